@@ -1,0 +1,84 @@
+"""The two-body impact model of Fig 3: SDOF trunk (eq 11) struck by a linearised pendulum.
+
+Tree: M_T x'' + C_T x' + K_T x = F (eq 11); pendulum (or billet): m y'' + k y = -F with
+k = m g / l_e (eq 13; k = 0 for a billet). Both start at rest position 0, the pendulum
+moving at u_1 (eq 48) and touching the trunk at t = 0. Contact means x = y; the
+pendulum may not pass the trunk (gap x - y >= 0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .parameters import Billet, Pendulum, Scenario, _check
+from .reduction import reduce_trunk
+
+
+@dataclass(frozen=True)
+class TwoBodyModel:
+    """Parameters of eqs 13-35, SI units."""
+
+    dynamic_mass: float  # M_T, kg
+    damping: float  # C_T, N s/m
+    stiffness: float  # K_T, N/m
+    impactor_mass: float  # m, kg
+    impactor_stiffness: float  # k = m g / l_e, N/m (0 for a billet)
+    impact_speed: float  # u_1, m/s
+    restitution: float  # e
+
+    def __post_init__(self):
+        _check("model.dynamic_mass", self.dynamic_mass, low=0, low_open=True, unit="kg")
+        _check("model.damping", self.damping, low=0, unit="N s/m")
+        _check("model.stiffness", self.stiffness, low=0, low_open=True, unit="N/m")
+        _check("model.impactor_mass", self.impactor_mass, low=0, low_open=True, unit="kg")
+        _check("model.impactor_stiffness", self.impactor_stiffness, low=0, unit="N/m")
+        _check("model.impact_speed", self.impact_speed, low=0, low_open=True, unit="m/s")
+        _check("model.restitution", self.restitution, low=0, high=1)
+
+    @property
+    def reduced_mass(self) -> float:
+        """mu = M_T m / (M_T + m), kg (eq 55)."""
+        return self.dynamic_mass * self.impactor_mass / (self.dynamic_mass + self.impactor_mass)
+
+    @property
+    def initial_energy(self) -> float:
+        """1/2 m u_1^2 = m g l_e (1 - cos theta_r) for the pendulum, J."""
+        return 0.5 * self.impactor_mass * self.impact_speed ** 2
+
+    @property
+    def together_frequency(self) -> float:
+        """omega_n = sqrt((K_T + k) / (M_T + m)), rad/s (eq 34, eq 46)."""
+        return math.sqrt((self.stiffness + self.impactor_stiffness)
+                         / (self.dynamic_mass + self.impactor_mass))
+
+    @property
+    def together_decay(self) -> float:
+        """b = C_T / (2 (M_T + m)), 1/s (eq 35-36)."""
+        return self.damping / (2.0 * (self.dynamic_mass + self.impactor_mass))
+
+    def with_restitution(self, e: float) -> "TwoBodyModel":
+        from dataclasses import replace
+
+        return replace(self, restitution=e)
+
+    def as_dict(self) -> dict:
+        return {"M_T": self.dynamic_mass, "C_T": self.damping, "K_T": self.stiffness,
+                "m": self.impactor_mass, "k": self.impactor_stiffness,
+                "e": self.restitution, "u1": self.impact_speed}
+
+
+def two_body_model(scenario: Scenario, restitution: float | None = None) -> TwoBodyModel:
+    """Reduce a scenario to the model of Fig 3 (eqs 7-11, 13, 48)."""
+    tree = reduce_trunk(scenario.trunk)
+    imp = scenario.impactor
+    e = scenario.contact.restitution if restitution is None else restitution
+    if isinstance(imp, Pendulum):
+        k = imp.stiffness
+    elif isinstance(imp, Billet):
+        k = 0.0
+    else:  # pragma: no cover - Scenario validates the type
+        raise TypeError(imp)
+    return TwoBodyModel(dynamic_mass=tree.dynamic_mass, damping=tree.damping,
+                        stiffness=tree.stiffness, impactor_mass=imp.mass,
+                        impactor_stiffness=k, impact_speed=imp.impact_speed, restitution=e)

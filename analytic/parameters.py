@@ -1,0 +1,222 @@
+"""Physical parameters of the paper's trunk, impactor and contact (SI units).
+
+Every dataclass is frozen and validates itself on construction: a bad value raises
+:class:`ParameterError` with one line naming the field and its allowed range.
+
+Symbols follow the paper (Figs 1-3): trunk length ``l``, clamp (impact) height ``a``,
+diameter ``d``, density ``rho``, Young's modulus ``E``, clamp mass ``m_c``, crown mass
+``m_f``, distributed viscous damping ``C`` (eq 9), pendulum mass ``m``, equivalent length
+``l_e`` and release angle ``theta_r`` (eq 48), restitution ``e`` (eq 21).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+STANDARD_GRAVITY = 9.81  # m/s^2, the value the paper uses (after eq 48)
+
+
+class ParameterError(ValueError):
+    """A parameter is outside its allowed range; the message is one line."""
+
+
+def _check(path: str, value, *, low=None, high=None, low_open=False, high_open=False,
+           unit: str = "", allow_inf: bool = False) -> float:
+    """Return ``value`` as float or raise a one-line :class:`ParameterError`."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{path}: expected a number{f' in {unit}' if unit else ''}, got {value!r}")
+    v = float(value)
+    lo = "(" if low_open else "["
+    hi = ")" if high_open else "]"
+    rng = f"{lo}{'-inf' if low is None else low}, {'inf' if high is None else high}{hi}"
+    u = f" {unit}" if unit else ""
+    if math.isnan(v) or (math.isinf(v) and not allow_inf):
+        raise ParameterError(f"{path} = {value!r}{u}: must be a finite number in {rng}{u}")
+    bad = ((low is not None and (v < low or (low_open and v == low)))
+           or (high is not None and (v > high or (high_open and v == high))))
+    if bad:
+        raise ParameterError(f"{path} = {value!r}{u} is out of range: allowed {rng}{u}")
+    return v
+
+
+@dataclass(frozen=True)
+class Trunk:
+    """Uniform cantilever trunk with clamp and crown point masses (eqs 1-11).
+
+    ``base_stiffness`` is an optional rotational spring at the ground (root/soil
+    compliance), N m/rad; ``math.inf`` is the paper's rigid clamp.
+    """
+
+    length: float  # l, m: height of the lumped crown mass above the ground
+    clamp_height: float  # a, m: height of the impact point (clamp)
+    diameter: float  # d, m
+    density: float  # rho, kg/m^3
+    youngs_modulus: float  # E, Pa
+    clamp_mass: float = 0.0  # m_c, kg
+    crown_mass: float = 0.0  # m_f, kg
+    damping: float = 0.0  # C, N s/m^2: viscous damping force per unit length per unit velocity
+    base_stiffness: float = math.inf  # k_theta, N m/rad
+
+    def __post_init__(self):
+        _check("trunk.length", self.length, low=0, low_open=True, unit="m")
+        _check("trunk.clamp_height", self.clamp_height, low=0, high=self.length, low_open=True,
+               unit="m")
+        _check("trunk.diameter", self.diameter, low=0, low_open=True, unit="m")
+        _check("trunk.density", self.density, low=0, low_open=True, unit="kg/m^3")
+        _check("trunk.youngs_modulus", self.youngs_modulus, low=0, low_open=True, unit="Pa")
+        _check("trunk.clamp_mass", self.clamp_mass, low=0, unit="kg")
+        _check("trunk.crown_mass", self.crown_mass, low=0, unit="kg")
+        _check("trunk.damping", self.damping, low=0, unit="N s/m^2")
+        _check("trunk.base_stiffness", self.base_stiffness, low=0, low_open=True,
+               unit="N m/rad", allow_inf=True)
+
+    @property
+    def area(self) -> float:
+        """Cross-section A = pi d^2 / 4, m^2."""
+        return math.pi * self.diameter ** 2 / 4.0
+
+    @property
+    def second_moment(self) -> float:
+        """Area moment of inertia I = pi d^4 / 64, m^4."""
+        return math.pi * self.diameter ** 4 / 64.0
+
+    @property
+    def bending_stiffness(self) -> float:
+        """E I, N m^2."""
+        return self.youngs_modulus * self.second_moment
+
+    @property
+    def trunk_mass(self) -> float:
+        """m_t = rho A l, kg (after eq 7)."""
+        return self.density * self.area * self.length
+
+
+@dataclass(frozen=True)
+class Pendulum:
+    """Pendulum impactor released from rest at ``release_angle`` (rad), eq 48.
+
+    After the first impact it is linearised as mass ``m`` on a spring ``k = m g / l_e``
+    (Fig 3, eq 13), natural frequency omega_2 = sqrt(g / l_e).
+    """
+
+    mass: float  # m, kg
+    equivalent_length: float  # l_e, m
+    release_angle: float  # theta_r, rad
+    gravity: float = STANDARD_GRAVITY  # g, m/s^2
+
+    def __post_init__(self):
+        _check("impactor.mass", self.mass, low=0, low_open=True, unit="kg")
+        _check("impactor.equivalent_length", self.equivalent_length, low=0, low_open=True,
+               unit="m")
+        _check("impactor.release_angle", self.release_angle, low=0, high=math.pi,
+               low_open=True, unit="rad")
+        _check("impactor.gravity", self.gravity, low=0, low_open=True, unit="m/s^2")
+
+    @property
+    def stiffness(self) -> float:
+        """Equivalent spring k = m g / l_e, N/m (Fig 3)."""
+        return self.mass * self.gravity / self.equivalent_length
+
+    @property
+    def natural_frequency(self) -> float:
+        """omega_2 = sqrt(g / l_e), rad/s (eq 14)."""
+        return math.sqrt(self.gravity / self.equivalent_length)
+
+    @property
+    def impact_speed(self) -> float:
+        """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48)."""
+        return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
+            self.release_angle / 2.0)
+
+    @property
+    def release_angle_deg(self) -> float:
+        return math.degrees(self.release_angle)
+
+
+@dataclass(frozen=True)
+class Billet:
+    """Unrestrained mass (spring-loaded billet) striking at ``impact_speed``: omega_2 = 0."""
+
+    mass: float  # m, kg
+    impact_speed: float  # u_1, m/s
+
+    def __post_init__(self):
+        _check("impactor.mass", self.mass, low=0, low_open=True, unit="kg")
+        _check("impactor.impact_speed", self.impact_speed, low=0, low_open=True, unit="m/s")
+
+    stiffness = 0.0
+    natural_frequency = 0.0
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Contact between impactor and trunk.
+
+    ``restitution`` is Newton's e of eq 21. For the soft (spring-dashpot) models a contact
+    ``stiffness`` (N/m) or a contact ``duration`` (s, for the undamped two-body collision
+    pi / sqrt(k / mu)) sets the stiffness; give at most one of them.
+    """
+
+    restitution: float  # e, dimensionless
+    stiffness: float | None = None  # k_c, N/m
+    duration: float | None = None  # s
+
+    def __post_init__(self):
+        _check("contact.restitution", self.restitution, low=0, high=1, unit="")
+        if self.stiffness is not None:
+            _check("contact.stiffness", self.stiffness, low=0, low_open=True, unit="N/m")
+        if self.duration is not None:
+            _check("contact.duration", self.duration, low=0, low_open=True, unit="s")
+        if self.stiffness is not None and self.duration is not None:
+            raise ParameterError("contact: give either stiffness (N/m) or duration (s), not both")
+
+
+DEFAULT_CONTACT_DURATION = 5e-4  # s: half a millisecond, well inside the paper's T0 of 4-6 ms
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One impact experiment: trunk, impactor and contact, simulated until ``t_end`` (s)."""
+
+    name: str
+    trunk: Trunk
+    impactor: Pendulum | Billet
+    contact: Contact
+    t_end: float = 0.1  # s
+    description: str = ""
+    notes: dict = field(default_factory=dict, compare=False, hash=False)
+
+    def __post_init__(self):
+        if not isinstance(self.trunk, Trunk):
+            raise ParameterError("trunk: expected a Trunk")
+        if not isinstance(self.impactor, (Pendulum, Billet)):
+            raise ParameterError("impactor: expected a Pendulum or a Billet")
+        if not isinstance(self.contact, Contact):
+            raise ParameterError("contact: expected a Contact")
+        _check("t_end", self.t_end, low=0, low_open=True, unit="s")
+
+    def to_dict(self) -> dict:
+        """The scenario as run, in the JSON layout of ``treeimpact simulate``."""
+        t = self.trunk
+        imp = self.impactor
+        impactor = {"mass": imp.mass}
+        if isinstance(imp, Pendulum):
+            impactor.update(type="pendulum", equivalent_length=imp.equivalent_length,
+                            release_angle_deg=imp.release_angle_deg, gravity=imp.gravity)
+        else:
+            impactor.update(type="billet", impact_speed=imp.impact_speed)
+        return {
+            "name": self.name,
+            "t_end": self.t_end,
+            "trunk": {
+                "length": t.length, "clamp_height": t.clamp_height, "diameter": t.diameter,
+                "density": t.density, "youngs_modulus": t.youngs_modulus,
+                "clamp_mass": t.clamp_mass, "crown_mass": t.crown_mass, "damping": t.damping,
+                "base_stiffness": None if math.isinf(t.base_stiffness) else t.base_stiffness,
+            },
+            "impactor": impactor,
+            "contact": {"restitution": self.contact.restitution,
+                        "stiffness": self.contact.stiffness,
+                        "duration": self.contact.duration},
+        }
