@@ -17,3 +17,8 @@ __all__ = [
     "TwoBodyModel", "load_scenario", "reduce_trunk", "scenario_from_dict",
     "shipped_scenarios", "static_mode_shape", "two_body_model",
 ]
+
+from .simulate import impact_metrics, simulate, simulate_model  # noqa: E402
+from .solver import ImpactSolution, solve_impacts  # noqa: E402
+
+__all__ += ["ImpactSolution", "impact_metrics", "simulate", "simulate_model", "solve_impacts"]

@@ -1,0 +1,122 @@
+"""Certified search for the *first* zero of a smooth function on (0, t_max].
+
+Used for the next impact (gap x - y returning to 0, eq 12) and for separation (contact
+force returning to 0 after moving together, eq 34). Missing an impact would silently change
+the answer, so the search never trusts a sign pattern alone: it uses bounds B_n on the
+derivatives |f^(n)| over the whole interval.
+
+* On [ta, tb] with f(ta), f(tb) > 0, f >= min(f(ta), f(tb)) - B_2 (tb - ta)^2 / 8, so the
+  interval is certified zero-free when that lower bound is positive.
+* Next to t = 0, where f has a zero of order p (f(0) = ... = f^(p-1)(0) = 0 < f^(p)(0)),
+  q(t) = f(t) / t^p has q(0) = f^(p)(0)/p! and |q'| <= B_{p+1}/(p+1)!, which certifies the
+  first interval (this is what keeps a grazing or closely spaced impact from being skipped).
+* An interval that cannot be certified is bisected; an interval with a sign change is
+  handed to Brent's method only once f is certified monotone on it (f' bounded away from 0
+  by B_2 times the width), so the zero found is the first one.
+
+A fast path handles the short flights of a chattering sequence: with p = 1 and
+f''(0) < 0, q'(t) <= f''(0)/2 + B_3 t / 3 < 0 for t < 3|f''(0)| / (2 B_3), so f has a
+single zero there if f is negative at the end of that range.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable, Sequence
+
+from scipy.optimize import brentq
+
+_XTOL_REL = 4e-16
+_RTOL = 4.0 * 2.220446049250313e-16  # the smallest rtol brentq accepts
+
+
+def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max: float,
+               bounds: Sequence[float], rate: float, order: int = 0,
+               taylor: Sequence[float] = ()) -> float | None:
+    """First t in (0, t_max] with f(t) = 0, or None if f > 0 throughout.
+
+    f, df: scalar function and its derivative; bounds[n] >= sup |f^(n)| on [0, t_max]
+    (n = 0..order+2); rate: fastest characteristic rate of f (1/s), which sets the first
+    sampling step; order: order p of the zero of f at t = 0 (0 if f(0) > 0); taylor:
+    the derivatives f^(n)(0), n = 0..order+2, used next to t = 0.
+    """
+    if t_max <= 0.0:
+        return None
+    b2 = bounds[2]
+    if order == 1 and len(taylor) > 3 and taylor[2] < 0.0:
+        t_root = _fast_path(f, t_max, bounds, taylor)
+        if t_root is not None:
+            return t_root if t_root > 0.0 else None
+    step = min(t_max, 0.3 / rate) if rate > 0 else t_max
+    lead = taylor[order] / math.factorial(order) if order > 0 else None
+    lip = bounds[order + 1] / math.factorial(order + 1) if order > 0 else None
+
+    def certified(ta, tb, fa, fb):
+        if ta == 0.0 and order > 0:
+            qb = fb / tb ** order
+            return lead > 0.0 and qb > 0.0 and lead + qb > lip * tb
+        return fa > 0.0 and fb > 0.0 and min(fa, fb) > b2 * (tb - ta) ** 2 / 8.0
+
+    def search(ta, tb, fa, fb, depth):
+        if fb <= 0.0 and fa > 0.0 and (ta > 0.0 or order == 0):
+            dfa = df(ta)
+            if dfa < -b2 * (tb - ta):  # strictly decreasing on [ta, tb]: a single zero
+                return brentq(f, ta, tb, xtol=_XTOL_REL * tb, rtol=_RTOL)
+        elif certified(ta, tb, fa, fb):
+            return None
+        if tb - ta <= 1e-14 * max(tb, 1e-300) or depth > 200:
+            # An interval too small to resolve: f touches zero here (grazing) or crosses it.
+            return tb if fb <= 0.0 else (ta if ta > 0.0 and fa <= 0.0 else None)
+        tm = 0.5 * (ta + tb)
+        fm = f(tm)
+        if ta > 0.0 and fa <= 0.0:
+            return ta
+        left = search(ta, tm, fa, fm, depth + 1)
+        if left is not None:
+            return left
+        return search(tm, tb, fm, fb, depth + 1)
+
+    ta, fa = 0.0, (taylor[0] if taylor else f(0.0))
+    while ta < t_max:
+        tb = min(t_max, ta + step)
+        fb = f(tb)
+        root = search(ta, tb, fa, fb, 0)
+        if root is not None:
+            return root
+        ta, fa = tb, fb
+    return None
+
+
+def _fast_path(f, t_max, bounds, taylor):
+    """Single short flight: f = gamma t + f''(0) t^2/2 + ..., f''(0) < 0 (see module doc)."""
+    gamma, acc, jerk = taylor[1], taylor[2], taylor[3]
+    t_mono = 1.5 * abs(acc) / bounds[3] if bounds[3] > 0 else math.inf
+    # Zero of the cubic Taylor model gamma + acc t/2 + jerk t^2/6, smallest positive root.
+    t_pred = -2.0 * gamma / acc
+    if jerk != 0.0:
+        disc = (acc / 2.0) ** 2 - 4.0 * (jerk / 6.0) * gamma
+        if disc >= 0.0:
+            cands = [(-acc / 2.0 + s * math.sqrt(disc)) / (2.0 * jerk / 6.0) for s in (1.0, -1.0)]
+            cands = [c for c in cands if c > 0.0]
+            if cands:
+                t_pred = min(cands)
+    t_hi = min(t_mono, t_max, 1.25 * t_pred)
+    if t_hi <= 0.0:
+        return None
+    f_hi = f(t_hi)
+    if f_hi > 0.0:
+        if t_hi == t_mono or t_hi == t_max:
+            return None  # let the general search decide
+        t_hi = min(t_mono, t_max, 4.0 * t_pred)
+        f_hi = f(t_hi)
+        if f_hi > 0.0:
+            return None
+    # q = f/t is strictly decreasing on (0, t_hi]: f > 0 left of its single zero.
+    t_lo = t_hi * 1e-3
+    f_lo = f(t_lo)
+    while f_lo <= 0.0:  # only possible if the zero is very close to 0
+        t_hi, t_lo = t_lo, t_lo * 1e-3
+        if t_lo < 1e-300:
+            return None
+        f_lo = f(t_lo)
+    return brentq(f, t_lo, t_hi, xtol=_XTOL_REL * t_hi, rtol=_RTOL)

@@ -1,0 +1,208 @@
+"""Soft-contact variant of the paper's model: the same two bodies, a spring-dashpot contact.
+
+The contact force on the trunk is
+
+    F = max(0, k delta + c delta_dot),     delta = y - x  (overlap, > 0 when pressed)
+
+It only pushes, and it releases when the *force* reaches zero, not when the overlap does.
+This variant isolates the contact model from engine numerics: the engines' SDOF models
+must reproduce it, and its difference from the Newton model of eqs 20-21 is the
+"contact model" rung of the discrepancy ladder.
+
+Restitution of one collision (derivation)
+------------------------------------------
+For two free bodies the overlap obeys mu delta'' = -(k delta + c delta') while F > 0, with
+mu = M m / (M + m). With omega = sqrt(k / mu), zeta = c / (2 sqrt(k mu)) and time in units
+of 1/omega, delta = v0 psi(t) where psi'' + 2 zeta psi' + psi = 0, psi(0) = 0, psi'(0) = 1.
+The force vanishes when psi + 2 zeta psi' = 0. With the roots r1,2 = -zeta +- sqrt(zeta^2 - 1)
+(r1 r2 = 1, r1 + r2 = -2 zeta) one has 1 + 2 zeta r_j = -r_j^2, hence the release time
+
+    t_r = 2 ln(r2 / r1) / (r1 - r2),
+
+real for zeta > 1 and, continued analytically, t_r = (pi - atan2(2 zeta s, 1 - 2 zeta^2)) / s
+with s = sqrt(1 - zeta^2) for zeta < 1 (t_r = 2 at zeta = 1). The restitution is
+e = -psi'(t_r). It falls from 1 (zeta = 0) through exp(-2) (zeta = 1) to 0 (zeta -> inf, as
+1 / (4 zeta^2)); :func:`damping_ratio_for_restitution` inverts it with Brent's method.
+For zeta < 1 this is exp(-zeta (pi - atan2(2 zeta s, 1 - 2 zeta^2)) / s), smaller than the
+classical exp(-zeta pi / s) of a dashpot that may pull: releasing early loses more energy.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from .model import TwoBodyModel, two_body_model
+from .parameters import DEFAULT_CONTACT_DURATION, Contact, ParameterError, Scenario
+
+
+def release_time(zeta: float) -> float:
+    """Release time of one collision, in units of 1/omega (see module docstring)."""
+    if zeta < 0 or not math.isfinite(zeta):
+        raise ParameterError(f"zeta = {zeta!r}: allowed [0, inf)")
+    if abs(zeta - 1.0) < 1e-9:
+        return 2.0
+    if zeta < 1.0:
+        s = math.sqrt(1.0 - zeta * zeta)
+        return (math.pi - math.atan2(2.0 * zeta * s, 1.0 - 2.0 * zeta * zeta)) / s
+    sd = math.sqrt(zeta * zeta - 1.0)
+    r1, r2 = -zeta + sd, -zeta - sd
+    return 2.0 * math.log(r2 / r1) / (r1 - r2)
+
+
+def restitution_for_damping_ratio(zeta: float) -> float:
+    """e of one collision under F = max(0, k delta + c delta') with damping ratio zeta."""
+    t = release_time(zeta)
+    if abs(zeta - 1.0) < 1e-9:
+        return math.exp(-t) * (t - 1.0)
+    if zeta < 1.0:
+        s = math.sqrt(1.0 - zeta * zeta)
+        ex = math.exp(-zeta * t)
+        return -ex * (math.cos(s * t) - zeta / s * math.sin(s * t))
+    sd = math.sqrt(zeta * zeta - 1.0)
+    r1, r2 = -zeta + sd, -zeta - sd
+    return -(r1 * math.exp(r1 * t) - r2 * math.exp(r2 * t)) / (r1 - r2)
+
+
+def damping_ratio_for_restitution(e: float) -> float:
+    """Inverse of :func:`restitution_for_damping_ratio` for 0 < e <= 1."""
+    if isinstance(e, bool) or not isinstance(e, (int, float)) or not (0.0 < e <= 1.0):
+        raise ParameterError(
+            f"contact.restitution = {e!r} is out of range for a soft contact: allowed (0, 1] "
+            "(e = 0 needs infinite damping)")
+    if e == 1.0:
+        return 0.0
+    hi = 1.0
+    while restitution_for_damping_ratio(hi) > e:
+        hi *= 2.0
+    return brentq(lambda z: restitution_for_damping_ratio(z) - e, 0.0, hi, xtol=1e-15,
+                  rtol=1e-14)
+
+
+def contact_law(model: TwoBodyModel, contact: Contact | None = None, *,
+                stiffness: float | None = None, duration: float | None = None
+                ) -> tuple[float, float]:
+    """(k_c in N/m, c_c in N s/m) giving the model's restitution e in one collision.
+
+    The stiffness comes from ``stiffness`` or ``duration`` (keyword first, then the
+    contact's), duration meaning the undamped collision time pi sqrt(mu / k); the default
+    duration is :data:`analytic.parameters.DEFAULT_CONTACT_DURATION`.
+    """
+    mu = model.reduced_mass
+    if stiffness is None and duration is None and contact is not None:
+        stiffness, duration = contact.stiffness, contact.duration
+    if stiffness is not None and duration is not None:
+        raise ParameterError("contact: give either stiffness (N/m) or duration (s), not both")
+    if stiffness is None:
+        duration = DEFAULT_CONTACT_DURATION if duration is None else duration
+        Contact(restitution=model.restitution, duration=duration)  # validates
+        stiffness = mu * (math.pi / duration) ** 2
+    else:
+        Contact(restitution=model.restitution, stiffness=stiffness)
+    zeta = damping_ratio_for_restitution(model.restitution)
+    return stiffness, 2.0 * zeta * math.sqrt(stiffness * mu)
+
+
+def collision_duration(model: TwoBodyModel, stiffness: float, damping: float) -> float:
+    """Duration (s) of one free two-body collision under the law, first touch to release."""
+    mu = model.reduced_mass
+    omega = math.sqrt(stiffness / mu)
+    return release_time(damping / (2.0 * math.sqrt(stiffness * mu))) / omega
+
+
+def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
+                  stiffness: float | None = None, duration: float | None = None,
+                  t_end: float | None = None, samples_per_collision: int = 100):
+    """The scenario's two-body model with the soft contact, integrated to ``t_end`` (s).
+
+    Piecewise-smooth integration (DOP853, rtol 1e-11) with events at touch (delta = 0,
+    rising) and release (k delta + c delta' = 0, falling). Returns a SimulationResult
+    (backend "analytic-soft") whose metrics come from :func:`analytic.records.metrics_from_record`,
+    the same rule the engines use.
+    """
+    from .records import ImpactRecord, metrics_from_record
+    from .results import SimulationResult, Trajectory
+
+    model = two_body_model(scenario, restitution)
+    t_end = scenario.t_end if t_end is None else t_end
+    k_c, c_c = contact_law(model, scenario.contact, stiffness=stiffness, duration=duration)
+    t_col = collision_duration(model, k_c, c_c)
+    rec = soft_record(model, k_c, c_c, t_end, dt_sample=t_col / samples_per_collision)
+    metrics = metrics_from_record(
+        rec, impact_speed=model.impact_speed, initial_energy=model.initial_energy,
+        collision_duration=t_col, impactor_mass=model.impactor_mass,
+        dynamic_mass=model.dynamic_mass,
+        equivalent_length=getattr(scenario.impactor, "equivalent_length", None),
+        gravity=getattr(scenario.impactor, "gravity", 9.81))
+    model_dict = {**model.as_dict(), "contact_stiffness": k_c, "contact_damping": c_c}
+    scen = scenario.to_dict()
+    scen["contact"]["restitution"] = model.restitution
+    return SimulationResult(
+        backend="analytic-soft", metrics=metrics, model=model_dict, scenario=scen,
+        trajectory=Trajectory(t=rec.t, x=rec.x, vx=rec.vx, y=rec.y, vy=rec.vy, force=rec.force),
+        extra={"record": rec, "collision_duration": t_col})
+
+
+def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sample: float):
+    """Integrate the soft-contact two-body model; return an ``ImpactRecord`` sampled every dt."""
+    from .records import ImpactRecord
+
+    M, C, K = model.dynamic_mass, model.damping, model.stiffness
+    m, kp = model.impactor_mass, model.impactor_stiffness
+
+    def rhs(_t, s, in_contact):
+        x, vx, y, vy = s[0], s[1], s[2], s[3]
+        f = k_c * (y - x) + c_c * (vy - vx) if in_contact else 0.0
+        return [vx, (-K * x - C * vx + f) / M, vy, (-kp * y - f) / m, C * vx * vx,
+                -f * (vy - vx)]
+
+    def touch(_t, s, _c):
+        # Contact (re)starts when the law would push: at the first touch (delta rising
+        # through 0, where the function jumps from k delta < 0 to c delta' > 0) or, while
+        # still overlapping after a release, when k delta + c delta' rises through 0 again.
+        delta = s[2] - s[0]
+        return k_c * delta + c_c * (s[3] - s[1]) if delta > 0.0 else k_c * delta
+
+    def release(_t, s, _c):
+        return k_c * (s[2] - s[0]) + c_c * (s[3] - s[1])
+
+    release.terminal, release.direction = True, -1.0
+
+    n = int(math.ceil(t_end / dt_sample))
+    t_grid = np.linspace(0.0, t_end, n + 1)
+    out = np.empty((6, t_grid.size))
+    state = np.array([0.0, 0.0, 0.0, model.impact_speed, 0.0, 0.0])
+    t, in_contact = 0.0, True
+    scale = max(model.impact_speed, 1e-12)
+    max_step = math.pi * math.sqrt(model.reduced_mass / k_c) / 20.0
+    contact_flag = np.zeros(t_grid.size, dtype=bool)
+    while t < t_end:
+        event = release if in_contact else touch
+        sol = solve_ivp(rhs, (t, t_end), state, method="DOP853", args=(in_contact,),
+                        events=event, dense_output=True, rtol=1e-11,
+                        atol=[1e-14 * scale, 1e-11 * scale, 1e-14 * scale, 1e-11 * scale,
+                              1e-12, 1e-12], max_step=max_step if in_contact else np.inf,
+                        first_step=None)
+        if sol.status == -1:
+            from .results import SimulationDiverged
+
+            raise SimulationDiverged(f"soft-contact integration failed: {sol.message}")
+        t_stop = sol.t_events[0][0] if sol.t_events[0].size else t_end
+        sel = (t_grid >= t) & (t_grid <= t_stop)
+        if np.any(sel):
+            out[:, sel] = sol.sol(t_grid[sel])
+            contact_flag[sel] = in_contact
+        state = sol.y_events[0][0] if sol.t_events[0].size else sol.y[:, -1]
+        t = t_stop
+        in_contact = not in_contact
+    x, vx, y, vy, w_damp, w_contact = out
+    force = np.where(contact_flag, np.maximum(0.0, k_c * (y - x) + c_c * (vy - vx)), 0.0)
+    kinetic = 0.5 * M * vx ** 2 + 0.5 * m * vy ** 2
+    potential = 0.5 * K * x ** 2 + 0.5 * kp * y ** 2
+    return ImpactRecord(
+        t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force, kinetic=kinetic, potential=potential,
+        damping_work=w_damp, contact_work=w_contact,
+        pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2)

@@ -1,0 +1,75 @@
+"""The registry of simulation backends: the only place that names the engines.
+
+Each entry maps a backend name to ``module:function`` for ``simulate(scenario, **options)``
+(returning :class:`analytic.results.SimulationResult`) and, where the backend has its own
+trunk, ``modes(scenario, **options)``. Options a backend does not take are refused with a
+one-line error instead of being ignored.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+from dataclasses import dataclass
+
+from analytic.parameters import ParameterError
+
+
+@dataclass(frozen=True)
+class Backend:
+    name: str
+    simulate_ref: str
+    modes_ref: str | None
+    description: str
+
+    def _load(self, ref: str):
+        module, func = ref.split(":")
+        try:
+            return getattr(importlib.import_module(module), func)
+        except (ImportError, AttributeError) as exc:
+            raise ParameterError(f"backend {self.name!r} is not available here: {exc}") from None
+
+    def options(self) -> set[str]:
+        sig = inspect.signature(self._load(self.simulate_ref))
+        return {p.name for p in sig.parameters.values() if p.kind == p.KEYWORD_ONLY}
+
+    def simulate(self, scenario, **options):
+        func = self._load(self.simulate_ref)
+        self._check(func, options)
+        return func(scenario, **options)
+
+    def modes(self, scenario, **options):
+        if self.modes_ref is None:
+            raise ParameterError(f"backend {self.name!r} has no modes")
+        func = self._load(self.modes_ref)
+        self._check(func, options)
+        return func(scenario, **options)
+
+    def _check(self, func, options):
+        allowed = {p.name for p in inspect.signature(func).parameters.values()
+                   if p.kind == p.KEYWORD_ONLY}
+        for key in options:
+            if key not in allowed:
+                flag = "--" + key.replace("_", "-")
+                raise ParameterError(f"{flag}: not an option of backend {self.name!r} "
+                                     f"(its options: {', '.join(sorted(allowed)) or 'none'})")
+
+
+BACKENDS = {
+    "analytic": Backend("analytic", "analytic.simulate:simulate", "analytic.modes:modes",
+                        "exact Newton-restitution solver of the paper (eqs 12-35)"),
+    "soft": Backend("soft", "analytic.soft_contact:simulate_soft", "analytic.modes:modes",
+                    "analytic SDOF with the spring-dashpot contact"),
+    "mujoco": Backend("mujoco", "mujoco_models:simulate", "mujoco_models:modes",
+                      "MuJoCo (MJCF) slide-joint or hinged-segment trunk"),
+    "bullet": Backend("bullet", "bullet_models:simulate", "bullet_models:modes",
+                      "PyBullet prismatic or hinged-link trunk"),
+}
+
+
+def get_backend(name: str) -> Backend:
+    try:
+        return BACKENDS[name]
+    except KeyError:
+        raise ParameterError(
+            f"--backend = {name!r}: allowed {', '.join(BACKENDS)}") from None

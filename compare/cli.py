@@ -1,0 +1,165 @@
+"""``treeimpact``: the command line (SI units throughout; keys documented in the README).
+
+Exit codes: 0 success; 2 bad input (one line on stderr naming the field and its range,
+no traceback); 3 a simulation diverged (reported as such, never as numbers).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from analytic.parameters import ParameterError
+from analytic.results import METRIC_UNITS, SimulationDiverged, _clean
+
+EXIT_BAD_INPUT = 2
+EXIT_DIVERGED = 3
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2 (argparse prints usage by default)
+        raise ParameterError(message)
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+def _count(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="treeimpact", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    sp = sub.add_parser("paper", help="reproduce Table 1 and list the paper's discrepancies")
+    sp.add_argument("--json", action="store_true", help="machine-readable output")
+
+    ss = sub.add_parser("simulate", help="simulate one scenario")
+    ss.add_argument("scenario", help="shipped scenario name or TOML path")
+    ss.add_argument("--backend", default="analytic", help="analytic, soft, mujoco or bullet")
+    ss.add_argument("--e", type=_number, dest="restitution", help="restitution e in [0, 1]")
+    ss.add_argument("--t-end", type=_number, dest="t_end", help="end time, s")
+    ss.add_argument("--trunk", choices=("sdof", "chain"), help="engine trunk model")
+    ss.add_argument("--segments", type=_count, help="segments of the hinged trunk")
+    ss.add_argument("--pendulum", choices=("linear", "full"), help="engine pendulum model")
+    ss.add_argument("--contact", choices=("soft", "newton"), help="Bullet contact mode")
+    ss.add_argument("--contact-stiffness", type=_number, dest="contact_stiffness",
+                    help="contact stiffness, N/m")
+    ss.add_argument("--dt", type=_number, help="time step, s")
+    ss.add_argument("--json", action="store_true")
+
+    sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
+    sm.add_argument("scenario")
+    sm.add_argument("--backend", default="analytic")
+    sm.add_argument("--segments", type=_count)
+    sm.add_argument("--json", action="store_true")
+    return p
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return "n/a" if not math.isfinite(v) else f"{v:.6g}"
+    return str(v)
+
+
+def cmd_paper(args) -> int:
+    from analytic.paper import reproduce
+
+    res = reproduce()
+    if args.json:
+        print(json.dumps(_clean(res), indent=2))
+        return 0
+    for name, quantities in res["trees"].items():
+        print(f"Table 1, {name} tree (SI units)")
+        print(f"  {'quantity':<16}{'printed':>14}{'recomputed':>14}{'rel diff':>10}  how")
+        for q, row in quantities.items():
+            print(f"  {q:<16}{_fmt(row['printed']):>14}{_fmt(row['recomputed']):>14}"
+                  f"{row['rel_diff']:>+10.3%}  {row['how']}")
+        print()
+    print("Restitution e reproducing each measured quantity (exact solver, Table 1 parameters)")
+    for name, rows in res["restitution_estimates"].items():
+        cells = ", ".join(f"{r['quantity']}: {_fmt(r['restitution'])}" for r in rows)
+        print(f"  {name}: {cells}")
+    print()
+    print("Discrepancies between the printed equations and the printed numbers")
+    for d in res["discrepancies"]:
+        print(f"- {d['equation']}: printed {d['printed']}")
+        print(f"    reproduces the table: {d['reproduces_table']}")
+        print(f"    evidence: {d['evidence']}")
+    return 0
+
+
+def _options(args, names) -> dict:
+    return {n: getattr(args, n) for n in names if getattr(args, n, None) is not None}
+
+
+def cmd_simulate(args) -> int:
+    from analytic.scenario import load_scenario
+
+    from .backends import get_backend
+
+    backend = get_backend(args.backend)
+    scenario = load_scenario(args.scenario)
+    opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
+                           "contact_stiffness", "dt"))
+    result = backend.simulate(scenario, **opts)
+    if args.json:
+        print(json.dumps(result.to_json(), indent=2))
+        return 0
+    print(f"{scenario.name} ({result.backend})")
+    print("model: " + ", ".join(f"{k} = {_fmt(v)}" for k, v in result.model.items()))
+    for key, value in result.metrics.items():
+        unit = METRIC_UNITS[key][0]
+        print(f"  {key:<22}{_fmt(value):>14} {unit:<5} {METRIC_UNITS[key][1]}")
+    return 0
+
+
+def cmd_modes(args) -> int:
+    from analytic.scenario import load_scenario
+
+    from .backends import get_backend
+
+    backend = get_backend(args.backend)
+    scenario = load_scenario(args.scenario)
+    res = backend.modes(scenario, **_options(args, ("segments",)))
+    if args.json:
+        print(json.dumps(_clean(res), indent=2))
+        return 0
+    for part in ("model", "beam"):
+        r = res[part]
+        omegas = ", ".join(_fmt(w) for w in r["omegas"])
+        print(f"{part:<6} static stiffness at a = {_fmt(r['static_stiffness'])} N/m; "
+              f"natural frequencies = [{omegas}] rad/s")
+    return 0
+
+
+COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes}
+
+
+def main(argv=None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+        return COMMANDS[args.command](args)
+    except ParameterError as exc:
+        print(f"treeimpact: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except SimulationDiverged as exc:
+        print(f"treeimpact: simulation diverged: {exc}", file=sys.stderr)
+        return EXIT_DIVERGED
+    except BrokenPipeError:  # output piped into head & co.
+        sys.stderr.close()
+        return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
