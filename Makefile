@@ -17,7 +17,7 @@ report: $(STAMP)
 	$(BIN)/treeimpact paper
 
 test: $(STAMP)
-	$(BIN)/python -m pytest tests compare
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest tests compare
 
 benchmark: $(STAMP)
 	$(BIN)/python benchmarks/bench_solver.py

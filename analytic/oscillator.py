@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -94,20 +95,38 @@ class Oscillator:
         return -2.0 * self.beta * self.acceleration(x, v) - self.omega_sq * v
 
     def derivative_bounds(self, x0: float, v0: float, n_max: int = 5) -> list[float]:
-        """Bounds B_n >= |x^(n)(t)| for all t >= 0, n = 0..n_max.
+        """Bounds B_n >= |x^(n)(t)| for all t >= 0, n = 0..n_max, from the modal form.
 
-        The energy E = v^2/2 + Omega^2 x^2/2 never grows (beta >= 0), so |v| <= sqrt(2E),
-        Omega |x| <= sqrt(2E); higher derivatives follow from the equation of motion,
-        x^(n+2) = -2 beta x^(n+1) - Omega^2 x^(n).
+        Underdamped: x = R e^{-beta t} cos(w t + phase), and every derivative multiplies the
+        complex amplitude by -beta + i w, of modulus Omega: B_n = R Omega^n.
+        Overdamped: x = A e^{r1 t} + B e^{r2 t}: B_n = |A| |r1|^n + |B| |r2|^n.
+        Critical: x = (A + B t) e^{-beta t}; e^{-beta t} |A + B t| <= |A| + |B| / (e beta),
+        so B_n = beta^n (|A| + |B| / (e beta)) + n beta^(n-1) |B| (billet: beta = 0, B_0 = inf).
+        Bounds from the state at a later time are tighter once a transient has decayed.
         """
-        amp = math.sqrt(v0 * v0 + self.omega_sq * x0 * x0)
-        w = math.sqrt(self.omega_sq)
-        b = [amp / w if w > 0 else math.inf, amp, (w + 2.0 * self.beta) * amp]
-        while len(b) <= n_max:
-            b.append(self.omega_sq * b[-2] + 2.0 * self.beta * b[-1])
-        if w == 0.0 and self.beta == 0.0:  # free flight: x'' = 0
-            b[2:] = [0.0] * (len(b) - 2)
-        return b
+        b, w2 = self.beta, self.omega_sq
+        reg = self.regime
+        if reg == "under":
+            w = math.sqrt(w2 - b * b)
+            amp = math.hypot(x0, (v0 + b * x0) / w)
+            om = math.sqrt(w2)
+            return [amp * om ** n for n in range(n_max + 1)]
+        if reg == "over":
+            sd = math.sqrt(b * b - w2)
+            r1, r2 = -b + sd, -b - sd
+            ca = abs((v0 - r2 * x0) / (r1 - r2))
+            cb = abs((r1 * x0 - v0) / (r1 - r2))
+            return [ca * abs(r1) ** n + cb * abs(r2) ** n for n in range(n_max + 1)]
+        ca, cb = abs(x0), abs(v0 + b * x0)
+        if b == 0.0:
+            return [math.inf if cb > 0 else ca, cb] + [0.0] * (n_max - 1)
+        return [b ** n * (ca + cb / (math.e * b)) + n * b ** (n - 1) * cb
+                for n in range(n_max + 1)]
+
+
+@lru_cache(maxsize=8)
+def _leggauss(nodes: int):
+    return np.polynomial.legendre.leggauss(nodes)
 
 
 def gauss_legendre_integral(func, t0: float, t1: float, rate: float, nodes: int = 20) -> float:
@@ -119,7 +138,7 @@ def gauss_legendre_integral(func, t0: float, t1: float, rate: float, nodes: int 
     if t1 <= t0:
         return 0.0
     panels = max(1, int(math.ceil((t1 - t0) * max(rate, 1e-12) / 0.5)))
-    xg, wg = np.polynomial.legendre.leggauss(nodes)
+    xg, wg = _leggauss(nodes)
     edges = np.linspace(t0, t1, panels + 1)
     half = 0.5 * np.diff(edges)
     mid = 0.5 * (edges[1:] + edges[:-1])

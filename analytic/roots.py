@@ -32,13 +32,16 @@ _RTOL = 4.0 * 2.220446049250313e-16  # the smallest rtol brentq accepts
 
 def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max: float,
                bounds: Sequence[float], rate: float, order: int = 0,
-               taylor: Sequence[float] = ()) -> float | None:
+               taylor: Sequence[float] = (),
+               local_bounds: Callable[[float], Sequence[float]] | None = None) -> float | None:
     """First t in (0, t_max] with f(t) = 0, or None if f > 0 throughout.
 
     f, df: scalar function and its derivative; bounds[n] >= sup |f^(n)| on [0, t_max]
     (n = 0..order+2); rate: fastest characteristic rate of f (1/s), which sets the first
     sampling step; order: order p of the zero of f at t = 0 (0 if f(0) > 0); taylor:
-    the derivatives f^(n)(0), n = 0..order+2, used next to t = 0.
+    the derivatives f^(n)(0), n = 0..order+2, used next to t = 0; local_bounds(t0):
+    bounds valid on [t0, t_max] (tighter once a transient has decayed), used for each
+    sampling step after the first.
     """
     if t_max <= 0.0:
         return None
@@ -78,6 +81,8 @@ def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max:
 
     ta, fa = 0.0, (taylor[0] if taylor else f(0.0))
     while ta < t_max:
+        if ta > 0.0 and local_bounds is not None:
+            b2 = min(bounds[2], local_bounds(ta)[2])
         tb = min(t_max, ta + step)
         fb = f(tb)
         root = search(ta, tb, fa, fb, 0)

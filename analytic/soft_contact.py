@@ -23,8 +23,9 @@ real for zeta > 1 and, continued analytically, t_r = (pi - atan2(2 zeta s, 1 - 2
 with s = sqrt(1 - zeta^2) for zeta < 1 (t_r = 2 at zeta = 1). The restitution is
 e = -psi'(t_r). It falls from 1 (zeta = 0) through exp(-2) (zeta = 1) to 0 (zeta -> inf, as
 1 / (4 zeta^2)); :func:`damping_ratio_for_restitution` inverts it with Brent's method.
-For zeta < 1 this is exp(-zeta (pi - atan2(2 zeta s, 1 - 2 zeta^2)) / s), smaller than the
-classical exp(-zeta pi / s) of a dashpot that may pull: releasing early loses more energy.
+For zeta < 1 this is exp(-zeta (pi - atan2(2 zeta s, 1 - 2 zeta^2)) / s), larger than the
+classical exp(-zeta pi / s) of a dashpot that may pull: the pulling tail the law cuts off
+would only have dissipated more (Schwager and Poeschel's "no attraction" contact).
 """
 
 from __future__ import annotations
@@ -156,53 +157,80 @@ def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sa
     def rhs(_t, s, in_contact):
         x, vx, y, vy = s[0], s[1], s[2], s[3]
         f = k_c * (y - x) + c_c * (vy - vx) if in_contact else 0.0
+        # last two states: work dissipated by the trunk damping, work absorbed by the contact
         return [vx, (-K * x - C * vx + f) / M, vy, (-kp * y - f) / m, C * vx * vx,
-                -f * (vy - vx)]
+                f * (vy - vx)]
 
-    def touch(_t, s, _c):
-        # Contact (re)starts when the law would push: at the first touch (delta rising
-        # through 0, where the function jumps from k delta < 0 to c delta' > 0) or, while
-        # still overlapping after a release, when k delta + c delta' rises through 0 again.
-        delta = s[2] - s[0]
-        return k_c * delta + c_c * (s[3] - s[1]) if delta > 0.0 else k_c * delta
-
-    def release(_t, s, _c):
+    # Three phases, each integrated smoothly up to its terminal event:
+    #   "contact":  F = k delta + c delta' > 0; ends when F falls through 0 (release);
+    #   "overlap":  released but still overlapping (delta > 0, F = 0); contact resumes when
+    #               k delta + c delta' rises through 0, free flight starts when delta falls
+    #               through 0; steps limited to the collision time scale so that a short
+    #               excursion of the law is never stepped over;
+    #   "free":     delta < 0; contact starts when delta rises through 0 (F = c delta' > 0).
+    def law(_t, s, _c):
         return k_c * (s[2] - s[0]) + c_c * (s[3] - s[1])
 
-    release.terminal, release.direction = True, -1.0
+    def overlap(_t, s, _c):
+        return s[2] - s[0]
 
+    def law_rises(_t, s, c):
+        return law(_t, s, c)
+
+    law.terminal, law.direction = True, -1.0
+    law_rises.terminal, law_rises.direction = True, 1.0
+    overlap.terminal, overlap.direction = True, -1.0
+
+    def overlap_rises(_t, s, c):
+        return overlap(_t, s, c)
+
+    overlap_rises.terminal, overlap_rises.direction = True, 1.0
     n = int(math.ceil(t_end / dt_sample))
     t_grid = np.linspace(0.0, t_end, n + 1)
     out = np.empty((6, t_grid.size))
     state = np.array([0.0, 0.0, 0.0, model.impact_speed, 0.0, 0.0])
-    t, in_contact = 0.0, True
+    t, phase = 0.0, "contact"
     scale = max(model.impact_speed, 1e-12)
-    max_step = math.pi * math.sqrt(model.reduced_mass / k_c) / 20.0
+    short_step = math.pi * math.sqrt(model.reduced_mass / k_c) / 20.0
     contact_flag = np.zeros(t_grid.size, dtype=bool)
+    stalls = 0
     while t < t_end:
-        event = release if in_contact else touch
-        sol = solve_ivp(rhs, (t, t_end), state, method="DOP853", args=(in_contact,),
-                        events=event, dense_output=True, rtol=1e-11,
+        events = {"contact": [law], "overlap": [law_rises, overlap],
+                  "free": [overlap_rises]}[phase]
+        sol = solve_ivp(rhs, (t, t_end), state, method="DOP853", args=(phase == "contact",),
+                        events=events, dense_output=True, rtol=1e-11,
                         atol=[1e-14 * scale, 1e-11 * scale, 1e-14 * scale, 1e-11 * scale,
-                              1e-12, 1e-12], max_step=max_step if in_contact else np.inf,
-                        first_step=None)
-        if sol.status == -1:
+                              1e-12, 1e-12], max_step=np.inf if phase == "free" else short_step)
+        if sol.status == -1 or not np.all(np.isfinite(sol.y[:, -1])):
             from .results import SimulationDiverged
 
             raise SimulationDiverged(f"soft-contact integration failed: {sol.message}")
-        t_stop = sol.t_events[0][0] if sol.t_events[0].size else t_end
+        hits = [(te[0], k) for k, te in enumerate(sol.t_events) if te.size]
+        if hits:
+            t_stop, which = min(hits)
+            state = sol.y_events[which][0]
+        else:
+            t_stop, which = t_end, None
+            state = sol.y[:, -1]
         sel = (t_grid >= t) & (t_grid <= t_stop)
         if np.any(sel):
             out[:, sel] = sol.sol(t_grid[sel])
-            contact_flag[sel] = in_contact
-        state = sol.y_events[0][0] if sol.t_events[0].size else sol.y[:, -1]
+            contact_flag[sel] = phase == "contact"
+        stalls = stalls + 1 if t_stop <= t else 0
+        if stalls > 10:
+            from .results import SimulationDiverged
+
+            raise SimulationDiverged(f"soft-contact integration stalled at t = {t:.6g} s")
         t = t_stop
-        in_contact = not in_contact
+        if which is not None:
+            phase = {"contact": "overlap", "free": "contact"}.get(
+                phase, "contact" if which == 0 else "free")
     x, vx, y, vy, w_damp, w_contact = out
     force = np.where(contact_flag, np.maximum(0.0, k_c * (y - x) + c_c * (vy - vx)), 0.0)
     kinetic = 0.5 * M * vx ** 2 + 0.5 * m * vy ** 2
     potential = 0.5 * K * x ** 2 + 0.5 * kp * y ** 2
+    overlap = np.where(contact_flag, np.maximum(y - x, 0.0), 0.0)
     return ImpactRecord(
         t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force, kinetic=kinetic, potential=potential,
-        damping_work=w_damp, contact_work=w_contact,
+        damping_work=w_damp, contact_work=w_contact, contact_potential=0.5 * k_c * overlap ** 2,
         pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2)

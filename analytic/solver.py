@@ -20,6 +20,7 @@ Sequence of events from the first contact (t = 0, tree at rest, pendulum at u_1)
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -130,24 +131,40 @@ class ImpactSolution:
         """(T0, x0, V) of the first moving-together phase, or None."""
         return self.together_starts[0] if self.together_starts else None
 
+    def _phase_integral(self, which: str, k: int, t1: float) -> float:
+        """int over phase k from its start to t1 (absolute time) of x, y or C_T vx^2."""
+        tree, _, both = self._osc
+        ph = self.phases[k]
+        rate = max(tree.fastest_rate, both.fastest_rate, 1e-9)
+        comp = {"x": 0, "y": 2, "damping": 1}[which]
+
+        def fn(s):
+            vals = self._phase_state(ph, s)[comp]
+            return vals * vals if which == "damping" else vals
+
+        val = gauss_legendre_integral(fn, 0.0, t1 - ph.t0, rate)
+        return self.model.damping * val if which == "damping" else val
+
+    @cached_property
+    def _cumulative(self) -> dict:
+        """Integrals over whole phases, cumulated: {which: [0, I_0, I_0 + I_1, ...]}."""
+        out = {}
+        for which in ("x", "y", "damping"):
+            acc = [0.0]
+            for k, ph in enumerate(self.phases):
+                acc.append(acc[-1] + self._phase_integral(which, k, ph.t1))
+            out[which] = acc
+        return out
+
     def _integral(self, which: str, t_stop: float) -> float:
         """int_0^{t_stop} of x ('x'), y ('y') or C_T vx^2 ('damping') over the phases."""
-        tree, _, both = self._osc
-        total = 0.0
-        for ph in self.phases:
-            if ph.t0 >= t_stop:
-                break
-            t1 = min(ph.t1, t_stop)
-            rate = max(tree.fastest_rate, both.fastest_rate, 1e-9)
-            k = {"x": 0, "y": 2, "damping": 1}[which]
-
-            def fn(s, ph=ph, k=k):
-                vals = self._phase_state(ph, s)[k]
-                return vals * vals if which == "damping" else vals
-
-            val = gauss_legendre_integral(fn, 0.0, t1 - ph.t0, rate)
-            total += self.model.damping * val if which == "damping" else val
-        return total
+        if not self.phases or t_stop <= self.phases[0].t0:
+            return 0.0
+        starts = [ph.t0 for ph in self.phases]
+        k = max(0, bisect_right(starts, t_stop) - 1)
+        ph = self.phases[k]
+        done = self._cumulative[which][k]
+        return done + self._phase_integral(which, k, min(ph.t1, t_stop))
 
     def energy_terms(self, t: float) -> dict:
         """Ledger terms at time t (J): kinetic, potential, damping work, impact losses."""
@@ -283,7 +300,15 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             if order == 0:  # touching with no relative velocity: find the first non-zero term
                 order = 2 if g2 > 1e-12 * bounds[2] else 3
             taylor = (0.0, g1, g2, g3, 0.0, 0.0)
-            s_hit = first_zero(gap, dgap, t_end - t, bounds, rate, order=order, taylor=taylor)
+            def local_bounds(s):
+                dx, vxs = tree.advance(s, x0, vx0)
+                dy, vys = pend.advance(s, y0, vy0)
+                lt = tree.derivative_bounds(x0 + dx, vxs)
+                lp = pend.derivative_bounds(y0 + dy, vys)
+                return [lt[n] + lp[n] for n in range(len(lt))]
+
+            s_hit = first_zero(gap, dgap, t_end - t, bounds, rate, order=order, taylor=taylor,
+                               local_bounds=local_bounds)
             s_stop = t_end - t if s_hit is None else s_hit
             sol.phases.append(Phase("free", t, t + s_stop, x0, vx0, y0, vy0))
             dx, vx = tree.advance(s_stop, x0, vx0)
@@ -317,8 +342,13 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                 return cx * v + cv * both.acceleration(x0 + dx, v)
 
             f0 = cx * x0 + cv * v0
+            def local_force_bounds(s):
+                dx, v = both.advance(s, x0, v0)
+                lb = both.derivative_bounds(x0 + dx, v)
+                return [abs(cx) * lb[n] + abs(cv) * lb[n + 1] for n in range(len(lb) - 1)]
+
             s_sep = first_zero(force, dforce, t_end - t, fb, both.fastest_rate, order=0,
-                               taylor=(f0,))
+                               taylor=(f0,), local_bounds=local_force_bounds)
             s_stop = t_end - t if s_sep is None else s_sep
             sol.phases.append(Phase("together", t, t + s_stop, x0, v0, x0, v0))
             dx, v = both.advance(s_stop, x0, v0)

@@ -1,0 +1,193 @@
+"""Metrics from a sampled contact record: the one rule every soft-contact backend shares.
+
+The soft-contact variant (:mod:`analytic.soft_contact`), MuJoCo and PyBullet all produce an
+:class:`ImpactRecord` (a time series with the contact force) and turn it into the metrics of
+:data:`analytic.results.METRIC_KEYS` with :func:`metrics_from_record`, so their numbers differ
+only by their physics, never by how impacts are counted.
+
+Detection rule (documented, the same for every backend)
+-------------------------------------------------------
+* **Contact intervals** are the maximal runs of samples whose contact force exceeds
+  ``force_threshold`` times the record's peak force (default 1e-6: far below the force of
+  the moving-together phase, about 1e-3 of the peak, yet above round-off).
+* **Moving together** (eq 34) is the first contact interval that lasts longer than
+  ``persist_factor`` (default 3) free-collision durations: one free two-body collision lasts
+  one duration, so a contact that outlives three of them is held by the tree's and the
+  pendulum's own dynamics, which is the paper's "moving together".
+* **T0** is the first time in that interval at which the bodies share one velocity: the
+  relative velocity ``vy - vx`` is within ``common_velocity_tolerance`` (default 1e-3) of the
+  impact speed u1, or changes sign. This is the analogue of the accumulation point of the
+  Newton sequence, where the relative velocity reaches exactly zero; a damped soft contact
+  approaches it exponentially, hence the tolerance. **V** and **x0** are ``vx`` and ``x``
+  there. Times are interpolated linearly between samples.
+* **n_impacts** counts the contact intervals starting at or before T0 (the last one included,
+  as the Newton solver counts the impacts resolved before the common motion).
+* **t_sep** is the end of the moving-together interval (NaN if it outlasts the record).
+* **impact_loss** (eq 56's analogue) is the energy absorbed by the contact up to T0 minus the
+  elastic energy the contact still holds then: what the impact process dissipated.
+* **energy_transferred** (eq 58) and **theta_b** use the pendulum's energy after the last
+  release in the record (NaN when the bodies are still in contact at the end).
+* **ledger_residual**: max over samples of |kinetic + potential + damping work + contact work
+  - initial energy| / initial energy.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .parameters import ParameterError
+from .results import METRIC_KEYS
+
+
+@dataclass(frozen=True)
+class ImpactRecord:
+    """A sampled simulation, t = 0 at the first contact (all SI: s, m, m/s, N, J).
+
+    ``x``/``vx``: trunk impact point; ``y``/``vy``: pendulum contact point; ``force``: contact
+    force on the trunk (>= 0). Energies: ``kinetic`` and ``potential`` of both bodies
+    (springs and gravity), ``damping_work`` dissipated by the trunk's damping so far,
+    ``contact_work`` absorbed by the contact so far (integral of F (vy - vx) dt: stored plus
+    dissipated), ``contact_potential`` elastic energy held in the contact now,
+    ``pendulum_energy`` the pendulum's own kinetic + potential energy.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    vx: np.ndarray
+    y: np.ndarray
+    vy: np.ndarray
+    force: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+    damping_work: np.ndarray
+    contact_work: np.ndarray
+    contact_potential: np.ndarray
+    pendulum_energy: np.ndarray
+
+    def __post_init__(self):
+        n = np.shape(self.t)
+        for name in self.__dataclass_fields__:
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.shape != n:
+                raise ParameterError(f"record.{name}: shape {value.shape}, expected {n}")
+            object.__setattr__(self, name, value)
+        if n[0] < 3 or np.any(np.diff(self.t) <= 0):
+            raise ParameterError("record.t: at least 3 strictly increasing times required")
+
+
+def contact_intervals(force: np.ndarray, threshold: float) -> list[tuple[int, int]]:
+    """Index pairs (first, last) of the maximal runs with force > threshold."""
+    on = np.asarray(force) > threshold
+    if not on.any():
+        return []
+    edges = np.diff(on.astype(np.int8))
+    starts = list(np.flatnonzero(edges == 1) + 1)
+    ends = list(np.flatnonzero(edges == -1))
+    if on[0]:
+        starts.insert(0, 0)
+    if on[-1]:
+        ends.append(on.size - 1)
+    return list(zip(starts, ends))
+
+
+def _interp(t: np.ndarray, f: np.ndarray, at: float) -> float:
+    return float(np.interp(at, t, f))
+
+
+def _integral_to(t: np.ndarray, f: np.ndarray, t_stop: float) -> float:
+    k = int(np.searchsorted(t, t_stop, side="right"))
+    tt = np.append(t[:k], t_stop)
+    ff = np.append(f[:k], _interp(t, f, t_stop))
+    return float(np.trapezoid(ff, tt))
+
+
+def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_energy: float,
+                        collision_duration: float, impactor_mass: float, dynamic_mass: float,
+                        equivalent_length: float | None = None, gravity: float = 9.81,
+                        force_threshold: float = 1e-6, persist_factor: float = 3.0,
+                        common_velocity_tolerance: float = 1e-3) -> dict:
+    """The metrics of :data:`METRIC_KEYS` from a record, by the rule of the module docstring.
+
+    ``dynamic_mass`` (M_T, kg) only enters the e = 0 loss of eq 57,
+    0.5 m u1^2 M_T / (M_T + m); ``equivalent_length`` (m) gives theta_b (NaN for a billet).
+    """
+    r = record
+    nan = math.nan
+    peak = float(np.max(r.force))
+    if not (math.isfinite(peak) and peak > 0):
+        raise ParameterError("record.force: no contact in the record (peak force <= 0)")
+    intervals = contact_intervals(r.force, force_threshold * peak)
+    t = r.t
+    together = None
+    for i0, i1 in intervals:
+        if t[i1] - t[i0] > persist_factor * collision_duration:
+            together = (i0, i1)
+            break
+    T0 = x0 = V = A_x = A_y = nan
+    loss = nan
+    n_impacts = len(intervals)
+    t_sep = nan
+    if together is not None:
+        i0, i1 = together
+        rel = r.vy[i0:i1 + 1] - r.vx[i0:i1 + 1]
+        tol = common_velocity_tolerance * impact_speed
+        g = np.abs(rel) - tol  # <= 0 once the velocities are common
+        if rel.size > 1:
+            cross = np.flatnonzero(((g[:-1] > 0) & (g[1:] <= 0))
+                                   | (np.sign(rel[:-1]) * np.sign(rel[1:]) < 0))
+        else:
+            cross = np.array([], dtype=int)
+        if g[0] <= 0 or not cross.size:
+            T0 = float(t[i0])
+        else:
+            k = int(cross[0])
+            # the sign change of rel, or the crossing of |rel| = tol, interpolated linearly
+            a, b = (rel[k], rel[k + 1]) if np.sign(rel[k]) != np.sign(rel[k + 1]) else (
+                g[k], g[k + 1])
+            frac = a / (a - b) if a != b else 0.0
+            T0 = float(t[i0 + k] + frac * (t[i0 + k + 1] - t[i0 + k]))
+        V = _interp(t, r.vx, T0)
+        x0 = _interp(t, r.x, T0)
+        A_x = _integral_to(t, r.x, T0)
+        A_y = _integral_to(t, r.y, T0)
+        loss = _interp(t, r.contact_work, T0) - _interp(t, r.contact_potential, T0)
+        n_impacts = sum(1 for j0, _ in intervals if t[j0] <= T0)
+        t_sep = float(t[i1]) if i1 < t.size - 1 else nan
+    else:
+        loss = float(r.contact_work[-1] - r.contact_potential[-1])
+    k_max = int(np.argmax(r.x))
+    x_max, t_xmax = float(r.x[k_max]), float(t[k_max])
+    if 0 < k_max < t.size - 1:  # parabola through the three samples around the maximum
+        y0, y1, y2 = r.x[k_max - 1:k_max + 2]
+        den = y0 - 2.0 * y1 + y2
+        if den < 0:
+            s = 0.5 * (y0 - y2) / den
+            h = 0.5 * (t[k_max + 1] - t[k_max - 1])
+            x_max = float(y1 - 0.25 * (y0 - y2) * s)
+            t_xmax = float(t[k_max] + s * h)
+    theta_b = e_transferred = nan
+    if intervals and intervals[-1][1] < t.size - 1 and together is not None:
+        e_pend = float(r.pendulum_energy[intervals[-1][1] + 1])
+        e_transferred = initial_energy - e_pend - loss
+        if equivalent_length is not None:
+            c = 1.0 - e_pend / (impactor_mass * gravity * equivalent_length)
+            theta_b = math.acos(max(-1.0, min(1.0, c)))
+    total = r.kinetic + r.potential + r.damping_work + r.contact_work
+    ledger = float(np.max(np.abs(total - initial_energy)) / initial_energy)
+    m = impactor_mass
+    metrics = {
+        "n_impacts": int(n_impacts),
+        "T0": T0, "x0": x0, "V": V,
+        "x_max": x_max, "t_xmax": t_xmax, "t_sep": t_sep,
+        "A_x": A_x, "A_y": A_y,
+        "impact_loss": float(loss),
+        "impact_loss_inelastic": 0.5 * m * impact_speed ** 2 * dynamic_mass / (dynamic_mass + m),
+        "energy_transferred": e_transferred,
+        "theta_b": theta_b,
+        "ledger_residual": ledger,
+    }
+    assert tuple(metrics) == METRIC_KEYS
+    return metrics

@@ -1,0 +1,63 @@
+"""The time-step rule of the engine runners (MuJoCo and PyBullet share it).
+
+Rule: resolve the fastest time scale of the model,
+
+    dt = min(t_c / steps_per_collision, (2 pi / omega_max) / steps_per_period),
+
+with t_c the duration of one free two-body collision under the soft contact
+(:func:`analytic.soft_contact.collision_duration`) and omega_max the highest natural
+frequency of the engine's trunk (rad/s; None for the SDOF trunk, whose frequency is far
+below the contact's). Defaults: 50 steps per collision (the restitution of one collision is
+then within 0.01 of its target, see the engine tests) and 20 steps per period.
+
+A step is refused when it cannot be stable for an explicit/semi-implicit integrator:
+omega dt >= 2 for the contact (omega = pi / t_c, its undamped frequency) or for the
+highest trunk mode.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .parameters import ParameterError
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+            math.isfinite(value) and value > 0):
+        raise ParameterError(f"{name} = {value!r} is out of range: allowed (0, inf)")
+    return float(value)
+
+
+def stability_limit(collision_duration: float, highest_frequency: float | None = None) -> float:
+    """Largest stable step (s): 2 / omega for the contact and the highest trunk mode."""
+    t_c = _positive("collision_duration", collision_duration)
+    limit = 2.0 * t_c / math.pi
+    if highest_frequency is not None:
+        limit = min(limit, 2.0 / _positive("highest_frequency", highest_frequency))
+    return limit
+
+
+def choose_time_step(collision_duration: float, highest_frequency: float | None = None, *,
+                     steps_per_collision: int = 50, steps_per_period: int = 20) -> float:
+    """The documented default step (s), see the module docstring."""
+    t_c = _positive("collision_duration", collision_duration)
+    dt = t_c / steps_per_collision
+    if highest_frequency is not None:
+        w = _positive("highest_frequency", highest_frequency)
+        dt = min(dt, 2.0 * math.pi / w / steps_per_period)
+    return dt
+
+
+def check_time_step(dt, collision_duration: float, highest_frequency: float | None = None
+                    ) -> float:
+    """Return ``dt`` (s) if it can be stable, else raise a one-line ParameterError."""
+    dt = _positive("dt", dt)
+    limit = stability_limit(collision_duration, highest_frequency)
+    if dt >= limit:
+        what = f"contact duration {collision_duration:.3g} s"
+        if highest_frequency is not None:
+            what += f", highest trunk mode {highest_frequency:.4g} rad/s"
+        raise ParameterError(f"dt = {dt:.3g} s is too large for stability: allowed "
+                             f"(0, {limit:.3g}) s ({what})")
+    return dt

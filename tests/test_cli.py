@@ -1,0 +1,135 @@
+"""The treeimpact command line: JSON layout, units, and one-line errors with exit code 2."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from analytic.results import METRIC_KEYS
+from compare.cli import main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_paper_json_layout(capsys):
+    code, out, _ = run(capsys, "paper", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert set(data["trees"]) == {"open-center", "central-leader"}
+    quantities = {"u1", "V", "x0", "T0", "A_x", "M_T", "K_T", "E", "b", "omega_n", "xi",
+                  "energy_loss_pct"}
+    for tree in data["trees"].values():
+        assert set(tree) == quantities
+        for row in tree.values():
+            assert {"printed", "recomputed", "rel_diff"} <= set(row)
+    for d in data["discrepancies"]:
+        assert {"equation", "printed", "reproduces_table", "evidence"} == set(d)
+
+
+def test_simulate_json_layout(capsys):
+    code, out, _ = run(capsys, "simulate", "open-center", "--e", "0.2", "--t-end", "0.05",
+                       "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert set(data["model"]) >= {"M_T", "C_T", "K_T", "m", "k", "e", "u1"}
+    assert tuple(data["metrics"]) == METRIC_KEYS
+    assert data["model"]["e"] == 0.2
+    assert set(data["scenario"]["trunk"]) >= {"length", "clamp_height", "diameter", "density",
+                                              "youngs_modulus", "clamp_mass", "crown_mass",
+                                              "damping", "base_stiffness"}
+    assert "release_angle_deg" in data["scenario"]["impactor"]
+    assert data["scenario"]["contact"]["restitution"] == 0.2
+
+
+def test_simulate_a_toml_path(capsys, tmp_path):
+    f = tmp_path / "billet.toml"
+    f.write_text("""
+[trunk]
+length = 1.0
+clamp_height = 0.3
+diameter = 0.12
+density = 950
+youngs_modulus = 9e9
+[impactor]
+type = "billet"
+mass = 50
+impact_speed = 3.0
+[contact]
+restitution = 0.2
+""")
+    code, out, _ = run(capsys, "simulate", str(f), "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["metrics"]["theta_b"] is None  # no rebound angle for a billet (JSON null)
+    assert data["scenario"]["impactor"]["impact_speed"] == 3.0
+
+
+@pytest.mark.parametrize("argv,field", [
+    (["simulate", "open-center", "--e", "1.5"], "contact.restitution"),
+    (["simulate", "open-center", "--e", "-0.1"], "contact.restitution"),
+    (["simulate", "open-center", "--e", "nan"], "contact.restitution"),
+    (["simulate", "open-center", "--t-end", "-1"], "t_end"),
+    (["simulate", "no-such-tree"], "no-such-tree"),
+    (["simulate", "open-center", "--backend", "ode"], "--backend"),
+    (["simulate", "open-center", "--segments", "4"], "--segments"),
+    (["simulate", "open-center", "--e", "abc"], "--e"),
+    (["frobnicate"], "command"),
+])
+def test_bad_input_gives_one_line_and_exit_2(capsys, argv, field):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and field in lines[0]
+    assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("body,field", [
+    ('[trunk]\nlength = -1\nclamp_height = 0.3\ndiameter = 0.1\ndensity = 900\n'
+     'youngs_modulus = 9e9\n[impactor]\nmass = 100\nequivalent_length = 1.5\n'
+     'release_angle_deg = 30\n[contact]\nrestitution = 0.1\n', "trunk.length"),
+    ("[trunk]\nlength = 1.0\n", "trunk.clamp_height: missing"),
+    ("this is not toml ][", "malformed TOML"),
+    ('name = "x"\n[trunk]\nlength = 1.0\nclamp_height = 2.0\ndiameter = 0.1\ndensity = 900\n'
+     'youngs_modulus = 9e9\n[impactor]\nmass = 100\nequivalent_length = 1.5\n'
+     'release_angle_deg = 30\n[contact]\nrestitution = 0.1\n', "trunk.clamp_height"),
+    ('[trunk]\nlength = 1.0\nclamp_height = 0.3\ndiameter = 0.1\ndensity = 900\n'
+     'youngs_modulus = 9e9\n[impactor]\nmass = -100\nequivalent_length = 1.5\n'
+     'release_angle_deg = 30\n[contact]\nrestitution = 0.1\n', "impactor.mass"),
+    ('[trunk]\nlength = 1.0\nclamp_height = 0.3\ndiameter = 0.1\ndensity = 900\n'
+     'youngs_modulus = "soft"\n[impactor]\nmass = 100\nequivalent_length = 1.5\n'
+     'release_angle_deg = 30\n[contact]\nrestitution = 0.1\n', "trunk.youngs_modulus"),
+    ('[trunk]\nlength = 1.0\nclamp_height = 0.3\ndiameter = 0.1\ndensity = 900\n'
+     'youngs_modulus = 9e9\ncolour = 3\n[impactor]\nmass = 100\nequivalent_length = 1.5\n'
+     'release_angle_deg = 30\n[contact]\nrestitution = 0.1\n', "trunk.colour"),
+    ('[trunk]\nlength = 1.0\nclamp_height = 0.3\ndiameter = 0.1\ndensity = nan\n'
+     'youngs_modulus = 9e9\n[impactor]\nmass = 100\nequivalent_length = 1.5\n'
+     'release_angle_deg = 30\n[contact]\nrestitution = 0.1\n', "trunk.density"),
+])
+def test_malformed_scenario_file_gives_one_line_and_exit_2(capsys, tmp_path, body, field):
+    f = tmp_path / "bad.toml"
+    f.write_text(body)
+    code, out, err = run(capsys, "simulate", str(f))
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and field in err
+
+
+def test_modes_side_by_side(capsys):
+    pytest.importorskip("analytic.beam")
+    code, out, _ = run(capsys, "modes", "open-center", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["model"]["static_stiffness"] == pytest.approx(1.2e6, rel=1e-6)
+    assert len(data["beam"]["omegas"]) >= 1
+
+
+def test_console_script_exit_code_without_traceback():
+    proc = subprocess.run([sys.executable, "-m", "compare.cli", "simulate", "open-center",
+                           "--e", "2"], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and "contact.restitution" in proc.stderr
