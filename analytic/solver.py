@@ -242,6 +242,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
     pend = Oscillator.from_mck(m, 0.0, model.impactor_stiffness)
     both = Oscillator.from_mck(M + m, model.damping, model.stiffness + model.impactor_stiffness)
     rate = max(tree.fastest_rate, pend.fastest_rate, 1e-12)
+    tree_adv, pend_adv = tree.scalar_advance, pend.scalar_advance
     sol = ImpactSolution(model=model, t_end=t_end)
     u_scale = model.impact_speed
 
@@ -293,6 +294,11 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             def dgap(s):
                 return tree.advance(s, x0, vx0)[1] - pend.advance(s, y0, vy0)[1]
 
+            def gap_slope(s):
+                dx, vxs = tree_adv(s, x0, vx0)
+                dy, vys = pend_adv(s, y0, vy0)
+                return (x0 - y0) + dx - dy, vxs - vys
+
             g1 = vx0 - vy0
             g2 = tree.acceleration(x0, vx0) - pend.acceleration(y0, vy0)
             g3 = tree.jerk(x0, vx0) - pend.jerk(y0, vy0)
@@ -308,7 +314,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                 return [lt[n] + lp[n] for n in range(len(lt))]
 
             s_hit = first_zero(gap, dgap, t_end - t, bounds, rate, order=order, taylor=taylor,
-                               local_bounds=local_bounds)
+                               local_bounds=local_bounds, fdf=gap_slope)
             s_stop = t_end - t if s_hit is None else s_hit
             sol.phases.append(Phase("free", t, t + s_stop, x0, vx0, y0, vy0))
             dx, vx = tree.advance(s_stop, x0, vx0)

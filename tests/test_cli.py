@@ -120,7 +120,6 @@ def test_malformed_scenario_file_gives_one_line_and_exit_2(capsys, tmp_path, bod
 
 
 def test_modes_side_by_side(capsys):
-    pytest.importorskip("analytic.beam")
     code, out, _ = run(capsys, "modes", "open-center", "--json")
     assert code == 0
     data = json.loads(out)
