@@ -1,0 +1,597 @@
+"""The PyBullet runner: one DIRECT client per process, fixed step, spring and damping forces by hand.
+
+Per step the runner reads the joint states, applies the trunk's spring and damping (and the
+linear pendulum's spring m g / l_e, or the full pendulum's weight -m g l_e sin(theta)) as
+joint forces with TORQUE_CONTROL, calls ``stepSimulation`` and reads the contact force.
+Bullet's default velocity motors (which brake every joint) are switched off once
+(VELOCITY_CONTROL with force 0). The world has no gravity: the paper neglects the trunk's
+weight, so the trunk is weightless, and the only weight in the model, the pendulum's, is
+applied as its joint torque (the linear pendulum's restoring spring is that weight,
+linearised, eq 13).
+
+Bullet (multibody, Featherstone) steps semi-implicitly: v_{n+1} = v_n + dt a(forces at
+step n) + contact impulse / mass, x_{n+1} = x_n + dt v_{n+1}. The runner's energy ledger
+follows that step exactly for the kinetic energy: the work of an impulse P over a step is
+P (v_n + v_{n+1}) / 2, so the damping work is sum C v_n (v_n + v_{n+1}) / 2 dt and the
+contact work sum F dt ((vy - vx)_n + (vy - vx)_{n+1}) / 2; the springs' potential energy
+1/2 K x^2 differs from their discrete work by the integrator's bounded O(omega dt) energy
+error (omega dt < 2e-3 for the trunk at the default step).
+
+Damping is explicit, -C v_n over step n (Bullet's own joint damping is explicit too).
+Accuracy (measured, central-leader SDOF, soft contact): V, x_max and impact_loss agree with
+the analytic soft variant within 0.25 % at the default step, T0 (which hinges on the time
+of the re-contact after the first rebound) converges at first order: 1.1 % at the default
+50 steps per collision, 0.29 % at 200.
+
+Contact (see :mod:`bullet_models._contact` for the ERP/CFM derivation):
+
+* ``soft``: the law (k_c, c_c) of :func:`analytic.soft_contact.contact_law` (the same as the
+  analytic soft variant), given to Bullet as stiffness k_c and damping c_b, the law's
+  damping less what the implicit step adds, for the reduced mass mu of the pendulum and the
+  trunk's apparent mass at a (M_T for the SDOF trunk; 1 / (J_a M^-1 J_a^T) of the chain,
+  the mass the contact sees in the first instant). Friction 0, restitution 0.
+* ``newton``: a rigid contact with Bullet's restitution: pendulum restitution e, trunk 1
+  (Bullet multiplies them), contact ERP 0 (the solver never pushes overlapping bodies
+  apart, which would add energy), contact processing threshold 0 on both links (no
+  speculative contact: a contact acts only once the bodies overlap, so the bounce is
+  applied to the true approach velocity, eq 21, instead of being computed at a distance,
+  which lowers the rebound velocity by gap / dt), contact slop 0, and the restitution
+  velocity threshold (below which Bullet makes a bounce plastic) lowered from Bullet's
+  0.2 m/s to 1e-3 u1: bounces slower than that are the "common velocity" of
+  :func:`analytic.records.metrics_from_record` anyway, while Bullet's default would zero
+  the paper's first rebounds (e u1 ~ 0.2 m/s). The impact is then applied at the first
+  step with overlap, at most one step (dt u1) late.
+
+Time step (:mod:`analytic.timestep`): soft: dt = min(t_c / 50, 2 pi / omega_max / 20) with
+t_c the free collision time of the law on the reduced mass above and omega_max the chain's
+highest linearised mode (none for the SDOF trunk); if that dt is above
+:func:`bullet_models._contact.largest_time_step` (the implicit step would damp more than
+the target e allows) it is lowered to 0.9 of that limit. newton: the same rule with the
+default soft contact's t_c (5e-4 s), i.e. impact times resolved to 1e-5 s.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from analytic.chain import (chain_matrices, chain_natural_frequencies, default_segments,
+                            hinged_chain, lateral_jacobian)
+from analytic.model import TwoBodyModel, two_body_model
+from analytic.parameters import (DEFAULT_CONTACT_DURATION, Contact, ParameterError,
+                                 Pendulum, Scenario)
+from analytic.records import ImpactRecord, metrics_from_record
+from analytic.reduction import reduce_trunk
+from analytic.results import SimulationDiverged, SimulationResult, Trajectory
+from analytic.soft_contact import collision_duration, contact_law
+from analytic.timestep import check_time_step, choose_time_step
+
+from . import _contact, _urdf
+
+TRUNKS = ("sdof", "chain")
+PENDULUMS = ("linear", "full")
+CONTACTS = ("soft", "newton")
+DAMPINGS = ("distributed", "joint")
+RESTITUTION_THRESHOLD_FRACTION = 1e-3  # of u1: slower bounces are plastic (newton mode)
+SWING_STEP = 1e-4  # s: step of the full pendulum's free swing before the contact
+SWING_SWITCH_STEPS = 20  # switch to the impact step this many swing steps before contact
+ENERGY_GROWTH_LIMIT = 0.05  # relative: mechanical energy above (1 + this) E0 = diverged
+
+
+def _choice(name, value, allowed):
+    if value not in allowed:
+        raise ParameterError(f"--{name} = {value!r}: allowed {', '.join(allowed)}")
+    return value
+
+
+# ----------------------------------------------------------------------------------- client
+_CLIENT = {"id": None, "dir": None, "files": {}}
+
+
+def client():
+    """This process's PyBullet DIRECT client (created once)."""
+    import pybullet as p
+
+    cid = _CLIENT["id"]
+    if cid is None or not p.isConnected(cid):
+        cid = p.connect(p.DIRECT)
+        _CLIENT["id"] = cid
+    return p, cid
+
+
+def _urdf_file(text: str) -> str:
+    files = _CLIENT["files"]
+    if text not in files:
+        if _CLIENT["dir"] is None:
+            _CLIENT["dir"] = tempfile.mkdtemp(prefix="bullet_models_")
+        path = os.path.join(_CLIENT["dir"], f"model_{len(files)}.urdf")
+        with open(path, "w") as fh:
+            fh.write(text)
+        files[text] = path
+    return files[text]
+
+
+# ------------------------------------------------------------------------------------ setup
+@dataclass(frozen=True)
+class Setup:
+    """Everything a run needs, computed without the engine (SI units)."""
+
+    scenario: Scenario
+    model: TwoBodyModel
+    trunk: str
+    pendulum: str
+    contact: str
+    damping: str
+    segments: int | None
+    dt: float
+    t_end: float
+    trunk_urdf: str
+    pendulum_urdf: str
+    contact_stiffness: float | None  # k_c, N/m (soft)
+    contact_damping: float | None  # c_c, N s/m (soft, the continuous law)
+    bullet: _contact.BulletContact | None
+    collision_duration: float  # s: t_c of the soft law (soft) or dt (newton: one-step impulses)
+    omega_max: float | None
+    apparent_mass: float  # kg: trunk mass seen by the contact
+    matrices: tuple | None = field(default=None, repr=False)  # chain (M, K, D)
+
+
+def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
+               contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
+               damping="distributed") -> Setup:
+    if not isinstance(scenario, Scenario):
+        raise ParameterError("scenario: expected an analytic.Scenario")
+    _choice("trunk", trunk, TRUNKS)
+    _choice("pendulum", pendulum, PENDULUMS)
+    _choice("contact", contact, CONTACTS)
+    _choice("damping", damping, DAMPINGS)
+    if restitution is not None:
+        Contact(restitution=restitution)
+    if pendulum == "full" and not isinstance(scenario.impactor, Pendulum):
+        raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
+    model = two_body_model(scenario, restitution)
+    t_end = scenario.t_end if t_end is None else t_end
+    if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
+            math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"--t-end = {t_end!r} s is out of range: allowed (0, inf) s")
+    tr = scenario.trunk
+    matrices = None
+    if trunk == "chain":
+        n = default_segments(tr) if segments is None else segments
+        chain = hinged_chain(tr, n)
+        M, K, D = chain_matrices(chain)
+        ja = lateral_jacobian(chain, tr.clamp_height)[0]
+        apparent = float(1.0 / (ja @ np.linalg.solve(M, ja)))
+        omega_max = float(chain_natural_frequencies(chain, chain.segments)[-1])
+        trunk_urdf = _urdf.trunk_chain_urdf(chain, name=f"{scenario.name}-trunk-chain-{n}")
+        segments = n
+        matrices = (M, K, D)
+    else:
+        if segments is not None:
+            raise ParameterError("--segments: only for --trunk chain")
+        tree = reduce_trunk(tr)
+        apparent = tree.dynamic_mass
+        omega_max = None
+        trunk_urdf = _urdf.trunk_sdof_urdf(tree, tr.clamp_height,
+                                           name=f"{scenario.name}-trunk-sdof")
+    pend_urdf = _urdf.pendulum_urdf(scenario.impactor, tr.clamp_height, pendulum,
+                                    name=f"{scenario.name}-pendulum-{pendulum}")
+    m = model.impactor_mass
+    mu = apparent * m / (apparent + m)
+    k_c = c_c = bullet = None
+    if contact == "soft":
+        if contact_stiffness is not None:
+            k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
+        else:
+            k_c, c_c = contact_law(model, scenario.contact)
+        law_model = TwoBodyModel(apparent, 0.0, 1.0, m, 0.0, model.impact_speed,
+                                 model.restitution)
+        t_c = collision_duration(law_model, k_c, c_c)
+        if dt is None:
+            dt = choose_time_step(t_c, omega_max)
+            limit = _contact.largest_time_step(k_c, c_c, mu)
+            if dt > limit:
+                dt = 0.9 * limit
+        check_time_step(dt, t_c, omega_max)
+        bullet = _contact.bullet_contact(k_c, c_c, mu, dt)
+        col = t_c
+    else:
+        if contact_stiffness is not None:
+            raise ParameterError("--contact-stiffness: only for --contact soft")
+        w = omega_max if omega_max is not None else math.sqrt(
+            (model.stiffness + model.impactor_stiffness) / min(model.dynamic_mass, m))
+        if dt is None:
+            dt = choose_time_step(DEFAULT_CONTACT_DURATION, omega_max)
+        check_time_step(dt, math.pi / w, w)
+        col = dt
+    return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
+                 contact=contact, damping=damping, segments=segments, dt=float(dt),
+                 t_end=float(t_end), trunk_urdf=trunk_urdf, pendulum_urdf=pend_urdf,
+                 contact_stiffness=k_c, contact_damping=c_c, bullet=bullet,
+                 collision_duration=col, omega_max=omega_max, apparent_mass=apparent,
+                 matrices=matrices)
+
+
+# ------------------------------------------------------------------------------------ world
+@dataclass
+class World:
+    p: object
+    cid: int
+    trunk: int
+    pendulum: int
+    trunk_joints: list
+    contact_link: int
+
+
+def build_world(setup: Setup) -> World:
+    """Load both bodies into this process's client, configured for ``setup``."""
+    p, cid = client()
+    p.resetSimulation(physicsClientId=cid)
+    p.setGravity(0.0, 0.0, 0.0, physicsClientId=cid)
+    newton = setup.contact == "newton"
+    u1 = setup.model.impact_speed
+    p.setPhysicsEngineParameter(
+        fixedTimeStep=setup.dt, numSubSteps=0, numSolverIterations=50, contactSlop=0.0,
+        restitutionVelocityThreshold=RESTITUTION_THRESHOLD_FRACTION * u1 if newton else 0.0,
+        contactERP=0.0 if newton else 0.2, globalCFM=0.0, enableConeFriction=0,
+        deterministicOverlappingPairs=1, physicsClientId=cid)
+    tb = p.loadURDF(_urdf_file(setup.trunk_urdf), useFixedBase=True, physicsClientId=cid)
+    pb = p.loadURDF(_urdf_file(setup.pendulum_urdf), useFixedBase=True, physicsClientId=cid)
+    nj = p.getNumJoints(tb, physicsClientId=cid)
+    joints = list(range(nj))
+    p.setJointMotorControlArray(tb, joints, p.VELOCITY_CONTROL, forces=[0.0] * nj,
+                                physicsClientId=cid)
+    p.setJointMotorControl2(pb, 0, p.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
+    for j in joints:  # no native damping anywhere: the runner applies it
+        p.changeDynamics(tb, j, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0,
+                         lateralFriction=0.0, physicsClientId=cid)
+    p.changeDynamics(pb, 0, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0,
+                     lateralFriction=0.0, physicsClientId=cid)
+    pad = joints[-1] if setup.trunk == "sdof" else _clamp_link(setup)
+    for body, link in ((tb, pad), (pb, 0)):
+        if newton:
+            rest = setup.model.restitution if body == pb else 1.0
+            p.changeDynamics(body, link, restitution=rest, contactProcessingThreshold=0.0,
+                             physicsClientId=cid)
+        else:
+            ks, ds = setup.bullet.per_body
+            p.changeDynamics(body, link, restitution=0.0, contactStiffness=ks,
+                             contactDamping=ds, physicsClientId=cid)
+    return World(p, cid, tb, pb, joints, pad)
+
+
+def _clamp_link(setup: Setup) -> int:
+    return hinged_chain(setup.scenario.trunk, setup.segments).clamp_segment
+
+
+# ------------------------------------------------------------------------------------- run
+def run(setup: Setup) -> SimulationResult:
+    """Simulate ``setup``; the record starts at the first contact (t = 0)."""
+    world = build_world(setup)
+    p, cid = world.p, world.cid
+    dt = setup.dt
+    model = setup.model
+    full = setup.pendulum == "full"
+    imp = setup.scenario.impactor
+    m = model.impactor_mass
+    tb, pb = world.trunk, world.pendulum
+    if full:
+        le, g = imp.equivalent_length, imp.gravity
+        inertia = m * le * le * (1.0 + _urdf.BOB_INERTIA_FRACTION)
+        t_shift, e0 = _swing(world, setup, le, g)
+        theta0, omega0 = p.getJointState(pb, 0, physicsClientId=cid)[:2]
+        y0, vy0 = le * math.sin(theta0), le * math.cos(theta0) * omega0
+    else:
+        le = g = inertia = None
+        p.resetJointState(pb, 0, 0.0, model.impact_speed, physicsClientId=cid)
+        t_shift, e0 = 0.0, model.initial_energy
+    n_steps = int(math.ceil(setup.t_end / dt))
+    chain = setup.trunk == "chain"
+    if chain:
+        rec = _loop_chain(world, setup, n_steps, full, le, g, m)
+    else:
+        rec = _loop_sdof(world, setup, n_steps, full, le, g, m)
+    return _result(setup, rec, t_shift, e0, inertia)
+
+
+def _swing(world: World, setup: Setup, le: float, g: float):
+    """Release the full pendulum at -theta_r; step until it is about to touch (eq 48).
+
+    Swings with :data:`SWING_STEP` (or dt if smaller), switching to dt shortly before the
+    contact, and stops at the last step before the bob reaches the trunk. Returns
+    (time of touch measured from now, s; initial energy m g l_e (1 - cos theta_r), J).
+    """
+    p, cid, pb = world.p, world.cid, world.pendulum
+    imp = setup.scenario.impactor
+    m = imp.mass
+    theta_r = imp.release_angle
+    p.resetJointState(pb, 0, -theta_r, 0.0, physicsClientId=cid)
+    h = max(SWING_STEP, setup.dt)
+    p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)
+    mgl = m * g * le
+    steps_max = int(10.0 * math.pi * math.sqrt(le / g) / setup.dt) + 10
+    for _ in range(steps_max):
+        th, om = p.getJointState(pb, 0, physicsClientId=cid)[:2]
+        if th >= 0.0:
+            raise SimulationDiverged("full pendulum passed the trunk before contact")
+        remaining = -th / max(om, 1e-12)
+        if h > setup.dt and remaining < SWING_SWITCH_STEPS * h:
+            h = setup.dt
+            p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)
+        if h == setup.dt and le * math.sin(-th) <= le * math.cos(th) * om * h:
+            # touches within the next step: the record starts here
+            return remaining, mgl * (1.0 - math.cos(theta_r))
+        p.setJointMotorControl2(pb, 0, p.TORQUE_CONTROL, force=-mgl * math.sin(th),
+                                physicsClientId=cid)
+        p.stepSimulation(physicsClientId=cid)
+    raise SimulationDiverged("full pendulum never reached the trunk")
+
+
+def _loop_sdof(world, setup, n_steps, full, le, g, m):
+    p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
+    model = setup.model
+    K, C, kp = model.stiffness, model.damping, model.impactor_stiffness
+    mgl = m * g * le if full else 0.0
+    gjs, sjm, step, gcp = (p.getJointState, p.setJointMotorControl2, p.stepSimulation,
+                           p.getContactPoints)
+    TQ = p.TORQUE_CONTROL
+    x = np.empty(n_steps + 1)
+    vx = np.empty(n_steps + 1)
+    q = np.empty(n_steps + 1)
+    qd = np.empty(n_steps + 1)
+    force = np.zeros(n_steps + 1)
+    sin = math.sin
+    for n in range(n_steps + 1):
+        xs = gjs(tb, 0, cid)
+        ps = gjs(pb, 0, cid)
+        x[n] = xs[0]
+        v = xs[1]
+        vx[n] = v
+        q[n] = ps[0]
+        qd[n] = ps[1]
+        if n == n_steps:
+            break
+        sjm(tb, 0, TQ, force=-K * xs[0] - C * v, physicsClientId=cid)
+        sjm(pb, 0, TQ, force=-mgl * sin(ps[0]) if full else -kp * ps[0], physicsClientId=cid)
+        step(cid)
+        f = 0.0
+        for c in gcp(tb, pb, physicsClientId=cid):
+            f += c[9]
+        force[n] = f
+        if not (n & 1023) and not math.isfinite(xs[0] + ps[0]):
+            raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
+    return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force}
+
+
+def _loop_chain(world, setup, n_steps, full, le, g, m):
+    p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
+    model = setup.model
+    M, K, D = setup.matrices
+    kdiag = np.diag(K).copy()
+    if setup.damping == "joint":
+        D = np.diag(_joint_damping(M, K, D))
+    kp = model.impactor_stiffness
+    mgl = m * g * le if full else 0.0
+    joints = world.trunk_joints
+    nj = len(joints)
+    gjss, sjma, sjm, step, gcp = (p.getJointStates, p.setJointMotorControlArray,
+                                  p.setJointMotorControl2, p.stepSimulation,
+                                  p.getContactPoints)
+    gjs = p.getJointState
+    TQ = p.TORQUE_CONTROL
+    Q = np.empty((n_steps + 1, nj))
+    QD = np.empty((n_steps + 1, nj))
+    q = np.empty(n_steps + 1)
+    qd = np.empty(n_steps + 1)
+    force = np.zeros(n_steps + 1)
+    sin = math.sin
+    for n in range(n_steps + 1):
+        states = gjss(tb, joints, cid)
+        ps = gjs(pb, 0, cid)
+        th = [s[0] for s in states]
+        om = [s[1] for s in states]
+        Q[n] = th
+        QD[n] = om
+        q[n] = ps[0]
+        qd[n] = ps[1]
+        if n == n_steps:
+            break
+        tau = -kdiag * Q[n] - D @ QD[n]
+        sjma(tb, joints, TQ, forces=tau.tolist(), physicsClientId=cid)
+        sjm(pb, 0, TQ, force=-mgl * sin(ps[0]) if full else -kp * ps[0], physicsClientId=cid)
+        step(cid)
+        f = 0.0
+        for c in gcp(tb, pb, physicsClientId=cid):
+            f += c[9]
+        force[n] = f
+        if not (n & 1023) and not np.all(np.isfinite(Q[n])):
+            raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
+    chain = hinged_chain(setup.scenario.trunk, setup.segments)
+    h = chain.lengths[:chain.clamp_index]
+    phi = np.cumsum(Q, axis=1)[:, :chain.clamp_index]
+    phid = np.cumsum(QD, axis=1)[:, :chain.clamp_index]
+    x = np.sin(phi) @ h
+    vx = (np.cos(phi) * phid) @ h
+    kin = 0.5 * np.einsum("ni,ij,nj->n", QD, M, QD)
+    pot = 0.5 * (Q * Q) @ kdiag
+    ddot = np.einsum("ni,ij,nj->n", QD[:-1], D, 0.5 * (QD[:-1] + QD[1:]))
+    return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force, "trunk_kinetic": kin,
+            "trunk_potential": pot, "damping_power": ddot}
+
+
+def _joint_damping(M, K, D) -> np.ndarray:
+    """Hinge dampers beta k_j (stiffness-proportional) with the first mode's damping of D.
+
+    The documented alternative to the distributed damping: beta = phi^T D phi / phi^T K phi
+    for the first mode phi, so mode 1 keeps its damping ratio; higher modes get more.
+    """
+    import scipy.linalg
+
+    w2, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, 0])
+    phi = vec[:, 0]
+    beta = float(phi @ D @ phi) / float(phi @ K @ phi)
+    return beta * np.diag(K)
+
+
+def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> SimulationResult:
+    model = setup.model
+    dt = setup.dt
+    m = model.impactor_mass
+    full = setup.pendulum == "full"
+    n = rec["x"].size
+    t = np.arange(n) * dt - t_shift
+    x, vx = rec["x"], rec["vx"]
+    if full:
+        imp = setup.scenario.impactor
+        le, g = imp.equivalent_length, imp.gravity
+        th, om = rec["q"], rec["qd"]
+        y, vy = le * np.sin(th), le * np.cos(th) * om
+        pend_kin = 0.5 * inertia * om * om
+        pend_pot = m * g * le * (1.0 - np.cos(th))
+    else:
+        y, vy = rec["q"], rec["qd"]
+        pend_kin = 0.5 * m * vy * vy
+        pend_pot = 0.5 * model.impactor_stiffness * y * y
+    if setup.trunk == "chain":
+        trunk_kin, trunk_pot = rec["trunk_kinetic"], rec["trunk_potential"]
+        d_power = rec["damping_power"]
+    else:
+        trunk_kin = 0.5 * model.dynamic_mass * vx * vx
+        trunk_pot = 0.5 * model.stiffness * x * x
+        d_power = model.damping * vx[:-1] * 0.5 * (vx[:-1] + vx[1:])
+    force = rec["force"]
+    rel = vy - vx
+    c_power = force[:-1] * 0.5 * (rel[:-1] + rel[1:])
+    damping_work = np.concatenate([[0.0], np.cumsum(d_power) * dt])
+    contact_work = np.concatenate([[0.0], np.cumsum(c_power) * dt])
+    if setup.contact == "soft":
+        overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
+        c_pot = 0.5 * setup.contact_stiffness * overlap ** 2
+    else:
+        c_pot = np.zeros(n)
+    kinetic = trunk_kin + pend_kin
+    potential = trunk_pot + pend_pot
+    mech = kinetic + potential
+    if not np.all(np.isfinite(mech)) or np.max(mech) > (1.0 + ENERGY_GROWTH_LIMIT) * e0:
+        raise SimulationDiverged(
+            f"bullet: mechanical energy reached {np.nanmax(mech):.4g} J > "
+            f"{1 + ENERGY_GROWTH_LIMIT:g} x the input {e0:.4g} J (dt = {dt:.3g} s)")
+    # the force of step n acts from sample n to n + 1; the last sample repeats it
+    force_rec = force.copy()
+    force_rec[-1] = force[-2]
+    record = ImpactRecord(t=t, x=x, vx=vx, y=y, vy=vy, force=force_rec, kinetic=kinetic,
+                          potential=potential, damping_work=damping_work,
+                          contact_work=contact_work, contact_potential=c_pot,
+                          pendulum_energy=pend_kin + pend_pot)
+    imp = setup.scenario.impactor
+    metrics = metrics_from_record(
+        record, impact_speed=model.impact_speed, initial_energy=e0,
+        collision_duration=setup.collision_duration, impactor_mass=m,
+        dynamic_mass=model.dynamic_mass,
+        equivalent_length=getattr(imp, "equivalent_length", None),
+        gravity=getattr(imp, "gravity", 9.81))
+    b = setup.bullet
+    model_dict = {**model.as_dict(), "segments": setup.segments, "dt": dt,
+                  "contact_stiffness": setup.contact_stiffness,
+                  "contact_damping": setup.contact_damping,
+                  "trunk": setup.trunk, "pendulum": setup.pendulum, "contact": setup.contact,
+                  "damping": setup.damping, "apparent_mass": setup.apparent_mass,
+                  "bullet_contact_damping": b.damping if b else None,
+                  "contact_erp": b.erp if b else 0.0,
+                  "restitution_velocity_threshold": (
+                      RESTITUTION_THRESHOLD_FRACTION * model.impact_speed
+                      if setup.contact == "newton" else 0.0)}
+    scen = setup.scenario.to_dict()
+    scen["contact"]["restitution"] = model.restitution
+    scen["t_end"] = setup.t_end
+    return SimulationResult(
+        backend="bullet", metrics=metrics, model=model_dict, scenario=scen,
+        trajectory=Trajectory(t=t, x=x, vx=vx, y=y, vy=vy, force=force_rec),
+        extra={"record": record, "collision_duration": setup.collision_duration,
+               "initial_energy": e0})
+
+
+def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
+             contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
+             damping="distributed") -> SimulationResult:
+    """Run one scenario in PyBullet (rules in the module docstring); backend "bullet"."""
+    return run(make_setup(scenario, trunk=trunk, segments=segments, pendulum=pendulum,
+                          contact=contact, contact_stiffness=contact_stiffness, dt=dt,
+                          restitution=restitution, t_end=t_end, damping=damping))
+
+
+def _batch_one(args):
+    scenario, options = args
+    try:
+        return simulate(scenario, **options)
+    except SimulationDiverged as exc:
+        return exc
+
+
+def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
+    """Simulate many scenarios over a process pool (one PyBullet client per process).
+
+    Returns, in order, a SimulationResult or the SimulationDiverged of each scenario;
+    bad options raise ParameterError before any process starts.
+    """
+    import concurrent.futures as cf
+    import multiprocessing as mp
+
+    scenarios = list(scenarios)
+    for s in scenarios:  # validate everything here, with one-line errors
+        make_setup(s, **options)
+    if not scenarios:
+        return []
+    workers = max_workers or min(len(scenarios), os.cpu_count() or 1)
+    if workers <= 1:
+        return [_batch_one((s, options)) for s in scenarios]
+    ctx = mp.get_context("spawn")  # a forked child would share the parent's client
+    with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        return list(pool.map(_batch_one, [(s, options) for s in scenarios]))
+
+
+def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
+    """Static stiffness at a (N/m) and natural frequencies (rad/s) of Bullet's chain.
+
+    Mass matrix from the engine (``calculateMassMatrix`` at rest), stiffness from the hinge
+    springs the runner applies, the clamp point's lateral Jacobian from the engine
+    (``calculateJacobian``): K_a = 1 / (J K^-1 J^T), omega^2 = eig(K, M). ``beam``: the
+    continuous-beam reference of :func:`analytic.modes.beam_reference`.
+    """
+    import scipy.linalg
+
+    from analytic.modes import beam_reference
+
+    tr = scenario.trunk
+    n = default_segments(tr) if segments is None else segments
+    chain = hinged_chain(tr, n)
+    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or not 1 <= n_modes <= n:
+        raise ParameterError(f"n_modes = {n_modes!r} is out of range: allowed [1, {n}]")
+    M, J = engine_matrices(chain)
+    kd = np.asarray(chain.hinge_stiffnesses)
+    static = float(1.0 / np.sum(J ** 2 / kd))
+    w2 = scipy.linalg.eigh(np.diag(kd), M, eigvals_only=True, subset_by_index=[0, n_modes - 1])
+    return {"model": {"static_stiffness": static, "omegas": [float(v) for v in np.sqrt(w2)],
+                      "segments": n},
+            "beam": beam_reference(scenario, n_modes)}
+
+
+def engine_matrices(chain) -> tuple[np.ndarray, np.ndarray]:
+    """(mass matrix at rest from Bullet, kg m^2; d x(a) / d theta from Bullet, m/rad)."""
+    p, cid = client()
+    p.resetSimulation(physicsClientId=cid)
+    text = _urdf.trunk_chain_urdf(chain)
+    body = p.loadURDF(_urdf_file(text), useFixedBase=True, physicsClientId=cid)
+    n = chain.segments
+    zeros = [0.0] * n
+    M = np.asarray(p.calculateMassMatrix(body, zeros, physicsClientId=cid))
+    link = chain.clamp_segment
+    # the top of the clamp segment, z = a, in the link's URDF frame (which is where PyBullet
+    # 3.2.7 takes localPosition from, measured: not the centre-of-mass frame)
+    local = (0.0, 0.0, float(chain.lengths[link]))
+    lin, _ = p.calculateJacobian(body, link, local, zeros, zeros, zeros, physicsClientId=cid)
+    return M, np.asarray(lin)[0]
