@@ -10,9 +10,30 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import os
+import sys
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from analytic.parameters import ParameterError
+
+
+@contextmanager
+def _quiet_stdout():
+    """Send what C extensions print on file descriptor 1 to stderr for the duration."""
+    try:
+        sys.stdout.flush()
+        saved = os.dup(1)
+    except (OSError, ValueError):  # no real stdout (e.g. captured): nothing to protect
+        yield
+        return
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 @dataclass(frozen=True)
@@ -25,7 +46,8 @@ class Backend:
     def _load(self, ref: str):
         module, func = ref.split(":")
         try:
-            return getattr(importlib.import_module(module), func)
+            with _quiet_stdout():  # pybullet prints its build time on import: keep JSON clean
+                return getattr(importlib.import_module(module), func)
         except (ImportError, AttributeError) as exc:
             raise ParameterError(f"backend {self.name!r} is not available here: {exc}") from None
 

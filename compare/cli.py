@@ -56,6 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
     ss.add_argument("--contact-stiffness", type=_number, dest="contact_stiffness",
                     help="contact stiffness, N/m")
     ss.add_argument("--dt", type=_number, help="time step, s")
+    ss.add_argument("--damping", choices=("distributed", "joint"),
+                    help="engine trunk damping: the paper's distributed C, or joint damping")
     ss.add_argument("--json", action="store_true")
 
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
@@ -63,6 +65,20 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--backend", default="analytic")
     sm.add_argument("--segments", type=_count)
     sm.add_argument("--json", action="store_true")
+    sr = sub.add_parser("report", help="write the discrepancy report (html, md, json)")
+    sr.add_argument("--out", default="reports", help="output directory (default: reports)")
+    sr.add_argument("--scenario", action="append", dest="scenarios",
+                    help="shipped scenario name or TOML path (repeatable; default: all shipped)")
+    sr.add_argument("--study", action="append", dest="studies", default=[],
+                    help="directory of a finished study to include (repeatable)")
+
+    try:
+        from .sweep.cli_support import add_sweep_arguments
+    except ImportError:  # pragma: no cover - the sweep package is optional at import time
+        add_sweep_arguments = None
+    if add_sweep_arguments is not None:
+        sw = sub.add_parser("sweep", help="run a parameter sweep: validity maps and studies")
+        add_sweep_arguments(sw)
     return p
 
 
@@ -111,7 +127,7 @@ def cmd_simulate(args) -> int:
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
     opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
-                           "contact_stiffness", "dt"))
+                           "contact_stiffness", "dt", "damping"))
     result = backend.simulate(scenario, **opts)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
@@ -143,7 +159,26 @@ def cmd_modes(args) -> int:
     return 0
 
 
-COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes}
+def cmd_report(args) -> int:
+    from analytic.scenario import load_scenario
+
+    from .report import write_report
+
+    scenarios = [load_scenario(n) for n in args.scenarios] if args.scenarios else None
+    paths = write_report(args.out, scenarios=scenarios, study_dirs=tuple(args.studies))
+    for kind, path in paths.items():
+        print(f"{kind}: {path}")
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    from .sweep.cli_support import run_sweep_command
+
+    return run_sweep_command(args)
+
+
+COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes,
+            "report": cmd_report, "sweep": cmd_sweep}
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,104 @@
+"""Throughput of ``treeimpact sweep`` (a benchmark, not a test; nothing is asserted).
+
+Run: ``.venv/bin/python benchmarks/bench_sweep.py [--backends analytic,soft,mujoco,bullet]
+[--repeats 3]``. Measured in one process run, per backend:
+
+1. grid points per second with a local process pool of 1 and of 2 workers
+   (target: 2 workers >= 1.8 x 1 worker);
+2. the same with a Dask ``LocalCluster`` of 2 single-threaded worker processes
+   (target: >= 90 % of the 2-worker process pool).
+
+Each sweep is the central-leader scenario over ``e`` (and ``crown_ratio`` for the cheap
+backends), written to a fresh directory, identification included (what a study runs). A
+point costs the backend run plus the analytic reference run (always part of a sweep). The
+pools and the cluster are warmed up first (imports); the best of ``--repeats`` is kept,
+since the machine may be shared. Points per second = grid points / wall time of
+:func:`compare.sweep.run.run_sweep` (planning, runs, the CSV journal and the Parquet table).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from compare.sweep.run import run_sweep  # noqa: E402
+
+#: Grid per backend: about 10-20 s of work for one worker on this machine.
+GRIDS = {
+    "analytic": ["e=0.05:0.95:20", "crown_ratio=0:4:20"],  # 400 points, ~5 ms each
+    "soft": ["e=0.1:0.9:10", "crown_ratio=0:4:10"],  # 100 points, ~0.05-0.15 s each
+    "mujoco": ["e=0.1:0.9:8", "crown_ratio=0,2,4"],
+    "bullet": ["e=0.1:0.9:8", "crown_ratio=0,2,4"],  # 24 points, SDOF trunk ~0.1 s each
+}
+ENGINE_OPTIONS = {"mujoco": {"trunk": "sdof"}, "bullet": {"trunk": "sdof"}}
+
+
+def points_per_second(backend: str, repeats: int, **kw) -> tuple[float, int]:
+    best = 0.0
+    n = 0
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory() as d:
+            t0 = time.perf_counter()
+            res = run_sweep("central-leader", GRIDS[backend], Path(d) / "s",
+                            backends=["analytic", backend],
+                            options={k: v for k, v in ENGINE_OPTIONS.items() if k == backend},
+                            progress=False, **kw)
+            wall = time.perf_counter() - t0
+        n = res.table["point"].nunique()
+        bad = res.table[res.table["target"] == backend]["status"].ne("ok").sum()
+        if bad:
+            print(f"  note: {bad} {backend} rows without numbers, e.g. "
+                  f"{res.table[res.table['status'] != 'ok']['error'].iloc[0]}")
+        best = max(best, n / wall)
+    return best, n
+
+
+def warm(**kw) -> None:
+    with tempfile.TemporaryDirectory() as d:
+        run_sweep("central-leader", ["e=0.1,0.2,0.3,0.4"], Path(d) / "w",
+                  backends=["analytic", "soft"], progress=False, **kw)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--backends", default="analytic,soft,mujoco,bullet")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args(argv)
+    from compare.backends import get_backend
+    from distributed import LocalCluster
+
+    backends = []
+    for b in args.backends.split(","):
+        try:
+            get_backend(b).options()
+            backends.append(b)
+        except Exception as exc:  # noqa: BLE001 - reported, then left out
+            print(f"{b}: not measured ({exc})")
+    print(f"cpu count {os.cpu_count()}; best of {args.repeats}; points/s of a sweep")
+    warm(workers=1)
+    rows = []
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster:
+        warm(scheduler=cluster.scheduler_address)
+        for b in backends:
+            one, n = points_per_second(b, args.repeats, workers=1)
+            two, _ = points_per_second(b, args.repeats, workers=2)
+            dask, _ = points_per_second(b, args.repeats, scheduler=cluster.scheduler_address)
+            rows.append((b, n, one, two, dask))
+            print(f"{b:9s} {n:4d} points  1 worker {one:8.2f}/s  2 workers {two:8.2f}/s "
+                  f"(x{two / one:.2f}, target 1.8)  dask 2x1 {dask:8.2f}/s "
+                  f"({dask / two:.0%} of pool, target 90%)", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,143 @@
+"""``treeimpact sweep``: arguments and command (wired into compare/cli.py by the lead).
+
+    treeimpact sweep --grid e=0:0.9:10 --grid crown_ratio=0:4:9 [--scenario NAME]
+        [--backend analytic,soft,mujoco,bullet] [--ladder] [--option [BACKEND.]NAME=VALUE]
+        [--workers N] [--scheduler ADDRESS] [--tolerance REL] [--retry-failed]
+        [--no-identify] --out DIR
+    treeimpact sweep --preset default|full --out DIR      (a whole study)
+
+Writes the sweep table (results.csv, results.parquet), the validity and identification maps
+and study.md / study.html into DIR. Rerunning with the same DIR resumes. Bad input: one
+line naming the flag and the allowed form (exit 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from analytic.parameters import ParameterError
+
+from .grid import GRID_FORM
+
+OPTION_FORM = "[BACKEND.]NAME=VALUE, e.g. trunk=sdof or mujoco.integrator=RK4"
+
+
+def _workers(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return n
+
+
+def _tolerance(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"expected a relative tolerance > 0 (0.05 = 5 %), "
+                                         f"got {text!r}")
+    return v
+
+
+def add_sweep_arguments(parser) -> None:
+    """Add the arguments of ``treeimpact sweep`` to ``parser``."""
+    parser.add_argument("--grid", action="append", default=[], metavar="SPEC",
+                        help=f"swept parameter, repeatable: {GRID_FORM}; NAME is a dotted "
+                             "scenario field (trunk.crown_mass), e, segments, dt, "
+                             "contact_stiffness, mass_ratio, a_over_l, crown_ratio or "
+                             "option.NAME")
+    parser.add_argument("--scenario", default="central-leader",
+                        help="shipped scenario name or TOML path (default: central-leader)")
+    parser.add_argument("--backend", default="analytic,soft,mujoco,bullet",
+                        help="comma-separated backends (analytic is always run as the "
+                             "reference; default: all)")
+    parser.add_argument("--ladder", action="store_true",
+                        help="run each engine as the ladder's rungs (SDOF, chain, chain + full "
+                             "pendulum) so maps show which assumption dominates")
+    parser.add_argument("--option", action="append", default=[], metavar="OPT",
+                        help=f"fixed backend option, repeatable: {OPTION_FORM}")
+    parser.add_argument("--workers", type=_workers, default=None,
+                        help="local worker processes (default: CPU count; 0: this process)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="Dask scheduler address (tcp://host:8786): run on that cluster")
+    parser.add_argument("--preset", default=None, choices=("default", "full"),
+                        help="run a whole study (validity, identification, speed); --grid "
+                             "replaces the preset's validity grid")
+    parser.add_argument("--tolerance", type=_tolerance, default=None,
+                        help="validity tolerance, relative (default 0.05)")
+    parser.add_argument("--retry-failed", action="store_true", dest="retry_failed",
+                        help="on resume, rerun rows whose status is not ok")
+    parser.add_argument("--no-identify", action="store_false", dest="identify",
+                        help="skip the identification procedure on each record")
+    parser.add_argument("--out", required=True, help="output directory (resumable)")
+
+
+def parse_options(specs, backends) -> dict:
+    """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine)."""
+    from .run import ENGINES
+
+    out: dict = {}
+    for spec in specs or []:
+        if spec.count("=") != 1 or not spec.split("=")[0].strip() or not spec.split("=")[1]:
+            raise ParameterError(f"--option {spec!r}: expected {OPTION_FORM}")
+        name, text = (s.strip() for s in spec.split("="))
+        try:
+            value = float(text)
+            if value == int(value) and "." not in text and "e" not in text.lower():
+                value = int(value)
+        except ValueError:
+            value = text
+        if "." in name:
+            backend, name = name.split(".", 1)
+            if not name:
+                raise ParameterError(f"--option {spec!r}: expected {OPTION_FORM}")
+            targets = [backend]
+        else:
+            targets = [b for b in backends if b in ENGINES]
+            if not targets:
+                raise ParameterError(f"--option {spec!r}: no engine among --backend "
+                                     f"{','.join(backends)}; write BACKEND.NAME=VALUE")
+        for b in targets:
+            out.setdefault(b, {})[name] = value
+    return out
+
+
+def run_sweep_command(args) -> int:
+    """Run ``treeimpact sweep``; returns the exit code (0; bad input raises ParameterError)."""
+    from .grid import parse_grid
+    from .run import _check_backends, run_sweep
+    from .study import run_study, write_study
+
+    backends = _check_backends(args.backend)
+    grid = parse_grid(args.grid) if args.grid else None
+    options = parse_options(args.option, backends)
+    if args.preset:
+        if options:
+            raise ParameterError("--option: not used with --preset (the preset fixes the "
+                                 "engines' options); run a plain sweep instead")
+        paths = run_study(args.out, args.preset, scenario=args.scenario, backends=backends,
+                          workers=args.workers, scheduler=args.scheduler,
+                          tolerance=args.tolerance, grid=args.grid or None)
+    else:
+        if grid is None:
+            raise ParameterError(f"--grid: give at least one ({GRID_FORM}) or --preset")
+        res = run_sweep(args.scenario, grid, args.out, backends=backends, ladder=args.ladder,
+                        options=options, workers=args.workers, scheduler=args.scheduler,
+                        identify=args.identify, retry_failed=args.retry_failed)
+        status = res.table["status"].value_counts().to_dict()
+        print(f"sweep: {len(res.table)} rows ("
+              + ", ".join(f"{k} {v}" for k, v in sorted(status.items()))
+              + f"); {res.rows_written} written now, {res.rows_done_before} done before; "
+              f"{res.wall_s:.1f} s")
+        paths = write_study(args.out, {"sweep": res.out}, tolerance=args.tolerance,
+                            title=f"Sweep of {res.table['scenario'].iloc[0] if len(res.table) else args.scenario}",
+                            meta={"wall_s": res.wall_s})
+    for kind in ("table", "md", "html"):
+        print(f"{kind}: {paths[kind]}")
+    print(f"figures: {len(paths['figures'])} in {paths['md'].parent}")
+    return 0

@@ -1,0 +1,289 @@
+"""Grid specifications of a sweep: ``NAME=START:STOP:COUNT`` or ``NAME=V1,V2,...``.
+
+A grid is a list of :class:`Axis` (one per ``--grid``); its points are the cartesian
+product of the axes' values, the first axis varying slowest. ``START:STOP:COUNT`` is
+``COUNT`` evenly spaced values from ``START`` to ``STOP``, both included (``numpy.linspace``,
+rounded to 12 significant digits so that keys and labels read 0.3, not 0.30000000000000004).
+
+What a NAME may be (:func:`resolve_parameter`):
+
+* a dotted name into the scenario (``trunk.crown_mass``, ``contact.restitution``,
+  ``impactor.mass``, ``t_end``, ``impactor.release_angle_deg`` in degrees, ...): the
+  scenario is rebuilt with that field replaced (:mod:`compare.sweep.apply`), SI units;
+* an alias: ``e`` = ``contact.restitution``; ``contact_stiffness`` = ``contact.stiffness``
+  (N/m; the contact's duration is cleared, the two are exclusive); ``segments`` and ``dt``
+  (s) are engine options passed to the backends that take them;
+* any other engine option (``trunk``, ``pendulum``, ``contact``, ``damping``,
+  ``integrator``...) as ``option.NAME`` (values may be words: ``option.contact=soft,newton``);
+* a derived ratio, solved for its underlying parameter after every direct override:
+  ``a_over_l`` = a / l (sets ``trunk.clamp_height``), ``crown_ratio`` = m_f / m_trunk
+  (sets ``trunk.crown_mass``; m_trunk = rho A l), ``mass_ratio`` = m / M_T (sets
+  ``impactor.mass``; M_T from eq 7, computed after the other ratios).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import json
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from analytic.parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk
+
+GRID_FORM = "NAME=START:STOP:COUNT (COUNT values, both ends included) or NAME=V1,V2,..."
+
+SCENARIO = "scenario"
+OPTION = "option"
+DERIVED = "derived"
+
+#: Short names and what they stand for.
+ALIASES = {
+    "e": "contact.restitution",
+    "restitution": "contact.restitution",
+    "contact_stiffness": "contact.stiffness",
+    "segments": "option.segments",
+    "dt": "option.dt",
+    "integrator": "option.integrator",
+}
+
+#: Derived ratios: (underlying dotted parameter, meaning); applied in this order.
+DERIVED_RATIOS = {
+    "a_over_l": ("trunk.clamp_height", "a / l: clamp (impact) height over trunk length"),
+    "crown_ratio": ("trunk.crown_mass", "m_f / m_trunk: crown mass over trunk mass rho A l"),
+    "mass_ratio": ("impactor.mass", "m / M_T: impactor mass over the dynamic mass (eq 7)"),
+}
+
+#: Engine options whose values must be integers.
+INTEGER_OPTIONS = {"segments"}
+
+_SECTIONS = {"trunk": (Trunk,), "impactor": (Pendulum, Billet), "contact": (Contact,)}
+_EXTRA_FIELDS = {"impactor": {"release_angle_deg"}}
+_TOP_FIELDS = {"t_end"}
+_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """What a grid NAME sets: ``kind`` scenario/option/derived and its ``target``
+    (dotted scenario path, option name, or ratio name)."""
+
+    name: str
+    kind: str
+    target: str
+
+    @property
+    def integer(self) -> bool:
+        return self.kind == OPTION and self.target in INTEGER_OPTIONS
+
+
+def _fields(cls) -> set[str]:
+    return {f.name for f in dataclasses.fields(cls)}
+
+
+def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
+    """The :class:`Parameter` a grid NAME refers to, or a one-line ParameterError."""
+    if not isinstance(name, str) or not _NAME_RE.match(name):
+        raise ParameterError(f"{flag} {name!r}: not a NAME; allowed: a scenario field "
+                             f"(trunk.crown_mass), an alias ({', '.join(sorted(ALIASES))}), a ratio "
+                             f"({', '.join(DERIVED_RATIOS)}) or option.NAME")
+    if name in DERIVED_RATIOS:
+        return Parameter(name, DERIVED, name)
+    target = ALIASES.get(name, name)
+    if target.startswith("option."):
+        return Parameter(name, OPTION, target.split(".", 1)[1])
+    if "." not in target:
+        if target in _TOP_FIELDS:
+            return Parameter(name, SCENARIO, target)
+        raise ParameterError(
+            f"{flag} {name!r}: unknown name; allowed: dotted scenario fields "
+            f"(trunk.*, impactor.*, contact.*, t_end), aliases {', '.join(sorted(ALIASES))}, "
+            f"ratios {', '.join(DERIVED_RATIOS)}, or option.NAME for an engine option")
+    section, field = target.split(".")
+    if section not in _SECTIONS:
+        raise ParameterError(f"{flag} {name!r}: unknown section {section!r}; allowed: "
+                             f"{', '.join(_SECTIONS)}")
+    allowed = set().union(*(_fields(c) for c in _SECTIONS[section])) | _EXTRA_FIELDS.get(
+        section, set())
+    if field not in allowed:
+        raise ParameterError(f"{flag} {name!r}: {section} has no field {field!r}; allowed: "
+                             f"{', '.join(sorted(allowed))}")
+    return Parameter(name, SCENARIO, target)
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One swept parameter and its values (floats; ints for integer options; words for
+    engine options that take words)."""
+
+    parameter: Parameter
+    values: tuple
+
+    @property
+    def name(self) -> str:
+        return self.parameter.name
+
+    @property
+    def numeric(self) -> bool:
+        return all(isinstance(v, (int, float)) for v in self.values)
+
+    def spec(self) -> str:
+        return f"{self.name}=" + ",".join(_fmt(v) for v in self.values)
+
+
+def _fmt(v) -> str:
+    return repr(v) if isinstance(v, float) else str(v)
+
+
+def _number(text: str, spec: str, flag: str, what: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise ParameterError(f"{flag} {spec!r}: {what} {text!r} is not a number; "
+                             f"expected {GRID_FORM}") from None
+    if not math.isfinite(v):
+        raise ParameterError(f"{flag} {spec!r}: {what} {text!r} must be finite; "
+                             f"expected {GRID_FORM}")
+    return v
+
+
+def parse_axis(spec: str, flag: str = "--grid") -> Axis:
+    """Parse one ``--grid`` spec into an :class:`Axis` (one-line ParameterError naming
+    ``flag`` and the allowed form on any mistake)."""
+    if not isinstance(spec, str) or spec.count("=") != 1:
+        raise ParameterError(f"{flag} {spec!r}: expected {GRID_FORM}, e.g. e=0:0.9:10 or "
+                             f"segments=1,2,4")
+    name, body = (s.strip() for s in spec.split("="))
+    try:
+        param = resolve_parameter(name, flag)
+    except ParameterError as exc:  # name the whole spec the user wrote
+        raise ParameterError(str(exc).replace(f"{flag} {name!r}", f"{flag} {spec!r}", 1)) \
+            from None
+    if not body:
+        raise ParameterError(f"{flag} {spec!r}: no values; expected {GRID_FORM}")
+    if ":" in body:
+        parts = body.split(":")
+        if len(parts) != 3:
+            raise ParameterError(f"{flag} {spec!r}: a range needs exactly START:STOP:COUNT; "
+                                 f"expected {GRID_FORM}")
+        start = _number(parts[0], spec, flag, "START")
+        stop = _number(parts[1], spec, flag, "STOP")
+        try:
+            count = int(parts[2])
+        except ValueError:
+            raise ParameterError(f"{flag} {spec!r}: COUNT {parts[2]!r} must be an integer >= 1; "
+                                 f"expected {GRID_FORM}") from None
+        if count < 1:
+            raise ParameterError(f"{flag} {spec!r}: COUNT = {count} must be >= 1; "
+                                 f"expected {GRID_FORM}")
+        if count == 1 and start != stop:
+            raise ParameterError(f"{flag} {spec!r}: COUNT = 1 needs START = STOP; "
+                                 f"expected {GRID_FORM}")
+        # 12 significant digits: 0.3, not 0.30000000000000004 (linspace's rounding)
+        values = [float(f"{v:.12g}") for v in np.linspace(start, stop, count)]
+    else:
+        items = [s.strip() for s in body.split(",")]
+        if any(not s for s in items):
+            raise ParameterError(f"{flag} {spec!r}: empty value in the list; expected {GRID_FORM}")
+        values = []
+        for s in items:
+            try:
+                v = float(s)
+            except ValueError:
+                if param.kind != OPTION:
+                    raise ParameterError(f"{flag} {spec!r}: value {s!r} is not a number; "
+                                         f"expected {GRID_FORM}") from None
+                v = s  # a word, for engine options such as contact=soft,newton
+            else:
+                if not math.isfinite(v):
+                    raise ParameterError(f"{flag} {spec!r}: value {s!r} must be finite; "
+                                         f"expected {GRID_FORM}")
+            values.append(v)
+    if param.integer:
+        ints = []
+        for v in values:
+            if isinstance(v, str) or v != int(v):
+                raise ParameterError(f"{flag} {spec!r}: {name} takes integers, got {v!r}; "
+                                     f"expected {GRID_FORM} with integer values")
+            ints.append(int(v))
+        values = ints
+    if len(set(values)) != len(values):
+        raise ParameterError(f"{flag} {spec!r}: repeated values; expected {GRID_FORM}")
+    return Axis(param, tuple(values))
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The axes of a sweep; points are their cartesian product (first axis slowest)."""
+
+    axes: tuple
+
+    def __post_init__(self):
+        names = [a.name for a in self.axes]
+        targets = [(a.parameter.kind, a.parameter.target) for a in self.axes]
+        for i, t in enumerate(targets):
+            if t in targets[:i]:
+                raise ParameterError(f"--grid {names[i]!r}: sets the same parameter as "
+                                     f"{names[targets.index(t)]!r}; give each parameter once")
+        derived_targets = {DERIVED_RATIOS[a.name][0] for a in self.axes
+                           if a.parameter.kind == DERIVED}
+        for a in self.axes:
+            if a.parameter.kind == SCENARIO and a.parameter.target in derived_targets:
+                raise ParameterError(f"--grid {a.name!r}: also set by a swept ratio; "
+                                     f"sweep either the parameter or its ratio")
+
+    @property
+    def names(self) -> tuple:
+        return tuple(a.name for a in self.axes)
+
+    def __len__(self) -> int:
+        n = 1
+        for a in self.axes:
+            n *= len(a.values)
+        return n
+
+    def points(self) -> list[dict]:
+        """Every grid point as {axis name: value}, in a fixed order."""
+        return [dict(zip(self.names, combo))
+                for combo in itertools.product(*(a.values for a in self.axes))]
+
+    def specs(self) -> list[str]:
+        return [a.spec() for a in self.axes]
+
+    def axis(self, name: str) -> Axis:
+        for a in self.axes:
+            if a.name == name:
+                return a
+        raise KeyError(name)
+
+
+def parse_grid(specs, flag: str = "--grid") -> Grid:
+    """A :class:`Grid` from ``--grid`` specs (a string or a list of them)."""
+    if isinstance(specs, str):
+        specs = [specs]
+    specs = list(specs or [])
+    if not specs:
+        raise ParameterError(f"{flag}: give at least one, {GRID_FORM}")
+    return Grid(tuple(parse_axis(s, flag) for s in specs))
+
+
+def point_key(point: dict) -> str:
+    """A stable text key of a grid point (JSON; floats by repr, so exact)."""
+    return json.dumps([[k, v] for k, v in point.items()], separators=(",", ":"))
+
+
+def point_from_key(key: str) -> dict:
+    return {k: v for k, v in json.loads(key)}
+
+
+def derived_ratios(scenario: Scenario) -> dict:
+    """The derived ratios of a scenario: a_over_l, crown_ratio, mass_ratio (see module doc)."""
+    from analytic.reduction import reduce_trunk
+
+    t = scenario.trunk
+    return {"a_over_l": t.clamp_height / t.length,
+            "crown_ratio": t.crown_mass / t.trunk_mass,
+            "mass_ratio": scenario.impactor.mass / reduce_trunk(t).dynamic_mass}

@@ -1,0 +1,314 @@
+"""Model-validity studies: sweeps + validity maps + identification maps + speed curves.
+
+A study directory stands alone and is also a section of the report
+(``treeimpact report --study DIR``, :mod:`compare.report.studies`)::
+
+    study.html, study.md     the study (summary.md is the same text, read by the report)
+    study.json               a small summary (counts, per-metric summaries, skip reasons)
+    results.parquet/.csv     every row of every sweep, with a ``sweep`` column
+    *.png                    validity-*, identification-*, speed-* figures
+    validity/, speed-ENGINE/ the sweep directories (resumable: rerun to finish them)
+
+Presets (:data:`PRESETS`):
+
+* ``default``: central-leader, e = 0.1, 0.5, 0.9 x crown_ratio = 0, 4 on the ladder
+  (analytic, soft; SDOF, chain, chain + full pendulum per engine) and 3 time steps at one
+  contact stiffness per engine variant for the speed curves; sized to keep ``make report``
+  under a minute (measured: see the preset's ``expected``).
+* ``full``: the issue's grid e = 0:0.9:10 x segments = 1,2,4,8,16,32 x crown_ratio = 0:4:9
+  on the ladder (540 points), and 4 time steps x 3 stiffnesses per engine variant.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from analytic.parameters import ParameterError
+
+from .maps import (DEFAULT_TOLERANCE, RUNG_LETTERS, identification_maps, validity_maps)
+from .run import JOURNAL, TABLE, read_table, run_sweep
+
+
+@dataclass(frozen=True)
+class Preset:
+    name: str
+    scenario: str
+    grid: tuple  # --grid specs of the validity sweep
+    ladder: bool = True
+    engines: tuple = ("mujoco", "bullet")
+    speed: bool = True
+    speed_dts: tuple = (1e-4, 3e-5, 1e-5)  # s
+    speed_durations: tuple = (1e-3, 5e-4)  # s: contact durations giving the stiffnesses
+    expected: str = ""
+    notes: dict = field(default_factory=dict, compare=False)
+
+
+PRESETS = {
+    "default": Preset(
+        "default", "central-leader", ("e=0.1,0.5,0.9", "crown_ratio=0,4"),
+        speed_dts=(1e-4, 3e-5, 1e-5), speed_durations=(5e-4,),
+        expected="measured on 2 shared cores, 2 workers: 1 s for analytic + soft; Bullet "
+                 "adds about 15 s (its chain rungs take 1-4 s per run), MuJoCo its own "
+                 "(per-run times in study.json 'timings')"),
+    "full": Preset(
+        "full", "central-leader", ("e=0:0.9:10", "segments=1,2,4,8,16,32",
+                                   "crown_ratio=0:4:9"),
+        speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
+        expected="540 grid points: analytic + soft rows ~1 min on 2 cores (soft 0.1 s/run, "
+                 "run once per (e, crown) since segments does not change them); engine rows: "
+                 "estimate = 540 x 3 rungs x the per-run time in the default study's "
+                 "'timings' / workers (e.g. 0.5 s/run on 2 workers: ~7 min per engine)"),
+}
+
+
+def get_preset(name: str) -> Preset:
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ParameterError(f"--preset {name!r}: allowed {', '.join(PRESETS)}") from None
+
+
+def run_study(out, preset: str = "default", *, scenario=None, backends=None, workers=None,
+              scheduler=None, progress=None, tolerance=None, grid=None) -> dict:
+    """Run (or resume) a preset's sweeps into ``out`` and write the study; returns the paths."""
+    from .speed import speed_curves, speed_sweep
+
+    p = get_preset(preset)
+    t0 = time.perf_counter()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    scen = scenario or p.scenario
+    engines = tuple(b for b in (backends or p.engines) if b in ("mujoco", "bullet"))
+    targets = ("analytic", "soft", *engines)
+    res = run_sweep(scen, list(grid or p.grid), out / "validity", backends=targets,
+                    ladder=p.ladder, workers=workers, scheduler=scheduler, progress=progress)
+    speed = None
+    if p.speed and engines:
+        speed = speed_sweep(scen, out, engines=engines, dts=p.speed_dts,
+                            durations=p.speed_durations, progress=progress)
+        speed["curves"] = speed_curves(speed, out)
+    return write_study(out, {"validity": res.out}, speed=speed, tolerance=tolerance,
+                       title=f"Model-validity study ({p.name} preset)",
+                       meta={"preset": p.name, "expected_run_time": p.expected,
+                             "wall_s": time.perf_counter() - t0})
+
+
+def _combined_table(out: Path, sweeps: dict, speed: dict | None):
+    import pandas as pd
+
+    frames = []
+    dirs = dict(sweeps)
+    if speed:
+        dirs.update({f"speed-{e}": d for e, d in speed["engines"].items()})
+    for name, d in dirs.items():
+        df = read_table(d)
+        frames.append(df.assign(sweep=name))
+    table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    if list(dirs.values()) == [out]:  # a single sweep written into the study directory
+        return out / TABLE, table
+    for c in table.columns:
+        if table[c].dtype == object:
+            table[c] = table[c].astype("string")
+    table.to_parquet(out / TABLE, index=False)
+    table.to_csv(out / JOURNAL, index=False)
+    return out / TABLE, table
+
+
+def _fmt_rel(v) -> str:
+    return "n/a" if v is None or v != v else f"{v:+.1%}"
+
+
+def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
+                title: str = "Model-validity study", meta: dict | None = None) -> dict:
+    """Draw the maps of finished sweeps (``{name: sweep dir}``) and write study.md,
+    study.html, summary.md, study.json and the combined results table into ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    meta = dict(meta or {})
+    table_path, table = _combined_table(out, sweeps, speed)
+    validity, ident, specs = [], [], {}
+    for name, d in sweeps.items():
+        df = read_table(d)
+        specs[name] = json.loads((Path(d) / "sweep.json").read_text())
+        prefix = "" if len(sweeps) == 1 else f"{name}-"
+        validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity")
+        ident += identification_maps(df, out, prefix=f"{prefix}identification")
+    curves = (speed or {}).get("curves", [])
+    status = table["status"].value_counts().to_dict() if len(table) else {}
+    timings = {}
+    if len(table):
+        ok = table[table["status"] == "ok"].drop_duplicates(subset=["task"])
+        for b, g in ok.groupby("backend"):
+            timings[b] = {"runs": int(len(g)), "mean_wall_s": float(g["wall_s"].astype(float)
+                                                                    .mean())}
+    problems = []
+    if len(table):
+        bad = table[table["status"] != "ok"].drop_duplicates(subset=["target", "error"])
+        problems = [{"sweep": r["sweep"], "target": r["target"], "status": r["status"],
+                     "error": r["error"]} for _, r in bad.head(40).iterrows()]
+    summary = {
+        "title": title, **meta, "sweeps": {n: {"scenario": s["scenario"]["name"],
+                                               "grid": s["grid"]} for n, s in specs.items()},
+        "rows": int(len(table)), "status": {str(k): int(v) for k, v in status.items()},
+        "timings": timings,
+        "tolerance": tolerance if tolerance is not None else DEFAULT_TOLERANCE,
+        "validity": [{"target": v["target"], "figure": v["path"].name if v["path"] else None,
+                      "summary": v["summary"]} for v in validity],
+        "identification": [{"target": v["target"], "figure": v["path"].name,
+                            "summary": v["summary"]} for v in ident],
+        "speed": {"skipped": (speed or {}).get("skipped", []),
+                  "figures": [c["path"].name for c in curves if c["path"]]},
+        "problems": problems,
+    }
+    md = _markdown(summary, validity, ident, curves)
+    (out / "study.md").write_text(md)
+    # the report embeds the figures itself: its copy of the text carries no image links
+    (out / "summary.md").write_text("\n".join(l for l in md.splitlines()
+                                              if not l.startswith("![")))
+    (out / "study.json").write_text(json.dumps(_jsonable(summary), indent=2))
+    (out / "study.html").write_text(_html(title, md))
+    return {"md": out / "study.md", "html": out / "study.html", "json": out / "study.json",
+            "table": table_path,
+            "figures": [v["path"] for v in validity + ident if v["path"]]
+            + [c["path"] for c in curves if c["path"]]}
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, float) and obj != obj:
+        return None
+    if isinstance(obj, Path):
+        return str(obj)
+    if hasattr(obj, "item"):
+        return obj.item()
+    return obj
+
+
+def _markdown(summary, validity, ident, curves) -> str:
+    L = [f"# {summary['title']}", ""]
+    for name, s in summary["sweeps"].items():
+        L.append(f"- sweep `{name}`: scenario `{s['scenario']}`, grid "
+                 + ", ".join(f"`{g}`" for g in s["grid"]))
+    if summary.get("expected_run_time"):
+        L.append(f"- expected run time of this preset: {summary['expected_run_time']}")
+    if summary.get("wall_s") is not None:
+        L.append(f"- this run took {summary['wall_s']:.1f} s (finished rows of an earlier "
+                 f"run are reused)")
+    L.append(f"- rows: {summary['rows']} ("
+             + ", ".join(f"{k}: {v}" for k, v in sorted(summary["status"].items())) + ")")
+    if summary["timings"]:
+        L.append("- mean wall time per run: " + ", ".join(
+            f"{b} {t['mean_wall_s']:.3g} s ({t['runs']} runs)"
+            for b, t in summary["timings"].items()))
+    L += ["", "## Validity maps", "",
+          "Relative discrepancy (target - analytic) / |analytic| of each metric from the "
+          "paper's one-degree-of-freedom Newton-restitution model (eqs 12-35). Tolerance "
+          f"contour: {summary['tolerance'] if isinstance(summary['tolerance'], dict) else format(summary['tolerance'], '.0%')} "
+          "(a study criterion: Table 1 prints M_T and K_T to two figures, and the paper's "
+          "own identification is off by 15-30 % on exact records).", "",
+          "Rung letters: " + "; ".join(f"**{v[0]}** {v[1]}" for v in RUNG_LETTERS.values()),
+          ""]
+    for v in validity:
+        L.append(f"### {v['target']}")
+        if v["path"] is not None:
+            L += ["", f"![{v['target']}]({v['path'].name})", "", v["caption"], ""]
+        L += ["| metric | within tolerance | worst | at | dominating rung (cells) |",
+              "|---|---|---|---|---|"]
+        for s in v["summary"]:
+            dom = ", ".join(f"{k} {n}" for k, n in s["dominant"].items())
+            L.append(f"| {s['metric']} | {s['within']:.0%} of {s['cells']} | "
+                     f"{_fmt_rel(s['worst_rel'])} | `{s['worst_point']}` | {dom} |")
+        L.append("")
+    if not validity:
+        L += ["No target other than the analytic reference produced values.", ""]
+    L += ["## Identification maps", "",
+          "The paper's identification procedure (eqs 39-48, as printed) run on each target's "
+          "own displacement record, against the true M_T, K_T, xi and E of the scenario.", ""]
+    for v in ident:
+        L += [f"### {v['target']}", "", f"![identification {v['target']}]({v['path'].name})",
+              "", v["caption"], "", "| parameter | cells | failed | best abs error | worst | at |",
+              "|---|---|---|---|---|---|"]
+        for s in v["summary"]:
+            L.append(f"| {s['parameter']} | {s['cells']} | {s['failed']} | "
+                     f"{s['best_abs_rel']:.1%} | {_fmt_rel(s['worst_rel'])} | "
+                     f"`{s['worst_point']}` |")
+        L.append("")
+    L += ["## Speed-accuracy curves", ""]
+    for c in curves:
+        if c["path"] is not None:
+            L += [f"![speed {c['engine']}]({c['path'].name})", "", c["caption"], ""]
+        else:
+            L += [f"- {c['engine']}: no run succeeded ("
+                  + "; ".join(sorted(set(c["points"]["error"].astype(str))))[:300] + ")", ""]
+    for s in summary["speed"]["skipped"]:
+        L.append(f"- skipped: {s['reason']}")
+    if not curves and not summary["speed"]["skipped"]:
+        L.append("No engine in this study.")
+    L.append("")
+    if summary["problems"]:
+        L += ["## Rows without numbers", "", "| sweep | target | status | error |",
+              "|---|---|---|---|"]
+        for p in summary["problems"]:
+            L.append(f"| {p['sweep']} | {p['target']} | {p['status']} | "
+                     f"{str(p['error']).replace('|', '/')} |")
+        L.append("")
+    return "\n".join(L)
+
+
+def _html(title: str, md: str) -> str:
+    """A standalone page from the study's markdown (headings, lists, tables, images)."""
+    body = []
+    lines = md.splitlines()
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        if line.startswith("|"):
+            rows = []
+            while i < len(lines) and lines[i].startswith("|"):
+                rows.append([c.strip() for c in lines[i].strip("|").split("|")])
+                i += 1
+            head, data = rows[0], [r for r in rows[2:]]
+            body.append("<table><tr>" + "".join(f"<th>{_inline(c)}</th>" for c in head)
+                        + "</tr>" + "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>"
+                                                             for c in r) + "</tr>" for r in data)
+                        + "</table>")
+            continue
+        if line.startswith("#"):
+            level = len(line) - len(line.lstrip("#"))
+            body.append(f"<h{level}>{_inline(line[level:].strip())}</h{level}>")
+        elif line.startswith("!["):
+            alt, src = line[2:].split("](", 1)
+            body.append(f'<p><img src="{html.escape(src[:-1])}" alt="{html.escape(alt)}" '
+                        f'style="max-width:100%"></p>')
+        elif line.startswith("- "):
+            items = []
+            while i < len(lines) and lines[i].startswith("- "):
+                items.append(f"<li>{_inline(lines[i][2:])}</li>")
+                i += 1
+            body.append("<ul>" + "".join(items) + "</ul>")
+            continue
+        elif line.strip():
+            body.append(f"<p>{_inline(line)}</p>")
+        i += 1
+    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
+             "table{border-collapse:collapse;font-size:0.85em}td,th{border:1px solid #ccc;"
+             "padding:2px 6px}code{font-size:0.85em}")
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
+            f"</title><style>{style}</style></head><body>\n" + "\n".join(body)
+            + "\n</body></html>\n")
+
+
+def _inline(text: str) -> str:
+    import re
+
+    t = html.escape(text)
+    t = re.sub(r"`([^`]*)`", r"<code>\1</code>", t)
+    t = re.sub(r"\*\*([^*]*)\*\*", r"<b>\1</b>", t)
+    return t
