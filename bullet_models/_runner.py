@@ -198,7 +198,9 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                 dt = 0.9 * limit
         check_time_step(dt, t_c, omega_max)
         bullet = _contact.bullet_contact(k_c, c_c, mu, dt)
-        col = t_c
+        # Impacts are told from moving together on the scale of the SDOF model's free
+        # collision, the same for every rung (the chain's local collision, t_c, is shorter).
+        col = collision_duration(model, k_c, c_c)
     else:
         if contact_stiffness is not None:
             raise ParameterError("--contact-stiffness: only for --contact soft")
