@@ -1,0 +1,17 @@
+"""treeimpact.mujoco_models: MuJoCo models of the paper's trunk, pendulum and soft contact.
+
+Public API (SI units)::
+
+    from mujoco_models import simulate, simulate_batch, modes, build_model
+    result = simulate(load_scenario("open-center"), trunk="sdof")
+
+Rules: :mod:`mujoco_models._builder` (the MJCF, built with ``mujoco.MjSpec``),
+:mod:`mujoco_models._contact` (MuJoCo's solref/solimp as a spring-dashpot and the
+restitution mapping for its Euler step), :mod:`mujoco_models._runner` (time step, rollout,
+record, energy ledger). ``python -m mujoco_models.regenerate`` writes the models of the
+shipped scenarios to ``mujoco_models/models``.
+"""
+
+from ._runner import build_model, modes, simulate, simulate_batch
+
+__all__ = ["build_model", "modes", "simulate", "simulate_batch"]

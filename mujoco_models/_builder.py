@@ -1,0 +1,348 @@
+"""MJCF models of the trunk, the pendulum and their contact, built with ``mujoco.MjSpec``.
+
+Frames (SI units): +x is the direction the pendulum travels at impact, z is up, everything
+moves in the x-z plane. The trunk's axis is the z axis; at rest (all joint positions 0) the
+trunk's contact sphere (radius d/2, centre (0, 0, a)) and the pendulum's bob (radius
+:data:`BOB_RADIUS`, centre (-(d/2 + r_b), 0, a)) touch at (-d/2, 0, a): x = y = 0 and
+touching at t = 0, the convention of :mod:`analytic.model`. Sphere-sphere contact keeps the
+normal along the line of centres, which is x for the slide-joint bodies.
+
+Bodies (inertias are explicit, never from geoms: ``inertiafromgeom="false"``):
+
+* **SDOF trunk** (``trunk="sdof"``): body ``trunk`` on the slide joint ``trunk_x`` (axis x)
+  at height a with mass M_T, joint stiffness K_T and joint damping C_T of eq 11
+  (:func:`analytic.reduction.reduce_trunk`).
+* **Chain trunk** (``trunk="chain"``): the hinged-segment trunk of
+  :func:`analytic.chain.hinged_chain`. Segment j is body ``segment_j`` with the hinge
+  ``hinge_j`` (axis +y: a positive angle tilts the trunk above towards +x) at its bottom
+  z_j, stiffness k_j (Hencky rule; the base hinge includes the root spring), mass rho A h_j
+  with the rod inertia rho A h_j^3 / 12 about its centre; the clamp mass m_c and the crown
+  mass m_f are point masses at the top of the segments ending at a and at l, merged into
+  those bodies' inertials by the parallel-axis rule (no rotary inertia of their own, as in
+  the paper). Inertias about the axes without a joint are set equal to the bending one
+  (positive definite; they never enter the planar motion). The contact sphere and the site
+  ``impact_point`` sit at the top of the clamp segment, z = a.
+* **Damping** (``damping="distributed"``, default): the paper's distributed viscous damping
+  C (eq 9, Rayleigh function int C v^2 dz / 2) at the damping points of the chain (two Gauss
+  points per segment, C h / 2 each, exact for rigid segments): each point p is a fixed
+  tendon ``damper_p`` whose length sum_j (z_p - z_j) theta_j is the linearised lateral
+  displacement of the point, with tendon damping C h / 2, so the generalised damping force
+  is -sum_p c_p J_p^T J_p theta' = -D theta' of :func:`analytic.chain.chain_matrices`.
+  ``damping="joint"``: the documented alternative, hinge (material) damping beta k_j
+  proportional to the hinge stiffness with beta = phi^T D phi / phi^T K phi for the first
+  mode phi, so that mode keeps its damping ratio and higher modes get more (the same rule as
+  the PyBullet backend). MuJoCo's Euler step treats joint damping implicitly (needed: beta
+  k_j is stiff for the short segments) and tendon damping explicitly.
+* **Trunk weight**: every trunk body has ``gravcomp="1"``: the paper neglects the trunk's
+  weight; gravity acts on the pendulum only.
+* **Linear pendulum** (``pendulum="linear"``; also the billet): body ``pendulum`` of mass m on
+  the slide joint ``pendulum_x`` with stiffness k = m g / l_e (eq 13; 0 for a billet).
+* **Full pendulum** (``pendulum="full"``): body ``pendulum`` on the hinge ``pendulum_hinge``
+  (axis -y, a positive angle swings the bob towards +x) at the pivot l_e above the bob; the
+  bob is a point mass m at l_e with a rotary inertia of :data:`BOB_INERTIA_FRACTION` m l_e^2
+  about its centre (MuJoCo needs a positive inertia), y = l_e sin(theta).
+* **Contact**: all geoms have contype = conaffinity = 0; the only contact is the explicit
+  ``<pair name="impact">`` bob / trunk sphere, frictionless (condim 1), margin 0, with a
+  direct ``solref = (-k S, -c S)`` and constant impedance ``solimp = (1e-4, 1e-4, ...)``
+  (:mod:`mujoco_models._contact`: this makes it the spring-dashpot F = max(0, k delta + c
+  delta')).
+* **Sensors** (read by the runner, in this order): ``touch`` (contact force on the bob, N),
+  ``framepos``/``framelinvel`` of ``impact_point`` and ``contact_point`` (m, m/s),
+  ``e_kinetic`` and ``e_potential`` (J, with ``energy`` enabled) and the trunk's
+  ``subtreecom`` (its gravity energy, which MuJoCo counts although gravcomp cancels it).
+* **Options**: Euler integrator, the run's time step, Newton solver, energy enabled.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from analytic.chain import HingedChain, chain_matrices
+from analytic.parameters import Billet, ParameterError, Pendulum, Scenario
+from analytic.reduction import TreeSDOF
+
+from . import _contact
+
+BOB_RADIUS = 0.05  # m: radius of the pendulum's contact sphere (geometry only)
+BOB_INERTIA_FRACTION = 1e-6  # bob inertia about its centre / (m l_e^2)
+TOUCH_SITE_FACTOR = 1.5  # touch-sensor zone radius / bob radius: holds the contact point
+SENSOR_LAYOUT = (("force", 1), ("x_pos", 3), ("x_vel", 3), ("y_pos", 3), ("y_vel", 3),
+                 ("kinetic", 1), ("potential", 1), ("trunk_com", 3))
+
+
+def sensor_slices() -> dict:
+    """Name -> slice into the sensordata vector (layout :data:`SENSOR_LAYOUT`)."""
+    out, i = {}, 0
+    for name, n in SENSOR_LAYOUT:
+        out[name] = slice(i, i + n)
+        i += n
+    return out
+
+
+@dataclass(frozen=True)
+class TrunkSpec:
+    """What the builder needs about the trunk (SI units)."""
+
+    kind: str  # "sdof" | "chain"
+    sdof: TreeSDOF | None
+    chain: HingedChain | None
+    damping: str  # "distributed" | "joint"
+
+
+def joint_damping(chain: HingedChain) -> np.ndarray:
+    """Hinge dampers beta k_j (N m s/rad): the first mode keeps the damping of D (docstring)."""
+    import scipy.linalg
+
+    M, K, D = chain_matrices(chain)
+    _, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, 0])
+    phi = vec[:, 0]
+    beta = float(phi @ D @ phi) / float(phi @ K @ phi)
+    return beta * np.diag(K)
+
+
+def _spec(name: str, dt: float, gravity: float, implicit_damping: bool) -> mujoco.MjSpec:
+    spec = mujoco.MjSpec()
+    spec.modelname = name
+    spec.compiler.degree = False
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    spec.compiler.autolimits = True
+    opt = spec.option
+    opt.timestep = dt
+    opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
+    opt.gravity = [0.0, 0.0, -gravity]
+    opt.enableflags = int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    if not implicit_damping:
+        opt.disableflags = int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP)
+    return spec
+
+
+def _geom(body, name, gtype, size, pos=(0.0, 0.0, 0.0), rgba=None, group=0, fromto=None):
+    g = body.add_geom()
+    g.name = name
+    g.type = gtype
+    g.size = list(size) + [0.0] * (3 - len(size))
+    g.contype = 0
+    g.conaffinity = 0
+    g.group = group
+    if fromto is not None:
+        g.fromto = list(fromto)
+    else:
+        g.pos = list(pos)
+    if rgba is not None:
+        g.rgba = list(rgba)
+    return g
+
+
+def _site(body, name, pos, radius):
+    s = body.add_site()
+    s.name = name
+    s.pos = list(pos)
+    s.size = [radius, 0.0, 0.0]
+    return s
+
+
+def _inertial(body, mass, com_z, inertia):
+    body.explicitinertial = True
+    body.mass = float(mass)
+    body.ipos = [0.0, 0.0, float(com_z)]
+    body.inertia = [float(inertia)] * 3
+
+
+def add_trunk(spec: mujoco.MjSpec, trunk: TrunkSpec, clamp_height: float, diameter: float):
+    """Add the trunk to ``spec``; returns the name of its root body."""
+    r = diameter / 2.0
+    wood = (0.55, 0.4, 0.25, 1.0)
+    if trunk.kind == "sdof":
+        tree = trunk.sdof
+        body = spec.worldbody.add_body()
+        body.name = "trunk"
+        body.pos = [0.0, 0.0, clamp_height]
+        body.gravcomp = 1.0
+        _inertial(body, tree.dynamic_mass, 0.0, 0.5 * tree.dynamic_mass * r * r)
+        j = body.add_joint()
+        j.name = "trunk_x"
+        j.type = mujoco.mjtJoint.mjJNT_SLIDE
+        j.axis = [1.0, 0.0, 0.0]
+        j.stiffness = tree.stiffness
+        j.damping = tree.damping
+        _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r], rgba=wood)
+        _site(body, "impact_point", (0.0, 0.0, 0.0), 0.2 * r)
+        return "trunk"
+    chain = trunk.chain
+    tr = chain.trunk
+    z = np.asarray(chain.boundaries)
+    h = chain.lengths
+    parent = spec.worldbody
+    bodies = []
+    damp = joint_damping(chain) if trunk.damping == "joint" else None
+    for j in range(chain.segments):
+        body = parent.add_body()
+        body.name = f"segment_{j}"
+        body.pos = [0.0, 0.0, 0.0 if j == 0 else float(h[j - 1])]
+        body.gravcomp = 1.0
+        masses = [(chain.masses[j], h[j] / 2.0)]
+        rot = chain.inertias[j]
+        if j == chain.clamp_segment and tr.clamp_mass > 0:
+            masses.append((tr.clamp_mass, h[j]))
+        if j == chain.crown_segment and tr.crown_mass > 0:
+            masses.append((tr.crown_mass, h[j]))
+        mass = sum(mm for mm, _ in masses)
+        com = sum(mm * zz for mm, zz in masses) / mass
+        inertia = rot + sum(mm * (zz - com) ** 2 for mm, zz in masses)
+        _inertial(body, mass, com, inertia)
+        hinge = body.add_joint()
+        hinge.name = f"hinge_{j}"
+        hinge.type = mujoco.mjtJoint.mjJNT_HINGE
+        hinge.axis = [0.0, 1.0, 0.0]
+        hinge.stiffness = chain.hinge_stiffnesses[j]
+        if damp is not None:
+            hinge.damping = float(damp[j])
+        _geom(body, f"segment_{j}_wood", mujoco.mjtGeom.mjGEOM_CYLINDER, [r],
+              fromto=(0.0, 0.0, 0.0, 0.0, 0.0, float(h[j])), rgba=wood, group=1)
+        if j == chain.clamp_segment:
+            _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r],
+                  pos=(0.0, 0.0, float(h[j])), rgba=(0.3, 0.3, 0.3, 0.5))
+            _site(body, "impact_point", (0.0, 0.0, float(h[j])), 0.2 * r)
+        bodies.append(body)
+        parent = body
+    if trunk.damping == "distributed" and tr.damping > 0:
+        for p, (zp, cp) in enumerate(zip(chain.damping_heights, chain.damping_coefficients)):
+            ten = spec.add_tendon()
+            ten.name = f"damper_{p}"
+            ten.damping = float(cp)
+            for j in range(chain.segments):
+                if z[j] < zp:
+                    ten.wrap_joint(f"hinge_{j}", float(zp - z[j]))
+    return "segment_0"
+
+
+def add_pendulum(spec: mujoco.MjSpec, impactor, kind: str, clamp_height: float,
+                 diameter: float) -> str:
+    """Add the pendulum (or billet) touching the trunk at rest; returns its body name."""
+    x0 = -(diameter / 2.0 + BOB_RADIUS)
+    steel = (0.6, 0.65, 0.75, 1.0)
+    m = impactor.mass
+    body = spec.worldbody.add_body()
+    body.name = "pendulum"
+    if kind == "linear":
+        body.pos = [x0, 0.0, clamp_height]
+        _inertial(body, m, 0.0, 0.4 * m * BOB_RADIUS ** 2)
+        j = body.add_joint()
+        j.name = "pendulum_x"
+        j.type = mujoco.mjtJoint.mjJNT_SLIDE
+        j.axis = [1.0, 0.0, 0.0]
+        j.stiffness = impactor.stiffness
+        bob_z = 0.0
+    else:
+        le = impactor.equivalent_length
+        body.pos = [x0, 0.0, clamp_height + le]
+        _inertial(body, m, -le, BOB_INERTIA_FRACTION * m * le * le)
+        j = body.add_joint()
+        j.name = "pendulum_hinge"
+        j.type = mujoco.mjtJoint.mjJNT_HINGE
+        j.axis = [0.0, -1.0, 0.0]
+        bob_z = -le
+        _geom(body, "pendulum_rod", mujoco.mjtGeom.mjGEOM_CAPSULE, [0.01],
+              fromto=(0.0, 0.0, 0.0, 0.0, 0.0, bob_z + BOB_RADIUS), rgba=steel, group=1)
+    _geom(body, "bob", mujoco.mjtGeom.mjGEOM_SPHERE, [BOB_RADIUS], pos=(0.0, 0.0, bob_z),
+          rgba=steel)
+    _site(body, "contact_point", (0.0, 0.0, bob_z), 0.2 * BOB_RADIUS)
+    _site(body, "touch_zone", (0.0, 0.0, bob_z), TOUCH_SITE_FACTOR * BOB_RADIUS)
+    return "pendulum"
+
+
+def add_contact_and_sensors(spec: mujoco.MjSpec, solref, trunk_root: str):
+    pair = spec.add_pair()
+    pair.name = "impact"
+    pair.geomname1 = "bob"
+    pair.geomname2 = "trunk_pad"
+    pair.condim = 1
+    pair.margin = 0.0
+    pair.gap = 0.0
+    pair.solref = list(solref)
+    d = _contact.IMPEDANCE
+    pair.solimp = [d, d, *_contact.SOLIMP_TAIL]
+    S = mujoco.mjtSensor
+    O = mujoco.mjtObj
+    for name, stype, otype, obj in (
+            ("contact_force", S.mjSENS_TOUCH, O.mjOBJ_SITE, "touch_zone"),
+            ("x_pos", S.mjSENS_FRAMEPOS, O.mjOBJ_SITE, "impact_point"),
+            ("x_vel", S.mjSENS_FRAMELINVEL, O.mjOBJ_SITE, "impact_point"),
+            ("y_pos", S.mjSENS_FRAMEPOS, O.mjOBJ_SITE, "contact_point"),
+            ("y_vel", S.mjSENS_FRAMELINVEL, O.mjOBJ_SITE, "contact_point"),
+            ("kinetic", S.mjSENS_E_KINETIC, O.mjOBJ_UNKNOWN, ""),
+            ("potential", S.mjSENS_E_POTENTIAL, O.mjOBJ_UNKNOWN, ""),
+            ("trunk_com", S.mjSENS_SUBTREECOM, O.mjOBJ_BODY, trunk_root)):
+        s = spec.add_sensor()
+        s.name = name
+        s.type = stype
+        s.objtype = otype
+        if obj:
+            s.objname = obj
+    return pair
+
+
+def build_spec(name: str, trunk: TrunkSpec, scenario: Scenario, pendulum: str, dt: float,
+               solref=(-1.0, -1.0)) -> tuple[mujoco.MjSpec, object]:
+    """The MjSpec of one model (see module docstring); returns (spec, contact pair)."""
+    imp = scenario.impactor
+    if pendulum == "full" and not isinstance(imp, Pendulum):
+        raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
+    g = imp.gravity if isinstance(imp, Pendulum) else 9.81
+    tr = scenario.trunk
+    spec = _spec(name, dt, g, implicit_damping=trunk.kind == "chain" and trunk.damping == "joint")
+    root = add_trunk(spec, trunk, tr.clamp_height, tr.diameter)
+    if isinstance(imp, Billet):
+        imp = _BilletAsSpring(imp.mass)
+    add_pendulum(spec, imp, pendulum, tr.clamp_height, tr.diameter)
+    pair = add_contact_and_sensors(spec, solref, root)
+    return spec, pair
+
+
+@dataclass(frozen=True)
+class _BilletAsSpring:
+    mass: float
+    stiffness: float = 0.0
+
+
+#: MuJoCo 3.3.7's XML writer names the energy sensors <kinetic>/<potential>
+#: (xml_native_writer.cc, case mjSENS_E_KINETIC) while its reader only knows <e_kinetic>/
+#: <e_potential> (xml_native_reader.cc): the written file would not load without this fix.
+_WRITER_FIXES = (("<kinetic ", "<e_kinetic "), ("<potential ", "<e_potential "))
+
+
+def mjcf_text(spec: mujoco.MjSpec) -> str:
+    """``spec.to_xml()`` with the energy-sensor names the reader accepts (numbers: MuJoCo's
+    writer keeps 6 significant digits)."""
+    text = spec.to_xml()
+    for old, new in _WRITER_FIXES:
+        text = text.replace(old, new)
+    return text
+
+
+def contact_inverse_masses(model: mujoco.MjModel) -> tuple[float, float]:
+    """(A, A_hat), 1/kg: exact J M^-1 J^T of the contact normal (x) at rest, and MuJoCo's
+    diagApprox of the pair (sum of the bodies' translational ``body_invweight0``).
+
+    J is the x row of (bob point - trunk point) velocity Jacobians; for rotations about y the
+    x velocity depends on the height only, so the sites' centres stand for the contact point.
+    """
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    nv = model.nv
+    jac = np.zeros((2, 3, nv))
+    for k, site in enumerate(("contact_point", "impact_point")):
+        sid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, site)
+        mujoco.mj_jacSite(model, data, jac[k], None, sid)
+    J = (jac[1, 0] - jac[0, 0]).reshape(1, nv)
+    X = np.zeros_like(J)
+    mujoco.mj_solveM(model, data, X, J)
+    A = float((J @ X.T)[0, 0])
+    gid = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in ("bob", "trunk_pad")]
+    A_hat = float(sum(model.body_invweight0[model.geom_bodyid[g], 0] for g in gid))
+    return A, A_hat

@@ -1,0 +1,530 @@
+"""The MuJoCo runner: build the model, roll it out with ``mujoco.rollout``, turn the record into metrics.
+
+Setup (:func:`make_setup`, no stepping): the model is compiled once with a placeholder
+contact, the contact's exact inverse effective mass A = J M^-1 J^T and MuJoCo's diagApprox
+are read from it (:func:`mujoco_models._builder.contact_inverse_masses`), the law is fixed
+and the model recompiled with its ``solref`` and time step.
+
+* Contact law: stiffness k (N/m) = ``contact_stiffness`` if given, else the scenario's
+  (:func:`analytic.soft_contact.contact_law`: its stiffness, or mu (pi / duration)^2 with the
+  two-body model's reduced mass mu, default duration 5e-4 s), the same physical N/m for both
+  trunks and as the analytic soft variant. The damping gives one free collision the target
+  e *for the engine's own effective mass* mu_eff = 1/A (M_T m / (M_T + m) for the SDOF
+  trunk, the clamp's apparent mass with the pendulum for the chain), corrected for the
+  Euler step (:func:`mujoco_models._contact.engine_law`); ``model["contact_stiffness"]`` and
+  ``model["contact_damping"]`` are the (k, c) MuJoCo integrates.
+* Time step (:mod:`analytic.timestep`): dt = min(t_c / 50, 2 pi / omega_max / 20) with t_c
+  the free collision time of the law on mu_eff and omega_max the highest mode of the
+  engine's chain (from MuJoCo's own mass matrix and hinge stiffnesses; none for the SDOF
+  trunk); a given dt is refused if omega dt >= 2 for either.
+
+Run (:func:`simulate_batch`; :func:`simulate` is a batch of one): initial states are set,
+all models of one size signature step together in one multi-threaded ``mujoco.rollout``
+call; nothing is stepped from Python. The linear pendulum starts touching the trunk
+(overlap 1e-12 m so that the contact exists at the first step) at u1 (eq 48); the full
+pendulum is released at rest from -theta_r and swings, contact disabled, with
+:data:`SWING_STEP` until :data:`SWING_MARGIN` s before the exact (elliptic-integral) arrival,
+then continues with the contact and dt; t = 0 is the touch, interpolated between the last
+sample before the contact and the first with it.
+
+Record (engine quantities; ``rollout``'s sensordata of step n is computed at the state
+before step n): the contact force is the ``touch`` sensor (the pair's normal force), x and
+y the ``framepos``/``framelinvel`` x-components of the trunk's impact point and the bob's
+centre; kinetic energy is MuJoCo's ``e_kinetic``; potential energy is ``e_potential``
+(springs and gravity) less the gravity energy of the trunk (gravity compensated, so it does
+no work; from the trunk's ``subtreecom``) less its rest value. Over step n the Euler step
+changes the kinetic energy by exactly h f_n . (v_n + v_{n+1}) / 2 for a force f_n acting
+during the step (constant mass matrix), so the works are summed that way: the contact work
+with F_n (w_n + w_{n+1}) / 2, w = vy - vx; the damping work with the tendon dampers'
+explicit force D v_n and the joint dampers' implicit force B v_{n+1} (Euler's eulerdamp),
+D and B read back from the compiled model. The ledger (kinetic + potential + damping work +
+contact work = initial energy) then only carries the integrator's own O(omega h) energy
+error of the springs and the variation of the chain's mass matrix, and its residual is
+reported. A run whose state or energies go non-finite, whose rollout stops on a MuJoCo
+warning, or whose mechanical energy exceeds (1 + :data:`ENERGY_GROWTH_LIMIT`) times the
+input raises :class:`analytic.results.SimulationDiverged`.
+
+Metrics: :func:`analytic.records.metrics_from_record` (contact intervals from the force,
+moving together = first interval longer than 3 free-collision times t_c, T0 where vy - vx
+reaches the common velocity; see that module).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+from mujoco import rollout as mj_rollout
+
+from analytic.chain import default_segments, hinged_chain
+from analytic.model import TwoBodyModel, two_body_model
+from analytic.parameters import Contact, ParameterError, Pendulum, Scenario
+from analytic.records import ImpactRecord, metrics_from_record
+from analytic.reduction import reduce_trunk
+from analytic.results import SimulationDiverged, SimulationResult, Trajectory
+from analytic.soft_contact import contact_law, damping_ratio_for_restitution, release_time
+from analytic.timestep import check_time_step, choose_time_step
+
+from . import _builder, _contact
+
+TRUNKS = ("sdof", "chain")
+PENDULUMS = ("linear", "full")
+DAMPINGS = ("distributed", "joint")
+INITIAL_OVERLAP = 1e-12  # m: the linear pendulum starts touching, the contact active
+SWING_STEP = 1e-4  # s: step of the full pendulum's free swing (contact disabled)
+SWING_MARGIN = 2e-3  # s: the swing hands over to dt this long before the exact arrival
+ENERGY_GROWTH_LIMIT = 0.05  # relative: mechanical energy above (1 + this) E0 = diverged
+PLACEHOLDER_DT = 1e-5  # s: time step of the first compile (only its masses are used)
+
+
+def _choice(name, value, allowed):
+    if value not in allowed:
+        raise ParameterError(f"--{name} = {value!r}: allowed {', '.join(allowed)}")
+    return value
+
+
+@dataclass(frozen=True)
+class Setup:
+    """A compiled model and everything the run needs (SI units)."""
+
+    scenario: Scenario
+    model: TwoBodyModel
+    trunk: str
+    pendulum: str
+    damping: str
+    segments: int | None
+    dt: float
+    t_end: float
+    law: _contact.EngineLaw
+    collision_duration: float  # s: free collision of the law on mu_eff
+    omega_max: float | None  # rad/s: highest mode of the engine's chain
+    inverse_mass: float  # A, 1/kg
+    inverse_mass_approx: float  # MuJoCo's diagApprox of the pair, 1/kg
+    solref: tuple
+    mjmodel: mujoco.MjModel = field(repr=False, compare=False)
+    spec: mujoco.MjSpec = field(repr=False, compare=False)
+
+    @property
+    def effective_mass(self) -> float:
+        return 1.0 / self.inverse_mass
+
+
+def _trunk_spec(scenario: Scenario, trunk: str, segments, damping) -> tuple:
+    tr = scenario.trunk
+    if trunk == "chain":
+        n = default_segments(tr) if segments is None else segments
+        chain = hinged_chain(tr, n)
+        return _builder.TrunkSpec("chain", None, chain, damping), chain.segments
+    if segments is not None:
+        raise ParameterError("--segments: only for --trunk chain")
+    return _builder.TrunkSpec("sdof", reduce_trunk(tr), None, damping), None
+
+
+def engine_trunk_matrices(mjmodel: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
+    """(M, K) of the trunk's hinges from the engine: ``mj_fullM`` at rest and the joint stiffnesses."""
+    data = mujoco.MjData(mjmodel)
+    mujoco.mj_forward(mjmodel, data)
+    M = np.zeros((mjmodel.nv, mjmodel.nv))
+    mujoco.mj_fullM(mjmodel, M, data.qM)
+    hinges = [j for j in range(mjmodel.njnt)
+              if mujoco.mj_id2name(mjmodel, mujoco.mjtObj.mjOBJ_JOINT, j).startswith("hinge_")]
+    dofs = [int(mjmodel.jnt_dofadr[j]) for j in hinges]
+    return M[np.ix_(dofs, dofs)], np.diag(mjmodel.jnt_stiffness[hinges])
+
+
+def highest_frequency(M: np.ndarray, K: np.ndarray) -> float:
+    """Largest omega (rad/s) of K v = omega^2 M v."""
+    import scipy.linalg
+
+    w2 = scipy.linalg.eigh(K, M, eigvals_only=True)
+    return float(math.sqrt(w2[-1]))
+
+
+def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
+               contact_stiffness=None, dt=None, restitution=None, t_end=None,
+               damping="distributed") -> Setup:
+    """Validate the options and compile the model (rules in the module docstring).
+
+    Setups are cached per (scenario, options) (the last :data:`SETUP_CACHE_SIZE`): a repeated
+    run does not recompile. Do not modify ``setup.mjmodel`` in place; copy it.
+    """
+    if not isinstance(scenario, Scenario):
+        raise ParameterError("scenario: expected an analytic.Scenario")
+    try:
+        return _cached_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
+                             restitution, t_end, damping)
+    except TypeError:  # an unhashable option value: validate and build without the cache
+        return _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
+                           restitution, t_end, damping)
+
+
+SETUP_CACHE_SIZE = 64
+
+
+@functools.lru_cache(maxsize=SETUP_CACHE_SIZE)
+def _cached_setup(*args) -> Setup:
+    return _make_setup(*args)
+
+
+def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, restitution,
+                t_end, damping) -> Setup:
+    _choice("trunk", trunk, TRUNKS)
+    _choice("pendulum", pendulum, PENDULUMS)
+    _choice("damping", damping, DAMPINGS)
+    if restitution is not None:
+        Contact(restitution=restitution)
+    if pendulum == "full" and not isinstance(scenario.impactor, Pendulum):
+        raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
+    model = two_body_model(scenario, restitution)
+    e = model.restitution
+    if not e > 0.0:
+        raise ParameterError("--restitution = 0: a soft contact needs e in (0, 1] (e = 0 "
+                             "needs infinite damping)")
+    t_end = scenario.t_end if t_end is None else t_end
+    if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
+            math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"--t-end = {t_end!r} s is out of range: allowed (0, inf) s")
+    if contact_stiffness is not None:
+        k = contact_law(model, scenario.contact, stiffness=contact_stiffness)[0]
+    else:
+        k = contact_law(model, scenario.contact)[0]
+    tspec, n = _trunk_spec(scenario, trunk, segments, damping)
+    name = f"{scenario.name}-{trunk}-{pendulum}"
+    spec, pair = _builder.build_spec(name, tspec, scenario, pendulum, PLACEHOLDER_DT)
+    m1 = spec.compile()
+    A, A_hat = _builder.contact_inverse_masses(m1)
+    mu = 1.0 / A
+    zeta = damping_ratio_for_restitution(e)
+    t_c = release_time(zeta) / math.sqrt(k / mu)
+    omega_max = highest_frequency(*engine_trunk_matrices(m1)) if trunk == "chain" else None
+    if dt is None:
+        dt = choose_time_step(t_c, omega_max)
+    dt = check_time_step(dt, t_c, omega_max)
+    law = _contact.engine_law(float(k), float(e), float(mu), float(dt))
+    S = _contact.effective_denominator(A, A_hat)
+    solref = _contact.solref_for_law(law.stiffness, law.damping, S)
+    pair.solref = list(solref)
+    spec.option.timestep = dt
+    mjmodel = spec.compile()
+    return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
+                 damping=damping, segments=n, dt=float(dt), t_end=float(t_end), law=law,
+                 collision_duration=t_c, omega_max=omega_max, inverse_mass=A,
+                 inverse_mass_approx=A_hat, solref=tuple(solref), mjmodel=mjmodel, spec=spec)
+
+
+def build_model(scenario: Scenario, **options) -> mujoco.MjModel:
+    """The compiled MjModel the runner would step for ``scenario`` and ``options``."""
+    return make_setup(scenario, **options).mjmodel
+
+
+# --------------------------------------------------------------------------------- stepping
+def _state(mjmodel: mujoco.MjModel, qpos, qvel) -> np.ndarray:
+    data = mujoco.MjData(mjmodel)
+    data.qpos[:] = qpos
+    data.qvel[:] = qvel
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    out = np.empty(mujoco.mj_stateSize(mjmodel, spec))
+    mujoco.mj_getState(mjmodel, data, out, spec)
+    return out
+
+
+def _rollout(models, states, nsteps, nthread):
+    """One multi-threaded rollout of models (same size signature) for max(nsteps) steps."""
+    nstep = int(max(nsteps))
+    datas = [mujoco.MjData(models[0]) for _ in range(max(1, min(nthread, len(models))))]
+    state, sensordata = mj_rollout.rollout(list(models), datas, np.asarray(states),
+                                           nstep=nstep)
+    return state, sensordata
+
+
+def _signature(m: mujoco.MjModel) -> tuple:
+    return (m.nq, m.nv, m.na, m.nu, m.nsensordata, m.nbody, m.nmocap, m.nuserdata)
+
+
+def _swing_time(imp: Pendulum) -> float:
+    """Exact time (s) of the swing from rest at theta_r to the bottom: K(sin(theta_r/2)) sqrt(l_e/g)."""
+    from scipy.special import ellipk
+
+    s = math.sin(imp.release_angle / 2.0)
+    return float(ellipk(s * s) * math.sqrt(imp.equivalent_length / imp.gravity))
+
+
+@dataclass
+class _Plan:
+    setup: Setup
+    state0: np.ndarray  # state at the start of the recorded phase (filled after the swing)
+    nstep: int
+    swing_steps: int = 0
+
+
+def _plan(setup: Setup) -> _Plan:
+    m = setup.mjmodel
+    nq = m.nq
+    qpos = np.zeros(nq)
+    qvel = np.zeros(m.nv)
+    n_main = int(math.ceil(setup.t_end / setup.dt)) + 2
+    if setup.pendulum == "linear":
+        qpos[-1] = INITIAL_OVERLAP
+        qvel[-1] = setup.model.impact_speed
+        return _Plan(setup, _state(m, qpos, qvel), n_main)
+    imp = setup.scenario.impactor
+    qpos[-1] = -imp.release_angle
+    t_swing = _swing_time(imp)
+    h = max(SWING_STEP, setup.dt)
+    n_swing = max(0, int((t_swing - SWING_MARGIN) / h))
+    remaining = t_swing - n_swing * h
+    n_pre = int(math.ceil(1.5 * remaining / setup.dt)) + 2
+    return _Plan(setup, _state(m, qpos, qvel), n_main + n_pre, swing_steps=n_swing)
+
+
+def _swing_models(plans):
+    import copy
+
+    out = []
+    for p in plans:
+        m = copy.deepcopy(p.setup.mjmodel)
+        m.opt.timestep = max(SWING_STEP, p.setup.dt)
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+        out.append(m)
+    return out
+
+
+def _run_group(plans: list[_Plan], nthread: int) -> list:
+    """Roll out a group of plans with one size signature; returns per plan (states, sensors)."""
+    swing = [p for p in plans if p.swing_steps > 0]
+    if swing:
+        models = _swing_models(swing)
+        st, _ = _rollout(models, [p.state0 for p in swing], [p.swing_steps for p in swing],
+                         nthread)
+        for i, p in enumerate(swing):
+            s = st[i, p.swing_steps - 1].copy()
+            s[0] = 0.0  # time restarts: the recorded phase is timed by its own steps
+            p.state0 = s
+    st, sd = _rollout([p.setup.mjmodel for p in plans], [p.state0 for p in plans],
+                      [p.nstep for p in plans], nthread)
+    return [(p.state0, st[i, :p.nstep], sd[i, :p.nstep]) for i, p in enumerate(plans)]
+
+
+# ---------------------------------------------------------------------------------- record
+def _damping_matrices(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
+    """(D explicit from tendon dampers, B implicit from joint dampers), generalised, N m s/rad."""
+    nv = m.nv
+    D = np.zeros((nv, nv))
+    for t in range(m.ntendon):
+        J = np.zeros(nv)
+        adr, num = m.tendon_adr[t], m.tendon_num[t]
+        for w in range(adr, adr + num):
+            if m.wrap_type[w] != mujoco.mjtWrap.mjWRAP_JOINT:  # pragma: no cover
+                raise ParameterError("only fixed tendons are expected")
+            J[m.jnt_dofadr[m.wrap_objid[w]]] += m.wrap_prm[w]
+        D += m.tendon_damping[t] * np.outer(J, J)
+    return D, np.diag(m.dof_damping)
+
+
+def _rest_potential(m: mujoco.MjModel, trunk_root: int) -> float:
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    mujoco.mj_energyPos(m, d)
+    g = -m.opt.gravity[2]
+    return float(d.energy[0] - m.body_subtreemass[trunk_root] * g * d.subtree_com[trunk_root, 2])
+
+
+def _record(setup: Setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]:
+    """Build the ImpactRecord (t = 0 at the touch); returns (record, initial energy, touch index)."""
+    m = setup.mjmodel
+    sl = _builder.sensor_slices()
+    nq, nv = m.nq, m.nv
+    q = np.vstack([state0[1:1 + nq], states[:-1, 1:1 + nq]])  # q_n at the sensor samples
+    v_all = np.vstack([state0[1 + nq:1 + nq + nv], states[:, 1 + nq:1 + nq + nv]])  # n..N
+    if not (np.all(np.isfinite(states)) and np.all(np.isfinite(sensors))):
+        raise SimulationDiverged(f"mujoco: non-finite state (dt = {setup.dt:.3g} s)")
+    times = states[:, 0]
+    expected = state0[0] + setup.dt * np.arange(1, len(times) + 1)
+    if not np.allclose(times, expected, rtol=0, atol=1e-6 * setup.dt + 1e-12 * expected[-1]):
+        raise SimulationDiverged("mujoco: the rollout stopped on a MuJoCo warning "
+                                 f"(dt = {setup.dt:.3g} s)")
+    force = sensors[:, sl["force"]][:, 0]
+    x = sensors[:, sl["x_pos"]][:, 0]
+    vx = sensors[:, sl["x_vel"]][:, 0]
+    tr = setup.scenario.trunk
+    y = sensors[:, sl["y_pos"]][:, 0] + (tr.diameter / 2.0 + _builder.BOB_RADIUS)
+    vy = sensors[:, sl["y_vel"]][:, 0]
+    kinetic = sensors[:, sl["kinetic"]][:, 0]
+    root = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY,
+                             "trunk" if setup.trunk == "sdof" else "segment_0")
+    g = -m.opt.gravity[2]
+    trunk_grav = m.body_subtreemass[root] * g * sensors[:, sl["trunk_com"]][:, 2]
+    potential = sensors[:, sl["potential"]][:, 0] - trunk_grav - _rest_potential(m, root)
+    model = setup.model
+    mm = model.impactor_mass
+    if setup.pendulum == "full":
+        imp = setup.scenario.impactor
+        pid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "pendulum")
+        inertia = m.body_inertia[pid, 1] + mm * imp.equivalent_length ** 2
+        th, om = q[:, -1], v_all[:-1, -1]
+        pend = 0.5 * inertia * om * om + mm * imp.gravity * imp.equivalent_length * (
+            1.0 - np.cos(th))
+        e0 = mm * imp.gravity * imp.equivalent_length * (1.0 - math.cos(imp.release_angle))
+    else:
+        pend = 0.5 * mm * vy * vy + 0.5 * model.impactor_stiffness * y * y
+        e0 = float(kinetic[0] + potential[0])
+    # works over step n (n = 0 .. N-2), with v_n and v_{n+1}
+    D, B = _damping_matrices(m)
+    v0, v1 = v_all[:-2], v_all[1:-1]
+    vbar = 0.5 * (v0 + v1)
+    d_power = np.einsum("ni,ij,nj->n", v0, D, vbar) + np.einsum("ni,ij,nj->n", v1, B, vbar)
+    w = vy - vx
+    c_power = force[:-1] * 0.5 * (w[:-1] + w[1:])
+    dt = setup.dt
+    damping_work = np.concatenate([[0.0], np.cumsum(d_power) * dt])
+    contact_work = np.concatenate([[0.0], np.cumsum(c_power) * dt])
+    k_d = setup.law.stiffness
+    overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
+    c_pot = 0.5 * k_d * overlap ** 2
+    mech = kinetic + potential
+    if not np.all(np.isfinite(mech)) or np.max(mech) > (1.0 + ENERGY_GROWTH_LIMIT) * e0:
+        raise SimulationDiverged(
+            f"mujoco: mechanical energy reached {np.nanmax(mech):.4g} J > "
+            f"{1 + ENERGY_GROWTH_LIMIT:g} x the input {e0:.4g} J (dt = {dt:.3g} s)")
+    # t = 0 at the touch: the first sample with force, interpolated on the overlap y - x
+    on = np.flatnonzero(force > 0.0)
+    if not on.size:
+        raise SimulationDiverged("mujoco: the pendulum never touched the trunk")
+    i1 = int(on[0])
+    n = np.arange(len(force), dtype=float)
+    if i1 == 0:
+        start, t_touch = 0, 0.0
+    else:
+        g0, g1 = (y - x)[i1 - 1], (y - x)[i1]
+        frac = min(1.0, max(0.0, -g0 / (g1 - g0))) if g1 != g0 else 1.0
+        start, t_touch = i1 - 1, (i1 - 1 + frac) * dt
+    t = n * dt - t_touch
+    s = slice(start, None)
+    base_d, base_c = damping_work[start], contact_work[start]
+    record = ImpactRecord(
+        t=t[s], x=x[s], vx=vx[s], y=y[s], vy=vy[s], force=force[s], kinetic=kinetic[s],
+        potential=potential[s], damping_work=damping_work[s] - base_d,
+        contact_work=contact_work[s] - base_c, contact_potential=c_pot[s],
+        pendulum_energy=pend[s])
+    if start:  # energy already dissipated before the record starts (none: no contact yet)
+        e0 = e0 - base_d - base_c
+    return record, e0, i1
+
+
+def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
+    record, e0, i1 = _record(setup, state0, states, sensors)
+    model = setup.model
+    imp = setup.scenario.impactor
+    metrics = metrics_from_record(
+        record, impact_speed=model.impact_speed, initial_energy=e0,
+        collision_duration=setup.collision_duration, impactor_mass=model.impactor_mass,
+        dynamic_mass=model.dynamic_mass,
+        equivalent_length=getattr(imp, "equivalent_length", None),
+        gravity=getattr(imp, "gravity", 9.81))
+    law = setup.law
+    model_dict = {**model.as_dict(), "segments": setup.segments, "dt": setup.dt,
+                  "contact_stiffness": law.stiffness, "contact_damping": law.damping,
+                  "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
+                  "effective_mass": setup.effective_mass,
+                  "law_stiffness": law.law_stiffness, "law_damping": law.law_damping,
+                  "solref": list(setup.solref),
+                  "solimp": [_contact.IMPEDANCE, _contact.IMPEDANCE, *_contact.SOLIMP_TAIL],
+                  "collision_duration": setup.collision_duration,
+                  "omega_max": setup.omega_max}
+    scen = setup.scenario.to_dict()
+    scen["contact"]["restitution"] = model.restitution
+    scen["t_end"] = setup.t_end
+    r = record
+    return SimulationResult(
+        backend="mujoco", metrics=metrics, model=model_dict, scenario=scen,
+        trajectory=Trajectory(t=r.t, x=r.x, vx=r.vx, y=r.y, vy=r.vy, force=r.force),
+        extra={"record": record, "collision_duration": setup.collision_duration,
+               "initial_energy": e0, "impact_speed_measured": float(r.vy[0] - r.vx[0]),
+               "law": law})
+
+
+# ------------------------------------------------------------------------------------ API
+def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
+             contact_stiffness=None, dt=None, restitution=None, t_end=None,
+             damping="distributed") -> SimulationResult:
+    """Run one scenario in MuJoCo (rules in the module docstring); backend "mujoco"."""
+    out = simulate_batch([scenario], trunk=trunk, segments=segments, pendulum=pendulum,
+                         contact_stiffness=contact_stiffness, dt=dt, restitution=restitution,
+                         t_end=t_end, damping=damping, max_workers=1)[0]
+    if isinstance(out, SimulationDiverged):
+        raise out
+    return out
+
+
+def run_setups(setups: list[Setup], *, max_workers=None) -> list:
+    """Roll out compiled setups; a SimulationResult or SimulationDiverged per setup, in order."""
+    nthread = max_workers or os.cpu_count() or 1
+    plans = [_plan(s) for s in setups]
+    groups: dict = {}
+    for i, p in enumerate(plans):
+        groups.setdefault(_signature(p.setup.mjmodel), []).append(i)
+    out = [None] * len(plans)
+    for idx in groups.values():
+        for i, (s0, st, sd) in zip(idx, _run_group([plans[i] for i in idx], nthread)):
+            try:
+                out[i] = _result(setups[i], s0, st, sd)
+            except SimulationDiverged as exc:
+                out[i] = exc
+    return out
+
+
+def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
+    """Simulate many scenarios with the same options through multi-threaded ``mujoco.rollout``.
+
+    Models of one size signature (same trunk kind and segments) step together in one rollout
+    call over ``max_workers`` threads (default: all CPUs). Returns, in order, a
+    SimulationResult or the SimulationDiverged of each scenario; bad options raise
+    ParameterError before anything is stepped.
+    """
+    setups = [make_setup(s, **options) for s in scenarios]
+    return run_setups(setups, max_workers=max_workers)
+
+
+def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
+    """Static stiffness at a (N/m) and natural frequencies (rad/s) of MuJoCo's chain.
+
+    From the engine: the mass matrix ``mj_fullM`` at rest, the hinge stiffnesses of the
+    compiled model and the impact point's x Jacobian ``mj_jacSite``: K_a = 1 / (J K^-1 J^T),
+    omega^2 = eig(K, M). ``beam``: :func:`analytic.modes.beam_reference`.
+    """
+    import scipy.linalg
+
+    from analytic.modes import beam_reference
+
+    if not isinstance(scenario, Scenario):
+        raise ParameterError("scenario: expected an analytic.Scenario")
+    tspec, n = _trunk_spec(scenario, "chain", segments, "distributed")
+    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or not 1 <= n_modes <= n:
+        raise ParameterError(f"n_modes = {n_modes!r} is out of range: allowed [1, {n}]")
+    spec, _ = _builder.build_spec(f"{scenario.name}-chain-modes", tspec, scenario, "linear",
+                                  PLACEHOLDER_DT)
+    m = spec.compile()
+    M, K = engine_trunk_matrices(m)
+    J = impact_jacobian(m)
+    kd = np.diag(K)
+    static = float(1.0 / np.sum(J ** 2 / kd))
+    w2 = scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=[0, n_modes - 1])
+    return {"model": {"static_stiffness": static, "omegas": [float(v) for v in np.sqrt(w2)],
+                      "segments": n},
+            "beam": beam_reference(scenario, n_modes)}
+
+
+def impact_jacobian(m: mujoco.MjModel) -> np.ndarray:
+    """d x(a) / d theta of the trunk's hinges from ``mj_jacSite`` at rest (m/rad)."""
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    jac = np.zeros((3, m.nv))
+    mujoco.mj_jacSite(m, d, jac, None,
+                      mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "impact_point"))
+    hinges = [j for j in range(m.njnt)
+              if mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j).startswith("hinge_")]
+    return jac[0, [int(m.jnt_dofadr[j]) for j in hinges]]
