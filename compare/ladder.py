@@ -1,0 +1,489 @@
+"""The discrepancy ladder: one scenario run as a ladder of models, one assumption per rung.
+
+==  ===========  ==========================================================================
+ #  kind         model (what changes from the rung below)
+==  ===========  ==========================================================================
+ 1  ``newton``   analytic SDOF + Newton restitution: the paper (eqs 12-35), exact
+ 2  ``contact``  analytic SDOF + spring-dashpot contact with the same e (contact model)
+ 3  ``engine``   engine SDOF (slide joint) + soft contact, MuJoCo and Bullet (engine numerics)
+ 4  ``trunk``    engine hinged-segment trunk, linearised pendulum (the 1-DOF assumption)
+ 5  ``pendulum`` engine hinged-segment trunk, full pendulum released from theta_r
+                 (the pendulum linearisation)
+==  ===========  ==========================================================================
+
+Every rung reports the impact metrics of :data:`LADDER_METRICS` and the four parameters the
+paper's identification procedure (eqs 39-48, :mod:`analytic.identification`, "paper"
+reading) recovers from the rung's own displacement record, :data:`IDENT_METRICS`. The *step*
+of a rung is its relative change from the rung it is compared with (:attr:`Rung.previous`:
+rung 2 for both engines' rung 3, then the same engine's rung below), so each part of the
+total discrepancy is attributed to one cause.
+
+A rung that cannot run (engine package not available, an engine that cannot express the
+rung, a diverged run) stays in the ladder with its status and reason: never silently.
+
+Verdicts (:func:`check`) come from ``compare/tolerances.toml``: ``ok`` within the tolerance,
+``exceeds`` beyond it, ``finding`` where the discrepancy is the documented finding and lies
+in its band, ``finding-lost`` where a documented finding fell within the ordinary tolerance
+(a change hid it), ``out-of-band`` outside its band, ``reported`` where no tolerance applies
+(with the reason), ``n/a`` when a value is missing.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from analytic.parameters import ParameterError, Pendulum, Scenario
+from analytic.results import METRIC_UNITS, _clean
+
+from .runs import OK, SESSION_CACHE, SKIPPED, Run, RunCache, resolve_scenario
+
+TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
+
+ENGINES = ("mujoco", "bullet")
+
+#: Impact metrics of the ladder (keys of analytic.results.METRIC_KEYS).
+LADDER_METRICS = ("T0", "x0", "V", "x_max", "t_xmax", "t_sep", "impact_loss",
+                  "energy_transferred", "theta_b")
+#: Parameters recovered by the identification procedure, compared with the model's truth.
+IDENT_METRICS = ("M_T", "K_T", "xi", "E")
+IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
+               "K_T": ("N/m", "identified stiffness (eq 46)"),
+               "xi": ("1", "identified damping ratio b / omega_n (eqs 42-43)"),
+               "E": ("Pa", "identified Young's modulus (eq 47)")}
+ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
+
+KINDS = {
+    "newton": (1, "the paper: analytic SDOF + Newton restitution (eqs 12-35)"),
+    "contact": (2, "contact model: spring-dashpot contact with the same e"),
+    "engine": (3, "engine numerics: engine SDOF (slide joint) + soft contact"),
+    "trunk": (4, "1-DOF assumption: hinged-segment trunk, linearised pendulum"),
+    "pendulum": (5, "pendulum linearisation: full pendulum released from theta_r"),
+}
+
+#: Sampling of the exact solution for the figures and the identification: 20 us, the
+#: record spacing at which analytic.identification's tests recover b and omega_n.
+ANALYTIC_SAMPLE_STEP = 2e-5
+
+
+def unit_of(metric: str) -> str:
+    if metric.startswith("id_"):
+        return IDENT_UNITS[metric[3:]][0]
+    return METRIC_UNITS[metric][0]
+
+
+def meaning_of(metric: str) -> str:
+    if metric.startswith("id_"):
+        return IDENT_UNITS[metric[3:]][1]
+    return METRIC_UNITS[metric][1]
+
+
+@dataclass(frozen=True)
+class Rung:
+    """One rung: which backend with which options, and the rung it is compared with."""
+
+    id: str
+    kind: str
+    backend: str
+    options: tuple  # sorted (name, value) pairs passed to the backend
+    previous: str | None
+
+    @property
+    def level(self) -> int:
+        return KINDS[self.kind][0]
+
+    @property
+    def assumption(self) -> str:
+        return KINDS[self.kind][1]
+
+    @property
+    def engine(self) -> str | None:
+        return self.backend if self.backend in ENGINES else None
+
+
+def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
+    """Segments of the hinged trunk: ``segments`` or analytic.chain.default_segments
+    (the smallest N within 0.5 % of the beam's static stiffness and first two frequencies)."""
+    if segments is not None:
+        return int(segments)
+    from analytic.chain import default_segments
+
+    return default_segments(scenario.trunk)
+
+
+def ladder_rungs(scenario, *, engines=ENGINES, segments: int | None = None) -> list[Rung]:
+    """The rungs of one scenario, in ladder order (engine rungs per engine)."""
+    scen = resolve_scenario(scenario)
+    n = chain_segments(scen, segments)
+    samples = int(round(scen.t_end / ANALYTIC_SAMPLE_STEP)) + 1
+    rungs = [Rung("analytic", "newton", "analytic", (("samples", samples),), None),
+             Rung("soft", "contact", "soft", (), "analytic")]
+    for eng in engines:
+        sdof, chain = f"{eng}-sdof", f"{eng}-chain{n}"
+        rungs += [
+            Rung(sdof, "engine", eng, (("pendulum", "linear"), ("trunk", "sdof")), "soft"),
+            Rung(chain, "trunk", eng, (("pendulum", "linear"), ("segments", n),
+                                      ("trunk", "chain")), sdof),
+            Rung(f"{chain}-full", "pendulum", eng, (("pendulum", "full"), ("segments", n),
+                                                    ("trunk", "chain")), chain),
+        ]
+    return rungs
+
+
+# --------------------------------------------------------------------------- tolerances
+
+
+@lru_cache(maxsize=4)
+def _load(path: str) -> dict:
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    _validate(data, path)
+    return data
+
+
+def load_tolerances(path: str | Path | None = None) -> dict:
+    """The tolerance file (``compare/tolerances.toml``), validated: every entry has a reason."""
+    return _load(str(TOLERANCES_PATH if path is None else path))
+
+
+def _validate(data: dict, path: str) -> None:
+    def need_reason(where, entry):
+        if not isinstance(entry, dict) or not str(entry.get("reason", "")).strip():
+            raise ParameterError(f"{path}: {where}: every tolerance needs a one-line reason")
+        if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
+            raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
+        if "rel" not in entry and not entry.get("report_only"):
+            raise ParameterError(f"{path}: {where}: give rel or report_only = true")
+
+    for section in ("step", "engines"):
+        for kind, metrics in data.get(section, {}).items():
+            for metric, entry in metrics.items():
+                need_reason(f"{section}.{kind}.{metric}", entry)
+    for metric, entry in data.get("identification", {}).items():
+        need_reason(f"identification.{metric}", entry)
+    for kind, entry in data.get("ledger", {}).items():
+        need_reason(f"ledger.{kind}", entry)
+    for i, f in enumerate(data.get("finding", [])):
+        for key in ("name", "scenario", "metric", "band", "reason", "kinds"):
+            if key not in f:
+                raise ParameterError(f"{path}: finding[{i}].{key}: missing")
+        lo, hi = f["band"]
+        if not lo < hi:
+            raise ParameterError(f"{path}: finding[{i}].band: need lo < hi")
+
+
+# --------------------------------------------------------------------------- checks
+
+
+@dataclass(frozen=True)
+class Check:
+    """One comparison of the ladder: a rung's value against a reference, with its verdict."""
+
+    scenario: str
+    rung: str
+    metric: str
+    value: float
+    reference: str  # the reference rung id, or "truth"
+    reference_value: float
+    rel_diff: float  # (value - reference) / |reference|
+    tolerance: float | None  # relative, None when only reported
+    verdict: str
+    reason: str
+    finding: str | None = None
+    band: tuple | None = None
+
+    def to_json(self) -> dict:
+        return _clean(self.__dict__ | {"band": list(self.band) if self.band else None})
+
+
+def relative_step(value, reference) -> float:
+    if not (_finite(value) and _finite(reference)) or reference == 0:
+        return math.nan
+    return (value - reference) / abs(reference)
+
+
+def _finite(v) -> bool:
+    return isinstance(v, (int, float, np.floating, np.integer)) and math.isfinite(v)
+
+
+def _finding_for(tol: dict, scenario: str, kind: str, metric: str, rung_id: str):
+    for f in tol.get("finding", []):
+        if f["scenario"] == scenario and f["metric"] == metric and kind in f["kinds"]:
+            if "rungs" in f and rung_id not in f["rungs"]:
+                continue
+            return f
+    return None
+
+
+def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: str,
+          reference_value, entry: dict | None, tol: dict) -> Check:
+    """The verdict of one comparison (see the module docstring)."""
+    rel = relative_step(value, reference_value)
+    finding = _finding_for(tol, scenario, kind, metric, rung)
+    tolerance = None if entry is None or entry.get("report_only") else float(entry["rel"])
+    reason = entry["reason"] if entry else "no tolerance entry"
+    if finding is not None:
+        band = tuple(finding["band"])
+        reason = finding["reason"]
+        if not math.isfinite(rel):
+            verdict = "n/a"
+        elif tolerance is not None and abs(rel) <= tolerance:
+            verdict = "finding-lost"
+        elif band[0] <= rel <= band[1]:
+            verdict = "finding"
+        else:
+            verdict = "out-of-band"
+        return Check(scenario, rung, metric, _f(value), reference, _f(reference_value), rel,
+                     tolerance, verdict, reason, finding["name"], band)
+    if not math.isfinite(rel):
+        verdict = "n/a"
+    elif tolerance is None:
+        verdict = "reported"
+    else:
+        verdict = "ok" if abs(rel) <= tolerance else "exceeds"
+    return Check(scenario, rung, metric, _f(value), reference, _f(reference_value), rel,
+                 tolerance, verdict, reason)
+
+
+def _f(v) -> float:
+    return float(v) if _finite(v) else math.nan
+
+
+# --------------------------------------------------------------------------- identification
+
+
+def identify_rung(result, scenario: Scenario) -> dict:
+    """The paper's procedure run on a rung's displacement record (eqs 39-48, "paper"
+    reading, A_y from the pendulum record). Returns the identified values, their relative
+    errors against the model's truth, and the regression; or the reason it failed."""
+    from analytic.identification import (identification_errors, identify_from_record,
+                                         pendulum_test_of, truth_of)
+
+    if not isinstance(scenario.impactor, Pendulum):
+        return {"status": SKIPPED, "reason": "the identification procedure needs a pendulum"}
+    tr = result.trajectory
+    if tr is None:
+        rec = result.extra.get("record")
+        if rec is None:
+            return {"status": SKIPPED, "reason": "the run has no displacement record"}
+        t, x, y = rec.t, rec.x, rec.y
+    else:
+        t, x, y = tr.t, tr.x, tr.y
+    try:
+        ident, reg = identify_from_record(t, x, pendulum_test_of(scenario), y=y, reading="paper")
+    except ParameterError as exc:
+        return {"status": SKIPPED, "reason": f"identification failed: {exc}"}
+    truth = truth_of(scenario)
+    errors = identification_errors(ident, truth)
+    return {"status": OK, "reason": None,
+            "values": {k: getattr(ident, k) for k in IDENT_METRICS},
+            "errors": {k: errors[k] for k in IDENT_METRICS},
+            "truth": {k: truth[k] for k in IDENT_METRICS},
+            "regression": {"t_first": reg.t_first, "t_together": reg.t_together,
+                           "x_together": reg.x_together, "t_origin": reg.t_origin,
+                           "coefficients": list(reg.coefficients), "x_max": reg.x_max,
+                           "tau": reg.tau},
+            "identified": ident.as_dict()}
+
+
+# --------------------------------------------------------------------------- the ladder
+
+
+@dataclass
+class RungResult:
+    rung: Rung
+    run: Run
+    values: dict = field(default_factory=dict)  # metric -> value (NaN when missing)
+    identification: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.run.ok
+
+    @property
+    def status(self) -> str:
+        return self.run.status
+
+    @property
+    def reason(self) -> str | None:
+        return self.run.reason
+
+    @property
+    def result(self):
+        return self.run.result
+
+
+@dataclass
+class Ladder:
+    """One scenario's ladder: every rung's values, steps and checks."""
+
+    scenario: Scenario
+    rungs: list  # RungResult, ladder order
+    truth: dict
+    tolerances: dict
+
+    def __getitem__(self, rung_id: str) -> RungResult:
+        for r in self.rungs:
+            if r.rung.id == rung_id:
+                return r
+        raise KeyError(rung_id)
+
+    @property
+    def name(self) -> str:
+        return self.scenario.name
+
+    def value(self, rung_id: str, metric: str) -> float:
+        return self[rung_id].values.get(metric, math.nan)
+
+    def step(self, rung_id: str, metric: str) -> float:
+        r = self[rung_id]
+        if r.rung.previous is None:
+            return math.nan
+        return relative_step(r.values.get(metric, math.nan),
+                             self[r.rung.previous].values.get(metric, math.nan))
+
+    def step_check(self, rung_id: str, metric: str) -> Check:
+        r = self[rung_id]
+        prev = r.rung.previous
+        entry = self.tolerances.get("step", {}).get(r.rung.kind, {}).get(metric)
+        return judge(self.name, rung_id, r.rung.kind, metric, self.value(rung_id, metric), prev,
+                     self.value(prev, metric), entry, self.tolerances)
+
+    def identification_check(self, rung_id: str, metric: str) -> Check:
+        r = self[rung_id]
+        entry = self.tolerances.get("identification", {}).get(metric)
+        return judge(self.name, rung_id, r.rung.kind, f"id_{metric}",
+                     r.values.get(f"id_{metric}", math.nan), "truth", self.truth[metric],
+                     entry, self.tolerances)
+
+    def engines_check(self, kind: str, metric: str) -> Check | None:
+        """MuJoCo against Bullet at one rung kind (engine, trunk or pendulum)."""
+        ids = [r.rung.id for r in self.rungs if r.rung.kind == kind]
+        if len(ids) != 2:
+            return None
+        entry = self.tolerances.get("engines", {}).get(kind, {}).get(metric)
+        return judge(self.name, ids[1], f"engines-{kind}", metric, self.value(ids[1], metric),
+                     ids[0], self.value(ids[0], metric), entry, self.tolerances)
+
+    def checks(self) -> list[Check]:
+        """Every comparison of the ladder: steps, identification, engines against each other."""
+        out = []
+        for r in self.rungs:
+            if not r.ok:
+                continue
+            if r.rung.previous is not None and self[r.rung.previous].ok:
+                out += [self.step_check(r.rung.id, m) for m in ALL_METRICS]
+            if r.identification.get("status") == OK:
+                out += [self.identification_check(r.rung.id, m) for m in IDENT_METRICS]
+        for kind in ("engine", "trunk", "pendulum"):
+            ids = [r for r in self.rungs if r.rung.kind == kind]
+            if len(ids) == 2 and all(r.ok for r in ids):
+                out += [self.engines_check(kind, m) for m in ALL_METRICS]
+        return out
+
+    def table(self) -> list[dict]:
+        """The ladder table: per metric, every rung's value and step from its previous rung."""
+        rows = []
+        for m in ALL_METRICS:
+            cells = []
+            for r in self.rungs:
+                cells.append({"rung": r.rung.id, "value": r.values.get(m, math.nan),
+                              "step": self.step(r.rung.id, m), "status": r.status})
+            rows.append({"metric": m, "unit": unit_of(m), "meaning": meaning_of(m),
+                         "truth": self.truth.get(m[3:], math.nan) if m.startswith("id_")
+                         else math.nan, "cells": cells})
+        return rows
+
+    def to_json(self) -> dict:
+        return _clean({
+            "scenario": self.name,
+            "inputs": self.scenario.to_dict(),
+            "truth": self.truth,
+            "rungs": [{
+                "id": r.rung.id, "level": r.rung.level, "kind": r.rung.kind,
+                "assumption": r.rung.assumption, "backend": r.rung.backend,
+                "options": dict(r.rung.options), "previous": r.rung.previous,
+                "status": r.status, "reason": r.reason, "wall_s": r.run.wall_s,
+                "model": r.result.model if r.ok else None,
+                "values": r.values,
+                "steps": {m: self.step(r.rung.id, m) for m in ALL_METRICS},
+                "identification": {k: v for k, v in r.identification.items()
+                                    if k != "identified"},
+            } for r in self.rungs],
+            "checks": [c.to_json() for c in self.checks()],
+        })
+
+
+def rung_values(result, identification: dict) -> dict:
+    vals = {m: _f(result.metrics.get(m)) for m in LADDER_METRICS}
+    for k in IDENT_METRICS:
+        vals[f"id_{k}"] = _f(identification.get("values", {}).get(k)) if identification.get(
+            "status") == OK else math.nan
+    return vals
+
+
+def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
+                 segments: int | None = None, tolerances: dict | None = None) -> Ladder:
+    """Run (or fetch from ``cache``) every rung of one scenario and assemble the ladder."""
+    from analytic.identification import truth_of
+
+    scen = resolve_scenario(scenario)
+    cache = SESSION_CACHE if cache is None else cache
+    tol = load_tolerances() if tolerances is None else tolerances
+    out = []
+    for rung in ladder_rungs(scen, engines=engines, segments=segments):
+        run = cache.run(scen, rung.backend, **dict(rung.options))
+        rr = RungResult(rung, run)
+        if run.ok:
+            if "identification" not in run.memo:
+                run.memo["identification"] = identify_rung(run.result, scen)
+            rr.identification = run.memo["identification"]
+            rr.values = rung_values(run.result, rr.identification)
+        else:
+            rr.values = {m: math.nan for m in ALL_METRICS}
+            rr.identification = {"status": SKIPPED, "reason": f"rung not run: {run.reason}"}
+        out.append(rr)
+    truth = {k: v for k, v in truth_of(scen).items()} if isinstance(
+        scen.impactor, Pendulum) else {}
+    return Ladder(scen, out, truth, tol)
+
+
+# --------------------------------------------------------------------------- failure table
+
+
+def _fmt(v) -> str:
+    if isinstance(v, str):
+        return v
+    if v is None or not _finite(v):
+        return "n/a"
+    return f"{v:.5g}"
+
+
+def failure_table(ladder: Ladder, checks: list[Check]) -> str:
+    """The compact table a failing check prints: metric, each rung's value, the compared
+    pair, relative difference, tolerance and reason."""
+    rung_ids = [r.rung.id for r in ladder.rungs]
+    head = ["metric", "unit", *rung_ids, "checked", "vs", "rel diff", "tolerance", "verdict",
+            "reason"]
+    rows = [head]
+    for c in checks:
+        vals = [_fmt(ladder.value(rid, c.metric)) if ladder[rid].ok else ladder[rid].status
+                for rid in rung_ids]
+        tol = (f"band [{c.band[0]:+.3g}, {c.band[1]:+.3g}]" if c.band else
+               ("-" if c.tolerance is None else f"{c.tolerance:.3g}"))
+        rows.append([c.metric, unit_of(c.metric), *vals, c.rung, c.reference,
+                     "n/a" if not math.isfinite(c.rel_diff) else f"{c.rel_diff:+.3%}", tol,
+                     c.verdict, c.reason])
+    widths = [max(len(str(r[i])) for r in rows) for i in range(len(head) - 1)]
+    lines = []
+    for r in rows:
+        lines.append("  ".join(str(c).ljust(w) for c, w in zip(r[:-1], widths)) + "  " + r[-1])
+    return f"scenario {ladder.name}\n" + "\n".join(lines)
+
+
+PASSING = ("ok", "finding", "reported")

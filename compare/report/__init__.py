@@ -1,0 +1,121 @@
+"""The discrepancy report: ``report.html`` (one self-contained page, figures embedded as
+base64 PNG), ``report.md`` and ``report.json`` (every number of the page).
+
+Sections, one module each, each a class with a jinja2 template under ``templates/``:
+
+* :mod:`.paper` - Table 1 printed vs recomputed and the paper's discrepancies;
+* :mod:`.scenario` - per scenario: Figs 4-5 redrawn for every rung, contact force, impact
+  sequence, energy ledger, the ladder table, identification against the truth;
+* :mod:`.studies` - one per model-validity study directory given;
+* :mod:`.runlog` - every backend run, its status (skips with their reasons) and wall time.
+
+The runs come from a :class:`compare.runs.RunCache` (``runs``), by default the session
+cache that ``pytest compare`` fills, so ``pytest compare --report DIR`` reuses its runs.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import time
+from pathlib import Path
+
+from analytic.results import _clean
+
+__all__ = ["write_report", "build_sections"]
+
+
+def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, segments=None,
+                   figures_on: bool = True) -> dict:
+    """The report's sections (not yet rendered) and the wall time each took (s)."""
+    from analytic.scenario import shipped_scenarios
+
+    from ..runs import SESSION_CACHE, resolve_scenario
+    from .paper import PaperSection
+    from .runlog import RunsSection
+    from .scenario import ScenarioSection
+    from .studies import StudySection
+
+    cache = SESSION_CACHE if runs is None else runs
+    names = list(shipped_scenarios()) if not scenarios else list(scenarios)
+    wall = {}
+    t0 = time.perf_counter()
+    paper = PaperSection()
+    wall["paper"] = time.perf_counter() - t0
+    scen_sections = []
+    for s in names:
+        t0 = time.perf_counter()
+        scen = resolve_scenario(s)
+        scen_sections.append(ScenarioSection(scen, cache, engines=engines, segments=segments,
+                                             figures_on=figures_on))
+        wall[f"scenario {scen.name}"] = time.perf_counter() - t0
+    studies = [StudySection(d) for d in study_dirs]
+    log = RunsSection(cache, wall)
+    return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log}
+
+
+def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -> dict:
+    """Write report.html, report.md and report.json into ``out_dir`` (created if needed).
+
+    ``scenarios``: shipped names, TOML paths or Scenario objects (default: the shipped
+    scenarios); ``study_dirs``: directories of model-validity studies; ``runs``: the
+    :class:`compare.runs.RunCache` to take runs from (default: the session cache).
+    Options ``engines`` (tuple of engine backends) and ``segments`` (hinged trunk) go to
+    the ladder. Returns ``{"html": Path, "md": Path, "json": Path}``.
+    """
+    from .base import environment
+
+    t_start = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    sections = build_sections(scenarios, study_dirs, runs, **options)
+    ordered = [sections["paper"], *sections["scenarios"], *sections["studies"],
+               sections["runs"]]
+    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    summary = _summary(sections["scenarios"])
+    env = environment()
+    paths = {}
+    for fmt, name in (("html", "report.html"), ("md", "report.md")):
+        body = [s.render(fmt) for s in ordered]
+        page = env.get_template(f"report.{fmt}.j2").render(
+            sections=ordered, bodies=body, generated=stamp, summary=summary)
+        paths[fmt] = out / name
+        paths[fmt].write_text(page, encoding="utf-8")
+    sections["runs"].wall_s["total"] = time.perf_counter() - t_start
+    data = {
+        "generated": stamp,
+        "tolerances": "compare/tolerances.toml",
+        "summary": summary,
+        "paper": sections["paper"].to_json(),
+        "scenarios": {s.ladder.name: s.to_json() for s in sections["scenarios"]},
+        "studies": [s.to_json() for s in sections["studies"]],
+        "runs": sections["runs"].to_json(),
+    }
+    paths["json"] = out / "report.json"
+    paths["json"].write_text(json.dumps(_clean(data), indent=1), encoding="utf-8")
+    return paths
+
+
+def _summary(scen_sections) -> dict:
+    """Counts of verdicts over all checks, the findings and the rungs not run."""
+    from ..ladder import PASSING
+
+    counts: dict = {}
+    findings, problems, skipped = [], [], []
+    for s in scen_sections:
+        for c in s.checks:
+            counts[c.verdict] = counts.get(c.verdict, 0) + 1
+            if c.finding:
+                findings.append({"scenario": c.scenario, "rung": c.rung, "metric": c.metric,
+                                 "finding": c.finding, "rel_diff": c.rel_diff,
+                                 "verdict": c.verdict})
+            elif c.verdict not in PASSING:
+                problems.append({"scenario": c.scenario, "rung": c.rung, "metric": c.metric,
+                                 "rel_diff": c.rel_diff, "tolerance": c.tolerance,
+                                 "verdict": c.verdict, "reason": c.reason})
+        for r in s.ladder.rungs:
+            if not r.ok:
+                skipped.append({"scenario": s.ladder.name, "rung": r.rung.id,
+                                "status": r.status, "reason": r.reason})
+    return {"verdicts": counts, "findings": findings, "problems": problems,
+            "not_run": skipped}

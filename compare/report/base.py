@@ -1,0 +1,72 @@
+"""Shared machinery of the report sections: the jinja2 environment and number filters.
+
+A section is a class with ``title``, ``anchor``, a template pair
+``templates/<name>.html.j2`` / ``templates/<name>.md.j2`` rendered with :meth:`context`,
+and :meth:`to_json` (every number the page shows, machine-readable).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import jinja2
+
+TEMPLATES = Path(__file__).with_name("templates")
+
+
+def num(v, digits: int = 4) -> str:
+    """A number with ``digits`` significant digits; n/a for None/NaN; ints as they are."""
+    if v is None:
+        return "n/a"
+    if isinstance(v, bool):
+        return str(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return "n/a"
+        if v != 0 and (abs(v) >= 1e5 or abs(v) < 1e-3):
+            return f"{v:.{digits - 1}e}"
+        return f"{v:.{digits}g}"
+    return str(v)
+
+
+def pct(v, digits: int = 2) -> str:
+    """A relative difference as a signed percentage."""
+    if v is None or not isinstance(v, (int, float)) or not math.isfinite(v):
+        return ""
+    return f"{100 * v:+.{digits}f} %"
+
+
+_ENV = None
+
+
+def environment() -> jinja2.Environment:
+    global _ENV
+    if _ENV is None:
+        _ENV = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+                                  autoescape=jinja2.select_autoescape(["html.j2"]),
+                                  undefined=jinja2.StrictUndefined, trim_blocks=True,
+                                  lstrip_blocks=True, keep_trailing_newline=True)
+        _ENV.filters["num"] = num
+        _ENV.filters["pct"] = pct
+    return _ENV
+
+
+class Section:
+    """Base of every report section."""
+
+    template = ""  # stem of templates/<template>.html.j2 and .md.j2
+    title = ""
+    anchor = ""
+
+    def context(self) -> dict:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def to_json(self) -> dict:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def render(self, fmt: str) -> str:
+        tpl = environment().get_template(f"{self.template}.{fmt}.j2")
+        return tpl.render(section=self, **self.context())

@@ -1,0 +1,152 @@
+"""Report section: one scenario's ladder, with the paper's Figs 4-5 redrawn for every rung,
+the contact force, the impact sequence, the energy ledger, the ladder table and the
+identification against the truth (including its dependence on e)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from analytic.results import _clean
+
+from ..ladder import (ALL_METRICS, IDENT_METRICS, PASSING, build_ladder, identify_rung,
+                      meaning_of, unit_of)
+from ..runs import OK
+from . import figures
+from .base import Section
+
+#: Restitution values of the identification sweep (exact solver, cheap): e = 0 is the
+#: procedure's own assumption, 0.1 the shipped default.
+E_SWEEP = (0.0, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3)
+
+
+def energy_ledger(rr) -> dict | None:
+    """Energy terms at T0 (J) of one rung: kinetic, potential (springs, gravity and the
+    contact spring), damping work, impact loss, and eq 58's energy transferred. The first
+    four sum to the initial energy; the residual is reported."""
+    if not rr.ok:
+        return None
+    res = rr.result
+    T0 = rr.values.get("T0", math.nan)
+    if not math.isfinite(T0):
+        return None
+    if "solution" in res.extra:
+        sol = res.extra["solution"]
+        terms = sol.energy_terms(T0)
+        e0 = sol.model.initial_energy
+        out = {"kinetic": terms["kinetic"], "potential": terms["potential"],
+               "damping": terms["damping"], "impact loss": terms["impact_loss"]}
+    elif "record" in res.extra:
+        rec = res.extra["record"]
+        e0 = float(rec.kinetic[0] + rec.potential[0] + rec.damping_work[0] + rec.contact_work[0])
+
+        def at(a):
+            return float(np.interp(T0, rec.t, a))
+
+        out = {"kinetic": at(rec.kinetic), "potential": at(rec.potential) + at(
+            rec.contact_potential), "damping": at(rec.damping_work),
+            "impact loss": at(rec.contact_work) - at(rec.contact_potential)}
+    else:
+        return None
+    total = sum(out.values())
+    out["energy transferred"] = rr.values.get("energy_transferred", math.nan)
+    return {"t": T0, "terms": out, "initial": e0, "residual": (total - e0) / e0}
+
+
+def identification_sweep(scenario, cache) -> list[dict]:
+    """The paper's procedure on exact-solver records for each e of :data:`E_SWEEP`."""
+    from ..ladder import ANALYTIC_SAMPLE_STEP
+
+    samples = int(round(scenario.t_end / ANALYTIC_SAMPLE_STEP)) + 1
+    out = []
+    for e in E_SWEEP:
+        run = cache.run(scenario, "analytic", restitution=e, samples=samples)
+        if not run.ok:
+            out.append({"e": e, "status": run.status, "reason": run.reason, "errors": {}})
+            continue
+        if "identification" not in run.memo:
+            run.memo["identification"] = identify_rung(run.result, scenario)
+        ident = run.memo["identification"]
+        out.append({"e": e, "status": ident["status"], "reason": ident.get("reason"),
+                    "T0": run.result.metrics["T0"],
+                    "errors": ident.get("errors", {}), "values": ident.get("values", {})})
+    return out
+
+
+class ScenarioSection(Section):
+    template = "scenario"
+
+    def __init__(self, scenario, cache, *, engines=None, segments=None, figures_on=True):
+        kw = {} if engines is None else {"engines": engines}
+        self.ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
+        self.title = f"Scenario {self.ladder.name}"
+        self.anchor = f"scenario-{self.ladder.name}"
+        self.ledgers = {r.rung.id: energy_ledger(r) for r in self.ladder.rungs}
+        self.sweep = identification_sweep(self.ladder.scenario, cache)
+        self.checks = self.ladder.checks()
+        self.figures = {}
+        if figures_on:
+            self._draw()
+
+    def _draw(self):
+        L = self.ladder
+        self.figures["displacement"] = figures.displacement_figure(L)
+        self.figures["force"] = figures.force_figure(L)
+        self.figures["sequence"] = figures.sequence_figure(L)
+        ledgers = {rid: {**v, "style": figures.rung_style(L[rid].rung)}
+                   for rid, v in self.ledgers.items() if v is not None}
+        if ledgers:
+            e0 = next(iter(ledgers.values()))["initial"]
+            self.figures["energy"] = figures.energy_figure(ledgers, e0, L.name)
+        self.figures["identification"] = figures.identification_figure(
+            self.sweep, L.name, L.tolerances)
+
+    def _verdicts(self) -> dict:
+        """(rung, metric) -> step check verdict; (rung, id metric, 'truth') for identification."""
+        out = {}
+        for c in self.checks:
+            key = (c.rung, c.metric, c.reference)
+            out[key] = c
+        return out
+
+    def context(self) -> dict:
+        L = self.ladder
+        verdicts = self._verdicts()
+        rows = []
+        for row in L.table():
+            cells = []
+            for cell in row["cells"]:
+                r = L[cell["rung"]]
+                c = verdicts.get((cell["rung"], row["metric"], r.rung.previous))
+                cells.append({**cell, "verdict": c.verdict if c else "",
+                              "flag": bool(c and c.verdict not in PASSING)})
+            rows.append({**row, "cells": cells})
+        ident_rows = []
+        for r in L.rungs:
+            idr = r.identification
+            cols = []
+            for k in IDENT_METRICS:
+                c = verdicts.get((r.rung.id, f"id_{k}", "truth"))
+                cols.append({"metric": k, "value": idr.get("values", {}).get(k),
+                             "error": idr.get("errors", {}).get(k),
+                             "verdict": c.verdict if c else "",
+                             "flag": bool(c and c.verdict not in PASSING)})
+            ident_rows.append({"rung": r.rung.id, "status": idr.get("status"),
+                               "reason": idr.get("reason"), "cols": cols})
+        findings = [c for c in self.checks if c.finding]
+        problems = [c for c in self.checks if c.verdict not in PASSING and not c.finding]
+        return {
+            "L": L, "rows": rows, "ident_rows": ident_rows, "truth": L.truth,
+            "ident_metrics": IDENT_METRICS, "figures": self.figures,
+            "rungs": L.rungs, "skips": [r for r in L.rungs if not r.ok],
+            "ledgers": self.ledgers, "sweep": self.sweep, "findings": findings,
+            "problems": problems, "unit_of": unit_of, "meaning_of": meaning_of,
+            "metrics": ALL_METRICS, "OK": OK,
+        }
+
+    def to_json(self) -> dict:
+        out = self.ladder.to_json()
+        out["energy_ledger"] = _clean({k: v for k, v in self.ledgers.items()})
+        out["identification_vs_e"] = _clean(self.sweep)
+        return out

@@ -1,0 +1,133 @@
+"""Session cache of backend runs, keyed by (scenario, backend, options).
+
+Every run of ``pytest compare`` and of the report goes through one :class:`RunCache`, so a
+scenario is simulated once per (backend, options) and shared by every test, the ladder and
+the report. A run that cannot produce numbers keeps the reason instead:
+
+* ``skipped``: the backend refused the run with a one-line :class:`ParameterError` (the
+  engine package is not available here, or the engine cannot express the requested rung,
+  e.g. an option it does not have);
+* ``diverged``: the simulation raised :class:`SimulationDiverged`;
+* ``failed``: any other exception (a bug: the tests fail on it, the report shows it).
+
+Nothing is ever dropped silently: the report lists every run with its status and reason.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from dataclasses import dataclass, field
+
+from analytic.parameters import ParameterError, Scenario
+from analytic.results import SimulationDiverged, SimulationResult
+
+OK, SKIPPED, DIVERGED, FAILED = "ok", "skipped", "diverged", "failed"
+
+
+def resolve_scenario(scenario) -> Scenario:
+    """A :class:`Scenario` from a shipped name, a TOML path or a Scenario."""
+    if isinstance(scenario, Scenario):
+        return scenario
+    from analytic.scenario import load_scenario
+
+    return load_scenario(scenario)
+
+
+def scenario_key(scenario: Scenario) -> str:
+    """The scenario's name plus a digest of all its inputs (two edits of one name differ)."""
+    text = json.dumps(scenario.to_dict(), sort_keys=True, default=str)
+    return f"{scenario.name}#{hashlib.sha1(text.encode()).hexdigest()[:10]}"
+
+
+def options_key(options: dict) -> tuple:
+    return tuple(sorted(options.items()))
+
+
+@dataclass
+class Run:
+    """One backend run: its result, or the reason it has none, and its wall time (s)."""
+
+    scenario: str
+    backend: str
+    options: dict
+    status: str
+    result: SimulationResult | None = None
+    reason: str | None = None
+    wall_s: float = 0.0
+    memo: dict = field(default_factory=dict)  # derived data (the identification), computed once
+
+    @property
+    def ok(self) -> bool:
+        return self.status == OK
+
+    def describe(self) -> str:
+        opts = ", ".join(f"{k}={v}" for k, v in sorted(self.options.items()))
+        return f"{self.scenario} {self.backend}({opts})"
+
+    def to_json(self) -> dict:
+        return {"scenario": self.scenario, "backend": self.backend,
+                "options": dict(self.options), "status": self.status,
+                "reason": self.reason, "wall_s": self.wall_s}
+
+
+@dataclass
+class RunCache:
+    """Runs keyed by (scenario inputs, backend, options); see the module docstring."""
+
+    runs: dict = field(default_factory=dict)
+
+    def run(self, scenario, backend: str, **options) -> Run:
+        scen = resolve_scenario(scenario)
+        key = (scenario_key(scen), backend, options_key(options))
+        hit = self.runs.get(key)
+        if hit is not None:
+            return hit
+        from .backends import get_backend
+
+        t0 = time.perf_counter()
+        try:
+            result = get_backend(backend).simulate(scen, **options)
+            run = Run(scen.name, backend, dict(options), OK, result=result)
+        except ParameterError as exc:
+            run = Run(scen.name, backend, dict(options), SKIPPED, reason=_one_line(exc))
+        except SimulationDiverged as exc:
+            run = Run(scen.name, backend, dict(options), DIVERGED,
+                      reason=f"diverged: {_one_line(exc)}")
+        except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests
+            run = Run(scen.name, backend, dict(options), FAILED,
+                      reason=f"{type(exc).__name__}: {_one_line(exc)}")
+        run.wall_s = time.perf_counter() - t0
+        self.runs[key] = run
+        return run
+
+    def __iter__(self):
+        return iter(self.runs.values())
+
+    def __len__(self):
+        return len(self.runs)
+
+    def timings(self) -> dict:
+        """Wall time (s) and number of runs per backend."""
+        out: dict = {}
+        for r in self.runs.values():
+            t = out.setdefault(r.backend, {"runs": 0, "wall_s": 0.0})
+            t["runs"] += 1
+            t["wall_s"] += r.wall_s
+        return out
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+#: The process-wide cache: ``pytest compare`` and ``write_report`` share it, so
+#: ``pytest compare --report DIR`` writes the report from the runs the tests made.
+SESSION_CACHE = RunCache()
+
+
+def finite(value) -> bool:
+    return isinstance(value, (int, float)) and math.isfinite(value)

@@ -1,0 +1,165 @@
+"""Cross-checks of the discrepancy ladder, parametrised over the shipped scenarios, the
+backends and the rungs (ids ``<scenario>-<rung>``, e.g. ``open-center-mujoco-chain10``).
+
+Each step test compares a rung with the rung below it (compare/ladder.py) under the
+tolerance of compare/tolerances.toml; only (rung kind, metric) pairs with a tolerance or a
+documented finding are generated (the others are reported by the ladder, with the reason
+the file gives). A rung whose engine is not available here is skipped with the reason.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from analytic.scenario import shipped_scenarios
+from compare.conftest import assert_checks, require_run
+from compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs, load_tolerances
+
+SCENARIOS = shipped_scenarios()
+TOL = load_tolerances()
+
+
+def _has_finding(scenario, kind, metric):
+    return any(f["scenario"] == scenario and f["metric"] == metric and kind in f["kinds"]
+               for f in TOL.get("finding", []))
+
+
+def _tested(scenario, kind, metric, section="step"):
+    entry = TOL.get(section, {}).get(kind, {}).get(metric) if section == "step" else \
+        TOL.get(section, {}).get(metric)
+    return bool(entry and "rel" in entry) or _has_finding(scenario, kind, metric)
+
+
+def step_cases(metric):
+    return [pytest.param(s, r, id=f"{s}-{r.id}") for s in SCENARIOS for r in ladder_rungs(s)
+            if r.previous is not None and _tested(s, r.kind, metric)]
+
+
+def _step(ladder_of, scenario, rung, metric):
+    ladder = ladder_of(scenario)
+    require_run(ladder, rung.previous)
+    require_run(ladder, rung.id)
+    assert_checks(ladder, [ladder.step_check(rung.id, metric)])
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("T0"))
+def test_impact_duration(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "T0")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("x0"))
+def test_displacement_when_moving_together(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "x0")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("V"))
+def test_common_velocity(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "V")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("x_max"))
+def test_max_displacement(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "x_max")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("t_xmax"))
+def test_time_of_max_displacement(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "t_xmax")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("t_sep"))
+def test_separation_time(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "t_sep")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("impact_loss"))
+def test_impact_loss(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "impact_loss")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("energy_transferred"))
+def test_energy_transferred(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "energy_transferred")
+
+
+@pytest.mark.parametrize("scenario, rung", step_cases("theta_b"))
+def test_rebound_angle(ladder_of, scenario, rung):
+    _step(ladder_of, scenario, rung, "theta_b")
+
+
+def ident_cases():
+    """The paper's procedure is designed for the Newton record (rung 1): judged there against
+    the truth, with the documented findings; on the other rungs it is reported."""
+    return [pytest.param(s, r, m, id=f"{s}-{r.id}-{m}") for s in SCENARIOS
+            for r in ladder_rungs(s) if r.kind == "newton" for m in IDENT_METRICS]
+
+
+@pytest.mark.parametrize("scenario, rung, metric", ident_cases())
+def test_identification_against_truth(ladder_of, scenario, rung, metric):
+    ladder = ladder_of(scenario)
+    require_run(ladder, rung.id)
+    assert ladder[rung.id].identification["status"] == "ok", ladder[rung.id].identification
+    assert_checks(ladder, [ladder.identification_check(rung.id, metric)])
+
+
+def engine_cases():
+    out = []
+    for s in SCENARIOS:
+        rungs = ladder_rungs(s)
+        for kind in ("engine", "trunk", "pendulum"):
+            if sum(r.kind == kind for r in rungs) != 2:
+                continue
+            for m in ALL_METRICS:
+                entry = TOL.get("engines", {}).get(kind, {}).get(m)
+                if entry and "rel" in entry:
+                    out.append(pytest.param(s, kind, m, id=f"{s}-{kind}-{m}"))
+    return out
+
+
+@pytest.mark.parametrize("scenario, kind, metric", engine_cases())
+def test_engines_agree(ladder_of, scenario, kind, metric):
+    """MuJoCo and Bullet on the same rung: the same model in two engines."""
+    ladder = ladder_of(scenario)
+    ids = [r.rung.id for r in ladder.rungs if r.rung.kind == kind]
+    for rid in ids:
+        require_run(ladder, rid)
+    assert_checks(ladder, [ladder.engines_check(kind, metric)])
+
+
+def rung_cases():
+    return [pytest.param(s, r, id=f"{s}-{r.id}") for s in SCENARIOS for r in ladder_rungs(s)]
+
+
+@pytest.mark.parametrize("scenario, rung", rung_cases())
+def test_energy_ledger_closes(ladder_of, scenario, rung):
+    """kinetic + potential + damping work + contact work = initial energy on every rung."""
+    ladder = ladder_of(scenario)
+    require_run(ladder, rung.id)
+    entry = TOL["ledger"].get(rung.kind)
+    assert entry is not None, f"compare/tolerances.toml: no [ledger] tolerance for {rung.kind!r}"
+    residual = ladder[rung.id].result.metrics["ledger_residual"]
+    assert residual <= entry["rel"], (
+        f"{scenario} {rung.id}: ledger residual {residual:.3g} > {entry['rel']} "
+        f"({entry['reason']})")
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "bullet"])
+def test_engine_sdof_error_is_first_order_in_dt(run_cache, engine):
+    """The engine-SDOF step's T0 and x0 tolerances (rung 3 vs 2) rest on this: their error
+    against the analytic soft contact is integrator error, so it halves when dt halves.
+    A modelling difference would not shrink with dt."""
+    scenario = "central-leader"
+    ref = run_cache.run(scenario, "soft")
+    base = run_cache.run(scenario, engine, trunk="sdof", pendulum="linear")
+    for run in (ref, base):
+        if not run.ok:
+            pytest.skip(f"{run.describe()}: {run.reason}")
+    half = run_cache.run(scenario, engine, trunk="sdof", pendulum="linear",
+                         dt=base.result.model["dt"] / 2)
+    assert half.ok, half.reason
+    for key in ("T0", "x0"):
+        e1 = base.result.metrics[key] / ref.result.metrics[key] - 1.0
+        e2 = half.result.metrics[key] / ref.result.metrics[key] - 1.0
+        # first order: ratio 2 (1.96 MuJoCo, 1.98 Bullet measured); 1.6-2.4 leaves room for
+        # the O(dt^2) remainder and the record's linear interpolation of the crossing
+        assert 1.6 < e1 / e2 < 2.4, (key, e1, e2)

@@ -1,0 +1,133 @@
+"""The report: three files, self-contained HTML, every number in the JSON, skips with their
+reasons, figures with units on every axis, study directories embedded."""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import re
+
+import pytest
+
+from analytic import load_scenario, simulate
+from analytic.paper import reproduce
+from compare.report import figures, write_report
+from compare.runs import RunCache
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    """One scenario, the analytic rungs plus an engine that does not exist here."""
+    out = tmp_path_factory.mktemp("report")
+    cache = RunCache()
+    paths = write_report(out, scenarios=["open-center"], runs=cache,
+                         engines=("no-such-engine",), segments=4)
+    return paths, cache
+
+
+def test_three_files_and_a_self_contained_page(report):
+    paths, _ = report
+    assert set(paths) == {"html", "md", "json"}
+    html = paths["html"].read_text()
+    assert "<html" in html and html.rstrip().endswith("</html>")
+    srcs = re.findall(r'src="([^"]+)"', html)
+    assert len(srcs) >= 5  # displacement, force, sequence, energy, identification
+    assert all(s.startswith("data:image/png;base64,") for s in srcs)
+    assert not re.search(r'(href|src)="(https?:)?//', html)  # nothing fetched from outside
+    png = base64.b64decode(srcs[0].split(",", 1)[1])
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_json_holds_the_numbers_of_the_page(report):
+    paths, _ = report
+    data = json.loads(paths["json"].read_text())
+    scen = data["scenarios"]["open-center"]
+    exact = simulate(load_scenario("open-center"))  # independent run
+    rung1 = scen["rungs"][0]
+    assert rung1["id"] == "analytic" and rung1["status"] == "ok"
+    assert rung1["values"]["V"] == pytest.approx(exact.metrics["V"], rel=1e-12)
+    assert scen["inputs"]["trunk"]["diameter"] == 0.142
+    checks = scen["checks"]
+    assert {"value", "reference_value", "rel_diff", "tolerance", "verdict", "reason"} <= set(
+        checks[0])
+    # Table 1, printed and recomputed, as analytic.paper gives them
+    ref = reproduce(with_restitution_estimates=False)
+    assert data["paper"]["trees"]["open-center"]["M_T"]["recomputed"] == pytest.approx(
+        ref["trees"]["open-center"]["M_T"]["recomputed"])
+    assert len(data["paper"]["discrepancies"]) == len(ref["discrepancies"])
+    # the energy ledger at T0 closes to the initial energy
+    led = scen["energy_ledger"]["analytic"]
+    assert abs(led["residual"]) < 1e-9
+    html = paths["html"].read_text()
+    assert f"{rung1['values']['x_max']:.4g}" in html
+
+
+def test_skipped_rungs_are_listed_with_their_reason_everywhere(report):
+    paths, cache = report
+    reason = next(r.reason for r in cache if r.backend == "no-such-engine")
+    assert "no-such-engine" in reason
+    data = json.loads(paths["json"].read_text())
+    not_run = data["summary"]["not_run"]
+    assert {r["rung"] for r in not_run} == {"no-such-engine-sdof", "no-such-engine-chain4",
+                                            "no-such-engine-chain4-full"}
+    assert all(r["reason"] == reason for r in not_run)
+    for fmt in ("html", "md"):
+        text = paths[fmt].read_text()
+        assert text.count("no-such-engine-chain4-full") >= 2
+        assert reason.replace("'", "&#39;") in text or reason in text
+
+
+def test_findings_are_flagged_in_the_page(report):
+    paths, _ = report
+    data = json.loads(paths["json"].read_text())
+    found = [f for f in data["summary"]["findings"] if f["scenario"] == "open-center"]
+    assert [f["finding"] for f in found] == ["e too large for the identification"]
+    assert found[0]["verdict"] == "finding"
+    assert "e too large for the identification" in paths["html"].read_text()
+
+
+def test_every_axis_has_a_unit(monkeypatch):
+    from compare.report.scenario import ScenarioSection
+
+    figs = []
+
+    def keep(fig):
+        figs.append(fig)
+        return "data:image/png;base64,"
+
+    monkeypatch.setattr(figures, "to_data_uri", keep)
+    ScenarioSection(load_scenario("central-leader"), RunCache(), engines=())
+    assert len(figs) == 5
+    unit = re.compile(r"\((ms|mm|kN|N s|m/s|J|%|1|s|m)\)")
+    for fig in figs:
+        for ax in fig.axes:
+            if ax.get_xlabel():  # shared axes keep the label on one of them
+                assert unit.search(ax.get_xlabel()), ax.get_xlabel()
+            assert unit.search(ax.get_ylabel()) or not ax.get_ylabel(), ax.get_ylabel()
+        assert any(ax.get_ylabel() for ax in fig.axes)
+
+
+def test_study_directories_become_sections(tmp_path):
+    study = tmp_path / "validity-map"
+    study.mkdir()
+    png = base64.b64decode(
+        "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==")
+    (study / "map.png").write_bytes(png)
+    (study / "summary.json").write_text(json.dumps({"cells": 4}))
+    (study / "summary.md").write_text("Where the 1-DOF model holds.")
+    paths = write_report(tmp_path / "out", scenarios=["open-center"], study_dirs=[study],
+                         runs=RunCache(), engines=())
+    html = paths["html"].read_text()
+    assert "Study: validity-map" in html and "Where the 1-DOF model holds." in html
+    assert base64.b64encode(png).decode() in html
+    data = json.loads(paths["json"].read_text())
+    assert data["studies"][0]["data"]["summary.json"] == {"cells": 4}
+
+
+def test_json_has_no_nan(report):
+    paths, _ = report
+    text = paths["json"].read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    json.loads(text)
+    assert math.isfinite(json.loads(text)["runs"]["wall_s"]["total"])
