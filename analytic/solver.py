@@ -11,7 +11,13 @@ Sequence of events from the first contact (t = 0, tree at rest, pendulum at u_1)
    sum gives the remaining time 2 gamma / (|a_rel| (1 - e)) and the remaining loss
    mu gamma^2 / 2 (the whole relative kinetic energy, sum of eq 55 over the tail). The tail
    is closed only when mu gamma^2 / 2 < 1e-13 of the input energy, so the closure changes
-   no reported digit; how many impacts were resolved and the tail are recorded;
+   no reported digit; how many impacts were resolved and the tail are recorded. Every impact
+   before the closure is resolved exactly, so the work of one chattering sequence grows as
+   ln(1e-13) / ln(e), i.e. as 1 / (1 - e) when e -> 1 (about 1.5e3 impacts at e = 0.99);
+   with e = 1 the tree's damping alone drains the relative motion, as 1 / n. A sequence
+   that needs more than :data:`MAX_CHATTER_IMPACTS` impacts is refused with a one-line
+   :class:`~analytic.parameters.ParameterError` naming ``contact.restitution``, never
+   truncated into a wrong answer;
 4. moving together (eq 34) while the contact force is compressive; separation when it
    reaches zero;
 5. further free flights and impacts up to t_end.
@@ -27,11 +33,15 @@ from functools import cached_property
 import numpy as np
 
 from .model import TwoBodyModel
+from .parameters import ParameterError
 from .oscillator import Oscillator, gauss_legendre_integral
 from .roots import first_zero
 
 TAIL_ENERGY_FRACTION = 1e-13  # close a chattering tail once it holds less than this of E0
 _MAX_EVENTS = 1_000_000  # a guard against a bug, not a cap on the physics: exceeding it raises
+#: Impacts one chattering sequence may take before the solver refuses the model (1 / (1 - e)
+#: growth, see the module docstring): ~1 s of work, 60 times what e = 0.99 needs.
+MAX_CHATTER_IMPACTS = 100_000
 
 
 @dataclass(frozen=True)
@@ -249,6 +259,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
     t, x, vx, y, vy = 0.0, 0.0, 0.0, 0.0, model.impact_speed
     mode = "impact"
     free_order = 1
+    chatter = 0  # impacts since the bodies last moved together or started
     for _ in range(_MAX_EVENTS):
         if t >= t_end:
             break
@@ -260,6 +271,13 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             loss = 0.5 * mu * (1.0 - e * e) * approach * approach  # eq 55
             sol.impacts.append(Impact(len(sol.impacts) + 1, t, x, U, u, V_new, v_new, loss))
             vx, vy = V_new, v_new
+            chatter += 1
+            if chatter > MAX_CHATTER_IMPACTS:
+                raise ParameterError(
+                    f"contact.restitution = {e!r}: the chattering sequence still holds "
+                    f"{0.5 * mu * (vx - vy) ** 2 / e0:.1e} of the input energy after "
+                    f"{MAX_CHATTER_IMPACTS} impacts (the exact solver's work grows as "
+                    f"1 / (1 - e)); allowed here: a smaller e, e <= 0.99 always runs")
             gamma = vx - vy
             a_rel = tree.acceleration(x, vx) - pend.acceleration(y, vy)
             tail_energy = 0.5 * mu * gamma * gamma
@@ -333,6 +351,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             mode = "impact"
             continue
         if mode == "together":
+            chatter = 0
             sol.together_starts.append((t, x, vx))
             x0, v0 = x, vx
             bb = both.derivative_bounds(x0, v0)
