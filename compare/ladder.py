@@ -157,7 +157,8 @@ def _validate(data: dict, path: str) -> None:
             raise ParameterError(f"{path}: {where}: every tolerance needs a one-line reason")
         if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
             raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
-        if "rel" not in entry and not entry.get("report_only"):
+        if "rel" not in entry and not entry.get("report_only") and where != \
+                "identification_reported":
             raise ParameterError(f"{path}: {where}: give rel or report_only = true")
 
     for section in ("step", "engines"):
@@ -166,6 +167,7 @@ def _validate(data: dict, path: str) -> None:
                 need_reason(f"{section}.{kind}.{metric}", entry)
     for metric, entry in data.get("identification", {}).items():
         need_reason(f"identification.{metric}", entry)
+    need_reason("identification_reported", data.get("identification_reported"))
     for kind, entry in data.get("ledger", {}).items():
         need_reason(f"ledger.{kind}", entry)
     for i, f in enumerate(data.get("finding", [])):
@@ -355,8 +357,14 @@ class Ladder:
                      self.value(prev, metric), entry, self.tolerances)
 
     def identification_check(self, rung_id: str, metric: str) -> Check:
+        """The identified value against the truth: judged on the Newton record the procedure
+        was derived for, reported (with the file's reason) on every other rung."""
         r = self[rung_id]
-        entry = self.tolerances.get("identification", {}).get(metric)
+        if r.rung.kind == "newton":
+            entry = self.tolerances.get("identification", {}).get(metric)
+        else:
+            entry = {"report_only": True,
+                     "reason": self.tolerances["identification_reported"]["reason"]}
         return judge(self.name, rung_id, r.rung.kind, f"id_{metric}",
                      r.values.get(f"id_{metric}", math.nan), "truth", self.truth[metric],
                      entry, self.tolerances)
