@@ -31,8 +31,10 @@ Bodies (inertias are explicit, never from geoms: ``inertiafromgeom="false"``):
   ``damping="joint"``: the documented alternative, hinge (material) damping beta k_j
   proportional to the hinge stiffness with beta = phi^T D phi / phi^T K phi for the first
   mode phi, so that mode keeps its damping ratio and higher modes get more (the same rule as
-  the PyBullet backend). MuJoCo's Euler step treats joint damping implicitly (needed: beta
-  k_j is stiff for the short segments) and tendon damping explicitly.
+  the PyBullet backend). Only this variant keeps MuJoCo's ``eulerdamp`` on: its Euler step
+  treats the joint damping implicitly (needed: beta k_j is stiff for the short segments).
+  The SDOF trunk and the distributed damping disable it: their dampers (the slide joint's
+  C_T, the tendons) act explicitly, -c v_n.
 * **Trunk weight**: every trunk body has ``gravcomp="1"``: the paper neglects the trunk's
   weight; gravity acts on the pendulum only.
 * **Linear pendulum** (``pendulum="linear"``; also the billet): body ``pendulum`` of mass m on

@@ -35,14 +35,19 @@ centre; kinetic energy is MuJoCo's ``e_kinetic``; potential energy is ``e_potent
 no work; from the trunk's ``subtreecom``) less its rest value. Over step n the Euler step
 changes the kinetic energy by exactly h f_n . (v_n + v_{n+1}) / 2 for a force f_n acting
 during the step (constant mass matrix), so the works are summed that way: the contact work
-with F_n (w_n + w_{n+1}) / 2, w = vy - vx; the damping work with the tendon dampers'
-explicit force D v_n and the joint dampers' implicit force B v_{n+1} (Euler's eulerdamp),
-D and B read back from the compiled model. The ledger (kinetic + potential + damping work +
+with F_n (w_n + w_{n+1}) / 2, w = vy - vx; the damping work with the explicit force D v_n
+(tendon dampers, and joint dampers where eulerdamp is disabled: the SDOF trunk, the chain's
+distributed damping) and the implicit force B v_{n+1} (joint dampers under eulerdamp: the
+chain's joint damping), D and B read back from the compiled model
+(:func:`_damping_matrices`; a test checks them against one engine step). The ledger (kinetic + potential + damping work +
 contact work = initial energy) then only carries the integrator's own O(omega h) energy
 error of the springs and the variation of the chain's mass matrix, and its residual is
 reported. A run whose state or energies go non-finite, whose rollout stops on a MuJoCo
-warning, or whose mechanical energy exceeds (1 + :data:`ENERGY_GROWTH_LIMIT`) times the
-input raises :class:`analytic.results.SimulationDiverged`.
+warning, whose mechanical energy exceeds (1 + :data:`ENERGY_GROWTH_LIMIT`) times the
+input, or whose ledger shows the engine creating more than :data:`ENERGY_GROWTH_LIMIT` times
+the input (kinetic + potential + damping work + contact work above the input: an unstable
+step, even while damping keeps the mechanical energy below the input) raises
+:class:`analytic.results.SimulationDiverged`.
 
 Metrics: :func:`analytic.records.metrics_from_record` (contact intervals from the force,
 moving together = first interval longer than 3 free-collision times t_c, T0 where vy - vx
@@ -63,7 +68,7 @@ from mujoco import rollout as mj_rollout
 from analytic.chain import default_segments, hinged_chain
 from analytic.model import TwoBodyModel, two_body_model
 from analytic.parameters import Contact, ParameterError, Pendulum, Scenario
-from analytic.records import ImpactRecord, metrics_from_record
+from analytic.records import ImpactRecord, detection_duration, metrics_from_record
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
 from analytic.soft_contact import contact_law, damping_ratio_for_restitution, release_time
@@ -101,12 +106,16 @@ class Setup:
     t_end: float
     law: _contact.EngineLaw
     collision_duration: float  # s: free collision of the law on mu_eff
+    detection_duration: float  # s: analytic.records.detection_duration, common to all rungs
     omega_max: float | None  # rad/s: highest mode of the engine's chain
     inverse_mass: float  # A, 1/kg
     inverse_mass_approx: float  # MuJoCo's diagApprox of the pair, 1/kg
     solref: tuple
     mjmodel: mujoco.MjModel = field(repr=False, compare=False)
     spec: mujoco.MjSpec = field(repr=False, compare=False)
+    # computed once per setup (a run does not rebuild MjData for them):
+    initial_state: np.ndarray = field(repr=False, compare=False)  # mjSTATE_FULLPHYSICS, t = 0
+    rest_potential: float = field(repr=False, compare=False)  # J: springs + pendulum gravity
 
     @property
     def effective_mass(self) -> float:
@@ -210,10 +219,17 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     pair.solref = list(solref)
     spec.option.timestep = dt
     mjmodel = spec.compile()
+    root = mujoco.mj_name2id(mjmodel, mujoco.mjtObj.mjOBJ_BODY,
+                             "trunk" if trunk == "sdof" else "segment_0")
+    state0 = _state(mjmodel, *_initial_qpos_qvel(mjmodel, pendulum, model, scenario))
+    state0.flags.writeable = False
     return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
                  damping=damping, segments=n, dt=float(dt), t_end=float(t_end), law=law,
-                 collision_duration=t_c, omega_max=omega_max, inverse_mass=A,
-                 inverse_mass_approx=A_hat, solref=tuple(solref), mjmodel=mjmodel, spec=spec)
+                 collision_duration=t_c,
+                 detection_duration=detection_duration(model, scenario.contact, stiffness=k),
+                 omega_max=omega_max, inverse_mass=A,
+                 inverse_mass_approx=A_hat, solref=tuple(solref), mjmodel=mjmodel, spec=spec,
+                 initial_state=state0, rest_potential=_rest_potential(mjmodel, root))
 
 
 def build_model(scenario: Scenario, **options) -> mujoco.MjModel:
@@ -261,24 +277,31 @@ class _Plan:
     swing_steps: int = 0
 
 
-def _plan(setup: Setup) -> _Plan:
-    m = setup.mjmodel
-    nq = m.nq
-    qpos = np.zeros(nq)
+def _initial_qpos_qvel(m: mujoco.MjModel, pendulum: str, model: TwoBodyModel,
+                       scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Trunk at rest; linear pendulum touching at u1, full pendulum at rest at -theta_r."""
+    qpos = np.zeros(m.nq)
     qvel = np.zeros(m.nv)
-    n_main = int(math.ceil(setup.t_end / setup.dt)) + 2
-    if setup.pendulum == "linear":
+    if pendulum == "linear":
         qpos[-1] = INITIAL_OVERLAP
-        qvel[-1] = setup.model.impact_speed
-        return _Plan(setup, _state(m, qpos, qvel), n_main)
+        qvel[-1] = model.impact_speed
+    else:
+        qpos[-1] = -scenario.impactor.release_angle
+    return qpos, qvel
+
+
+def _plan(setup: Setup) -> _Plan:
+    n_main = int(math.ceil(setup.t_end / setup.dt)) + 2
+    state0 = setup.initial_state.copy()
+    if setup.pendulum == "linear":
+        return _Plan(setup, state0, n_main)
     imp = setup.scenario.impactor
-    qpos[-1] = -imp.release_angle
     t_swing = _swing_time(imp)
     h = max(SWING_STEP, setup.dt)
     n_swing = max(0, int((t_swing - SWING_MARGIN) / h))
     remaining = t_swing - n_swing * h
     n_pre = int(math.ceil(1.5 * remaining / setup.dt)) + 2
-    return _Plan(setup, _state(m, qpos, qvel), n_main + n_pre, swing_steps=n_swing)
+    return _Plan(setup, state0, n_main + n_pre, swing_steps=n_swing)
 
 
 def _swing_models(plans):
@@ -311,7 +334,12 @@ def _run_group(plans: list[_Plan], nthread: int) -> list:
 
 # ---------------------------------------------------------------------------------- record
 def _damping_matrices(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
-    """(D explicit from tendon dampers, B implicit from joint dampers), generalised, N m s/rad."""
+    """(D explicit, B implicit) generalised damping matrices, N m s/rad (N s/m for slides).
+
+    Tendon dampers are explicit. Joint dampers are implicit (Euler's eulerdamp: B v_{n+1})
+    unless the model disables eulerdamp (the SDOF trunk, the chain's distributed damping):
+    then MuJoCo applies them explicitly (-b v_n) and they go into D.
+    """
     nv = m.nv
     D = np.zeros((nv, nv))
     for t in range(m.ntendon):
@@ -322,7 +350,10 @@ def _damping_matrices(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
                 raise ParameterError("only fixed tendons are expected")
             J[m.jnt_dofadr[m.wrap_objid[w]]] += m.wrap_prm[w]
         D += m.tendon_damping[t] * np.outer(J, J)
-    return D, np.diag(m.dof_damping)
+    joint = np.diag(m.dof_damping)
+    if m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP):
+        return D + joint, np.zeros_like(joint)
+    return D, joint
 
 
 def _rest_potential(m: mujoco.MjModel, trunk_root: int) -> float:
@@ -338,7 +369,6 @@ def _record(setup: Setup, state0, states, sensors) -> tuple[ImpactRecord, float,
     m = setup.mjmodel
     sl = _builder.sensor_slices()
     nq, nv = m.nq, m.nv
-    q = np.vstack([state0[1:1 + nq], states[:-1, 1:1 + nq]])  # q_n at the sensor samples
     v_all = np.vstack([state0[1 + nq:1 + nq + nv], states[:, 1 + nq:1 + nq + nv]])  # n..N
     if not (np.all(np.isfinite(states)) and np.all(np.isfinite(sensors))):
         raise SimulationDiverged(f"mujoco: non-finite state (dt = {setup.dt:.3g} s)")
@@ -358,14 +388,15 @@ def _record(setup: Setup, state0, states, sensors) -> tuple[ImpactRecord, float,
                              "trunk" if setup.trunk == "sdof" else "segment_0")
     g = -m.opt.gravity[2]
     trunk_grav = m.body_subtreemass[root] * g * sensors[:, sl["trunk_com"]][:, 2]
-    potential = sensors[:, sl["potential"]][:, 0] - trunk_grav - _rest_potential(m, root)
+    potential = sensors[:, sl["potential"]][:, 0] - trunk_grav - setup.rest_potential
     model = setup.model
     mm = model.impactor_mass
     if setup.pendulum == "full":
         imp = setup.scenario.impactor
         pid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "pendulum")
         inertia = m.body_inertia[pid, 1] + mm * imp.equivalent_length ** 2
-        th, om = q[:, -1], v_all[:-1, -1]
+        th = np.concatenate([[state0[nq]], states[:-1, nq]])  # pendulum angle q_n
+        om = v_all[:-1, -1]
         pend = 0.5 * inertia * om * om + mm * imp.gravity * imp.equivalent_length * (
             1.0 - np.cos(th))
         e0 = mm * imp.gravity * imp.equivalent_length * (1.0 - math.cos(imp.release_angle))
@@ -376,7 +407,9 @@ def _record(setup: Setup, state0, states, sensors) -> tuple[ImpactRecord, float,
     D, B = _damping_matrices(m)
     v0, v1 = v_all[:-2], v_all[1:-1]
     vbar = 0.5 * (v0 + v1)
-    d_power = np.einsum("ni,ij,nj->n", v0, D, vbar) + np.einsum("ni,ij,nj->n", v1, B, vbar)
+    d_power = np.einsum("ni,ni->n", v0 @ D, vbar)  # v_n^T D vbar (matmul: BLAS, not einsum)
+    if B.any():
+        d_power += np.einsum("ni,ni->n", v1 * np.diag(B), vbar)  # B diagonal (joint dampers)
     w = vy - vx
     c_power = force[:-1] * 0.5 * (w[:-1] + w[1:])
     dt = setup.dt
@@ -390,6 +423,11 @@ def _record(setup: Setup, state0, states, sensors) -> tuple[ImpactRecord, float,
         raise SimulationDiverged(
             f"mujoco: mechanical energy reached {np.nanmax(mech):.4g} J > "
             f"{1 + ENERGY_GROWTH_LIMIT:g} x the input {e0:.4g} J (dt = {dt:.3g} s)")
+    created = float(np.max(mech + damping_work + contact_work)) - e0
+    if created > ENERGY_GROWTH_LIMIT * e0:  # the ledger: energy the engine made from nothing
+        raise SimulationDiverged(
+            f"mujoco: the engine created {created:.4g} J > {ENERGY_GROWTH_LIMIT:g} x the input "
+            f"{e0:.4g} J (kinetic + potential + dissipated; dt = {dt:.3g} s)")
     # t = 0 at the touch: the first sample with force, interpolated on the overlap y - x
     on = np.flatnonzero(force > 0.0)
     if not on.size:
@@ -421,7 +459,7 @@ def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
     imp = setup.scenario.impactor
     metrics = metrics_from_record(
         record, impact_speed=model.impact_speed, initial_energy=e0,
-        collision_duration=setup.collision_duration, impactor_mass=model.impactor_mass,
+        collision_duration=setup.detection_duration, impactor_mass=model.impactor_mass,
         dynamic_mass=model.dynamic_mass,
         equivalent_length=getattr(imp, "equivalent_length", None),
         gravity=getattr(imp, "gravity", 9.81))

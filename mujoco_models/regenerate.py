@@ -3,8 +3,10 @@
 One file per scenario, trunk (``sdof``, ``chain`` with :func:`analytic.chain.default_segments`)
 and pendulum (``linear``, ``full``): ``<scenario>-<trunk>-<pendulum>.xml``, exactly the model
 the runner steps with its default options (contact law and time step included), written by
-``MjSpec.to_xml`` (6 significant digits; see :func:`mujoco_models._builder.mjcf_text`). Open one with ``python -m mujoco.viewer --mjcf=<file>``. ``--check`` only
-compares and exits 1 if a file would change.
+``MjSpec.to_xml`` (6 significant digits; see :func:`mujoco_models._builder.mjcf_text`).
+Open one with ``python -m mujoco.viewer --mjcf=<file>``. XML files of no shipped scenario
+are removed. ``--check`` only compares and exits 1 if a file would change
+or be removed.
 """
 
 from __future__ import annotations
@@ -46,14 +48,20 @@ def main(argv=None) -> int:
     files = generated()
     changed = [n for n, text in files.items()
                if not (MODELS_DIR / n).exists() or (MODELS_DIR / n).read_text() != text]
+    stale = sorted(p.name for p in MODELS_DIR.glob("*.xml") if p.name not in files)
     if args.check:
         for n in changed:
             print(f"would change: {n}")
-        return 1 if changed else 0
+        for n in stale:
+            print(f"would remove: {n}")
+        return 1 if changed or stale else 0
     MODELS_DIR.mkdir(exist_ok=True)
     for n, text in files.items():
         (MODELS_DIR / n).write_text(text)
-    print(f"wrote {len(files)} MJCF files to {MODELS_DIR} ({len(changed)} changed)")
+    for n in stale:  # a model of no shipped scenario (renamed or removed)
+        (MODELS_DIR / n).unlink()
+    print(f"wrote {len(files)} MJCF files to {MODELS_DIR} ({len(changed)} changed, "
+          f"{len(stale)} removed)")
     return 0
 
 
