@@ -17,19 +17,28 @@ contact work sum F dt ((vy - vx)_n + (vy - vx)_{n+1}) / 2; the springs' potentia
 1/2 K x^2 differs from their discrete work by the integrator's bounded O(omega dt) energy
 error (omega dt < 2e-3 for the trunk at the default step).
 
-Damping is explicit, -C v_n over step n (Bullet's own joint damping is explicit too).
-Accuracy (measured, central-leader SDOF, soft contact): V, x_max and impact_loss agree with
-the analytic soft variant within 0.25 % at the default step, T0 (which hinges on the time
-of the re-contact after the first rebound) converges at first order: 1.1 % at the default
-50 steps per collision, 0.29 % at 200.
+Damping is explicit, -C v_n over step n (Bullet's own joint damping is explicit too); the
+chain's hinge-damping alternative is stiff and acts implicitly (:func:`damping_operators`).
+Accuracy (measured, SDOF trunk, soft contact, against the analytic soft variant): x_max and
+impact_loss within 1e-4 at the default step on every shipped scenario; V within 0.2 %
+(central-leader, open-center; realistic-crown, where V = 0.03 u1: 1.9 %, 0.6 % at dt / 4);
+T0 (which hinges on the time of the re-contact after the first rebound) converges at first
+order: 1.1 % at the default 50 steps per collision, 0.29 % at 200 (central-leader). Chain
+(soft, default N): x_max within 0.2 % of the MuJoCo backend's.
 
 Contact (see :mod:`bullet_models._contact` for the ERP/CFM derivation):
 
 * ``soft``: the law (k_c, c_c) of :func:`analytic.soft_contact.contact_law` (the same as the
-  analytic soft variant), given to Bullet as stiffness k_c and damping c_b, the law's
-  damping less what the implicit step adds, for the reduced mass mu of the pendulum and the
-  trunk's apparent mass at a (M_T for the SDOF trunk; 1 / (J_a M^-1 J_a^T) of the chain,
-  the mass the contact sees in the first instant). Friction 0, restitution 0.
+  analytic soft variant), given to Bullet as (k_b, c_b) of
+  :func:`bullet_models._contact.bullet_contact`: the matched-pole stiffness and the damping
+  that makes the implicit step's free collision rebound with the law's e, for the reduced
+  mass mu of the pendulum and the trunk's apparent mass at a (M_T for the SDOF trunk;
+  1 / (J_a M^-1 J_a^T) of the chain, the mass the contact sees in the first instant).
+  Friction 0, restitution 0. The implicit step always dissipates, so e = 1 is refused
+  (ParameterError); e -> 1 needs dt -> 0 (:func:`bullet_models._contact.largest_time_step`).
+  ``model["contact_stiffness"]``/``["contact_damping"]`` are the (k_b, c_b) Bullet
+  integrates, ``law_stiffness``/``law_damping`` the law's (k_c, c_c), as in the MuJoCo
+  backend.
 * ``newton``: a rigid contact with Bullet's restitution: pendulum restitution e, trunk 1
   (Bullet multiplies them), contact ERP 0 (the solver never pushes overlapping bodies
   apart, which would add energy), contact processing threshold 0 on both links (no
@@ -40,7 +49,16 @@ Contact (see :mod:`bullet_models._contact` for the ERP/CFM derivation):
   0.2 m/s to 1e-3 u1: bounces slower than that are the "common velocity" of
   :func:`analytic.records.metrics_from_record` anyway, while Bullet's default would zero
   the paper's first rebounds (e u1 ~ 0.2 m/s). The impact is then applied at the first
-  step with overlap, at most one step (dt u1) late.
+  step with overlap, at most one step (dt u1) late: impact times are first order in dt, and
+  so is V where the trunk decelerates at T0 (realistic-crown, V = 0.03 u1 near x_max:
+  +2.1 % at the default step, 0.2 % at dt / 8; central-leader and open-center < 0.5 %).
+  On the chain the same settings give the first impact exactly eq 21 with the clamp's
+  apparent mass (the tests check the impulse and the engine's joint-velocity response).
+
+Engine settings that matter (:func:`load`): the URDF's inertias are used
+(``URDF_USE_INERTIA_FROM_FILE``; by default PyBullet takes them from the collision shapes)
+and Bullet's joint-speed clamp (100 rad/s by default, which the chain's segments exceed at
+impact) is raised to :data:`JOINT_VELOCITY_LIMIT`; reaching it is a divergence.
 
 Time step (:mod:`analytic.timestep`): soft: dt = min(t_c / 50, 2 pi / omega_max / 20) with
 t_c the free collision time of the law on the reduced mass above and omega_max the chain's
@@ -64,7 +82,7 @@ from analytic.chain import (chain_matrices, chain_natural_frequencies, default_s
 from analytic.model import TwoBodyModel, two_body_model
 from analytic.parameters import (DEFAULT_CONTACT_DURATION, Contact, ParameterError,
                                  Pendulum, Scenario)
-from analytic.records import ImpactRecord, metrics_from_record
+from analytic.records import ImpactRecord, detection_duration, metrics_from_record
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
 from analytic.soft_contact import collision_duration, contact_law
@@ -80,6 +98,7 @@ RESTITUTION_THRESHOLD_FRACTION = 1e-3  # of u1: slower bounces are plastic (newt
 SWING_STEP = 1e-4  # s: step of the full pendulum's free swing before the contact
 SWING_SWITCH_STEPS = 20  # switch to the impact step this many swing steps before contact
 ENERGY_GROWTH_LIMIT = 0.05  # relative: mechanical energy above (1 + this) E0 = diverged
+JOINT_VELOCITY_LIMIT = 1e6  # rad/s or m/s: Bullet clamps joint speeds here (default 100)
 
 
 def _choice(name, value, allowed):
@@ -92,15 +111,56 @@ def _choice(name, value, allowed):
 _CLIENT = {"id": None, "dir": None, "files": {}}
 
 
+def _import_pybullet():
+    """``import pybullet`` without its build-time banner on stderr (CLI: one-line errors)."""
+    import sys
+
+    if "pybullet" in sys.modules:
+        return sys.modules["pybullet"]
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+    except (OSError, ValueError):  # no real stderr (captured): nothing to keep clean
+        import pybullet
+        return pybullet
+    try:
+        os.dup2(devnull, 2)
+        import pybullet
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+    return pybullet
+
+
 def client():
     """This process's PyBullet DIRECT client (created once)."""
-    import pybullet as p
+    p = _import_pybullet()
 
     cid = _CLIENT["id"]
     if cid is None or not p.isConnected(cid):
         cid = p.connect(p.DIRECT)
         _CLIENT["id"] = cid
     return p, cid
+
+
+def load(p, cid, text: str) -> int:
+    """Load a model's URDF text as a fixed-base multibody with the URDF's own inertias.
+
+    Without ``URDF_USE_INERTIA_FROM_FILE`` PyBullet replaces every link's inertia by that of
+    its collision shapes (a 1 mm default box for the chain segments, the pad's box for the
+    clamp segment, the 5 cm sphere for the bob): measured on the central-leader chain, the
+    mass matrix then differs from :func:`analytic.chain.chain_matrices` by 6e-4 of its
+    largest entry instead of 2e-16. Every link's joint-velocity clamp (Bullet's default is
+    100 rad/s or m/s, reached by the chain's segments at impact) is raised to
+    :data:`JOINT_VELOCITY_LIMIT`; a run that reaches it is reported as diverged.
+    """
+    body = p.loadURDF(_urdf_file(text), useFixedBase=True,
+                      flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+    for j in range(p.getNumJoints(body, physicsClientId=cid)):
+        p.changeDynamics(body, j, maxJointVelocity=JOINT_VELOCITY_LIMIT, physicsClientId=cid)
+    return body
 
 
 def _urdf_file(text: str) -> str:
@@ -184,6 +244,11 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
     mu = apparent * m / (apparent + m)
     k_c = c_c = bullet = None
     if contact == "soft":
+        if not model.restitution < 1.0:
+            raise ParameterError(
+                f"contact.restitution = {model.restitution:g}: Bullet's soft contact steps "
+                "implicitly and always dissipates: allowed (0, 1) with --contact soft (e = 1: "
+                "--contact newton)")
         if contact_stiffness is not None:
             k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
         else:
@@ -200,7 +265,7 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
         bullet = _contact.bullet_contact(k_c, c_c, mu, dt)
         # Impacts are told from moving together on the scale of the SDOF model's free
         # collision, the same for every rung (the chain's local collision, t_c, is shorter).
-        col = collision_duration(model, k_c, c_c)
+        col = detection_duration(model, scenario.contact, stiffness=k_c)
     else:
         if contact_stiffness is not None:
             raise ParameterError("--contact-stiffness: only for --contact soft")
@@ -241,8 +306,8 @@ def build_world(setup: Setup) -> World:
         restitutionVelocityThreshold=RESTITUTION_THRESHOLD_FRACTION * u1 if newton else 0.0,
         contactERP=0.0 if newton else 0.2, globalCFM=0.0, enableConeFriction=0,
         deterministicOverlappingPairs=1, physicsClientId=cid)
-    tb = p.loadURDF(_urdf_file(setup.trunk_urdf), useFixedBase=True, physicsClientId=cid)
-    pb = p.loadURDF(_urdf_file(setup.pendulum_urdf), useFixedBase=True, physicsClientId=cid)
+    tb = load(p, cid, setup.trunk_urdf)
+    pb = load(p, cid, setup.pendulum_urdf)
     nj = p.getNumJoints(tb, physicsClientId=cid)
     joints = list(range(nj))
     p.setJointMotorControlArray(tb, joints, p.VELOCITY_CONTROL, forces=[0.0] * nj,
@@ -366,7 +431,8 @@ def _loop_sdof(world, setup, n_steps, full, le, g, m):
         force[n] = f
         if not (n & 1023) and not math.isfinite(xs[0] + ps[0]):
             raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
-    return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force}
+    return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force,
+            "joint_speed": max(float(np.max(np.abs(vx))), float(np.max(np.abs(qd))))}
 
 
 def _loop_chain(world, setup, n_steps, full, le, g, m):
@@ -374,8 +440,7 @@ def _loop_chain(world, setup, n_steps, full, le, g, m):
     model = setup.model
     M, K, D = setup.matrices
     kdiag = np.diag(K).copy()
-    if setup.damping == "joint":
-        D = np.diag(_joint_damping(M, K, D))
+    Dv, Dq = damping_operators(setup)
     kp = model.impactor_stiffness
     mgl = m * g * le if full else 0.0
     joints = world.trunk_joints
@@ -402,7 +467,9 @@ def _loop_chain(world, setup, n_steps, full, le, g, m):
         qd[n] = ps[1]
         if n == n_steps:
             break
-        tau = -kdiag * Q[n] - D @ QD[n]
+        tau = -kdiag * Q[n] - Dv @ QD[n]
+        if Dq is not None:
+            tau += Dq @ Q[n]
         sjma(tb, joints, TQ, forces=tau.tolist(), physicsClientId=cid)
         sjm(pb, 0, TQ, force=-mgl * sin(ps[0]) if full else -kp * ps[0], physicsClientId=cid)
         step(cid)
@@ -420,9 +487,33 @@ def _loop_chain(world, setup, n_steps, full, le, g, m):
     vx = (np.cos(phi) * phid) @ h
     kin = 0.5 * np.einsum("ni,ij,nj->n", QD, M, QD)
     pot = 0.5 * (Q * Q) @ kdiag
-    ddot = np.einsum("ni,ij,nj->n", QD[:-1], D, 0.5 * (QD[:-1] + QD[1:]))
+    tau_d = QD[:-1] @ Dv.T  # the damping torque applied over each step (resisting)
+    if Dq is not None:
+        tau_d -= Q[:-1] @ Dq.T
+    ddot = np.einsum("ni,ni->n", tau_d, 0.5 * (QD[:-1] + QD[1:]))
     return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force, "trunk_kinetic": kin,
-            "trunk_potential": pot, "damping_power": ddot}
+            "trunk_potential": pot, "damping_power": ddot,
+            "joint_speed": max(float(np.max(np.abs(QD))), float(np.max(np.abs(qd))))}
+
+
+def damping_operators(setup: Setup) -> tuple[np.ndarray, np.ndarray | None]:
+    """(Dv, Dq): the chain's damping torque over step n is -(Dv theta'_n - Dq theta_n).
+
+    ``distributed``: explicit, Dv = D of :func:`analytic.chain.chain_matrices`, Dq = None
+    (its largest rate, eig(M^-1 D) ~ C / (rho A) ~ 350 1/s, is far inside stability).
+    ``joint``: the hinge dampers B = diag(beta k_j) (:func:`_joint_damping`) are stiff (beta
+    omega_max^2 dt >> 2 at the default step: explicit, the run diverges), so they act
+    implicitly, as MuJoCo's Euler step treats joint damping: the torque is -B theta'_{n+1}
+    with theta'_{n+1} = (M + dt B)^-1 (M theta'_n - dt K theta_n), the step's velocity
+    without the contact, M the chain's mass matrix at rest (Bullet's own, to round-off). So
+    Dv = B (M + dt B)^-1 M and Dq = -dt B (M + dt B)^-1 K.
+    """
+    M, K, D = setup.matrices
+    if setup.damping != "joint":
+        return D, None
+    B = np.diag(_joint_damping(M, K, D))
+    G = B @ np.linalg.inv(M + setup.dt * B)
+    return G @ M, -setup.dt * (G @ K)
 
 
 def _joint_damping(M, K, D) -> np.ndarray:
@@ -472,9 +563,13 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
     contact_work = np.concatenate([[0.0], np.cumsum(c_power) * dt])
     if setup.contact == "soft":
         overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
-        c_pot = 0.5 * setup.contact_stiffness * overlap ** 2
+        c_pot = 0.5 * setup.bullet.stiffness * overlap ** 2  # Bullet's spring k_b
     else:
         c_pot = np.zeros(n)
+    if not rec["joint_speed"] < 0.5 * JOINT_VELOCITY_LIMIT:  # NaN included
+        raise SimulationDiverged(
+            f"bullet: a joint speed reached {rec['joint_speed']:.4g} (rad/s or m/s), near "
+            f"Bullet's clamp {JOINT_VELOCITY_LIMIT:g} (dt = {dt:.3g} s)")
     kinetic = trunk_kin + pend_kin
     potential = trunk_pot + pend_pot
     mech = kinetic + potential
@@ -498,12 +593,17 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
         gravity=getattr(imp, "gravity", 9.81))
     b = setup.bullet
     model_dict = {**model.as_dict(), "segments": setup.segments, "dt": dt,
-                  "contact_stiffness": setup.contact_stiffness,
-                  "contact_damping": setup.contact_damping,
-                  "trunk": setup.trunk, "pendulum": setup.pendulum, "contact": setup.contact,
-                  "damping": setup.damping, "apparent_mass": setup.apparent_mass,
-                  "bullet_contact_damping": b.damping if b else None,
+                  "contact_stiffness": b.stiffness if b else None,
+                  "contact_damping": b.damping if b else None,
+                  "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
+                  "effective_mass": b.reduced_mass if b else None,
+                  "law_stiffness": setup.contact_stiffness,
+                  "law_damping": setup.contact_damping,
+                  "collision_duration": setup.collision_duration,
+                  "omega_max": setup.omega_max,
+                  "contact": setup.contact, "apparent_mass": setup.apparent_mass,
                   "contact_erp": b.erp if b else 0.0,
+                  "contact_cfm": b.cfm if b else 0.0,
                   "restitution_velocity_threshold": (
                       RESTITUTION_THRESHOLD_FRACTION * model.impact_speed
                       if setup.contact == "newton" else 0.0)}
@@ -587,7 +687,7 @@ def engine_matrices(chain) -> tuple[np.ndarray, np.ndarray]:
     p, cid = client()
     p.resetSimulation(physicsClientId=cid)
     text = _urdf.trunk_chain_urdf(chain)
-    body = p.loadURDF(_urdf_file(text), useFixedBase=True, physicsClientId=cid)
+    body = load(p, cid, text)
     n = chain.segments
     zeros = [0.0] * n
     M = np.asarray(p.calculateMassMatrix(body, zeros, physicsClientId=cid))

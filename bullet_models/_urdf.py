@@ -28,7 +28,9 @@ Models (one URDF each, every base is fixed to the world):
   the moment of inertia about the pivot by that fraction.
 
 Inertias the model does not use (rotation about axes without a joint) are set to the used
-one, so every inertia tensor is positive definite. Contact stiffness, damping, friction
+one, so every inertia tensor is positive definite. They reach Bullet only when loaded with
+``URDF_USE_INERTIA_FROM_FILE`` (:func:`bullet_models._runner.load`); PyBullet's default
+replaces them by the collision shapes' inertias. Contact stiffness, damping, friction
 and restitution are set at run time (:mod:`bullet_models._runner`): they depend on the
 time step.
 """
