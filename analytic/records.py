@@ -13,7 +13,10 @@ Detection rule (documented, the same for every backend)
 * **Moving together** (eq 34) is the first contact interval that lasts longer than
   ``persist_factor`` (default 3) free-collision durations: one free two-body collision lasts
   one duration, so a contact that outlives three of them is held by the tree's and the
-  pendulum's own dynamics, which is the paper's "moving together".
+  pendulum's own dynamics, which is the paper's "moving together". The duration is that of
+  the SDOF model's free collision under the scenario's law (:func:`detection_duration`) on
+  every rung and in every engine, the hinged trunk included, so that a difference between
+  rungs is never a difference in how impacts are counted.
 * **T0** is the first time in that interval at which the bodies share one velocity: the
   relative velocity ``vy - vx`` is within ``common_velocity_tolerance`` (default 1e-3) of the
   impact speed u1, or changes sign. This is the analogue of the accumulation point of the
@@ -76,6 +79,15 @@ class ImpactRecord:
             object.__setattr__(self, name, value)
         if n[0] < 3 or np.any(np.diff(self.t) <= 0):
             raise ParameterError("record.t: at least 3 strictly increasing times required")
+
+
+def detection_duration(model, contact=None, *, stiffness: float | None = None) -> float:
+    """Free-collision duration (s) on which impacts are told from moving together: the SDOF
+    two-body model's collision under the contact law for the model's e (stiffness N/m from
+    ``stiffness``, else the contact's stiffness or duration), whatever trunk the backend has."""
+    from .soft_contact import collision_duration, contact_law
+
+    return collision_duration(model, *contact_law(model, contact, stiffness=stiffness))
 
 
 def contact_intervals(force: np.ndarray, threshold: float) -> list[tuple[int, int]]:
