@@ -255,7 +255,11 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
             k_c, c_c = contact_law(model, scenario.contact)
         law_model = TwoBodyModel(apparent, 0.0, 1.0, m, 0.0, model.impact_speed,
                                  model.restitution)
-        t_c = collision_duration(law_model, k_c, c_c)
+        # the step resolves the collision Bullet integrates: stiffness k_c with the damping
+        # that gives e on the apparent mass (as (k_b, c_b) below; the SDOF law's c_c on the
+        # chain's light apparent mass would be overdamped and its duration not Bullet's)
+        t_c = collision_duration(law_model, k_c, _contact.law_for_restitution(
+            model.restitution, k_c, mu))
         if dt is None:
             dt = choose_time_step(t_c, omega_max)
             limit = _contact.largest_time_step(k_c, c_c, mu)
