@@ -37,6 +37,11 @@ def ladder_of(run_cache):
     from compare.ladder import build_ladder
 
     def get(name):
+        if not _LADDERS:  # first use: every shipped ladder's runs at once, on a process pool
+            from analytic.scenario import shipped_scenarios
+            from compare.ladder import prefetch_ladders
+
+            prefetch_ladders(run_cache, list(shipped_scenarios()))
         if name not in _LADDERS:
             _LADDERS[name] = build_ladder(name, cache=run_cache)
         return _LADDERS[name]

@@ -435,6 +435,16 @@ def rung_values(result, identification: dict) -> dict:
     return vals
 
 
+def prefetch_ladders(cache: RunCache, scenarios, *, engines=None, segments=None,
+                     workers: int | None = None) -> None:
+    """Run every rung of the scenarios' ladders into ``cache`` on a process pool
+    (:meth:`compare.runs.RunCache.prefetch`); :func:`build_ladder` then finds them cached."""
+    engines = ENGINES if engines is None else engines
+    cache.prefetch([(s, r.backend, dict(r.options)) for s in scenarios
+                    for r in ladder_rungs(s, engines=engines, segments=segments)],
+                   workers=workers)
+
+
 def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
                  segments: int | None = None, tolerances: dict | None = None) -> Ladder:
     """Run (or fetch from ``cache``) every rung of one scenario and assemble the ladder."""
