@@ -139,28 +139,132 @@ def fake_engine(monkeypatch):
 
 
 def test_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path, fake_engine):
-    res = run_sweep("central-leader", ["e=0.2,0.5,0.9", "crown_ratio=-1,0.5"], tmp_path,
-                    backends=["analytic", fake_engine], workers=0, identify=False)
+    # central-leader: l = 1 m; a clamp height of 0.8 m is invalid on the 0.5 m trunk only
+    grid = ["e=0.2,0.5,0.9", "trunk.clamp_height=0.315,0.8", "trunk.length=0.5,1"]
+    res = run_sweep("central-leader", grid, tmp_path, backends=["analytic", fake_engine],
+                    workers=0, identify=False)
     df = res.table
-    assert len(df) == 3 * 2 * 2  # every (point, target) has a row, none is lost
-    invalid = df[df["crown_ratio"] == -1]
-    assert set(invalid["status"]) == {INVALID}
-    assert invalid["error"].str.contains("trunk.crown_mass").all()
-    fake = df[(df["target"] == "fake") & (df["crown_ratio"] == 0.5)].set_index("e")
-    assert fake.loc[0.2, "status"] == "ok"
-    assert fake.loc[0.5, "status"] == "diverged" and "energy grew" in fake.loc[0.5, "error"]
-    assert fake.loc[0.9, "status"] == "failed" and "RuntimeError" in fake.loc[0.9, "error"]
-    ok = df[(df["status"] == "ok") & (df["crown_ratio"] == 0.5)]
-    assert set(ok["target"]) == {"analytic", "fake"} and len(ok) == 4
+    assert len(df) == 3 * 2 * 2 * 2  # every (point, target) has a row, none is lost
+    combo = (df["trunk.clamp_height"] == 0.8) & (df["trunk.length"] == 0.5)
+    assert set(df[combo]["status"]) == {INVALID} and combo.sum() == 3 * 2
+    assert df[combo]["error"].str.contains("trunk.clamp_height").all()
+    valid = df[~combo]
+    fake = valid[valid["target"] == "fake"]
+    assert set(fake[fake["e"] == 0.2]["status"]) == {"ok"}
+    div = fake[fake["e"] == 0.5]
+    assert set(div["status"]) == {"diverged"} and div["error"].str.contains("energy grew").all()
+    assert div[["x_max", "T0"]].isna().all().all()  # a diverged row carries no numbers
+    bad = fake[fake["e"] == 0.9]
+    assert set(bad["status"]) == {"failed"} and bad["error"].str.contains("RuntimeError").all()
+    assert set(valid[valid["target"] == "analytic"]["status"]) == {"ok"}
 
 
-def test_unavailable_option_is_a_skipped_row_not_a_crash(tmp_path, fake_engine):
+def test_value_invalid_at_every_point_is_refused_before_anything_runs(tmp_path):
+    with pytest.raises(ParameterError) as exc:
+        run_sweep("central-leader", ["e=0.2,2", "crown_ratio=0,1"], tmp_path / "s",
+                  workers=0, identify=False)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith("--grid 'e=0.2,2.0': e = 2.0")
+    assert "allowed [0, 1]" in msg  # analytic.Contact's range of the restitution
+    assert not (tmp_path / "s").exists()
+    with pytest.raises(ParameterError, match=r"^--grid 'option.foo=1.0': no backend .*"
+                                             r"analytic.* allowed: "):
+        run_sweep("central-leader", ["option.foo=1"], tmp_path / "s", workers=0)
+
+
+def _infinite_x_max(scenario, *, t_end=None):
+    """A stand-in engine that returns (does not raise) a run whose x_max blew up."""
+    result = simulate(scenario, t_end=t_end)
+    result.metrics["x_max"] = math.inf
+    return result
+
+
+def test_run_returning_infinite_metrics_is_recorded_as_diverged(tmp_path, monkeypatch):
+    from compare import backends
+
+    monkeypatch.setitem(backends.BACKENDS, "inf", backends.Backend(
+        "inf", "compare.test_sweep:_infinite_x_max", None, "test engine"))
+    res = run_sweep("central-leader", ["e=0.3"], tmp_path, backends=["analytic", "inf"],
+                    workers=0, identify=False)
+    row = res.table.set_index("target").loc["inf"]
+    assert row["status"] == "diverged" and "x_max" in row["error"]
+    assert math.isnan(row["x_max"]) and math.isnan(row["T0"])
+
+
+def _dies_at_half(scenario, *, t_end=None):
+    """A stand-in engine whose worker process dies (as in a crash) at e = 0.5."""
+    import multiprocessing
+    import os
+
+    if scenario.contact.restitution == 0.5 and multiprocessing.parent_process() is not None:
+        os._exit(1)
+    return simulate(scenario, t_end=t_end)
+
+
+def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
+    from compare import backends
+
+    monkeypatch.setitem(backends.BACKENDS, "crash", backends.Backend(
+        "crash", "compare.test_sweep:_dies_at_half", None, "test engine"))
+    res = run_sweep("central-leader", ["e=0.1,0.3,0.5,0.7,0.9"], tmp_path,
+                    backends=["analytic", "crash"], workers=2, identify=False, progress=False)
+    df = res.table.set_index(["target", "e"])
+    assert len(df) == 10
+    assert df.loc[("crash", 0.5), "status"] == "failed"
+    assert "worker process died" in df.loc[("crash", 0.5), "error"]
+    others = df.drop(index=("crash", 0.5))
+    assert set(others["status"]) == {"ok"}
+    # the rows of the surviving points are the in-process runs' numbers
+    ref = simulate(apply_point(load_scenario("central-leader"), {"e": 0.7})[0])
+    assert df.loc[("crash", 0.7), "x_max"] == ref.metrics["x_max"]
+
+
+def test_segments_one_is_the_sdof_trunk_and_shares_its_run(monkeypatch):
+    from compare import backends
+    from compare.sweep.run import make_targets, plan
+
+    monkeypatch.setitem(backends.BACKENDS, "eng", backends.Backend(
+        "eng", "compare.test_sweep:_engine_with_trunk", None, "test engine"))
+    targets = make_targets(["analytic", "eng"], ladder=True)
+    tasks, immediate = plan(load_scenario("central-leader"), parse_grid(["segments=1,4"]),
+                            targets, identify=False)
+    assert not immediate
+    opts = {(pk, t.id): dict(task.options) for task in tasks for _, pk, t in task.rows}
+    one, four = '[["segments",1]]', '[["segments",4]]'
+    assert opts[(one, "eng-chain")] == {"trunk": "sdof", "pendulum": "linear"}
+    assert opts[(one, "eng-chain-full")] == {"trunk": "sdof", "pendulum": "full"}
+    assert opts[(four, "eng-chain")] == {"trunk": "chain", "pendulum": "linear", "segments": 4}
+    assert opts[(four, "eng-sdof")] == {"trunk": "sdof", "pendulum": "linear"}
+    # one run for the SDOF rung at both points and the chain rung at segments = 1
+    shared = [t for t in tasks if dict(t.options) == {"trunk": "sdof", "pendulum": "linear"}]
+    assert len(shared) == 1 and len(shared[0].rows) == 3
+
+
+def _engine_with_trunk(scenario, *, trunk="chain", segments=None, pendulum="linear",
+                       t_end=None):  # pragma: no cover - planned, never run
+    raise AssertionError("not run")
+
+
+def _takes_segments(scenario, *, segments=None, t_end=None):
+    """A stand-in engine that takes ``segments`` (and ignores it)."""
+    return simulate(scenario, t_end=t_end)
+
+
+def test_unavailable_option_is_a_skipped_row_not_a_crash(tmp_path, fake_engine, monkeypatch):
+    from compare import backends
+
+    monkeypatch.setitem(backends.BACKENDS, "seg", backends.Backend(
+        "seg", "compare.test_sweep:_takes_segments", None, "test engine"))
     res = run_sweep("central-leader", ["e=0.2", "segments=4"], tmp_path,
-                    backends=["analytic", fake_engine], workers=0, identify=False)
+                    backends=["analytic", fake_engine, "seg"], workers=0, identify=False)
     row = res.table.set_index("target")
     assert row.loc["analytic", "status"] == "ok"  # segments does not apply to the reference
+    assert row.loc["seg", "status"] == "ok"
     assert row.loc["fake", "status"] == "skipped"
     assert "--segments" in row.loc["fake", "error"]
+    with pytest.raises(ParameterError, match=r"^--grid 'segments=4': no backend .* takes"):
+        run_sweep("central-leader", ["segments=4"], tmp_path / "b",
+                  backends=["analytic", fake_engine], workers=0)
 
 
 def _metric_frame(df):
@@ -194,6 +298,13 @@ def test_resume_after_interruption_loses_nothing(tmp_path):
     pd.testing.assert_frame_equal(_metric_frame(res.table), _metric_frame(fresh.table))
     parquet = pd.read_parquet(tmp_path / "a" / TABLE)
     assert len(parquet) == 15
+
+
+def test_progress_bar_counts_every_row(tmp_path, capsys):
+    run_sweep("central-leader", ["e=0.1,0.2,0.3"], tmp_path, workers=0, identify=False,
+              progress=True)
+    err = capsys.readouterr().err
+    assert "sweep: 100%" in err and "3/3" in err  # tqdm's bar on stderr
 
 
 def test_resume_refuses_another_scenario_in_the_same_directory(tmp_path):
@@ -269,6 +380,54 @@ def test_validity_map_of_soft_against_analytic(tmp_path):
     assert xmax["within"] == 1.0 and abs(xmax["worst_rel"]) <= 0.015
 
 
+def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tmp_path):
+    from compare.report.studies import StudySection
+    from compare.sweep.study import write_study
+
+    res = run_sweep("central-leader", ["e=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
+                    backends=["analytic", "soft"], workers=0, progress=False)
+    paths = write_study(tmp_path / "study", {"validity": res.out})
+    names = sorted(p.name for p in paths["figures"])
+    # soft's validity map and one identification map per target (analytic, soft)
+    assert names == ["identification-analytic.png", "identification-soft.png",
+                     "validity-soft-e-crown_ratio.png"]
+    md = paths["md"].read_text()
+    assert all(f"]({n})" in md for n in names)  # study.md shows every figure
+    table = pd.read_parquet(paths["table"])
+    assert len(table) == 8 and set(table["sweep"]) == {"validity"}
+    page = paths["html"].read_text()
+    assert page.count("<img ") == 3 and "<table>" in page
+    sec = StudySection(tmp_path / "study")
+    html = sec.render("html")
+    # each figure in place (as a data URI), none repeated after the text
+    assert html.count('src="data:image/png;base64,') == 3 and sec.images == []
+    assert html.index("Validity maps") < html.index('src="data:image') \
+        < html.index("Identification maps")
+    # headings nest under the section's h2
+    assert html.count("<h2") == 1 and "<h1" not in html and "<h3>Sweep" not in html
+    assert "<h4>Validity maps</h4>" in html
+    text = sec.render("md")
+    assert "\n#### Validity maps" in text and "\n# " not in text and "\n## Validity" not in text
+    assert "validity-soft-e-crown_ratio.png" in text
+
+
+def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_engine):
+    from compare.sweep.run import _chunks, make_targets, plan
+
+    tasks, _ = plan(load_scenario("central-leader"), parse_grid(["e=0:0.9:40"]),
+                    make_targets(["analytic", fake_engine]), identify=False)
+    chunks = _chunks(tasks, 2)
+    assert sorted(t.key for c in chunks for t in c) == sorted(t.key for t in tasks)
+    # an engine of unknown cost (1 s a run): one run a call, so Ctrl-C loses little
+    assert all(len(c) == 1 for c in chunks if c[0].backend.name == "fake")
+    analytic = [c for c in chunks if c[0].backend.name == "analytic"]
+    assert all({t.backend.name for t in c} == {"analytic"} for c in analytic)
+    assert len(analytic) == 20  # 40 runs // (8 calls x 2 workers) = 2 a call
+    many, _ = plan(load_scenario("central-leader"), parse_grid(["e=0:0.9:400"]),
+                   make_targets(["analytic"]), identify=False)
+    assert max(len(c) for c in _chunks(many, 2)) == 16  # 400 // 16 = 25, capped at 16
+
+
 def test_identification_map_matches_the_documented_floor_and_finding(tmp_path):
     res = run_sweep("central-leader", ["e=0,0.1", "impactor.mass=132.4,140"], tmp_path,
                     workers=0, progress=False)
@@ -314,4 +473,40 @@ def test_treeimpact_sweep_writes_table_maps_and_study(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert rc == 2 and "\n" not in err and "--grid 'e=0:0.9'" in err
     assert "START:STOP:COUNT" in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--grid", "e=abc"], ["--grid 'e=abc'", "not a number", "START:STOP:COUNT"]),
+    (["--grid", "nosuch=1"], ["--grid 'nosuch=1'", "unknown name", "allowed"]),
+    (["--grid", "e=2"], ["--grid 'e=2.0'", "contact.restitution", "allowed [0, 1]"]),
+    (["--grid", "segments=0,4"], ["--grid 'segments=0,4'", "allowed [1, 1000]"]),
+    (["--grid", "dt=-1e-5"], ["--grid 'dt=-1e-5'", "allowed (0, inf)"]),
+    (["--grid", "e=0.1", "--workers", "-1"], ["--workers", "integer >= 0"]),
+    (["--grid", "e=0.1", "--backend", "nosuch"], ["--backend 'nosuch'", "allowed"]),
+    (["--grid", "e=0.1", "--scheduler", "nohost"], ["--scheduler 'nohost'", "tcp://HOST:PORT"]),
+])
+def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
+    from compare.cli import main
+
+    rc = main(["sweep", *argv, "--backend", "analytic", "--out", str(tmp_path / "o")]
+              if "--backend" not in argv else ["sweep", *argv, "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "\n" not in err and "Traceback" not in err
+    for w in words:
+        assert w in err, (w, err)
+    assert not (tmp_path / "o" / "results.csv").exists()  # nothing ran
+
+
+def test_interrupted_sweep_command_says_how_to_resume_and_exits_130(tmp_path, capsys,
+                                                                     monkeypatch):
+    from compare.cli import main
+    from compare.sweep import run
+
+    def interrupted(*args, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run, "run_sweep", interrupted)
+    rc = main(["sweep", "--grid", "e=0.1", "--backend", "analytic", "--out", str(tmp_path)])
+    err = capsys.readouterr().err.strip()
+    assert rc == 130 and "\n" not in err and "rerun the same command to resume" in err
 

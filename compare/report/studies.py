@@ -3,17 +3,30 @@
 A study directory is read as it is: its figures (``*.png``, ``*.svg``, sorted by name) are
 embedded, its ``*.json`` files are carried into report.json, and a ``summary.md`` (or
 ``README.md``) is shown as its text. The section's title is the directory's name.
+
+A directory written by ``treeimpact sweep`` (it has ``study.md``, :mod:`compare.sweep.study`)
+is shown as that study: its text with each figure in place, under its caption, headings
+nested under the section's; figures the text does not show follow it.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 from analytic.parameters import ParameterError
 
 from . import figures
 from .base import Section
+
+_IMAGE = re.compile(r"^!\[[^\]]*\]\(([^)]+)\)\s*$")
+
+
+def _demote(md: str, levels: int) -> str:
+    """Markdown with every heading ``levels`` deeper (the section is itself a ``##``)."""
+    return "\n".join("#" * levels + line if line.startswith("#") else line
+                     for line in md.splitlines())
 
 
 class StudySection(Section):
@@ -39,10 +52,31 @@ class StudySection(Section):
             if (d / name).is_file():
                 self.text = (d / name).read_text()
                 break
+        self.html = ""
+        if (d / "study.md").is_file():  # a study of compare.sweep: shown as written
+            self._from_study(d / "study.md")
+
+    def _from_study(self, path: Path) -> None:
+        from compare.sweep.study import markdown_body
+
+        md = path.read_text()
+        uris = {i["name"]: i["uri"] for i in self.images}
+        shown = {m.group(1) for m in map(_IMAGE.match, md.splitlines()) if m}
+        missing = sorted(shown - set(uris))
+        if missing:
+            raise ParameterError(f"study {self.directory.name}: study.md shows "
+                                 f"{', '.join(missing)}, which the directory does not have")
+        # the section is an h2: the study's title becomes an h3, its parts h4 and h5
+        self.html = markdown_body(md, heading_shift=2, image_src=uris.__getitem__)
+        self.images = [i for i in self.images if i["name"] not in shown]
+        self.text = _demote(self.text, 2)
 
     def context(self) -> dict:
-        return {"images": self.images, "text": self.text, "files": sorted(self.data)}
+        return {"images": self.images, "text": self.text, "html": self.html,
+                "files": sorted(self.data)}
 
     def to_json(self) -> dict:
-        return {"directory": str(self.directory), "figures": [i["name"] for i in self.images],
+        return {"directory": str(self.directory),
+                "figures": sorted(p.name for p in self.directory.iterdir()
+                                  if p.suffix.lower() in (".png", ".svg")),
                 "data": self.data, "summary": self.text}

@@ -7,8 +7,9 @@
     treeimpact sweep --preset default|full --out DIR      (a whole study)
 
 Writes the sweep table (results.csv, results.parquet), the validity and identification maps
-and study.md / study.html into DIR. Rerunning with the same DIR resumes. Bad input: one
-line naming the flag and the allowed form (exit 2).
+and study.md / study.html into DIR. Rerunning with the same DIR resumes; Ctrl-C keeps every
+finished row and exits 130 with one line. Bad input: one line naming the flag and the
+allowed form or range (exit 2).
 """
 
 from __future__ import annotations
@@ -66,8 +67,10 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask scheduler address (tcp://host:8786): run on that cluster")
     parser.add_argument("--preset", default=None, choices=("default", "full"),
-                        help="run a whole study (validity, identification, speed); --grid "
-                             "replaces the preset's validity grid")
+                        help="run a whole study (validity, identification, speed): default "
+                             "takes about 45 s on 2 cores; full (e=0:0.9:10, "
+                             "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 3 CPU-hours, "
+                             "1.5 h with 2 workers; --grid replaces the preset's validity grid")
     parser.add_argument("--tolerance", type=_tolerance, default=None,
                         help="validity tolerance, relative (default 0.05)")
     parser.add_argument("--retry-failed", action="store_true", dest="retry_failed",
@@ -107,8 +110,24 @@ def parse_options(specs, backends) -> dict:
     return out
 
 
+#: Exit code of an interrupted sweep (Ctrl-C): 128 + SIGINT, as a shell reports it.
+EXIT_INTERRUPTED = 130
+
+
 def run_sweep_command(args) -> int:
-    """Run ``treeimpact sweep``; returns the exit code (0; bad input raises ParameterError)."""
+    """Run ``treeimpact sweep``; returns the exit code (0; 130 when interrupted, with one line
+    saying how to resume; bad input raises ParameterError)."""
+    import sys
+
+    try:
+        return _run(args)
+    except KeyboardInterrupt:
+        print(f"treeimpact: sweep interrupted; the finished rows are kept in {args.out}: "
+              f"rerun the same command to resume", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _run(args) -> int:
     from .grid import parse_grid
     from .run import _check_backends, run_sweep
     from .study import run_study, write_study
@@ -122,7 +141,8 @@ def run_sweep_command(args) -> int:
                                  "engines' options); run a plain sweep instead")
         paths = run_study(args.out, args.preset, scenario=args.scenario, backends=backends,
                           workers=args.workers, scheduler=args.scheduler,
-                          tolerance=args.tolerance, grid=args.grid or None)
+                          tolerance=args.tolerance, grid=args.grid or None,
+                          retry_failed=args.retry_failed)
     else:
         if grid is None:
             raise ParameterError(f"--grid: give at least one ({GRID_FORM}) or --preset")

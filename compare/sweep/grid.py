@@ -12,7 +12,9 @@ What a NAME may be (:func:`resolve_parameter`):
   scenario is rebuilt with that field replaced (:mod:`compare.sweep.apply`), SI units;
 * an alias: ``e`` = ``contact.restitution``; ``contact_stiffness`` = ``contact.stiffness``
   (N/m; the contact's duration is cleared, the two are exclusive); ``segments`` and ``dt``
-  (s) are engine options passed to the backends that take them;
+  (s) are engine options passed to the backends that take them: ``segments`` integers in
+  [1, 1000] (1 is the one-degree-of-freedom trunk, eq 7: the engine's ``trunk=sdof`` model;
+  2 and more the hinged chain of :mod:`analytic.chain`), ``dt`` > 0;
 * any other engine option (``trunk``, ``pendulum``, ``contact``, ``damping``,
   ``integrator``...) as ``option.NAME`` (values may be words: ``option.contact=soft,newton``);
 * a derived ratio, solved for its underlying parameter after every direct override:
@@ -32,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from analytic.chain import MAX_SEGMENTS
 from analytic.parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk
 
 GRID_FORM = "NAME=START:STOP:COUNT (COUNT values, both ends included) or NAME=V1,V2,..."
@@ -59,6 +62,11 @@ DERIVED_RATIOS = {
 
 #: Engine options whose values must be integers.
 INTEGER_OPTIONS = {"segments"}
+
+#: Allowed range of numeric engine options: (low, high, low included), checked when parsed.
+#: segments: 1 (the SDOF trunk) to analytic.chain.MAX_SEGMENTS; dt: any positive step (the
+#: engine refuses an unstable one per run, recorded as a skipped row with its limit).
+OPTION_RANGES = {"segments": (1, MAX_SEGMENTS, True), "dt": (0.0, math.inf, False)}
 
 _SECTIONS = {"trunk": (Trunk,), "impactor": (Pendulum, Billet), "contact": (Contact,)}
 _EXTRA_FIELDS = {"impactor": {"release_angle_deg"}}
@@ -210,6 +218,14 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
                                      f"expected {GRID_FORM} with integer values")
             ints.append(int(v))
         values = ints
+    if param.kind == OPTION and param.target in OPTION_RANGES:
+        lo, hi, closed = OPTION_RANGES[param.target]
+        for v in values:
+            if isinstance(v, str) or not ((lo <= v if closed else lo < v) and v <= hi):
+                rng = (f"{'[' if closed else '('}{lo:g}, {hi:g}"
+                       f"{']' if math.isfinite(hi) else ')'}")
+                raise ParameterError(f"{flag} {spec!r}: {name} = {v!r} is out of range: "
+                                     f"allowed {rng}")
     if len(set(values)) != len(values):
         raise ParameterError(f"{flag} {spec!r}: repeated values; expected {GRID_FORM}")
     return Axis(param, tuple(values))
@@ -226,8 +242,10 @@ class Grid:
         targets = [(a.parameter.kind, a.parameter.target) for a in self.axes]
         for i, t in enumerate(targets):
             if t in targets[:i]:
-                raise ParameterError(f"--grid {names[i]!r}: sets the same parameter as "
-                                     f"{names[targets.index(t)]!r}; give each parameter once")
+                first = names[targets.index(t)]
+                what = "is given twice" if first == names[i] else \
+                    f"sets the same parameter as {first!r}"
+                raise ParameterError(f"--grid {names[i]!r}: {what}; give each parameter once")
         derived_targets = {DERIVED_RATIOS[a.name][0] for a in self.axes
                            if a.parameter.kind == DERIVED}
         for a in self.axes:

@@ -177,8 +177,9 @@ def _label(name: str) -> str:
     return units.get(name, name)
 
 
-def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None):
-    """One heatmap on ax: rows b, columns a (index grid, values as tick labels)."""
+def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annotate=False):
+    """One heatmap on ax: rows b, columns a (index grid, values as tick labels); with
+    ``annotate`` each cell also prints its value (in %) when the grid is small enough."""
 
     xs = sorted(cell[a].unique())
     ys = sorted(cell[b].unique())
@@ -214,6 +215,10 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None):
             elif L[j, i]:
                 ax.text(i, j, L[j, i], ha="center", va="center", fontsize=6,
                         color="k" if abs(Z[j, i]) < 0.6 * vmax else "w")
+            elif annotate and len(xs) <= 12 and len(ys) <= 12:
+                ax.text(i, j, f"{Z[j, i]:+.0%}" if abs(Z[j, i]) < 100 else f"{Z[j, i]:+.0e}",
+                        ha="center", va="center", fontsize=5,
+                        color="k" if abs(Z[j, i]) < 0.6 * vmax else "w")
     ax.set_xticks(range(len(xs)), [f"{v:.3g}" for v in xs], fontsize=6, rotation=45)
     ax.set_yticks(range(len(ys)), [f"{v:.3g}" for v in ys], fontsize=6)
     ax.set_xlabel(_label(a), fontsize=7)
@@ -242,7 +247,7 @@ def _line(ax, sub, a, value_col, tol, title):
 def _grid_figure(n_panels: int):
     from matplotlib.figure import Figure
 
-    ncol = min(3, n_panels)
+    ncol = 2 if n_panels == 4 else min(3, n_panels)
     nrow = math.ceil(n_panels / ncol)
     fig = Figure(figsize=(3.3 * ncol, 2.9 * nrow + 0.6), layout="constrained")
     axes = [fig.add_subplot(nrow, ncol, i + 1) for i in range(n_panels)]
@@ -259,11 +264,20 @@ def _safe(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
 
 
+def _in_order(groups, order):
+    """(target, frame) pairs of a groupby, targets listed in ``order`` first, in that order
+    (the sweep's own target order: soft, then each engine's rungs), then the rest by name."""
+    groups = dict(list(groups))
+    rank = {t: i for i, t in enumerate(order or ())}
+    return sorted(groups.items(), key=lambda kv: (rank.get(kv[0], len(rank)), kv[0]))
+
+
 def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=None,
-                  prefix: str = "validity") -> list[dict]:
+                  prefix: str = "validity", order=None) -> list[dict]:
     """Draw the validity maps of a sweep table into ``figdir``; returns one dict per figure
     (path, target, axes, caption) plus per-metric summaries (fraction within tolerance,
-    worst |rel| and where, dominating rung counts)."""
+    worst |rel| and where, dominating rung counts). ``order``: target ids in the order
+    their maps are listed."""
     figdir = Path(figdir)
     figdir.mkdir(parents=True, exist_ok=True)
     disc = discrepancies(df, metrics)
@@ -271,7 +285,7 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
         return []
     num = numeric_axes(df)
     out = []
-    for target, dt in disc.groupby("target", sort=False):
+    for target, dt in _in_order(disc.groupby("target", sort=False), order):
         ms = [m for m in metrics if dt[dt["metric"] == m]["rel"].notna().any()]
         if not ms:
             continue
@@ -368,7 +382,8 @@ _E_NAMES = ("e", "contact.restitution", "restitution")
 _CROWN_NAMES = ("crown_ratio", "trunk.crown_mass")
 
 
-def identification_maps(df, figdir, *, prefix: str = "identification") -> list[dict]:
+def identification_maps(df, figdir, *, prefix: str = "identification",
+                        order=None) -> list[dict]:
     """Draw the identification maps (see the module docstring) into ``figdir``."""
     figdir = Path(figdir)
     figdir.mkdir(parents=True, exist_ok=True)
@@ -387,7 +402,7 @@ def identification_maps(df, figdir, *, prefix: str = "identification") -> list[d
     else:
         return []
     out = []
-    for target, dt in ide.groupby("target", sort=False):
+    for target, dt in _in_order(ide.groupby("target", sort=False), order):
         if dt["rel"].notna().sum() == 0:
             continue
         fig, axes = _grid_figure(len(IDENT_KEYS))
@@ -401,7 +416,7 @@ def identification_maps(df, figdir, *, prefix: str = "identification") -> list[d
                       f"{k}: identified vs true")
             else:
                 im = _heat(ax, _worst(sub, "rel", a, b), a, b, "rel", DEFAULT_TOLERANCE,
-                           f"{k}: (identified - true) / true", vmax=vmax)
+                           f"{k}: (identified - true) / true", vmax=vmax, annotate=True)
             fin = sub[sub["rel"].notna()]
             if len(fin):
                 w = fin.loc[fin["rel"].abs().idxmax()]

@@ -10,11 +10,18 @@ can say which assumption dominates the discrepancy.
 Execution (:func:`run_sweep`):
 
 * ``workers=0``: in this process, one run after the other (debugging, tests);
-* ``workers=N`` (default: the CPU count): a local ``concurrent.futures.ProcessPoolExecutor``;
+* ``workers=N`` (default: the CPU count): a local ``concurrent.futures.ProcessPoolExecutor``
+  (a worker process that dies, say a crash inside an engine, costs only the point that
+  killed it: it is recorded as ``failed`` and the rest run on a fresh pool); Ctrl-C ends the
+  workers, keeps every finished row and writes the Parquet table;
 * ``scheduler=ADDRESS`` (or a ``dask.distributed.Client``): an existing Dask cluster.
 
 Runs with identical inputs (a grid point whose swept options a backend does not take:
-``segments`` for ``analytic``) are run once and their row written for every point.
+``segments`` for ``analytic`` or for an SDOF trunk) are run once and their row written for
+every point. ``segments = 1`` runs an engine's one-degree-of-freedom trunk (``trunk=sdof``).
+
+Before anything runs, :func:`check_grid` refuses a grid no point of which could run along
+one axis value (``e=2``) or an option no backend takes (one-line ParameterError).
 
 The table (:data:`JOURNAL`, CSV) gets one row per (grid point, target) the moment its run
 finishes, flushed at once, so an interrupted sweep loses nothing it finished; a rerun with
@@ -66,6 +73,9 @@ MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "e", "u1", "segments", "dt", "conta
 IDENT_KEYS = ("M_T", "K_T", "xi", "E")
 BASE_COLUMNS = ("scenario", "point", "target", "backend", "kind", "previous", "status", "error",
                 "wall_s", "t_end", "task", "worker", "finished")
+#: Seconds to wait for a Dask scheduler before --scheduler is refused as unreachable.
+SCHEDULER_TIMEOUT_S = 10
+
 #: Spacing (s) of the analytic trajectory handed to the identification: 20 us, the record
 #: spacing at which analytic.identification's tests recover b and omega_n.
 ANALYTIC_SAMPLE_STEP = 2e-5
@@ -211,6 +221,10 @@ def execute(task: Task) -> dict:
     out["wall_s"] = time.perf_counter() - t0
     if out["status"] != OK:
         return out
+    infinite = [k for k in METRIC_KEYS if math.isinf(_num(result.metrics.get(k)))]
+    if infinite:  # a run that returned instead of raising: still a divergence, not numbers
+        out.update(status=DIVERGED, error=f"diverged: infinite {', '.join(infinite)}")
+        return out
     out.update({k: _num(result.metrics.get(k)) for k in METRIC_KEYS})
     model = result.model or {}
     out.update({f"model.{k}": _num(model.get(k)) for k in MODEL_KEYS})
@@ -330,6 +344,18 @@ class SweepResult:
         return self.out / JOURNAL
 
 
+def make_out(out) -> Path:
+    """The output directory, created; a one-line ``--out`` error when it cannot be."""
+    out = Path(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"--out {str(out)!r}: cannot create the directory "
+                             f"({exc.strerror or type(exc).__name__}); allowed: a new or "
+                             f"existing writable directory") from None
+    return out
+
+
 def _spec(scenario: Scenario, grid: Grid, identify: bool) -> dict:
     return {"version": 1, "scenario": scenario.to_dict(), "grid": grid.specs(),
             "axes": list(grid.names), "identify": identify}
@@ -355,10 +381,7 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
     done = done or set()
     tasks: OrderedDict[str, Task] = OrderedDict()
     immediate = []
-    accepted = {}
-    for t in targets:
-        if t.reference:
-            accepted[t.id] = get_backend(t.backend).options()
+    accepted = {t.id: _accepted(t.backend) for t in targets}
     for point in grid.points():
         pk = point_key(point)
         todo = [t for t in targets if (pk, t.id) not in done]
@@ -377,6 +400,8 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
                 if name in t.drop or (t.reference and name not in accepted[t.id]):
                     continue  # the option does not change this target's model
                 opts[name] = value
+            if not t.reference:
+                opts = _trunk_options(opts, accepted[t.id])
             if t.backend == "analytic" and identify and "samples" in accepted[t.id] \
                     and "samples" not in opts:
                 opts["samples"] = int(round(scen.t_end / ANALYTIC_SAMPLE_STEP)) + 1
@@ -386,6 +411,62 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
                 task = tasks[key] = Task(key, scen, get_backend(t.backend), opts, identify)
             task.rows.append((point, pk, t))
     return list(tasks.values()), immediate
+
+
+def _accepted(backend: str) -> set:
+    """The options ``backend``'s simulate() takes (empty when it is not installed: its rows
+    are then skipped with the backend's own reason)."""
+    from compare.backends import get_backend
+
+    try:
+        return set(get_backend(backend).options())
+    except ParameterError:
+        return set()
+
+
+def _trunk_options(opts: dict, accepted: set) -> dict:
+    """An engine's options with ``segments`` read against its trunk: ``segments = 1`` is the
+    one-degree-of-freedom trunk (``trunk = sdof``, eq 7; a hinged chain needs 2 or more), and
+    an SDOF trunk has no segments (dropped: they do not change its model)."""
+    if "trunk" not in accepted or "segments" not in opts:
+        return opts
+    if opts["segments"] == 1:
+        return {k: v for k, v in opts.items() if k != "segments"} | {"trunk": "sdof"}
+    if opts.get("trunk") == "sdof":
+        return {k: v for k, v in opts.items() if k != "segments"}
+    return opts
+
+
+def check_grid(scenario: Scenario, grid: Grid, targets: list[Target]) -> None:
+    """Refuse, before anything runs, what no grid point could run (one-line ParameterError
+    naming the ``--grid`` spec): an engine option that no backend of the sweep takes, and an
+    axis value outside its parameter's range at every point (``e=2``). A point that is
+    invalid only in combination with other axes (a clamp height above one of the swept
+    lengths) is kept: it becomes an ``invalid`` row and the sweep goes on."""
+    accepted = set().union(*(_accepted(t.backend) for t in targets))
+    for ax in grid.axes:
+        p = ax.parameter
+        if p.kind == "option" and p.target not in accepted:
+            raise ParameterError(
+                f"--grid {ax.spec()!r}: no backend of this sweep "
+                f"({', '.join(dict.fromkeys(t.backend for t in targets))}) takes the option "
+                f"{p.target!r}; allowed: {', '.join(sorted(accepted))}")
+    points = grid.points()
+    errors = []
+    for point in points:
+        try:
+            apply_point(scenario, point)
+            errors.append(None)
+        except ParameterError as exc:
+            errors.append(_one_line(exc))
+    if not any(errors):
+        return
+    for ax in grid.axes:
+        for v in ax.values:
+            errs = [e for point, e in zip(points, errors) if point[ax.name] == v]
+            if all(errs):
+                raise ParameterError(f"--grid {ax.spec()!r}: {errs[0]} (at every point of "
+                                     f"the grid)")
 
 
 def _row_base(scenario, point, pk, target: Target) -> dict:
@@ -403,11 +484,40 @@ def _rows_of(task: Task, outcome: dict, scenario: Scenario) -> list[dict]:
             for point, pk, t in task.rows]
 
 
+#: Rough cost (s) of one run, by backend and trunk model, measured on a 2-core VM for the
+#: shipped scenarios: what decides how many runs go into one worker call. Unknown backends
+#: and engines' hinged chains (1-20 s) count as 1 s.
+RUN_COST = {("analytic", None): 0.005, ("soft", None): 0.2, ("mujoco", "sdof"): 0.05,
+            ("bullet", "sdof"): 0.15}
+DEFAULT_RUN_COST = 1.0
+#: Seconds of estimated work per worker call (and at most 16 runs): a call costs a few ms of
+#: scheduling, so short runs are grouped, and an interrupted sweep loses at most about this
+#: much finished work per worker (a run longer than this is a call of its own).
+CALL_BUDGET = 0.5
+
+
+def _cost_class(task: Task) -> tuple:
+    trunk = task.options.get("trunk")
+    return (task.backend.name, trunk if trunk == "sdof" else None)
+
+
 def _chunks(tasks: list, workers: int) -> list[list]:
-    """Tasks grouped so that each worker gets about 8 chunks (fewer round trips for the
-    4 ms analytic runs, still a fine-grained progress bar and little lost work)."""
-    n = max(1, min(16, len(tasks) // max(1, 8 * workers)))
-    return [tasks[i:i + n] for i in range(0, len(tasks), n)]
+    """Tasks grouped into worker calls: runs of one cost class (:data:`RUN_COST`) up to
+    :data:`CALL_BUDGET` seconds a call, and no fewer than about 8 calls per worker; order
+    kept within a class."""
+    classes = [_cost_class(t) for t in tasks]
+    count = {c: classes.count(c) for c in set(classes)}
+    size = {c: max(1, min(16, int(CALL_BUDGET / RUN_COST.get(c, DEFAULT_RUN_COST)),
+                          n // max(1, 8 * workers))) for c, n in count.items()}
+    chunks, open_ = [], {}
+    for t, c in zip(tasks, classes):
+        group = open_.setdefault(c, [])
+        group.append(t)
+        if len(group) >= size[c]:
+            chunks.append(group)
+            open_[c] = []
+    chunks += [g for g in open_.values() if g]
+    return chunks
 
 
 def _progress(total: int, enabled):
@@ -440,8 +550,20 @@ def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = Fal
                                 or workers < 0):
         raise ParameterError(f"--workers = {workers!r}: allowed integers >= 0 "
                              f"(0 runs in this process)")
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    check_grid(scen, grid, targets)
+    client, own_client = _connect(scheduler) if scheduler is not None else (None, False)
+    try:
+        return _sweep(scen, grid, targets, Path(out), workers=workers, client=client,
+                      identify=identify, retry_failed=retry_failed, progress=progress,
+                      on_rows=on_rows, t_start=t_start)
+    finally:
+        if own_client:
+            client.close()
+
+
+def _sweep(scen, grid, targets, out, *, workers, client, identify, retry_failed, progress,
+           on_rows, t_start) -> SweepResult:
+    out = make_out(out)
     spec = _spec(scen, grid, identify)
     _check_spec(out, spec)
     (out / SPEC).write_text(json.dumps(spec | {"targets": [dataclasses.asdict(t)
@@ -478,8 +600,8 @@ def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = Fal
         if immediate:
             emit(immediate)
         if tasks:
-            if scheduler is not None:
-                ran = _run_dask(tasks, scheduler, scen, emit)
+            if client is not None:
+                ran = _run_dask(tasks, client, scen, emit)
             elif workers == 0:
                 for task in tasks:
                     emit(_rows_of(task, execute(task), scen))
@@ -495,46 +617,124 @@ def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = Fal
                        time.perf_counter() - t_start)
 
 
+def _ignore_sigint() -> None:
+    """Worker initializer: Ctrl-C is the parent's to handle (it ends the workers itself), so a
+    terminal's SIGINT to the whole process group prints no worker tracebacks."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _end_workers(pool) -> None:
+    """Terminate the worker processes this pool started (by their Process objects)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _died(task: Task, exc: BaseException) -> dict:
+    return {"status": FAILED, "t_end": task.scenario.t_end, "wall_s": math.nan,
+            "error": f"worker process died running this point ({type(exc).__name__}: "
+                     f"{_one_line(exc)}); rerun with --retry-failed"}
+
+
 def _run_pool(tasks, workers, scen, emit) -> int:
+    """Run the tasks on a local process pool. A worker process that dies (a crash inside an
+    engine) breaks the pool: the calls it broke are run again on a fresh pool, and a call
+    broken twice is run one task at a time in a one-worker pool, so only the task that kills
+    its worker is recorded as failed."""
     from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
 
     ran = 0
-    chunks = _chunks(tasks, workers)
-    pool = ProcessPoolExecutor(max_workers=workers)
+    pending = _chunks(tasks, workers)
+    strikes: dict[int, int] = {}
+    suspects = []
+    while pending:
+        broken, unsent, futures = [], [], {}
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)),
+                                   initializer=_ignore_sigint)
+        try:
+            for c in pending:
+                try:
+                    futures[pool.submit(run_chunk, c)] = c
+                except BrokenProcessPool:  # broke while submitting: not this chunk's doing
+                    unsent.append(c)
+            for fut in as_completed(futures):
+                try:
+                    outcomes = fut.result()
+                except BrokenProcessPool:
+                    broken.append(futures[fut])
+                    continue
+                for task, outcome in zip(futures[fut], outcomes):
+                    emit(_rows_of(task, outcome, scen))
+                    ran += 1
+        except BaseException:
+            _end_workers(pool)
+            raise
+        pool.shutdown(wait=True)
+        pending = unsent
+        for c in broken:
+            strikes[id(c)] = strikes.get(id(c), 0) + 1
+            (suspects if strikes[id(c)] >= 2 else pending).append(c)
+    pool = None
     try:
-        futures = {pool.submit(run_chunk, c): c for c in chunks}
-        for fut in as_completed(futures):
-            for task, outcome in zip(futures[fut], fut.result()):
-                emit(_rows_of(task, outcome, scen))
-                ran += 1
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        for task in (t for c in suspects for t in c):
+            if pool is None:
+                pool = ProcessPoolExecutor(max_workers=1, initializer=_ignore_sigint)
+            try:
+                outcome = pool.submit(run_chunk, [task]).result()[0]
+            except BrokenProcessPool as exc:
+                outcome = _died(task, exc)
+                pool.shutdown(wait=True)
+                pool = None
+            emit(_rows_of(task, outcome, scen))
+            ran += 1
+    except BaseException:
+        if pool is not None:
+            _end_workers(pool)
+        raise
+    if pool is not None:
+        pool.shutdown(wait=True)
     return ran
 
 
-def _run_dask(tasks, scheduler, scen, emit) -> int:
-    from distributed import Client, as_completed
+def _connect(scheduler):
+    """(Dask client, whether this sweep opened it): ``scheduler`` is an address or a Client."""
+    from distributed import Client
 
-    own = not isinstance(scheduler, Client)
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise ParameterError(f"--scheduler {scheduler!r}: allowed: the address of a running "
+                             f"Dask scheduler, tcp://HOST:PORT")
     try:
-        client = Client(scheduler) if own else scheduler
+        return Client(scheduler, timeout=SCHEDULER_TIMEOUT_S), True
     except (OSError, ValueError, TypeError) as exc:
-        raise ParameterError(f"--scheduler {scheduler!r}: cannot connect "
-                             f"({_one_line(exc)})") from None
+        raise ParameterError(f"--scheduler {scheduler!r}: cannot connect ({_one_line(exc)}); "
+                             f"allowed: the address of a running Dask scheduler, "
+                             f"tcp://HOST:PORT") from None
+
+
+def _run_dask(tasks, client, scen, emit) -> int:
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
     ran = 0
+    workers = max(1, sum(client.nthreads().values()))
+    chunks = _chunks(tasks, workers)
+    futures = client.map(run_chunk, chunks, pure=False)
+    owner = {f.key: c for f, c in zip(futures, chunks)}
     try:
-        workers = max(1, sum(client.nthreads().values()))
-        chunks = _chunks(tasks, workers)
-        futures = client.map(run_chunk, chunks, pure=False)
-        owner = {f.key: c for f, c in zip(futures, chunks)}
-        try:
-            for fut in as_completed(futures):
-                for task, outcome in zip(owner[fut.key], fut.result()):
-                    emit(_rows_of(task, outcome, scen))
-                    ran += 1
-        finally:
-            client.cancel(futures)
+        for fut in as_completed(futures):
+            try:
+                outcomes = fut.result()
+            except KilledWorker as exc:  # the chunk killed every worker it was given
+                outcomes = [_died(task, exc) for task in owner[fut.key]]
+            for task, outcome in zip(owner[fut.key], outcomes):
+                emit(_rows_of(task, outcome, scen))
+                ran += 1
     finally:
-        if own:
-            client.close()
+        client.cancel(futures)
     return ran

@@ -171,7 +171,7 @@ def speed_figure(points, path, engine: str) -> Path | None:
     for ax in axes:
         ax.set_xlabel("wall time per simulated second (s/s)", fontsize=8)
         ax.set_ylabel("max relative error (SPEED_METRICS)", fontsize=7)
-        ax.tick_params(labelsize=7)
+        ax.tick_params(which="both", labelsize=6)  # log axes label minor ticks too
         ax.grid(True, which="both", lw=0.3)
     axes[1].legend(fontsize=6)
     fig.suptitle(f"{engine}: speed-accuracy (points along a curve: dt decreasing)", fontsize=9)

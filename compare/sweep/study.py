@@ -12,11 +12,29 @@ A study directory stands alone and is also a section of the report
 Presets (:data:`PRESETS`):
 
 * ``default``: central-leader, e = 0.1, 0.5, 0.9 x crown_ratio = 0, 4 on the ladder
-  (analytic, soft; SDOF, chain, chain + full pendulum per engine) and 3 time steps at one
-  contact stiffness per engine variant for the speed curves; sized to keep ``make report``
-  under a minute (measured: see the preset's ``expected``).
+  (analytic, soft; SDOF, chain, chain + full pendulum per engine) and 3 time steps at two
+  contact stiffnesses per engine variant for the speed curves. Measured (2-core VM shared with
+  other jobs, 2 workers): 41-56 s in all; the validity sweep 26-41 s of wall time (52-81 s
+  of CPU, about 60 % of it Bullet's 12 chain runs at 2-8 s each), speed curves 2 s, maps
+  12 s.
 * ``full``: the issue's grid e = 0:0.9:10 x segments = 1,2,4,8,16,32 x crown_ratio = 0:4:9
-  on the ladder (540 points), and 4 time steps x 3 stiffnesses per engine variant.
+  on the ladder (540 points), and 5 time steps x 3 stiffnesses per engine variant. Expected
+  run time, estimated (not a measured full run) from per-run times measured on the same VM
+  at e = 0.5, crown_ratio 0 and 4, central-leader:
+
+  ========  =====  =====  =====  =====  =====
+  segments    2      8     16     32    SDOF
+  ========  =====  =====  =====  =====  =====
+  MuJoCo    0.2 s  0.3 s  0.8 s  7.3 s  0.1 s
+  Bullet    1.0 s  2.0 s  4.0 s   22 s  0.3 s
+  ========  =====  =====  =====  =====  =====
+
+  Low e runs take about 1.5 times as long (the default study's timings). The two chain
+  rungs at 90 (e, crown) pairs and 5 chain segment counts (segments = 1 is the SDOF run,
+  shared) come to about 2,400 s of CPU for MuJoCo and 8,200 s for Bullet: about 3 CPU-hours,
+  1.5 hours with 2 workers, 12 minutes on 16; analytic, soft and the speed curves add under a
+  minute, the maps about 30 s. A run can be stopped and resumed at any time (rerun the same
+  command), and ``--scheduler`` spreads it over a Dask cluster.
 """
 
 from __future__ import annotations
@@ -30,7 +48,7 @@ from pathlib import Path
 from analytic.parameters import ParameterError
 
 from .maps import (DEFAULT_TOLERANCE, RUNG_LETTERS, identification_maps, validity_maps)
-from .run import JOURNAL, TABLE, read_table, run_sweep
+from .run import JOURNAL, TABLE, make_out, read_table, run_sweep
 
 
 @dataclass(frozen=True)
@@ -50,18 +68,16 @@ class Preset:
 PRESETS = {
     "default": Preset(
         "default", "central-leader", ("e=0.1,0.5,0.9", "crown_ratio=0,4"),
-        speed_dts=(1e-4, 3e-5, 1e-5), speed_durations=(5e-4,),
-        expected="measured on 2 shared cores, 2 workers: 1 s for analytic + soft; Bullet "
-                 "adds about 15 s (its chain rungs take 1-4 s per run), MuJoCo its own "
-                 "(per-run times in study.json 'timings')"),
+        speed_dts=(1e-4, 3e-5, 1e-5), speed_durations=(1e-3, 5e-4),
+        expected="about 45 s with 2 workers (measured 41-56 s on a shared 2-core VM: "
+                 "validity sweep 26-41 s, Bullet's chain rungs most of it; maps 12 s)"),
     "full": Preset(
         "full", "central-leader", ("e=0:0.9:10", "segments=1,2,4,8,16,32",
                                    "crown_ratio=0:4:9"),
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
-        expected="540 grid points: analytic + soft rows ~1 min on 2 cores (soft 0.1 s/run, "
-                 "run once per (e, crown) since segments does not change them); engine rows: "
-                 "estimate = 540 x 3 rungs x the per-run time in the default study's "
-                 "'timings' / workers (e.g. 0.5 s/run on 2 workers: ~7 min per engine)"),
+        expected="about 3 CPU-hours: 1.5 hours with 2 workers, 12 minutes on 16 (estimated "
+                 "from measured per-run times: Bullet's 32-segment chain takes 22 s a run, "
+                 "MuJoCo's 7 s; see compare/sweep/study.py); resumable"),
 }
 
 
@@ -73,19 +89,20 @@ def get_preset(name: str) -> Preset:
 
 
 def run_study(out, preset: str = "default", *, scenario=None, backends=None, workers=None,
-              scheduler=None, progress=None, tolerance=None, grid=None) -> dict:
+              scheduler=None, progress=None, tolerance=None, grid=None,
+              retry_failed: bool = False) -> dict:
     """Run (or resume) a preset's sweeps into ``out`` and write the study; returns the paths."""
     from .speed import speed_curves, speed_sweep
 
     p = get_preset(preset)
     t0 = time.perf_counter()
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_out(out)
     scen = scenario or p.scenario
     engines = tuple(b for b in (backends or p.engines) if b in ("mujoco", "bullet"))
     targets = ("analytic", "soft", *engines)
     res = run_sweep(scen, list(grid or p.grid), out / "validity", backends=targets,
-                    ladder=p.ladder, workers=workers, scheduler=scheduler, progress=progress)
+                    ladder=p.ladder, workers=workers, scheduler=scheduler, progress=progress,
+                    retry_failed=retry_failed)
     speed = None
     if p.speed and engines:
         speed = speed_sweep(scen, out, engines=engines, dts=p.speed_dts,
@@ -126,8 +143,7 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
                 title: str = "Model-validity study", meta: dict | None = None) -> dict:
     """Draw the maps of finished sweeps (``{name: sweep dir}``) and write study.md,
     study.html, summary.md, study.json and the combined results table into ``out``."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_out(out)
     meta = dict(meta or {})
     table_path, table = _combined_table(out, sweeps, speed)
     validity, ident, specs = [], [], {}
@@ -135,8 +151,10 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
         df = read_table(d)
         specs[name] = json.loads((Path(d) / "sweep.json").read_text())
         prefix = "" if len(sweeps) == 1 else f"{name}-"
-        validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity")
-        ident += identification_maps(df, out, prefix=f"{prefix}identification")
+        order = [t["id"] for t in specs[name].get("targets", [])]
+        validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity",
+                                  order=order)
+        ident += identification_maps(df, out, prefix=f"{prefix}identification", order=order)
     curves = (speed or {}).get("curves", [])
     status = table["status"].value_counts().to_dict() if len(table) else {}
     timings = {}
@@ -264,6 +282,19 @@ def _markdown(summary, validity, ident, curves) -> str:
 
 def _html(title: str, md: str) -> str:
     """A standalone page from the study's markdown (headings, lists, tables, images)."""
+    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
+             "table{border-collapse:collapse;font-size:0.85em}td,th{border:1px solid #ccc;"
+             "padding:2px 6px}code{font-size:0.85em}")
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
+            f"</title><style>{style}</style></head><body>\n" + markdown_body(md)
+            + "\n</body></html>\n")
+
+
+def markdown_body(md: str, *, heading_shift: int = 0, image_src=None) -> str:
+    """HTML of the study's markdown: the subset :func:`_markdown` writes (headings, lists,
+    pipe tables, one image per line, inline code and bold). ``heading_shift`` demotes the
+    headings (a report section nests them under its own); ``image_src(name)`` gives an
+    image's src (the report embeds the PNGs as data URIs)."""
     body = []
     lines = md.splitlines()
     i = 0
@@ -282,10 +313,14 @@ def _html(title: str, md: str) -> str:
             continue
         if line.startswith("#"):
             level = len(line) - len(line.lstrip("#"))
-            body.append(f"<h{level}>{_inline(line[level:].strip())}</h{level}>")
+            h = min(6, level + heading_shift)
+            body.append(f"<h{h}>{_inline(line[level:].strip())}</h{h}>")
         elif line.startswith("!["):
             alt, src = line[2:].split("](", 1)
-            body.append(f'<p><img src="{html.escape(src[:-1])}" alt="{html.escape(alt)}" '
+            src = src[:-1]
+            if image_src is not None:
+                src = image_src(src)
+            body.append(f'<p><img src="{html.escape(src)}" alt="{html.escape(alt)}" '
                         f'style="max-width:100%"></p>')
         elif line.startswith("- "):
             items = []
@@ -297,12 +332,7 @@ def _html(title: str, md: str) -> str:
         elif line.strip():
             body.append(f"<p>{_inline(line)}</p>")
         i += 1
-    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
-             "table{border-collapse:collapse;font-size:0.85em}td,th{border:1px solid #ccc;"
-             "padding:2px 6px}code{font-size:0.85em}")
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
-            f"</title><style>{style}</style></head><body>\n" + "\n".join(body)
-            + "\n</body></html>\n")
+    return "\n".join(body)
 
 
 def _inline(text: str) -> str:
