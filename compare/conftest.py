@@ -76,5 +76,6 @@ def pytest_sessionfinish(session, exitstatus):
     paths = write_report(out, runs=SESSION_CACHE)
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
     if reporter is not None:
+        reporter.ensure_newline()
         reporter.write_line(f"discrepancy report: {paths['html']} ({paths['md'].name}, "
                             f"{paths['json'].name})")
