@@ -58,6 +58,8 @@ def build_parser() -> argparse.ArgumentParser:
     ss.add_argument("--dt", type=_number, help="time step, s")
     ss.add_argument("--damping", choices=("distributed", "joint"),
                     help="engine trunk damping: the paper's distributed C, or joint damping")
+    ss.add_argument("--integrator", choices=("Euler", "implicit", "implicitfast", "RK4"),
+                    help="MuJoCo integrator (default Euler)")
     ss.add_argument("--json", action="store_true")
 
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
@@ -127,7 +129,7 @@ def cmd_simulate(args) -> int:
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
     opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
-                           "contact_stiffness", "dt", "damping"))
+                           "contact_stiffness", "dt", "damping", "integrator"))
     result = backend.simulate(scenario, **opts)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))

@@ -7,8 +7,9 @@ Public API (SI units)::
 
 Rules: :mod:`mujoco_models._builder` (the MJCF, built with ``mujoco.MjSpec``),
 :mod:`mujoco_models._contact` (MuJoCo's solref/solimp as a spring-dashpot and the
-restitution mapping for its Euler step), :mod:`mujoco_models._runner` (time step, rollout,
-record, energy ledger). ``python -m mujoco_models.regenerate`` writes the models of the
+restitution mapping for its Euler step, also exact for ``implicit``/``implicitfast``; RK4
+gets the continuous law), :mod:`mujoco_models._runner` (integrator option, time step,
+rollout, record, energy ledger). ``python -m mujoco_models.regenerate`` writes the models of the
 shipped scenarios to ``mujoco_models/models``.
 """
 

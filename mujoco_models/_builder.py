@@ -52,7 +52,12 @@ Bodies (inertias are explicit, never from geoms: ``inertiafromgeom="false"``):
   ``framepos``/``framelinvel`` of ``impact_point`` and ``contact_point`` (m, m/s),
   ``e_kinetic`` and ``e_potential`` (J, with ``energy`` enabled) and the trunk's
   ``subtreecom`` (its gravity energy, which MuJoCo counts although gravcomp cancels it).
-* **Options**: Euler integrator, the run's time step, Newton solver, energy enabled.
+* **Options**: the run's integrator (``integrator``: ``Euler``, the default, ``implicit``,
+  ``implicitfast`` or ``RK4``, :data:`INTEGRATOR_ENUMS`), the run's time step, Newton
+  solver, energy enabled. The ``eulerdamp`` flag above is written as for Euler whatever the
+  integrator; only Euler reads it (``implicit``/``implicitfast`` treat every joint and
+  tendon damper implicitly, RK4 every one explicitly at each stage). The checked-in MJCF
+  files are the default (Euler) models.
 """
 
 from __future__ import annotations
@@ -106,7 +111,15 @@ def joint_damping(chain: HingedChain) -> np.ndarray:
     return beta * np.diag(K)
 
 
-def _spec(name: str, dt: float, gravity: float, implicit_damping: bool) -> mujoco.MjSpec:
+#: ``integrator`` option value -> MuJoCo's enum.
+INTEGRATOR_ENUMS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
+                    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+                    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+                    "RK4": mujoco.mjtIntegrator.mjINT_RK4}
+
+
+def _spec(name: str, dt: float, gravity: float, implicit_damping: bool,
+          integrator: str = "Euler") -> mujoco.MjSpec:
     spec = mujoco.MjSpec()
     spec.modelname = name
     spec.compiler.degree = False
@@ -114,7 +127,7 @@ def _spec(name: str, dt: float, gravity: float, implicit_damping: bool) -> mujoc
     spec.compiler.autolimits = True
     opt = spec.option
     opt.timestep = dt
-    opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    opt.integrator = INTEGRATOR_ENUMS[integrator]
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
     opt.gravity = [0.0, 0.0, -gravity]
     opt.enableflags = int(mujoco.mjtEnableBit.mjENBL_ENERGY)
@@ -290,14 +303,18 @@ def add_contact_and_sensors(spec: mujoco.MjSpec, solref, trunk_root: str):
 
 
 def build_spec(name: str, trunk: TrunkSpec, scenario: Scenario, pendulum: str, dt: float,
-               solref=(-1.0, -1.0)) -> tuple[mujoco.MjSpec, object]:
+               solref=(-1.0, -1.0), integrator: str = "Euler") -> tuple[mujoco.MjSpec, object]:
     """The MjSpec of one model (see module docstring); returns (spec, contact pair)."""
     imp = scenario.impactor
     if pendulum == "full" and not isinstance(imp, Pendulum):
         raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
     g = imp.gravity if isinstance(imp, Pendulum) else 9.81
     tr = scenario.trunk
-    spec = _spec(name, dt, g, implicit_damping=trunk.kind == "chain" and trunk.damping == "joint")
+    if integrator not in INTEGRATOR_ENUMS:
+        raise ParameterError(f"--integrator = {integrator!r}: allowed "
+                             f"{', '.join(INTEGRATOR_ENUMS)}")
+    spec = _spec(name, dt, g, implicit_damping=trunk.kind == "chain" and trunk.damping == "joint",
+                 integrator=integrator)
     root = add_trunk(spec, trunk, tr.clamp_height, tr.diameter)
     if isinstance(imp, Billet):
         imp = _BilletAsSpring(imp.mass)

@@ -62,13 +62,15 @@ def test_no_contact_pair_other_than_pendulum_and_trunk(central):
     assert m.pair_dim[0] == 1  # frictionless
 
 
-def _free_collision_restitution(scenario, trunk, e):
+def _free_collision_restitution(scenario, trunk, e, integrator="Euler", dt_factor=1.0):
     """Pendulum against the trunk with every spring and damper removed: a two-body collision.
 
-    e = (vx - vy) / u1 at the first sample after the force has gone back to zero.
+    e = (vx - vy) / u1 at the first sample after the force has gone back to zero. The step is
+    ``dt_factor`` times the default one.
     """
     s = dataclasses.replace(scenario, contact=Contact(restitution=e, duration=5e-4))
-    setup = make_setup(s, trunk=trunk, t_end=1e-3)
+    dt = None if dt_factor == 1.0 else make_setup(s, trunk=trunk, t_end=1e-3).dt * dt_factor
+    setup = make_setup(s, trunk=trunk, t_end=1e-3, integrator=integrator, dt=dt)
     m = copy.deepcopy(setup.mjmodel)
     m.jnt_stiffness[:] = 0.0
     m.dof_damping[:] = 0.0
@@ -83,14 +85,57 @@ def _free_collision_restitution(scenario, trunk, e):
     return rel / setup.model.impact_speed, setup
 
 
+@pytest.mark.parametrize("integrator", ["Euler", "implicit", "implicitfast", "RK4"])
 @pytest.mark.parametrize("trunk", ["sdof", "chain"])
 @pytest.mark.parametrize("e", [0.05, 0.1, 0.3, 0.6, 0.9])
-def test_two_body_collision_gives_target_restitution(central, trunk, e):
-    measured, setup = _free_collision_restitution(central, trunk, e)
+def test_two_body_collision_gives_target_restitution(central, trunk, e, integrator):
+    measured, setup = _free_collision_restitution(central, trunk, e, integrator)
     assert abs(measured - e) < 0.01  # the issue's tolerance on the measured e
-    # measured: SDOF <= 1e-9 (the replay is MuJoCo's own map); chain <= 4.2e-4 (the free
-    # chain's velocity-dependent forces during the 50-step collision)
-    assert abs(measured - e) < (1e-8 if trunk == "sdof" else 1e-3)
+    if trunk == "chain":
+        # measured <= 4.2e-4 (Euler; 4.4e-4 RK4): the free chain's velocity-dependent forces
+        # during the 50-step collision
+        assert abs(measured - e) < 1e-3
+    elif integrator == "RK4":
+        # the continuous law uncorrected: RK4's own error at 50 steps, measured <= 9.4e-8
+        assert abs(measured - e) < 2e-7
+        # the replay is MuJoCo's RK4 map: measured <= 7.8e-10 (the -d a0 impedance term)
+        assert measured == pytest.approx(setup.law.uncorrected_restitution, abs=2e-9)
+    else:
+        assert abs(measured - e) < 1e-8  # Euler's map, corrected: measured <= 1e-9
+
+
+@pytest.mark.parametrize("trunk", ["sdof", "chain"])
+def test_implicit_integrators_take_eulers_contact_map(central, trunk):
+    """The contact is a constraint force, outside qDeriv: implicit and implicitfast rebound
+    like Euler with Euler's corrected law (mujoco_models._contact docstring)."""
+    euler = _free_collision_restitution(central, trunk, 0.3)[0]
+    fast = _free_collision_restitution(central, trunk, 0.3, "implicitfast")[0]
+    full, setup = _free_collision_restitution(central, trunk, 0.3, "implicit")
+    law = make_setup(setup.scenario, trunk=trunk, t_end=1e-3).law
+    assert (setup.law.stiffness, setup.law.damping) == (law.stiffness, law.damping)  # Euler's
+    assert fast == pytest.approx(euler, abs=1e-12)  # round-off: measured <= 1.3e-14
+    # implicit also linearises the chain's Coriolis forces: measured 5.8e-7 (chain), 1e-16 (SDOF)
+    assert full == pytest.approx(euler, abs=1e-12 if trunk == "sdof" else 1e-5)
+
+
+def test_rk4_restitution_converges_to_target_at_third_order_or_better(central):
+    """RK4 gets the continuous law uncorrected: its e error falls with dt at order 3.2 to 4.1
+    (measured, 25 -> 50 -> 100 steps per collision), and Euler's correction would be wrong
+    for it."""
+    for e in (0.3, 0.6, 0.9):
+        errs = [abs(_free_collision_restitution(central, "sdof", e, "RK4", f)[0] - e)
+                for f in (2.0, 1.0, 0.5)]
+        for coarse, fine in zip(errs, errs[1:]):
+            order = math.log2(coarse / fine)
+            assert 2.8 < order < 4.5, (e, errs)  # measured 3.19 .. 4.02
+    law = make_setup(dataclasses.replace(central, contact=Contact(restitution=0.3,
+                                                                  duration=5e-4)),
+                     trunk="sdof", integrator="RK4").law
+    assert (law.stiffness, law.damping) == (law.law_stiffness, law.law_damping)
+    euler = _contact.engine_law(law.law_stiffness, 0.3, law.reduced_mass, law.dt)
+    wrong = _contact.discrete_collision_rk4(euler.stiffness, euler.damping, law.reduced_mass,
+                                            law.dt)[0]
+    assert abs(wrong - 0.3) > 0.005  # Euler's correction under RK4: measured +0.0104
 
 
 def test_euler_step_correction_is_needed(central):
@@ -226,12 +271,34 @@ def test_non_finite_state_is_reported_as_diverged(central):
         _record(setup, plan.state0, st[0], sd)
 
 
-def test_energy_growing_engine_run_is_reported_as_diverged(central):
+def test_rollout_that_stops_advancing_time_is_reported_as_diverged(central):
+    """rollout stops stepping (time frozen) after a MuJoCo warning: the run is diverged."""
+    setup = make_setup(central, trunk="sdof", t_end=1e-3)
+    plan = _plan(setup)
+    m = setup.mjmodel
+    st, sd = rollout.rollout(m, mujoco.MjData(m), plan.state0, nstep=plan.nstep)
+    st = st[0].copy()
+    st[60:, 0] = st[59, 0]  # what a stopped rollout returns: the last state repeated
+    with pytest.raises(SimulationDiverged, match="warning"):
+        _record(setup, plan.state0, st, sd[0])
+
+
+def test_long_fine_step_run_is_not_mistaken_for_a_stopped_rollout(central):
+    """280 000 steps (dt / 16): t accumulates 5e-13 s of round-off, which an n dt check
+    took for a stopped rollout; the step-by-step rule does not."""
+    dt = make_setup(central, trunk="sdof", pendulum="full").dt / 16
+    res = simulate(central, trunk="sdof", pendulum="full", dt=dt)
+    assert res.metrics["x_max"] == pytest.approx(simulate_soft(central).metrics["x_max"],
+                                                 rel=1e-4)  # 1e-5 measured at dt / 16
+
+
+@pytest.mark.parametrize("integrator", ["Euler", "implicit", "RK4"])
+def test_energy_growing_engine_run_is_reported_as_diverged(central, integrator):
     """A real rollout that gains energy (the trunk's damper made negative: finite growth at
     C_T / M_T = 131 1/s) is reported as diverged, never turned into metrics."""
     from mujoco_models._runner import run_setups
 
-    setup = make_setup(central, trunk="sdof")
+    setup = make_setup(central, trunk="sdof", integrator=integrator)
     m = copy.deepcopy(setup.mjmodel)
     assert m.dof_damping[0] > 0  # the SDOF trunk's C_T
     m.dof_damping[0] *= -1.0
@@ -241,10 +308,12 @@ def test_energy_growing_engine_run_is_reported_as_diverged(central):
     assert not isinstance(run_setups([setup])[0], SimulationDiverged)  # control: C_T > 0
 
 
-def test_energy_created_while_damped_is_reported_as_diverged(central):
+@pytest.mark.parametrize("integrator", ["Euler", "implicit", "RK4"])
+def test_energy_created_while_damped_is_reported_as_diverged(central, integrator):
     """The ledger rule: kinetic energy the engine invents after the impact (10 % of the input,
-    mechanical energy still below the input) is caught by kinetic + potential + works."""
-    setup = make_setup(central, trunk="sdof", t_end=0.05)
+    mechanical energy still below the input) is caught by kinetic + potential + works (for
+    RK4: as a fall of the contact's dissipated energy)."""
+    setup = make_setup(central, trunk="sdof", t_end=0.05, integrator=integrator)
     plan = _plan(setup)
     m = setup.mjmodel
     st, sd = rollout.rollout(m, mujoco.MjData(m), plan.state0, nstep=plan.nstep)
@@ -257,12 +326,14 @@ def test_energy_created_while_damped_is_reported_as_diverged(central):
         _record(setup, plan.state0, st[0], sd)
 
 
+@pytest.mark.parametrize("integrator", ["Euler", "implicit", "implicitfast"])
 @pytest.mark.parametrize("opts", [dict(trunk="sdof"), dict(trunk="chain"),
                                   dict(trunk="chain", damping="joint")])
-def test_damping_matrices_are_what_the_euler_step_applies(central, opts):
+def test_damping_matrices_are_what_the_euler_step_applies(central, opts, integrator):
     """One engine step with springs and contact off: M (v1 - v0) / h = -D v0 - B v1 with the
-    (explicit D, implicit B) the ledger uses; the other split misses it."""
-    setup = make_setup(central, **opts)
+    (explicit D, implicit B) the ledger uses; the other split misses it. Euler: per the
+    eulerdamp flag; implicit, implicitfast: every damper implicit (B, with the tendons)."""
+    setup = make_setup(central, integrator=integrator, **opts)
     m = copy.deepcopy(setup.mjmodel)
     m.jnt_stiffness[:] = 0.0
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
@@ -281,6 +352,98 @@ def test_damping_matrices_are_what_the_euler_step_applies(central, opts):
     np.testing.assert_allclose(lhs, -D @ v0 - B @ v1, rtol=0, atol=1e-6 * scale)  # round-off
     wrong = -B @ v0 - D @ v1  # explicit and implicit swapped
     assert np.abs(lhs - wrong).max() > 1e-4 * scale  # measured >= 5.0e-4 (~ h b / m)
+
+
+def test_rk4_damping_work_quadrature_is_fourth_order_inside_runs():
+    """The RK4 ledger's damping work: the cubic rules inside each run of samples with one
+    contact state integrate a smooth power at O(h^4), and no stencil reaches across a
+    change of the contact state (there the power may have a kink)."""
+    from mujoco_models._runner import _step_means
+
+    def error(n):
+        t = np.linspace(0.0, 2.0, n + 1)
+        h = t[1] - t[0]
+        on = t >= 1.0  # the state changes inside step n/2 - 1 .. n/2
+        p = np.where(on, np.exp(-t), np.cos(3.0 * t))  # a jump at t = 1
+        got = np.cumsum(_step_means(p, on)) * h
+        i = n // 2 - 1  # the step where the state changes: the trapezoid
+        exact_left = math.sin(3.0 * t[i]) / 3.0
+        exact_total = exact_left + 0.5 * h * (p[i] + p[i + 1]) + math.exp(-t[i + 1]) \
+            - math.exp(-2.0)
+        return abs(got[i - 1] - exact_left), abs(got[-1] - exact_total)
+
+    (a1, b1), (a2, b2) = error(40), error(80)
+    for coarse, fine in ((a1, a2), (b1, b2)):
+        # h^4 (the one-sided end rules add h^5 at 20 samples a run): measured 4.29, 4.27;
+        # the trapezoid alone would give 2
+        assert 3.5 < math.log2(coarse / fine) < 4.6
+    assert a2 < 1e-7 and b2 < 1e-7  # measured 3.3e-8, 3.5e-8
+
+
+@pytest.mark.parametrize("integrator", ["Euler", "implicit", "implicitfast", "RK4"])
+def test_each_integrator_matches_the_soft_contact_at_its_default_step(central, integrator):
+    """Every integrator runs the central-leader SDOF model at the default step without being
+    reported diverged, and its peak trunk displacement is the analytic soft contact's."""
+    ref = simulate_soft(central).metrics
+    res = simulate(central, trunk="sdof", integrator=integrator)
+    assert res.model["integrator"] == integrator
+    assert res.model["dt"] == make_setup(central, trunk="sdof").dt  # one step rule for all
+    # x_max measured: Euler +4.2e-5, implicit and implicitfast -6.6e-5, RK4 +1.0e-7
+    assert res.metrics["x_max"] == pytest.approx(ref["x_max"], rel=5e-3)  # issue: 0.5 %
+    # impact loss measured: Euler +5.2e-5, implicit(fast) +5.0e-4 (implicit trunk damper,
+    # first order), RK4 -2.7e-6
+    assert res.metrics["impact_loss"] == pytest.approx(ref["impact_loss"], rel=5e-3)
+    assert res.metrics["n_impacts"] == ref["n_impacts"]
+    if integrator == "RK4":
+        assert res.metrics["ledger_residual"] < 1e-12  # closed by construction: 1.5e-16
+    else:
+        assert res.metrics["ledger_residual"] < 1e-3  # exact works: measured 6.0e-5
+
+
+def test_integrator_option_builds_that_integrator_and_keeps_the_default(central):
+    from mujoco_models._builder import mjcf_text
+
+    default = make_setup(central, trunk="sdof")
+    assert make_setup(central, trunk="sdof", integrator="Euler") is default  # one cache key
+    assert default.mjmodel.opt.integrator == mujoco.mjtIntegrator.mjINT_EULER
+    for name, enum in (("implicit", mujoco.mjtIntegrator.mjINT_IMPLICIT),
+                       ("implicitfast", mujoco.mjtIntegrator.mjINT_IMPLICITFAST),
+                       ("RK4", mujoco.mjtIntegrator.mjINT_RK4)):
+        setup = make_setup(central, trunk="sdof", integrator=name)
+        assert setup.mjmodel.opt.integrator == enum and setup.integrator == name
+        assert f'integrator="{name}"' in mjcf_text(setup.spec)
+    assert "integrator=" not in mjcf_text(default.spec)  # MuJoCo's default: the files keep it
+    batch = simulate_batch([central], trunk="sdof", integrator="RK4", t_end=0.005)[0]
+    assert batch.model["integrator"] == "RK4"
+    assert batch.metrics["x_max"] == simulate(central, trunk="sdof", integrator="RK4",
+                                              t_end=0.005).metrics["x_max"]
+
+
+@pytest.mark.parametrize("bad", ["euler", "RK2", "", None])
+def test_unknown_integrator_is_a_one_line_parameter_error(central, bad):
+    with pytest.raises(ParameterError) as exc:
+        simulate(central, trunk="sdof", integrator=bad)
+    msg = str(exc.value)
+    assert "\n" not in msg and "--integrator" in msg
+    assert "Euler, implicit, implicitfast, RK4" in msg
+
+
+def test_rk4_refuses_a_step_its_explicit_dampers_cannot_take(central):
+    """The chain's joint damping beta k_j is stiff (Euler and the implicit integrators treat
+    it implicitly): RK4 applies it explicitly, h lambda = 168 at the default step."""
+    with pytest.raises(ParameterError, match="RK4") as exc:
+        make_setup(central, trunk="chain", damping="joint", integrator="RK4")
+    assert "\n" not in str(exc.value) and "too large for stability" in str(exc.value)
+    make_setup(central, trunk="chain", integrator="RK4")  # tendon dampers: h lambda = 5.5e-4
+    make_setup(central, trunk="chain", damping="joint", integrator="implicitfast")
+
+
+def test_speed_study_runs_one_curve_per_mujoco_integrator():
+    from compare.sweep.speed import VARIANTS, engine_variants
+
+    name, values, reason, runnable = engine_variants("mujoco")
+    assert (name, reason, runnable) == ("integrator", None, True)
+    assert values == VARIANTS["mujoco"][1] == _contact.INTEGRATORS
 
 
 def test_batch_through_rollout_matches_serial_runs(central):
@@ -362,6 +525,29 @@ def test_cli_simulate_and_modes_with_the_mujoco_backend(capsys):
     assert main(["modes", "central-leader", "--backend", "mujoco", "--segments", "16"]) == 0
     out = capsys.readouterr().out
     assert "model" in out and "beam" in out and "static stiffness" in out
+
+
+def test_cli_simulate_with_an_integrator(capsys):
+    import json
+
+    from compare.cli import main
+
+    code = main(["simulate", "central-leader", "--backend", "mujoco", "--integrator", "RK4",
+                 "--t-end", "0.005", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and data["model"]["integrator"] == "RK4"
+
+
+@pytest.mark.parametrize("args", [["--backend", "mujoco", "--integrator", "foo"],
+                                  ["--backend", "bullet", "--integrator", "RK4"],
+                                  ["--integrator", "RK4"]])  # analytic: no integrator
+def test_cli_integrator_refused_with_one_line(capsys, args):
+    from compare.cli import main
+
+    code = main(["simulate", "central-leader", *args])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and "integrator" in err and "Traceback" not in err, err
 
 
 @pytest.mark.parametrize("args, field", [(["--segments", "0"], "segments"),
