@@ -604,6 +604,7 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
                   "law_stiffness": setup.contact_stiffness,
                   "law_damping": setup.contact_damping,
                   "collision_duration": setup.collision_duration,
+                  "integrator": "semi-implicit Euler",  # Bullet's only one (module docstring)
                   "omega_max": setup.omega_max,
                   "contact": setup.contact, "apparent_mass": setup.apparent_mass,
                   "contact_erp": b.erp if b else 0.0,
