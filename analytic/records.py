@@ -25,7 +25,11 @@ Detection rule (documented, the same for every backend)
   there. Times are interpolated linearly between samples.
 * **n_impacts** counts the contact intervals starting at or before T0 (the last one included,
   as the Newton solver counts the impacts resolved before the common motion).
-* **t_sep** is the end of the moving-together interval (NaN if it outlasts the record).
+* **t_sep** is the end of the moving-together interval (NaN if it outlasts the record): where
+  the compressive force, extrapolated linearly from the interval's last two samples, reaches
+  zero, kept between the last sample with force and the next (the force there is clipped to
+  0, so it cannot be interpolated; the extrapolation is exact to O(dt^2) for a force that
+  falls smoothly through zero).
 * **impact_loss** (eq 56's analogue) is the energy absorbed by the contact up to T0 minus the
   elastic energy the contact still holds then: what the impact process dissipated.
 * **energy_transferred** (eq 58) and **theta_b** use the pendulum's energy after the last
@@ -105,6 +109,17 @@ def contact_intervals(force: np.ndarray, threshold: float) -> list[tuple[int, in
     return list(zip(starts, ends))
 
 
+def _release_time(t: np.ndarray, force: np.ndarray, i0: int, i1: int) -> float:
+    """Zero of the force extrapolated from samples i1 - 1, i1 (see t_sep in the docstring)."""
+    if i1 == i0:
+        return float(t[i1])
+    f0, f1 = float(force[i1 - 1]), float(force[i1])
+    slope = (f1 - f0) / (t[i1] - t[i1 - 1])
+    if not slope < 0.0:
+        return float(t[i1])
+    return float(min(t[i1 + 1], t[i1] - f1 / slope))
+
+
 def _interp(t: np.ndarray, f: np.ndarray, at: float) -> float:
     return float(np.interp(at, t, f))
 
@@ -167,7 +182,7 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
         A_y = _integral_to(t, r.y, T0)
         loss = _interp(t, r.contact_work, T0) - _interp(t, r.contact_potential, T0)
         n_impacts = sum(1 for j0, _ in intervals if t[j0] <= T0)
-        t_sep = float(t[i1]) if i1 < t.size - 1 else nan
+        t_sep = _release_time(t, r.force, i0, i1) if i1 < t.size - 1 else nan
     else:
         loss = float(r.contact_work[-1] - r.contact_potential[-1])
     k_max = int(np.argmax(r.x))
