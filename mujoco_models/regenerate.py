@@ -11,10 +11,10 @@ or be removed.
 
 from __future__ import annotations
 
-import argparse
 import pathlib
 import sys
 
+from analytic.generated_files import regenerate_main
 from analytic.scenario import load_scenario, shipped_scenarios
 
 MODELS_DIR = pathlib.Path(__file__).resolve().parent / "models"
@@ -42,27 +42,8 @@ def generated() -> dict[str, str]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m mujoco_models.regenerate")
-    ap.add_argument("--check", action="store_true", help="compare only; exit 1 on a difference")
-    args = ap.parse_args(argv)
-    files = generated()
-    changed = [n for n, text in files.items()
-               if not (MODELS_DIR / n).exists() or (MODELS_DIR / n).read_text() != text]
-    stale = sorted(p.name for p in MODELS_DIR.glob("*.xml") if p.name not in files)
-    if args.check:
-        for n in changed:
-            print(f"would change: {n}")
-        for n in stale:
-            print(f"would remove: {n}")
-        return 1 if changed or stale else 0
-    MODELS_DIR.mkdir(exist_ok=True)
-    for n, text in files.items():
-        (MODELS_DIR / n).write_text(text)
-    for n in stale:  # a model of no shipped scenario (renamed or removed)
-        (MODELS_DIR / n).unlink()
-    print(f"wrote {len(files)} MJCF files to {MODELS_DIR} ({len(changed)} changed, "
-          f"{len(stale)} removed)")
-    return 0
+    return regenerate_main(argv, prog="python -m mujoco_models.regenerate", generated=generated,
+                           directory=MODELS_DIR, suffix=".xml", kind="MJCF")
 
 
 if __name__ == "__main__":
