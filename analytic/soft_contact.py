@@ -115,9 +115,12 @@ def collision_duration(model: TwoBodyModel, stiffness: float, damping: float) ->
 
 
 def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
-                  stiffness: float | None = None, duration: float | None = None,
+                  contact_stiffness: float | None = None, duration: float | None = None,
                   t_end: float | None = None, samples_per_collision: int = 100):
     """The scenario's two-body model with the soft contact, integrated to ``t_end`` (s).
+
+    ``contact_stiffness`` (N/m, the engines' and the CLI's name) or ``duration`` (s) replace
+    the scenario's contact stiffness (:func:`contact_law`).
 
     Piecewise-smooth integration (DOP853, rtol 1e-11) with events at touch (delta = 0,
     rising) and release (k delta + c delta' = 0, falling). Returns a SimulationResult
@@ -129,7 +132,8 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
 
     model = two_body_model(scenario, restitution)
     t_end = scenario.t_end if t_end is None else t_end
-    k_c, c_c = contact_law(model, scenario.contact, stiffness=stiffness, duration=duration)
+    k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness,
+                           duration=duration)
     t_col = collision_duration(model, k_c, c_c)
     rec = soft_record(model, k_c, c_c, t_end, dt_sample=t_col / samples_per_collision)
     metrics = metrics_from_record(

@@ -132,3 +132,12 @@ def test_console_script_exit_code_without_traceback():
                            "--e", "2"], capture_output=True, text=True)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr and "contact.restitution" in proc.stderr
+
+
+def test_soft_backend_takes_the_engines_contact_stiffness_flag(capsys):
+    from compare.cli import main
+
+    assert main(["simulate", "open-center", "--backend", "soft", "--contact-stiffness", "1e9",
+                 "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["model"]["contact_stiffness"] == 1e9
