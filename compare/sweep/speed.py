@@ -170,7 +170,8 @@ def speed_figure(points, path, engine: str) -> Path | None:
     axes[1].set_title("vs the paper's Newton solution (eqs 12-35)", fontsize=8)
     for ax in axes:
         ax.set_xlabel("wall time per simulated second (s/s)", fontsize=8)
-        ax.set_ylabel("max relative error (SPEED_METRICS)", fontsize=7)
+        ax.set_ylabel("max relative error of x_max, t_xmax, t_sep,\n"
+                      "impact loss, energy transferred, theta_b (1)", fontsize=7)
         ax.tick_params(which="both", labelsize=6)  # log axes label minor ticks too
         ax.grid(True, which="both", lw=0.3)
     axes[1].legend(fontsize=6)
