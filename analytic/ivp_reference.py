@@ -17,12 +17,18 @@ from .model import TwoBodyModel
 
 
 def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
-                      gamma_tol: float = 1e-7, stop_at_separation: bool = False) -> dict:
-    """Impacts [(t, U, u, V, v)], together start (t, x, V), separations [(t, x, v)]."""
+                      gamma_tol: float = 1e-7, stop_at_separation: bool = False,
+                      atol: tuple[float, float, float, float] = (1e-15, 1e-12, 1e-15, 1e-12)
+                      ) -> dict:
+    """Impacts [(t, U, u, V, v)], together start (t, x, V), separations [(t, x, v)].
+
+    rtol, atol: DOP853 tolerances (atol per state component x, x', y, y'; the default
+    1e-15 m on positions, not rtol, sets the accuracy of the impact times at rtol <~ 1e-12).
+    """
     M, C, K = model.dynamic_mass, model.damping, model.stiffness
     m, k, e = model.impactor_mass, model.impactor_stiffness, model.restitution
     u1 = model.impact_speed
-    atol = [1e-15, 1e-12, 1e-15, 1e-12]
+    atol = list(atol)
 
     def free(_t, s):
         return [s[1], (-K * s[0] - C * s[1]) / M, s[3], -k * s[2] / m]

@@ -33,9 +33,16 @@ class Oscillator:
     beta: float
     omega_sq: float
 
+    def __reduce__(self):
+        # pickled as its two parameters: the cached closures (scalar_advance, _bounds5) are
+        # rebuilt on use (results cross process pools: compare.runs.RunCache.prefetch)
+        return (self.__class__, (self.beta, self.omega_sq))
+
     @classmethod
     def from_mck(cls, mass: float, damping: float, stiffness: float) -> "Oscillator":
-        return cls(beta=damping / (2.0 * mass), omega_sq=stiffness / mass)
+        """The oscillator of m x'' + c x' + k x = 0; one shared instance per (m, c, k), so
+        that its constants (regime, :attr:`scalar_advance`, ...) are computed once."""
+        return _from_mck(cls, mass, damping, stiffness)
 
     @cached_property
     def regime(self) -> str:
@@ -156,6 +163,8 @@ class Oscillator:
         so B_n = beta^n (|A| + |B| / (e beta)) + n beta^(n-1) |B| (billet: beta = 0, B_0 = inf).
         Bounds from the state at a later time are tighter once a transient has decayed.
         """
+        if n_max == 5:
+            return self._bounds5(x0, v0)
         b, w2 = self.beta, self.omega_sq
         reg = self.regime
         if reg == "under":
@@ -174,6 +183,76 @@ class Oscillator:
             return [math.inf if cb > 0 else ca, cb] + [0.0] * (n_max - 1)
         return [b ** n * (ca + cb / (math.e * b)) + n * b ** (n - 1) * cb
                 for n in range(n_max + 1)]
+
+    @cached_property
+    def _bounds5(self):
+        """:meth:`derivative_bounds` with n_max = 5 (the solver's hot path): the same numbers,
+        with the powers of the rates computed once."""
+        b, w2 = self.beta, self.omega_sq
+        reg = self.regime
+        hypot = math.hypot
+        if reg == "under":
+            w = math.sqrt(w2 - b * b)
+            om = math.sqrt(w2)
+            p1, p2, p3, p4, p5 = (om ** n for n in range(1, 6))
+
+            def bounds(x0, v0):
+                amp = hypot(x0, (v0 + b * x0) / w)
+                return [amp, amp * p1, amp * p2, amp * p3, amp * p4, amp * p5]
+            return bounds
+        if reg == "over":
+            sd = math.sqrt(b * b - w2)
+            r1, r2 = -b + sd, -b - sd
+            d = r1 - r2
+            pa = [abs(r1) ** n for n in range(6)]
+            pb = [abs(r2) ** n for n in range(6)]
+
+            def bounds(x0, v0):
+                ca = abs((v0 - r2 * x0) / d)
+                cb = abs((r1 * x0 - v0) / d)
+                return [ca * a + cb * c for a, c in zip(pa, pb)]
+            return bounds
+        if b == 0.0:
+            return lambda x0, v0: self.derivative_bounds(x0, v0, 6)[:6]
+        pw = [b ** n for n in range(6)]
+        pw1 = [n * b ** (n - 1) for n in range(6)]
+        eb = math.e * b
+
+        def bounds(x0, v0):
+            ca, cb = abs(x0), abs(v0 + b * x0)
+            c0 = ca + cb / eb
+            return [p * c0 + q * cb for p, q in zip(pw, pw1)]
+        return bounds
+
+    def first_zero(self, f0: float, df0: float) -> float:
+        """First s > 0 where a solution f of this oscillator's equation, f(0) = f0 > 0 and
+        f'(0) = df0, vanishes (math.inf if never): in closed form.
+
+        Any linear combination of x and x' (the contact force while moving together, eq 34)
+        solves the same equation. Underdamped: f = e^{-beta s} (f0 cos ws + Q sin ws),
+        Q = (df0 + beta f0) / w, zero at ws = atan2(f0 w, -(df0 + beta f0)) in (0, pi).
+        Overdamped: f = A e^{r1 s} + B e^{r2 s} vanishes once, where e^{(r1 - r2) s} = -B/A,
+        if A < 0. Critical: f = e^{-beta s} (f0 + (df0 + beta f0) s).
+        """
+        if not f0 > 0.0:
+            raise ValueError(f"f0 = {f0!r}: must be positive")
+        b, w2 = self.beta, self.omega_sq
+        reg = self.regime
+        if reg == "under":
+            w = math.sqrt(w2 - b * b)
+            return math.atan2(f0 * w, -(df0 + b * f0)) / w
+        if reg == "over":
+            sd = math.sqrt(b * b - w2)
+            r1, r2 = -b + sd, -b - sd
+            a = (df0 - r2 * f0) / (r1 - r2)  # B = f0 - A
+            return math.log1p(f0 / -a) / (r1 - r2) if a < 0.0 else math.inf
+        slope = df0 + b * f0
+        return f0 / -slope if slope < 0.0 else math.inf
+
+
+@lru_cache(maxsize=256)
+def _from_mck(cls, mass: float, damping: float, stiffness: float) -> Oscillator:
+    return cls(beta=damping / (2.0 * mass), omega_sq=stiffness / mass)
 
 
 @lru_cache(maxsize=8)

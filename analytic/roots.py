@@ -16,7 +16,12 @@ derivatives |f^(n)| over the whole interval.
 
 A fast path handles the short flights of a chattering sequence: with p = 1 and
 f''(0) < 0, q'(t) <= f''(0)/2 + B_3 t / 3 < 0 for t < 3|f''(0)| / (2 B_3), so f has a
-single zero there if f is negative at the end of that range.
+single zero there if f is negative at the end of that range. Given f' as well, Newton steps
+from the cubic Taylor prediction certify that zero without a sign change being sampled:
+at t with f'(t) < 0 and d = f(t) / |f'(t)|, |d| < |f'(t)| / (2 B_2) makes f change sign
+between t and t + 2d (Taylor with the remainder bounded by B_2), so the single zero lies
+there, and within 2 B_2 d^2 / |f'(t)| of the Newton point t + d; that point is accepted
+once this bound is below round-off (usually after one or two evaluations).
 """
 
 from __future__ import annotations
@@ -46,12 +51,12 @@ def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max:
     interval where f is certified monotone is polished by bracketed Newton steps instead
     of Brent's method (same tolerance, fewer evaluations).
     """
-    polish = _polisher(f, fdf)
     if t_max <= 0.0:
         return None
+    polish = _polisher(f, fdf)
     b2 = bounds[2]
     if order == 1 and len(taylor) > 3 and taylor[2] < 0.0:
-        t_root = _fast_path(f, t_max, bounds, taylor, polish)
+        t_root = _fast_path(f, t_max, bounds, taylor, polish, fdf)
         if t_root is not None:
             return t_root if t_root > 0.0 else None
     step = min(t_max, 0.3 / rate) if rate > 0 else t_max
@@ -126,7 +131,7 @@ def _polisher(f, fdf):
     return newton
 
 
-def _fast_path(f, t_max, bounds, taylor, polish):
+def _fast_path(f, t_max, bounds, taylor, polish, fdf=None):
     """Single short flight: f = gamma t + f''(0) t^2/2 + ..., f''(0) < 0 (see module doc)."""
     gamma, acc, jerk = taylor[1], taylor[2], taylor[3]
     t_mono = 1.5 * abs(acc) / bounds[3] if bounds[3] > 0 else math.inf
@@ -135,10 +140,17 @@ def _fast_path(f, t_max, bounds, taylor, polish):
     if jerk != 0.0:
         disc = (acc / 2.0) ** 2 - 4.0 * (jerk / 6.0) * gamma
         if disc >= 0.0:
-            cands = [(-acc / 2.0 + s * math.sqrt(disc)) / (2.0 * jerk / 6.0) for s in (1.0, -1.0)]
-            cands = [c for c in cands if c > 0.0]
-            if cands:
-                t_pred = min(cands)
+            sq = math.sqrt(disc)
+            c1 = (-acc / 2.0 + sq) / (2.0 * jerk / 6.0)
+            c2 = (-acc / 2.0 - sq) / (2.0 * jerk / 6.0)
+            if c1 > 0.0 and (c1 < c2 or c2 <= 0.0):
+                t_pred = c1
+            elif c2 > 0.0:
+                t_pred = c2
+    if fdf is not None and gamma > 0.0:
+        t_root = _certified_newton(fdf, t_pred, min(t_mono, t_max), bounds[2])
+        if t_root is not None:
+            return t_root
     t_hi = min(t_mono, t_max, 1.25 * t_pred)
     if t_hi <= 0.0:
         return None
@@ -159,3 +171,36 @@ def _fast_path(f, t_max, bounds, taylor, polish):
             return None
         f_lo = f(t_lo)
     return polish(t_lo, t_hi, f_lo, f_hi, t_pred)
+
+
+_NEWTON_TOL = 2.220446049250313e-16  # accept a Newton point once its error bound is below
+# this fraction of it (one unit in the last place)
+
+
+def _certified_newton(fdf, t, t_lim, b2, max_steps=8):
+    """The single zero of f on (0, t_lim] by Newton steps from t, certified (module doc).
+
+    Precondition: f = t q(t) with q(0) > 0 strictly decreasing on (0, t_lim], so f has at
+    most one zero there and is positive before it. Returns None when no step certifies a
+    zero inside (0, t_lim] (the caller then brackets it by sampling).
+    """
+    if not b2 > 0.0 or not math.isfinite(b2):
+        return None
+    for _ in range(max_steps):
+        if not 0.0 < t <= t_lim:
+            return None
+        ft, dft = fdf(t)
+        if ft == 0.0:
+            return t
+        if not dft < 0.0:  # before the maximum of f: no Newton certificate here
+            return None
+        slope = -dft
+        d = ft / slope  # > 0: the zero lies right of t; < 0: left of t
+        t_new = t + d
+        if abs(d) * 2.0 * b2 < slope:  # a sign change between t and t + 2d: certified
+            if d > 0.0 and t + 2.0 * d > t_lim:
+                return None  # the zero may lie past t_lim, where q is not known monotone
+            if 2.0 * b2 * d * d <= _NEWTON_TOL * t_new * slope:
+                return t_new
+        t = t_new
+    return None

@@ -19,7 +19,9 @@ Sequence of events from the first contact (t = 0, tree at rest, pendulum at u_1)
    :class:`~analytic.parameters.ParameterError` naming ``contact.restitution``, never
    truncated into a wrong answer;
 4. moving together (eq 34) while the contact force is compressive; separation when it
-   reaches zero;
+   reaches zero. The force is a linear combination of the joint displacement and velocity,
+   so it solves the joint motion's equation itself and its first zero is found in closed
+   form (:meth:`~analytic.oscillator.Oscillator.first_zero`);
 5. further free flights and impacts up to t_end.
 """
 
@@ -253,9 +255,16 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
     pend = Oscillator.from_mck(m, 0.0, model.impactor_stiffness)
     both = Oscillator.from_mck(M + m, model.damping, model.stiffness + model.impactor_stiffness)
     rate = max(tree.fastest_rate, pend.fastest_rate, 1e-12)
-    tree_adv, pend_adv = tree.scalar_advance, pend.scalar_advance
+    tree_adv, pend_adv, both_adv = tree.scalar_advance, pend.scalar_advance, both.scalar_advance
+    tree_bounds, pend_bounds = tree.derivative_bounds, pend.derivative_bounds
+    # accelerations and jerks, x'' = -2 beta x' - Omega^2 x (inlined: the hot path)
+    b2t, w2t = 2.0 * tree.beta, tree.omega_sq
+    b2p, w2p = 2.0 * pend.beta, pend.omega_sq
+    cx, cv = _force_coefficients(model)
     sol = ImpactSolution(model=model, t_end=t_end)
+    impacts, phases = sol.impacts, sol.phases
     u_scale = model.impact_speed
+    tail_limit = TAIL_ENERGY_FRACTION * e0
 
     t, x, vx, y, vy = 0.0, 0.0, 0.0, 0.0, model.impact_speed
     mode = "impact"
@@ -270,7 +279,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             v_new = ((m - M * e) * u + M * (1.0 + e) * U) / (M + m)  # eq 54
             V_new = v_new + e * approach  # eq 21
             loss = 0.5 * mu * (1.0 - e * e) * approach * approach  # eq 55
-            sol.impacts.append(Impact(len(sol.impacts) + 1, t, x, U, u, V_new, v_new, loss))
+            impacts.append(Impact(len(impacts) + 1, t, x, U, u, V_new, v_new, loss))
             vx, vy = V_new, v_new
             chatter += 1
             if chatter > MAX_CHATTER_IMPACTS:
@@ -280,19 +289,19 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                     f"{MAX_CHATTER_IMPACTS} impacts (the exact solver's work grows as "
                     f"1 / (1 - e)); allowed here: a smaller e, e <= 0.99 always runs")
             gamma = vx - vy
-            a_rel = tree.acceleration(x, vx) - pend.acceleration(y, vy)
+            a_rel = (-b2t * vx - w2t * x) - (-b2p * vy - w2p * y)
             tail_energy = 0.5 * mu * gamma * gamma
             vc = (M * vx + m * vy) / (M + m)
             if gamma <= 1e-15 * u_scale:  # no relative velocity left (e = 0 or grazing)
-                if _together_force(model, x, vc) > 0.0:
+                if cx * x + cv * vc > 0.0:
                     vx = vy = vc
                     mode = "together"
                 else:
                     mode, free_order = "free", 0
                 continue
-            if e < 1.0 and a_rel < 0.0 and tail_energy < TAIL_ENERGY_FRACTION * e0:
+            if e < 1.0 and a_rel < 0.0 and tail_energy < tail_limit:
                 t_inf = t + 2.0 * gamma / (abs(a_rel) * (1.0 - e))
-                sol.tails.append(TailClosure(len(sol.impacts), t, t_inf, gamma, a_rel,
+                sol.tails.append(TailClosure(len(impacts), t, t_inf, gamma, a_rel,
                                              tail_energy))
                 vx = vy = vc
                 mode = "together"
@@ -301,49 +310,60 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             continue
         if mode == "free":
             x0, vx0, y0, vy0 = x, vx, y, vy
-            bt = tree.derivative_bounds(x0, vx0)
-            bp = pend.derivative_bounds(y0, vy0)
-            bounds = [bt[n] + bp[n] for n in range(len(bt))]
+            g0 = x0 - y0
+            bt = tree_bounds(x0, vx0)
+            bp = pend_bounds(y0, vy0)
+            bounds = [bt[0] + bp[0], bt[1] + bp[1], bt[2] + bp[2], bt[3] + bp[3],
+                      bt[4] + bp[4], bt[5] + bp[5]]
+
+            last = [-1.0, 0.0, 0.0, 0.0, 0.0]  # the state at the last sampled s
 
             def gap(s):
-                dx, _ = tree.advance(s, x0, vx0)
-                dy, _ = pend.advance(s, y0, vy0)
-                return (x0 - y0) + dx - dy
+                dx, vxs = tree_adv(s, x0, vx0)
+                dy, vys = pend_adv(s, y0, vy0)
+                last[0], last[1], last[2], last[3], last[4] = s, dx, vxs, dy, vys
+                return g0 + dx - dy
 
             def dgap(s):
-                return tree.advance(s, x0, vx0)[1] - pend.advance(s, y0, vy0)[1]
+                return tree_adv(s, x0, vx0)[1] - pend_adv(s, y0, vy0)[1]
 
             def gap_slope(s):
                 dx, vxs = tree_adv(s, x0, vx0)
                 dy, vys = pend_adv(s, y0, vy0)
-                return (x0 - y0) + dx - dy, vxs - vys
+                return g0 + dx - dy, vxs - vys
 
+            ax0, ay0 = -b2t * vx0 - w2t * x0, -b2p * vy0 - w2p * y0
             g1 = vx0 - vy0
-            g2 = tree.acceleration(x0, vx0) - pend.acceleration(y0, vy0)
-            g3 = tree.jerk(x0, vx0) - pend.jerk(y0, vy0)
+            g2 = ax0 - ay0
+            g3 = (-b2t * ax0 - w2t * vx0) - (-b2p * ay0 - w2p * vy0)
             order = free_order
             if order == 0:  # touching with no relative velocity: find the first non-zero term
                 order = 2 if g2 > 1e-12 * bounds[2] else 3
             taylor = (0.0, g1, g2, g3, 0.0, 0.0)
+
             def local_bounds(s):
-                dx, vxs = tree.advance(s, x0, vx0)
-                dy, vys = pend.advance(s, y0, vy0)
-                lt = tree.derivative_bounds(x0 + dx, vxs)
-                lp = pend.derivative_bounds(y0 + dy, vys)
-                return [lt[n] + lp[n] for n in range(len(lt))]
+                if s == last[0]:  # the search steps on from a point it has sampled
+                    _, dx, vxs, dy, vys = last
+                else:
+                    dx, vxs = tree_adv(s, x0, vx0)
+                    dy, vys = pend_adv(s, y0, vy0)
+                lt = tree_bounds(x0 + dx, vxs)
+                lp = pend_bounds(y0 + dy, vys)
+                return [lt[0] + lp[0], lt[1] + lp[1], lt[2] + lp[2], lt[3] + lp[3],
+                        lt[4] + lp[4], lt[5] + lp[5]]
 
             s_hit = first_zero(gap, dgap, t_end - t, bounds, rate, order=order, taylor=taylor,
                                local_bounds=local_bounds, fdf=gap_slope)
             s_stop = t_end - t if s_hit is None else s_hit
-            sol.phases.append(Phase("free", t, t + s_stop, x0, vx0, y0, vy0))
-            dx, vx = tree.advance(s_stop, x0, vx0)
-            dy, vy = pend.advance(s_stop, y0, vy0)
+            phases.append(Phase("free", t, t + s_stop, x0, vx0, y0, vy0))
+            dx, vx = tree_adv(s_stop, x0, vx0)
+            dy, vy = pend_adv(s_stop, y0, vy0)
             t, x, y = t + s_stop, x0 + dx, y0 + dy
             if s_hit is None:
                 break
             y = x  # in contact: the gap is zero to round-off
             if vy - vx <= 0.0:  # grazing: touching without approach
-                if _together_force(model, x, (M * vx + m * vy) / (M + m)) > 0.0:
+                if cx * x + cv * (M * vx + m * vy) / (M + m) > 0.0:
                     vx = vy = (M * vx + m * vy) / (M + m)
                     mode = "together"
                 else:
@@ -355,29 +375,18 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             chatter = 0
             sol.together_starts.append((t, x, vx))
             x0, v0 = x, vx
-            bb = both.derivative_bounds(x0, v0)
-            cx, cv = _force_coefficients(model)
-            fb = [abs(cx) * bb[n] + abs(cv) * bb[n + 1] for n in range(len(bb) - 1)]
-
-            def force(s):
-                dx, v = both.advance(s, x0, v0)
-                return cx * (x0 + dx) + cv * v
-
-            def dforce(s):
-                dx, v = both.advance(s, x0, v0)
-                return cx * v + cv * both.acceleration(x0 + dx, v)
-
             f0 = cx * x0 + cv * v0
-            def local_force_bounds(s):
-                dx, v = both.advance(s, x0, v0)
-                lb = both.derivative_bounds(x0 + dx, v)
-                return [abs(cx) * lb[n] + abs(cv) * lb[n + 1] for n in range(len(lb) - 1)]
-
-            s_sep = first_zero(force, dforce, t_end - t, fb, both.fastest_rate, order=0,
-                               taylor=(f0,), local_bounds=local_force_bounds)
+            if f0 > 0.0:
+                # The contact force N = cx x + cv v solves the equation of the joint motion
+                # (eq 34) itself: its first zero in closed form (Oscillator.first_zero).
+                s_sep = both.first_zero(f0, cx * v0 + cv * both.acceleration(x0, v0))
+                if not s_sep <= t_end - t:
+                    s_sep = None
+            else:  # not compressive at the start (round-off): the certified search decides
+                s_sep = _separation_search(both, cx, cv, x0, v0, f0, t_end - t)
             s_stop = t_end - t if s_sep is None else s_sep
-            sol.phases.append(Phase("together", t, t + s_stop, x0, v0, x0, v0))
-            dx, v = both.advance(s_stop, x0, v0)
+            phases.append(Phase("together", t, t + s_stop, x0, v0, x0, v0))
+            dx, v = both_adv(s_stop, x0, v0)
             t, x, vx, y, vy = t + s_stop, x0 + dx, v, x0 + dx, v
             if s_sep is None:
                 break
@@ -392,6 +401,31 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
     return sol
 
 
+def _separation_search(both: Oscillator, cx: float, cv: float, x0: float, v0: float,
+                       f0: float, t_max: float) -> float | None:
+    """First zero of the contact force N = cx x + cv v while moving together, by the
+    certified search of :mod:`analytic.roots` (used when N(0) = f0 is not positive)."""
+    adv = both.scalar_advance
+    bb = both.derivative_bounds(x0, v0)
+    fb = [abs(cx) * bb[n] + abs(cv) * bb[n + 1] for n in range(len(bb) - 1)]
+
+    def force(s):
+        dx, v = adv(s, x0, v0)
+        return cx * (x0 + dx) + cv * v
+
+    def dforce(s):
+        dx, v = adv(s, x0, v0)
+        return cx * v + cv * both.acceleration(x0 + dx, v)
+
+    def local_force_bounds(s):
+        dx, v = adv(s, x0, v0)
+        lb = both.derivative_bounds(x0 + dx, v)
+        return [abs(cx) * lb[n] + abs(cv) * lb[n + 1] for n in range(len(lb) - 1)]
+
+    return first_zero(force, dforce, t_max, fb, both.fastest_rate, order=0,
+                      taylor=(f0,), local_bounds=local_force_bounds)
+
+
 def _force_coefficients(model: TwoBodyModel) -> tuple[float, float]:
     """Contact force while moving together, N = cx x + cv v (from eq 34 and eq 13).
 
@@ -401,8 +435,3 @@ def _force_coefficients(model: TwoBodyModel) -> tuple[float, float]:
     M, m = model.dynamic_mass, model.impactor_mass
     return ((m * model.stiffness - M * model.impactor_stiffness) / (M + m),
             m * model.damping / (M + m))
-
-
-def _together_force(model: TwoBodyModel, x: float, v: float) -> float:
-    cx, cv = _force_coefficients(model)
-    return cx * x + cv * v

@@ -194,3 +194,69 @@ def test_state_outside_the_solution_is_refused():
     sol = solve_impacts(paper_model(), 0.05)
     with pytest.raises(ValueError, match="t: requested times"):
         sol.state([0.06])
+
+
+def test_first_zero_newton_certificate_picks_the_first_of_two_close_zeros():
+    # f = t (r1 - t)(r2 - t): a flight whose gap would close twice, 1e-3 apart in 1e-3
+    r1, r2 = 1e-3, 1.001e-3
+    f = lambda t: t * (r1 - t) * (r2 - t)  # noqa: E731
+    df = lambda t: r1 * r2 - 2 * (r1 + r2) * t + 3 * t * t  # noqa: E731
+    bounds = [1e-5, 1e-5, 0.07, 6.0, 0.0, 0.0]  # sup |f^(n)| on [0, 1e-2]
+    root = first_zero(f, df, 1e-2, bounds, rate=1.0, order=1,
+                      taylor=(0.0, r1 * r2, -2 * (r1 + r2), 6.0, 0.0, 0.0),
+                      fdf=lambda t: (f(t), df(t)))
+    assert root == pytest.approx(r1, rel=1e-13)
+
+
+@pytest.mark.parametrize("gamma", [1e-3, 1e-9, 1e-14])
+def test_first_zero_newton_certificate_on_a_chattering_flight(gamma):
+    # gap of a short flight: f = gamma t - a t^2 / 2 + j t^3 / 6, a = 2, j = 50
+    f = lambda t: gamma * t - t * t + 50 * t ** 3 / 6  # noqa: E731
+    df = lambda t: gamma - 2 * t + 25 * t * t  # noqa: E731
+    bounds = [1.0, 1.0, 2.0 + 50.0, 50.0, 0.0, 0.0]  # on [0, 1]
+    taylor = (0.0, gamma, -2.0, 50.0, 0.0, 0.0)
+    with_newton = first_zero(f, df, 1.0, bounds, rate=1.0, order=1, taylor=taylor,
+                             fdf=lambda t: (f(t), df(t)))
+    with_brent = first_zero(f, df, 1.0, bounds, rate=1.0, order=1, taylor=taylor)
+    assert with_newton == pytest.approx(with_brent, rel=4e-15)
+    assert abs(f(with_newton)) <= 1e-15 * gamma * with_newton
+
+
+@pytest.mark.parametrize("beta,omega_sq", [(30.0, 1.4e4), (100.0, 1e4), (300.0, 1e4),
+                                           (0.0, 6.5), (100.0 * (1 + 1e-7), 1e4)])
+@pytest.mark.parametrize("f0,df0", [(1.0, 50.0), (1.0, -50.0), (1e-3, -400.0), (2.0, 900.0)])
+def test_closed_form_first_zero_of_an_oscillator_solution(beta, omega_sq, f0, df0):
+    """Separation (contact force reaching zero while moving together) in closed form."""
+    osc = Oscillator(beta, omega_sq)
+
+    def f(t):
+        return f0 * (1.0 + osc.advance(t, 1.0, 0.0)[0]) + df0 * osc.advance(t, 0.0, 1.0)[0]
+
+    s = osc.first_zero(f0, df0)
+    # sampled while f is far above its round-off: e^{-slowest decay rate t} >= 1e-8
+    d = beta * beta - omega_sq
+    slowest = beta - math.sqrt(d) if d > 0 else beta
+    t_max = min(2.0, 18.0 / slowest) if slowest > 0 else 2.0
+    t = np.linspace(0.0, t_max, 400_001)[1:]
+    vals = f0 + osc.advance(t, f0, df0, np)[0]
+    neg = np.nonzero(vals <= 0.0)[0]
+    if neg.size == 0:
+        assert s > t_max
+        return
+    lo = t[neg[0] - 1] if neg[0] > 0 else 0.0
+    assert lo <= s <= t[neg[0]]  # the first sign change, not a later one
+    assert abs(f(s)) <= 1e-12 * (abs(f0) + abs(df0) * s)
+
+
+def test_solution_pickles_after_a_solve_for_process_pools():
+    """Results cross process pools (report, pytest compare, sweeps): a solved solution,
+    whose oscillators hold cached closures, pickles and gives the same states back."""
+    import pickle
+
+    from analytic import load_scenario, simulate
+
+    res = simulate(load_scenario("central-leader"))
+    back = pickle.loads(pickle.dumps(res))
+    sol, sol2 = res.extra["solution"], back.extra["solution"]
+    assert back.metrics == res.metrics
+    assert np.array_equal(sol.state([0.001, 0.02]), sol2.state([0.001, 0.02]))
