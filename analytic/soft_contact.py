@@ -127,7 +127,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     (backend "analytic-soft") whose metrics come from :func:`analytic.records.metrics_from_record`,
     the same rule the engines use.
     """
-    from .records import ImpactRecord, metrics_from_record
+    from .records import metrics_from_record
     from .results import SimulationResult, Trajectory
 
     model = two_body_model(scenario, restitution)

@@ -79,9 +79,9 @@ import numpy as np
 
 from analytic.chain import (chain_matrices, chain_natural_frequencies, default_segments,
                             hinged_chain, lateral_jacobian)
-from analytic.model import TwoBodyModel, two_body_model
-from analytic.parameters import (DEFAULT_CONTACT_DURATION, Contact, ParameterError,
-                                 Pendulum, Scenario)
+from analytic.engine_options import check_choice, engine_model
+from analytic.model import TwoBodyModel
+from analytic.parameters import DEFAULT_CONTACT_DURATION, ParameterError, Scenario
 from analytic.records import ImpactRecord, detection_duration, metrics_from_record
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
@@ -100,11 +100,6 @@ SWING_SWITCH_STEPS = 20  # switch to the impact step this many swing steps befor
 ENERGY_GROWTH_LIMIT = 0.05  # relative: mechanical energy above (1 + this) E0 = diverged
 JOINT_VELOCITY_LIMIT = 1e6  # rad/s or m/s: Bullet clamps joint speeds here (default 100)
 
-
-def _choice(name, value, allowed):
-    if value not in allowed:
-        raise ParameterError(f"--{name} = {value!r}: allowed {', '.join(allowed)}")
-    return value
 
 
 # ----------------------------------------------------------------------------------- client
@@ -205,19 +200,12 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                damping="distributed") -> Setup:
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")
-    _choice("trunk", trunk, TRUNKS)
-    _choice("pendulum", pendulum, PENDULUMS)
-    _choice("contact", contact, CONTACTS)
-    _choice("damping", damping, DAMPINGS)
-    if restitution is not None:
-        Contact(restitution=restitution)
-    if pendulum == "full" and not isinstance(scenario.impactor, Pendulum):
-        raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
-    model = two_body_model(scenario, restitution)
-    t_end = scenario.t_end if t_end is None else t_end
-    if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
-            math.isfinite(t_end) and t_end > 0):
-        raise ParameterError(f"--t-end = {t_end!r} s is out of range: allowed (0, inf) s")
+    check_choice("trunk", trunk, TRUNKS)
+    check_choice("pendulum", pendulum, PENDULUMS)
+    check_choice("contact", contact, CONTACTS)
+    check_choice("damping", damping, DAMPINGS)
+    model, t_end = engine_model(scenario, pendulum=pendulum, restitution=restitution,
+                                t_end=t_end)
     tr = scenario.trunk
     matrices = None
     if trunk == "chain":
@@ -349,13 +337,11 @@ def run(setup: Setup) -> SimulationResult:
     full = setup.pendulum == "full"
     imp = setup.scenario.impactor
     m = model.impactor_mass
-    tb, pb = world.trunk, world.pendulum
+    pb = world.pendulum
     if full:
         le, g = imp.equivalent_length, imp.gravity
         inertia = m * le * le * (1.0 + _urdf.BOB_INERTIA_FRACTION)
         t_shift, e0 = _swing(world, setup, le, g)
-        theta0, omega0 = p.getJointState(pb, 0, physicsClientId=cid)[:2]
-        y0, vy0 = le * math.sin(theta0), le * math.cos(theta0) * omega0
     else:
         le = g = inertia = None
         p.resetJointState(pb, 0, 0.0, model.impact_speed, physicsClientId=cid)

@@ -62,7 +62,6 @@ Bodies (inertias are explicit, never from geoms: ``inertiafromgeom="false"``):
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import mujoco

@@ -100,8 +100,9 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 
 from analytic.chain import default_segments, hinged_chain
-from analytic.model import TwoBodyModel, two_body_model
-from analytic.parameters import Contact, ParameterError, Pendulum, Scenario
+from analytic.engine_options import check_choice, engine_model
+from analytic.model import TwoBodyModel
+from analytic.parameters import ParameterError, Pendulum, Scenario
 from analytic.records import ImpactRecord, detection_duration, metrics_from_record
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
@@ -121,11 +122,6 @@ ENERGY_GROWTH_LIMIT = 0.05  # relative: mechanical energy above (1 + this) E0 = 
 PLACEHOLDER_DT = 1e-5  # s: time step of the first compile (only its masses are used)
 RK4_DAMPING_LIMIT = 2.785  # h lambda: RK4's stability limit on the negative real axis (2.7853)
 
-
-def _choice(name, value, allowed):
-    if value not in allowed:
-        raise ParameterError(f"--{name} = {value!r}: allowed {', '.join(allowed)}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -218,23 +214,16 @@ def _cached_setup(*args) -> Setup:
 
 def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, restitution,
                 t_end, damping, integrator) -> Setup:
-    _choice("trunk", trunk, TRUNKS)
-    _choice("pendulum", pendulum, PENDULUMS)
-    _choice("damping", damping, DAMPINGS)
-    _choice("integrator", integrator, INTEGRATORS)
-    if restitution is not None:
-        Contact(restitution=restitution)
-    if pendulum == "full" and not isinstance(scenario.impactor, Pendulum):
-        raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
-    model = two_body_model(scenario, restitution)
+    check_choice("trunk", trunk, TRUNKS)
+    check_choice("pendulum", pendulum, PENDULUMS)
+    check_choice("damping", damping, DAMPINGS)
+    check_choice("integrator", integrator, INTEGRATORS)
+    model, t_end = engine_model(scenario, pendulum=pendulum, restitution=restitution,
+                                t_end=t_end)
     e = model.restitution
     if not e > 0.0:
         raise ParameterError("--restitution = 0: a soft contact needs e in (0, 1] (e = 0 "
                              "needs infinite damping)")
-    t_end = scenario.t_end if t_end is None else t_end
-    if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
-            math.isfinite(t_end) and t_end > 0):
-        raise ParameterError(f"--t-end = {t_end!r} s is out of range: allowed (0, inf) s")
     if contact_stiffness is not None:
         k = contact_law(model, scenario.contact, stiffness=contact_stiffness)[0]
     else:
