@@ -150,9 +150,6 @@ class Oscillator:
     def acceleration(self, x, v):
         return -2.0 * self.beta * v - self.omega_sq * x
 
-    def jerk(self, x, v):
-        return -2.0 * self.beta * self.acceleration(x, v) - self.omega_sq * v
-
     def derivative_bounds(self, x0: float, v0: float, n_max: int = 5) -> list[float]:
         """Bounds B_n >= |x^(n)(t)| for all t >= 0, n = 0..n_max, from the modal form.
 

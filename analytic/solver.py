@@ -363,8 +363,9 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                 break
             y = x  # in contact: the gap is zero to round-off
             if vy - vx <= 0.0:  # grazing: touching without approach
-                if cx * x + cv * (M * vx + m * vy) / (M + m) > 0.0:
-                    vx = vy = (M * vx + m * vy) / (M + m)
+                vc = (M * vx + m * vy) / (M + m)
+                if cx * x + cv * vc > 0.0:
+                    vx = vy = vc
                     mode = "together"
                 else:
                     mode, free_order = "free", 0
