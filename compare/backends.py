@@ -42,6 +42,17 @@ class Backend:
     simulate_ref: str
     modes_ref: str | None
     description: str
+    #: a physics engine with its own trunk models (the ladder's engine rungs), not an
+    #: analytic reference
+    engine: bool = False
+    #: rough wall time (s) of one run of a shipped scenario on a 2-core VM, by trunk model
+    #: (None: the backend's only or default model): what orders and groups parallel runs
+    run_cost: tuple = ()
+
+    def cost(self, options: dict) -> float:
+        """Rough wall time (s) of one run with ``options`` (:attr:`run_cost`; 1 s unknown)."""
+        costs = dict(self.run_cost)
+        return costs.get(options.get("trunk"), costs.get(None, 1.0))
 
     def _load(self, ref: str):
         module, func = ref.split(":")
@@ -79,14 +90,20 @@ class Backend:
 
 BACKENDS = {
     "analytic": Backend("analytic", "analytic.simulate:simulate", "analytic.modes:modes",
-                        "exact Newton-restitution solver of the paper (eqs 12-35)"),
+                        "exact Newton-restitution solver of the paper (eqs 12-35)",
+                        run_cost=((None, 0.005),)),
     "soft": Backend("soft", "analytic.soft_contact:simulate_soft", "analytic.modes:modes",
-                    "analytic SDOF with the spring-dashpot contact"),
+                    "analytic SDOF with the spring-dashpot contact", run_cost=((None, 0.2),)),
     "mujoco": Backend("mujoco", "mujoco_models:simulate", "mujoco_models:modes",
-                      "MuJoCo (MJCF) slide-joint or hinged-segment trunk"),
+                      "MuJoCo (MJCF) slide-joint or hinged-segment trunk", engine=True,
+                      run_cost=(("sdof", 0.05), ("chain", 0.5))),
     "bullet": Backend("bullet", "bullet_models:simulate", "bullet_models:modes",
-                      "PyBullet prismatic or hinged-link trunk"),
+                      "PyBullet prismatic or hinged-link trunk", engine=True,
+                      run_cost=(("sdof", 0.15), ("chain", 2.5))),
 }
+
+#: The physics engines, in the order the ladder and the studies show them.
+ENGINES = tuple(name for name, b in BACKENDS.items() if b.engine)
 
 
 def get_backend(name: str) -> Backend:

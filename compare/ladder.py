@@ -41,11 +41,11 @@ import numpy as np
 from analytic.parameters import ParameterError, Pendulum, Scenario
 from analytic.results import METRIC_UNITS, _clean
 
+from .backends import ENGINES
 from .runs import OK, SESSION_CACHE, SKIPPED, Run, RunCache, resolve_scenario
 
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
-ENGINES = ("mujoco", "bullet")
 
 #: Impact metrics of the ladder (keys of analytic.results.METRIC_KEYS).
 LADDER_METRICS = ("T0", "x0", "V", "x_max", "t_xmax", "t_sep", "impact_loss",

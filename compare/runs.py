@@ -129,7 +129,10 @@ class RunCache:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        todo.sort(key=lambda t: -_expected_cost(t[2], t[3]))
+        from .backends import BACKENDS
+
+        # slowest first; a backend not in the registry is a run that records its own skip
+        todo.sort(key=lambda t: -(BACKENDS[t[2]].cost(t[3]) if t[2] in BACKENDS else 0.0))
         ctx = multiprocessing.get_context("forkserver")
         with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
             futures = [(key, pool.submit(_run_uncached, scen, backend, options))
@@ -156,12 +159,6 @@ class RunCache:
 def _run_uncached(scenario: Scenario, backend: str, options: dict) -> Run:
     """One run in a worker process (:meth:`RunCache.prefetch`)."""
     return RunCache().run(scenario, backend, **options)
-
-
-def _expected_cost(backend: str, options: dict) -> int:
-    """Rough order of a run's cost, for sending the slowest first."""
-    rank = {"bullet": 3, "mujoco": 2, "soft": 1}.get(backend, 0)
-    return rank * (10 if options.get("trunk") == "chain" else 1)
 
 
 def _one_line(exc: BaseException) -> str:

@@ -82,7 +82,7 @@ def add_sweep_arguments(parser) -> None:
 
 def parse_options(specs, backends) -> dict:
     """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine)."""
-    from .run import ENGINES
+    from compare.backends import ENGINES
 
     out: dict = {}
     for spec in specs or []:

@@ -57,6 +57,8 @@ from pathlib import Path
 from analytic.parameters import ParameterError, Pendulum, Scenario
 from analytic.results import METRIC_KEYS, SimulationDiverged
 
+from compare.backends import get_backend
+
 from .apply import apply_point
 from .grid import Grid, parse_grid, point_key
 
@@ -67,7 +69,6 @@ SPEC = "sweep.json"
 OK, SKIPPED, DIVERGED, FAILED, INVALID = "ok", "skipped", "diverged", "failed", "invalid"
 
 REFERENCE_BACKENDS = ("analytic", "soft")
-ENGINES = ("mujoco", "bullet")
 MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "e", "u1", "segments", "dt", "contact_stiffness",
               "contact_damping")
 IDENT_KEYS = ("M_T", "K_T", "xi", "E")
@@ -108,7 +109,6 @@ class Target:
 
 
 def _check_backends(backends) -> list[str]:
-    from compare.backends import get_backend
 
     if isinstance(backends, str):
         backends = [b.strip() for b in backends.split(",") if b.strip()]
@@ -375,7 +375,6 @@ def _check_spec(out: Path, spec: dict) -> None:
 def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: bool = True,
          done: set | None = None):
     """(tasks to run, rows already decided without running: invalid points)."""
-    from compare.backends import get_backend
     from compare.runs import options_key, scenario_key
 
     done = done or set()
@@ -416,7 +415,6 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
 def _accepted(backend: str) -> set:
     """The options ``backend``'s simulate() takes (empty when it is not installed: its rows
     are then skipped with the backend's own reason)."""
-    from compare.backends import get_backend
 
     try:
         return set(get_backend(backend).options())
@@ -484,12 +482,6 @@ def _rows_of(task: Task, outcome: dict, scenario: Scenario) -> list[dict]:
             for point, pk, t in task.rows]
 
 
-#: Rough cost (s) of one run, by backend and trunk model, measured on a 2-core VM for the
-#: shipped scenarios: what decides how many runs go into one worker call. Unknown backends
-#: and engines' hinged chains (1-20 s) count as 1 s.
-RUN_COST = {("analytic", None): 0.005, ("soft", None): 0.2, ("mujoco", "sdof"): 0.05,
-            ("bullet", "sdof"): 0.15}
-DEFAULT_RUN_COST = 1.0
 #: Seconds of estimated work per worker call (and at most 16 runs): a call costs a few ms of
 #: scheduling, so short runs are grouped, and an interrupted sweep loses at most about this
 #: much finished work per worker (a run longer than this is a call of its own).
@@ -501,13 +493,20 @@ def _cost_class(task: Task) -> tuple:
     return (task.backend.name, trunk if trunk == "sdof" else None)
 
 
+def _run_cost(cost_class: tuple) -> float:
+    """Rough cost (s) of one run of a class: the registry's
+    (:meth:`compare.backends.Backend.cost`); what decides how many runs go into one call."""
+    backend, trunk = cost_class
+    return get_backend(backend).cost({"trunk": trunk} if trunk else {})
+
+
 def _chunks(tasks: list, workers: int) -> list[list]:
-    """Tasks grouped into worker calls: runs of one cost class (:data:`RUN_COST`) up to
+    """Tasks grouped into worker calls: runs of one cost class (:func:`_run_cost`) up to
     :data:`CALL_BUDGET` seconds a call, and no fewer than about 8 calls per worker; order
     kept within a class."""
     classes = [_cost_class(t) for t in tasks]
     count = {c: classes.count(c) for c in set(classes)}
-    size = {c: max(1, min(16, int(CALL_BUDGET / RUN_COST.get(c, DEFAULT_RUN_COST)),
+    size = {c: max(1, min(16, int(CALL_BUDGET / _run_cost(c)),
                           n // max(1, 8 * workers))) for c, n in count.items()}
     chunks, open_ = [], {}
     for t, c in zip(tasks, classes):

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from analytic.parameters import ParameterError
+from compare.backends import ENGINES
 
 from .grid import Axis, Grid, Parameter, resolve_parameter
 from .run import OK, read_table, run_sweep
@@ -72,7 +73,7 @@ def engine_variants(engine: str) -> tuple[str | None, tuple, str | None, bool]:
     return name, values, None, True
 
 
-def speed_sweep(scenario, out, *, engines=("mujoco", "bullet"), dts=(1e-4, 3e-5, 1e-5),
+def speed_sweep(scenario, out, *, engines=ENGINES, dts=(1e-4, 3e-5, 1e-5),
                 stiffnesses=None, durations=(1e-3, 5e-4), workers: int = 1, scheduler=None,
                 progress=None) -> dict:
     """Run the speed-accuracy sweeps (one sweep directory per engine under ``out``).

@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from analytic.parameters import ParameterError
+from compare.backends import ENGINES
 
 from .maps import (DEFAULT_TOLERANCE, RUNG_LETTERS, identification_maps, validity_maps)
 from .run import JOURNAL, TABLE, make_out, read_table, run_sweep
@@ -57,7 +58,7 @@ class Preset:
     scenario: str
     grid: tuple  # --grid specs of the validity sweep
     ladder: bool = True
-    engines: tuple = ("mujoco", "bullet")
+    engines: tuple = ENGINES
     speed: bool = True
     speed_dts: tuple = (1e-4, 3e-5, 1e-5)  # s
     speed_durations: tuple = (1e-3, 5e-4)  # s: contact durations giving the stiffnesses
@@ -98,7 +99,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     t0 = time.perf_counter()
     out = make_out(out)
     scen = scenario or p.scenario
-    engines = tuple(b for b in (backends or p.engines) if b in ("mujoco", "bullet"))
+    engines = tuple(b for b in (backends or p.engines) if b in ENGINES)
     targets = ("analytic", "soft", *engines)
     res = run_sweep(scen, list(grid or p.grid), out / "validity", backends=targets,
                     ladder=p.ladder, workers=workers, scheduler=scheduler, progress=progress,
