@@ -48,6 +48,9 @@ class Backend:
     #: rough wall time (s) of one run of a shipped scenario on a 2-core VM, by trunk model
     #: (None: the backend's only or default model): what orders and groups parallel runs
     run_cost: tuple = ()
+    #: (option, values) whose values make separate speed-accuracy curves of an engine
+    #: (compare.sweep.speed), or None
+    variants: tuple | None = None
 
     def cost(self, options: dict) -> float:
         """Rough wall time (s) of one run with ``options`` (:attr:`run_cost`; 1 s unknown)."""
@@ -96,10 +99,12 @@ BACKENDS = {
                     "analytic SDOF with the spring-dashpot contact", run_cost=((None, 0.2),)),
     "mujoco": Backend("mujoco", "mujoco_models:simulate", "mujoco_models:modes",
                       "MuJoCo (MJCF) slide-joint or hinged-segment trunk", engine=True,
-                      run_cost=(("sdof", 0.05), ("chain", 0.5))),
+                      run_cost=(("sdof", 0.05), ("chain", 0.5)),
+                      variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4"))),
     "bullet": Backend("bullet", "bullet_models:simulate", "bullet_models:modes",
                       "PyBullet prismatic or hinged-link trunk", engine=True,
-                      run_cost=(("sdof", 0.15), ("chain", 2.5))),
+                      run_cost=(("sdof", 0.15), ("chain", 2.5)),
+                      variants=("contact", ("soft", "newton"))),
 }
 
 #: The physics engines, in the order the ladder and the studies show them.

@@ -439,11 +439,12 @@ def test_rk4_refuses_a_step_its_explicit_dampers_cannot_take(central):
 
 
 def test_speed_study_runs_one_curve_per_mujoco_integrator():
-    from compare.sweep.speed import VARIANTS, engine_variants
+    from compare.backends import get_backend
+    from compare.sweep.speed import engine_variants
 
     name, values, reason, runnable = engine_variants("mujoco")
     assert (name, reason, runnable) == ("integrator", None, True)
-    assert values == VARIANTS["mujoco"][1] == _contact.INTEGRATORS
+    assert values == get_backend("mujoco").variants[1] == _contact.INTEGRATORS
 
 
 def test_batch_through_rollout_matches_serial_runs(central):

@@ -1,7 +1,7 @@
 """Speed-accuracy curves per engine (after Erez, Tassa and Todorov 2015).
 
-For each engine and each of its variants (MuJoCo integrators, Bullet contact modes) the
-scenario's engine-numerics model (SDOF trunk, linear pendulum: :data:`SPEED_ENGINE_OPTIONS`)
+For each engine and each of its variants (MuJoCo integrators, Bullet contact modes; from
+:attr:`compare.backends.Backend.variants`) the scenario's engine-numerics model (SDOF trunk, linear pendulum: :data:`SPEED_ENGINE_OPTIONS`)
 is run over a range of time steps ``dt`` (s) and contact stiffnesses ``k_c``
 (N/m). Each run gives a point:
 
@@ -41,11 +41,6 @@ SPEED_METRICS = ("x_max", "t_xmax", "t_sep", "impact_loss", "energy_transferred"
 #: whose exact reference is the analytic soft-contact solution.
 SPEED_ENGINE_OPTIONS = {"trunk": "sdof", "pendulum": "linear"}
 
-#: The option and values that make the separate curves of each engine.
-VARIANTS = {"mujoco": ("integrator", ("Euler", "implicit", "implicitfast", "RK4")),
-            "bullet": ("contact", ("soft", "newton"))}
-
-
 def stiffness_for_duration(scenario, duration: float) -> float:
     """k_c (N/m) whose undamped two-body collision lasts ``duration`` s: mu (pi / t)^2."""
     from analytic.model import two_body_model
@@ -59,11 +54,12 @@ def engine_variants(engine: str) -> tuple[str | None, tuple, str | None, bool]:
     engine runs at all)."""
     from compare.backends import get_backend
 
-    name, values = VARIANTS.get(engine, (None, ()))
     try:
-        accepted = get_backend(engine).options()
+        backend = get_backend(engine)
+        accepted = backend.options()
     except ParameterError as exc:
         return None, (), str(exc), False
+    name, values = backend.variants or (None, ())
     if name is None:
         return None, (), None, True
     if name not in accepted:
