@@ -110,7 +110,7 @@ class RunCache:
         Each run is the same call :meth:`run` makes, in a worker process (``forkserver``: the
         engines' thread pools are never forked), so the cache ends up exactly as after
         serial :meth:`run` calls, only sooner. The slowest kinds (hinged-trunk engine runs)
-        are sent first. ``workers``: default the CPUs this process may use; 1 runs serially.
+        are sent first. ``workers``: default the CPU count; 1 runs serially.
         """
         todo, seen = [], set()
         for scenario, backend, options in requests:
@@ -120,8 +120,7 @@ class RunCache:
                 seen.add(key)
                 todo.append((key, scen, backend, dict(options)))
         if workers is None:
-            workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
-                else (os.cpu_count() or 1)
+            workers = os.cpu_count() or 1  # as the sweeps' pool and the engines' batches
         if workers <= 1 or len(todo) <= 1:
             for _, scen, backend, options in todo:
                 self.run(scen, backend, **options)
