@@ -9,7 +9,16 @@
      runner's per-step Python (joint states, spring/damper torques, contact force) costs;
    * ``bare loop``: a loop of ``stepSimulation`` alone on the same loaded model, started
      like the run. Without the trunk's spring the bodies fly apart after the first
-     collision and the contact-free steps are cheaper than the run's, so this ratio is lower.
+     collision and the contact-free steps are cheaper than the run's, so this ratio is lower;
+   * ``springs in Bullet``: a loop of ``stepSimulation`` alone with the springs inside the
+     engine, through Bullet's only in-engine joint spring, the statically linked
+     ``pdControlPlugin`` (``PD_CONTROL``: before every step it applies the explicit torque
+     -kp q_n - kd q'_n, the runner's own law), in a client of its own. SDOF trunk: kp, kd =
+     K_T, C_T and the linear pendulum's m g / l_e, so it is the runner's model, checked by
+     comparing the final state with the runner's; chain: the hinge springs only (the plugin
+     has per-joint gains and no coupled damping, and the diagonal of the distributed damping
+     alone, applied explicitly, is unstable at the chain's step). This is "a bare
+     stepSimulation loop on the same model": the spring-free loop is another model.
 
 2. The largest time step keeping V and x_max within 1 % of the analytic soft-contact
    reference on the SDOF trunk (all shipped scenarios; dt = default * 2^k): the largest dt
@@ -18,8 +27,11 @@
 
 from __future__ import annotations
 
+import math
 import statistics
 import time
+
+import numpy as np
 
 from analytic import load_scenario, shipped_scenarios
 from analytic.parameters import ParameterError
@@ -81,8 +93,35 @@ def bare_steps_per_second(setup) -> float:
     return n / (time.perf_counter() - t0)
 
 
+def engine_spring_rate(setup, pd_client) -> tuple[float, tuple]:
+    """(steps/s, final (q, q') of the pendulum) of bare stepping with pdControlPlugin springs."""
+    world = build_world(setup, client_id=pd_client)
+    p, cid = world.p, world.cid
+    p.resetJointState(world.pendulum, 0, 0.0, setup.model.impact_speed, physicsClientId=cid)
+    model = setup.model
+    if setup.trunk == "sdof":
+        gains = [(model.stiffness, model.damping)]
+    else:
+        gains = [(k, 0.0) for k in np.diag(setup.matrices[1])]
+    gains = dict(zip(world.trunk_joints, gains))
+    for body, joint, (kp, kd) in [(world.trunk, j, g) for j, g in gains.items()] + [
+            (world.pendulum, 0, (model.impactor_stiffness, 0.0))]:
+        p.setJointMotorControl2(body, joint, p.PD_CONTROL, targetPosition=0.0,
+                                targetVelocity=0.0, positionGain=kp, velocityGain=kd,
+                                force=1e300, physicsClientId=cid)
+    n = int(math.ceil(setup.t_end / setup.dt))
+    t0 = time.perf_counter()
+    for _ in range(n):
+        p.stepSimulation(cid)
+    rate = n / (time.perf_counter() - t0)
+    return rate, p.getJointState(world.pendulum, 0, physicsClientId=cid)[:2]
+
+
 def main() -> None:
     s = load_scenario("central-leader")
+    p, _ = _runner.client()
+    pd_client = p.connect(p.DIRECT)  # the plugin stays loaded in its client: not the runner's
+    p.loadPlugin("pdControlPlugin", physicsClientId=pd_client)
     print("runner vs bare stepSimulation (central-leader, soft contact), medians of", REPEATS)
     for trunk, t_end in (("sdof", 0.1), ("chain", 0.02)):
         setup = make_setup(s, trunk=trunk, t_end=t_end)
@@ -90,9 +129,17 @@ def main() -> None:
         runner = statistics.median(r for r, _ in rates)
         stepping = statistics.median(b for _, b in rates)
         bare = statistics.median(bare_steps_per_second(setup) for _ in range(REPEATS))
+        sprung = [engine_spring_rate(setup, pd_client) for _ in range(REPEATS)]
+        in_engine = statistics.median(r for r, _ in sprung)
         print(f"  {trunk:5s} dt={setup.dt:.3g} s  runner {runner:8.0f} steps/s  its "
               f"stepSimulation {stepping:8.0f} steps/s (in-run {runner / stepping:.1%})  "
-              f"bare loop {bare:8.0f} steps/s ({runner / bare:.1%})")
+              f"bare loop {bare:8.0f} steps/s ({runner / bare:.1%})  springs in Bullet "
+              f"{in_engine:8.0f} steps/s ({runner / in_engine:.1%})")
+        if trunk == "sdof":  # the same model: the same trajectory, to round-off
+            traj = run(setup).trajectory
+            y, vy = sprung[0][1]
+            print(f"    same model check: final pendulum (y, y') runner ({traj.y[-1]:.12g}, "
+                  f"{traj.vy[-1]:.12g}) springs in Bullet ({y:.12g}, {vy:.12g})")
     print("largest dt with V and x_max within 1 % of the analytic soft variant (SDOF trunk)")
     for name in shipped_scenarios():
         s = load_scenario(name)

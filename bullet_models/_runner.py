@@ -286,9 +286,11 @@ class World:
     contact_link: int
 
 
-def build_world(setup: Setup) -> World:
-    """Load both bodies into this process's client, configured for ``setup``."""
+def build_world(setup: Setup, client_id: int | None = None) -> World:
+    """Load both bodies into this process's client (or ``client_id``), configured for ``setup``."""
     p, cid = client()
+    if client_id is not None:
+        cid = client_id
     p.resetSimulation(physicsClientId=cid)
     p.setGravity(0.0, 0.0, 0.0, physicsClientId=cid)
     newton = setup.contact == "newton"
@@ -389,6 +391,12 @@ def _swing(world: World, setup: Setup, le: float, g: float):
 
 
 def _loop_sdof(world, setup, n_steps, full, le, g, m):
+    """Step the SDOF trunk; per step two joint-state reads, two torques, one contact query.
+
+    The PyBullet calls take their arguments by position (keyword parsing costs ~0.7 us per
+    call against a ~3 us step) and the loop only keeps what the engine returns; the arrays
+    are built after the loop.
+    """
     p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
     model = setup.model
     K, C, kp = model.stiffness, model.damping, model.impactor_stiffness
@@ -396,31 +404,32 @@ def _loop_sdof(world, setup, n_steps, full, le, g, m):
     gjs, sjm, step, gcp = (p.getJointState, p.setJointMotorControl2, p.stepSimulation,
                            p.getContactPoints)
     TQ = p.TORQUE_CONTROL
-    x = np.empty(n_steps + 1)
-    vx = np.empty(n_steps + 1)
-    q = np.empty(n_steps + 1)
-    qd = np.empty(n_steps + 1)
-    force = np.zeros(n_steps + 1)
-    sin = math.sin
-    for n in range(n_steps + 1):
+    states = []  # x, x', q, q' of each step, flat (floats only: nothing for the GC to track)
+    keep = states.append
+    contact_force = {}  # step -> summed normal force, N (steps with contact only)
+    sin, isfinite = math.sin, math.isfinite
+    for n in range(n_steps):
         xs = gjs(tb, 0, cid)
         ps = gjs(pb, 0, cid)
-        x[n] = xs[0]
-        v = xs[1]
-        vx[n] = v
-        q[n] = ps[0]
-        qd[n] = ps[1]
-        if n == n_steps:
-            break
-        sjm(tb, 0, TQ, force=-K * xs[0] - C * v, physicsClientId=cid)
-        sjm(pb, 0, TQ, force=-mgl * sin(ps[0]) if full else -kp * ps[0], physicsClientId=cid)
+        x, v, y = xs[0], xs[1], ps[0]
+        keep(x)
+        keep(v)
+        keep(y)
+        keep(ps[1])
+        # setJointMotorControl2(body, joint, mode, targetPosition, targetVelocity, force,
+        # positionGain, velocityGain, maxVelocity, client): TORQUE_CONTROL uses force only
+        sjm(tb, 0, TQ, 0.0, 0.0, -K * x - C * v, 0.1, 1.0, -1.0, cid)
+        sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
         step(cid)
-        f = 0.0
-        for c in gcp(tb, pb, physicsClientId=cid):
-            f += c[9]
-        force[n] = f
-        if not (n & 1023) and not math.isfinite(xs[0] + ps[0]):
+        points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
+        if points:
+            contact_force[n] = sum(c[9] for c in points)
+        if not (n & 1023) and not isfinite(x + y):
             raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
+    states.extend(gjs(tb, 0, cid)[:2] + gjs(pb, 0, cid)[:2])
+    x, vx, q, qd = np.array(states).reshape(n_steps + 1, 4).T
+    force = np.zeros(n_steps + 1)
+    force[list(contact_force)] = list(contact_force.values())
     return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force,
             "joint_speed": max(float(np.max(np.abs(vx))), float(np.max(np.abs(qd))))}
 
@@ -435,40 +444,43 @@ def _loop_chain(world, setup, n_steps, full, le, g, m):
     mgl = m * g * le if full else 0.0
     joints = world.trunk_joints
     nj = len(joints)
-    gjss, sjma, sjm, step, gcp = (p.getJointStates, p.setJointMotorControlArray,
-                                  p.setJointMotorControl2, p.stepSimulation,
-                                  p.getContactPoints)
-    gjs = p.getJointState
+    gjss, sjma, sjm, gjs, step, gcp = (p.getJointStates, p.setJointMotorControlArray,
+                                       p.setJointMotorControl2, p.getJointState,
+                                       p.stepSimulation, p.getContactPoints)
     TQ = p.TORQUE_CONTROL
-    Q = np.empty((n_steps + 1, nj))
-    QD = np.empty((n_steps + 1, nj))
-    q = np.empty(n_steps + 1)
-    qd = np.empty(n_steps + 1)
-    force = np.zeros(n_steps + 1)
+    # the hinge torques -K theta - (Dv theta' - Dq theta) as one operator on the state read
+    # from the engine, (theta_0, theta'_0, theta_1, theta'_1, ...)
+    torque = np.empty((nj, 2 * nj))
+    torque[:, 0::2] = -np.diag(kdiag) + (Dq if Dq is not None else 0.0)
+    torque[:, 1::2] = -Dv
+    trunk_states = []  # (nj, 2) arrays: theta, theta' of each step
+    pendulum_states = []  # q, q' of each step, flat
+    keep, keep_pendulum = trunk_states.append, pendulum_states.append
+    contact_force = {}  # step -> summed normal force, N (steps with contact only)
     sin = math.sin
-    for n in range(n_steps + 1):
-        states = gjss(tb, joints, cid)
+    for n in range(n_steps):
+        z = np.array([s[:2] for s in gjss(tb, joints, cid)])
         ps = gjs(pb, 0, cid)
-        th = [s[0] for s in states]
-        om = [s[1] for s in states]
-        Q[n] = th
-        QD[n] = om
-        q[n] = ps[0]
-        qd[n] = ps[1]
-        if n == n_steps:
-            break
-        tau = -kdiag * Q[n] - Dv @ QD[n]
-        if Dq is not None:
-            tau += Dq @ Q[n]
-        sjma(tb, joints, TQ, forces=tau.tolist(), physicsClientId=cid)
-        sjm(pb, 0, TQ, force=-mgl * sin(ps[0]) if full else -kp * ps[0], physicsClientId=cid)
+        y = ps[0]
+        keep(z)
+        keep_pendulum(y)
+        keep_pendulum(ps[1])
+        sjma(tb, joints, TQ, forces=(torque @ z.ravel()).tolist(), physicsClientId=cid)
+        # positional arguments as in _loop_sdof
+        sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
         step(cid)
-        f = 0.0
-        for c in gcp(tb, pb, physicsClientId=cid):
-            f += c[9]
-        force[n] = f
-        if not (n & 1023) and not np.all(np.isfinite(Q[n])):
+        points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
+        if points:
+            contact_force[n] = sum(c[9] for c in points)
+        if not (n & 1023) and not np.all(np.isfinite(z)):
             raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
+    keep(np.array([s[:2] for s in gjss(tb, joints, cid)]))
+    pendulum_states.extend(gjs(pb, 0, cid)[:2])
+    states = np.array(trunk_states)
+    Q, QD = states[:, :, 0], states[:, :, 1]
+    q, qd = np.array(pendulum_states).reshape(n_steps + 1, 2).T
+    force = np.zeros(n_steps + 1)
+    force[list(contact_force)] = list(contact_force.values())
     chain = hinged_chain(setup.scenario.trunk, setup.segments)
     h = chain.lengths[:chain.clamp_index]
     phi = np.cumsum(Q, axis=1)[:, :chain.clamp_index]
