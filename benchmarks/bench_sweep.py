@@ -11,10 +11,12 @@ Run: ``.venv/bin/python benchmarks/bench_sweep.py [--backends analytic,soft,mujo
 Each sweep is the central-leader scenario over ``e`` (and ``crown_ratio`` for the cheap
 backends), written to a fresh directory, identification included (what a study runs). A
 point costs the backend run plus the analytic reference run (always part of a sweep). The
-pools and the cluster are warmed up first (imports); the three configurations are run in
-turn ``--repeats`` times and the best of each kept, since the machine may be shared (the
-load average is printed before and after: other jobs on the cores lower the 2-worker
-figures). A backend whose rows are not all ``ok`` is reported as not measured (a failing
+pools and the cluster are warmed up first (imports, and one untimed round per backend);
+then ``--repeats`` rounds each run the three configurations back to back, and the printed
+figures are medians over the rounds: points per second of each configuration, and the
+ratios taken within each round (2 workers / 1 worker, Dask / 2 workers), so a slow spell of
+the shared machine hits both sides of a ratio alike (the load average is printed before
+and after: other jobs on the cores lower the 2-worker figures). A backend whose rows are not all ``ok`` is reported as not measured (a failing
 run is fast, so its points per second would mean nothing). Points per second = grid points / wall time of
 :func:`compare.sweep.run.run_sweep` (planning, runs, the CSV journal and the Parquet table).
 """
@@ -24,6 +26,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import statistics
 import sys
 import tempfile
 import time
@@ -38,7 +41,7 @@ from compare.sweep.run import run_sweep  # noqa: E402
 
 #: Grid per backend: about 10-20 s of work for one worker on this machine.
 GRIDS = {
-    "analytic": ["e=0.05:0.95:20", "crown_ratio=0:4:20"],  # 400 points, ~5 ms each
+    "analytic": ["e=0.05:0.95:40", "crown_ratio=0:4:40"],  # 1600 points, ~4 ms each
     "soft": ["e=0.1:0.9:10", "crown_ratio=0:4:10"],  # 100 points, ~0.05-0.15 s each
     "mujoco": ["e=0.1:0.9:20", "crown_ratio=0:4:10"],  # 200 points, SDOF trunk ~0.05 s each
     "bullet": ["e=0.1:0.9:12", "crown_ratio=0:4:5"],  # 60 points, SDOF trunk ~0.15 s each
@@ -72,7 +75,7 @@ def warm(**kw) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--backends", default="analytic,soft,mujoco,bullet")
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args(argv)
     from compare.backends import get_backend
     from distributed import LocalCluster
@@ -84,7 +87,7 @@ def main(argv=None) -> int:
             backends.append(b)
         except Exception as exc:  # noqa: BLE001 - reported, then left out
             print(f"{b}: not measured ({exc})")
-    print(f"cpu count {os.cpu_count()}; best of {args.repeats}; points/s of a sweep")
+    print(f"cpu count {os.cpu_count()}; medians of {args.repeats} rounds; points/s of a sweep")
     warm(workers=1)
     print(f"load average before: {os.getloadavg()[0]:.2f} (the targets assume idle cores)")
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -93,24 +96,29 @@ def main(argv=None) -> int:
         configs = {"1 worker": {"workers": 1}, "2 workers": {"workers": 2},
                    "dask 2x1": {"scheduler": cluster.scheduler_address}}
         for b in backends:
-            best = dict.fromkeys(configs, 0.0)
+            rounds = []
             why = None
             n = 0
-            for _ in range(args.repeats):  # configs interleaved: load drift hits them alike
+            for r in range(args.repeats + 1):  # round 0 warms this backend up, untimed
+                rate = {}
                 for name, kw in configs.items():
                     pps, n, why = points_per_second(b, **kw)
                     if why:
                         break
-                    best[name] = max(best[name], pps)
+                    rate[name] = pps
                 if why:
                     break
+                if r:
+                    rounds.append(rate)
             if why:
                 print(f"{b:9s} not measured: {why}", flush=True)
                 continue
-            one, two, dask = best.values()
+            one, two, dask = (statistics.median(r[c] for r in rounds) for c in configs)
+            scale = statistics.median(r["2 workers"] / r["1 worker"] for r in rounds)
+            share = statistics.median(r["dask 2x1"] / r["2 workers"] for r in rounds)
             print(f"{b:9s} {n:4d} points  1 worker {one:8.2f}/s  2 workers {two:8.2f}/s "
-                  f"(x{two / one:.2f}, target 1.8)  dask 2x1 {dask:8.2f}/s "
-                  f"({dask / two:.0%} of pool, target 90%)", flush=True)
+                  f"(x{scale:.2f}, target 1.8)  dask 2x1 {dask:8.2f}/s "
+                  f"({share:.0%} of pool, target 90%)", flush=True)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
 

@@ -425,7 +425,9 @@ def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_en
     assert len(analytic) == 20  # 40 runs // (8 calls x 2 workers) = 2 a call
     many, _ = plan(load_scenario("central-leader"), parse_grid(["e=0:0.9:400"]),
                    make_targets(["analytic"]), identify=False)
-    assert max(len(c) for c in _chunks(many, 2)) == 16  # 400 // 16 = 25, capped at 16
+    assert max(len(c) for c in _chunks(many, 2)) == 25  # 400 // (8 calls x 2 workers)
+    # the call budget bounds a call: 1 s / 5 ms (the registry's analytic run) = 200 runs
+    assert max(len(c) for c in _chunks(many * 5, 1)) == 200
 
 
 def test_identification_map_matches_the_documented_floor_and_finding(tmp_path):
