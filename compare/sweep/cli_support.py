@@ -69,8 +69,8 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--preset", default=None, choices=("default", "full"),
                         help="run a whole study (validity, identification, speed): default "
                              "takes about 45 s on 2 cores; full (e=0:0.9:10, "
-                             "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 3 CPU-hours, "
-                             "1.5 h with 2 workers; --grid replaces the preset's validity grid")
+                             "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 1.5 CPU-hours, "
+                             "45 min with 2 workers; --grid replaces the preset's validity grid")
     parser.add_argument("--tolerance", type=_tolerance, default=None,
                         help="validity tolerance, relative (default 0.05)")
     parser.add_argument("--retry-failed", action="store_true", dest="retry_failed",

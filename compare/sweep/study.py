@@ -18,23 +18,25 @@ Presets (:data:`PRESETS`):
   of CPU, about 60 % of it Bullet's 12 chain runs at 2-8 s each), speed curves 2 s, maps
   12 s.
 * ``full``: the issue's grid e = 0:0.9:10 x segments = 1,2,4,8,16,32 x crown_ratio = 0:4:9
-  on the ladder (540 points), and 5 time steps x 3 stiffnesses per engine variant. Expected
-  run time, estimated (not a measured full run) from per-run times measured on the same VM
-  at e = 0.5, crown_ratio 0 and 4, central-leader:
+  on the ladder (540 points), and 5 time steps x 3 stiffnesses per engine variant. The
+  e = 0 rows of the soft and engine rungs are ``skipped`` (a soft contact cannot give e = 0;
+  the analytic rung runs them), so 81 (e, crown) pairs run every rung. Expected run time,
+  measured on a slice of the preset (``--grid e=0.1,0.5,0.9 --grid segments=1,2,4,8,16,32
+  --grid crown_ratio=0,4``, central-leader, 2 workers on the 2-core VM): 57-79 s of runs per
+  (e, crown) pair, 65 s on average, most of it the 32-segment chains (Bullet 17-23 s a run,
+  MuJoCo 6-7 s; 16 segments: 2-3 s and 0.6-0.8 s):
 
   ========  =====  =====  =====  =====  =====
-  segments    2      8     16     32    SDOF
+  segments    2      4      8     16     32
   ========  =====  =====  =====  =====  =====
-  MuJoCo    0.2 s  0.3 s  0.8 s  7.3 s  0.1 s
-  Bullet    1.0 s  2.0 s  4.0 s   22 s  0.3 s
+  MuJoCo    0.1 s  0.2 s  0.2 s  0.6 s  6-7 s
+  Bullet    0.6 s  0.9 s  1.1 s  2.3 s  17-23 s
   ========  =====  =====  =====  =====  =====
 
-  Low e runs take about 1.5 times as long (the default study's timings). The two chain
-  rungs at 90 (e, crown) pairs and 5 chain segment counts (segments = 1 is the SDOF run,
-  shared) come to about 2,400 s of CPU for MuJoCo and 8,200 s for Bullet: about 3 CPU-hours,
-  1.5 hours with 2 workers, 12 minutes on 16; analytic, soft and the speed curves add under a
-  minute, the maps about 30 s. A run can be stopped and resumed at any time (rerun the same
-  command), and ``--scheduler`` spreads it over a Dask cluster.
+  81 pairs x 65 s: about 5,300 s of CPU (1.5 CPU-hours), about 45 minutes with 2 workers
+  (the slice ran 4 pairs in about 120 s of wall time), 6 minutes on 16; the speed curves take
+  15 s, the maps about a minute. A run can be stopped and resumed at any time (rerun the
+  same command), and ``--scheduler`` spreads it over a Dask cluster.
 """
 
 from __future__ import annotations
@@ -76,9 +78,9 @@ PRESETS = {
         "full", "central-leader", ("e=0:0.9:10", "segments=1,2,4,8,16,32",
                                    "crown_ratio=0:4:9"),
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
-        expected="about 3 CPU-hours: 1.5 hours with 2 workers, 12 minutes on 16 (estimated "
-                 "from measured per-run times: Bullet's 32-segment chain takes 22 s a run, "
-                 "MuJoCo's 7 s; see compare/sweep/study.py); resumable"),
+        expected="about 1.5 CPU-hours: 45 minutes with 2 workers, 6 on 16 (measured on a "
+                 "slice of the preset, 65 s of runs per (e, crown) pair; see "
+                 "compare/sweep/study.py); resumable"),
 }
 
 
