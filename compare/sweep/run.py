@@ -663,22 +663,7 @@ def _run_pool(tasks, workers, scen, emit) -> int:
     """Run the tasks on a local process pool. A worker process that dies (a crash inside an
     engine) breaks the pool: the calls it broke are run again on a fresh pool, and a call
     broken twice is run one task at a time in a one-worker pool, so only the task that kills
-    its worker is recorded as failed.
-
-    The parent's objects are frozen out of its garbage collector (``gc.freeze``) while the
-    pool runs: forked workers inherit them, and their collections then neither traverse nor
-    copy-on-write them (the Python docs' advice for fork; 2 workers about 5 % faster on the
-    analytic sweep of ``benchmarks/bench_sweep.py``)."""
-    import gc
-
-    gc.freeze()
-    try:
-        return _run_pool_frozen(tasks, workers, scen, emit)
-    finally:
-        gc.unfreeze()
-
-
-def _run_pool_frozen(tasks, workers, scen, emit) -> int:
+    its worker is recorded as failed."""
     from concurrent.futures import ProcessPoolExecutor, as_completed
     from concurrent.futures.process import BrokenProcessPool
 
