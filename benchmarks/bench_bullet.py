@@ -109,7 +109,7 @@ def engine_spring_rate(setup, pd_client) -> tuple[float, tuple]:
         p.setJointMotorControl2(body, joint, p.PD_CONTROL, targetPosition=0.0,
                                 targetVelocity=0.0, positionGain=kp, velocityGain=kd,
                                 force=1e300, physicsClientId=cid)
-    n = int(math.ceil(setup.t_end / setup.dt))
+    n = math.ceil(setup.t_end / setup.dt)
     t0 = time.perf_counter()
     for _ in range(n):
         p.stepSimulation(cid)

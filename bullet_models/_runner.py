@@ -437,7 +437,7 @@ def _loop_sdof(world, setup, n_steps, full, le, g, m):
 def _loop_chain(world, setup, n_steps, full, le, g, m):
     p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
     model = setup.model
-    M, K, D = setup.matrices
+    M, K, _ = setup.matrices
     kdiag = np.diag(K).copy()
     Dv, Dq = damping_operators(setup)
     kp = model.impactor_stiffness
