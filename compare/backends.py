@@ -51,6 +51,8 @@ class Backend:
     #: (option, values) whose values make separate speed-accuracy curves of an engine
     #: (compare.sweep.speed), or None
     variants: tuple | None = None
+    #: the report's line colours of an engine's rungs (SDOF, chain, chain + full pendulum)
+    shades: tuple = ()
 
     def cost(self, options: dict) -> float:
         """Rough wall time (s) of one run with ``options`` (:attr:`run_cost`; 1 s unknown)."""
@@ -100,11 +102,13 @@ BACKENDS = {
     "mujoco": Backend("mujoco", "mujoco_models:simulate", "mujoco_models:modes",
                       "MuJoCo (MJCF) slide-joint or hinged-segment trunk", engine=True,
                       run_cost=(("sdof", 0.05), ("chain", 0.5)),
-                      variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4"))),
+                      variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4")),
+                      shades=("#1f77b4", "#4f9fd6", "#8cc3ea")),
     "bullet": Backend("bullet", "bullet_models:simulate", "bullet_models:modes",
                       "PyBullet prismatic or hinged-link trunk", engine=True,
                       run_cost=(("sdof", 0.15), ("chain", 2.5)),
-                      variants=("contact", ("soft", "newton"))),
+                      variants=("contact", ("soft", "newton")),
+                      shades=("#d95f02", "#f28e2b", "#f7b76d")),
 }
 
 #: The physics engines, in the order the ladder and the studies show them.

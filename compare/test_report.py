@@ -131,3 +131,17 @@ def test_json_has_no_nan(report):
     assert "NaN" not in text and "Infinity" not in text
     json.loads(text)
     assert math.isfinite(json.loads(text)["runs"]["wall_s"]["total"])
+
+
+def test_each_engine_draws_its_rungs_in_its_own_three_shades():
+    from compare.backends import BACKENDS, ENGINES
+    from compare.report.figures import rung_style
+
+    class Rung:
+        def __init__(self, backend, kind):
+            self.backend, self.kind = backend, kind
+
+    colours = {(e, k): rung_style(Rung(e, k))["color"] for e in ENGINES
+               for k in ("engine", "trunk", "pendulum")}
+    assert len(set(colours.values())) == 3 * len(ENGINES)  # no two rungs share a colour
+    assert all(colours[(e, "engine")] == BACKENDS[e].shades[0] for e in ENGINES)

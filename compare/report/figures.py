@@ -16,12 +16,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from compare.backends import BACKENDS  # noqa: E402
+
 DPI = 110
 plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10,
                      "legend.fontsize": 8.5, "axes.grid": True, "grid.alpha": 0.3})
 
-_ENGINE_COLOURS = {"mujoco": ("#1f77b4", "#4f9fd6", "#8cc3ea"),
-                   "bullet": ("#d95f02", "#f28e2b", "#f7b76d")}
+#: shades of an engine without its own (:attr:`compare.backends.Backend.shades`)
+_DEFAULT_SHADES = ("#2ca02c", "#5fd35f", "#98df8a")
 
 
 def rung_style(rung) -> dict:
@@ -30,7 +32,8 @@ def rung_style(rung) -> dict:
         return {"color": "black", "ls": "-", "lw": 1.8}
     if rung.kind == "contact":
         return {"color": "#7f7f7f", "ls": "--", "lw": 1.6}
-    shades = _ENGINE_COLOURS.get(rung.backend, ("#2ca02c", "#5fd35f", "#98df8a"))
+    backend = BACKENDS.get(rung.backend)
+    shades = (backend.shades if backend is not None else ()) or _DEFAULT_SHADES
     i = {"engine": 0, "trunk": 1, "pendulum": 2}[rung.kind]
     return {"color": shades[i], "ls": ("-", "-.", ":")[i], "lw": 1.4}
 
