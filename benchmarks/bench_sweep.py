@@ -15,13 +15,16 @@ Run: ``.venv/bin/python benchmarks/bench_sweep.py [--backends analytic,soft,mujo
 
 Each sweep is the central-leader scenario over ``e`` (and ``crown_ratio`` for the cheap
 backends), written to a fresh directory, identification included (what a study runs). A
-point costs the backend run plus the analytic reference run (always part of a sweep). The
-pools and the cluster are warmed up first (imports, and one untimed round per backend);
-then ``--repeats`` rounds each run the three configurations back to back, and the printed
-figures are medians over the rounds: points per second of each configuration, and the
-ratios taken within each round (2 workers / 1 worker, Dask / 2 workers), so a slow spell of
-the shared machine hits both sides of a ratio alike (the load average is printed before
-and after: other jobs on the cores lower the 2-worker figures). A backend whose rows are not
+point costs the backend run plus the analytic reference run (always part of a sweep).
+``--repeats`` rounds (after one untimed warm-up round) each run the three configurations
+back to back, and the printed figures are medians over the rounds: points per second of
+each configuration, and the ratios taken within each round (2 workers / 1 worker, Dask /
+2 workers), so a slow spell of the shared machine hits both sides of a ratio alike (the
+load average is printed before and after: other jobs on the cores lower the 2-worker
+figures). The LocalCluster is started for the Dask sweep of each round, warmed up on the
+backend (imports) and closed after it: an idle LocalCluster of 2 workers took 11 % of one
+core here (heartbeats, monitors), which would otherwise come off the process pool's 2-worker
+figure on a 2-core machine. A backend whose rows are not
 all ``ok`` is reported as not measured (a failing run is fast, so its points per second
 would mean nothing). Points per second = grid points / wall time of
 :func:`compare.sweep.run.run_sweep` (planning, runs, the CSV journal and the Parquet table).
@@ -30,6 +33,7 @@ would mean nothing). Points per second = grid points / wall time of
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import statistics
@@ -75,10 +79,27 @@ def points_per_second(backend: str, **kw) -> tuple[float, int, str | None]:
     return n / wall, n, None
 
 
-def warm(**kw) -> None:
+@contextlib.contextmanager
+def local_cluster(config: dict, backend: str):
+    """A LocalCluster of 2 single-threaded worker processes, warmed up on ``backend``."""
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set(config):
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+    with cluster:
+        warm(backend, scheduler=cluster.scheduler_address)
+        yield cluster.scheduler_address
+
+
+def warm(backend: str = "soft", **kw) -> None:
+    """A small sweep of ``backend`` (its imports, in every worker of a cluster)."""
     with tempfile.TemporaryDirectory() as d:
         run_sweep("central-leader", ["e=0.1,0.2,0.3,0.4"], Path(d) / "w",
-                  backends=["analytic", "soft"], progress=False, **kw)
+                  backends=["analytic", backend],
+                  options={k: v for k, v in ENGINE_OPTIONS.items() if k == backend},
+                  progress=False, **kw)
 
 
 def main(argv=None) -> int:
@@ -88,9 +109,6 @@ def main(argv=None) -> int:
     ap.add_argument("--dask-defaults", action="store_true",
                     help="the LocalCluster with Dask's defaults, not DASK_SWEEP_CONFIG")
     args = ap.parse_args(argv)
-    import dask
-    from distributed import LocalCluster
-
     from compare.backends import get_backend
 
     backends = []
@@ -105,37 +123,33 @@ def main(argv=None) -> int:
     print(f"load average before: {os.getloadavg()[0]:.2f} (the targets assume idle cores)")
     config = {} if args.dask_defaults else DASK_SWEEP_CONFIG
     print(f"LocalCluster config: {config or 'Dask defaults'}")
-    with dask.config.set(config):
-        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-    with cluster:
-        warm(scheduler=cluster.scheduler_address)
-        configs = {"1 worker": {"workers": 1}, "2 workers": {"workers": 2},
-                   "dask 2x1": {"scheduler": cluster.scheduler_address}}
-        for b in backends:
-            rounds = []
-            why = None
-            n = 0
-            for r in range(args.repeats + 1):  # round 0 warms this backend up, untimed
-                rate = {}
-                for name, kw in configs.items():
-                    pps, n, why = points_per_second(b, **kw)
-                    if why:
-                        break
-                    rate[name] = pps
+    configs = ("1 worker", "2 workers", "dask 2x1")
+    for b in backends:
+        rounds = []
+        why = None
+        n = 0
+        for r in range(args.repeats + 1):  # round 0 warms this backend up, untimed
+            rate = {}
+            for name, kw in (("1 worker", {"workers": 1}), ("2 workers", {"workers": 2})):
+                rate[name], n, why = points_per_second(b, **kw)
                 if why:
                     break
-                if r:
-                    rounds.append(rate)
+            if not why:
+                with local_cluster(config, b) as address:
+                    rate["dask 2x1"], n, why = points_per_second(b, scheduler=address)
             if why:
-                print(f"{b:9s} not measured: {why}", flush=True)
-                continue
-            one, two, dask = (statistics.median(r[c] for r in rounds) for c in configs)
-            scale = statistics.median(r["2 workers"] / r["1 worker"] for r in rounds)
-            share = statistics.median(r["dask 2x1"] / r["2 workers"] for r in rounds)
-            print(f"{b:9s} {n:4d} points  1 worker {one:8.2f}/s  2 workers {two:8.2f}/s "
-                  f"(x{scale:.2f}, target 1.8)  dask 2x1 {dask:8.2f}/s "
-                  f"({share:.0%} of pool, target 90%)", flush=True)
+                break
+            if r:
+                rounds.append(rate)
+        if why:
+            print(f"{b:9s} not measured: {why}", flush=True)
+            continue
+        one, two, dask = (statistics.median(r[c] for r in rounds) for c in configs)
+        scale = statistics.median(r["2 workers"] / r["1 worker"] for r in rounds)
+        share = statistics.median(r["dask 2x1"] / r["2 workers"] for r in rounds)
+        print(f"{b:9s} {n:4d} points  1 worker {one:8.2f}/s  2 workers {two:8.2f}/s "
+              f"(x{scale:.2f}, target 1.8)  dask 2x1 {dask:8.2f}/s "
+              f"({share:.0%} of pool, target 90%)", flush=True)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
 
