@@ -16,9 +16,10 @@
      -kp q_n - kd q'_n, the runner's own law), in a client of its own. SDOF trunk: kp, kd =
      K_T, C_T and the linear pendulum's m g / l_e, so it is the runner's model, checked by
      comparing the final state with the runner's; chain: the hinge springs only (the plugin
-     has per-joint gains and no coupled damping, and the diagonal of the distributed damping
-     alone, applied explicitly, is unstable at the chain's step). This is "a bare
-     stepSimulation loop on the same model": the spring-free loop is another model.
+     has per-joint gains and no coupled damping; with the diagonal of the distributed
+     damping as its kd the run diverged, joint speeds at Bullet's clamp, cause not
+     investigated). This is "a bare stepSimulation loop on the same model": the
+     spring-free loop is another model.
 
 2. The largest time step keeping V and x_max within 1 % of the analytic soft-contact
    reference on the SDOF trunk (all shipped scenarios; dt = default * 2^k): the largest dt
@@ -100,12 +101,12 @@ def engine_spring_rate(setup, pd_client) -> tuple[float, tuple]:
     p.resetJointState(world.pendulum, 0, 0.0, setup.model.impact_speed, physicsClientId=cid)
     model = setup.model
     if setup.trunk == "sdof":
-        gains = [(model.stiffness, model.damping)]
+        trunk_gains = [(model.stiffness, model.damping)]
     else:
-        gains = [(k, 0.0) for k in np.diag(setup.matrices[1])]
-    gains = dict(zip(world.trunk_joints, gains))
-    for body, joint, (kp, kd) in [(world.trunk, j, g) for j, g in gains.items()] + [
-            (world.pendulum, 0, (model.impactor_stiffness, 0.0))]:
+        trunk_gains = [(k, 0.0) for k in np.diag(setup.matrices[1])]
+    controllers = [(world.trunk, j, g) for j, g in zip(world.trunk_joints, trunk_gains)]
+    controllers.append((world.pendulum, 0, (model.impactor_stiffness, 0.0)))
+    for body, joint, (kp, kd) in controllers:
         p.setJointMotorControl2(body, joint, p.PD_CONTROL, targetPosition=0.0,
                                 targetVelocity=0.0, positionGain=kp, velocityGain=kd,
                                 force=1e300, physicsClientId=cid)
