@@ -6,13 +6,26 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    ?= reports
 
-.PHONY: report test benchmark clean
+.PHONY: report test benchmark lock clean
 
-$(STAMP): pyproject.toml
+# Every package comes from requirements.lock (pip and setuptools included), then the project
+# itself without dependencies; `make lock` refreshes the lock from pyproject.toml's ranges.
+$(STAMP): pyproject.toml requirements.lock
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet "$$(grep '^pip==' requirements.lock)"
+	$(BIN)/python -m pip install --quiet -r requirements.lock
+	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
 	touch $(STAMP)
+
+# The lock: `uv pip compile` (uv pinned here, in a venv of its own) over pyproject.toml with
+# the test extra, plus pip and the build backend; one set of versions for Python 3.11-3.13.
+UV_VERSION := 0.13.9
+LOCKVENV   := .lockvenv
+lock:
+	test -x $(LOCKVENV)/bin/uv || ($(PYTHON) -m venv $(LOCKVENV) && $(LOCKVENV)/bin/python -m pip install --quiet uv==$(UV_VERSION))
+	printf 'pip\nsetuptools>=77\n' | $(LOCKVENV)/bin/uv pip compile pyproject.toml - --extra test \
+		--universal --fork-strategy fewest --python-version 3.11 --custom-compile-command "make lock" \
+		--quiet -o requirements.lock
 
 # The discrepancy report with the default model-validity study as one of its sections:
 # $(OUT)/report.html (self-contained), report.md, report.json; the study in $(OUT)/study.
@@ -30,4 +43,4 @@ benchmark: $(STAMP)
 	done
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) $(LOCKVENV) build *.egg-info

@@ -40,6 +40,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 
 from analytic.chain import HingedChain
+from analytic.generated_files import URDF_DIGITS, fixed_precision_xml
 from analytic.parameters import Billet, ParameterError, Pendulum
 from analytic.reduction import TreeSDOF
 
@@ -50,7 +51,8 @@ POINT_INERTIA = 1e-9  # kg m^2: inertia of links on prismatic joints (irrelevant
 
 
 def _num(v: float) -> str:
-    """Shortest round-trip text of a float: the URDF holds the model's numbers exactly."""
+    """Shortest round-trip text of a float: the runner's URDF holds the model's numbers
+    exactly (the checked-in files are rounded, :func:`scenario_urdfs`)."""
     return repr(float(v))
 
 
@@ -185,7 +187,8 @@ def pendulum_urdf(impactor: Pendulum | Billet, clamp_height: float, kind: str = 
 
 
 def scenario_urdfs(scenario) -> dict[str, str]:
-    """File name -> URDF text of every model of a scenario (the checked-in set)."""
+    """File name -> URDF text of every model of a scenario (the checked-in set), numbers at
+    :data:`analytic.generated_files.URDF_DIGITS` significant digits."""
     from analytic.chain import default_segments, hinged_chain
     from analytic.reduction import reduce_trunk
 
@@ -203,4 +206,4 @@ def scenario_urdfs(scenario) -> dict[str, str]:
     if isinstance(scenario.impactor, Pendulum):
         out[f"{scenario.name}-pendulum-full.urdf"] = pendulum_urdf(
             scenario.impactor, trunk.clamp_height, "full", name=f"{scenario.name}-pendulum-full")
-    return out
+    return {n: fixed_precision_xml(text, URDF_DIGITS) for n, text in out.items()}

@@ -11,7 +11,7 @@ from __future__ import annotations
 import pathlib
 import sys
 
-from analytic.generated_files import regenerate_main
+from analytic.generated_files import URDF_DIGITS, regenerate_main
 from analytic.scenario import load_scenario, shipped_scenarios
 
 from ._urdf import scenario_urdfs
@@ -29,7 +29,8 @@ def generated() -> dict[str, str]:
 
 def main(argv=None) -> int:
     return regenerate_main(argv, prog="python -m bullet_models.regenerate", generated=generated,
-                           directory=MODELS_DIR, suffix=".urdf", kind="URDF")
+                           directory=MODELS_DIR, suffix=".urdf", kind="URDF",
+                           digits=URDF_DIGITS)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ from __future__ import annotations
 import pathlib
 import sys
 
-from analytic.generated_files import regenerate_main
+from analytic.generated_files import MJCF_DIGITS, regenerate_main
 from analytic.scenario import load_scenario, shipped_scenarios
 
 MODELS_DIR = pathlib.Path(__file__).resolve().parent / "models"
@@ -43,7 +43,8 @@ def generated() -> dict[str, str]:
 
 def main(argv=None) -> int:
     return regenerate_main(argv, prog="python -m mujoco_models.regenerate", generated=generated,
-                           directory=MODELS_DIR, suffix=".xml", kind="MJCF")
+                           directory=MODELS_DIR, suffix=".xml", kind="MJCF",
+                           digits=MJCF_DIGITS)
 
 
 if __name__ == "__main__":
