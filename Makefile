@@ -10,11 +10,11 @@ OUT    ?= reports
 
 # Every package comes from requirements.lock (pip and setuptools included), then the project
 # itself without dependencies; `make lock` refreshes the lock from pyproject.toml's ranges.
+# PYTHONWARNINGS silences only setuptools' note that an editable install is editable.
 $(STAMP): pyproject.toml requirements.lock
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet "$$(grep '^pip==' requirements.lock)"
 	$(BIN)/python -m pip install --quiet -r requirements.lock
-	# setuptools' note that an editable install is one is information, not a warning: only it is silenced
 	PYTHONWARNINGS="ignore:Editable installation" $(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
 	touch $(STAMP)
 
