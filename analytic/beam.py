@@ -1,38 +1,6 @@
 """Continuous Euler-Bernoulli trunk: the reference the SDOF reduction and the engines are checked against.
 
-The trunk of the paper (Figs 1-2, eqs 1-11) is a uniform Euler-Bernoulli cantilever of length
-``l`` with a point mass ``m_c`` at the clamp height ``a`` and a point mass ``m_f`` at the top
-``l``; optionally the root is a rotational spring ``k_theta`` (``inf`` = the paper's rigid
-clamp). The paper reduces it to one degree of freedom with the static shape (eqs 5-11);
-here it is solved as a continuum, to measure what that reduction leaves out.
-
-Discretisation: Hermite-cubic (two-node, deflection + slope) finite elements with the
-consistent mass matrix; the point masses are lumped on the translational degree of freedom
-of their node (their rotary inertia is neglected, as in the paper); the root spring acts on
-the slope at z = 0. A node is always placed at ``a``.
-
-Mesh rule (:func:`mesh`): ``FREQUENCY_ELEMENTS = 160``: [0, a] and [a, l] are each cut into
-equal elements no longer than h = l/160 (ceil(160 a/l) and ceil(160 (l-a)/l) elements).
-Hermite cubics converge as h^4 in the eigenvalues; the n-th clamped-free mode has
-beta_n l <= 7.855 for n <= 3 (adding point masses or softening the root only lowers the
-frequencies, by Rayleigh's principle), so (beta_3 h)^4 <= (7.855/160)^4 = 5.8e-6 and the
-relative error of the first three frequencies, about (beta h)^4 / 1440 (measured: 4.0e-9
-for the third mode of the uniform cantilever, 1.0e-9 to 1.7e-9 for the shipped trunks,
-against the exact frequency equations), is below 1e-8.
-
-Solution: Hermite cubics are nodally exact for nodal forces and moments, so the inverse of the
-assembled stiffness is the closed-form influence (flexibility) matrix F of the continuous
-cantilever at the nodes; the lowest modes are found as the largest eigenvalues 1/omega^2 of
-F M (symmetrised with the Cholesky factor of M). This is the same discrete problem as
-K v = omega^2 M v without the h^-4 conditioning of K, which costs 1e-8..1e-5 of round-off in
-the first frequency at 80..640 elements when K is used directly. The tests check the
-frequencies against the exact frequency equations (uniform cantilever, tip mass, and the
-shipped trunks with clamp mass, crown mass and root spring, solved as an 8x8 determinant),
-to 1e-8 relative.
-
-Static stiffness: Hermite cubics contain the exact static deflection of a uniform beam under
-nodal point loads (piecewise cubic), so the stiffness at ``a`` is exact on any mesh with a
-node at ``a``; it is computed on the coarsest such mesh (nodes 0, a, l) to avoid round-off.
+Design notes and measured figures: docs/trunk-models.md.
 """
 
 from __future__ import annotations

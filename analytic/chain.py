@@ -1,41 +1,6 @@
 """Rigid hinged-segment trunk: the discretisation both engines build (MuJoCo hinges, Bullet revolutes).
 
-The continuous trunk of the paper (Figs 1-2, eqs 1-11; reference: :mod:`analytic.beam`) is cut
-into N rigid segments joined by rotational springs (a Hencky bar chain). Everything here is
-engine independent; the engines only translate a :class:`HingedChain` into bodies and joints.
-
-Segments (:func:`hinged_chain`). Boundaries 0 = z_0 < z_1 < ... < z_N = l with a boundary at
-the clamp height a: [0, a] gets N_in = floor(N a / l + 1/2) equal segments, clamped to
-[1, N - 1] when a < l, and [a, l] the other N - N_in equal segments (N_in = N when a = l).
-
-Bodies. Segment j (from z_j to z_{j+1}, length h_j) has mass rho A h_j, centre of mass at
-its mid-height and moment of inertia rho A h_j^3 / 12 about the bending axis through its
-centre: a thin rod, the rotary inertia of the Euler-Bernoulli beam (which neglects the
-cross-section's own rotary inertia rho I). The engines give each segment body exactly this
-inertia about the bending axis (a thin cylinder or box whose inertia is set explicitly; a
-solid cylinder's rho A (3 r^2 + h^2)/12 would add the neglected rho I h). The clamp mass m_c
-is a point mass at a and the crown mass m_f a point mass at l, each attached to the segment
-that ends there (segment N_in - 1 and segment N - 1); their rotary inertia is neglected, as
-in the paper.
-
-Hinges. Hinge j sits at z_j, the bottom of segment j, and its angle theta_j is the rotation
-of segment j relative to segment j - 1 (to the ground for j = 0). Stiffness by the Hencky
-rule generalised to unequal segments: an interior hinge carries the bending flexibility of
-the half segments on either side, k_j = 2 E I / (h_{j-1} + h_j); the base hinge carries half
-the first segment in series with the root spring, 1 / k_0 = h_0 / (2 E I) + 1 / k_theta
-(k_0 = 2 E I / h_0 for the rigid clamp). For a uniform cantilever under a tip load this gives
-exactly (1 + 1 / (2 N^2)) times the exact tip flexibility L^3 / (3 E I) (the tests check it);
-for the load at a the flexibility is a^3 / (3 E I) (1 + 1 / (2 N_in^2)) + a^2 / k_theta.
-
-Damping. The distributed viscous damping C (N s/m^2, eq 9) dissipates int C v(z)^2 dz. On a
-rigid segment the lateral velocity v is linear in z, so the two-point Gauss-Legendre rule is
-exact: two dampers per segment at z_c -+ h / (2 sqrt 3), each C h / 2 (N s/m), acting on the
-lateral velocity of that point.
-
-Linearisation (:func:`chain_matrices`). For small angles the lateral displacement at height
-z is x(z) = sum_{j: z_j < z} (z - z_j) theta_j and the rotation of segment s is
-sum_{j <= s} theta_j, which gives M (segment masses, rod inertias and point masses), the
-diagonal K of the hinge stiffnesses and D of the damping points, all in the hinge angles.
+Design notes and measured figures: docs/trunk-models.md.
 """
 
 from __future__ import annotations

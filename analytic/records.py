@@ -1,41 +1,6 @@
 """Metrics from a sampled contact record: the one rule every soft-contact backend shares.
 
-The soft-contact variant (:mod:`analytic.soft_contact`), MuJoCo and PyBullet all produce an
-:class:`ImpactRecord` (a time series with the contact force) and turn it into the metrics of
-:data:`analytic.results.METRIC_KEYS` with :func:`metrics_from_record`, so their numbers differ
-only by their physics, never by how impacts are counted.
-
-Detection rule (documented, the same for every backend)
--------------------------------------------------------
-* **Contact intervals** are the maximal runs of samples whose contact force exceeds
-  ``force_threshold`` times the record's peak force (default 1e-6: far below the force of
-  the moving-together phase, about 1e-3 of the peak, yet above round-off).
-* **Moving together** (eq 34) is the first contact interval that lasts longer than
-  ``persist_factor`` (default 3) free-collision durations: one free two-body collision lasts
-  one duration, so a contact that outlives three of them is held by the tree's and the
-  pendulum's own dynamics, which is the paper's "moving together". The duration is that of
-  the SDOF model's free collision under the scenario's law (:func:`detection_duration`) on
-  every rung and in every engine, the hinged trunk included, so that a difference between
-  rungs is never a difference in how impacts are counted.
-* **T0** is the first time in that interval at which the bodies share one velocity: the
-  relative velocity ``vy - vx`` is within ``common_velocity_tolerance`` (default 1e-3) of the
-  impact speed u1, or changes sign. This is the analogue of the accumulation point of the
-  Newton sequence, where the relative velocity reaches exactly zero; a damped soft contact
-  approaches it exponentially, hence the tolerance. **V** and **x0** are ``vx`` and ``x``
-  there. Times are interpolated linearly between samples.
-* **n_impacts** counts the contact intervals starting at or before T0 (the last one included,
-  as the Newton solver counts the impacts resolved before the common motion).
-* **t_sep** is the end of the moving-together interval (NaN if it outlasts the record): where
-  the compressive force, extrapolated linearly from the interval's last two samples, reaches
-  zero, kept between the last sample with force and the next (the force there is clipped to
-  0, so it cannot be interpolated; the extrapolation is exact to O(dt^2) for a force that
-  falls smoothly through zero).
-* **impact_loss** (eq 56's analogue) is the energy absorbed by the contact up to T0 minus the
-  elastic energy the contact still holds then: what the impact process dissipated.
-* **energy_transferred** (eq 58) and **theta_b** use the pendulum's energy after the last
-  release in the record (NaN when the bodies are still in contact at the end).
-* **ledger_residual**: max over samples of |kinetic + potential + damping work + contact work
-  - initial energy| / initial energy.
+Design notes and measured figures: docs/ladder.md.
 """
 
 from __future__ import annotations

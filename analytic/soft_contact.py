@@ -1,31 +1,6 @@
 """Soft-contact variant of the paper's model: the same two bodies, a spring-dashpot contact.
 
-The contact force on the trunk is
-
-    F = max(0, k delta + c delta_dot),     delta = y - x  (overlap, > 0 when pressed)
-
-It only pushes, and it releases when the *force* reaches zero, not when the overlap does.
-This variant isolates the contact model from engine numerics: the engines' SDOF models
-must reproduce it, and its difference from the Newton model of eqs 20-21 is the
-"contact model" rung of the discrepancy ladder.
-
-Restitution of one collision (derivation)
-------------------------------------------
-For two free bodies the overlap obeys mu delta'' = -(k delta + c delta') while F > 0, with
-mu = M m / (M + m). With omega = sqrt(k / mu), zeta = c / (2 sqrt(k mu)) and time in units
-of 1/omega, delta = v0 psi(t) where psi'' + 2 zeta psi' + psi = 0, psi(0) = 0, psi'(0) = 1.
-The force vanishes when psi + 2 zeta psi' = 0. With the roots r1,2 = -zeta +- sqrt(zeta^2 - 1)
-(r1 r2 = 1, r1 + r2 = -2 zeta) one has 1 + 2 zeta r_j = -r_j^2, hence the release time
-
-    t_r = 2 ln(r2 / r1) / (r1 - r2),
-
-real for zeta > 1 and, continued analytically, t_r = (pi - atan2(2 zeta s, 1 - 2 zeta^2)) / s
-with s = sqrt(1 - zeta^2) for zeta < 1 (t_r = 2 at zeta = 1). The restitution is
-e = -psi'(t_r). It falls from 1 (zeta = 0) through exp(-2) (zeta = 1) to 0 (zeta -> inf, as
-1 / (4 zeta^2)); :func:`damping_ratio_for_restitution` inverts it with Brent's method.
-For zeta < 1 this is exp(-zeta (pi - atan2(2 zeta s, 1 - 2 zeta^2)) / s), larger than the
-classical exp(-zeta pi / s) of a dashpot that may pull: the pulling tail the law cuts off
-would only have dissipated more (Schwager and Poeschel's "no attraction" contact).
+Design notes and measured figures: docs/contact-law.md.
 """
 
 from __future__ import annotations

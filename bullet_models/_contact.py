@@ -1,41 +1,6 @@
 """How Bullet turns a contact stiffness and damping into ERP/CFM, and the time-step correction.
 
-What Bullet does (bullet3 source, read for this module; PyBullet 3.2.7):
-
-* ``changeDynamics(contactStiffness=k_i, contactDamping=d_i)`` calls
-  ``btCollisionObject::setContactStiffnessAndDamping`` on the link's collider (PyBullet
-  ignores the pair unless both are >= 0, so a negative damping cannot be set).
-* The two colliders' values combine in ``btManifoldResult``: stiffness in series,
-  k = 1 / (1/k_0 + 1/k_1), damping in sum, c = d_0 + d_1. The runner gives both contacting
-  links k_i = 2 k and d_i = c / 2 (:func:`per_body`), which combine to exactly (k, c).
-* ``btMultiBodyConstraintSolver::setupMultiBodyContactConstraint`` (and the rigid-body
-  solver alike) sets ERP = dt k / (dt k + c), CFM = 1 / (dt k + c) (then divided by dt),
-  and solves for the normal impulse lambda >= 0 of the single contact row
-
-      lambda (1/mu + CFM/dt) = w + (ERP / dt) delta        (overlap delta >= 0)
-      lambda (1/mu + CFM/dt) = w + delta / dt              (gap, delta < 0: speculative)
-
-  with w the approach velocity after this step's applied forces, delta the overlap found
-  by collision detection at the start of the step and mu the effective mass of the row;
-  then v += impulse / mass and x += dt v. Multiplying out, the first line is exactly the
-  backward-Euler contact force lambda / dt = k delta_{n+1} + c w_{n+1} with
-  delta_{n+1} = delta_n + dt w_{n+1}: an implicit spring-dashpot, one-sided (lambda >= 0),
-  released when the implicit force would pull, as the continuous law
-  F = max(0, k delta + c delta') of :mod:`analytic.soft_contact`.
-
-Time-step correction. Backward Euler damps: an undamped implicit oscillator loses
-amplitude at about omega dt / 2 per radian, so with the continuous (k, c) one collision
-would come out with a smaller e than the law's e(zeta) (eq 21's target), and last longer.
-The runner gives Bullet (k_b, c_b): k_b by pole matching (:func:`matched_pole`: the implicit
-step then oscillates and decays per step exactly as the law does over dt), and c_b chosen
-so that the *discrete* collision of two free bodies of reduced mass mu, replayed step by
-step with the update above (:func:`discrete_collision`), rebounds with exactly the target
-e (Brent's method on c_b, :func:`bullet_contact`; pole matching alone leaves e off by up
-to 0.005 from the first and last step). Keeping k and tuning c alone also gives the right
-e, but the lowered damping releases later: 2 to 3 steps per collision, which delayed T0 by
-0.9 % on the SDOF scenarios. This needs c_b >= 0, i.e. the scheme's own damping must not exceed the target's: for e close to
-1 (zeta -> 0) that bounds dt (:func:`largest_time_step`, about 2 zeta / omega). The test
-suite checks the replay against PyBullet itself (two-body collisions, 0.05 <= e <= 0.9).
+Design notes and measured figures: docs/contact-law.md.
 """
 
 from __future__ import annotations

@@ -1,38 +1,6 @@
 """URDF of the Bullet models (built with xml.etree, never string templates).
 
-Frames and geometry (SI units): +x is the direction the pendulum travels at impact, z is
-up, everything moves in the x-z plane: the hinges turn about +y (a positive hinge angle tilts
-the trunk above it towards +x), the pendulum pivot about -y (a positive angle swings the
-bob, which hangs below the pivot, towards +x). At the rest configuration (all joint positions 0) the trunk's
-contact face is the plane x = 0 at the clamp height a and the pendulum's contact sphere
-(radius :data:`CONTACT_RADIUS`) touches it from -x at (0, 0, a): x = y = 0 and touching at
-t = 0, the convention of :mod:`analytic.model`.
-
-Models (one URDF each, every base is fixed to the world):
-
-* ``trunk-sdof``: the trunk of eq 11, a link of mass M_T on a prismatic joint along x at
-  height a; K_T and C_T are applied by the runner as joint forces.
-* ``trunk-chain``: the hinged-segment trunk of :func:`analytic.chain.hinged_chain`; segment
-  j is link ``segment_j`` on the continuous (unlimited revolute) joint ``hinge_j`` at z_j,
-  with mass rho A h_j (plus m_c on the segment ending at a, m_f on the top segment, both
-  point masses at the segment's top) and, about the bending axis through the link's centre
-  of mass, the rod inertia rho A h_j^3 / 12 moved there by the parallel-axis rule (the
-  point masses carry no rotary inertia, as in the paper). The hinge springs and the
-  damping are applied by the runner.
-* ``pendulum-linear``: the linearised pendulum of eq 13 (and the billet), mass m on a
-  prismatic joint along x; the spring k = m g / l_e is applied by the runner.
-* ``pendulum-full``: the pendulum as a point mass m at l_e below a pivot, on a continuous
-  joint; its weight is applied by the runner as the joint torque -m g l_e sin(theta) (the
-  world has no gravity, so the trunk is weightless as in the paper). Its rotary inertia about the bob's centre is
-  :data:`BOB_INERTIA_FRACTION` m l_e^2 (Bullet needs a positive inertia), which changes
-  the moment of inertia about the pivot by that fraction.
-
-Inertias the model does not use (rotation about axes without a joint) are set to the used
-one, so every inertia tensor is positive definite. They reach Bullet only when loaded with
-``URDF_USE_INERTIA_FROM_FILE`` (:func:`bullet_models._runner.load`); PyBullet's default
-replaces them by the collision shapes' inertias. Contact stiffness, damping, friction
-and restitution are set at run time (:mod:`bullet_models._runner`): they depend on the
-time step.
+Design notes and measured figures: docs/engines.md.
 """
 
 from __future__ import annotations

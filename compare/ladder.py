@@ -1,31 +1,6 @@
 """The discrepancy ladder: one scenario run as a ladder of models, one assumption per rung.
 
-==  ===========  ==========================================================================
- #  kind         model (what changes from the rung below)
-==  ===========  ==========================================================================
- 1  ``newton``   analytic SDOF + Newton restitution: the paper (eqs 12-35), exact
- 2  ``contact``  analytic SDOF + spring-dashpot contact with the same e (contact model)
- 3  ``engine``   engine SDOF (slide joint) + soft contact, MuJoCo and Bullet (engine numerics)
- 4  ``trunk``    engine hinged-segment trunk, linearised pendulum (the 1-DOF assumption)
- 5  ``pendulum`` engine hinged-segment trunk, full pendulum released from theta_r
-                 (the pendulum linearisation)
-==  ===========  ==========================================================================
-
-Every rung reports the impact metrics of :data:`LADDER_METRICS` and the four parameters the
-paper's identification procedure (eqs 39-48, :mod:`analytic.identification`, "paper"
-reading) recovers from the rung's own displacement record, :data:`IDENT_METRICS`. The *step*
-of a rung is its relative change from the rung it is compared with (:attr:`Rung.previous`:
-rung 2 for both engines' rung 3, then the same engine's rung below), so each part of the
-total discrepancy is attributed to one cause.
-
-A rung that cannot run (engine package not available, an engine that cannot express the
-rung, a diverged run) stays in the ladder with its status and reason: never silently.
-
-Verdicts (:func:`check`) come from ``compare/tolerances.toml``: ``ok`` within the tolerance,
-``exceeds`` beyond it, ``finding`` where the discrepancy is the documented finding and lies
-in its band, ``finding-lost`` where a documented finding fell within the ordinary tolerance
-(a change hid it), ``out-of-band`` outside its band, ``reported`` where no tolerance applies
-(with the reason), ``n/a`` when a value is missing.
+Design notes and measured figures: docs/ladder.md.
 """
 
 from __future__ import annotations

@@ -1,63 +1,6 @@
 """MJCF models of the trunk, the pendulum and their contact, built with ``mujoco.MjSpec``.
 
-Frames (SI units): +x is the direction the pendulum travels at impact, z is up, everything
-moves in the x-z plane. The trunk's axis is the z axis; at rest (all joint positions 0) the
-trunk's contact sphere (radius d/2, centre (0, 0, a)) and the pendulum's bob (radius
-:data:`BOB_RADIUS`, centre (-(d/2 + r_b), 0, a)) touch at (-d/2, 0, a): x = y = 0 and
-touching at t = 0, the convention of :mod:`analytic.model`. Sphere-sphere contact keeps the
-normal along the line of centres, which is x for the slide-joint bodies.
-
-Bodies (inertias are explicit, never from geoms: ``inertiafromgeom="false"``):
-
-* **SDOF trunk** (``trunk="sdof"``): body ``trunk`` on the slide joint ``trunk_x`` (axis x)
-  at height a with mass M_T, joint stiffness K_T and joint damping C_T of eq 11
-  (:func:`analytic.reduction.reduce_trunk`).
-* **Chain trunk** (``trunk="chain"``): the hinged-segment trunk of
-  :func:`analytic.chain.hinged_chain`. Segment j is body ``segment_j`` with the hinge
-  ``hinge_j`` (axis +y: a positive angle tilts the trunk above towards +x) at its bottom
-  z_j, stiffness k_j (Hencky rule; the base hinge includes the root spring), mass rho A h_j
-  with the rod inertia rho A h_j^3 / 12 about its centre; the clamp mass m_c and the crown
-  mass m_f are point masses at the top of the segments ending at a and at l, merged into
-  those bodies' inertials by the parallel-axis rule (no rotary inertia of their own, as in
-  the paper). Inertias about the axes without a joint are set equal to the bending one
-  (positive definite; they never enter the planar motion). The contact sphere and the site
-  ``impact_point`` sit at the top of the clamp segment, z = a.
-* **Damping** (``damping="distributed"``, default): the paper's distributed viscous damping
-  C (eq 9, Rayleigh function int C v^2 dz / 2) at the damping points of the chain (two Gauss
-  points per segment, C h / 2 each, exact for rigid segments): each point p is a fixed
-  tendon ``damper_p`` whose length sum_j (z_p - z_j) theta_j is the linearised lateral
-  displacement of the point, with tendon damping C h / 2, so the generalised damping force
-  is -sum_p c_p J_p^T J_p theta' = -D theta' of :func:`analytic.chain.chain_matrices`.
-  ``damping="joint"``: the documented alternative, hinge (material) damping beta k_j
-  proportional to the hinge stiffness with beta = phi^T D phi / phi^T K phi for the first
-  mode phi, so that mode keeps its damping ratio and higher modes get more (the same rule as
-  the PyBullet backend). Only this variant keeps MuJoCo's ``eulerdamp`` on: its Euler step
-  treats the joint damping implicitly (needed: beta k_j is stiff for the short segments).
-  The SDOF trunk and the distributed damping disable it: their dampers (the slide joint's
-  C_T, the tendons) act explicitly, -c v_n.
-* **Trunk weight**: every trunk body has ``gravcomp="1"``: the paper neglects the trunk's
-  weight; gravity acts on the pendulum only.
-* **Linear pendulum** (``pendulum="linear"``; also the billet): body ``pendulum`` of mass m on
-  the slide joint ``pendulum_x`` with stiffness k = m g / l_e (eq 13; 0 for a billet).
-* **Full pendulum** (``pendulum="full"``): body ``pendulum`` on the hinge ``pendulum_hinge``
-  (axis -y, a positive angle swings the bob towards +x) at the pivot l_e above the bob; the
-  bob is a point mass m at l_e with a rotary inertia of :data:`BOB_INERTIA_FRACTION` m l_e^2
-  about its centre (MuJoCo needs a positive inertia), y = l_e sin(theta).
-* **Contact**: all geoms have contype = conaffinity = 0; the only contact is the explicit
-  ``<pair name="impact">`` bob / trunk sphere, frictionless (condim 1), margin 0, with a
-  direct ``solref = (-k S, -c S)`` and constant impedance ``solimp = (1e-4, 1e-4, ...)``
-  (:mod:`mujoco_models._contact`: this makes it the spring-dashpot F = max(0, k delta + c
-  delta')).
-* **Sensors** (read by the runner, in this order): ``touch`` (contact force on the bob, N),
-  ``framepos``/``framelinvel`` of ``impact_point`` and ``contact_point`` (m, m/s),
-  ``e_kinetic`` and ``e_potential`` (J, with ``energy`` enabled) and the trunk's
-  ``subtreecom`` (its gravity energy, which MuJoCo counts although gravcomp cancels it).
-* **Options**: the run's integrator (``integrator``: ``Euler``, the default, ``implicit``,
-  ``implicitfast`` or ``RK4``, :data:`INTEGRATOR_ENUMS`), the run's time step, Newton
-  solver, energy enabled. The ``eulerdamp`` flag above is written as for Euler whatever the
-  integrator; only Euler reads it (``implicit``/``implicitfast`` treat every joint and
-  tendon damper implicitly, RK4 every one explicitly at each stage). The checked-in MJCF
-  files are the default (Euler) models.
+Design notes and measured figures: docs/engines.md.
 """
 
 from __future__ import annotations

@@ -1,26 +1,6 @@
 """Grid specifications of a sweep: ``NAME=START:STOP:COUNT`` or ``NAME=V1,V2,...``.
 
-A grid is a list of :class:`Axis` (one per ``--grid``); its points are the cartesian
-product of the axes' values, the first axis varying slowest. ``START:STOP:COUNT`` is
-``COUNT`` evenly spaced values from ``START`` to ``STOP``, both included (``numpy.linspace``,
-rounded to 12 significant digits so that keys and labels read 0.3, not 0.30000000000000004).
-
-What a NAME may be (:func:`resolve_parameter`):
-
-* a dotted name into the scenario (``trunk.crown_mass``, ``contact.restitution``,
-  ``impactor.mass``, ``t_end``, ``impactor.release_angle_deg`` in degrees, ...): the
-  scenario is rebuilt with that field replaced (:mod:`compare.sweep.apply`), SI units;
-* an alias: ``e`` = ``contact.restitution``; ``contact_stiffness`` = ``contact.stiffness``
-  (N/m; the contact's duration is cleared, the two are exclusive); ``segments`` and ``dt``
-  (s) are engine options passed to the backends that take them: ``segments`` integers in
-  [1, 1000] (1 is the one-degree-of-freedom trunk, eq 7: the engine's ``trunk=sdof`` model;
-  2 and more the hinged chain of :mod:`analytic.chain`), ``dt`` > 0;
-* any other engine option (``trunk``, ``pendulum``, ``contact``, ``damping``,
-  ``integrator``...) as ``option.NAME`` (values may be words: ``option.contact=soft,newton``);
-* a derived ratio, solved for its underlying parameter after every direct override:
-  ``a_over_l`` = a / l (sets ``trunk.clamp_height``), ``crown_ratio`` = m_f / m_trunk
-  (sets ``trunk.crown_mass``; m_trunk = rho A l), ``mass_ratio`` = m / M_T (sets
-  ``impactor.mass``; M_T from eq 7, computed after the other ratios).
+Design notes and measured figures: docs/sweeps.md.
 """
 
 from __future__ import annotations

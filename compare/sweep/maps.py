@@ -1,26 +1,6 @@
 """Validity maps and identification maps of a sweep (matplotlib, PNG).
 
-Discrepancy (:func:`discrepancies`): for every ``ok`` row that is not the analytic
-reference and every metric, ``rel = (value - analytic) / |analytic|`` with the analytic
-(paper, eqs 12-35) value at the same grid point, and the row's ``step``, its relative change
-from the target it is compared with (``previous``: soft for an engine, the rung below on a
-ladder). The *dominating rung* of a cell is the step of largest magnitude along the chain
-from the row down to the analytic reference, named by the assumption it tests (contact
-model, engine numerics, 1-DOF trunk, pendulum linearisation).
-
-Validity map (:func:`validity_maps`): per target and pair of swept numeric parameters, one
-heatmap per metric of the signed ``rel`` (colour on a symmetric log scale, linear within
-tolerance / 5, clipped at +-100 %), the contour
-``|rel| = tolerance`` drawn in black, and the dominating rung's letter in every cell. Where
-more than two parameters are swept, each cell shows the worst case (largest |rel|, sign
-kept) over the other parameters: a cell is within tolerance only if it is for all of them.
-With one swept numeric parameter the map is a line plot with the tolerance band.
-
-Identification map (:func:`identification_maps`): per target, the relative error
-``(identified - true) / true`` of M_T, K_T, xi and E found by the paper's procedure
-(eqs 39-48) on that target's own record, over e and the crown mass when both are swept.
-
-Default tolerance: :data:`DEFAULT_TOLERANCE`.
+Design notes and measured figures: docs/sweeps.md.
 """
 
 from __future__ import annotations

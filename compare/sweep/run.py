@@ -1,43 +1,6 @@
 """Run a sweep: every grid point on every target, results appended as they finish.
 
-Targets (:func:`make_targets`): by default one per backend, each compared with the one
-below it (``soft`` with ``analytic``; an engine with ``soft`` when it is swept, else with
-``analytic``); ``analytic``, the paper's exact solution, is always run as the reference.
-With ``ladder=True`` the targets are the rungs of :mod:`compare.ladder` (analytic, soft,
-and per engine: SDOF trunk, hinged chain, hinged chain with the full pendulum), so a map
-can say which assumption dominates the discrepancy.
-
-Execution (:func:`run_sweep`):
-
-* ``workers=0``: in this process, one run after the other (debugging, tests);
-* ``workers=N`` (default: the CPU count): a local ``concurrent.futures.ProcessPoolExecutor``
-  (a worker process that dies, say a crash inside an engine, costs only the point that
-  killed it: it is recorded as ``failed`` and the rest run on a fresh pool); Ctrl-C ends the
-  workers, keeps every finished row and writes the Parquet table;
-* ``scheduler=ADDRESS`` (or a ``dask.distributed.Client``): an existing Dask cluster.
-
-Runs with identical inputs (a grid point whose swept options a backend does not take:
-``segments`` for ``analytic`` or for an SDOF trunk) are run once and their row written for
-every point. ``segments = 1`` runs an engine's one-degree-of-freedom trunk (``trunk=sdof``).
-
-Before anything runs, :func:`check_grid` refuses a grid no point of which could run along
-one axis value (``e=2``) or an option no backend takes (one-line ParameterError).
-
-The table (:data:`JOURNAL`, CSV) gets one row per (grid point, target) the moment its run
-finishes, flushed at once, so an interrupted sweep loses nothing it finished; a rerun with
-the same ``out`` skips the rows already there (``retry_failed`` reruns rows whose status is
-not ``ok``; the last row of a key wins). A grid point outside a parameter's range
-(``invalid``), a backend that refuses or is not installed (``skipped``), a diverged run
-(``diverged``) or any other exception (``failed``) is recorded with its one-line error and
-the sweep goes on. When the sweep ends (or is interrupted) the table is also written
-deduplicated as :data:`TABLE` (Parquet).
-
-Columns: ``scenario, point, target, backend, kind, previous, status, error, wall_s`` (s of
-the backend call), ``t_end`` (simulated s), ``task``, ``worker``, ``finished`` (unix s); the
-swept parameters under their grid names; the metrics of :data:`analytic.results.METRIC_KEYS`;
-``model.*`` (M_T, C_T, K_T, m, k, e, u1 and the engine's segments, dt, contact stiffness);
-``id.*`` the parameters the identification procedure (eqs 39-48) recovers from the run's
-record, ``truth.*`` their true values, ``id_error`` why it failed.
+Design notes and measured figures: docs/sweeps.md.
 """
 
 from __future__ import annotations

@@ -1,42 +1,6 @@
 """Model-validity studies: sweeps + validity maps + identification maps + speed curves.
 
-A study directory stands alone and is also a section of the report
-(``treeimpact report --study DIR``, :mod:`compare.report.studies`)::
-
-    study.html, study.md     the study (summary.md is the same text, read by the report)
-    study.json               a small summary (counts, per-metric summaries, skip reasons)
-    results.parquet/.csv     every row of every sweep, with a ``sweep`` column
-    *.png                    validity-*, identification-*, speed-* figures
-    validity/, speed-ENGINE/ the sweep directories (resumable: rerun to finish them)
-
-Presets (:data:`PRESETS`):
-
-* ``default``: central-leader, e = 0.1, 0.5, 0.9 x crown_ratio = 0, 4 on the ladder
-  (analytic, soft; SDOF, chain, chain + full pendulum per engine) and 3 time steps at two
-  contact stiffnesses per engine variant for the speed curves. Measured (2-core VM shared with
-  other jobs, 2 workers): 41-56 s in all; the validity sweep 26-41 s of wall time (52-81 s
-  of CPU, about 60 % of it Bullet's 12 chain runs at 2-8 s each), speed curves 2 s, maps
-  12 s.
-* ``full``: the issue's grid e = 0:0.9:10 x segments = 1,2,4,8,16,32 x crown_ratio = 0:4:9
-  on the ladder (540 points), and 5 time steps x 3 stiffnesses per engine variant. The
-  e = 0 rows of the soft and engine rungs are ``skipped`` (a soft contact cannot give e = 0;
-  the analytic rung runs them), so 81 (e, crown) pairs run every rung. Expected run time,
-  measured on a slice of the preset (``--grid e=0.1,0.5,0.9 --grid segments=1,2,4,8,16,32
-  --grid crown_ratio=0,4``, central-leader, 2 workers on the 2-core VM): 57-79 s of runs per
-  (e, crown) pair, 65 s on average, most of it the 32-segment chains (Bullet 17-23 s a run,
-  MuJoCo 6-7 s; 16 segments: 2-3 s and 0.6-0.8 s):
-
-  ========  =====  =====  =====  =====  =====
-  segments    2      4      8     16     32
-  ========  =====  =====  =====  =====  =====
-  MuJoCo    0.1 s  0.2 s  0.2 s  0.6 s  6-7 s
-  Bullet    0.6 s  0.9 s  1.1 s  2.3 s  17-23 s
-  ========  =====  =====  =====  =====  =====
-
-  81 pairs x 65 s: about 5,300 s of CPU (1.5 CPU-hours), about 45 minutes with 2 workers
-  (the slice ran 4 pairs in about 120 s of wall time), 6 minutes on 16; the speed curves take
-  15 s, the maps about a minute. A run can be stopped and resumed at any time (rerun the
-  same command), and ``--scheduler`` spreads it over a Dask cluster.
+Design notes and measured figures: docs/sweeps.md.
 """
 
 from __future__ import annotations
