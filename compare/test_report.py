@@ -1,5 +1,5 @@
-"""The report: three files, self-contained HTML, every number in the JSON, skips with their
-reasons, figures with units on every axis, study directories embedded."""
+"""The report: three files and its figures beside them, every number in the JSON, skips with
+their reasons, figures with units on every axis, study directories as sections."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 
 from analytic import load_scenario, simulate
 from analytic.paper import reproduce
-from compare.report import figures, write_report
+from compare.report import write_report
 from compare.runs import RunCache
 
 
@@ -26,17 +26,28 @@ def report(tmp_path_factory):
     return paths, cache
 
 
-def test_three_files_and_a_self_contained_page(report):
+def test_three_files_and_figures_beside_a_page_under_1_mb(report):
     paths, _ = report
     assert set(paths) == {"html", "md", "json"}
     html = paths["html"].read_text()
     assert "<html" in html and html.rstrip().endswith("</html>")
+    assert len(html.encode()) < 1_000_000
     srcs = re.findall(r'src="([^"]+)"', html)
     assert len(srcs) >= 5  # displacement, force, sequence, energy, identification
-    assert all(s.startswith("data:image/png;base64,") for s in srcs)
+    assert all(s.startswith("figures/") and s.endswith(".png") for s in srcs)
+    page_dir = paths["html"].parent
+    for s in srcs:
+        assert (page_dir / s).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", s
     assert not re.search(r'(href|src)="(https?:)?//', html)  # nothing fetched from outside
-    png = base64.b64decode(srcs[0].split(",", 1)[1])
-    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    md = paths["md"].read_text()
+    assert set(re.findall(r"\]\((figures/[^)]+)\)", md)) == set(srcs)  # the same figures
+
+
+def test_every_section_is_collapsible_and_tables_sort(report):
+    paths, _ = report
+    html = paths["html"].read_text()
+    assert html.count('<details class="section"') == 3  # paper, open-center, runs
+    assert 'id="scenario-open-center"' in html and "querySelectorAll(\"table\")" in html
 
 
 def test_json_holds_the_numbers_of_the_page(report):
@@ -87,17 +98,16 @@ def test_findings_are_flagged_in_the_page(report):
     assert "e too large for the identification" in paths["html"].read_text()
 
 
-def test_every_axis_has_a_unit(monkeypatch):
+def test_every_axis_has_a_unit():
     from compare.report.scenario import ScenarioSection
 
     figs = []
 
-    def keep(fig):
+    def keep(fig, stem):
         figs.append(fig)
-        return "data:image/png;base64,"
+        return f"figures/{stem}.png"
 
-    monkeypatch.setattr(figures, "to_data_uri", keep)
-    ScenarioSection(load_scenario("central-leader"), RunCache(), engines=())
+    ScenarioSection(load_scenario("central-leader"), RunCache(), engines=(), figure_sink=keep)
     assert len(figs) == 5
     unit = re.compile(r"\((ms|mm|kN|N s|m/s|J|%|1|s|m)\)")
     for fig in figs:
@@ -120,7 +130,9 @@ def test_study_directories_become_sections(tmp_path):
                          runs=RunCache(), engines=())
     html = paths["html"].read_text()
     assert "Study: validity-map" in html and "Where the 1-DOF model holds." in html
-    assert base64.b64encode(png).decode() in html
+    assert 'src="../validity-map/map.png"' in html  # linked where it is, from the page
+    assert (tmp_path / "out" / "../validity-map/map.png").read_bytes() == png
+    assert "](../validity-map/map.png)" in paths["md"].read_text()
     data = json.loads(paths["json"].read_text())
     assert data["studies"][0]["data"]["summary.json"] == {"cells": 4}
 

@@ -397,18 +397,18 @@ def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tm
     assert len(table) == 8 and set(table["sweep"]) == {"validity"}
     page = paths["html"].read_text()
     assert page.count("<img ") == 3 and "<table>" in page
-    sec = StudySection(tmp_path / "study")
+    sec = StudySection(tmp_path / "study", page_dir=tmp_path)
     html = sec.render("html")
-    # each figure in place (as a data URI), none repeated after the text
-    assert html.count('src="data:image/png;base64,') == 3 and sec.images == []
-    assert html.index("Validity maps") < html.index('src="data:image') \
+    # each figure in place (linked relative to the page), none repeated after the text
+    assert html.count('src="study/') == 3 and sec.images == []
+    assert html.index("Validity maps") < html.index('src="study/') \
         < html.index("Identification maps")
-    # headings nest under the section's h2
-    assert html.count("<h2") == 1 and "<h1" not in html and "<h3>Sweep" not in html
+    # headings nest under the section's own heading (the report's <summary>, an h2)
+    assert "<h2" not in html and "<h1" not in html and "<h3>Sweep" not in html
     assert "<h4>Validity maps</h4>" in html
     text = sec.render("md")
     assert "\n#### Validity maps" in text and "\n# " not in text and "\n## Validity" not in text
-    assert "validity-soft-e-crown_ratio.png" in text
+    assert "](study/validity-soft-e-crown_ratio.png)" in text  # report.md shows it too
 
 
 def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_engine):

@@ -1,5 +1,5 @@
-"""The discrepancy report: ``report.html`` (one self-contained page, figures embedded as
-base64 PNG), ``report.md`` and ``report.json`` (every number of the page).
+"""The discrepancy report: ``report.html`` and ``report.md`` (the same figures, PNG files in
+``figures/`` beside them) and ``report.json`` (every number of the page).
 
 Sections, one module each, each a class with a jinja2 template under ``templates/``:
 
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import math
 import time
 from pathlib import Path
 
@@ -26,18 +27,21 @@ __all__ = ["write_report", "build_sections"]
 
 
 def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, segments=None,
-                   figures_on: bool = True) -> dict:
-    """The report's sections (not yet rendered) and the wall time each took (s)."""
+                   out_dir=None) -> dict:
+    """The report's sections (not yet rendered) and the wall time each took (s); figures
+    are written to ``out_dir/figures`` (none without ``out_dir``)."""
     from analytic.scenario import shipped_scenarios
 
     from ..ladder import prefetch_ladders
     from ..runs import SESSION_CACHE, resolve_scenario
+    from .figures import FigureFiles
     from .paper import PaperSection
     from .runlog import RunsSection
     from .scenario import ScenarioSection
     from .studies import StudySection
 
     cache = SESSION_CACHE if runs is None else runs
+    sink = FigureFiles(Path(out_dir) / "figures") if out_dir is not None else None
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)
     wall = {}
     t0 = time.perf_counter()
@@ -51,9 +55,9 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         t0 = time.perf_counter()
         scen = resolve_scenario(s)
         scen_sections.append(ScenarioSection(scen, cache, engines=engines, segments=segments,
-                                             figures_on=figures_on))
+                                             figure_sink=sink))
         wall[f"scenario {scen.name}"] = time.perf_counter() - t0
-    studies = [StudySection(d) for d in study_dirs]
+    studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log}
 
@@ -65,14 +69,17 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     scenarios); ``study_dirs``: directories of model-validity studies; ``runs``: the
     :class:`compare.runs.RunCache` to take runs from (default: the session cache).
     Options ``engines`` (tuple of engine backends) and ``segments`` (hinged trunk) go to
-    the ladder. Returns ``{"html": Path, "md": Path, "json": Path}``.
+    the ladder. Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
+    ``out_dir/figures``.
     """
     from .base import environment
 
     t_start = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    sections = build_sections(scenarios, study_dirs, runs, **options)
+    for old in (out / "figures").glob("*.png"):  # figures of an earlier report
+        old.unlink()
+    sections = build_sections(scenarios, study_dirs, runs, out_dir=out, **options)
     ordered = [sections["paper"], *sections["scenarios"], *sections["studies"],
                sections["runs"]]
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -80,9 +87,9 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     env = environment()
     paths = {}
     for fmt, name in (("html", "report.html"), ("md", "report.md")):
-        body = [s.render(fmt) for s in ordered]
+        parts = [(s, s.render(fmt)) for s in ordered]
         page = env.get_template(f"report.{fmt}.j2").render(
-            sections=ordered, bodies=body, generated=stamp, summary=summary)
+            sections=ordered, parts=parts, generated=stamp, summary=summary)
         paths[fmt] = out / name
         paths[fmt].write_text(page, encoding="utf-8")
     sections["runs"].wall_s["total"] = time.perf_counter() - t_start
@@ -100,8 +107,14 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     return paths
 
 
+#: How many of the largest discrepancies the summary lists, whatever their verdict.
+LARGEST = 12
+
+
 def _summary(scen_sections) -> dict:
-    """Counts of verdicts over all checks, the findings and the rungs not run."""
+    """Counts of verdicts over all checks, the findings, the rungs not run, and the
+    :data:`LARGEST` largest relative discrepancies between rungs whatever their verdict
+    (the identification has its own table per scenario)."""
     from ..ladder import PASSING
 
     counts: dict = {}
@@ -121,5 +134,12 @@ def _summary(scen_sections) -> dict:
             if not r.ok:
                 skipped.append({"scenario": s.ladder.name, "rung": r.rung.id,
                                 "status": r.status, "reason": r.reason})
+    largest = sorted((c for s in scen_sections for c in s.checks
+                      if not c.metric.startswith("id_") and isinstance(c.rel_diff, float)
+                      and math.isfinite(c.rel_diff)),
+                     key=lambda c: -abs(c.rel_diff))[:LARGEST]
     return {"verdicts": counts, "findings": findings, "problems": problems,
-            "not_run": skipped}
+            "not_run": skipped,
+            "largest": [{"scenario": c.scenario, "rung": c.rung, "metric": c.metric,
+                         "reference": c.reference, "rel_diff": c.rel_diff,
+                         "verdict": c.verdict, "reason": c.reason} for c in largest]}

@@ -1,26 +1,30 @@
-"""Figures of the report (matplotlib, Agg backend), returned as base64 PNG data URIs.
+"""Figures of the report (matplotlib, Agg backend), written as PNG files beside the page.
 
-Every axis carries its quantity and unit. Rungs keep one colour and line style across all
-figures of a scenario (:func:`rung_style`).
+Every figure function returns a matplotlib ``Figure``; :class:`FigureFiles` writes it and
+gives the path the page links to. Every axis carries its quantity and unit, legends sit
+outside the data, and rungs keep one colour and line style across all figures of a
+scenario (:func:`rung_style`). Where rungs nearly coincide, the figures show each rung's
+difference from the paper's model (or one panel per rung) instead of overlaid curves.
 """
 
 from __future__ import annotations
 
-import base64
-import io
 import math
+import re
+from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 import numpy as np  # noqa: E402
 
 from compare.backends import BACKENDS  # noqa: E402
 
 DPI = 110
 plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10,
-                     "legend.fontsize": 8.5, "axes.grid": True, "grid.alpha": 0.3})
+                     "legend.fontsize": 9, "axes.grid": True, "grid.alpha": 0.3})
 
 #: shades of an engine without its own (:attr:`compare.backends.Backend.shades`)
 _DEFAULT_SHADES = ("#2ca02c", "#5fd35f", "#98df8a")
@@ -38,11 +42,34 @@ def rung_style(rung) -> dict:
     return {"color": shades[i], "ls": ("-", "-.", ":")[i], "lw": 1.4}
 
 
-def to_data_uri(fig) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=DPI, bbox_inches="tight")
-    plt.close(fig)
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+class FigureFiles:
+    """Writes figures as ``<directory>/<stem>.png`` and returns their path relative to the
+    page (``prefix``): the page and report.md link to the same files."""
+
+    def __init__(self, directory, prefix: str = "figures"):
+        self.directory = Path(directory)
+        self.prefix = prefix
+
+    def __call__(self, fig, stem: str) -> str:
+        name = re.sub(r"[^A-Za-z0-9._-]+", "-", stem) + ".png"
+        self.directory.mkdir(parents=True, exist_ok=True)
+        fig.savefig(self.directory / name, format="png", dpi=DPI, bbox_inches="tight")
+        plt.close(fig)
+        return f"{self.prefix}/{name}"
+
+
+def _legend_right(target, handles=None, labels=None):
+    """One legend to the right of the axes or figure ``target``, never on the data."""
+    if handles is None:
+        handles, labels = target.get_legend_handles_labels()
+    if not handles:
+        return
+    if isinstance(target, Figure):
+        target.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5),
+                      frameon=False)
+    else:
+        target.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                      borderaxespad=0, frameon=False)
 
 
 def _ok_rungs(ladder):
@@ -64,94 +91,131 @@ def _impact_window(ladder) -> float:
     return max(3e-3, 1.6 * max(t0)) if t0 else 5e-3
 
 
-def displacement_figure(ladder) -> str:
-    """x(t) of the impact point and y(t) of the pendulum for every rung (Figs 4, 5)."""
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10.5, 3.8))
+def _reference(ladder):
+    """The paper's model (rung 1) if it ran, else None."""
+    ref = ladder.rungs[0]
+    return ref if ref.ok and ref.result.trajectory is not None else None
+
+
+def displacement_figure(ladder) -> Figure:
+    """x(t) of the impact point and y(t) of the pendulum for every rung (Figs 4, 5), and
+    below each the rung's difference from the paper's model (rung 1), in mm."""
+    fig, axes = plt.subplots(2, 2, figsize=(11, 6.2), sharex=True,
+                             gridspec_kw={"height_ratios": (3, 2)})
     t_hi = _window_end(ladder)
+    ref = _reference(ladder)
     for r in _ok_rungs(ladder):
         tr = r.result.trajectory
         sel = tr.t <= t_hi
         st = rung_style(r.rung)
-        ax1.plot(tr.t[sel] * 1e3, tr.x[sel] * 1e3, label=r.rung.id, **st)
-        ax2.plot(tr.t[sel] * 1e3, tr.y[sel] * 1e3, label=r.rung.id, **st)
-    ax1.set(title="impact point of the trunk", xlabel="time t (ms)", ylabel="displacement (mm)")
-    ax2.set(title="pendulum at the contact point", xlabel="time t (ms)", ylabel="displacement (mm)")
-    ax1.legend(loc="best")
-    fig.suptitle(f"{ladder.name}: displacement-time, every rung", y=1.02)
-    return to_data_uri(fig)
+        t_ms = tr.t[sel] * 1e3
+        for col, (z, zref) in enumerate(((tr.x, "x"), (tr.y, "y"))):
+            axes[0, col].plot(t_ms, z[sel] * 1e3, label=r.rung.id, **st)
+            if ref is not None and r is not ref:
+                rt = ref.result.trajectory
+                base = np.interp(tr.t[sel], rt.t, getattr(rt, zref))
+                axes[1, col].plot(t_ms, (z[sel] - base) * 1e3, **st)
+    axes[0, 0].set(title="impact point of the trunk, x", ylabel="displacement x (mm)")
+    axes[0, 1].set(title="pendulum at the contact point, y", ylabel="displacement y (mm)")
+    ref_id = ref.rung.id if ref is not None else "rung 1"
+    axes[1, 0].set(xlabel="time t (ms)", ylabel=f"x - x[{ref_id}] (mm)")
+    axes[1, 1].set(xlabel="time t (ms)", ylabel=f"y - y[{ref_id}] (mm)")
+    for ax in axes[1]:
+        ax.axhline(0.0, color="black", lw=0.8)
+    fig.suptitle(f"{ladder.name}: displacement-time of every rung (top) and its difference "
+                 f"from the paper's model (bottom)", y=1.0)
+    _legend_right(fig, *axes[0, 0].get_legend_handles_labels())
+    fig.tight_layout()
+    return fig
 
 
-def force_figure(ladder) -> str:
-    """Contact force (kN) of the soft-contact rungs; Newton impulses (N s) as stems."""
-    fig, ax = plt.subplots(figsize=(10.5, 3.6))
+def force_figure(ladder) -> Figure:
+    """Contact force (kN, log axis) of the soft-contact rungs over the impact process; the
+    paper's model's Newton impulses (N s) in a panel of their own."""
+    fig, (ax, ax_imp) = plt.subplots(1, 2, figsize=(11, 3.8),
+                                     gridspec_kw={"width_ratios": (3, 1.2)})
     t_hi = _impact_window(ladder)
-    twin = None
+    peak = 0.0
     for r in [r for r in ladder.rungs if r.ok]:
         st = rung_style(r.rung)
         if r.rung.kind == "newton":
             sol = r.result.extra.get("solution")
-            if sol is None or not sol.impacts:
-                continue
-            imp = [(i.t, r.result.model["m"] * (i.u - i.v)) for i in sol.impacts if i.t <= t_hi]
+            imp = [(i.t, r.result.model["m"] * (i.u - i.v)) for i in (sol.impacts if sol else ())
+                   if i.t <= t_hi]
             if imp:
-                twin = ax.twinx()
                 t, j = np.array(imp).T
-                twin.vlines(t * 1e3, 0, j, color="black", lw=1.2)
-                twin.plot(t * 1e3, j, "ko", ms=4, label=f"{r.rung.id}: impulses")
-                twin.set_ylabel("Newton impulse (N s)")
-                twin.set_ylim(bottom=0)
-                twin.grid(False)
-                twin.legend(loc="center right")
+                ax_imp.vlines(t * 1e3, 0, j, color=st["color"], lw=1.2)
+                ax_imp.plot(t * 1e3, j, "o", color=st["color"], ms=4,
+                            label=f"{r.rung.id}: impulses")
             continue
         tr = r.result.trajectory
         if tr is None or tr.force is None:
             continue
         sel = tr.t <= t_hi
         ax.plot(tr.t[sel] * 1e3, tr.force[sel] / 1e3, label=r.rung.id, **st)
-    peaks = [float(np.nanmax(ln.get_ydata())) for ln in ax.get_lines() if len(ln.get_ydata())]
-    if peaks and max(peaks) > 0:  # the first collision peaks ~100 times the later force
+        peak = max(peak, float(np.nanmax(tr.force[sel] / 1e3)) if sel.any() else 0.0)
+    if peak > 0:  # the first collision peaks ~100 times the later force: log axis
         ax.set_yscale("log")
-        ax.set_ylim(max(peaks) * 1e-5, max(peaks) * 2)
-    ax.set(title=f"{ladder.name}: contact force during the impact process (log scale)",
-           xlabel="time t (ms)", ylabel="contact force on the trunk (kN)")
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=4)
-    return to_data_uri(fig)
+        ax.set_ylim(peak * 1e-5, peak * 2)
+    ax.set(title="contact force, soft-contact rungs (log axis)", xlabel="time t (ms)",
+           ylabel="contact force on the trunk (kN)")
+    ax_imp.set(title="Newton impulses, the paper's model", xlabel="time t (ms)",
+               ylabel="impulse (N s)")
+    ax_imp.set_ylim(bottom=0)
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax_imp.get_legend_handles_labels()
+    fig.suptitle(f"{ladder.name}: the impact process", y=1.0)
+    fig.tight_layout()
+    _legend_right(fig, h1 + h2, l1 + l2)
+    return fig
 
 
-def sequence_figure(ladder) -> str:
-    """The impact sequence: velocities of trunk (vx) and pendulum (vy) over the impact
-    process, Newton impacts marked, T0 of each rung as a tick."""
-    fig, ax = plt.subplots(figsize=(10.5, 3.8))
+def sequence_figure(ladder) -> Figure:
+    """The impact sequence, one panel per rung (shared axes): trunk velocity vx and
+    pendulum velocity vy over the impact process, T0 and V marked."""
+    rungs = _ok_rungs(ladder)
+    n = max(1, len(rungs))
+    ncol = min(4, n)
+    nrow = math.ceil(n / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(11, 2.5 * nrow + 0.6), sharex=True,
+                             sharey=True, squeeze=False)
     t_hi = _impact_window(ladder)
-    for r in _ok_rungs(ladder):
+    for ax, r in zip(axes.flat, rungs):
         st = rung_style(r.rung)
         tr = r.result.trajectory
         if r.rung.kind == "newton" and "solution" in r.result.extra:
-            sol = r.result.extra["solution"]
             t = np.linspace(0.0, t_hi, 3000)
-            _, vx, _, vy = sol.state(t)
+            _, vx, _, vy = r.result.extra["solution"].state(t)
         else:
             sel = tr.t <= t_hi
             t, vx, vy = tr.t[sel], tr.vx[sel], tr.vy[sel]
-        ax.plot(t * 1e3, vx, label=f"{r.rung.id}: trunk", **st)
-        ax.plot(t * 1e3, vy, alpha=0.55, **{**st, "lw": st["lw"] * 0.8})
+        ax.plot(t * 1e3, vx, color=st["color"], lw=1.5, label="trunk vx")
+        ax.plot(t * 1e3, vy, color="0.45", lw=1.0, ls="--", label="pendulum vy")
         T0 = r.values.get("T0", math.nan)
         if math.isfinite(T0) and T0 <= t_hi:
-            ax.plot([T0 * 1e3], [r.values["V"]], marker="v", color=st["color"], ms=7)
-    ax.set(title=f"{ladder.name}: impact sequence (thick: trunk vx, faint: pendulum vy; "
-                 "triangles: T0, V)", xlabel="time t (ms)", ylabel="velocity (m/s)")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
-    return to_data_uri(fig)
+            ax.plot([T0 * 1e3], [r.values["V"]], marker="v", color="black", ms=6,
+                    ls="none", label="T0, V")
+        ax.set_title(r.rung.id, fontsize=9.5)
+    for ax in axes.flat[len(rungs):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("time t (ms)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("velocity (m/s)")
+    fig.suptitle(f"{ladder.name}: impact sequence, one panel per rung", y=1.0)
+    fig.tight_layout()
+    _legend_right(fig, *axes.flat[0].get_legend_handles_labels())
+    return fig
 
 
 LEDGER_TERMS = ("kinetic", "potential", "damping", "impact loss", "energy transferred")
 
 
-def energy_figure(ledgers: dict, initial_energy: float, name: str) -> str:
+def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
     """Energy ledger bars (J) per rung: at T0, kinetic, potential, damping work and impact
     loss sum to the initial energy; the energy transferred (eq 58) is shown beside them."""
     rungs = list(ledgers)
-    fig, ax = plt.subplots(figsize=(10.5, 3.8))
+    fig, ax = plt.subplots(figsize=(11, 3.8))
     n = len(LEDGER_TERMS)
     width = 0.8 / max(1, len(rungs))
     x = np.arange(n)
@@ -163,17 +227,17 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> str:
                hatch={"-": None, "--": "//", "-.": "..", ":": "xx"}[st["ls"]])
     ax.axhline(initial_energy, color="black", lw=0.8, ls="--")
     ax.annotate(f"initial energy {initial_energy:.0f} J", (n - 0.5, initial_energy),
-                ha="right", va="bottom", fontsize=8.5)
+                ha="right", va="bottom", fontsize=9)
     ax.set_xticks(x, [f"{k}\n(at T0)" if k != "energy transferred" else "energy transferred\n(eq 58)"
                       for k in LEDGER_TERMS])
     ax.set(title=f"{name}: energy ledger at T0", ylabel="energy (J)")
-    ax.legend(loc="upper left", ncol=2)
-    return to_data_uri(fig)
+    _legend_right(ax)
+    return fig
 
 
-def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> str:
+def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> Figure:
     """Identification error against e (exact solver records), with the procedure's floor."""
-    fig, ax = plt.subplots(figsize=(10.5, 3.6))
+    fig, ax = plt.subplots(figsize=(11, 3.6))
     es = [s["e"] for s in sweep]
     for key, st in (("M_T", "o-"), ("K_T", "s-"), ("xi", "^-")):
         ax.plot(es, [100 * s["errors"].get(key, math.nan) for s in sweep], st, label=key)
@@ -184,14 +248,5 @@ def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> str
     ax.set(title=f"{name}: identification (eqs 39-48, paper reading) on exact records vs e "
                  "(bands: tolerances)",
            xlabel="coefficient of restitution e (1)", ylabel="error (identified - true) (%)")
-    ax.legend(loc="best")
-    return to_data_uri(fig)
-
-
-def image_figure(path) -> str:
-    """A study's own PNG or SVG figure, embedded as it is."""
-    from pathlib import Path
-
-    p = Path(path)
-    mime = "image/svg+xml" if p.suffix.lower() == ".svg" else "image/png"
-    return f"data:{mime};base64," + base64.b64encode(p.read_bytes()).decode("ascii")
+    _legend_right(ax)
+    return fig

@@ -77,7 +77,7 @@ def identification_sweep(scenario, cache) -> list[dict]:
 class ScenarioSection(Section):
     template = "scenario"
 
-    def __init__(self, scenario, cache, *, engines=None, segments=None, figures_on=True):
+    def __init__(self, scenario, cache, *, engines=None, segments=None, figure_sink=None):
         kw = {} if engines is None else {"engines": engines}
         self.ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
         self.title = f"Scenario {self.ladder.name}"
@@ -85,22 +85,24 @@ class ScenarioSection(Section):
         self.ledgers = {r.rung.id: energy_ledger(r) for r in self.ladder.rungs}
         self.sweep = identification_sweep(self.ladder.scenario, cache)
         self.checks = self.ladder.checks()
-        self.figures = {}
-        if figures_on:
-            self._draw()
+        self.figures = {}  # name -> path of the figure file, relative to the page
+        if figure_sink is not None:
+            self._draw(figure_sink)
 
-    def _draw(self):
+    def _draw(self, sink):
+        """Draw the figures and hand each to ``sink(fig, stem) -> path``."""
         L = self.ladder
-        self.figures["displacement"] = figures.displacement_figure(L)
-        self.figures["force"] = figures.force_figure(L)
-        self.figures["sequence"] = figures.sequence_figure(L)
+        drawn = {"displacement": figures.displacement_figure(L),
+                 "force": figures.force_figure(L),
+                 "sequence": figures.sequence_figure(L)}
         ledgers = {rid: {**v, "style": figures.rung_style(L[rid].rung)}
                    for rid, v in self.ledgers.items() if v is not None}
         if ledgers:
             e0 = next(iter(ledgers.values()))["initial"]
-            self.figures["energy"] = figures.energy_figure(ledgers, e0, L.name)
-        self.figures["identification"] = figures.identification_figure(
-            self.sweep, L.name, L.tolerances)
+            drawn["energy"] = figures.energy_figure(ledgers, e0, L.name)
+        drawn["identification"] = figures.identification_figure(self.sweep, L.name,
+                                                                L.tolerances)
+        self.figures = {name: sink(fig, f"{L.name}-{name}") for name, fig in drawn.items()}
 
     def _verdicts(self) -> dict:
         """(rung, metric) -> step check verdict; (rung, id metric, 'truth') for identification."""

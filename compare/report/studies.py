@@ -1,8 +1,8 @@
 """Report section: one model-validity study (validity map, speed-accuracy curve, ...).
 
 A study directory is read as it is: its figures (``*.png``, ``*.svg``, sorted by name) are
-embedded, its ``*.json`` files are carried into report.json, and a ``summary.md`` (or
-``README.md``) is shown as its text. The section's title is the directory's name.
+linked where they are (paths relative to the page), its ``*.json`` files are carried into
+report.json, and a ``summary.md`` (or ``README.md``) is shown as its text. The section's title is the directory's name.
 
 A directory written by ``treeimpact sweep`` (it has ``study.md``, :mod:`compare.sweep.study`)
 is shown as that study: its text with each figure in place, under its caption, headings
@@ -12,15 +12,16 @@ nested under the section's; figures the text does not show follow it.
 from __future__ import annotations
 
 import json
+import os
 import re
 from pathlib import Path
 
 from analytic.parameters import ParameterError
 
-from . import figures
 from .base import Section
 
 _IMAGE = re.compile(r"^!\[[^\]]*\]\(([^)]+)\)\s*$")
+_IMAGE_LINK = re.compile(r"^(!\[[^\]]*\])\(([^)]+)\)", re.M)
 
 
 def _demote(md: str, levels: int) -> str:
@@ -29,17 +30,23 @@ def _demote(md: str, levels: int) -> str:
                      for line in md.splitlines())
 
 
+def _link(path: Path, page_dir) -> str:
+    """``path`` as the page links to it: relative to the page's directory, '/'-separated."""
+    target = os.path.relpath(path.resolve(), Path(page_dir).resolve()) if page_dir else path
+    return Path(target).as_posix()
+
+
 class StudySection(Section):
     template = "study"
 
-    def __init__(self, directory):
+    def __init__(self, directory, page_dir=None):
         d = Path(directory)
         if not d.is_dir():
             raise ParameterError(f"study_dirs: {str(d)!r} is not a directory")
         self.directory = d
         self.title = f"Study: {d.name}"
         self.anchor = f"study-{d.name}"
-        self.images = [{"name": p.name, "uri": figures.image_figure(p)}
+        self.images = [{"name": p.name, "uri": _link(p, page_dir)}
                        for p in sorted(d.iterdir()) if p.suffix.lower() in (".png", ".svg")]
         self.data = {}
         for p in sorted(d.glob("*.json")):
@@ -69,7 +76,8 @@ class StudySection(Section):
         # the section is an h2: the study's title becomes an h3, its parts h4 and h5
         self.html = markdown_body(md, heading_shift=2, image_src=uris.__getitem__)
         self.images = [i for i in self.images if i["name"] not in shown]
-        self.text = _demote(self.text, 2)
+        # report.md shows the study's own text, its figures linked from the report
+        self.text = _demote(_IMAGE_LINK.sub(lambda m: f"{m.group(1)}({uris[m.group(2)]})", md), 2)
 
     def context(self) -> dict:
         return {"images": self.images, "text": self.text, "html": self.html,

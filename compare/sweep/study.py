@@ -109,7 +109,7 @@ def _fmt_rel(v) -> str:
 def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
                 title: str = "Model-validity study", meta: dict | None = None) -> dict:
     """Draw the maps of finished sweeps (``{name: sweep dir}``) and write study.md,
-    study.html, summary.md, study.json and the combined results table into ``out``."""
+    study.html, study.json and the combined results table into ``out``."""
     out = make_out(out)
     meta = dict(meta or {})
     table_path, table = _combined_table(out, sweeps, speed)
@@ -151,9 +151,6 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
     }
     md = _markdown(summary, validity, ident, curves)
     (out / "study.md").write_text(md)
-    # the report embeds the figures itself: its copy of the text carries no image links
-    (out / "summary.md").write_text("\n".join(l for l in md.splitlines()
-                                              if not l.startswith("![")))
     (out / "study.json").write_text(json.dumps(_jsonable(summary), indent=2))
     (out / "study.html").write_text(_html(title, md))
     return {"md": out / "study.md", "html": out / "study.html", "json": out / "study.json",
@@ -261,7 +258,7 @@ def markdown_body(md: str, *, heading_shift: int = 0, image_src=None) -> str:
     """HTML of the study's markdown: the subset :func:`_markdown` writes (headings, lists,
     pipe tables, one image per line, inline code and bold). ``heading_shift`` demotes the
     headings (a report section nests them under its own); ``image_src(name)`` gives an
-    image's src (the report embeds the PNGs as data URIs)."""
+    image's src (the report links the study's PNGs relative to its own page)."""
     body = []
     lines = md.splitlines()
     i = 0
