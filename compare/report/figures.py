@@ -226,6 +226,7 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
                color=st["color"], edgecolor="black", lw=0.4,
                hatch={"-": None, "--": "//", "-.": "..", ":": "xx"}[st["ls"]])
     ax.axhline(initial_energy, color="black", lw=0.8, ls="--")
+    ax.set_ylim(top=1.12 * max(initial_energy, ax.get_ylim()[1]))  # room for the label
     ax.annotate(f"initial energy {initial_energy:.0f} J", (n - 0.5, initial_energy),
                 ha="right", va="bottom", fontsize=9)
     ax.set_xticks(x, [f"{k}\n(at T0)" if k != "energy transferred" else "energy transferred\n(eq 58)"
