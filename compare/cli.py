@@ -74,6 +74,12 @@ def build_parser() -> argparse.ArgumentParser:
     sr.add_argument("--study", action="append", dest="studies", default=[],
                     help="directory of a finished study to include (repeatable)")
 
+    from .scenario_cmd import add_arguments as add_scenario_arguments
+
+    add_scenario_arguments(sub.add_parser(
+        "scenario", help="write a scenario file for your own tree from measured M_T, K_T, b"),
+        _number)
+
     try:
         from .sweep.cli_support import add_sweep_arguments
     except ImportError:  # pragma: no cover - the sweep package is optional at import time
@@ -179,8 +185,14 @@ def cmd_sweep(args) -> int:
     return run_sweep_command(args)
 
 
+def cmd_scenario(args) -> int:
+    from .scenario_cmd import run
+
+    return run(args)
+
+
 COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes,
-            "report": cmd_report, "sweep": cmd_sweep}
+            "report": cmd_report, "sweep": cmd_sweep, "scenario": cmd_scenario}
 
 
 def main(argv=None) -> int:

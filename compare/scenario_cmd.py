@@ -1,0 +1,125 @@
+"""``treeimpact scenario``: a scenario file for a user's own tree from measured quantities.
+
+The measured M_T, K_T and b (or the regression a1, a2, x_max, tau of Figs 4-5) and the
+chosen l, rho, E, m_c become a trunk by :func:`analytic.calibration.calibrate_trunk`; the
+file records which values were given, chosen and calibrated, as the shipped files do.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from analytic.parameters import ParameterError
+
+#: Chosen values when not given: the shipped trees' choices (analytic/scenarios/*.toml).
+DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
+            "contact_duration": 5e-4, "t_end": 0.1}
+
+
+def add_arguments(sp: argparse.ArgumentParser, number) -> None:
+    """The command's options; ``number`` parses a float with a one-line error."""
+    sp.add_argument("name", help="the scenario's name (also the file name with --out DIR)")
+    g = sp.add_argument_group("the test (given)")
+    g.add_argument("--clamp-height", type=number, required=True, help="a, m: impact height")
+    g.add_argument("--diameter", type=number, required=True, help="d, m: trunk diameter")
+    g.add_argument("--mass", type=number, required=True, help="m, kg: pendulum mass")
+    g.add_argument("--equivalent-length", type=number, required=True,
+                   help="l_e, m: equivalent length of the pendulum")
+    g.add_argument("--release-angle", type=number, required=True,
+                   help="theta_r, deg: release angle of the pendulum")
+    m = sp.add_argument_group("the tree (measured)")
+    m.add_argument("--dynamic-mass", type=number, required=True, help="M_T, kg")
+    m.add_argument("--stiffness", type=number, help="K_T, N/m (or --x-max and --tau)")
+    m.add_argument("--damping-rate", type=number, help="b, 1/s (or --a1 and --a2)")
+    m.add_argument("--a1", type=number, help="regression a1 = V, m/s (eq 40)")
+    m.add_argument("--a2", type=number, help="regression a2, m/s^2 (eq 40)")
+    m.add_argument("--x-max", type=number, help="largest displacement, m (eq 38)")
+    m.add_argument("--tau", type=number, help="time of x_max from the extrapolated origin, s")
+    c = sp.add_argument_group("chosen (defaults: the shipped trees' choices)")
+    c.add_argument("--youngs-modulus", type=number, required=True,
+                   help="E, Pa (Table 1 gives 8.9e9 and 12.6e9 for its two trees)")
+    c.add_argument("--length", type=number, help=f"l, m (default {DEFAULTS['length']})")
+    c.add_argument("--density", type=number,
+                   help=f"rho, kg/m^3 (default {DEFAULTS['density']})")
+    c.add_argument("--clamp-mass", type=number,
+                   help=f"m_c, kg (default {DEFAULTS['clamp_mass']})")
+    c.add_argument("--restitution", type=number,
+                   help=f"e, 1 (default {DEFAULTS['restitution']})")
+    c.add_argument("--contact-duration", type=number,
+                   help=f"s, soft-contact models (default {DEFAULTS['contact_duration']})")
+    c.add_argument("--t-end", type=number, help=f"s (default {DEFAULTS['t_end']})")
+    sp.add_argument("--out", help="write the file here (a directory: NAME.toml in it); "
+                                  "default: print it")
+
+
+def _pick(args, key):
+    v = getattr(args, key)
+    return DEFAULTS[key] if v is None else v
+
+
+def build_scenario(args):
+    """The calibrated :class:`Scenario` of the command's arguments."""
+    from analytic.calibration import (MeasuredTree, calibrate_trunk, calibration_notes,
+                                      damping_rate_from_regression, stiffness_from_regression)
+    from analytic.parameters import Contact, Pendulum, Scenario, Trunk
+
+    pendulum = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
+                        release_angle=math.radians(args.release_angle))
+    given = ["a", "d", "theta_r", "m", "l_e", "M_T"]
+    if args.damping_rate is not None:
+        if args.a1 is not None or args.a2 is not None:
+            raise ParameterError("--damping-rate: give it or --a1 and --a2, not both")
+        b = args.damping_rate
+        given.append("b")
+    elif args.a1 is not None and args.a2 is not None:
+        b = damping_rate_from_regression(args.a1, args.a2)
+        given.append(f"b = -a2/a1 (eq 42) from a1 = {args.a1:g} m/s, a2 = {args.a2:g} m/s^2")
+    else:
+        raise ParameterError("--damping-rate: missing (give b in 1/s, or --a1 and --a2)")
+    if args.stiffness is not None:
+        if args.x_max is not None or args.tau is not None:
+            raise ParameterError("--stiffness: give it or --x-max and --tau, not both")
+        k_t = args.stiffness
+        given.append("K_T")
+    elif None not in (args.x_max, args.tau, args.a1, args.a2):
+        k_t = stiffness_from_regression(a1=args.a1, a2=args.a2, x_max=args.x_max, tau=args.tau,
+                                        dynamic_mass=args.dynamic_mass, impactor_mass=args.mass,
+                                        impactor_stiffness=pendulum.stiffness)
+        given.append(f"K_T from x_max = {args.x_max:g} m, tau = {args.tau:g} s (eqs 43, 46)")
+    else:
+        raise ParameterError("--stiffness: missing (give K_T in N/m, or --x-max, --tau, --a1 "
+                             "and --a2)")
+    measured = MeasuredTree(dynamic_mass=args.dynamic_mass, stiffness=k_t, damping_rate=b)
+    chosen = Trunk(length=_pick(args, "length"), clamp_height=args.clamp_height,
+                   diameter=args.diameter, density=_pick(args, "density"),
+                   youngs_modulus=args.youngs_modulus, clamp_mass=_pick(args, "clamp_mass"))
+    trunk = calibrate_trunk(chosen, measured, impactor_mass=args.mass)
+    chosen_names = [f"{sym} = {_pick(args, k):g} {unit}" for sym, k, unit in (
+        ("l", "length", "m"), ("rho", "density", "kg/m^3"), ("m_c", "clamp_mass", "kg"))]
+    notes = calibration_notes(measured, given=", ".join(given),
+                              chosen=", ".join([f"E = {args.youngs_modulus:g} Pa",
+                                                *chosen_names]))
+    notes["restitution"] = f"e = {_pick(args, 'restitution'):g} chosen"
+    contact = Contact(restitution=_pick(args, "restitution"),
+                      duration=_pick(args, "contact_duration"))
+    return Scenario(name=args.name, trunk=trunk, impactor=pendulum, contact=contact,
+                    t_end=_pick(args, "t_end"),
+                    description=f"{args.name}: calibrated by treeimpact scenario", notes=notes)
+
+
+def run(args) -> int:
+    from analytic.scenario_toml import scenario_toml
+
+    text = scenario_toml(build_scenario(args))
+    if args.out is None:
+        print(text, end="")
+        return 0
+    out = Path(args.out)
+    path = out / f"{args.name}.toml" if out.is_dir() else out
+    if not path.parent.is_dir():
+        raise ParameterError(f"--out {args.out!r}: no such directory {str(path.parent)!r}")
+    path.write_text(text, encoding="utf-8")
+    print(f"wrote {path}")
+    return 0
