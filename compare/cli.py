@@ -173,7 +173,8 @@ def cmd_report(args) -> int:
     from .report import write_report
 
     scenarios = [load_scenario(n) for n in args.scenarios] if args.scenarios else None
-    paths = write_report(args.out, scenarios=scenarios, study_dirs=tuple(args.studies))
+    paths = write_report(args.out, scenarios=scenarios, study_dirs=tuple(args.studies),
+                         progress=True)
     for kind, path in paths.items():
         print(f"{kind}: {path}")
     return 0

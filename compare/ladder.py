@@ -411,13 +411,13 @@ def rung_values(result, identification: dict) -> dict:
 
 
 def prefetch_ladders(cache: RunCache, scenarios, *, engines=None, segments=None,
-                     workers: int | None = None) -> None:
+                     workers: int | None = None, progress: bool = False) -> None:
     """Run every rung of the scenarios' ladders into ``cache`` on a process pool
     (:meth:`compare.runs.RunCache.prefetch`); :func:`build_ladder` then finds them cached."""
     engines = ENGINES if engines is None else engines
     cache.prefetch([(s, r.backend, dict(r.options)) for s in scenarios
                     for r in ladder_rungs(s, engines=engines, segments=segments)],
-                   workers=workers)
+                   workers=workers, progress=progress)
 
 
 def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,

@@ -104,13 +104,14 @@ class RunCache:
         self.runs[key] = run
         return run
 
-    def prefetch(self, requests, workers: int | None = None) -> None:
+    def prefetch(self, requests, workers: int | None = None, progress: bool = False) -> None:
         """Run the (scenario, backend, options) requests not yet cached on a process pool.
 
         Each run is the same call :meth:`run` makes, in a worker process (``forkserver``: the
         engines' thread pools are never forked), so the cache ends up exactly as after
         serial :meth:`run` calls, only sooner. The slowest kinds (hinged-trunk engine runs)
-        are sent first. ``workers``: default the CPU count; 1 runs serially.
+        are sent first. ``workers``: default the CPU count; 1 runs serially. ``progress``:
+        report finished runs on stderr (:class:`compare.progress.Progress`).
         """
         todo, seen = [], set()
         for scenario, backend, options in requests:
@@ -121,9 +122,16 @@ class RunCache:
                 todo.append((key, scen, backend, dict(options)))
         if workers is None:
             workers = os.cpu_count() or 1  # as the sweeps' pool and the engines' batches
+        from .progress import Progress
+
+        bar = Progress(len(todo), "runs") if progress and todo else None
         if workers <= 1 or len(todo) <= 1:
             for _, scen, backend, options in todo:
                 self.run(scen, backend, **options)
+                if bar is not None:
+                    bar.update()
+            if bar is not None:
+                bar.close()
             return
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
@@ -138,6 +146,10 @@ class RunCache:
                        for key, scen, backend, options in todo]
             for key, fut in futures:
                 self.runs[key] = fut.result()
+                if bar is not None:
+                    bar.update()
+        if bar is not None:
+            bar.close()
 
     def __iter__(self):
         return iter(self.runs.values())

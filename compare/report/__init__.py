@@ -27,13 +27,15 @@ __all__ = ["write_report", "build_sections"]
 
 
 def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, segments=None,
-                   out_dir=None) -> dict:
+                   out_dir=None, progress: bool = False) -> dict:
     """The report's sections (not yet rendered) and the wall time each took (s); figures
-    are written to ``out_dir/figures`` (none without ``out_dir``)."""
+    are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
+    sections reported on stderr as they finish."""
     from analytic.scenario import shipped_scenarios
 
     from ..ladder import prefetch_ladders
     from ..runs import SESSION_CACHE, resolve_scenario
+    from ..progress import Progress
     from .figures import FigureFiles
     from .paper import PaperSection
     from .runlog import RunsSection
@@ -45,18 +47,23 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)
     wall = {}
     t0 = time.perf_counter()
-    prefetch_ladders(cache, names, engines=engines, segments=segments)
+    prefetch_ladders(cache, names, engines=engines, segments=segments, progress=progress)
     wall["runs (process pool)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     paper = PaperSection()
     wall["paper"] = time.perf_counter() - t0
     scen_sections = []
+    bar = Progress(len(names), "report sections", unit="scenario") if progress else None
     for s in names:
         t0 = time.perf_counter()
         scen = resolve_scenario(s)
         scen_sections.append(ScenarioSection(scen, cache, engines=engines, segments=segments,
                                              figure_sink=sink))
         wall[f"scenario {scen.name}"] = time.perf_counter() - t0
+        if bar is not None:
+            bar.update()
+    if bar is not None:
+        bar.close()
     studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log}

@@ -1,0 +1,53 @@
+"""Progress of long runs on stderr: a tqdm bar on a terminal, else one line every few
+seconds (logs and CI see how far a run is), and the honest wall time at the end."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+#: Seconds between two progress lines when stderr is not a terminal.
+LINE_EVERY_S = 5.0
+
+
+class Progress:
+    """Counts finished items of ``total``; ``update(n)`` after each, ``close()`` at the end."""
+
+    def __init__(self, total: int, desc: str, unit: str = "run", stream=None):
+        self.total, self.desc, self.unit = total, desc, unit
+        self.stream = stream if stream is not None else sys.stderr
+        self.done = 0
+        self.start = self._last = time.perf_counter()
+        self._bar = None
+        if getattr(self.stream, "isatty", lambda: False)():
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=total, unit=unit, desc=desc, file=self.stream)
+
+    def update(self, n: int = 1) -> None:
+        self.done += n
+        if self._bar is not None:
+            self._bar.update(n)
+            return
+        now = time.perf_counter()
+        if now - self._last >= LINE_EVERY_S and self.done < self.total:  # close() says done
+            self._last = now
+            self._line(now)
+
+    def _line(self, now: float, final: bool = False) -> None:
+        pct = 100.0 * self.done / self.total if self.total else 100.0
+        word = "done" if final else "running"
+        print(f"{self.desc}: {self.done}/{self.total} {self.unit}s ({pct:.0f} %), "
+              f"{now - self.start:.1f} s, {word}", file=self.stream, flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+        self._line(time.perf_counter(), final=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
