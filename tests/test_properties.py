@@ -35,12 +35,22 @@ ELASTIC_OVERDAMPED = TwoBodyModel(
     impactor_mass=469.3527616896069, impactor_stiffness=0.0, impact_speed=1.0, restitution=1.0)
 
 
+# Found by hypothesis: a light, heavily overdamped trunk. After moving together the bodies
+# separate with the relative acceleration zero up to the round-off of the separation time;
+# read as a second-order zero it made the search return an immediate re-contact, again
+# and again (a hang). A separation starts the free flight with a third-order zero.
+LIGHT_OVERDAMPED = TwoBodyModel(
+    dynamic_mass=5.0, damping=90147.34109509406, stiffness=10000.0, impactor_mass=1.0,
+    impactor_stiffness=8429.71100390023, impact_speed=5.0, restitution=0.005)
+
+
 # Run time is bounded: each example must finish within the deadline. The solver's work is
 # bounded by the tail closure for e <= 0.99; closer to 1 it grows as 1 / (1 - e) and a
 # sequence beyond MAX_CHATTER_IMPACTS is refused, never cut short into numbers.
 @settings(max_examples=60, deadline=timedelta(seconds=5), derandomize=True)
 @given(model=models, t_end=st.floats(0.005, 0.2))
 @example(model=ELASTIC_OVERDAMPED, t_end=0.125)
+@example(model=LIGHT_OVERDAMPED, t_end=0.005)
 def test_random_models_give_finite_metrics_and_a_closed_ledger(model, t_end):
     try:
         sol = solve_impacts(model, t_end)
@@ -71,3 +81,21 @@ def test_restitution_up_to_0_99_always_closes_its_chattering(model, t_end):
 def test_elastic_chatter_on_an_overdamped_trunk_is_refused_in_one_line():
     with pytest.raises(ParameterError, match=r"^contact\.restitution = 1\.0: .* after 100000 "):
         solve_impacts(ELASTIC_OVERDAMPED, 0.125)
+
+
+def test_a_separation_starts_the_flight_at_third_order_and_the_bodies_separate():
+    sol = solve_impacts(LIGHT_OVERDAMPED, 0.005)
+    assert sol.separations  # the joint motion ended with the force at zero
+    t_sep = sol.separations[0].t
+    assert not any(i.t > t_sep for i in sol.impacts)  # no spurious re-contact after it
+    assert impact_metrics(sol)["ledger_residual"] < 1e-9
+
+
+def test_a_loop_that_stops_advancing_time_is_a_one_line_divergence(monkeypatch):
+    """The guard against a solver that no longer advances (it used to loop for hours)."""
+    from analytic import solver
+    from analytic.results import SimulationDiverged
+
+    monkeypatch.setattr(solver, "first_zero", lambda *a, **k: 0.0)  # every flight: no time
+    with pytest.raises(SimulationDiverged, match=r"^exact solver: 1001 events without "):
+        solve_impacts(LIGHT_OVERDAMPED, 0.005)
