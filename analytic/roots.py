@@ -29,8 +29,6 @@ from __future__ import annotations
 import math
 from typing import Callable, Sequence
 
-from scipy.optimize import brentq
-
 _XTOL_REL = 4e-16
 _RTOL = 4.0 * 2.220446049250313e-16  # the smallest rtol brentq accepts
 
@@ -104,6 +102,8 @@ def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max:
 def _polisher(f, fdf):
     """The zero of f on [a, b] where f(a) > 0 >= f(b) and f is monotone."""
     if fdf is None:
+        from scipy.optimize import brentq  # here, not at import: `treeimpact --help` is fast
+
         return lambda a, b, fa, fb, guess: brentq(f, a, b, xtol=_XTOL_REL * b, rtol=_RTOL)
 
     def newton(a, b, fa, fb, guess):

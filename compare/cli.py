@@ -38,7 +38,9 @@ def _count(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="treeimpact", description=__doc__.splitlines()[0])
+    p = _Parser(prog="treeimpact", description="The fruit-tree trunk impact model of the paper "
+                "and its cross-checks against MuJoCo and PyBullet (SI units; exit codes: 0 "
+                "success, 2 bad input, 3 the simulation diverged).")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     sp = sub.add_parser("paper", help="reproduce Table 1 and list the paper's discrepancies")
@@ -60,13 +62,14 @@ def build_parser() -> argparse.ArgumentParser:
                     help="engine trunk damping: the paper's distributed C, or joint damping")
     ss.add_argument("--integrator", choices=("Euler", "implicit", "implicitfast", "RK4"),
                     help="MuJoCo integrator (default Euler)")
-    ss.add_argument("--json", action="store_true")
+    ss.add_argument("--json", action="store_true", help="machine-readable output")
 
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
-    sm.add_argument("scenario")
-    sm.add_argument("--backend", default="analytic")
-    sm.add_argument("--segments", type=_count)
-    sm.add_argument("--json", action="store_true")
+    sm.add_argument("scenario", help="shipped scenario name or TOML path")
+    sm.add_argument("--backend", default="analytic",
+                    help="analytic (the SDOF trunk), mujoco or bullet (their hinged trunks)")
+    sm.add_argument("--segments", type=_count, help="segments of the hinged trunk")
+    sm.add_argument("--json", action="store_true", help="machine-readable output")
     sr = sub.add_parser("report", help="write the discrepancy report (html, md, json)")
     sr.add_argument("--out", default="reports", help="output directory (default: reports)")
     sr.add_argument("--scenario", action="append", dest="scenarios",
@@ -127,6 +130,53 @@ def _options(args, names) -> dict:
     return {n: getattr(args, n) for n in names if getattr(args, n, None) is not None}
 
 
+#: Units of the ``model`` keys every backend reports (README); others print without one.
+MODEL_UNITS = {"M_T": "kg", "C_T": "N s/m", "K_T": "N/m", "m": "kg", "k": "N/m", "e": "1",
+               "u1": "m/s", "dt": "s", "contact_stiffness": "N/m", "contact_damping": "N s/m",
+               "law_stiffness": "N/m", "law_damping": "N s/m", "effective_mass": "kg",
+               "collision_duration": "s", "omega_max": "rad/s"}
+
+
+#: Metrics printed without a relative difference: a count and a numerical residual.
+_NO_DIFFERENCE = ("n_impacts", "ledger_residual")
+
+
+def _unit(u: str) -> str:
+    return "-" if u in ("1", "") else u  # a dimensionless 1 read as a second number
+
+
+def _rel(value, reference) -> str:
+    if not (isinstance(value, (int, float)) and isinstance(reference, (int, float))
+            and math.isfinite(value) and math.isfinite(reference) and reference != 0):
+        return ""
+    return f"{(value - reference) / abs(reference):+.1%}"
+
+
+def _print_simulation(scenario, result, reference) -> None:
+    """One key per line, units in their own column; beside a backend's value the paper's
+    model (the analytic backend) and the relative difference, when ``reference`` is given."""
+    print(f"{scenario.name} ({result.backend})")
+    print("model:")
+    for key, value in result.model.items():
+        text = _fmt(value) if not isinstance(value, (list, tuple)) else " ".join(
+            _fmt(v) for v in value)
+        print(f"  {key:<22}{text:>14}  {_unit(MODEL_UNITS.get(key, ''))}")
+    head = f"  {'metric':<22}{result.backend:>14}  {'unit':<7}"
+    if reference is not None:
+        head += f"{'paper model':>14}{'difference':>12}"
+    print("metrics:" if reference is None else "metrics (paper model: the analytic backend, "
+          "eqs 12-35):")
+    print(head + "  meaning")
+    for key, value in result.metrics.items():
+        unit, meaning = METRIC_UNITS[key]
+        line = f"  {key:<22}{_fmt(value):>14}  {_unit(unit):<7}"
+        if reference is not None:
+            ref = reference.metrics.get(key)
+            diff = "" if key in _NO_DIFFERENCE else _rel(value, ref)
+            line += f"{_fmt(ref):>14}{diff:>12}"
+        print(line + f"  {meaning}")
+
+
 def cmd_simulate(args) -> int:
     from analytic.scenario import load_scenario
 
@@ -140,11 +190,11 @@ def cmd_simulate(args) -> int:
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
         return 0
-    print(f"{scenario.name} ({result.backend})")
-    print("model: " + ", ".join(f"{k} = {_fmt(v)}" for k, v in result.model.items()))
-    for key, value in result.metrics.items():
-        unit = METRIC_UNITS[key][0]
-        print(f"  {key:<22}{_fmt(value):>14} {unit:<5} {METRIC_UNITS[key][1]}")
+    reference = None
+    if args.backend != "analytic":  # the paper's model beside it (a few ms)
+        opts = _options(args, ("restitution", "t_end"))
+        reference = get_backend("analytic").simulate(scenario, **opts)
+    _print_simulation(scenario, result, reference)
     return 0
 
 
@@ -159,11 +209,15 @@ def cmd_modes(args) -> int:
     if args.json:
         print(json.dumps(_clean(res), indent=2))
         return 0
-    for part in ("model", "beam"):
-        r = res[part]
-        omegas = ", ".join(_fmt(w) for w in r["omegas"])
-        print(f"{part:<6} static stiffness at a = {_fmt(r['static_stiffness'])} N/m; "
-              f"natural frequencies = [{omegas}] rad/s")
+    model, beam = res["model"], res["beam"]
+    print(f"{scenario.name} ({args.backend} trunk against the continuous Euler-Bernoulli beam)")
+    print(f"  {'quantity':<26}{'model':>14}{'beam':>14}{'difference':>12}  unit")
+    rows = [("static stiffness at a", model["static_stiffness"], beam["static_stiffness"],
+             "N/m")]
+    rows += [(f"natural frequency {i + 1}", w, wb, "rad/s")
+             for i, (w, wb) in enumerate(zip(model["omegas"], beam["omegas"]))]
+    for name, v, vb, unit in rows:
+        print(f"  {name:<26}{_fmt(v):>14}{_fmt(vb):>14}{_rel(v, vb):>12}  {unit}")
     return 0
 
 

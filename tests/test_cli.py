@@ -141,3 +141,47 @@ def test_soft_backend_takes_the_engines_contact_stiffness_flag(capsys):
                  "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["model"]["contact_stiffness"] == 1e9
+
+
+def test_simulate_text_shows_the_paper_model_beside_the_backend(capsys):
+    """One key per line, units in their own column, and the difference from the analytic
+    backend computed from the two backends' own JSON."""
+    _, soft_json, _ = run(capsys, "simulate", "central-leader", "--backend", "soft", "--json")
+    _, ref_json, _ = run(capsys, "simulate", "central-leader", "--json")
+    v, v_ref = json.loads(soft_json)["metrics"]["V"], json.loads(ref_json)["metrics"]["V"]
+    code, out, _ = run(capsys, "simulate", "central-leader", "--backend", "soft")
+    assert code == 0
+    line = next(l for l in out.splitlines() if l.split()[:1] == ["V"])
+    assert line.split()[:5] == ["V", f"{v:.6g}", "m/s", f"{v_ref:.6g}",
+                                f"{(v - v_ref) / abs(v_ref):+.1%}"]
+    assert any(l.split() == ["M_T", "110", "kg"] for l in out.splitlines())
+    n_line = next(l for l in out.splitlines() if l.split()[:1] == ["n_impacts"])
+    assert n_line.split()[2] == "-"  # a count has no unit, not a "1" read as a number
+
+
+def test_modes_text_shows_the_difference_from_the_beam(capsys):
+    _, js, _ = run(capsys, "modes", "central-leader", "--json")
+    res = json.loads(js)
+    code, out, _ = run(capsys, "modes", "central-leader")
+    assert code == 0
+    k, kb = res["model"]["static_stiffness"], res["beam"]["static_stiffness"]
+    line = next(l for l in out.splitlines() if "static stiffness at a" in l)
+    assert line.split()[-2:] == [f"{(k - kb) / abs(kb):+.1%}", "N/m"]
+
+
+def test_every_option_has_help_text():
+    from compare.cli import build_parser
+
+    parser = build_parser()
+    subparsers = next(a for a in parser._actions if a.choices and isinstance(a.choices, dict))
+    for name, sub in subparsers.choices.items():
+        for action in sub._actions:
+            if action.dest != "help":
+                assert action.help, f"treeimpact {name} {action.option_strings or action.dest}"
+
+
+def test_the_command_line_starts_without_scipy():
+    """`treeimpact --help` should not pay for scipy (about 0.3 s of its start-up)."""
+    code = "import sys, compare.cli; print('scipy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
