@@ -1,0 +1,78 @@
+"""The README and docs/ show only commands and test ids that exist and run."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from compare.cli import build_parser, main
+
+ROOT = Path(__file__).resolve().parent.parent
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def _code(text: str) -> list[str]:
+    """Inline code spans and the lines of code blocks, continuation lines joined."""
+    blocks = re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S)
+    spans = re.findall(r"`([^`\n]+)`", re.sub(r"```.*?```", "", text, flags=re.S))
+    return spans + [line for b in blocks for line in b.replace("\\\n", " ").splitlines()]
+
+
+def _commands(prefix: str) -> list[tuple[str, str]]:
+    """(page, command) for every concrete command starting with ``prefix`` (templates with
+    placeholders such as SCENARIO or [--json] are syntax, not commands)."""
+    out = []
+    for page in PAGES:
+        for code in _code(page.read_text()):
+            code = code.split("#")[0].strip()
+            if code.startswith(prefix) and not re.search(r"[A-Z]{2,}|\[|\.\.\.|\|", code):
+                out.append((page.name, code))
+    return out
+
+
+TREEIMPACT = _commands("treeimpact ")
+
+
+def test_the_pages_show_commands():
+    assert len(TREEIMPACT) >= 4 and any(p == "README.md" for p, _ in TREEIMPACT)
+
+
+@pytest.mark.parametrize("page, command", TREEIMPACT, ids=[c for _, c in TREEIMPACT])
+def test_every_treeimpact_command_shown_parses(page, command):
+    build_parser().parse_args(shlex.split(command)[1:])  # argparse errors raise
+
+
+def test_the_add_your_own_tree_example_runs(tmp_path, monkeypatch, capsys):
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## Add your own tree"):]
+    commands = [c for c in _code(section[:section.index("\n## ", 3)])
+                if c.startswith("treeimpact ")]
+    assert [c.split()[1] for c in commands] == ["scenario", "simulate"]
+    monkeypatch.chdir(tmp_path)
+    for command in commands:
+        assert main(shlex.split(command)[1:]) == 0, command
+    assert "my-tree (analytic)" in capsys.readouterr().out
+
+
+def test_every_make_target_shown_exists():
+    targets = set(re.findall(r"^([a-z]+):", (ROOT / "Makefile").read_text(), flags=re.M))
+    shown = {c.split()[1] for _, c in _commands("make ")}
+    assert shown and shown <= targets, shown - targets
+
+
+def test_every_test_id_shown_is_collected():
+    ids = sorted({m for page in PAGES for m in re.findall(r"`(test_\w+\[[^\]`]+\])`",
+                                                              page.read_text())})
+    assert ids
+    files = {i: next(p for d in ("tests", "compare") for p in (ROOT / d).glob("test_*.py")
+                     if f"def {i.split('[')[0]}(" in p.read_text()) for i in ids}
+    for test_id, path in files.items():
+        node = f"{path.relative_to(ROOT)}::{test_id}"
+        proc = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", node],
+                              cwd=ROOT, capture_output=True, text=True)
+        assert proc.returncode == 0 and node in proc.stdout, f"{node}: {proc.stdout[-300:]}"
