@@ -21,6 +21,44 @@ class ParameterError(ValueError):
     """A parameter is outside its allowed range; the message is one line."""
 
 
+#: Physical plausibility limits (SI) of every field: what an orchard tree, a harvester's
+#: pendulum or billet, and a contact pad can be, with generous margins (README table).
+#: Beyond them the models leave their assumptions (small deflections, a beam) or the
+#: numbers leave what double precision and a bounded run can resolve.
+LIMITS = {
+    "trunk.length": (0.1, 30.0, "m"),
+    "trunk.clamp_height": (0.01, 30.0, "m"),
+    "trunk.diameter": (0.005, 3.0, "m"),
+    "trunk.density": (100.0, 2000.0, "kg/m^3"),
+    "trunk.youngs_modulus": (1e7, 1e11, "Pa"),
+    "trunk.clamp_mass": (0.0, 1000.0, "kg"),
+    "trunk.crown_mass": (0.0, 1e4, "kg"),
+    "trunk.damping": (0.0, 1e6, "N s/m^2"),
+    "trunk.base_stiffness": (10.0, math.inf, "N m/rad"),
+    "impactor.mass": (0.1, 1e4, "kg"),
+    "impactor.equivalent_length": (0.05, 30.0, "m"),
+    "impactor.release_angle_deg": (0.01, 180.0, "deg"),
+    "impactor.gravity": (1.0, 30.0, "m/s^2"),
+    "impactor.impact_speed": (0.01, 50.0, "m/s"),
+    "contact.restitution": (0.0, 1.0, "1"),
+    "contact.stiffness": (1e2, 1e12, "N/m"),
+    "contact.duration": (1e-6, 0.1, "s"),
+    "t_end": (1e-4, 10.0, "s"),
+}
+
+
+def _limit(path: str, value, *, high=None, high_open=False, allow_inf=False) -> float:
+    """``_check`` against :data:`LIMITS` (``high``: a tighter bound, e.g. a <= l)."""
+    low, top, unit = LIMITS[path]
+    if high is not None and high < top:
+        top = high
+    else:
+        high_open = False
+    return _check(path, value, low=low, high=None if math.isinf(top) else top,
+                  high_open=high_open, unit=unit if unit != "1" else "",
+                  allow_inf=allow_inf or math.isinf(top))
+
+
 def _check(path: str, value, *, low=None, high=None, low_open=False, high_open=False,
            unit: str = "", allow_inf: bool = False) -> float:
     """Return ``value`` as float or raise a one-line :class:`ParameterError`."""
@@ -29,7 +67,7 @@ def _check(path: str, value, *, low=None, high=None, low_open=False, high_open=F
     v = float(value)
     lo = "(" if low_open else "["
     hi = ")" if high_open else "]"
-    rng = f"{lo}{'-inf' if low is None else low}, {'inf' if high is None else high}{hi}"
+    rng = f"{lo}{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}{hi}"
     u = f" {unit}" if unit else ""
     if math.isnan(v) or (math.isinf(v) and not allow_inf):
         raise ParameterError(f"{path} = {value!r}{u}: must be a finite number in {rng}{u}")
@@ -59,17 +97,16 @@ class Trunk:
     base_stiffness: float = math.inf  # k_theta, N m/rad
 
     def __post_init__(self):
-        _check("trunk.length", self.length, low=0, low_open=True, unit="m")
-        _check("trunk.clamp_height", self.clamp_height, low=0, high=self.length, low_open=True,
-               unit="m")
-        _check("trunk.diameter", self.diameter, low=0, low_open=True, unit="m")
-        _check("trunk.density", self.density, low=0, low_open=True, unit="kg/m^3")
-        _check("trunk.youngs_modulus", self.youngs_modulus, low=0, low_open=True, unit="Pa")
-        _check("trunk.clamp_mass", self.clamp_mass, low=0, unit="kg")
-        _check("trunk.crown_mass", self.crown_mass, low=0, unit="kg")
-        _check("trunk.damping", self.damping, low=0, unit="N s/m^2")
-        _check("trunk.base_stiffness", self.base_stiffness, low=0, low_open=True,
-               unit="N m/rad", allow_inf=True)
+        _limit("trunk.length", self.length)
+        _limit("trunk.clamp_height", self.clamp_height,
+               high=self.length if isinstance(self.length, (int, float)) else None)
+        _limit("trunk.diameter", self.diameter)
+        _limit("trunk.density", self.density)
+        _limit("trunk.youngs_modulus", self.youngs_modulus)
+        _limit("trunk.clamp_mass", self.clamp_mass)
+        _limit("trunk.crown_mass", self.crown_mass)
+        _limit("trunk.damping", self.damping)
+        _limit("trunk.base_stiffness", self.base_stiffness)
 
     @property
     def area(self) -> float:
@@ -106,12 +143,11 @@ class Pendulum:
     gravity: float = STANDARD_GRAVITY  # g, m/s^2
 
     def __post_init__(self):
-        _check("impactor.mass", self.mass, low=0, low_open=True, unit="kg")
-        _check("impactor.equivalent_length", self.equivalent_length, low=0, low_open=True,
-               unit="m")
-        _check("impactor.release_angle", self.release_angle, low=0, high=math.pi,
-               low_open=True, unit="rad")
-        _check("impactor.gravity", self.gravity, low=0, low_open=True, unit="m/s^2")
+        _limit("impactor.mass", self.mass)
+        _limit("impactor.equivalent_length", self.equivalent_length)
+        _check("impactor.release_angle", self.release_angle, low=math.radians(
+            LIMITS["impactor.release_angle_deg"][0]), high=math.pi, unit="rad")
+        _limit("impactor.gravity", self.gravity)
 
     @property
     def stiffness(self) -> float:
@@ -142,8 +178,8 @@ class Billet:
     impact_speed: float  # u_1, m/s
 
     def __post_init__(self):
-        _check("impactor.mass", self.mass, low=0, low_open=True, unit="kg")
-        _check("impactor.impact_speed", self.impact_speed, low=0, low_open=True, unit="m/s")
+        _limit("impactor.mass", self.mass)
+        _limit("impactor.impact_speed", self.impact_speed)
 
     stiffness = 0.0
     natural_frequency = 0.0
@@ -163,11 +199,11 @@ class Contact:
     duration: float | None = None  # s
 
     def __post_init__(self):
-        _check("contact.restitution", self.restitution, low=0, high=1, unit="")
+        _limit("contact.restitution", self.restitution)
         if self.stiffness is not None:
-            _check("contact.stiffness", self.stiffness, low=0, low_open=True, unit="N/m")
+            _limit("contact.stiffness", self.stiffness)
         if self.duration is not None:
-            _check("contact.duration", self.duration, low=0, low_open=True, unit="s")
+            _limit("contact.duration", self.duration)
         if self.stiffness is not None and self.duration is not None:
             raise ParameterError("contact: give either stiffness (N/m) or duration (s), not both")
 
@@ -194,7 +230,7 @@ class Scenario:
             raise ParameterError("impactor: expected a Pendulum or a Billet")
         if not isinstance(self.contact, Contact):
             raise ParameterError("contact: expected a Contact")
-        _check("t_end", self.t_end, low=0, low_open=True, unit="s")
+        _limit("t_end", self.t_end)
 
     def to_dict(self) -> dict:
         """The scenario as run, in the JSON layout of ``treeimpact simulate``."""

@@ -5,7 +5,7 @@ Layout of a scenario file (SI units; angles in degrees where the key says ``_deg
     name = "open-center"
     t_end = 0.1                      # s
     [trunk]       length, clamp_height, diameter, density, youngs_modulus,
-                  clamp_mass, crown_mass, damping, base_stiffness (optional)
+                  clamp_mass, crown_mass, damping, base_stiffness (inf: a rigid clamp)
     [impactor]    type = "pendulum": mass, equivalent_length, release_angle_deg, gravity?
                   type = "billet":   mass, impact_speed
     [contact]     restitution, stiffness? | duration?
@@ -22,11 +22,14 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
-from .parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk
+from .parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk, _limit
 
 _TRUNK_KEYS = {"length", "clamp_height", "diameter", "density", "youngs_modulus", "clamp_mass",
                "crown_mass", "damping", "base_stiffness"}
 _TRUNK_REQUIRED = {"length", "clamp_height", "diameter", "density", "youngs_modulus"}
+#: Required too (a missing mass or damping is not silently 0), but reported after the
+#: values that are given have been checked: what is wrong comes before what is missing.
+_TRUNK_REQUIRED_LATER = ("clamp_mass", "crown_mass", "damping", "base_stiffness")
 _PENDULUM_KEYS = {"type", "mass", "equivalent_length", "release_angle_deg", "gravity"}
 _BILLET_KEYS = {"type", "mass", "impact_speed"}
 _CONTACT_KEYS = {"restitution", "stiffness", "duration"}
@@ -59,7 +62,8 @@ def _keys(table: dict, prefix: str, allowed: set, required: set) -> None:
 def _number(table: dict, prefix: str, key: str):
     v = table[key]
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ParameterError(f"{prefix}.{key}: expected a number, got {v!r}")
+        name = f"{prefix}.{key}" if prefix else key
+        raise ParameterError(f"{name}: expected a number, got {v!r}")
     return v
 
 
@@ -79,10 +83,8 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
     kind = imp_t.get("type", "pendulum")
     if kind == "pendulum":
         _keys(imp_t, "impactor", _PENDULUM_KEYS, {"mass", "equivalent_length", "release_angle_deg"})
-        deg = _number(imp_t, "impactor", "release_angle_deg")
-        if not (isinstance(deg, (int, float)) and 0 < deg <= 180):
-            raise ParameterError(
-                f"impactor.release_angle_deg = {deg!r} deg is out of range: allowed (0, 180] deg")
+        deg = _limit("impactor.release_angle_deg", _number(imp_t, "impactor",
+                                                           "release_angle_deg"))
         kw = dict(mass=_number(imp_t, "impactor", "mass"),
                   equivalent_length=_number(imp_t, "impactor", "equivalent_length"),
                   release_angle=math.radians(deg))
@@ -100,15 +102,23 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
     _keys(con_t, "contact", _CONTACT_KEYS, {"restitution"})
     contact = Contact(**{k: _number(con_t, "contact", k) for k in con_t})
 
+    later = [k for k in _TRUNK_REQUIRED_LATER if k not in trunk_t]
+    if later:
+        raise ParameterError(f"trunk.{later[0]}: missing required value"
+                             + (" (base_stiffness = inf: a rigid clamp)"
+                                if later[0] == "base_stiffness" else ""))
+    notes = data.get("calibration", {})
+    if not isinstance(notes, dict):
+        raise ParameterError("calibration: expected a table [calibration] of notes")
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name:
         raise ParameterError("name: expected a non-empty string")
     kw = {}
     if "t_end" in data:
-        kw["t_end"] = data["t_end"]
+        kw["t_end"] = _number(data, "", "t_end")
     return Scenario(name=name, trunk=trunk, impactor=impactor, contact=contact,
                     description=str(data.get("description", "")),
-                    notes=dict(data.get("calibration", {})), **kw)
+                    notes=dict(notes), **kw)
 
 
 def load_scenario(source: str | Path) -> Scenario:
@@ -116,15 +126,25 @@ def load_scenario(source: str | Path) -> Scenario:
     text: str
     path = Path(source)
     if isinstance(source, str) and source in shipped_scenarios():
-        text = (resources.files("analytic") / "scenarios" / f"{source}.toml").read_text()
+        raw = (resources.files("analytic") / "scenarios" / f"{source}.toml").read_bytes()
         default = source
     elif path.is_file():
-        text = path.read_text()
+        try:
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise ParameterError(f"scenario {str(source)!r}: cannot be read "
+                                 f"({exc.strerror})") from None
         default = path.stem
     else:
         raise ParameterError(
             f"scenario {str(source)!r}: no such file or shipped scenario "
             f"(shipped: {', '.join(shipped_scenarios())})")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"scenario {str(source)!r}: not UTF-8 text (byte "
+                             f"0x{raw[exc.start]:02x} at offset {exc.start}); TOML files are "
+                             "UTF-8") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

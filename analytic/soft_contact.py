@@ -25,7 +25,7 @@ def release_time(zeta: float) -> float:
         s = math.sqrt(1.0 - zeta * zeta)
         return (math.pi - math.atan2(2.0 * zeta * s, 1.0 - 2.0 * zeta * zeta)) / s
     sd = math.sqrt(zeta * zeta - 1.0)
-    r1, r2 = -zeta + sd, -zeta - sd
+    r1, r2 = -1.0 / (zeta + sd), -zeta - sd  # r1 r2 = 1: no cancellation in r1
     return 2.0 * math.log(r2 / r1) / (r1 - r2)
 
 
@@ -39,16 +39,22 @@ def restitution_for_damping_ratio(zeta: float) -> float:
         ex = math.exp(-zeta * t)
         return -ex * (math.cos(s * t) - zeta / s * math.sin(s * t))
     sd = math.sqrt(zeta * zeta - 1.0)
-    r1, r2 = -zeta + sd, -zeta - sd
+    r1, r2 = -1.0 / (zeta + sd), -zeta - sd
     return -(r1 * math.exp(r1 * t) - r2 * math.exp(r2 * t)) / (r1 - r2)
+
+
+#: The smallest restitution a spring-dashpot contact is asked for (damping ratio ~50).
+MIN_SOFT_RESTITUTION = 1e-4
 
 
 def damping_ratio_for_restitution(e: float) -> float:
     """Inverse of :func:`restitution_for_damping_ratio` for 0 < e <= 1."""
-    if isinstance(e, bool) or not isinstance(e, (int, float)) or not (0.0 < e <= 1.0):
+    if isinstance(e, bool) or not isinstance(e, (int, float)) or not (
+            MIN_SOFT_RESTITUTION <= e <= 1.0):
         raise ParameterError(
-            f"contact.restitution = {e!r} is out of range for a soft contact: allowed (0, 1] "
-            "(e = 0 needs infinite damping)")
+            f"contact.restitution = {e!r} is out of range for a soft contact: allowed "
+            f"[{MIN_SOFT_RESTITUTION:g}, 1] (e = 0 needs infinite damping; e ~ 1 / (4 zeta^2) "
+            "when overdamped, so 1e-4 already needs a damping ratio of 50)")
     if e == 1.0:
         return 0.0
     hi = 1.0

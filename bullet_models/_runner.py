@@ -21,7 +21,7 @@ from analytic.records import ImpactRecord, detection_duration, metrics_from_reco
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
 from analytic.soft_contact import collision_duration, contact_law
-from analytic.timestep import check_time_step, choose_time_step
+from analytic.timestep import check_time_step, check_work, choose_time_step, sdof_rate
 
 from . import _contact, _urdf
 
@@ -183,12 +183,13 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
         # chain's light apparent mass would be overdamped and its duration not Bullet's)
         t_c = collision_duration(law_model, k_c, _contact.law_for_restitution(
             model.restitution, k_c, mu))
+        fastest = omega_max if omega_max is not None else sdof_rate(model)
         if dt is None:
-            dt = choose_time_step(t_c, omega_max)
+            dt = choose_time_step(t_c, fastest)
             limit = _contact.largest_time_step(k_c, c_c, mu)
             if dt > limit:
                 dt = 0.9 * limit
-        check_time_step(dt, t_c, omega_max)
+        check_time_step(dt, t_c, fastest)
         bullet = _contact.bullet_contact(k_c, c_c, mu, dt)
         # Impacts are told from moving together on the scale of the SDOF model's free
         # collision, the same for every rung (the chain's local collision, t_c, is shorter).
@@ -202,6 +203,8 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
             dt = choose_time_step(DEFAULT_CONTACT_DURATION, omega_max)
         check_time_step(dt, math.pi / w, w)
         col = dt
+    # the loop keeps Python floats of every step: 2 per joint and the contact force, ~32 B each
+    check_work(t_end, dt, 32.0 * (2 * (segments or 1) + 3))
     return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
                  contact=contact, damping=damping, segments=segments, dt=float(dt),
                  t_end=float(t_end), trunk_urdf=trunk_urdf, pendulum_urdf=pend_urdf,

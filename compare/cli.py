@@ -9,7 +9,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+from pathlib import Path
 
 from analytic.parameters import ParameterError
 from analytic.results import METRIC_UNITS, SimulationDiverged, _clean
@@ -177,6 +179,29 @@ def _print_simulation(scenario, result, reference) -> None:
         print(line + f"  {meaning}")
 
 
+#: Flag -> (attribute, the field whose plausible range it takes, analytic.parameters.LIMITS).
+_FLAG_LIMITS = {"--e": ("restitution", "contact.restitution"), "--t-end": ("t_end", "t_end"),
+                "--contact-stiffness": ("contact_stiffness", "contact.stiffness")}
+MAX_SEGMENTS = 64  # the hinged trunk's highest mode grows as N^2: 64 segments take minutes
+
+
+def _check_flags(args) -> None:
+    """One-line errors that name the flag the user typed, with its allowed range."""
+    from analytic.parameters import LIMITS, _check
+
+    for flag, (attr, field) in _FLAG_LIMITS.items():
+        value = getattr(args, attr, None)
+        if value is not None:
+            low, high, unit = LIMITS[field]
+            _check(flag, value, low=low, high=high, unit="" if unit == "1" else unit)
+    dt = getattr(args, "dt", None)
+    if dt is not None:
+        _check("--dt", dt, low=0.0, low_open=True, high=1e-3, unit="s")
+    segments = getattr(args, "segments", None)
+    if segments is not None and not 1 <= segments <= MAX_SEGMENTS:
+        raise ParameterError(f"--segments = {segments}: allowed 1 to {MAX_SEGMENTS}")
+
+
 def cmd_simulate(args) -> int:
     from analytic.scenario import load_scenario
 
@@ -184,6 +209,7 @@ def cmd_simulate(args) -> int:
 
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
+    _check_flags(args)
     opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
                            "contact_stiffness", "dt", "damping", "integrator"))
     result = backend.simulate(scenario, **opts)
@@ -227,11 +253,27 @@ def cmd_report(args) -> int:
     from .report import write_report
 
     scenarios = [load_scenario(n) for n in args.scenarios] if args.scenarios else None
+    for study in args.studies:  # checked before an hour of runs, not after
+        if not Path(study).is_dir():
+            raise ParameterError(f"--study {study!r}: not a directory (a finished study, "
+                                 "treeimpact sweep --out DIR)")
+    _writable_dir("--out", args.out)
     paths = write_report(args.out, scenarios=scenarios, study_dirs=tuple(args.studies),
                          progress=True)
     for kind, path in paths.items():
         print(f"{kind}: {path}")
     return 0
+
+
+def _writable_dir(flag: str, path: str) -> None:
+    """Create ``path`` (a directory) now, or raise a one-line error naming ``flag``."""
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"{flag} {path!r}: cannot create the directory "
+                             f"({exc.strerror or type(exc).__name__})") from None
+    if not os.access(path, os.W_OK):
+        raise ParameterError(f"{flag} {path!r}: the directory is not writable")
 
 
 def cmd_sweep(args) -> int:
@@ -263,6 +305,23 @@ def main(argv=None) -> int:
     except BrokenPipeError:  # output piped into head & co.
         sys.stderr.close()
         return 0
+    except MemoryError:
+        print("treeimpact: error: the run needs more memory than this machine has: a shorter "
+              "--t-end or a softer contact", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except ArithmeticError as exc:  # overflow or division by zero: no numbers to report
+        print(f"treeimpact: simulation diverged: {type(exc).__name__} ({_one_line(exc)})",
+              file=sys.stderr)
+        return EXIT_DIVERGED
+    except OSError as exc:  # a path that cannot be read or written
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"treeimpact: error:{where} {exc.strerror or _one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _one_line(exc: BaseException) -> str:
+    lines = str(exc).strip().splitlines()
+    return lines[0] if lines else type(exc).__name__
 
 
 if __name__ == "__main__":  # pragma: no cover

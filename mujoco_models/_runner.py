@@ -22,7 +22,7 @@ from analytic.records import ImpactRecord, detection_duration, metrics_from_reco
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
 from analytic.soft_contact import contact_law, damping_ratio_for_restitution, release_time
-from analytic.timestep import check_time_step, choose_time_step
+from analytic.timestep import check_time_step, check_work, choose_time_step, sdof_rate
 
 from . import _builder, _contact
 
@@ -153,9 +153,13 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     zeta = damping_ratio_for_restitution(e)
     t_c = release_time(zeta) / math.sqrt(k / mu)
     omega_max = highest_frequency(*engine_trunk_matrices(m1)) if trunk == "chain" else None
+    fastest = omega_max if omega_max is not None else sdof_rate(model)
     if dt is None:
-        dt = choose_time_step(t_c, omega_max)
-    dt = check_time_step(dt, t_c, omega_max)
+        dt = choose_time_step(t_c, fastest)
+    dt = check_time_step(dt, t_c, fastest)
+    # the rollout keeps the full state and the sensors of every step
+    check_work(t_end, dt, 8.0 * (mujoco.mj_stateSize(m1, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+                                 + m1.nsensordata))
     law = _contact.engine_law(float(k), float(e), float(mu), float(dt), integrator)
     S = _contact.effective_denominator(A, A_hat)
     solref = _contact.solref_for_law(law.stiffness, law.damping, S)

@@ -55,6 +55,10 @@ clamp_height = 0.3
 diameter = 0.12
 density = 950
 youngs_modulus = 9e9
+clamp_mass = 0
+crown_mass = 0
+damping = 0
+base_stiffness = inf
 [impactor]
 type = "billet"
 mass = 50
@@ -69,11 +73,24 @@ restitution = 0.2
     assert data["scenario"]["impactor"]["impact_speed"] == 3.0
 
 
+@pytest.mark.parametrize("key", ["clamp_mass", "crown_mass", "damping", "base_stiffness"])
+def test_a_missing_trunk_key_is_an_error_not_a_silent_zero(capsys, tmp_path, key):
+    from pathlib import Path
+
+    text = Path("analytic/scenarios/open-center.toml").read_text()
+    f = tmp_path / "tree.toml"
+    f.write_text("\n".join(l for l in text.splitlines() if not l.startswith(f"{key} =")))
+    code, _, err = run(capsys, "simulate", str(f))
+    assert code == 2 and err.startswith(f"treeimpact: error: trunk.{key}: missing required value")
+    assert err.count("\n") == 1
+
+
 @pytest.mark.parametrize("argv,field", [
-    (["simulate", "open-center", "--e", "1.5"], "contact.restitution"),
-    (["simulate", "open-center", "--e", "-0.1"], "contact.restitution"),
-    (["simulate", "open-center", "--e", "nan"], "contact.restitution"),
-    (["simulate", "open-center", "--t-end", "-1"], "t_end"),
+    # the flag as the user typed it (issue 12), with its range
+    (["simulate", "open-center", "--e", "1.5"], "--e = 1.5 is out of range: allowed [0, 1]"),
+    (["simulate", "open-center", "--e", "-0.1"], "--e = -0.1"),
+    (["simulate", "open-center", "--e", "nan"], "--e = nan"),
+    (["simulate", "open-center", "--t-end", "-1"], "--t-end = -1.0 s"),
     (["simulate", "no-such-tree"], "no-such-tree"),
     (["simulate", "open-center", "--backend", "ode"], "--backend"),
     (["simulate", "open-center", "--segments", "4"], "--segments"),
@@ -131,7 +148,7 @@ def test_console_script_exit_code_without_traceback():
     proc = subprocess.run([sys.executable, "-m", "compare.cli", "simulate", "open-center",
                            "--e", "2"], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert "Traceback" not in proc.stderr and "contact.restitution" in proc.stderr
+    assert "Traceback" not in proc.stderr and "--e = 2.0" in proc.stderr  # the flag typed
 
 
 def test_soft_backend_takes_the_engines_contact_stiffness_flag(capsys):
