@@ -64,6 +64,36 @@ class SimulationResult:
                 "metrics": _clean(self.metrics), "scenario": _clean(self.scenario)}
 
 
+#: Largest energy-ledger error (fraction of the input energy) a result may carry: every rung's
+#: own tolerance is below 2 % (compare/tolerances.toml [ledger]); beyond this it diverged.
+LEDGER_DIVERGED = 0.05
+
+
+def check_plausible(result: SimulationResult) -> SimulationResult:
+    """``result`` if its numbers can be reported, else :class:`SimulationDiverged` in one line:
+    x_max finite and within the geometry (0 < x_max <= a: the small-deflection beam of
+    eq 1 cannot move further than its clamp height), impact loss finite, ledger residual
+    finite and at most :data:`LEDGER_DIVERGED`."""
+    m = result.metrics
+    a = (result.scenario.get("trunk") or {}).get("clamp_height", math.inf)
+    x_max, loss, ledger = m.get("x_max"), m.get("impact_loss"), m.get("ledger_residual")
+    problem = None
+    if not _finite(x_max) or not 0.0 < x_max <= a:
+        problem = f"x_max = {x_max!r} m (allowed (0, a = {a:g}] m: the clamp height)"
+    elif not _finite(loss):
+        problem = f"impact_loss = {loss!r} J"
+    elif not _finite(ledger) or ledger > LEDGER_DIVERGED:
+        problem = (f"energy ledger residual {ledger!r} of the input energy (allowed up to "
+                   f"{LEDGER_DIVERGED:g})")
+    if problem is not None:
+        raise SimulationDiverged(f"{result.backend}: {problem}")
+    return result
+
+
+def _finite(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
 def _clean(obj):
     """JSON-safe copy: NaN and inf become None (JSON has neither)."""
     if isinstance(obj, dict):

@@ -72,9 +72,13 @@ class Backend:
         return {p.name for p in sig.parameters.values() if p.kind == p.KEYWORD_ONLY}
 
     def simulate(self, scenario, **options):
+        """The backend's result, checked before anyone reports it (a diverged run raises
+        :class:`analytic.results.SimulationDiverged`: never numbers)."""
+        from analytic.results import check_plausible
+
         func = self._load(self.simulate_ref)
         self._check(func, options)
-        return func(scenario, **options)
+        return check_plausible(func(scenario, **options))
 
     def modes(self, scenario, **options):
         if self.modes_ref is None:

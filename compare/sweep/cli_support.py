@@ -115,16 +115,23 @@ EXIT_INTERRUPTED = 130
 
 
 def run_sweep_command(args) -> int:
-    """Run ``treeimpact sweep``; returns the exit code (0; 130 when interrupted, with one line
-    saying how to resume; bad input raises ParameterError)."""
+    """Run ``treeimpact sweep``; returns the exit code (0; 130 when interrupted by Ctrl-C or
+    SIGTERM, with one line saying how to resume; bad input raises ParameterError)."""
+    import signal
     import sys
 
+    def terminate(signum, frame):  # SIGTERM ends the sweep as Ctrl-C does: workers stopped
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, terminate)
     try:
         return _run(args)
     except KeyboardInterrupt:
         print(f"treeimpact: sweep interrupted; the finished rows are kept in {args.out}: "
               f"rerun the same command to resume", file=sys.stderr)
         return EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _run(args) -> int:

@@ -17,6 +17,9 @@ import numpy as np
 from analytic.chain import MAX_SEGMENTS
 from analytic.parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk
 
+#: Bounds of a grid: values per axis and points in all (the --preset full study has 540).
+MAX_AXIS_VALUES = 1000
+MAX_POINTS = 100_000
 GRID_FORM = "NAME=START:STOP:COUNT (COUNT values, both ends included) or NAME=V1,V2,..."
 
 SCENARIO = "scenario"
@@ -164,9 +167,9 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
         except ValueError:
             raise ParameterError(f"{flag} {spec!r}: COUNT {parts[2]!r} must be an integer >= 1; "
                                  f"expected {GRID_FORM}") from None
-        if count < 1:
-            raise ParameterError(f"{flag} {spec!r}: COUNT = {count} must be >= 1; "
-                                 f"expected {GRID_FORM}")
+        if count < 1 or count > MAX_AXIS_VALUES:
+            raise ParameterError(f"{flag} {spec!r}: COUNT = {count}: allowed 1 to "
+                                 f"{MAX_AXIS_VALUES}; expected {GRID_FORM}")
         if count == 1 and start != stop:
             raise ParameterError(f"{flag} {spec!r}: COUNT = 1 needs START = STOP; "
                                  f"expected {GRID_FORM}")
@@ -265,7 +268,12 @@ def parse_grid(specs, flag: str = "--grid") -> Grid:
     specs = list(specs or [])
     if not specs:
         raise ParameterError(f"{flag}: give at least one, {GRID_FORM}")
-    return Grid(tuple(parse_axis(s, flag) for s in specs))
+    grid = Grid(tuple(parse_axis(s, flag) for s in specs))
+    n = math.prod(len(a.values) for a in grid.axes)
+    if n > MAX_POINTS:
+        raise ParameterError(f"{flag}: {n} grid points (" + " x ".join(
+            str(len(a.values)) for a in grid.axes) + f"): allowed up to {MAX_POINTS}")
+    return grid
 
 
 def point_key(point: dict) -> str:

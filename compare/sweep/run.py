@@ -704,6 +704,12 @@ def _run_dask(tasks, client, scen, emit) -> int:
     from distributed.scheduler import KilledWorker
 
     ran = 0
+    where = f"--scheduler {client.scheduler.address!r}" if client.scheduler else "--scheduler"
+    try:
+        client.wait_for_workers(1, timeout=SCHEDULER_TIMEOUT_S)
+    except (TimeoutError, OSError) as exc:
+        raise ParameterError(f"{where}: no worker joined within {SCHEDULER_TIMEOUT_S} s "
+                             f"({_one_line(exc)}): start dask workers for it") from None
     workers = max(1, sum(client.nthreads().values()))
     chunks = _chunks(tasks, workers)
     futures = client.map(run_chunk, chunks, pure=False)
@@ -716,6 +722,13 @@ def _run_dask(tasks, client, scen, emit) -> int:
                 outcomes = [_died(task, exc) for task in owner[fut.key]]
             emit(_call_rows(owner[fut.key], outcomes, scen))  # one flushed write per call
             ran += len(outcomes)
+    except (OSError, TimeoutError) as exc:  # the scheduler went away (CommClosedError too)
+        raise ParameterError(f"{where}: lost the scheduler ({type(exc).__name__}: "
+                             f"{_one_line(exc)}); the finished rows are kept: rerun to "
+                             "resume") from None
     finally:
-        client.cancel(futures)
+        try:
+            client.cancel(futures)
+        except (OSError, TimeoutError):  # nothing left to cancel on a lost scheduler
+            pass
     return ran
