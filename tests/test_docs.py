@@ -76,3 +76,11 @@ def test_every_test_id_shown_is_collected():
         proc = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", node],
                               cwd=ROOT, capture_output=True, text=True)
         assert proc.returncode == 0 and node in proc.stdout, f"{node}: {proc.stdout[-300:]}"
+
+
+def test_the_readme_limits_table_is_the_code_s():
+    from analytic.parameters import LIMITS
+
+    readme = (ROOT / "README.md").read_text()
+    rows = dict(re.findall(r"^\| `([a-z_.]+)` \| (\[[^|]+\]) \|", readme, flags=re.M))
+    assert rows == {k: f"[{lo:g}, {hi:g}]" for k, (lo, hi, _) in LIMITS.items()}

@@ -1,0 +1,188 @@
+"""Bad input and extreme values (issue 12): every case a hostile trial found, as a named
+regression. Each ends in exit 0 with plausible numbers, or exit 2 (bad input) / 3 (diverged)
+with exactly one line on stderr naming what the user typed; never a traceback or a hang."""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from compare.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIO = (ROOT / "analytic" / "scenarios" / "open-center.toml").read_text()
+
+
+def edited(tmp_path, **fields) -> str:
+    """open-center.toml with ``key = value`` lines replaced (first occurrence of each key)."""
+    text = SCENARIO
+    for key, value in fields.items():
+        text, n = re.subn(rf"(?m)^{key}\s*=.*$", f"{key} = {value}", text, count=1)
+        assert n == 1, key
+    path = tmp_path / "tree.toml"
+    path.write_text(text)
+    return str(path)
+
+
+def one_line(capsys, argv, code, *words):
+    """Run the CLI in-process; exit ``code`` with one stderr line holding every word."""
+    rc = main(argv)
+    err = capsys.readouterr().err
+    assert rc == code, err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for w in words:
+        assert w in err, (w, err)
+    return err
+
+
+@pytest.mark.parametrize("fields, words", [
+    ({"damping": "1e12"}, ["trunk.damping = 1000000000000.0", "allowed [0, 1e+06]"]),  # 19.8 GiB
+    ({"length": "1e30"}, ["trunk.length"]),  # was ledger 5e55, x_max 0
+    ({"density": "1e308"}, ["trunk.density"]),  # was null loss and residual
+    ({"density": "1e-3", "clamp_mass": "0", "crown_mass": "0"}, ["trunk.density"]),  # 24 min
+    ({"t_end": "1e6"}, ["t_end = 1000000.0 s", "allowed [0.0001, 10] s"]),  # was a hang
+], ids=["damping-1e12", "length-1e30", "density-1e308", "light-trunk", "t_end-1e6"])
+def test_implausible_scenario_fields_are_refused(tmp_path, capsys, fields, words):
+    one_line(capsys, ["simulate", edited(tmp_path, **fields)], 2, *words)
+
+
+def test_a_pendulum_57_km_long_is_refused_not_simulated(tmp_path, capsys):
+    """bullet sdof gave x_max 1.11 where soft and mujoco gave 2.185, ledger 0.30, exit 0."""
+    one_line(capsys, ["simulate", edited(tmp_path, equivalent_length="57005"), "--backend",
+                      "bullet", "--trunk", "sdof"], 2, "impactor.equivalent_length")
+
+
+def test_a_steel_stiff_trunk_is_refused(tmp_path, capsys):
+    """E = 1e16 Pa on the mujoco SDOF trunk: omega dt = 1.93 was accepted, x_max 2.5x off."""
+    path = edited(tmp_path, youngs_modulus="1e16", base_stiffness="1e16")
+    one_line(capsys, ["simulate", path, "--backend", "mujoco", "--trunk", "sdof"], 2,
+             "trunk.youngs_modulus", "allowed [1e+07, 1e+11] Pa")
+
+
+def test_the_sdof_trunk_frequency_sets_the_engine_time_step():
+    """The stiffest plausible SDOF trunk: its own omega enters the step (omega dt < 2)."""
+    from analytic import load_scenario
+    from analytic.parameters import Trunk
+    from mujoco_models._runner import make_setup
+
+    s = load_scenario("open-center")
+    stiff = Trunk(length=1.0, clamp_height=0.05, diameter=1.0, density=950.0,
+                  youngs_modulus=1e11, clamp_mass=1.0, crown_mass=0.0, damping=0.0,
+                  base_stiffness=math.inf)
+    import dataclasses
+
+    setup = make_setup(dataclasses.replace(s, trunk=stiff), trunk="sdof")
+    omega = math.sqrt(setup.model.stiffness / setup.model.dynamic_mass)
+    assert omega * setup.dt <= 2 * math.pi / 20 * (1 + 1e-12)  # 20 steps a period
+
+
+def test_contact_stiffness_1e16_is_refused_before_it_runs(capsys):
+    """Was 175 s and 11.5 GB before a MemoryError."""
+    one_line(capsys, ["simulate", "open-center", "--backend", "mujoco", "--trunk", "sdof",
+                      "--contact-stiffness", "1e16"], 2, "--contact-stiffness", "1e+12")
+
+
+def test_rk4_with_a_step_too_coarse_for_the_contact_is_refused(capsys):
+    """T0 6.09 ms against 2.05 ms with a closed ledger, exit 0: the ledger cannot tell."""
+    one_line(capsys, ["simulate", "open-center", "--backend", "mujoco", "--trunk", "sdof",
+                      "--integrator", "RK4", "--dt", "1.86e-4"], 2, "--dt", "RK4",
+             "rebounds at e = 0.2")
+
+
+def test_work_budget_is_checked_before_a_run(capsys, monkeypatch):
+    monkeypatch.setenv("TREEIMPACT_MAX_STEPS", "1000")
+    one_line(capsys, ["simulate", "open-center", "--backend", "mujoco", "--trunk", "sdof"], 2,
+             "--t-end / --dt", "allowed up to 1e+03 steps", "TREEIMPACT_MAX_STEPS")
+
+
+@pytest.mark.parametrize("argv, code, words", [
+    (["simulate", "open-center", "--backend", "soft", "--t-end", "-1"], 2, ["--t-end = -1.0"]),
+    (["simulate", "open-center", "--backend", "mujoco", "--e", "1e-308"], 2,
+     ["contact.restitution = 1e-308", "soft contact"]),  # was a ZeroDivisionError
+    (["report", "--out", "/dev/null/x"], 2, ["--out '/dev/null/x'"]),  # NotADirectoryError
+    (["report", "--study", "/nonexistent"], 2, ["--study '/nonexistent'"]),  # after the runs
+    (["sweep", "--grid", "e=0:1:100000000", "--out", "/tmp/never"], 2, ["COUNT"]),  # unbounded
+], ids=["soft-t-end-negative", "mujoco-e-1e-308", "report-out-not-a-dir",
+        "report-study-missing", "sweep-count-1e8"])
+def test_bad_flags_are_one_line(capsys, argv, code, words):
+    one_line(capsys, argv, code, *words)
+
+
+def test_latin1_byte_in_a_scenario_file(tmp_path, capsys):
+    path = tmp_path / "tree.toml"
+    path.write_bytes(SCENARIO.replace("Table 1", "Table \xe9").encode("latin-1"))
+    one_line(capsys, ["simulate", str(path)], 2, "not UTF-8", "offset")
+
+
+def test_calibration_that_is_not_a_table(tmp_path, capsys):
+    path = tmp_path / "tree.toml"
+    path.write_text('calibration = "x"\n' + SCENARIO.split("[calibration]")[0])
+    one_line(capsys, ["simulate", str(path)], 2, "calibration: expected a table")
+
+
+def test_results_beyond_the_geometry_or_the_ledger_are_divergences():
+    import dataclasses
+
+    from analytic import load_scenario, simulate
+    from analytic.results import SimulationDiverged, check_plausible
+
+    good = simulate(load_scenario("open-center"))
+    assert check_plausible(good) is good
+    for change, words in (({"x_max": 2.0}, "x_max = 2.0 m"),  # a = 0.354 m
+                          ({"x_max": math.nan}, "x_max = nan"),
+                          ({"ledger_residual": 0.3}, "ledger residual 0.3")):
+        bad = dataclasses.replace(good, metrics={**good.metrics, **change})
+        with pytest.raises(SimulationDiverged, match=re.escape(words)):
+            check_plausible(bad)
+
+
+def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tmp_path):
+    code = ("import mujoco, mujoco_models._runner\n"
+            "m = mujoco.MjModel.from_xml_string('<mujoco><option timestep=\"1\"/><worldbody>"
+            "<body><joint type=\"slide\" stiffness=\"1e12\"/><geom size=\"0.1\" mass=\"1\"/>"
+            "</body></worldbody></mujoco>')\n"
+            "d = mujoco.MjData(m); d.qpos[0] = 1\n"
+            "for _ in range(3): mujoco.mj_step(m, d)\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert proc.returncode == 0 and proc.stdout == ""
+    assert proc.stderr.count("mujoco: Nan, Inf or huge value in QACC") == 1  # once per kind
+    assert list(tmp_path.iterdir()) == []  # no MUJOCO_LOG.TXT
+
+
+def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
+    out = tmp_path / "sweep"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "compare.cli", "sweep", "--grid", "e=0.1:0.9:30",
+         "--grid", "crown_ratio=0,1,2", "--backend", "analytic,soft", "--out", str(out)],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not (out / "results.csv").exists() and time.monotonic() < deadline:
+        time.sleep(0.1)  # running: its journal exists
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1].startswith("treeimpact: sweep interrupted")
+    assert "Traceback" not in err
+
+
+def test_a_scheduler_without_workers_is_one_line_after_its_timeout(tmp_path, monkeypatch):
+    from distributed import Client, LocalCluster
+
+    from analytic.parameters import ParameterError
+    from compare.sweep import run
+
+    monkeypatch.setattr(run, "SCHEDULER_TIMEOUT_S", 1)
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        with pytest.raises(ParameterError, match=r"no worker joined within 1 s"):
+            run.run_sweep("central-leader", ["e=0.3"], tmp_path / "s", scheduler=client,
+                          identify=False, progress=False)

@@ -1,0 +1,88 @@
+"""A seeded fuzz of scenario fields and command-line options (issue 12): every case ends in
+exit 0 with finite, plausible numbers, or exit 2/3 with exactly one line on stderr; never a
+traceback, never past its time bound."""
+
+from __future__ import annotations
+
+import json
+import math
+import random
+import re
+import signal
+from pathlib import Path
+
+import pytest
+
+from compare.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIO = (ROOT / "analytic" / "scenarios" / "central-leader.toml").read_text()
+FIELDS = ("length", "clamp_height", "diameter", "density", "youngs_modulus", "clamp_mass",
+          "crown_mass", "damping", "base_stiffness", "mass", "equivalent_length",
+          "release_angle_deg", "restitution", "duration", "t_end")
+CASES = 600  # ~10 s on one core: the analytic backend, a tenth on the soft contact
+SECONDS_PER_CASE = 20  # a hang is a failure, not a wait
+
+
+def _value(rng: random.Random, current: float) -> str:
+    """A hostile replacement: a scale of the current value (near it, 0.1 .. 10, half the
+    time; else 1e-12 .. 1e12), its negative, zero, a non-number, or a wrong type."""
+    kind = rng.random()
+    if kind < 0.5:
+        return repr(current * 10 ** rng.uniform(-1, 1))
+    if kind < 0.75:
+        return repr(current * 10 ** rng.uniform(-12, 12))
+    return rng.choice(["0", "-1", repr(-current), "nan", "inf", "-inf", '"x"', "true",
+                       "[1, 2]", "1e308", "5e-324"])
+
+
+def _case(seed: int) -> tuple[str, list[str]]:
+    rng = random.Random(seed)
+    text = SCENARIO
+    for key in rng.sample(FIELDS, rng.randint(1, 3)):
+        m = re.search(rf"(?m)^{key}\s*=\s*([0-9.eE+-]+)", text)
+        text = text[:m.start(1)] + _value(rng, float(m.group(1))) + text[m.end(1):]
+    args = []
+    if rng.random() < 0.3:
+        flag = rng.choice(["--e", "--t-end", "--contact-stiffness"])
+        args += [flag, rng.choice(["-1", "0", "nan", "1e-308", "1e308", "0.5", "2", "1e9"])]
+    if "--contact-stiffness" in args or rng.random() < 0.1:
+        args += ["--backend", "soft"]
+    return text, args
+
+
+def _alarm(signum, frame):
+    raise TimeoutError(f"a case ran past {SECONDS_PER_CASE} s")
+
+
+@pytest.mark.parametrize("chunk", range(3))
+def test_fuzzed_scenarios_and_flags_never_traceback_hang_or_print_garbage(chunk, tmp_path,
+                                                                          capsys):
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    outcomes = {0: 0, 2: 0, 3: 0}
+    try:
+        for seed in range(chunk * CASES // 3, (chunk + 1) * CASES // 3):
+            text, args = _case(seed)
+            path = tmp_path / f"case{seed}.toml"
+            path.write_text(text)
+            signal.alarm(SECONDS_PER_CASE)
+            try:
+                rc = main(["simulate", str(path), "--json", *args])
+            finally:
+                signal.alarm(0)
+            out = capsys.readouterr()
+            where = f"seed {seed}: {args} {out.err!r}"
+            assert rc in outcomes, where
+            outcomes[rc] += 1
+            if rc == 0:
+                assert out.err == "", where
+                metrics = json.loads(out.out)["metrics"]
+                a = json.loads(out.out)["scenario"]["trunk"]["clamp_height"]
+                assert 0 < metrics["x_max"] <= a and math.isfinite(metrics["impact_loss"])
+                assert metrics["ledger_residual"] <= 0.05, where
+            else:
+                assert out.out == "" and out.err.count("\n") == 1, where
+                assert "Traceback" not in out.err, where
+    finally:
+        signal.signal(signal.SIGALRM, previous)
+    assert outcomes[0] > 0 and outcomes[2] > 0  # the fuzz reaches both sides of the limits
