@@ -47,7 +47,8 @@ class ImpactRecord:
                 raise ParameterError(f"record.{name}: shape {value.shape}, expected {n}")
             object.__setattr__(self, name, value)
         if n[0] < 3 or np.any(np.diff(self.t) <= 0):
-            raise ParameterError("record.t: at least 3 strictly increasing times required")
+            raise ParameterError("--t-end / --dt: the record has fewer than 3 increasing times: a "
+                             "longer --t-end or a smaller --dt (record.t)")
 
 
 def detection_duration(model, contact=None, *, stiffness: float | None = None) -> float:
@@ -110,7 +111,8 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
     nan = math.nan
     peak = float(np.max(r.force))
     if not (math.isfinite(peak) and peak > 0):
-        raise ParameterError("record.force: no contact in the record (peak force <= 0)")
+        raise ParameterError("--t-end: no contact in the record: the pendulum never touched "
+                             "the trunk within t_end (peak force <= 0)")
     intervals = contact_intervals(r.force, force_threshold * peak)
     t = r.t
     together = None

@@ -46,7 +46,7 @@ def check_time_step(dt, collision_duration: float, highest_frequency: float | No
         what = f"contact duration {collision_duration:.3g} s"
         if highest_frequency is not None:
             what += f", highest trunk mode {highest_frequency:.4g} rad/s"
-        raise ParameterError(f"dt = {dt:.3g} s is too large for stability: allowed "
+        raise ParameterError(f"--dt = {dt:.3g} s is too large for stability: allowed "
                              f"(0, {limit:.3g}) s ({what})")
     return dt
 

@@ -61,7 +61,8 @@ def discrete_collision(k: float, c: float, mu: float, dt: float, v0: float = 1.0
         if delta < 0.0 and w < 0.0:
             steps = sum(1 for p in impulses if p > 0.0)
             return -w / v0, steps, impulses
-    raise ParameterError("discrete_collision: the bodies never separated (check k, c, dt)")
+    raise ParameterError("--dt / --contact-stiffness: one free collision did not end "
+                         f"within {MAX_COLLISION_STEPS} steps: a larger --dt or a softer contact")
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,8 @@ def discrete_collision(k: float, c: float, mu: float, h: float) -> tuple[float, 
             return float(-w[i]), int(n + i)
         n += chunk
         chunk *= 2
-    raise ParameterError("discrete_collision: the bodies never separated (check k, c, dt)")
+    raise ParameterError("--dt / --contact-stiffness: one free collision did not end "
+                         f"within {MAX_COLLISION_STEPS} steps: a larger --dt or a softer contact")
 
 
 def _discrete_collision_loop(k, c, mu, h):
@@ -72,7 +73,8 @@ def _discrete_collision_loop(k, c, mu, h):
         delta += h * w
         if k * delta + c * w <= 0.0 or delta < 0.0:
             return -w, n
-    raise ParameterError("discrete_collision: the bodies never separated (check k, c, dt)")
+    raise ParameterError("--dt / --contact-stiffness: one free collision did not end "
+                         f"within {MAX_COLLISION_STEPS} steps: a larger --dt or a softer contact")
 
 
 def discrete_collision_rk4(k: float, c: float, mu: float, h: float) -> tuple[float, int]:
@@ -97,7 +99,8 @@ def discrete_collision_rk4(k: float, c: float, mu: float, h: float) -> tuple[flo
         w += h / 6.0 * (w1 + 2.0 * w2 + 2.0 * w3 + w4)
         if k * delta + c * w <= 0.0 or delta < 0.0:
             return -w, n
-    raise ParameterError("discrete_collision_rk4: the bodies never separated (check k, c, dt)")
+    raise ParameterError("--dt / --contact-stiffness: one free collision did not end "
+                         f"within {MAX_COLLISION_STEPS} steps (RK4): a larger --dt or a softer contact")
 
 
 def matched_pole(k: float, c: float, mu: float, h: float) -> tuple[float, float]:
