@@ -210,7 +210,30 @@ def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "pa
             sel) > 1 else 0.0
     ident = identify(a1=reg.coefficients[1], a2=reg.coefficients[2], x_max=reg.x_max,
                      tau=reg.tau, x0=x0, T0=T0, test=test, A_x=A_x, A_y=A_y, reading=reading)
+    check_identifiable(ident)
     return ident, reg
+
+
+def check_identifiable(ident: Identified) -> Identified:
+    """``ident`` if the procedure's premises hold on the record, else a one-line
+    ParameterError starting "not identifiable": the moving-together motion decays and
+    oscillates (0 < xi < 1, eqs 35-36), the common velocity is below the impact speed
+    (V < u1: the pendulum gave the trunk momentum, eq 44), and M_T and K_T come out positive
+    (eqs 44 and 46). A number that breaks them is not a property of the tree."""
+    problem = None
+    if not 0.0 < ident.xi < 1.0:
+        problem = (f"xi = {ident.xi:.3g} (b = {ident.b:.3g} 1/s, omega_n = "
+                   f"{ident.omega_n:.3g} rad/s): the motion after moving together does not "
+                   "decay as a damped oscillation (eqs 35-36 need 0 < xi < 1)")
+    elif not ident.V < ident.u1:
+        problem = (f"V = {ident.V:.3g} m/s is not below the impact speed u1 = "
+                   f"{ident.u1:.3g} m/s (eq 44)")
+    elif not (ident.M_T > 0.0 and ident.K_T > 0.0):
+        problem = (f"M_T = {ident.M_T:.3g} kg, K_T = {ident.K_T:.3g} N/m: eqs 44 and 46 give "
+                   "a non-positive mass or stiffness")
+    if problem is not None:
+        raise ParameterError(f"not identifiable: {problem}")
+    return ident
 
 
 def pendulum_test_of(scenario) -> PendulumTest:

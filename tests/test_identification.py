@@ -87,3 +87,22 @@ def test_bad_input_is_refused_with_the_field_name():
         regress(np.linspace(0, 0.1, 100), np.linspace(0, 1, 100), window=0.02)
     with pytest.raises(ParameterError, match="finite"):
         regress(np.linspace(0, 0.1, 100), np.full(100, np.nan))
+
+
+def test_a_record_that_breaks_the_premises_is_not_identifiable():
+    """Never a number that is not a property of a tree (issue 14): a negative xi, a V above
+    u1, a negative M_T are refused with the premise that failed."""
+    import dataclasses
+
+    from analytic.identification import check_identifiable
+
+    scen = load_scenario("central-leader")
+    res = simulate(scen, samples=5001)
+    ident, _ = identify_from_record(res.trajectory.t, res.trajectory.x, pendulum_test_of(scen),
+                                    y=res.trajectory.y)
+    assert check_identifiable(ident) is ident  # the exact SDOF record is identifiable
+    for change, words in (({"xi": -0.89}, "xi = -0.89"), ({"xi": 1.2}, "0 < xi < 1"),
+                          ({"V": 3.0}, "not below the impact speed"),
+                          ({"M_T": -10.3}, "M_T = -10.3 kg"), ({"K_T": -860.0}, "K_T = -860")):
+        with pytest.raises(ParameterError, match=f"^not identifiable: .*{words}"):
+            check_identifiable(dataclasses.replace(ident, **change))

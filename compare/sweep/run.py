@@ -162,7 +162,9 @@ def _identify(result, scenario: Scenario) -> dict:
         ident, _ = identify_from_record(src.t, src.x, pendulum_test_of(scenario), y=src.y,
                                         reading="paper")
     except (ParameterError, ValueError, FloatingPointError) as exc:
-        out["id_error"] = f"identification failed: {_one_line(exc)}"
+        text = _one_line(exc)  # "not identifiable: ..." when the premises fail
+        out["id_error"] = text if text.startswith("not identifiable") else (
+            f"identification failed: {text}")
         return out
     out.update({f"id.{k}": float(getattr(ident, k)) for k in IDENT_KEYS})
     return out
