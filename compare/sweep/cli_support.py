@@ -135,6 +135,9 @@ def run_sweep_command(args) -> int:
 
 
 def _run(args) -> int:
+    import time
+
+    t_start = time.perf_counter()
     from .grid import parse_grid
     from .run import _check_backends, run_sweep
     from .study import run_study, write_study
@@ -160,11 +163,12 @@ def _run(args) -> int:
         print(f"sweep: {len(res.table)} rows ("
               + ", ".join(f"{k} {v}" for k, v in sorted(status.items()))
               + f"); {res.rows_written} written now, {res.rows_done_before} done before; "
-              f"{res.wall_s:.1f} s")
+              f"runs {res.wall_s:.1f} s")
         paths = write_study(args.out, {"sweep": res.out}, tolerance=args.tolerance,
                             title=f"Sweep of {res.table['scenario'].iloc[0] if len(res.table) else args.scenario}",
                             meta={"wall_s": res.wall_s})
     for kind in ("table", "md", "html"):
         print(f"{kind}: {paths[kind]}")
     print(f"figures: {len(paths['figures'])} in {paths['md'].parent}")
+    print(f"wall time: {time.perf_counter() - t_start:.1f} s (runs, maps and the study)")
     return 0

@@ -11,7 +11,6 @@ import json
 import math
 import os
 import socket
-import sys
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -505,13 +504,13 @@ def _chunks(tasks: list, workers: int) -> list[list]:
 
 
 def _progress(total: int, enabled):
-    if enabled is None:
-        enabled = sys.stderr.isatty()
-    if not enabled:
+    """Rows reported on stderr (``enabled`` None: always, a bar on a terminal and a line every
+    few seconds elsewhere; False: never)."""
+    if enabled is False or total == 0:
         return None
-    from tqdm import tqdm
+    from ..progress import Progress
 
-    return tqdm(total=total, unit="row", desc="sweep", file=sys.stderr)
+    return Progress(total, "sweep", unit="row")
 
 
 def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = False,
