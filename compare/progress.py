@@ -1,5 +1,6 @@
 """Progress of long runs on stderr: a tqdm bar on a terminal, else one line every few
-seconds (logs and CI see how far a run is), and the honest wall time at the end."""
+seconds (logs and CI see how far a run is) and the honest wall time at the end; a run
+shorter than a few seconds prints nothing."""
 
 from __future__ import annotations
 
@@ -13,13 +14,15 @@ LINE_EVERY_S = 5.0
 class Progress:
     """Counts finished items of ``total``; ``update(n)`` after each, ``close()`` at the end."""
 
-    def __init__(self, total: int, desc: str, unit: str = "run", stream=None):
+    def __init__(self, total: int, desc: str, unit: str = "run", stream=None,
+                 bar: bool | None = None):
         self.total, self.desc, self.unit = total, desc, unit
         self.stream = stream if stream is not None else sys.stderr
         self.done = 0
         self.start = self._last = time.perf_counter()
+        self._lines = 0  # progress lines printed: a run shorter than LINE_EVERY_S prints none
         self._bar = None
-        if getattr(self.stream, "isatty", lambda: False)():
+        if bar or (bar is None and getattr(self.stream, "isatty", lambda: False)()):
             from tqdm import tqdm
 
             self._bar = tqdm(total=total, unit=unit, desc=desc, file=self.stream)
@@ -35,6 +38,9 @@ class Progress:
             self._line(now)
 
     def _line(self, now: float, final: bool = False) -> None:
+        if final and not self._lines and now - self.start < LINE_EVERY_S:
+            return  # a short run needs no word on its progress
+        self._lines += 1
         pct = 100.0 * self.done / self.total if self.total else 100.0
         word = "done" if final else "running"
         print(f"{self.desc}: {self.done}/{self.total} {self.unit}s ({pct:.0f} %), "

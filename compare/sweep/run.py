@@ -504,13 +504,13 @@ def _chunks(tasks: list, workers: int) -> list[list]:
 
 
 def _progress(total: int, enabled):
-    """Rows reported on stderr (``enabled`` None: always, a bar on a terminal and a line every
-    few seconds elsewhere; False: never)."""
+    """Rows reported on stderr: ``enabled`` None, a bar on a terminal and a line every few
+    seconds elsewhere; True, a bar; False, nothing."""
     if enabled is False or total == 0:
         return None
     from ..progress import Progress
 
-    return Progress(total, "sweep", unit="row")
+    return Progress(total, "sweep", unit="row", bar=True if enabled else None)
 
 
 def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = False,
