@@ -28,7 +28,7 @@ def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dic
         tail = next((c for c in sol.tails if c.t_start == t0), None)
         T0 = tail.t_accumulation if tail is not None else t0
         T0 = min(T0, sol.t_end)
-        x_, vx_, _, _ = (float(a[0]) for a in sol.state(T0))
+        x_, vx_, _, _ = sol._scalar_state(T0)
         x0, V = x_, vx_
         A_x = sol._integral("x", T0)
         A_y = sol._integral("y", T0)
@@ -44,7 +44,7 @@ def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dic
     e_transferred = nan
     if sol.separations:
         t_last = sol.separations[-1].t
-        _, _, y, vy = (float(a[0]) for a in sol.state(t_last))
+        _, _, y, vy = sol._scalar_state(t_last)
         e_pend = 0.5 * model.impactor_mass * vy ** 2 + 0.5 * model.impactor_stiffness * y ** 2
         e_transferred = model.initial_energy - e_pend - loss_process
         if scenario is not None and isinstance(scenario.impactor, Pendulum):

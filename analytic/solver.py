@@ -126,6 +126,23 @@ class ImpactSolution:
         dy, vy = pend.advance(s, ph.y0, ph.vy0, np)
         return ph.x0 + dx, vx, ph.y0 + dy, vy
 
+    def _scalar_state(self, t: float) -> tuple[float, float, float, float]:
+        """(x, vx, y, vy) at one time t (s): :meth:`state` on the solver's scalar path."""
+        k = max(0, bisect_right(self._starts, t) - 1)
+        ph = self.phases[k]
+        s = t - ph.t0
+        tree, pend, both = self._osc
+        if ph.kind == "together":
+            dx, vx = both.scalar_advance(s, ph.x0, ph.vx0)
+            return ph.x0 + dx, vx, ph.x0 + dx, vx
+        dx, vx = tree.scalar_advance(s, ph.x0, ph.vx0)
+        dy, vy = pend.scalar_advance(s, ph.y0, ph.vy0)
+        return ph.x0 + dx, vx, ph.y0 + dy, vy
+
+    @cached_property
+    def _starts(self) -> list:
+        return [ph.t0 for ph in self.phases]
+
     def state(self, t):
         """(x, vx, y, vy) at times t (s, 0 <= t <= t_end); arrays."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -147,7 +164,36 @@ class ImpactSolution:
         return self.together_starts[0] if self.together_starts else None
 
     def _phase_integral(self, which: str, k: int, t1: float) -> float:
-        """int over phase k from its start to t1 (absolute time) of x, y or C_T vx^2."""
+        """int over phase k from its start to t1 (absolute time) of x, y or C_T vx^2, in
+        closed form from the phase's end points (docs/energy-ledger.md): integrating
+        x'' + 2 beta x' + Omega^2 x = 0 gives Omega^2 int x = -(dv + 2 beta dx) (eqs 15-16),
+        and C_T int vx^2 is the oscillator's own energy lost (eq 11 times vx)."""
+        ph = self.phases[k]
+        s = t1 - ph.t0
+        if s <= 0.0:
+            return 0.0
+        tree, pend, both = self._osc
+        m = self.model
+        if ph.kind == "together":  # one body: M_T + m on K_T + k, damping C_T
+            osc, mass, stiff = both, m.dynamic_mass + m.impactor_mass, m.stiffness + (
+                m.impactor_stiffness)
+        else:
+            osc, mass, stiff = tree, m.dynamic_mass, m.stiffness
+        dx, vx1 = osc.scalar_advance(s, ph.x0, ph.vx0)
+        x1 = ph.x0 + dx
+        if which == "damping":
+            return (0.5 * mass * (ph.vx0 ** 2 - vx1 ** 2)
+                    + 0.5 * stiff * (ph.x0 ** 2 - x1 ** 2))
+        if which == "x" or ph.kind == "together":  # y = x while moving together
+            return -((vx1 - ph.vx0) + 2.0 * osc.beta * (x1 - ph.x0)) / osc.omega_sq
+        if pend.omega_sq > 0.0:  # undamped: y0 sin(w s) / w + 2 v0 sin^2(w s / 2) / w^2
+            w = math.sqrt(pend.omega_sq)  # (no difference of nearly equal velocities)
+            return ph.y0 * math.sin(w * s) / w + 2.0 * ph.vy0 * (math.sin(0.5 * w * s) / w) ** 2
+        return ph.y0 * s + 0.5 * ph.vy0 * s * s  # a billet flies freely
+
+    def _phase_integral_quadrature(self, which: str, k: int, t1: float) -> float:
+        """:meth:`_phase_integral` by Gauss-Legendre quadrature of the motion itself: the
+        independent check of the closed forms (tests, benchmark)."""
         tree, _, both = self._osc
         ph = self.phases[k]
         rate = max(tree.fastest_rate, both.fastest_rate, 1e-9)
@@ -184,7 +230,7 @@ class ImpactSolution:
     def energy_terms(self, t: float) -> dict:
         """Ledger terms at time t (J): kinetic, potential, damping work, impact losses."""
         m = self.model
-        x, vx, y, vy = (float(a[0]) for a in self.state(t))
+        x, vx, y, vy = self._scalar_state(t)
         losses = sum(i.loss for i in self.impacts if i.t <= t)
         losses += sum(c.loss for c in self.tails if c.t_start <= t)
         return {

@@ -96,6 +96,42 @@ def _verdict(r_exact: float, r_ivp: float) -> str:
     return "solve_ivp"
 
 
+def _bench_simulate(names, repeats: int) -> None:
+    """analytic.simulate (solver, every metric, the ledger) with the phase integrals in
+    closed form against the same with them by quadrature (the code before issue 13),
+    interleaved; and the largest difference of any metric between the two."""
+    from contextlib import contextmanager
+
+    from analytic.simulate import simulate
+    from analytic.solver import ImpactSolution
+
+    @contextmanager
+    def quadrature():
+        closed = ImpactSolution._phase_integral
+        ImpactSolution._phase_integral = ImpactSolution._phase_integral_quadrature
+        try:
+            yield
+        finally:
+            ImpactSolution._phase_integral = closed
+
+    print(f"\nanalytic.simulate: {'scenario':16s} {'closed ms':>9s} {'quadrature ms':>13s} "
+          f"{'ratio':>6s} {'max metric rel diff':>19s}")
+    for name in names:
+        scenario = load_scenario(name)
+        closed_t, quad_t = [], []
+        for _ in range(max(3, repeats // 20)):
+            closed_t += _time(lambda: simulate(scenario), 10)
+            with quadrature():
+                quad_t += _time(lambda: simulate(scenario), 10)
+        a = simulate(scenario).metrics
+        with quadrature():
+            b = simulate(scenario).metrics
+        diff = max(abs(a[k] - b[k]) / max(abs(b[k]), 1e-300) for k in a
+                   if isinstance(a[k], float) and math.isfinite(a[k]) and k != "ledger_residual")
+        mc, mq = statistics.median(closed_t) * 1e3, statistics.median(quad_t) * 1e3
+        print(f"{'':19s}{name:16s} {mc:9.3f} {mq:13.3f} {mq / mc:6.1f} {diff:19.1e}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=200)
@@ -158,6 +194,7 @@ def main(argv=None) -> int:
             exact_wins.append(verdict != "solve_ivp")
             print(f"{name:16s} {label:>14s} {d_ex:9.1e} {r_ex:6.1f} {d_ivp:9.1e} {r_ivp:7.1f} "
                   f"{u:9.1e}  {verdict}")
+    _bench_simulate(names, args.repeats)
     if not stop:
         print("\n(the targets below are set for --through separation)")
     print(f"\ntargets: median < 0.2 ms {'met' if max(medians) < 0.2 else 'MISSED'} "

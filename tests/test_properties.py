@@ -99,3 +99,30 @@ def test_a_loop_that_stops_advancing_time_is_a_one_line_divergence(monkeypatch):
     monkeypatch.setattr(solver, "first_zero", lambda *a, **k: 0.0)  # every flight: no time
     with pytest.raises(SimulationDiverged, match=r"^exact solver: 1001 events without "):
         solve_impacts(LIGHT_OVERDAMPED, 0.005)
+
+
+@settings(max_examples=40, deadline=timedelta(seconds=5), derandomize=True)
+@given(model=models.filter(lambda m: m.restitution <= 0.9), t_end=st.floats(0.005, 0.1))
+def test_phase_integrals_in_closed_form_match_quadrature(model, t_end):
+    """A_x, A_y and the damping work by their closed forms (eqs 15-16, the oscillator's
+    energy) against Gauss-Legendre quadrature of the motion itself, phase by phase."""
+    sol = solve_impacts(model, t_end)
+    eps = 2.220446049250313e-16
+    for k, ph in enumerate(sol.phases):
+        s = ph.t1 - ph.t0
+        x1, vx1, y1, vy1 = sol._scalar_state(ph.t1)
+        together = ph.kind == "together"
+        mass = model.dynamic_mass + (model.impactor_mass if together else 0.0)
+        stiff = model.stiffness + (model.impactor_stiffness if together else 0.0)
+        beta, w2 = 0.5 * model.damping / mass, stiff / mass
+        # round-off of each closed form: its terms (end points) times a few eps
+        floor = {"x": (abs(ph.vx0) + abs(vx1) + 2 * beta * (abs(ph.x0) + abs(x1))) / w2,
+                 "y": abs(ph.y0) * s + abs(ph.vy0) * s * s,
+                 "damping": mass * (ph.vx0 ** 2 + vx1 ** 2) + stiff * (ph.x0 ** 2 + x1 ** 2)}
+        if together:
+            floor["y"] = floor["x"]
+        for which in ("x", "y", "damping"):
+            closed = sol._phase_integral(which, k, ph.t1)
+            quad = sol._phase_integral_quadrature(which, k, ph.t1)  # Gauss-Legendre: 1e-12
+            assert abs(closed - quad) <= 1e-9 * abs(quad) + 64 * eps * floor[which], (
+                which, k, closed, quad)
