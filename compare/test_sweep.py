@@ -512,3 +512,28 @@ def test_interrupted_sweep_command_says_how_to_resume_and_exits_130(tmp_path, ca
     err = capsys.readouterr().err.strip()
     assert rc == 130 and "\n" not in err and "rerun the same command to resume" in err
 
+
+
+def test_map_cells_print_their_values_outline_the_tolerance_and_say_why_na():
+    """A colour that saturates never hides a value: +300 % prints as such, the colour bar
+    gets an arrow; a cell within 5 % is outlined; a cell without a value says why."""
+    import matplotlib
+    import pandas as pd
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    from compare.sweep.maps import _extend, _heat
+
+    matplotlib.use("Agg")
+    cell = pd.DataFrame({"e": [0.1, 0.5, 0.9], "crown_ratio": [0.0, 0.0, 0.0],
+                         "rel": [0.01, 3.0, math.nan], "value": [1.0, 4.0, 1.0],
+                         "analytic": [0.99, 1.0, math.nan]})
+    ax = Figure().add_subplot()
+    _heat(ax, cell, "e", "crown_ratio", "rel", 0.05, "x_max", vmax=1.0)
+    texts = [t.get_text() for t in ax.texts]
+    assert texts == ["+1%", "+300%", "n/a\npaper model:\nno value"]
+    outlined = [p.get_xy() for p in ax.patches if isinstance(p, Rectangle)]
+    assert outlined == [(-0.5, -0.5)]  # only the 1 % cell, on the grid's own cell
+    assert _extend(cell["rel"], 1.0) == "max" and _extend(cell["rel"], 5.0) == "neither"
+    assert all(t.get_fontsize() >= 7 for t in ax.texts)
+    assert all(lbl.get_fontsize() >= 9 for lbl in ax.get_xticklabels())

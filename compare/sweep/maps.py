@@ -158,53 +158,84 @@ def _label(name: str) -> str:
 
 
 def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annotate=False):
-    """One heatmap on ax: rows b, columns a (index grid, values as tick labels); with
-    ``annotate`` each cell also prints its value (in %) when the grid is small enough."""
+    """One heatmap on ax: rows b, columns a (index grid, values as tick labels). Every cell
+    prints its value (in %; the colours saturate at +-vmax, the text does not) and, with
+    ``letters``, the dominant rung's letter; a cell within ``tol`` is outlined in black; a
+    cell without a value says why (``annotate`` is kept for callers: values always show)."""
+    import matplotlib
+    from matplotlib.colors import SymLogNorm
+    from matplotlib.patches import Rectangle
 
     xs = sorted(cell[a].unique())
     ys = sorted(cell[b].unique())
     Z = np.full((len(ys), len(xs)), np.nan)
     L = np.full((len(ys), len(xs)), "", dtype=object)
+    why = np.full((len(ys), len(xs)), "", dtype=object)
     xi = {v: i for i, v in enumerate(xs)}
     yi = {v: i for i, v in enumerate(ys)}
     for _, r in cell.iterrows():
-        Z[yi[r[b]], xi[r[a]]] = r[value_col]
+        j, i = yi[r[b]], xi[r[a]]
+        Z[j, i] = r[value_col]
         if letters is not None and isinstance(r.get(letters), str):
-            L[yi[r[b]], xi[r[a]]] = RUNG_LETTERS.get(r[letters], ("?",))[0]
+            L[j, i] = RUNG_LETTERS.get(r[letters], ("?",))[0]
+        why[j, i] = _why_missing(r)
     finite = np.isfinite(Z)
     if vmax is None:
         vmax = _vmax(Z, tol)
     masked = np.ma.masked_invalid(np.clip(Z, -vmax, vmax))
-    import matplotlib
-    from matplotlib.colors import SymLogNorm
-
-    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.88")
     # symmetric log colours: linear within tol / 5, so a 1 % and a 100 % cell both read
     norm = SymLogNorm(linthresh=tol / 5.0, linscale=0.5, vmin=-vmax, vmax=vmax)
     im = ax.pcolormesh(np.arange(len(xs) + 1) - 0.5, np.arange(len(ys) + 1) - 0.5, masked,
                        cmap=cmap, norm=norm, shading="flat")
-    if finite.sum() >= 4 and len(xs) >= 2 and len(ys) >= 2:
-        A = np.where(finite, np.abs(Z), np.nan)
-        if np.nanmin(A) < tol < np.nanmax(A):
-            ax.contour(np.arange(len(xs)), np.arange(len(ys)), np.ma.masked_invalid(A),
-                       levels=[tol], colors="k", linewidths=1.2)
+    small = len(xs) <= 12 and len(ys) <= 12
+    size = 9 if len(xs) <= 6 else 7
     for j in range(len(ys)):
         for i in range(len(xs)):
             if not finite[j, i]:
-                ax.text(i, j, "n/a", ha="center", va="center", fontsize=5, color="0.4")
-            elif L[j, i]:
-                ax.text(i, j, L[j, i], ha="center", va="center", fontsize=6,
-                        color="k" if abs(Z[j, i]) < 0.6 * vmax else "w")
-            elif annotate and len(xs) <= 12 and len(ys) <= 12:
-                ax.text(i, j, f"{Z[j, i]:+.0%}" if abs(Z[j, i]) < 100 else f"{Z[j, i]:+.0e}",
-                        ha="center", va="center", fontsize=5,
-                        color="k" if abs(Z[j, i]) < 0.6 * vmax else "w")
-    ax.set_xticks(range(len(xs)), [f"{v:.3g}" for v in xs], fontsize=6, rotation=45)
-    ax.set_yticks(range(len(ys)), [f"{v:.3g}" for v in ys], fontsize=6)
-    ax.set_xlabel(_label(a), fontsize=7)
-    ax.set_ylabel(_label(b), fontsize=7)
-    ax.set_title(title, fontsize=8)
+                if small:
+                    ax.text(i, j, f"n/a\n{why[j, i]}", ha="center", va="center",
+                            fontsize=size - 1.5, color="0.3", linespacing=1.0)
+                continue
+            if abs(Z[j, i]) <= tol:  # within the tolerance: outlined on the real grid
+                ax.add_patch(Rectangle((i - 0.5, j - 0.5), 1, 1, fill=False, ec="k", lw=2.0))
+            if small:
+                v = Z[j, i]
+                text = f"{v:+.0%}" if abs(v) < 100 else f"{v:+.1e}"
+                if L[j, i]:
+                    text = f"{L[j, i]} {text}"
+                ax.text(i, j, text, ha="center", va="center", fontsize=size,
+                        color="k" if abs(v) < 0.5 * vmax else "w")
+    ax.set_xticks(range(len(xs)), [f"{v:.3g}" for v in xs], fontsize=9,
+                  rotation=45 if len(xs) > 6 else 0)
+    ax.set_yticks(range(len(ys)), [f"{v:.3g}" for v in ys], fontsize=9)
+    ax.set_xlabel(_label(a), fontsize=10)
+    ax.set_ylabel(_label(b), fontsize=10)
+    ax.set_title(title, fontsize=10)
     return im
+
+
+def _why_missing(row) -> str:
+    """Why a map cell has no value, in a few words (the row's own error first)."""
+    for col in ("id_error", "error"):
+        text = row.get(col)
+        if isinstance(text, str) and text:
+            return "not\nidentifiable" if text.startswith("not identifiable") else "failed"
+    value, ref = row.get("value"), row.get("analytic")
+    if isinstance(ref, float) and not math.isfinite(ref):
+        return "paper model:\nno value"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "no value"
+    return ""
+
+
+def _extend(values, vmax) -> str:
+    """The colour bar's arrows: which ends the values pass (clipped colours, never silent)."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    lo, hi = bool(v.size and v.min() < -vmax), bool(v.size and v.max() > vmax)
+    return {(True, True): "both", (True, False): "min", (False, True): "max"}.get((lo, hi),
+                                                                                "neither")
 
 
 def _vmax(values, tol) -> float:
@@ -293,7 +324,9 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
                     im = _heat(ax, cell, a, b, "rel", tol, f"{m} (tol {tol:.0%})",
                                letters="dominant", vmax=vmax)
             if im is not None:
-                fig.colorbar(im, ax=axes, shrink=0.6, label="(target - analytic) / |analytic|")
+                cb = fig.colorbar(im, ax=axes, shrink=0.6, extend=_extend(dt["rel"], vmax))
+                cb.set_label("(target - analytic) / |analytic|; colours saturate at "
+                             f"+-{vmax:.0%}, the cells print their value", fontsize=9)
             what = f"{a} x {b}" if b else a
             fig.suptitle(f"{target} vs the paper's model (analytic): {what}", fontsize=9)
             path = figdir / f"{prefix}-{_safe(target)}-{_safe(a)}{'-' + _safe(b) if b else ''}.png"
@@ -349,6 +382,8 @@ def identification_errors(df):
                           "identified": ok[f"id.{k}"].astype(float),
                           "truth": ok[f"truth.{k}"].astype(float)})
         f["rel"] = _rel(f["identified"], f["truth"])
+        if "id_error" in ok:  # why a cell has no value (shown on the map)
+            f["id_error"] = ok["id_error"].to_numpy()
         for c in axes:
             f[c] = ok[c].to_numpy()
         frames.append(f)
@@ -405,7 +440,9 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
                                 "best_abs_rel": float(fin["rel"].abs().min()),
                                 "worst_rel": float(w["rel"]), "worst_point": w["point"]})
         if im is not None:
-            fig.colorbar(im, ax=axes, shrink=0.6, label="(identified - true) / |true|")
+            cb = fig.colorbar(im, ax=axes, shrink=0.6, extend=_extend(dt["rel"], vmax))
+            cb.set_label("(identified - true) / |true|; colours saturate at "
+                         f"+-{vmax:.0%}, the cells print their value", fontsize=9)
         fig.suptitle(f"Identification (eqs 39-48) on the {target} record", fontsize=9)
         path = figdir / f"{prefix}-{_safe(target)}.png"
         fig.savefig(path, dpi=110)
