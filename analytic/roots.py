@@ -29,7 +29,12 @@ from __future__ import annotations
 import math
 from typing import Callable, Sequence
 
+from .results import SimulationDiverged
+
 _XTOL_REL = 4e-16
+#: Bisections one search may take: certifying (0, t_max] takes a few hundred; beyond this the
+#: bounds cannot separate the zero from round-off, and the search ends instead of hanging.
+MAX_EVALUATIONS = 100_000
 _RTOL = 4.0 * 2.220446049250313e-16  # the smallest rtol brentq accepts
 
 
@@ -67,7 +72,14 @@ def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max:
             return lead > 0.0 and qb > 0.0 and lead + qb > lip * tb
         return fa > 0.0 and fb > 0.0 and min(fa, fb) > b2 * (tb - ta) ** 2 / 8.0
 
+    evaluations = [0]
+
     def search(ta, tb, fa, fb, depth):
+        evaluations[0] += 1
+        if evaluations[0] > MAX_EVALUATIONS:
+            raise SimulationDiverged(
+                f"root search: no certified answer after {MAX_EVALUATIONS} bisections "
+                f"on (0, {t_max:.3g}] s (a contact the bounds cannot resolve)")
         if fb <= 0.0 and fa > 0.0 and (ta > 0.0 or order == 0):
             dfa = df(ta)
             if dfa < -b2 * (tb - ta):  # strictly decreasing on [ta, tb]: a single zero

@@ -260,3 +260,13 @@ def test_solution_pickles_after_a_solve_for_process_pools():
     sol, sol2 = res.extra["solution"], back.extra["solution"]
     assert back.metrics == res.metrics
     assert np.array_equal(sol.state([0.001, 0.02]), sol2.state([0.001, 0.02]))
+
+
+def test_a_root_search_the_bounds_cannot_certify_ends_in_one_line():
+    """f hugging zero from above (never certified at these bounds): a bounded number of
+    bisections, then a one-line divergence, never a hang (issue 12)."""
+    from analytic.results import SimulationDiverged
+    from analytic.roots import first_zero
+
+    with pytest.raises(SimulationDiverged, match=r"^root search: no certified answer"):
+        first_zero(lambda t: 1e-300, lambda t: 0.0, 1.0, (1.0, 1.0, 1e300, 1e300), rate=1.0)
