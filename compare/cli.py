@@ -79,7 +79,12 @@ def build_parser() -> argparse.ArgumentParser:
     sr.add_argument("--study", action="append", dest="studies", default=[],
                     help="directory of a finished study to include (repeatable)")
 
+    from .identify_cmd import add_arguments as add_identify_arguments
     from .scenario_cmd import add_arguments as add_scenario_arguments
+
+    add_identify_arguments(sub.add_parser(
+        "identify", help="tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test "
+                         "record, with 95 % intervals"), _number)
 
     add_scenario_arguments(sub.add_parser(
         "scenario", help="write a scenario file for your own tree from measured M_T, K_T, b"),
@@ -282,6 +287,12 @@ def cmd_sweep(args) -> int:
     return run_sweep_command(args)
 
 
+def cmd_identify(args) -> int:
+    from .identify_cmd import run
+
+    return run(args)
+
+
 def cmd_scenario(args) -> int:
     from .scenario_cmd import run
 
@@ -289,7 +300,8 @@ def cmd_scenario(args) -> int:
 
 
 COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes,
-            "report": cmd_report, "sweep": cmd_sweep, "scenario": cmd_scenario}
+            "report": cmd_report, "sweep": cmd_sweep, "scenario": cmd_scenario,
+            "identify": cmd_identify}
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,64 @@
+"""Benchmark: one `treeimpact identify` fit (analytic.record_fit.fit_record) on a 0.1 s,
+5 kHz record with 1 % noise, and one evaluation of its model (the exact solver sampled at
+the record's times). Prints medians over interleaved repeats and the evaluations per fit.
+
+Target (issue 17): one identification under 2 s on one core.
+
+    python benchmarks/bench_identify.py [--repeats 10]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+
+
+def main(argv=None) -> int:
+    from test_record_fit import synthetic
+
+    from analytic import record_fit
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=10)
+    args = ap.parse_args(argv)
+    print(f"{'e':>5s} {'fit s':>8s} {'model ms':>9s} {'evaluations':>12s}")
+    worst = 0.0
+    for e in (0.1, 0.3):
+        _, record, test = synthetic(e, 0)
+        p = record_fit._start(record, test)
+        fits, evals, counts = [], [], []
+        original = record_fit.model_x
+        for _ in range(args.repeats):
+            calls = [0]
+
+            def counted(*a, **k):
+                calls[0] += 1
+                return original(*a, **k)
+
+            record_fit.model_x = counted
+            t0 = time.perf_counter()
+            record_fit.fit_record(record, test)
+            fits.append(time.perf_counter() - t0)
+            record_fit.model_x = original
+            counts.append(calls[0])
+            t0 = time.perf_counter()
+            original(p, test, record.t)
+            evals.append(time.perf_counter() - t0)
+        mf = statistics.median(fits)
+        worst = max(worst, mf)
+        print(f"{e:5.1f} {mf:8.3f} {1e3 * statistics.median(evals):9.3f} "
+              f"{int(np.median(counts)):12d}")
+    print(f"target: one identification < 2 s {'met' if worst < 2.0 else 'MISSED'} "
+          f"(worst median {worst:.3f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
