@@ -122,7 +122,7 @@ def _summary(scen_sections) -> dict:
     """Counts of verdicts over all checks, the findings, the rungs not run, and the
     :data:`LARGEST` largest relative discrepancies between rungs whatever their verdict
     (the identification has its own table per scenario)."""
-    from ..ladder import PASSING
+    from .scenario import QUIET
 
     counts: dict = {}
     findings, problems, skipped = [], [], []
@@ -133,7 +133,7 @@ def _summary(scen_sections) -> dict:
                 findings.append({"scenario": c.scenario, "rung": c.rung, "metric": c.metric,
                                  "finding": c.finding, "rel_diff": c.rel_diff,
                                  "verdict": c.verdict})
-            elif c.verdict not in PASSING:
+            elif c.verdict not in QUIET:
                 problems.append({"scenario": c.scenario, "rung": c.rung, "metric": c.metric,
                                  "rel_diff": c.rel_diff, "tolerance": c.tolerance,
                                  "verdict": c.verdict, "reason": c.reason})

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from analytic.parameters import ParameterError, Pendulum
 from analytic.results import _clean
 
 from ..ladder import (ALL_METRICS, IDENT_METRICS, PASSING, build_ladder, identify_rung,
@@ -74,6 +75,49 @@ def identification_sweep(scenario, cache) -> list[dict]:
     return out
 
 
+#: Sampling of the records handed to the full-record fit (Hz), and the rest prepended (s) so
+#: the fit sees the trunk still before the contact, as in a measured record.
+FIT_RATE = 5000.0
+FIT_REST = 5e-3
+
+
+def record_fits(ladder) -> list[dict]:
+    """The exact 1-DOF model fitted to each rung's whole record (analytic.record_fit): the
+    1-DOF properties that best explain it, their errors against the model's truth, and
+    whether the 1-DOF model explains the record at all."""
+    from analytic.identification import pendulum_test_of
+    from analytic.model import two_body_model
+    from analytic.record_fit import Record, fit_record
+
+    scen = ladder.scenario
+    if not isinstance(scen.impactor, Pendulum):
+        return []
+    model = two_body_model(scen)
+    truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping}
+    test = pendulum_test_of(scen)
+    out = []
+    for r in ladder.rungs:
+        if not r.ok or r.result.trajectory is None:
+            continue
+        tr = r.result.trajectory
+        t = np.arange(-FIT_REST, float(tr.t[-1]), 1.0 / FIT_RATE)
+        x = np.where(t > 0.0, np.interp(t, tr.t, tr.x), 0.0)
+        try:
+            fit = fit_record(Record(t, x), test)
+        except ParameterError as exc:
+            out.append({"rung": r.rung.id, "error": str(exc)})
+            continue
+        out.append({"rung": r.rung.id, "values": {k: fit.values[k] for k in (*truth, "e")},
+                    "errors": {k: fit.values[k] / v - 1.0 for k, v in truth.items()},
+                    "residual": fit.residual_rms / fit.peak, "explained": fit.explained})
+    return out
+
+
+#: Verdicts the page does not flag: passing ones, and n/a (a value that does not exist, e.g.
+#: a record that is not identifiable: shown with its reason, not as a failed check).
+QUIET = (*PASSING, "n/a")
+
+
 class ScenarioSection(Section):
     template = "scenario"
 
@@ -84,6 +128,7 @@ class ScenarioSection(Section):
         self.anchor = f"scenario-{self.ladder.name}"
         self.ledgers = {r.rung.id: energy_ledger(r) for r in self.ladder.rungs}
         self.sweep = identification_sweep(self.ladder.scenario, cache)
+        self.fits = record_fits(self.ladder)
         self.checks = self.ladder.checks()
         self.figures = {}  # name -> path of the figure file, relative to the page
         if figure_sink is not None:
@@ -122,7 +167,7 @@ class ScenarioSection(Section):
                 r = L[cell["rung"]]
                 c = verdicts.get((cell["rung"], row["metric"], r.rung.previous))
                 cells.append({**cell, "verdict": c.verdict if c else "",
-                              "flag": bool(c and c.verdict not in PASSING)})
+                              "flag": bool(c and c.verdict not in QUIET)})
             rows.append({**row, "cells": cells})
         ident_rows = []
         for r in L.rungs:
@@ -133,16 +178,17 @@ class ScenarioSection(Section):
                 cols.append({"metric": k, "value": idr.get("values", {}).get(k),
                              "error": idr.get("errors", {}).get(k),
                              "verdict": c.verdict if c else "",
-                             "flag": bool(c and c.verdict not in PASSING)})
+                             "flag": bool(c and c.verdict not in QUIET)})
             ident_rows.append({"rung": r.rung.id, "status": idr.get("status"),
                                "reason": idr.get("reason"), "cols": cols})
         findings = [c for c in self.checks if c.finding]
-        problems = [c for c in self.checks if c.verdict not in PASSING and not c.finding]
+        problems = [c for c in self.checks if c.verdict not in QUIET and not c.finding]
         return {
             "L": L, "rows": rows, "ident_rows": ident_rows, "truth": L.truth,
             "ident_metrics": IDENT_METRICS, "figures": self.figures,
             "rungs": L.rungs, "skips": [r for r in L.rungs if not r.ok],
-            "ledgers": self.ledgers, "sweep": self.sweep, "findings": findings,
+            "ledgers": self.ledgers, "sweep": self.sweep, "fits": self.fits,
+            "findings": findings,
             "problems": problems, "unit_of": unit_of, "meaning_of": meaning_of,
             "metrics": ALL_METRICS, "OK": OK,
         }
@@ -151,4 +197,5 @@ class ScenarioSection(Section):
         out = self.ladder.to_json()
         out["energy_ledger"] = _clean({k: v for k, v in self.ledgers.items()})
         out["identification_vs_e"] = _clean(self.sweep)
+        out["record_fits"] = _clean(self.fits)
         return out

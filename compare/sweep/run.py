@@ -603,10 +603,13 @@ def _sweep(scen, grid, targets, out, *, workers, client, applied, identify, retr
 
 def _ignore_sigint() -> None:
     """Worker initializer: Ctrl-C is the parent's to handle (it ends the workers itself), so a
-    terminal's SIGINT to the whole process group prints no worker tracebacks."""
+    terminal's SIGINT to the whole process group prints no worker tracebacks; SIGTERM takes
+    its default action (a forked worker would inherit the parent's handler, which turns it
+    into a KeyboardInterrupt and a traceback when the parent ends the worker)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _end_workers(pool) -> None:
