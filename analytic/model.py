@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .parameters import Billet, Pendulum, Scenario, _check
+from .parameters import Billet, Pendulum, Scenario, check_range
 from .reduction import reduce_trunk
 
 
@@ -28,13 +28,13 @@ class TwoBodyModel:
     restitution: float  # e
 
     def __post_init__(self):
-        _check("model.dynamic_mass", self.dynamic_mass, low=0, low_open=True, unit="kg")
-        _check("model.damping", self.damping, low=0, unit="N s/m")
-        _check("model.stiffness", self.stiffness, low=0, low_open=True, unit="N/m")
-        _check("model.impactor_mass", self.impactor_mass, low=0, low_open=True, unit="kg")
-        _check("model.impactor_stiffness", self.impactor_stiffness, low=0, unit="N/m")
-        _check("model.impact_speed", self.impact_speed, low=0, low_open=True, unit="m/s")
-        _check("model.restitution", self.restitution, low=0, high=1)
+        check_range("model.dynamic_mass", self.dynamic_mass, low=0, low_open=True, unit="kg")
+        check_range("model.damping", self.damping, low=0, unit="N s/m")
+        check_range("model.stiffness", self.stiffness, low=0, low_open=True, unit="N/m")
+        check_range("model.impactor_mass", self.impactor_mass, low=0, low_open=True, unit="kg")
+        check_range("model.impactor_stiffness", self.impactor_stiffness, low=0, unit="N/m")
+        check_range("model.impact_speed", self.impact_speed, low=0, low_open=True, unit="m/s")
+        check_range("model.restitution", self.restitution, low=0, high=1)
 
     @property
     def reduced_mass(self) -> float:

@@ -47,19 +47,16 @@ LIMITS = {
 }
 
 
-def _limit(path: str, value, *, high=None, high_open=False, allow_inf=False) -> float:
-    """``_check`` against :data:`LIMITS` (``high``: a tighter bound, e.g. a <= l)."""
+def check_limit(path: str, value, *, high=None) -> float:
+    """:func:`check_range` against :data:`LIMITS` (``high``: a tighter bound, e.g. a <= l)."""
     low, top, unit = LIMITS[path]
     if high is not None and high < top:
         top = high
-    else:
-        high_open = False
-    return _check(path, value, low=low, high=None if math.isinf(top) else top,
-                  high_open=high_open, unit=unit if unit != "1" else "",
-                  allow_inf=allow_inf or math.isinf(top))
+    return check_range(path, value, low=low, high=None if math.isinf(top) else top,
+                       unit=unit if unit != "1" else "", allow_inf=math.isinf(top))
 
 
-def _check(path: str, value, *, low=None, high=None, low_open=False, high_open=False,
+def check_range(path: str, value, *, low=None, high=None, low_open=False, high_open=False,
            unit: str = "", allow_inf: bool = False) -> float:
     """Return ``value`` as float or raise a one-line :class:`ParameterError`."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -97,16 +94,16 @@ class Trunk:
     base_stiffness: float = math.inf  # k_theta, N m/rad
 
     def __post_init__(self):
-        _limit("trunk.length", self.length)
-        _limit("trunk.clamp_height", self.clamp_height,
+        check_limit("trunk.length", self.length)
+        check_limit("trunk.clamp_height", self.clamp_height,
                high=self.length if isinstance(self.length, (int, float)) else None)
-        _limit("trunk.diameter", self.diameter)
-        _limit("trunk.density", self.density)
-        _limit("trunk.youngs_modulus", self.youngs_modulus)
-        _limit("trunk.clamp_mass", self.clamp_mass)
-        _limit("trunk.crown_mass", self.crown_mass)
-        _limit("trunk.damping", self.damping)
-        _limit("trunk.base_stiffness", self.base_stiffness)
+        check_limit("trunk.diameter", self.diameter)
+        check_limit("trunk.density", self.density)
+        check_limit("trunk.youngs_modulus", self.youngs_modulus)
+        check_limit("trunk.clamp_mass", self.clamp_mass)
+        check_limit("trunk.crown_mass", self.crown_mass)
+        check_limit("trunk.damping", self.damping)
+        check_limit("trunk.base_stiffness", self.base_stiffness)
 
     @property
     def area(self) -> float:
@@ -143,11 +140,11 @@ class Pendulum:
     gravity: float = STANDARD_GRAVITY  # g, m/s^2
 
     def __post_init__(self):
-        _limit("impactor.mass", self.mass)
-        _limit("impactor.equivalent_length", self.equivalent_length)
-        _check("impactor.release_angle", self.release_angle, low=math.radians(
+        check_limit("impactor.mass", self.mass)
+        check_limit("impactor.equivalent_length", self.equivalent_length)
+        check_range("impactor.release_angle", self.release_angle, low=math.radians(
             LIMITS["impactor.release_angle_deg"][0]), high=math.pi, unit="rad")
-        _limit("impactor.gravity", self.gravity)
+        check_limit("impactor.gravity", self.gravity)
 
     @property
     def stiffness(self) -> float:
@@ -178,8 +175,8 @@ class Billet:
     impact_speed: float  # u_1, m/s
 
     def __post_init__(self):
-        _limit("impactor.mass", self.mass)
-        _limit("impactor.impact_speed", self.impact_speed)
+        check_limit("impactor.mass", self.mass)
+        check_limit("impactor.impact_speed", self.impact_speed)
 
     stiffness = 0.0
     natural_frequency = 0.0
@@ -199,11 +196,11 @@ class Contact:
     duration: float | None = None  # s
 
     def __post_init__(self):
-        _limit("contact.restitution", self.restitution)
+        check_limit("contact.restitution", self.restitution)
         if self.stiffness is not None:
-            _limit("contact.stiffness", self.stiffness)
+            check_limit("contact.stiffness", self.stiffness)
         if self.duration is not None:
-            _limit("contact.duration", self.duration)
+            check_limit("contact.duration", self.duration)
         if self.stiffness is not None and self.duration is not None:
             raise ParameterError("contact: give either stiffness (N/m) or duration (s), not both")
 
@@ -230,7 +227,7 @@ class Scenario:
             raise ParameterError("impactor: expected a Pendulum or a Billet")
         if not isinstance(self.contact, Contact):
             raise ParameterError("contact: expected a Contact")
-        _limit("t_end", self.t_end)
+        check_limit("t_end", self.t_end)
 
     def to_dict(self) -> dict:
         """The scenario as run, in the JSON layout of ``treeimpact simulate``."""

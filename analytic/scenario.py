@@ -22,7 +22,7 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
-from .parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk, _limit
+from .parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk, check_limit
 
 _TRUNK_KEYS = {"length", "clamp_height", "diameter", "density", "youngs_modulus", "clamp_mass",
                "crown_mass", "damping", "base_stiffness"}
@@ -83,7 +83,7 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
     kind = imp_t.get("type", "pendulum")
     if kind == "pendulum":
         _keys(imp_t, "impactor", _PENDULUM_KEYS, {"mass", "equivalent_length", "release_angle_deg"})
-        deg = _limit("impactor.release_angle_deg", _number(imp_t, "impactor",
+        deg = check_limit("impactor.release_angle_deg", _number(imp_t, "impactor",
                                                            "release_angle_deg"))
         kw = dict(mass=_number(imp_t, "impactor", "mass"),
                   equivalent_length=_number(imp_t, "impactor", "equivalent_length"),

@@ -192,16 +192,16 @@ MAX_SEGMENTS = 64  # the hinged trunk's highest mode grows as N^2: 64 segments t
 
 def _check_flags(args) -> None:
     """One-line errors that name the flag the user typed, with its allowed range."""
-    from analytic.parameters import LIMITS, _check
+    from analytic.parameters import LIMITS, check_range
 
     for flag, (attr, field) in _FLAG_LIMITS.items():
         value = getattr(args, attr, None)
         if value is not None:
             low, high, unit = LIMITS[field]
-            _check(flag, value, low=low, high=high, unit="" if unit == "1" else unit)
+            check_range(flag, value, low=low, high=high, unit="" if unit == "1" else unit)
     dt = getattr(args, "dt", None)
     if dt is not None:
-        _check("--dt", dt, low=0.0, low_open=True, high=1e-3, unit="s")
+        check_range("--dt", dt, low=0.0, low_open=True, high=1e-3, unit="s")
     segments = getattr(args, "segments", None)
     if segments is not None and not 1 <= segments <= MAX_SEGMENTS:
         raise ParameterError(f"--segments = {segments}: allowed 1 to {MAX_SEGMENTS}")

@@ -29,14 +29,14 @@ def add_arguments(sp: argparse.ArgumentParser, number) -> None:
 
 def _test(args):
     from analytic.identification import PendulumTest
-    from analytic.parameters import LIMITS, Pendulum, _check
+    from analytic.parameters import LIMITS, Pendulum, check_range
 
     pend = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
                     release_angle=math.radians(args.release_angle))  # validated, one line
     for flag, value, field in (("--clamp-height", args.clamp_height, "trunk.clamp_height"),
                                ("--diameter", args.diameter, "trunk.diameter")):
         low, high, unit = LIMITS[field]
-        _check(flag, value, low=low, high=high, unit=unit)
+        check_range(flag, value, low=low, high=high, unit=unit)
     return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
                         release_angle=pend.release_angle, clamp_height=args.clamp_height,
                         diameter=args.diameter, gravity=pend.gravity)
