@@ -187,11 +187,11 @@ def _print_simulation(scenario, result, reference) -> None:
 #: Flag -> (attribute, the field whose plausible range it takes, analytic.parameters.LIMITS).
 _FLAG_LIMITS = {"--e": ("restitution", "contact.restitution"), "--t-end": ("t_end", "t_end"),
                 "--contact-stiffness": ("contact_stiffness", "contact.stiffness")}
-MAX_SEGMENTS = 64  # the hinged trunk's highest mode grows as N^2: 64 segments take minutes
 
 
 def _check_flags(args) -> None:
     """One-line errors that name the flag the user typed, with its allowed range."""
+    from analytic.chain import MAX_SEGMENTS
     from analytic.parameters import LIMITS, check_range
 
     for flag, (attr, field) in _FLAG_LIMITS.items():
