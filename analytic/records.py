@@ -185,3 +185,21 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
     }
     assert tuple(metrics) == METRIC_KEYS
     return metrics
+
+
+#: A peak is ambiguous when x(t) has another local maximum this close to its largest.
+PEAK_AMBIGUITY = 0.05
+
+
+def peak_times(t, x, within: float = PEAK_AMBIGUITY) -> list[float]:
+    """Times (s) of the local maxima of x(t) within ``within`` of its largest (prominence at
+    least 2 % of the largest, so ripple on one peak is not a second one). More than one: the
+    time of the maximum is not a robust quantity (which peak wins flips with small changes)."""
+    from scipy.signal import find_peaks
+
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    top = float(np.max(x))
+    if not top > 0:
+        return []
+    peaks, _ = find_peaks(x, prominence=0.02 * top)
+    return [float(t[i]) for i in peaks if x[i] >= (1.0 - within) * top]

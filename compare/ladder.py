@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from analytic.parameters import ParameterError, Pendulum, Scenario
+from analytic.records import PEAK_AMBIGUITY, peak_times
 from analytic.results import METRIC_UNITS, _clean
 
 from .backends import ENGINES
@@ -279,6 +280,7 @@ class RungResult:
     run: Run
     values: dict = field(default_factory=dict)  # metric -> value (NaN when missing)
     identification: dict = field(default_factory=dict)
+    peaks: list = field(default_factory=list)  # s: the times of x(t)'s near-equal maxima
 
     @property
     def ok(self) -> bool:
@@ -329,9 +331,30 @@ class Ladder:
     def step_check(self, rung_id: str, metric: str) -> Check:
         r = self[rung_id]
         prev = r.rung.previous
+        ambiguous = self._ambiguous_peak(rung_id, prev, metric)
+        if ambiguous is not None:
+            return ambiguous
         entry = self.tolerances.get("step", {}).get(r.rung.kind, {}).get(metric)
         return judge(self.name, rung_id, r.rung.kind, metric, self.value(rung_id, metric), prev,
                      self.value(prev, metric), entry, self.tolerances)
+
+    def _ambiguous_peak(self, rung_id: str, reference: str, metric: str) -> Check | None:
+        """t_xmax compared between a record with one clear maximum and one whose x(t) has a
+        second maximum within 5 % of the largest (analytic.records.peak_times): flagged
+        'ambiguous', not judged (which peak wins flips with small changes). Records of the
+        same shape (both one peak, or both two) are judged as usual."""
+        if metric != "t_xmax":
+            return None
+        a, b = self[rung_id].peaks, self[reference].peaks
+        if (len(a) > 1) == (len(b) > 1):
+            return None
+        which, times = (rung_id, a) if len(a) > 1 else (reference, b)
+        value, ref = self.value(rung_id, metric), self.value(reference, metric)
+        return Check(self.name, rung_id, metric, _f(value), reference, _f(ref),
+                     relative_step(value, ref), None, "ambiguous",
+                     f"x(t) of {which} has maxima within {100 * PEAK_AMBIGUITY:.0f} % of each other at "
+                     + ", ".join(f"{1e3 * s:.1f}" for s in times) + " ms: the time of the "
+                     "maximum is not a robust quantity")
 
     def identification_check(self, rung_id: str, metric: str) -> Check:
         """The identified value against the truth: judged on the Newton record the procedure
@@ -351,6 +374,9 @@ class Ladder:
         ids = [r.rung.id for r in self.rungs if r.rung.kind == kind]
         if len(ids) != 2:
             return None
+        ambiguous = self._ambiguous_peak(ids[1], ids[0], metric)
+        if ambiguous is not None:
+            return ambiguous
         entry = self.tolerances.get("engines", {}).get(kind, {}).get(metric)
         return judge(self.name, ids[1], f"engines-{kind}", metric, self.value(ids[1], metric),
                      ids[0], self.value(ids[0], metric), entry, self.tolerances)
@@ -439,6 +465,8 @@ def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
                 run.memo["identification"] = identify_rung(run.result, scen)
             rr.identification = run.memo["identification"]
             rr.values = rung_values(run.result, rr.identification)
+            tr = run.result.trajectory
+            rr.peaks = peak_times(tr.t, tr.x) if tr is not None else []
         else:
             rr.values = {m: math.nan for m in ALL_METRICS}
             rr.identification = {"status": SKIPPED, "reason": f"rung not run: {run.reason}"}

@@ -113,9 +113,10 @@ def record_fits(ladder) -> list[dict]:
     return out
 
 
-#: Verdicts the page does not flag: passing ones, and n/a (a value that does not exist, e.g.
-#: a record that is not identifiable: shown with its reason, not as a failed check).
-QUIET = (*PASSING, "n/a")
+#: Verdicts the page does not flag: passing ones, n/a (a value that does not exist, e.g. a
+#: record that is not identifiable) and ambiguous (a peak time of two near-equal maxima):
+#: shown with their reason, not as failed checks.
+QUIET = (*PASSING, "n/a", "ambiguous")
 
 
 class ScenarioSection(Section):
