@@ -157,3 +157,24 @@ def test_each_engine_draws_its_rungs_in_its_own_three_shades():
                for k in ("engine", "trunk", "pendulum")}
     assert len(set(colours.values())) == 3 * len(ENGINES)  # no two rungs share a colour
     assert all(colours[(e, "engine")] == BACKENDS[e].shades[0] for e in ENGINES)
+
+
+def test_the_answer_leads_with_x_max_energy_and_whether_the_fit_explains(report, run_cache):
+    """Without a flexible trunk there is no answer to give (the fixture's engine does not
+    exist); with one, the numbers are the ladder's own: the chains' mean against rung 1."""
+    from compare.report import _answer
+    from compare.report.scenario import ScenarioSection
+
+    paths, _ = report
+    data = json.loads(paths["json"].read_text())
+    assert data["summary"]["answer"] == [{"scenario": "open-center", "available": False}]
+    section = ScenarioSection(load_scenario("central-leader"), run_cache)
+    (answer,) = _answer([section])
+    chains = [r for r in section.ladder.rungs if r.rung.kind == "trunk"]
+    x0 = section.ladder.rungs[0].values["x_max"]
+    x_flex = sum(r.values["x_max"] for r in chains) / len(chains)
+    assert answer["metrics"]["x_max"]["rel"] == pytest.approx(x_flex / x0 - 1.0, rel=1e-12)
+    assert answer["good_enough"] == {"x_max": False, "energy_transferred": False}
+    assert answer["explained"] is False  # the full-record fit on the chains' records
+    html = paths["html"].read_text()
+    assert html.index("The answer") < html.index("Summary")
