@@ -150,7 +150,8 @@ def _label(name: str) -> str:
     units = {"e": "e", "contact.restitution": "e", "segments": "segments",
              "trunk.crown_mass": "m_f (kg)", "impactor.mass": "m (kg)", "dt": "dt (s)",
              "contact_stiffness": "k_c (N/m)", "trunk.clamp_height": "a (m)",
-             "t_end": "t_end (s)"}
+             "t_end": "t_end (s)", "contact.duration": "contact duration (s)",
+             "contact.stiffness": "k_c (N/m)"}
     if name in DERIVED_RATIOS:
         return {"a_over_l": "a / l", "crown_ratio": "m_f / m_trunk",
                 "mass_ratio": "m / M_T"}[name]

@@ -34,7 +34,7 @@ class Preset:
 
 PRESETS = {
     "default": Preset(
-        "default", "central-leader", ("e=0.1,0.5,0.9", "crown_ratio=0,4"),
+        "default", "central-leader", ("contact.duration=2e-4,1e-3,5e-3", "crown_ratio=0,4"),
         speed_dts=(1e-4, 3e-5, 1e-5), speed_durations=(1e-3, 5e-4),
         expected="about 45 s with 2 workers (measured 41-56 s on a shared 2-core VM: "
                  "validity sweep 26-41 s, Bullet's chain rungs most of it; maps 12 s)"),
