@@ -16,6 +16,8 @@ from pathlib import Path
 from analytic.parameters import ParameterError
 from analytic.results import METRIC_UNITS, SimulationDiverged, _clean
 
+from .runs import one_line
+
 EXIT_BAD_INPUT = 2
 EXIT_DIVERGED = 3
 
@@ -153,10 +155,11 @@ def _unit(u: str) -> str:
 
 
 def _rel(value, reference) -> str:
-    if not (isinstance(value, (int, float)) and isinstance(reference, (int, float))
-            and math.isfinite(value) and math.isfinite(reference) and reference != 0):
-        return ""
-    return f"{(value - reference) / abs(reference):+.1%}"
+    """:func:`compare.ladder.relative_step` as text ('' where it has no value)."""
+    from .ladder import relative_step
+
+    rel = relative_step(value, reference)
+    return f"{rel:+.1%}" if math.isfinite(rel) else ""
 
 
 def _print_simulation(scenario, result, reference) -> None:
@@ -322,18 +325,13 @@ def main(argv=None) -> int:
               "--t-end or a softer contact", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ArithmeticError as exc:  # overflow or division by zero: no numbers to report
-        print(f"treeimpact: simulation diverged: {type(exc).__name__} ({_one_line(exc)})",
+        print(f"treeimpact: simulation diverged: {type(exc).__name__} ({one_line(exc)})",
               file=sys.stderr)
         return EXIT_DIVERGED
     except OSError as exc:  # a path that cannot be read or written
         where = f" {exc.filename!r}" if exc.filename else ""
-        print(f"treeimpact: error:{where} {exc.strerror or _one_line(exc)}", file=sys.stderr)
+        print(f"treeimpact: error:{where} {exc.strerror or one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
-
-
-def _one_line(exc: BaseException) -> str:
-    lines = str(exc).strip().splitlines()
-    return lines[0] if lines else type(exc).__name__
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -93,13 +93,13 @@ class RunCache:
             result = get_backend(backend).simulate(scen, **options)
             run = Run(scen.name, backend, dict(options), OK, result=result)
         except ParameterError as exc:
-            run = Run(scen.name, backend, dict(options), SKIPPED, reason=_one_line(exc))
+            run = Run(scen.name, backend, dict(options), SKIPPED, reason=one_line(exc))
         except SimulationDiverged as exc:
             run = Run(scen.name, backend, dict(options), DIVERGED,
-                      reason=f"diverged: {_one_line(exc)}")
+                      reason=f"diverged: {one_line(exc)}")
         except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests
             run = Run(scen.name, backend, dict(options), FAILED,
-                      reason=f"{type(exc).__name__}: {_one_line(exc)}")
+                      reason=f"{type(exc).__name__}: {one_line(exc)}")
         run.wall_s = time.perf_counter() - t0
         self.runs[key] = run
         return run
@@ -172,7 +172,8 @@ def _run_uncached(scenario: Scenario, backend: str, options: dict) -> Run:
     return RunCache().run(scenario, backend, **options)
 
 
-def _one_line(exc: BaseException) -> str:
+def one_line(exc: BaseException) -> str:
+    """The first line of an exception's message (its type's name when empty)."""
     text = str(exc).strip().splitlines()
     return text[0] if text else type(exc).__name__
 
