@@ -186,3 +186,26 @@ def test_a_scheduler_without_workers_is_one_line_after_its_timeout(tmp_path, mon
         with pytest.raises(ParameterError, match=r"no worker joined within 1 s"):
             run.run_sweep("central-leader", ["e=0.3"], tmp_path / "s", scheduler=client,
                           identify=False, progress=False)
+
+
+def test_a_scheduler_lost_during_the_sweep_is_one_line_and_keeps_the_rows(tmp_path,
+                                                                          monkeypatch):
+    """The connection dropping while results come back (distributed's CommClosedError is an
+    OSError): one line naming the scheduler, no traceback."""
+    import distributed
+    from distributed import Client, LocalCluster
+    from distributed.comm.core import CommClosedError
+
+    from analytic.parameters import ParameterError
+    from compare.sweep import run
+
+    def lost(futures, *a, **k):
+        raise CommClosedError("in <TCP (closed)>: Stream is closed")
+        yield  # pragma: no cover - a generator, as as_completed is iterated
+
+    monkeypatch.setattr(distributed, "as_completed", lost)
+    with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        with pytest.raises(ParameterError, match=r"lost the scheduler \(CommClosedError: "):
+            run.run_sweep("central-leader", ["e=0.3"], tmp_path / "s", scheduler=client,
+                          identify=False, progress=False)

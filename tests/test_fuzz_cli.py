@@ -86,3 +86,7 @@ def test_fuzzed_scenarios_and_flags_never_traceback_hang_or_print_garbage(chunk,
     finally:
         signal.signal(signal.SIGALRM, previous)
     assert outcomes[0] > 0 and outcomes[2] > 0  # the fuzz reaches both sides of the limits
+    import resource
+
+    # the memory bound (2 GB, analytic.timestep.MAX_BYTES) held for the whole process so far
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 < 2e9
