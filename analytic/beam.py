@@ -256,3 +256,28 @@ def beam_mode_shapes(trunk: Trunk, n_modes: int = 3, z=None, *, normalise: str =
             raise ParameterError("normalise = 'clamp': a mode has a node at the clamp height a; use 'max'")
         shapes = shapes / at_a[:, None]
     return w.copy(), z, shapes
+
+
+def beam_matrices(trunk: Trunk, elements: int):
+    """``(M, D, K, nodes, keep)`` of the trunk on :func:`mesh` (kg, N s/m, N/m, SI dofs).
+
+    Dofs as in :func:`assemble` (w_i, l w_i'); ``D`` is the consistent damping matrix of the
+    distributed damping C (eq 9: force C w' per unit length), the mass matrix's shape
+    functions with C in place of rho A, no point masses.
+    """
+    nodes = mesh(trunk, elements)
+    K, M, keep = assemble(trunk, nodes)
+    n, l = len(nodes), trunk.length
+    scale = np.tile([1.0, 1.0 / l], 2)
+    D = np.zeros((2 * n, 2 * n))
+    for e in range(n - 1):
+        _, d = _element_matrices(nodes[e + 1] - nodes[e], 1.0, trunk.damping)
+        s = slice(2 * e, 2 * e + 4)
+        D[s, s] += d * np.outer(scale, scale)
+    return M, D[np.ix_(keep, keep)], K, nodes, keep
+
+
+def deflection_dof(nodes: np.ndarray, keep: np.ndarray, height: float) -> int:
+    """Index among the kept dofs of the deflection at the node nearest ``height`` (m)."""
+    i = int(np.argmin(np.abs(np.asarray(nodes) - height)))
+    return int(np.nonzero(np.asarray(keep) == 2 * i)[0][0])

@@ -88,6 +88,33 @@ def contact_law(model: TwoBodyModel, contact: Contact | None = None, *,
     return stiffness, 2.0 * zeta * math.sqrt(stiffness * mu)
 
 
+#: How a trunk other than the SDOF gets its contact damping: "pad" keeps the SDOF rung's
+#: (k_c, c_c), one physical pad for every trunk; "effective" recalibrates c_c so that one
+#: free collision with the trunk's instantaneous effective mass at the clamp rebounds at e
+#: (the restitution convention; docs/contact-law.md).
+CALIBRATIONS = ("pad", "effective")
+
+
+def pad_restitution(stiffness: float, damping: float, reduced_mass: float) -> float:
+    """e of one free collision of reduced mass mu (kg) under the pad (k N/m, c N s/m).
+
+    The pad's own e on a light trunk is smaller than on M_T (the same c is more damping
+    there); below :data:`MIN_SOFT_RESTITUTION` it is refused with a one-line error.
+    """
+    e = restitution_for_damping_ratio(damping / (2.0 * math.sqrt(stiffness * reduced_mass)))
+    if e < MIN_SOFT_RESTITUTION:
+        raise ParameterError(
+            f"contact.restitution: the pad rebounds at e = {e:.3g} on the trunk's effective "
+            f"mass, below {MIN_SOFT_RESTITUTION:g}: a larger e or --calibration effective")
+    return e
+
+
+def effective_damping(stiffness: float, restitution: float, reduced_mass: float) -> float:
+    """c_c (N s/m) giving e in one free collision of reduced mass mu (kg) at stiffness k."""
+    zeta = damping_ratio_for_restitution(restitution)
+    return 2.0 * zeta * math.sqrt(stiffness * reduced_mass)
+
+
 def collision_duration(model: TwoBodyModel, stiffness: float, damping: float) -> float:
     """Duration (s) of one free two-body collision under the law, first touch to release."""
     mu = model.reduced_mass

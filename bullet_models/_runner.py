@@ -20,7 +20,8 @@ from analytic.parameters import DEFAULT_CONTACT_DURATION, ParameterError, Scenar
 from analytic.records import ImpactRecord, detection_duration, metrics_from_record
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
-from analytic.soft_contact import collision_duration, contact_law
+from analytic.soft_contact import (CALIBRATIONS, collision_duration, contact_law,
+                                   effective_damping)
 from analytic.timestep import check_time_step, check_work, choose_time_step, sdof_rate
 
 from . import _contact, _urdf
@@ -127,18 +128,20 @@ class Setup:
     collision_duration: float  # s: t_c of the soft law (soft) or dt (newton: one-step impulses)
     omega_max: float | None
     apparent_mass: float  # kg: trunk mass seen by the contact
+    calibration: str = "pad"  # analytic.soft_contact.CALIBRATIONS
     matrices: tuple | None = field(default=None, repr=False)  # chain (M, K, D)
 
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               damping="distributed") -> Setup:
+               damping="distributed", calibration="pad") -> Setup:
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")
     check_choice("trunk", trunk, TRUNKS)
     check_choice("pendulum", pendulum, PENDULUMS)
     check_choice("contact", contact, CONTACTS)
     check_choice("damping", damping, DAMPINGS)
+    check_choice("calibration", calibration, CALIBRATIONS)
     model, t_end = engine_model(scenario, pendulum=pendulum, restitution=restitution,
                                 t_end=t_end)
     tr = scenario.trunk
@@ -172,10 +175,9 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                 f"contact.restitution = {model.restitution:g}: Bullet's soft contact steps "
                 "implicitly and always dissipates: allowed (0, 1) with --contact soft (e = 1: "
                 "--contact newton)")
-        if contact_stiffness is not None:
-            k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
-        else:
-            k_c, c_c = contact_law(model, scenario.contact)
+        k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
+        if calibration == "effective":  # e on the trunk's effective mass, not the pad's c_c
+            c_c = effective_damping(k_c, model.restitution, mu)
         law_model = TwoBodyModel(apparent, 0.0, 1.0, m, 0.0, model.impact_speed,
                                  model.restitution)
         # the step resolves the collision Bullet integrates: stiffness k_c with the damping
@@ -210,7 +212,7 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                  t_end=float(t_end), trunk_urdf=trunk_urdf, pendulum_urdf=pend_urdf,
                  contact_stiffness=k_c, contact_damping=c_c, bullet=bullet,
                  collision_duration=col, omega_max=omega_max, apparent_mass=apparent,
-                 matrices=matrices)
+                 matrices=matrices, calibration=calibration)
 
 
 # ------------------------------------------------------------------------------------ world
@@ -535,7 +537,7 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
     model_dict = {**model.as_dict(), "segments": setup.segments, "dt": dt,
                   "contact_stiffness": b.stiffness if b else None,
                   "contact_damping": b.damping if b else None,
-                  "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
+                  "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping, "calibration": setup.calibration,
                   "effective_mass": b.reduced_mass if b else None,
                   "law_stiffness": setup.contact_stiffness,
                   "law_damping": setup.contact_damping,
@@ -560,11 +562,16 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
              contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             damping="distributed") -> SimulationResult:
-    """Run one scenario in PyBullet (rules in the module docstring); backend "bullet"."""
+             damping="distributed", calibration="pad") -> SimulationResult:
+    """Run one scenario in PyBullet (rules in the module docstring); backend "bullet".
+
+    ``calibration``: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
+    recalibrated so that e holds on the trunk's effective mass at the clamp.
+    """
     return run(make_setup(scenario, trunk=trunk, segments=segments, pendulum=pendulum,
                           contact=contact, contact_stiffness=contact_stiffness, dt=dt,
-                          restitution=restitution, t_end=t_end, damping=damping))
+                          restitution=restitution, t_end=t_end, damping=damping,
+                          calibration=calibration))
 
 
 def _batch_one(args):

@@ -103,6 +103,9 @@ BACKENDS = {
                         run_cost=((None, 0.005),)),
     "soft": Backend("soft", "analytic.soft_contact:simulate_soft", "analytic.modes:modes",
                     "analytic SDOF with the spring-dashpot contact", run_cost=((None, 0.2),)),
+    "beam": Backend("beam", "analytic.beam_impact:simulate_beam", "analytic.beam_impact:modes",
+                    "continuum Euler-Bernoulli trunk with the same pad, exact between contact "
+                    "switches", run_cost=((None, 0.6),)),
     "mujoco": Backend("mujoco", "mujoco_models:simulate", "mujoco_models:modes",
                       "MuJoCo (MJCF) slide-joint or hinged-segment trunk", engine=True,
                       run_cost=(("sdof", 0.05), ("chain", 0.5)),

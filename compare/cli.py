@@ -52,7 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     ss = sub.add_parser("simulate", help="simulate one scenario")
     ss.add_argument("scenario", help="shipped scenario name or TOML path")
-    ss.add_argument("--backend", default="analytic", help="analytic, soft, mujoco or bullet")
+    ss.add_argument("--backend", default="analytic",
+                    help="analytic, soft, beam, mujoco or bullet")
     ss.add_argument("--e", type=_number, dest="restitution", help="restitution e in [0, 1]")
     ss.add_argument("--t-end", type=_number, dest="t_end", help="end time, s")
     ss.add_argument("--trunk", choices=("sdof", "chain"), help="engine trunk model")
@@ -62,6 +63,10 @@ def build_parser() -> argparse.ArgumentParser:
     ss.add_argument("--contact-stiffness", type=_number, dest="contact_stiffness",
                     help="contact stiffness, N/m")
     ss.add_argument("--dt", type=_number, help="time step, s")
+    ss.add_argument("--elements", type=_count, help="beam backend: elements of the trunk mesh")
+    ss.add_argument("--calibration", choices=("pad", "effective"),
+                    help="beam, mujoco, bullet: the contact damping of the SDOF's pad (default) "
+                         "or recalibrated so that e holds on the trunk's effective mass")
     ss.add_argument("--damping", choices=("distributed", "joint"),
                     help="engine trunk damping: the paper's distributed C, or joint damping")
     ss.add_argument("--integrator", choices=("Euler", "implicit", "implicitfast", "RK4"),
@@ -71,8 +76,10 @@ def build_parser() -> argparse.ArgumentParser:
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
     sm.add_argument("scenario", help="shipped scenario name or TOML path")
     sm.add_argument("--backend", default="analytic",
-                    help="analytic (the SDOF trunk), mujoco or bullet (their hinged trunks)")
+                    help="analytic (the SDOF trunk), beam (its mesh), mujoco or bullet (their "
+                         "hinged trunks)")
     sm.add_argument("--segments", type=_count, help="segments of the hinged trunk")
+    sm.add_argument("--elements", type=_count, help="beam backend: elements of the trunk mesh")
     sm.add_argument("--json", action="store_true", help="machine-readable output")
     sr = sub.add_parser("report", help="write the discrepancy report (html, md, json)")
     sr.add_argument("--out", default="reports", help="output directory (default: reports)")
@@ -219,7 +226,8 @@ def cmd_simulate(args) -> int:
     scenario = load_scenario(args.scenario)
     _check_flags(args)
     opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
-                           "contact_stiffness", "dt", "damping", "integrator"))
+                           "contact_stiffness", "dt", "damping", "integrator", "elements",
+                           "calibration"))
     result = backend.simulate(scenario, **opts)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
@@ -239,7 +247,7 @@ def cmd_modes(args) -> int:
 
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
-    res = backend.modes(scenario, **_options(args, ("segments",)))
+    res = backend.modes(scenario, **_options(args, ("segments", "elements")))
     if args.json:
         print(json.dumps(_clean(res), indent=2))
         return 0

@@ -18,6 +18,7 @@ from analytic.records import PEAK_AMBIGUITY, peak_times
 from analytic.results import METRIC_UNITS, _clean
 
 from .backends import ENGINES
+from .rungs import KINDS, Rung, rung_table  # noqa: F401  (KINDS, Rung: public here too)
 from .runs import OK, SESSION_CACHE, SKIPPED, Run, RunCache, resolve_scenario
 
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
@@ -33,14 +34,6 @@ IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
                "xi": ("1", "identified damping ratio b / omega_n (eqs 42-43)"),
                "E": ("Pa", "identified Young's modulus (eq 47)")}
 ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
-
-KINDS = {
-    "newton": (1, "the paper: analytic SDOF + Newton restitution (eqs 12-35)"),
-    "contact": (2, "contact model: spring-dashpot contact with the same e"),
-    "engine": (3, "engine numerics: engine SDOF (slide joint) + soft contact"),
-    "trunk": (4, "1-DOF assumption: hinged-segment trunk, linearised pendulum"),
-    "pendulum": (5, "pendulum linearisation: full pendulum released from theta_r"),
-}
 
 #: Sampling of the exact solution for the figures and the identification: 20 us, the
 #: record spacing at which analytic.identification's tests recover b and omega_n.
@@ -59,29 +52,6 @@ def meaning_of(metric: str) -> str:
     return METRIC_UNITS[metric][1]
 
 
-@dataclass(frozen=True)
-class Rung:
-    """One rung: which backend with which options, and the rung it is compared with."""
-
-    id: str
-    kind: str
-    backend: str
-    options: tuple  # sorted (name, value) pairs passed to the backend
-    previous: str | None
-
-    @property
-    def level(self) -> int:
-        return KINDS[self.kind][0]
-
-    @property
-    def assumption(self) -> str:
-        return KINDS[self.kind][1]
-
-    @property
-    def engine(self) -> str | None:
-        return self.backend if self.backend in ENGINES else None
-
-
 def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
     """Segments of the hinged trunk: ``segments`` or analytic.chain.default_segments
     (the smallest N within 0.5 % of the beam's static stiffness and first two frequencies)."""
@@ -93,22 +63,12 @@ def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
 
 
 def ladder_rungs(scenario, *, engines=ENGINES, segments: int | None = None) -> list[Rung]:
-    """The rungs of one scenario, in ladder order (engine rungs per engine)."""
+    """The rungs of one scenario, in ladder order (:func:`compare.rungs.rung_table` with the
+    scenario's chain segments and the analytic record's sampling)."""
     scen = resolve_scenario(scenario)
-    n = chain_segments(scen, segments)
     samples = int(round(scen.t_end / ANALYTIC_SAMPLE_STEP)) + 1
-    rungs = [Rung("analytic", "newton", "analytic", (("samples", samples),), None),
-             Rung("soft", "contact", "soft", (), "analytic")]
-    for eng in engines:
-        sdof, chain = f"{eng}-sdof", f"{eng}-chain{n}"
-        rungs += [
-            Rung(sdof, "engine", eng, (("pendulum", "linear"), ("trunk", "sdof")), "soft"),
-            Rung(chain, "trunk", eng, (("pendulum", "linear"), ("segments", n),
-                                      ("trunk", "chain")), sdof),
-            Rung(f"{chain}-full", "pendulum", eng, (("pendulum", "full"), ("segments", n),
-                                                    ("trunk", "chain")), chain),
-        ]
-    return rungs
+    return rung_table(engines, segments=chain_segments(scen, segments),
+                      analytic_options=(("samples", samples),))
 
 
 # --------------------------------------------------------------------------- tolerances
@@ -370,7 +330,7 @@ class Ladder:
                      entry, self.tolerances)
 
     def engines_check(self, kind: str, metric: str) -> Check | None:
-        """MuJoCo against Bullet at one rung kind (engine, trunk or pendulum)."""
+        """MuJoCo against Bullet at one rung kind (engine, chain or pendulum)."""
         ids = [r.rung.id for r in self.rungs if r.rung.kind == kind]
         if len(ids) != 2:
             return None
@@ -391,7 +351,7 @@ class Ladder:
                 out += [self.step_check(r.rung.id, m) for m in ALL_METRICS]
             if r.identification.get("status") == OK:
                 out += [self.identification_check(r.rung.id, m) for m in IDENT_METRICS]
-        for kind in ("engine", "trunk", "pendulum"):
+        for kind in ("engine", "chain", "pendulum"):
             ids = [r for r in self.rungs if r.rung.kind == kind]
             if len(ids) == 2 and all(r.ok for r in ids):
                 out += [self.engines_check(kind, m) for m in ALL_METRICS]

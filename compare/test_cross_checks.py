@@ -106,7 +106,7 @@ def engine_cases():
     out = []
     for s in SCENARIOS:
         rungs = ladder_rungs(s)
-        for kind in ("engine", "trunk", "pendulum"):
+        for kind in ("engine", "chain", "pendulum"):
             if sum(r.kind == kind for r in rungs) != 2:
                 continue
             for m in ALL_METRICS:

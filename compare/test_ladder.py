@@ -24,13 +24,18 @@ TOL = load_tolerances()
 def test_each_rung_changes_exactly_one_assumption():
     rungs = {r.id: r for r in ladder_rungs("open-center", engines=("mujoco", "bullet"),
                                            segments=7)}
-    assert [r.level for r in rungs.values()] == [1, 2, 3, 4, 5, 3, 4, 5]
+    assert [r.level for r in rungs.values()] == [1, 2, 3, 4, 5, 6, 7, 5, 6, 7]
     assert rungs["analytic"].previous is None and rungs["soft"].previous == "analytic"
+    # the trunk alone: the beam backend takes the soft SDOF's pad (k_c, c_c) by default
+    assert rungs["beam"].previous == "soft" and rungs["beam"].options == ()
+    convention = rungs["beam-effective"]
+    assert convention.previous == "beam" and convention.backend == "beam"
+    assert dict(convention.options) == {"calibration": "effective"}
     for eng in ("mujoco", "bullet"):
         sdof, chain, full = (rungs[f"{eng}-sdof"], rungs[f"{eng}-chain7"],
                              rungs[f"{eng}-chain7-full"])
-        assert sdof.previous == "soft" and chain.previous == sdof.id and full.previous == chain.id
-        # one option differs between a rung and the one it is compared with
+        assert sdof.previous == "soft" and chain.previous == "beam" and full.previous == chain.id
+        # the engine's own pair differs in the trunk only
         assert dict(chain.options).keys() - dict(sdof.options).keys() == {"segments"}
         assert {k for k in dict(chain.options) if dict(chain.options)[k] != dict(
             sdof.options).get(k)} == {"trunk", "segments"}
@@ -97,7 +102,7 @@ def test_ladder_keeps_unavailable_rungs_as_explicit_skips():
         assert all(math.isnan(v) for v in r.values.values())
         assert "rung not run" in r.identification["reason"]
     js = ladder.to_json()
-    assert [r["status"] for r in js["rungs"]] == ["ok", "ok", "skipped", "skipped", "skipped"]
+    assert [r["status"] for r in js["rungs"]] == ["ok"] * 4 + ["skipped"] * 3
     # no check is made against a rung that did not run
     assert not {c.rung for c in ladder.checks()} & {r.rung.id for r in skipped}
 
@@ -190,12 +195,12 @@ def test_failure_table_names_metric_values_difference_tolerance_and_reason():
                                                  ("open-center", False)])
 def test_peak_time_of_two_near_equal_maxima_is_flagged_not_judged(ladder_of, scenario,
                                                                   ambiguous):
-    """The hinged trunk's x(t) has a second maximum within 5 % of the largest (central-leader:
-    12.0 and 16.8 ms, 1.8 % apart; realistic-crown: 26.7 and 32.1 ms, 0.8 %): its t_xmax
-    against the SDOF's single peak is 'ambiguous'; open-center's chain has one clear peak and
-    its t_xmax step stays a judged finding."""
+    """The continuum trunk's x(t) has a second maximum within 5 % of the largest
+    (central-leader: 12.0 and 16.8 ms, 1.8 % apart; realistic-crown: 26.7 and 32.1 ms, 0.8 %):
+    its t_xmax against the SDOF's single peak is 'ambiguous'; open-center's continuum has one
+    clear peak and its t_xmax step stays a judged finding."""
     ladder = ladder_of(scenario)
-    chain = next(r for r in ladder.rungs if r.rung.kind == "trunk" and r.ok)
+    chain = next(r for r in ladder.rungs if r.rung.kind == "beam" and r.ok)
     check = ladder.step_check(chain.rung.id, "t_xmax")
     if ambiguous:
         assert len(chain.peaks) == 2 and check.verdict == "ambiguous"

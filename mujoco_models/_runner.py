@@ -22,7 +22,8 @@ from analytic.parameters import ParameterError, Pendulum, Scenario
 from analytic.records import ImpactRecord, detection_duration, metrics_from_record
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
-from analytic.soft_contact import contact_law, damping_ratio_for_restitution, release_time
+from analytic.soft_contact import (CALIBRATIONS, contact_law, damping_ratio_for_restitution,
+                                   pad_restitution, release_time)
 from analytic.timestep import check_time_step, check_work, choose_time_step, sdof_rate
 
 from . import _builder, _contact
@@ -77,6 +78,7 @@ class Setup:
     inverse_mass_approx: float  # MuJoCo's diagApprox of the pair, 1/kg
     solref: tuple
     integrator: str
+    calibration: str  # "pad" or "effective" (analytic.soft_contact.CALIBRATIONS)
     mjmodel: mujoco.MjModel = field(repr=False, compare=False)
     spec: mujoco.MjSpec = field(repr=False, compare=False)
     # computed once per setup (a run does not rebuild MjData for them):
@@ -121,7 +123,7 @@ def highest_frequency(M: np.ndarray, K: np.ndarray) -> float:
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               damping="distributed", integrator="Euler") -> Setup:
+               damping="distributed", integrator="Euler", calibration="pad") -> Setup:
     """Validate the options and compile the model (rules in the module docstring).
 
     Setups are cached per (scenario, options) (the last :data:`SETUP_CACHE_SIZE`): a repeated
@@ -131,10 +133,10 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
         raise ParameterError("scenario: expected an analytic.Scenario")
     try:
         return _cached_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
-                             restitution, t_end, damping, integrator)
+                             restitution, t_end, damping, integrator, calibration)
     except TypeError:  # an unhashable option value: validate and build without the cache
         return _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
-                           restitution, t_end, damping, integrator)
+                           restitution, t_end, damping, integrator, calibration)
 
 
 SETUP_CACHE_SIZE = 64
@@ -146,21 +148,19 @@ def _cached_setup(*args) -> Setup:
 
 
 def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, restitution,
-                t_end, damping, integrator) -> Setup:
+                t_end, damping, integrator, calibration) -> Setup:
     check_choice("trunk", trunk, TRUNKS)
     check_choice("pendulum", pendulum, PENDULUMS)
     check_choice("damping", damping, DAMPINGS)
     check_choice("integrator", integrator, INTEGRATORS)
+    check_choice("calibration", calibration, CALIBRATIONS)
     model, t_end = engine_model(scenario, pendulum=pendulum, restitution=restitution,
                                 t_end=t_end)
     e = model.restitution
     if not e > 0.0:
         raise ParameterError("--restitution = 0: a soft contact needs e in (0, 1] (e = 0 "
                              "needs infinite damping)")
-    if contact_stiffness is not None:
-        k = contact_law(model, scenario.contact, stiffness=contact_stiffness)[0]
-    else:
-        k = contact_law(model, scenario.contact)[0]
+    k, c_pad = contact_law(model, scenario.contact, stiffness=contact_stiffness)
     tspec, n = _trunk_spec(scenario, trunk, segments, damping)
     name = f"{scenario.name}-{trunk}-{pendulum}"
     spec, pair = _builder.build_spec(name, tspec, scenario, pendulum, PLACEHOLDER_DT,
@@ -168,6 +168,8 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     m1 = spec.compile()
     A, A_hat = _builder.contact_inverse_masses(m1)
     mu = 1.0 / A
+    if calibration == "pad":  # the SDOF's (k_c, c_c): the e it gives on this model's mu
+        e = pad_restitution(k, c_pad, mu)
     zeta = damping_ratio_for_restitution(e)
     t_c = release_time(zeta) / math.sqrt(k / mu)
     omega_max = highest_frequency(*engine_trunk_matrices(m1)) if trunk == "chain" else None
@@ -200,7 +202,7 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
                  damping=damping, segments=n, dt=float(dt), t_end=float(t_end), law=law,
                  collision_duration=t_c,
                  detection_duration=detection_duration(model, scenario.contact, stiffness=k),
-                 omega_max=omega_max, inverse_mass=A,
+                 omega_max=omega_max, inverse_mass=A, calibration=calibration,
                  inverse_mass_approx=A_hat, solref=tuple(solref), integrator=integrator,
                  mjmodel=mjmodel, spec=spec,
                  initial_state=state0, rest_potential=_rest_potential(mjmodel, root))
@@ -514,7 +516,7 @@ def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
     model_dict = {**model.as_dict(), "segments": setup.segments, "dt": setup.dt,
                   "contact_stiffness": law.stiffness, "contact_damping": law.damping,
                   "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
-                  "integrator": setup.integrator,
+                  "integrator": setup.integrator, "calibration": setup.calibration,
                   "effective_mass": setup.effective_mass,
                   "law_stiffness": law.law_stiffness, "law_damping": law.law_damping,
                   "solref": list(setup.solref),
@@ -536,15 +538,18 @@ def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
 # ------------------------------------------------------------------------------------ API
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
              contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             damping="distributed", integrator="Euler") -> SimulationResult:
+             damping="distributed", integrator="Euler", calibration="pad"
+             ) -> SimulationResult:
     """Run one scenario in MuJoCo (rules in the module docstring); backend "mujoco".
 
     ``integrator``: MuJoCo's ``Euler`` (default), ``implicit``, ``implicitfast`` or ``RK4``.
+    ``calibration``: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
+    recalibrated so that e holds on the trunk's effective mass at the clamp.
     """
     out = simulate_batch([scenario], trunk=trunk, segments=segments, pendulum=pendulum,
                          contact_stiffness=contact_stiffness, dt=dt, restitution=restitution,
                          t_end=t_end, damping=damping, integrator=integrator,
-                         max_workers=1)[0]
+                         calibration=calibration, max_workers=1)[0]
     if isinstance(out, SimulationDiverged):
         raise out
     return out

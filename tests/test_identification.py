@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from analytic import load_scenario, simulate, solve_impacts, two_body_model
+from analytic import load_scenario, simulate
 from analytic.identification import (READINGS, identification_errors, identify,
                                      identify_from_record, pendulum_test_of, regress, truth_of)
 from analytic.parameters import ParameterError

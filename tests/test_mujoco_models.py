@@ -67,11 +67,14 @@ def _free_collision_restitution(scenario, trunk, e, integrator="Euler", dt_facto
     """Pendulum against the trunk with every spring and damper removed: a two-body collision.
 
     e = (vx - vy) / u1 at the first sample after the force has gone back to zero. The step is
-    ``dt_factor`` times the default one.
+    ``dt_factor`` times the default one. The contact is calibrated on the trunk's effective
+    mass (``calibration="effective"``), the mapping these tests check.
     """
     s = dataclasses.replace(scenario, contact=Contact(restitution=e, duration=5e-4))
-    dt = None if dt_factor == 1.0 else make_setup(s, trunk=trunk, t_end=1e-3).dt * dt_factor
-    setup = make_setup(s, trunk=trunk, t_end=1e-3, integrator=integrator, dt=dt)
+    dt = None if dt_factor == 1.0 else make_setup(s, trunk=trunk, t_end=1e-3,
+                                                  calibration="effective").dt * dt_factor
+    setup = make_setup(s, trunk=trunk, t_end=1e-3, integrator=integrator, dt=dt,
+                       calibration="effective")
     m = copy.deepcopy(setup.mjmodel)
     m.jnt_stiffness[:] = 0.0
     m.dof_damping[:] = 0.0
@@ -112,7 +115,7 @@ def test_implicit_integrators_take_eulers_contact_map(central, trunk):
     euler = _free_collision_restitution(central, trunk, 0.3)[0]
     fast = _free_collision_restitution(central, trunk, 0.3, "implicitfast")[0]
     full, setup = _free_collision_restitution(central, trunk, 0.3, "implicit")
-    law = make_setup(setup.scenario, trunk=trunk, t_end=1e-3).law
+    law = make_setup(setup.scenario, trunk=trunk, t_end=1e-3, calibration="effective").law
     assert (setup.law.stiffness, setup.law.damping) == (law.stiffness, law.damping)  # Euler's
     assert fast == pytest.approx(euler, abs=1e-12)  # round-off: measured <= 1.3e-14
     # implicit also linearises the chain's Coriolis forces: measured 5.8e-7 (chain), 1e-16 (SDOF)
@@ -563,3 +566,22 @@ def test_cli_bad_mujoco_options_are_one_line_errors(capsys, args, field):
     err = capsys.readouterr().err
     assert code == 2
     assert err.count("\n") == 1 and field in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("trunk", ["sdof", "chain"])
+def test_pad_calibration_keeps_the_soft_sdofs_contact_law(central, trunk):
+    """Default "pad": MuJoCo integrates the soft SDOF rung's (k_c, c_c) on any trunk; its e on
+    the chain's light effective mass is the law's, smaller than the scenario's."""
+    from analytic.model import two_body_model
+    from analytic.soft_contact import contact_law, restitution_for_damping_ratio
+
+    setup = make_setup(central, trunk=trunk, t_end=1e-3)
+    k, c = contact_law(two_body_model(central), central.contact)
+    assert setup.law.law_stiffness == pytest.approx(k, rel=1e-12)
+    assert setup.law.law_damping == pytest.approx(c, rel=1e-9)  # brentq on e, then back to c
+    e = restitution_for_damping_ratio(c / (2 * np.sqrt(k * setup.effective_mass
+                                                       * central.impactor.mass
+                                                       / (setup.effective_mass
+                                                          + central.impactor.mass))))
+    if trunk == "chain":
+        assert e < 0.5 * central.contact.restitution

@@ -36,9 +36,13 @@ def rung_style(rung) -> dict:
         return {"color": "black", "ls": "-", "lw": 1.8}
     if rung.kind == "contact":
         return {"color": "#7f7f7f", "ls": "--", "lw": 1.6}
+    if rung.kind == "beam":
+        return {"color": "#9467bd", "ls": "-", "lw": 1.6}
+    if rung.kind == "convention":
+        return {"color": "#c5b0d5", "ls": "--", "lw": 1.4}
     backend = BACKENDS.get(rung.backend)
     shades = (backend.shades if backend is not None else ()) or _DEFAULT_SHADES
-    i = {"engine": 0, "trunk": 1, "pendulum": 2}[rung.kind]
+    i = {"engine": 0, "chain": 1, "pendulum": 2}[rung.kind]
     return {"color": shades[i], "ls": ("-", "-.", ":")[i], "lw": 1.4}
 
 

@@ -30,7 +30,7 @@ SPEC = "sweep.json"
 
 OK, SKIPPED, DIVERGED, FAILED, INVALID = "ok", "skipped", "diverged", "failed", "invalid"
 
-REFERENCE_BACKENDS = ("analytic", "soft")
+REFERENCE_BACKENDS = ("analytic", "soft", "beam")
 MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "e", "u1", "segments", "dt", "contact_stiffness",
               "contact_damping")
 IDENT_KEYS = ("M_T", "K_T", "xi", "E")
@@ -61,7 +61,7 @@ class Target:
     backend: str
     options: tuple = ()  # sorted (name, value) pairs
     previous: str | None = None
-    kind: str = "model"  # ladder kind: newton, contact, engine, trunk, pendulum; "model" for
+    kind: str = "model"  # ladder kind (compare.rungs.KINDS); "model" for
     # an engine run as configured, compared with soft (numerics and trunk/pendulum together)
     drop: tuple = ()  # swept options this target ignores (segments for an SDOF trunk)
 
@@ -100,25 +100,21 @@ def make_targets(backends=("analytic",), *, ladder: bool = False,
     def opts(backend, extra=()):
         return tuple(sorted({**dict(extra), **options.get(backend, {})}.items()))
 
+    if ladder:  # the ladder's own rung table (compare.rungs), chain segments left to the grid
+        from compare.rungs import rung_table
+
+        engines = [b for b in names if b not in REFERENCE_BACKENDS]
+        return [Target(r.id, r.backend, opts(r.backend, r.options), r.previous, r.kind, r.drop)
+                for r in rung_table(engines)]
     targets = [Target("analytic", "analytic", opts("analytic"), None, "newton")]
-    has_soft = "soft" in names or ladder
-    if has_soft:
+    below = "analytic"
+    if "soft" in names:
         targets.append(Target("soft", "soft", opts("soft"), "analytic", "contact"))
-    engines = [b for b in names if b not in REFERENCE_BACKENDS]  # engines (or any other)
-    below = "soft" if has_soft else "analytic"
-    for eng in engines:
-        if not ladder:
-            targets.append(Target(eng, eng, opts(eng), below, "model"))
-            continue
-        sdof, chain = f"{eng}-sdof", f"{eng}-chain"
-        targets += [
-            Target(sdof, eng, opts(eng, {"trunk": "sdof", "pendulum": "linear"}), "soft",
-                   "engine", drop=("segments",)),
-            Target(chain, eng, opts(eng, {"trunk": "chain", "pendulum": "linear"}), sdof,
-                   "trunk"),
-            Target(f"{chain}-full", eng, opts(eng, {"trunk": "chain", "pendulum": "full"}),
-                   chain, "pendulum"),
-        ]
+        below = "soft"
+    if "beam" in names:
+        targets.append(Target("beam", "beam", opts("beam"), below, "beam"))
+    for eng in (b for b in names if b not in REFERENCE_BACKENDS):  # engines (or any other)
+        targets.append(Target(eng, eng, opts(eng), below, "model"))
     return targets
 
 
