@@ -169,21 +169,27 @@ def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
 
     n, N = model.dofs, model.dofs + 1
     k_c, c_c = model.contact_stiffness, model.contact_damping
-    systems = {}
+    systems, accel = {}, {}
     for contact in (False, True):
         A, g = _system(model, contact)
         modal = _Modal(A)
         if not np.all(np.isfinite(modal.W)):
             raise SimulationDiverged("beam: the state matrix could not be diagonalised")
         systems[contact] = (modal, g)
+        accel[contact] = A[N + model.crown]  # the crown's acceleration in this contact state
     g = systems[True][1]
     zero = np.zeros(N)
-    # observables: x, y, x', y', delta, delta', crown
-    rows = np.zeros((7, 2 * N))
-    rows[0, model.clamp] = rows[2, N + model.clamp] = 1.0
-    rows[1, n] = rows[3, N + n] = 1.0
-    rows[4, :N], rows[5, N:] = g, g
-    rows[6, model.crown] = 1.0
+    # observables: x, y, x', y', delta, delta', crown, crown acceleration (per contact state)
+    base = np.zeros((8, 2 * N))
+    base[0, model.clamp] = base[2, N + model.clamp] = 1.0
+    base[1, n] = base[3, N + n] = 1.0
+    base[4, :N], base[5, N:] = g, g
+    base[6, model.crown] = 1.0
+    rows_of = {}
+    for contact in (False, True):
+        rows_of[contact] = base.copy()
+        rows_of[contact][7] = accel[contact]
+    rows = base
     Mf = np.zeros((N, N))
     Mf[:n, :n], Mf[n, n] = model.M, model.impactor_mass
     Kf = np.zeros((N, N))
@@ -209,7 +215,7 @@ def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
 
     steps = int(math.ceil(t_end / dt_sample - 1e-9))
     t_grid = np.linspace(0.0, t_end, steps + 1)
-    obs = np.zeros((7, t_grid.size))
+    obs = np.zeros((8, t_grid.size))
     energy = np.zeros((4, t_grid.size))  # kinetic, potential, damping work, contact work
     in_contact = np.zeros(t_grid.size, dtype=bool)
     z = np.zeros(2 * N)
@@ -247,8 +253,8 @@ def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
                 end_s, nxt = _locate(phase, modal, rows, w, s_lo, s_hi, k_c, c_c,
                                      d[k], f[k])
                 jj = j + k  # samples before the event belong to this phase
-            _fill(t_grid, j, jj, t, modal, rows, w, forms[contact], obs, energy, in_contact,
-                  contact, w_damp, w_contact, U[:jj - j])
+            _fill(t_grid, j, jj, t, modal, rows_of[contact], w, forms[contact], obs, energy,
+                  in_contact, contact, w_damp, w_contact, U[:jj - j])
             j = jj
             chunk *= 4
         if end_s is None:
@@ -267,7 +273,7 @@ def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
         if switches > max_switches:
             raise SimulationDiverged(f"beam: more than {max_switches} contact switches by "
                                      f"t = {t:.6g} s (chatter does not end)")
-    x, y, vx, vy, delta, ddelta, crown = obs
+    x, y, vx, vy, delta, ddelta, crown, crown_acc = obs
     force = np.where(in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
     kinetic, potential, damping_work, contact_work = energy
     m, kp = model.impactor_mass, model.impactor_stiffness
@@ -275,7 +281,8 @@ def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
         t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force, kinetic=kinetic, potential=potential,
         damping_work=damping_work, contact_work=contact_work,
         contact_potential=np.where(in_contact, 0.5 * k_c * np.maximum(delta, 0.0) ** 2, 0.0),
-        pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2)
+        pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2, crown=crown,
+        crown_acceleration=crown_acc)
     return record, crown, switches
 
 

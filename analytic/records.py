@@ -23,7 +23,8 @@ class ImpactRecord:
     (springs and gravity), ``damping_work`` dissipated by the trunk's damping so far,
     ``contact_work`` absorbed by the contact so far (integral of F (vy - vx) dt: stored plus
     dissipated), ``contact_potential`` elastic energy held in the contact now,
-    ``pendulum_energy`` the pendulum's own kinetic + potential energy.
+    ``pendulum_energy`` the pendulum's own kinetic + potential energy. Optional: ``crown``
+    (m) and ``crown_acceleration`` (m/s^2), the top mass's motion, where the backend has it.
     """
 
     t: np.ndarray
@@ -38,10 +39,14 @@ class ImpactRecord:
     contact_work: np.ndarray
     contact_potential: np.ndarray
     pendulum_energy: np.ndarray
+    crown: np.ndarray | None = None
+    crown_acceleration: np.ndarray | None = None
 
     def __post_init__(self):
         n = np.shape(self.t)
         for name in self.__dataclass_fields__:
+            if getattr(self, name) is None:
+                continue
             value = np.asarray(getattr(self, name), dtype=float)
             if value.shape != n:
                 raise ParameterError(f"record.{name}: shape {value.shape}, expected {n}")
@@ -58,6 +63,55 @@ def detection_duration(model, contact=None, *, stiffness: float | None = None) -
     from .soft_contact import collision_duration, contact_law
 
     return collision_duration(model, *contact_law(model, contact, stiffness=stiffness))
+
+
+def static_shape_crown(record: "ImpactRecord", model, tip: float):
+    """(crown, crown_acceleration) of an SDOF trunk record: the static shape of eq 5 moves
+    the crown by phi(l) x (``tip`` = phi(l), :func:`analytic.reduction.crown_factor`), with
+    x'' = (F - C_T x' - K_T x) / M_T (eq 11). SI units."""
+    acc = (record.force - model.damping * record.vx - model.stiffness * record.x) \
+        / model.dynamic_mass
+    return tip * record.x, tip * acc
+
+
+def with_static_shape_crown(record: "ImpactRecord", model, trunk) -> "ImpactRecord":
+    """``record`` of an SDOF trunk with its crown motion (:func:`static_shape_crown`)."""
+    from dataclasses import replace
+
+    from .reduction import crown_factor
+
+    crown, acc = static_shape_crown(record, model, crown_factor(trunk))
+    return replace(record, crown=crown, crown_acceleration=acc)
+
+
+def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy: float, *,
+                        impactor_mass: float, impactor_stiffness: float,
+                        impact_speed: float) -> dict:
+    """The metrics over every contact of the record (robust to chattering: no moving-together
+    point needed). They need the record to end after the last contact (else NaN): energy
+    delivered = initial - pendulum energy after the last separation - contact work, the work
+    of the contact force on the trunk (the pendulum loses int F y', the contact absorbs
+    int F (y' - x')); impulse from the pendulum's momentum, m (u1 - y') - k int y dt (eq 13),
+    which a subsampled force record would miss."""
+    r = record
+    nan = math.nan
+    out = {"energy_delivered": nan, "contact_dissipation": nan, "rebound_energy": nan,
+           "impulse": nan, "peak_force": float(np.max(r.force)),
+           "contact_episodes": len(intervals), "crown_peak": nan,
+           "crown_peak_acceleration": nan}
+    if intervals and intervals[-1][1] < r.t.size - 1:
+        after = intervals[-1][1] + 1
+        rebound = float(r.pendulum_energy[after])
+        dissipated = float(r.contact_work[after] - r.contact_potential[after])
+        spring = impactor_stiffness * float(np.trapezoid(r.y[:after + 1], r.t[:after + 1]))
+        out.update(energy_delivered=initial_energy - rebound - dissipated,
+                   contact_dissipation=dissipated, rebound_energy=rebound,
+                   impulse=impactor_mass * (impact_speed - float(r.vy[after])) - spring)
+    if r.crown is not None:
+        out["crown_peak"] = float(np.max(np.abs(r.crown)))
+    if r.crown_acceleration is not None:
+        out["crown_peak_acceleration"] = float(np.max(np.abs(r.crown_acceleration)))
+    return out
 
 
 def contact_intervals(force: np.ndarray, threshold: float) -> list[tuple[int, int]]:
@@ -182,6 +236,10 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
         "energy_transferred": e_transferred,
         "theta_b": theta_b,
         "ledger_residual": ledger,
+        **whole_event_metrics(
+            r, intervals, initial_energy, impactor_mass=m, impact_speed=impact_speed,
+            impactor_stiffness=0.0 if equivalent_length is None
+            else m * gravity / equivalent_length),
     }
     assert tuple(metrics) == METRIC_KEYS
     return metrics

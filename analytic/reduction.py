@@ -73,6 +73,11 @@ def static_mode_shape(trunk: Trunk) -> StaticModeShape:
     return StaticModeShape(inner / ya, outer / ya, a, l)
 
 
+def crown_factor(trunk: Trunk) -> float:
+    """phi(l): crown displacement per unit displacement at a in the static shape of eq 5."""
+    return float(static_mode_shape(trunk).outer(trunk.length))
+
+
 @dataclass(frozen=True)
 class TreeSDOF:
     """The trunk reduced to one degree of freedom at the impact point (eq 11)."""

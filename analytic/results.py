@@ -28,6 +28,16 @@ METRIC_UNITS = {
     "energy_transferred": ("J", "energy transferred to the tree, eq 58 with the loss of eq 56"),
     "theta_b": ("rad", "rebound angle of the pendulum (eq 58); NaN for a billet"),
     "ledger_residual": ("1", "largest |energy ledger error| / initial energy over all events"),
+    # whole-event metrics: every contact, robust to chattering (no moving-together point)
+    "energy_delivered": ("J", "work of the contact force on the trunk over all contacts"),
+    "contact_dissipation": ("J", "energy lost in the contact over all contacts (eq 56 summed)"),
+    "rebound_energy": ("J", "pendulum's energy after its last separation"),
+    "impulse": ("N s", "total impulse of the contact force"),
+    "peak_force": ("N", "largest contact force (NaN for Newton impulses)"),
+    "contact_episodes": ("1", "separate contacts (Newton: impacts + moving-together phases)"),
+    "crown_peak": ("m", "largest |displacement| of the crown (top mass) at l"),
+    "crown_peak_acceleration": ("m/s^2", "largest |acceleration| of the crown (NaN for Newton "
+                                         "impulses)"),
 }
 METRIC_KEYS = tuple(METRIC_UNITS)
 

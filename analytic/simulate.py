@@ -61,9 +61,38 @@ def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dic
         "energy_transferred": e_transferred,
         "theta_b": theta_b,
         "ledger_residual": max(r["residual"] for r in ledger),
+        **_whole_event(sol, scenario),
     }
     assert tuple(metrics) == METRIC_KEYS
     return metrics
+
+
+def _whole_event(sol: ImpactSolution, scenario: Scenario | None) -> dict:
+    """Whole-event metrics of the exact solution (analytic.results.METRIC_UNITS): every
+    impact, tail and moving-together phase. The energies and the impulse need the bodies to
+    have parted for good within t_end (else NaN); the impulse is the pendulum's momentum
+    balance m u1 - m y'(t) - k int_0^t y dt; force and crown acceleration are impulsive."""
+    model = sol.model
+    nan = math.nan
+    out = {"energy_delivered": nan, "contact_dissipation": nan, "rebound_energy": nan,
+           "impulse": nan, "peak_force": nan,
+           "contact_episodes": len(sol.impacts) + len(sol.together_starts),
+           "crown_peak": nan, "crown_peak_acceleration": nan}
+    last = sol.phases[-1] if sol.phases else None
+    if last is not None and last.kind == "free":
+        t = last.t0  # the final free flight starts at the last separation or impact
+        y, vy = last.y0, last.vy0
+        rebound = 0.5 * model.impactor_mass * vy ** 2 + 0.5 * model.impactor_stiffness * y ** 2
+        dissipated = sum(i.loss for i in sol.impacts) + sum(c.loss for c in sol.tails)
+        out.update(energy_delivered=model.initial_energy - rebound - dissipated,
+                   contact_dissipation=dissipated, rebound_energy=rebound,
+                   impulse=model.impactor_mass * (model.impact_speed - vy)
+                   - model.impactor_stiffness * sol._integral("y", t))
+    if scenario is not None:
+        from .reduction import crown_factor
+
+        out["crown_peak"] = crown_factor(scenario.trunk) * sol.x_max[0]
+    return out
 
 
 def simulate(scenario: Scenario, *, restitution: float | None = None, t_end: float | None = None,

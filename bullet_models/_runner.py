@@ -17,7 +17,8 @@ from analytic.chain import (chain_matrices, chain_natural_frequencies, default_s
 from analytic.engine_options import check_choice, engine_model
 from analytic.model import TwoBodyModel
 from analytic.parameters import DEFAULT_CONTACT_DURATION, ParameterError, Scenario
-from analytic.records import ImpactRecord, detection_duration, metrics_from_record
+from analytic.records import (ImpactRecord, detection_duration, metrics_from_record,
+                              with_static_shape_crown)
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
 from analytic.soft_contact import (CALIBRATIONS, collision_duration, contact_law,
@@ -527,6 +528,8 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
                           contact_work=contact_work, contact_potential=c_pot,
                           pendulum_energy=pend_kin + pend_pot)
     imp = setup.scenario.impactor
+    if setup.trunk == "sdof":  # the static shape carries the crown (eq 5)
+        record = with_static_shape_crown(record, model, setup.scenario.trunk)
     metrics = metrics_from_record(
         record, impact_speed=model.impact_speed, initial_energy=e0,
         collision_duration=setup.collision_duration, impactor_mass=m,

@@ -26,7 +26,9 @@ TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
 #: Impact metrics of the ladder (keys of analytic.results.METRIC_KEYS).
 LADDER_METRICS = ("T0", "x0", "V", "x_max", "t_xmax", "t_sep", "impact_loss",
-                  "energy_transferred", "theta_b")
+                  "energy_transferred", "theta_b", "energy_delivered", "contact_dissipation",
+                  "rebound_energy", "impulse", "peak_force", "contact_episodes", "crown_peak",
+                  "crown_peak_acceleration")
 #: Parameters recovered by the identification procedure, compared with the model's truth.
 IDENT_METRICS = ("M_T", "K_T", "xi", "E")
 IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),

@@ -94,12 +94,15 @@ def test_findings_are_flagged_in_the_page(report):
     data = json.loads(paths["json"].read_text())
     found = [f for f in data["summary"]["findings"] if f["scenario"] == "open-center"]
     # the identification's finding on the Newton rung; the 1-DOF assumption's on the beam
-    # rung (x_max, t_xmax, energy delivered), which needs no engine
+    # rung (x_max, t_xmax, energies, crown motion), which needs no engine
     assert {f["finding"] for f in found} == {
         "e too large for the identification",
-        "1-DOF assumption: the pendulum meets the light clamp, not M_T"}
+        "1-DOF assumption: the pendulum meets the light clamp, not M_T",
+        "1-DOF assumption: the crown does not follow the static shape"}
     assert {(f["rung"], f["metric"]) for f in found if f["finding"].startswith("1-DOF")} == {
-        ("beam", "x_max"), ("beam", "t_xmax"), ("beam", "energy_transferred")}
+        ("beam", "x_max"), ("beam", "t_xmax"), ("beam", "energy_transferred"),
+        ("beam", "energy_delivered"), ("beam", "contact_dissipation"),
+        ("beam", "crown_peak"), ("beam", "crown_peak_acceleration")}
     assert all(f["verdict"] == "finding" for f in found)
     assert "e too large for the identification" in paths["html"].read_text()
 

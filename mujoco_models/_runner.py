@@ -19,7 +19,8 @@ from analytic.chain import default_segments, hinged_chain
 from analytic.engine_options import check_choice, engine_model
 from analytic.model import TwoBodyModel
 from analytic.parameters import ParameterError, Pendulum, Scenario
-from analytic.records import ImpactRecord, detection_duration, metrics_from_record
+from analytic.records import (ImpactRecord, detection_duration, metrics_from_record,
+                              with_static_shape_crown)
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
 from analytic.soft_contact import (CALIBRATIONS, contact_law, damping_ratio_for_restitution,
@@ -506,6 +507,8 @@ def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
     record, e0, i1 = _record(setup, state0, states, sensors)
     model = setup.model
     imp = setup.scenario.impactor
+    if setup.trunk == "sdof":  # the static shape carries the crown (eq 5)
+        record = with_static_shape_crown(record, model, setup.scenario.trunk)
     metrics = metrics_from_record(
         record, impact_speed=model.impact_speed, initial_energy=e0,
         collision_duration=setup.detection_duration, impactor_mass=model.impactor_mass,

@@ -585,3 +585,22 @@ def test_pad_calibration_keeps_the_soft_sdofs_contact_law(central, trunk):
                                                           + central.impactor.mass))))
     if trunk == "chain":
         assert e < 0.5 * central.contact.restitution
+
+
+def test_chain_converges_to_the_beam():
+    """The hinged chain with the pad converges to the exact continuum (analytic.beam_impact)
+    at second order in 1/N: the gap of x_max and t_xmax at least thirds per doubling of N."""
+    from analytic.beam_impact import simulate_beam
+    from analytic.chain import default_segments
+
+    s = load_scenario("open-center")
+    n = default_segments(s.trunk)
+    beam = simulate_beam(s, elements=24, t_end=0.03).metrics
+    gaps = []
+    for segments in (n, 2 * n, 4 * n):
+        chain = simulate(s, trunk="chain", segments=segments, t_end=0.03).metrics
+        gaps.append([abs(chain[k] / beam[k] - 1) for k in ("x_max", "t_xmax")])
+    gaps = np.array(gaps)
+    # measured: x_max 3.0e-3, 6.4e-4, 6e-6; t_xmax 6.9e-3, 1.9e-3, 4.8e-4
+    assert np.all(gaps[1] < gaps[0] / 3) and np.all(gaps[2] < gaps[1] / 3)
+    assert gaps[0, 0] < 0.005 and gaps[2, 0] < 1e-4  # step.chain.x_max; the limit is the beam
