@@ -142,6 +142,16 @@ def lateral_jacobian(chain: HingedChain, z) -> np.ndarray:
     return np.maximum(z[:, None] - chain.hinge_heights[None, :], 0.0)
 
 
+def lateral_motion(chain: HingedChain, angles, rates, segments: int):
+    """(x, x') in m, m/s of the top of segment ``segments - 1`` for hinge angles (rad, each
+    relative to the segment below) and their rates per sample, rows of shape (N,): exact
+    kinematics, x = sum_j h_j sin(phi_j) with phi the cumulative angles."""
+    h = chain.lengths[:segments]
+    phi = np.cumsum(angles, axis=-1)[..., :segments]
+    phid = np.cumsum(rates, axis=-1)[..., :segments]
+    return np.sin(phi) @ h, (np.cos(phi) * phid) @ h
+
+
 def rotation_jacobian(chain: HingedChain) -> np.ndarray:
     """d(rotation of segment s) / d theta_j = 1 for j <= s: lower-triangular ones, (N, N)."""
     return np.tril(np.ones((chain.segments, chain.segments)))

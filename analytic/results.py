@@ -33,11 +33,12 @@ METRIC_UNITS = {
     "contact_dissipation": ("J", "energy lost in the contact over all contacts (eq 56 summed)"),
     "rebound_energy": ("J", "pendulum's energy after its last separation"),
     "impulse": ("N s", "total impulse of the contact force"),
-    "peak_force": ("N", "largest contact force (NaN for Newton impulses)"),
+    "peak_force": ("N", "largest contact force averaged over one collision duration t_c (NaN "
+                        "for Newton impulses)"),
     "contact_episodes": ("1", "separate contacts (Newton: impacts + moving-together phases)"),
     "crown_peak": ("m", "largest |displacement| of the crown (top mass) at l"),
-    "crown_peak_acceleration": ("m/s^2", "largest |acceleration| of the crown (NaN for Newton "
-                                         "impulses)"),
+    "crown_peak_acceleration": ("m/s^2", "largest |acceleration| of the crown averaged over t_c "
+                                         "(NaN for Newton impulses)"),
 }
 METRIC_KEYS = tuple(METRIC_UNITS)
 

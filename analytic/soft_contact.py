@@ -146,7 +146,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     rec = soft_record(model, k_c, c_c, t_end, dt_sample=t_col / samples_per_collision)
     from .records import with_static_shape_crown
 
-    rec = with_static_shape_crown(rec, model, scenario.trunk)
+    rec = with_static_shape_crown(rec, scenario.trunk)
     metrics = metrics_from_record(
         rec, impact_speed=model.impact_speed, initial_energy=model.initial_energy,
         collision_duration=t_col, impactor_mass=model.impactor_mass,

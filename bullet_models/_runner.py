@@ -8,12 +8,12 @@ from __future__ import annotations
 import math
 import os
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from analytic.chain import (chain_matrices, chain_natural_frequencies, default_segments,
-                            hinged_chain, lateral_jacobian)
+                            hinged_chain, lateral_jacobian, lateral_motion)
 from analytic.engine_options import check_choice, engine_model
 from analytic.model import TwoBodyModel
 from analytic.parameters import DEFAULT_CONTACT_DURATION, ParameterError, Scenario
@@ -423,18 +423,15 @@ def _loop_chain(world, setup, n_steps, full, le, g, m):
     force = np.zeros(n_steps + 1)
     force[list(contact_force)] = list(contact_force.values())
     chain = hinged_chain(setup.scenario.trunk, setup.segments)
-    h = chain.lengths[:chain.clamp_index]
-    phi = np.cumsum(Q, axis=1)[:, :chain.clamp_index]
-    phid = np.cumsum(QD, axis=1)[:, :chain.clamp_index]
-    x = np.sin(phi) @ h
-    vx = (np.cos(phi) * phid) @ h
+    x, vx = lateral_motion(chain, Q, QD, chain.clamp_index)
+    crown, crown_v = lateral_motion(chain, Q, QD, chain.segments)
     kin = 0.5 * np.einsum("ni,ij,nj->n", QD, M, QD)
     pot = 0.5 * (Q * Q) @ kdiag
     tau_d = QD[:-1] @ Dv.T  # the damping torque applied over each step (resisting)
     if Dq is not None:
         tau_d -= Q[:-1] @ Dq.T
     ddot = np.einsum("ni,ni->n", tau_d, 0.5 * (QD[:-1] + QD[1:]))
-    return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force, "trunk_kinetic": kin,
+    return {"x": x, "vx": vx, "crown": crown, "crown_velocity": crown_v, "q": q, "qd": qd, "force": force, "trunk_kinetic": kin,
             "trunk_potential": pot, "damping_power": ddot,
             "joint_speed": max(float(np.max(np.abs(QD))), float(np.max(np.abs(qd))))}
 
@@ -529,7 +526,9 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
                           pendulum_energy=pend_kin + pend_pot)
     imp = setup.scenario.impactor
     if setup.trunk == "sdof":  # the static shape carries the crown (eq 5)
-        record = with_static_shape_crown(record, model, setup.scenario.trunk)
+        record = with_static_shape_crown(record, setup.scenario.trunk)
+    else:  # the chain's top
+        record = replace(record, crown=rec["crown"], crown_velocity=rec["crown_velocity"])
     metrics = metrics_from_record(
         record, impact_speed=model.impact_speed, initial_energy=e0,
         collision_duration=setup.collision_duration, impactor_mass=m,

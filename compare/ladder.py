@@ -95,9 +95,10 @@ def _validate(data: dict, path: str) -> None:
             raise ParameterError(f"{path}: {where}: every tolerance needs a one-line reason")
         if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
             raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
-        if "rel" not in entry and not entry.get("report_only") and where != \
-                "identification_reported":
-            raise ParameterError(f"{path}: {where}: give rel or report_only = true")
+        if "rel" not in entry and not entry.get("report_only") and not entry.get("undefined") \
+                and where != "identification_reported":
+            raise ParameterError(f"{path}: {where}: give rel or report_only = true (or "
+                                 "undefined = true: no check)")
 
     for section in ("step", "engines"):
         for kind, metrics in data.get(section, {}).items():
@@ -290,6 +291,27 @@ class Ladder:
         return relative_step(r.values.get(metric, math.nan),
                              self[r.rung.previous].values.get(metric, math.nan))
 
+    def _undefined(self, section: str, kind: str, metric: str) -> bool:
+        entry = self.tolerances.get(section, {}).get(kind, {}).get(metric)
+        return bool(entry and entry.get("undefined"))
+
+    def not_compared(self) -> list[dict]:
+        """The (step kind, metrics, reason) the tolerance file marks ``undefined``: quantities
+        the step's models do not both define robustly, so no check is made (the ladder
+        table still shows their values). Only kinds present in this ladder."""
+        kinds = {r.rung.kind for r in self.rungs if r.rung.previous is not None}
+        kinds |= {f"engines.{r.rung.kind}" for r in self.rungs}
+        out = {}
+        for section in ("step", "engines"):
+            for kind, metrics in self.tolerances.get(section, {}).items():
+                name = kind if section == "step" else f"engines.{kind}"
+                if name not in kinds:
+                    continue
+                for metric, entry in metrics.items():
+                    if entry.get("undefined"):
+                        out.setdefault((name, entry["reason"]), []).append(metric)
+        return [{"kind": k, "metrics": ms, "reason": why} for (k, why), ms in out.items()]
+
     def step_check(self, rung_id: str, metric: str) -> Check:
         r = self[rung_id]
         prev = r.rung.previous
@@ -319,14 +341,11 @@ class Ladder:
                      "maximum is not a robust quantity")
 
     def identification_check(self, rung_id: str, metric: str) -> Check:
-        """The identified value against the truth: judged on the Newton record the procedure
-        was derived for, reported (with the file's reason) on every other rung."""
+        """The identified value against the truth, judged on the Newton record the procedure
+        was derived for. On other rungs the identification table shows the error against
+        the truth without a check (the file's ``identification_reported`` reason)."""
         r = self[rung_id]
-        if r.rung.kind == "newton":
-            entry = self.tolerances.get("identification", {}).get(metric)
-        else:
-            entry = {"report_only": True,
-                     "reason": self.tolerances["identification_reported"]["reason"]}
+        entry = self.tolerances.get("identification", {}).get(metric)
         return judge(self.name, rung_id, r.rung.kind, f"id_{metric}",
                      r.values.get(f"id_{metric}", math.nan), "truth", self.truth[metric],
                      entry, self.tolerances)
@@ -350,13 +369,15 @@ class Ladder:
             if not r.ok:
                 continue
             if r.rung.previous is not None and self[r.rung.previous].ok:
-                out += [self.step_check(r.rung.id, m) for m in ALL_METRICS]
-            if r.identification.get("status") == OK:
+                out += [self.step_check(r.rung.id, m) for m in ALL_METRICS
+                        if not self._undefined("step", r.rung.kind, m)]
+            if r.identification.get("status") == OK and r.rung.kind == "newton":
                 out += [self.identification_check(r.rung.id, m) for m in IDENT_METRICS]
         for kind in ("engine", "chain", "pendulum"):
             ids = [r for r in self.rungs if r.rung.kind == kind]
             if len(ids) == 2 and all(r.ok for r in ids):
-                out += [self.engines_check(kind, m) for m in ALL_METRICS]
+                out += [self.engines_check(kind, m) for m in ALL_METRICS
+                        if not self._undefined("engines", kind, m)]
         return out
 
     def table(self) -> list[dict]:

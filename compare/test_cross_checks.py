@@ -87,6 +87,22 @@ def test_rebound_angle(ladder_of, scenario, rung):
     _step(ladder_of, scenario, rung, "theta_b")
 
 
+WHOLE_EVENT = ("energy_delivered", "contact_dissipation", "rebound_energy", "impulse",
+               "peak_force", "contact_episodes", "crown_peak", "crown_peak_acceleration")
+
+
+def whole_event_cases():
+    return [pytest.param(s, r, m, id=f"{s}-{r.id}-{m}") for m in WHOLE_EVENT
+            for s, r in ((p.values[0], p.values[1]) for p in step_cases(m))]
+
+
+@pytest.mark.parametrize("scenario, rung, metric", whole_event_cases())
+def test_whole_event(ladder_of, scenario, rung, metric):
+    """Energy delivered to the tree, contact loss, rebound, impulse, peak force, contacts and
+    crown motion over every contact (no moving-together point needed)."""
+    _step(ladder_of, scenario, rung, metric)
+
+
 def ident_cases():
     """The paper's procedure is designed for the Newton record (rung 1): judged there against
     the truth, with the documented findings; on the other rungs it is reported."""

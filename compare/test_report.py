@@ -101,7 +101,7 @@ def test_findings_are_flagged_in_the_page(report):
         "1-DOF assumption: the crown does not follow the static shape"}
     assert {(f["rung"], f["metric"]) for f in found if f["finding"].startswith("1-DOF")} == {
         ("beam", "x_max"), ("beam", "t_xmax"), ("beam", "energy_transferred"),
-        ("beam", "energy_delivered"), ("beam", "contact_dissipation"),
+        ("beam", "energy_delivered"), ("beam", "contact_dissipation"), ("beam", "peak_force"),
         ("beam", "crown_peak"), ("beam", "crown_peak_acceleration")}
     assert all(f["verdict"] == "finding" for f in found)
     assert "e too large for the identification" in paths["html"].read_text()
@@ -168,7 +168,8 @@ def test_each_engine_draws_its_rungs_in_its_own_three_shades():
     assert all(colours[(e, "engine")] == BACKENDS[e].shades[0] for e in ENGINES)
 
 
-def test_the_answer_leads_with_x_max_energy_and_whether_the_fit_explains(report, run_cache):
+def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(report,
+                                                                               run_cache):
     """The answer is the continuum (beam rung) against rung 1, the ladder's own numbers; it
     needs no engine (the fixture's engine does not exist); the engines' chains agree with it."""
     from compare.report import _answer
@@ -186,7 +187,15 @@ def test_the_answer_leads_with_x_max_energy_and_whether_the_fit_explains(report,
     chains = [r for r in section.ladder.rungs if r.rung.kind == "chain" and r.ok]
     for chain in chains:  # discretisation: within the step.chain tolerance of the continuum
         assert chain.values["x_max"] == pytest.approx(x_flex, rel=0.005)
-    assert answer["good_enough"] == {"x_max": False, "energy_transferred": False}
+    # x_max, energy delivered, crown peak: the paper's (Newton) model; force and crown
+    # acceleration, which Newton's impulses do not have: the soft SDOF with the same pad
+    assert answer["good_enough"] == {"x_max": False, "energy_delivered": False,
+                                     "crown_peak": False, "crown_peak_acceleration": False,
+                                     "peak_force": False}
+    soft = section.ladder.value("soft", "peak_force")
+    assert answer["metrics"]["peak_force"]["one_dof"] == soft
+    assert answer["metrics"]["energy_delivered"]["one_dof"] == \
+        section.ladder.rungs[0].values["energy_delivered"]
     assert answer["explained"] is False  # the full-record fit on the continuum's record
     html = paths["html"].read_text()
     assert html.index("The answer") < html.index("Summary")

@@ -9,13 +9,13 @@ import functools
 import math
 import os
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from analytic.chain import default_segments, hinged_chain
+from analytic.chain import default_segments, hinged_chain, lateral_motion
 from analytic.engine_options import check_choice, engine_model
 from analytic.model import TwoBodyModel
 from analytic.parameters import ParameterError, Pendulum, Scenario
@@ -503,12 +503,26 @@ def _record(setup: Setup, state0, states, sensors) -> tuple[ImpactRecord, float,
     return record, e0, i1
 
 
+def _crown_motion(setup: Setup, states: np.ndarray, n: int) -> dict:
+    """The chain top's x (m) and x' (m/s) over the last ``n`` states (the record's)."""
+    m = setup.mjmodel
+    chain = hinged_chain(setup.scenario.trunk, setup.segments)
+    ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"hinge_{j}")
+           for j in range(chain.segments)]
+    q = states[-n:, [1 + int(m.jnt_qposadr[i]) for i in ids]]
+    v = states[-n:, [1 + m.nq + int(m.jnt_dofadr[i]) for i in ids]]
+    crown, velocity = lateral_motion(chain, q, v, chain.segments)
+    return {"crown": crown, "crown_velocity": velocity}
+
+
 def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
     record, e0, i1 = _record(setup, state0, states, sensors)
     model = setup.model
     imp = setup.scenario.impactor
     if setup.trunk == "sdof":  # the static shape carries the crown (eq 5)
-        record = with_static_shape_crown(record, model, setup.scenario.trunk)
+        record = with_static_shape_crown(record, setup.scenario.trunk)
+    else:  # the chain's top, from the hinge angles of the recorded states
+        record = replace(record, **_crown_motion(setup, states, record.t.size))
     metrics = metrics_from_record(
         record, impact_speed=model.impact_speed, initial_energy=e0,
         collision_duration=setup.detection_duration, impactor_mass=model.impactor_mass,

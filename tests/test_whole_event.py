@@ -67,7 +67,27 @@ def test_impulse_is_the_integral_of_the_contact_force(name):
     rec = res.extra["record"]
     # trapezoid of the force at 400 samples per collision: O(1e-5) of the impulse
     assert res.metrics["impulse"] == pytest.approx(np.trapezoid(rec.force, rec.t), rel=1e-3)
-    assert res.metrics["peak_force"] == pytest.approx(rec.force.max(), rel=1e-12)
+
+
+def test_peak_force_is_the_first_collisions_mean_force():
+    """The mean force over t_c peaks on the first collision, a free collision to first order
+    in t_c omega_n: its impulse (1 + e) mu u1 (mu = m M_T / (m + M_T)) over t_c; and it
+    equals a direct quadrature of every window."""
+    scen = load_scenario("central-leader")
+    res = simulate_soft(scen, samples_per_collision=400)
+    model = two_body_model(scen)
+    m, M, u, e = model.impactor_mass, model.dynamic_mass, model.impact_speed, model.restitution
+    t_c = res.extra["collision_duration"]
+    free = (1 + e) * m * M / (m + M) * u / t_c
+    # the springs and trunk damper act during t_c: omega_n t_c, b t_c ~ 0.03 (3 % measured)
+    assert res.metrics["peak_force"] == pytest.approx(free, rel=0.05)
+    rec = res.extra["record"]
+    step = rec.t[1] - rec.t[0]
+    k = int(round(t_c / step))
+    direct = max(np.trapezoid(rec.force[i:i + k + 1], rec.t[i:i + k + 1])
+                 for i in range(0, 3 * k))
+    # windows start at samples here, interpolated there: O(1/400) of the mean
+    assert res.metrics["peak_force"] == pytest.approx(direct / t_c, rel=5e-3)
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
@@ -86,18 +106,28 @@ def test_sdof_crown_is_the_static_shape_of_the_beam(name):
                                                       * res.metrics["x_max"], rel=1e-6)
 
 
-def test_beam_crown_acceleration_is_the_second_derivative_of_its_motion():
-    """The beam's exact crown acceleration against a finite difference of its crown motion
-    well after the last contact (free vibration, smooth)."""
+def test_beam_crown_velocity_is_the_derivative_of_its_motion():
+    """The beam's exact crown velocity against a central difference of its crown motion."""
     model, _ = beam_impact_model(load_scenario("central-leader"))
-    dt = 2e-7  # (omega dt)^2 / 12 < 1e-4 for the mesh's highest mode (~1e5 rad/s)
-    rec, _, _ = beam_record(model, 0.0302, dt)
-    t, c, a = rec.t, rec.crown, rec.crown_acceleration
-    k = np.flatnonzero(t > 0.03)[:-1]
-    fd = (c[k + 1] - 2 * c[k] + c[k - 1]) / dt ** 2
-    scale = np.max(np.abs(a[k]))
-    # central difference: (omega dt)^2/12 of the highest mode plus round-off eps c/dt^2
-    assert np.max(np.abs(fd - a[k])) < 0.01 * scale
+    dt = 1e-7  # (omega dt)^2 / 6 < 1e-4 for the mesh's highest mode (~1e5 rad/s)
+    rec, _, _ = beam_record(model, 0.0101, dt)
+    t, c, v = rec.t, rec.crown, rec.crown_velocity
+    k = np.flatnonzero(t > 0.01)[:-1]
+    fd = (c[k + 1] - c[k - 1]) / (2 * dt)
+    assert np.max(np.abs(fd - v[k])) < 1e-3 * np.max(np.abs(v))
+
+
+@pytest.mark.parametrize("name", ("open-center", "realistic-crown"))
+def test_beam_peaks_over_t_c_converge_in_elements(name):
+    """The crown's mean acceleration and the contact's mean force over t_c (not pointwise
+    peaks, which the pad's force step drives through every mode) at 12 and 24 elements within
+    step.beam's 2 % and 0.5 % of 48 elements (measured 0.2-1.4 %, 0.1-0.4 %)."""
+    scen = load_scenario(name)
+    runs = [simulate_beam(scen, elements=n).metrics for n in (12, 24, 48)]
+    for m in runs[:2]:
+        assert m["crown_peak_acceleration"] == pytest.approx(
+            runs[2]["crown_peak_acceleration"], rel=0.02)
+        assert m["peak_force"] == pytest.approx(runs[2]["peak_force"], rel=0.005)
 
 
 @pytest.mark.parametrize("name", SCENARIOS)

@@ -190,7 +190,7 @@ class ScenarioSection(Section):
             "rungs": L.rungs, "skips": [r for r in L.rungs if not r.ok],
             "ledgers": self.ledgers, "sweep": self.sweep, "fits": self.fits,
             "findings": findings,
-            "problems": problems, "unit_of": unit_of, "meaning_of": meaning_of,
+            "problems": problems, "not_compared": L.not_compared(), "unit_of": unit_of, "meaning_of": meaning_of,
             "metrics": ALL_METRICS, "OK": OK,
         }
 
