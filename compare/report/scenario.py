@@ -13,6 +13,7 @@ from analytic.results import _clean
 
 from ..ladder import (ALL_METRICS, IDENT_METRICS, PASSING, build_ladder, identify_rung,
                       meaning_of, unit_of)
+from ..mechanism import matched_loss_evidence
 from ..runs import OK
 from . import figures
 from .base import Section
@@ -130,6 +131,7 @@ class ScenarioSection(Section):
         self.ledgers = {r.rung.id: energy_ledger(r) for r in self.ladder.rungs}
         self.sweep = identification_sweep(self.ladder.scenario, cache)
         self.fits = record_fits(self.ladder)
+        self.mechanism = matched_loss_evidence(self.ladder)
         self.checks = self.ladder.checks()
         self.figures = {}  # name -> path of the figure file, relative to the page
         if figure_sink is not None:
@@ -189,7 +191,7 @@ class ScenarioSection(Section):
             "ident_metrics": IDENT_METRICS, "figures": self.figures,
             "rungs": L.rungs, "skips": [r for r in L.rungs if not r.ok],
             "ledgers": self.ledgers, "sweep": self.sweep, "fits": self.fits,
-            "findings": findings,
+            "findings": findings, "mechanism": self.mechanism,
             "problems": problems, "not_compared": L.not_compared(), "unit_of": unit_of, "meaning_of": meaning_of,
             "metrics": ALL_METRICS, "OK": OK,
         }
@@ -199,4 +201,5 @@ class ScenarioSection(Section):
         out["energy_ledger"] = _clean({k: v for k, v in self.ledgers.items()})
         out["identification_vs_e"] = _clean(self.sweep)
         out["record_fits"] = _clean(self.fits)
+        out["mechanism"] = _clean(self.mechanism)
         return out
