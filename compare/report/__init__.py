@@ -35,10 +35,11 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     sections reported on stderr as they finish."""
     from analytic.scenario import shipped_scenarios
 
+    from ..contact_scan import contact_scan, scan_requests
     from ..ladder import prefetch_ladders
     from ..runs import SESSION_CACHE, resolve_scenario
     from ..progress import Progress
-    from .figures import FigureFiles
+    from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection
     from .scenario import ScenarioSection
@@ -49,8 +50,13 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)
     wall = {}
     t0 = time.perf_counter()
+    cache.prefetch([r for s in names for r in scan_requests(s)], progress=progress)
     prefetch_ladders(cache, names, engines=engines, segments=segments, progress=progress)
     wall["runs (process pool)"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    scans = {resolve_scenario(s).name: contact_scan(s, cache) for s in names}
+    scan_figure = sink(contact_scan_figure(scans), "contact-scan") if sink else None
+    wall["contact scan"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     paper = PaperSection()
     wall["paper"] = time.perf_counter() - t0
@@ -68,7 +74,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         bar.close()
     studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]
     log = RunsSection(cache, wall)
-    return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log}
+    return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log,
+            "contact": {"scans": scans, "figure": scan_figure}}
 
 
 def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -> dict:
@@ -95,6 +102,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     summary = _summary(sections["scenarios"])
     summary["answer"] = _answer(sections["scenarios"])
     summary["answer_metrics"] = ANSWER_METRICS
+    summary["contact"] = sections["contact"]
     env = environment()
     paths = {}
     for fmt, name in (("html", "report.html"), ("md", "report.md")):

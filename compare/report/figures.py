@@ -255,3 +255,37 @@ def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> Fig
            xlabel="coefficient of restitution e (1)", ylabel="error (identified - true) (%)")
     _legend_right(ax)
     return fig
+
+
+def contact_scan_figure(scans: dict) -> Figure:
+    """Per scenario, the continuum's gap to the 1-DOF model (%, beam vs soft SDOF, same pad)
+    against the contact duration (ms, log), with the +-tolerance band: where the 1-DOF model
+    is good enough. Symmetric-log y so that +200 % and -3 % both read."""
+    names = list(scans)
+    fig, axes = plt.subplots(1, len(names), figsize=(4.2 * len(names) + 1.6, 3.6),
+                             sharey=True, squeeze=False)
+    styles = {"x_max": ("o-", "tab:blue", "x_max"),
+              "energy_delivered": ("s-", "tab:red", "energy delivered"),
+              "crown_peak_acceleration": ("^-", "tab:green", "crown accel. (mean over t_c)")}
+    for ax, name in zip(axes[0], names):
+        s = scans[name]
+        d = 1e3 * np.asarray(s["durations"])
+        tol = 100 * s["tolerance"]
+        ax.axhspan(-tol, tol, color="0.85", lw=0)
+        for metric, gaps in s["gaps"].items():
+            mk, colour, label = styles.get(metric, (".-", None, metric))
+            ax.plot(d, 100 * np.asarray(gaps, float), mk, color=colour, ms=4, label=label)
+            if s["shortest"].get(metric) is not None:
+                ax.axvline(1e3 * s["shortest"][metric], color=colour, lw=0.8, ls=":")
+        ax.set_xscale("log")
+        ax.set_yscale("symlog", linthresh=10)
+        ticks = [-100, -30, -10, -5, 0, 5, 10, 30, 100, 300]
+        ax.set_yticks(ticks, [f"{t:+d}" if t else "0" for t in ticks])
+        ax.set(title=name, xlabel="contact duration t_c (ms)")
+        ax.grid(True, which="major", lw=0.3)
+    axes[0][0].set_ylabel("continuum vs 1-DOF (%)")
+    _legend_right(axes[0][-1])
+    fig.suptitle(f"Where the 1-DOF model holds: grey band +-{tol:.0f} %, dotted lines the "
+                 "shortest contact from which it stays inside", fontsize=10)
+    fig.tight_layout()
+    return fig

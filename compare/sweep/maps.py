@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from analytic.parameters import ParameterError
+
 from .run import IDENT_KEYS, OK
 
 try:  # the ladder's metric list, so a study and the report speak of the same metrics
@@ -26,8 +28,10 @@ DEFAULT_TOLERANCE = 0.05
 
 #: Letter and meaning of each ladder kind (the step a rung adds to the one below it).
 RUNG_LETTERS = {"contact": ("C", "contact model (spring-dashpot vs Newton's e)"),
+                "beam": ("B", "1-DOF assumption (continuum trunk vs SDOF, same pad)"),
+                "convention": ("R", "restitution convention (c_c for e on the clamp's mass)"),
                 "engine": ("E", "engine numerics (engine SDOF vs analytic soft contact)"),
-                "trunk": ("T", "1-DOF assumption (hinged-segment trunk vs SDOF)"),
+                "chain": ("D", "discretisation (engine's hinged chain vs continuum)"),
                 "pendulum": ("P", "pendulum linearisation (full vs linear pendulum)"),
                 "model": ("M", "engine as configured vs analytic soft contact (numerics, trunk "
                                "and pendulum together; run a ladder sweep to separate them)")}
@@ -256,12 +260,14 @@ def _line(ax, sub, a, value_col, tol, title):
     ax.tick_params(labelsize=6)
 
 
-def _grid_figure(n_panels: int):
+def _grid_figure(n_panels: int, columns: int = 6):
+    """A figure of heatmap panels; each panel wide enough for ``columns`` printed cells."""
     from matplotlib.figure import Figure
 
-    ncol = 2 if n_panels == 4 else min(3, n_panels)
+    ncol = 2 if n_panels == 4 or columns > 6 else min(3, n_panels)
     nrow = math.ceil(n_panels / ncol)
-    fig = Figure(figsize=(3.3 * ncol, 2.9 * nrow + 0.6), layout="constrained")
+    width = 3.3 if columns <= 6 else 0.5 * columns + 1.0
+    fig = Figure(figsize=(width * ncol + 1.0, 2.9 * nrow + 0.6), layout="constrained")
     axes = [fig.add_subplot(nrow, ncol, i + 1) for i in range(n_panels)]
     return fig, axes
 
@@ -285,11 +291,15 @@ def _in_order(groups, order):
 
 
 def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=None,
-                  prefix: str = "validity", order=None) -> list[dict]:
+                  prefix: str = "validity", order=None, value: str = "rel",
+                  skip=()) -> list[dict]:
     """Draw the validity maps of a sweep table into ``figdir``; returns one dict per figure
     (path, target, axes, caption) plus per-metric summaries (fraction within tolerance,
     worst |rel| and where, dominating rung counts). ``order``: target ids in the order
-    their maps are listed."""
+    their maps are listed. ``value``: "rel" maps each target against the paper's model,
+    "step" against the rung below it (beam vs soft: the 1-DOF assumption alone)."""
+    if value not in ("rel", "step"):
+        raise ParameterError(f"value: {value!r}, allowed 'rel' or 'step'")
     figdir = Path(figdir)
     figdir.mkdir(parents=True, exist_ok=True)
     disc = discrepancies(df, metrics)
@@ -298,6 +308,10 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
     num = numeric_axes(df)
     out = []
     for target, dt in _in_order(disc.groupby("target", sort=False), order):
+        if target in skip:  # drawn from another sweep of the study
+            continue
+        if value == "step":
+            dt = dt.assign(rel=dt["step"])  # the maps and summaries read the step
         ms = [m for m in metrics if dt[dt["metric"] == m]["rel"].notna().any()]
         if not ms:
             continue
@@ -312,7 +326,7 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
         else:
             plot_pairs = []
         for a, b in plot_pairs:
-            fig, axes = _grid_figure(len(ms))
+            fig, axes = _grid_figure(len(ms), dt[a].nunique())
             im = None
             vmax = _vmax(dt["rel"], min(_tolerance_of(tolerance, m) for m in ms))
             for ax, m in zip(axes, ms):
@@ -323,17 +337,19 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
                 else:
                     cell = _worst(sub, "rel", a, b)
                     im = _heat(ax, cell, a, b, "rel", tol, f"{m} (tol {tol:.0%})",
-                               letters="dominant", vmax=vmax)
+                               letters="dominant" if value == "rel" else None, vmax=vmax)
             if im is not None:
                 cb = fig.colorbar(im, ax=axes, shrink=0.6, extend=_extend(dt["rel"], vmax))
-                cb.set_label("(target - analytic) / |analytic|; colours saturate at "
-                             f"+-{vmax:.0%}, the cells print their value", fontsize=9)
+                cb.set_label(("vs analytic" if value == "rel" else "vs rung below")
+                             + f" (saturates at +-{vmax:.0%})", fontsize=9)
             what = f"{a} x {b}" if b else a
-            fig.suptitle(f"{target} vs the paper's model (analytic): {what}", fontsize=9)
+            versus = "the paper's model (analytic)" if value == "rel" else \
+                f"the rung below ({_previous(df, target)})"
+            fig.suptitle(f"{target} vs {versus}: {what}", fontsize=9)
             path = figdir / f"{prefix}-{_safe(target)}-{_safe(a)}{'-' + _safe(b) if b else ''}.png"
             fig.savefig(path, dpi=110)
             out.append({"path": path, "target": target, "axes": [a, b] if b else [a],
-                        "caption": _validity_caption(target, a, b, tolerance),
+                        "caption": _validity_caption(target, a, b, tolerance, value),
                         "summary": summary})
         if not plot_pairs:
             out.append({"path": None, "target": target, "axes": [], "caption": "",
@@ -341,15 +357,24 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
     return out
 
 
-def _validity_caption(target, a, b, tolerance) -> str:
+def _previous(df, target) -> str:
+    prev = df.loc[df["target"] == target, "previous"].dropna()
+    return str(prev.iloc[0]) if len(prev) else "none"
+
+
+def _validity_caption(target, a, b, tolerance, value="rel") -> str:
     tol = "per-metric tolerances" if isinstance(tolerance, dict) else \
         f"|rel| = {_tolerance_of(tolerance, '')*100:.3g} %"
+    if value == "step":
+        return (f"Relative step of {target} from the rung below it over {_label(a)}"
+                + (f" and {_label(b)}" if b else "") + f" (worst case over any other swept "
+                f"parameter). Black line: {tol}. Grey: no value (n/a).")
     if b is None:
         return (f"Relative discrepancy of {target} from the paper's model over {_label(a)}; "
                 f"grey band: {tol}.")
     return (f"Relative discrepancy of {target} from the paper's model over {_label(a)} and "
             f"{_label(b)} (worst case over any other swept parameter). Black line: {tol}. "
-            f"Letters: the rung whose step dominates (C, E, T, P, M: see the legend above). "
+            f"Letters: the rung whose step dominates (see the legend above). "
             f"Grey: no value (n/a).")
 
 
@@ -399,7 +424,7 @@ _CROWN_NAMES = ("crown_ratio", "trunk.crown_mass")
 
 
 def identification_maps(df, figdir, *, prefix: str = "identification",
-                        order=None) -> list[dict]:
+                        order=None, skip=()) -> list[dict]:
     """Draw the identification maps (see the module docstring) into ``figdir``."""
     figdir = Path(figdir)
     figdir.mkdir(parents=True, exist_ok=True)
@@ -419,6 +444,8 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
         return []
     out = []
     for target, dt in _in_order(ide.groupby("target", sort=False), order):
+        if target in skip:  # drawn from another sweep of the study
+            continue
         if dt["rel"].notna().sum() == 0:
             continue
         fig, axes = _grid_figure(len(IDENT_KEYS))

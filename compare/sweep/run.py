@@ -111,8 +111,9 @@ def make_targets(backends=("analytic",), *, ladder: bool = False,
     if "soft" in names:
         targets.append(Target("soft", "soft", opts("soft"), "analytic", "contact"))
         below = "soft"
-    if "beam" in names:
+    if "beam" in names:  # the engines' default trunk is the hinged chain: its reference
         targets.append(Target("beam", "beam", opts("beam"), below, "beam"))
+        below = "beam"
     for eng in (b for b in names if b not in REFERENCE_BACKENDS):  # engines (or any other)
         targets.append(Target(eng, eng, opts(eng), below, "model"))
     return targets
