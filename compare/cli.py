@@ -49,6 +49,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     sp = sub.add_parser("paper", help="reproduce Table 1 and list the paper's discrepancies")
     sp.add_argument("--json", action="store_true", help="machine-readable output")
+    sp.add_argument("--fit-contact", action="store_true", dest="fit_contact",
+                    help="also fit the contact duration and e to each tree's measured x_max "
+                         "and tau, on the 1-DOF (soft) and continuum (beam) models (about 20 s)")
 
     ss = sub.add_parser("simulate", help="simulate one scenario")
     ss.add_argument("scenario", help="shipped scenario name or TOML path")
@@ -115,13 +118,40 @@ def _fmt(v) -> str:
     return str(v)
 
 
+def _print_contact_fit(fits: dict) -> None:
+    print("Contact fitted to the measured x_max and tau (Table 1, Figs 4-5 regression): "
+          "residual = model / measured - 1; V, x0, T0 shown, not fitted (moving-together "
+          "point)")
+    for name, row in fits.items():
+        print(f"  {name}: measured x_max {1e3 * row['measured']['x_max']:.3f} mm, "
+              f"tau {1e3 * row['measured']['t_xmax']:.2f} ms")
+        for model, f in row["fits"].items():
+            label = "1-DOF (soft)" if model == "soft" else "continuum (beam)"
+            cells = "  ".join(f"{k} {v:+.1%}" if math.isfinite(v) else f"{k} n/a (no "
+                              "moving-together contact)" for k, v in f["residuals"].items())
+            print(f"    {label:<17} contact {1e3 * f['duration']:7.3f} ms  e {f['restitution']:.3f}"
+                  f"  rms(x_max, tau) {f['rms']:.1%}   {cells}")
+        if "one_dof_cost" in row:
+            c = row["one_dof_cost"]
+            print(f"    at the continuum's contact the 1-DOF model is off by x_max "
+                  f"{-c['x_max'] / (1 + c['x_max']):+.1%}, energy delivered "
+                  f"{-c['energy_delivered'] / (1 + c['energy_delivered']):+.1%}")
+    print()
+
+
 def cmd_paper(args) -> int:
     from analytic.paper import reproduce
 
     res = reproduce()
+    if getattr(args, "fit_contact", False):
+        from analytic.contact_fit import fit_paper_trees
+
+        res["contact_fit"] = fit_paper_trees()
     if args.json:
         print(json.dumps(_clean(res), indent=2))
         return 0
+    if "contact_fit" in res:
+        _print_contact_fit(res["contact_fit"])
     for name, quantities in res["trees"].items():
         print(f"Table 1, {name} tree (SI units)")
         print(f"  {'quantity':<16}{'printed':>14}{'recomputed':>14}{'rel diff':>10}  how")
