@@ -84,3 +84,17 @@ def test_the_readme_limits_table_is_the_code_s():
     readme = (ROOT / "README.md").read_text()
     rows = dict(re.findall(r"^\| `([a-z_.]+)` \| (\[[^|]+\]) \|", readme, flags=re.M))
     assert rows == {k: f"[{lo:g}, {hi:g}]" for k, (lo, hi, _) in LIMITS.items()}
+
+
+def test_every_local_link_and_image_resolves():
+    """Markdown links and images to files of the repository exist (a clone shows them)."""
+    import re
+
+    missing = []
+    for page in PAGES:
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", page.read_text()):
+            if target.startswith(("http://", "https://", "mailto:")):
+                continue
+            if not (page.parent / target).exists():
+                missing.append(f"{page.name}: {target}")
+    assert not missing, missing

@@ -50,8 +50,8 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--grid", action="append", default=[], metavar="SPEC",
                         help=f"swept parameter, repeatable: {GRID_FORM}; NAME is a dotted "
                              "scenario field (trunk.crown_mass), e, segments, dt, "
-                             "contact_stiffness, mass_ratio, a_over_l, crown_ratio or "
-                             "option.NAME")
+                             "contact_stiffness, contact_duration, mass_ratio, a_over_l, "
+                             "crown_ratio or option.NAME")
     parser.add_argument("--scenario", default="central-leader",
                         help="shipped scenario name or TOML path (default: central-leader)")
     parser.add_argument("--backend", default="analytic,soft,mujoco,bullet",
@@ -67,8 +67,9 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask scheduler address (tcp://host:8786): run on that cluster")
     parser.add_argument("--preset", default=None, choices=("default", "full"),
-                        help="run a whole study (validity, identification, speed): default "
-                             "takes about 45 s on 2 cores; full (e=0:0.9:10, "
+                        help="run a whole study: default (contact duration x crown ratio on "
+                             "the analytic, soft and beam backends, engines on 2 x 2 points) "
+                             "takes about 15-20 s on 2 cores; full (e=0:0.9:10, "
                              "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 1.5 CPU-hours, "
                              "45 min with 2 workers; --grid replaces the preset's validity grid")
     parser.add_argument("--tolerance", type=_tolerance, default=None,

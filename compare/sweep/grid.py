@@ -31,6 +31,7 @@ ALIASES = {
     "e": "contact.restitution",
     "restitution": "contact.restitution",
     "contact_stiffness": "contact.stiffness",
+    "contact_duration": "contact.duration",
     "segments": "option.segments",
     "dt": "option.dt",
     "integrator": "option.integrator",
