@@ -347,7 +347,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     Returns a SimulationResult (backend "beam") with the metrics of
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
     """
-    from .records import detection_duration, metrics_from_record
+    from .records import detection_duration, model_metrics
     from .results import SimulationResult, Trajectory
 
     t_end = scenario.t_end if t_end is None else t_end
@@ -362,12 +362,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     check_work(t_end, dt, 8.0 * 16)
     record, crown, switches = beam_record(model, t_end, dt)
     t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
-    metrics = metrics_from_record(
-        record, impact_speed=sdof.impact_speed, initial_energy=sdof.initial_energy,
-        collision_duration=t_detect, impactor_mass=sdof.impactor_mass,
-        dynamic_mass=sdof.dynamic_mass,
-        equivalent_length=getattr(scenario.impactor, "equivalent_length", None),
-        gravity=getattr(scenario.impactor, "gravity", 9.81))
+    metrics = model_metrics(record, sdof, scenario.impactor, collision_duration=t_detect)
     model_dict = {**sdof.as_dict(), "elements": model.elements, "calibration": calibration,
                   "contact_stiffness": model.contact_stiffness,
                   "contact_damping": model.contact_damping,

@@ -134,6 +134,20 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
     return out
 
 
+def model_metrics(record: "ImpactRecord", model, impactor, *, collision_duration: float,
+                  initial_energy: float | None = None) -> dict:
+    """:func:`metrics_from_record` with the two-body ``model``'s u1, m, M_T and initial
+    energy (J; ``initial_energy`` overrides it, e.g. an engine's own) and the
+    ``impactor``'s l_e and g (a billet has neither: theta_b is NaN)."""
+    return metrics_from_record(
+        record, impact_speed=model.impact_speed,
+        initial_energy=model.initial_energy if initial_energy is None else initial_energy,
+        collision_duration=collision_duration, impactor_mass=model.impactor_mass,
+        dynamic_mass=model.dynamic_mass,
+        equivalent_length=getattr(impactor, "equivalent_length", None),
+        gravity=getattr(impactor, "gravity", 9.81))
+
+
 def contact_intervals(force: np.ndarray, threshold: float) -> list[tuple[int, int]]:
     """Index pairs (first, last) of the maximal runs with force > threshold."""
     on = np.asarray(force) > threshold

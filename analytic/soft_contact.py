@@ -135,7 +135,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     (backend "analytic-soft") whose metrics come from :func:`analytic.records.metrics_from_record`,
     the same rule the engines use.
     """
-    from .records import metrics_from_record
+    from .records import model_metrics
     from .results import SimulationResult, Trajectory
 
     model = two_body_model(scenario, restitution)
@@ -147,12 +147,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     from .records import with_static_shape_crown
 
     rec = with_static_shape_crown(rec, scenario.trunk)
-    metrics = metrics_from_record(
-        rec, impact_speed=model.impact_speed, initial_energy=model.initial_energy,
-        collision_duration=t_col, impactor_mass=model.impactor_mass,
-        dynamic_mass=model.dynamic_mass,
-        equivalent_length=getattr(scenario.impactor, "equivalent_length", None),
-        gravity=getattr(scenario.impactor, "gravity", 9.81))
+    metrics = model_metrics(rec, model, scenario.impactor, collision_duration=t_col)
     model_dict = {**model.as_dict(), "contact_stiffness": k_c, "contact_damping": c_c}
     scen = scenario.to_dict()
     scen["contact"]["restitution"] = model.restitution

@@ -17,7 +17,7 @@ from analytic.chain import (chain_matrices, chain_natural_frequencies, default_s
 from analytic.engine_options import check_choice, engine_model
 from analytic.model import TwoBodyModel
 from analytic.parameters import DEFAULT_CONTACT_DURATION, ParameterError, Scenario
-from analytic.records import (ImpactRecord, detection_duration, metrics_from_record,
+from analytic.records import (ImpactRecord, detection_duration, model_metrics,
                               with_static_shape_crown)
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
@@ -529,12 +529,8 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
         record = with_static_shape_crown(record, setup.scenario.trunk)
     else:  # the chain's top
         record = replace(record, crown=rec["crown"], crown_velocity=rec["crown_velocity"])
-    metrics = metrics_from_record(
-        record, impact_speed=model.impact_speed, initial_energy=e0,
-        collision_duration=setup.collision_duration, impactor_mass=m,
-        dynamic_mass=model.dynamic_mass,
-        equivalent_length=getattr(imp, "equivalent_length", None),
-        gravity=getattr(imp, "gravity", 9.81))
+    metrics = model_metrics(record, model, imp, collision_duration=setup.collision_duration,
+                            initial_energy=e0)
     b = setup.bullet
     model_dict = {**model.as_dict(), "segments": setup.segments, "dt": dt,
                   "contact_stiffness": b.stiffness if b else None,

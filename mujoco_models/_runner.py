@@ -19,7 +19,7 @@ from analytic.chain import default_segments, hinged_chain, lateral_motion
 from analytic.engine_options import check_choice, engine_model
 from analytic.model import TwoBodyModel
 from analytic.parameters import ParameterError, Pendulum, Scenario
-from analytic.records import (ImpactRecord, detection_duration, metrics_from_record,
+from analytic.records import (ImpactRecord, detection_duration, model_metrics,
                               with_static_shape_crown)
 from analytic.reduction import reduce_trunk
 from analytic.results import SimulationDiverged, SimulationResult, Trajectory
@@ -523,12 +523,8 @@ def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
         record = with_static_shape_crown(record, setup.scenario.trunk)
     else:  # the chain's top, from the hinge angles of the recorded states
         record = replace(record, **_crown_motion(setup, states, record.t.size))
-    metrics = metrics_from_record(
-        record, impact_speed=model.impact_speed, initial_energy=e0,
-        collision_duration=setup.detection_duration, impactor_mass=model.impactor_mass,
-        dynamic_mass=model.dynamic_mass,
-        equivalent_length=getattr(imp, "equivalent_length", None),
-        gravity=getattr(imp, "gravity", 9.81))
+    metrics = model_metrics(record, model, imp, collision_duration=setup.detection_duration,
+                            initial_energy=e0)
     law = setup.law
     model_dict = {**model.as_dict(), "segments": setup.segments, "dt": setup.dt,
                   "contact_stiffness": law.stiffness, "contact_damping": law.damping,

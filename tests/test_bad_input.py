@@ -161,7 +161,7 @@ def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tm
 def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
     out = tmp_path / "sweep"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "compare.cli", "sweep", "--grid", "e=0.1:0.9:30",
+        [sys.executable, "-m", "compare.cli", "sweep", "--grid", "e=0.1:0.9:300",
          "--grid", "crown_ratio=0,1,2", "--backend", "analytic,soft", "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60

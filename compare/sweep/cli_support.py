@@ -121,9 +121,13 @@ def run_sweep_command(args) -> int:
     import signal
     import sys
 
+    from .run import STOP
+
     def terminate(signum, frame):  # SIGTERM ends the sweep as Ctrl-C does: workers stopped
+        STOP.set()  # checked again at the next result, should this raise be swallowed
         raise KeyboardInterrupt
 
+    STOP.clear()
     previous = signal.signal(signal.SIGTERM, terminate)
     try:
         return _run(args)

@@ -11,6 +11,7 @@ import json
 import math
 import os
 import socket
+import threading
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -586,6 +587,7 @@ def _sweep(scen, grid, targets, out, *, workers, client, applied, identify, retr
             elif workers == 0:
                 for task in tasks:
                     emit(_rows_of(task, execute(task), scen))
+                    _check_stop()
                     ran += 1
             else:
                 ran = _run_pool(tasks, workers or os.cpu_count() or 1, scen, emit)
@@ -607,6 +609,17 @@ def _ignore_sigint() -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+#: Set by a stop request (SIGTERM in the CLI): the pool loops raise KeyboardInterrupt at their
+#: next result, so a request whose asynchronous KeyboardInterrupt was swallowed (raised
+#: inside a finaliser, where Python only prints it) still ends the sweep.
+STOP = threading.Event()
+
+
+def _check_stop() -> None:
+    if STOP.is_set():
+        raise KeyboardInterrupt
 
 
 def _end_workers(pool) -> None:
@@ -646,6 +659,7 @@ def _run_pool(tasks, workers, scen, emit) -> int:
                 except BrokenProcessPool:  # broke while submitting: not this chunk's doing
                     unsent.append(c)
             for fut in as_completed(futures):
+                _check_stop()
                 try:
                     outcomes = fut.result()
                 except BrokenProcessPool:
@@ -674,6 +688,7 @@ def _run_pool(tasks, workers, scen, emit) -> int:
                 pool = None
             emit(_rows_of(task, outcome, scen))
             ran += 1
+            _check_stop()
     except BaseException:
         if pool is not None:
             _end_workers(pool)
@@ -717,6 +732,7 @@ def _run_dask(tasks, client, scen, emit) -> int:
     owner = {f.key: c for f, c in zip(futures, chunks)}
     try:
         for fut in as_completed(futures):
+            _check_stop()
             try:
                 outcomes = fut.result()
             except KilledWorker as exc:  # the chunk killed every worker it was given
