@@ -96,7 +96,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_identify_arguments(sub.add_parser(
         "identify", help="tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test "
-                         "record, with 95 % intervals"), _number)
+                         "record, with 95 %% intervals"), _number)
 
     add_scenario_arguments(sub.add_parser(
         "scenario", help="write a scenario file for your own tree from measured M_T, K_T, b"),
