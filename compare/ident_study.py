@@ -1,0 +1,214 @@
+"""Validation of the identification as a study: synthetic pendulum-test records from the
+analytic, soft and beam rungs over e x crown ratio, sampled as a test would be (rate, noise),
+identified by the full-record fit (analytic.record_fit) and by the paper's procedure
+(analytic.identification, "paper" reading); errors against the SDOF truth, drawn as maps.
+See docs/identification.md. SI units."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+#: The grid: restitution and crown ratio (m_f / m_trunk), rungs whose records are identified.
+RESTITUTIONS = (0.05, 0.1, 0.3, 0.5)
+CROWN_RATIOS = (0.0, 1.0, 2.0, 4.0)
+RUNGS = ("analytic", "soft", "beam")
+RATE = 5e3  # Hz: a common displacement-transducer rate
+NOISE = 0.01  # Gaussian noise, fraction of the record's peak
+REST = 0.02  # s of rest recorded before the impact (analytic.record_fit needs a baseline)
+PARAMETERS = ("M_T", "K_T", "b")  # b = C_T / (2 (M_T + m)), eq 42: what both methods find
+METHODS = ("fit", "paper")
+#: The issue's goal for the fit on SDOF records: within 2 % of the truth for e <= 0.3.
+GOAL, GOAL_MAX_E = 0.02, 0.3
+
+
+@dataclass(frozen=True)
+class Case:
+    scenario: str
+    restitution: float
+    crown_ratio: float
+    rung: str
+    seed: int = 0
+
+
+def _scenario(case: Case):
+    from compare.runs import resolve_scenario
+    from compare.sweep.apply import apply_point
+
+    scen, _ = apply_point(resolve_scenario(case.scenario),
+                          {"contact.restitution": case.restitution,
+                           "crown_ratio": case.crown_ratio})
+    return scen
+
+
+def sampled_record(trajectory, rate: float = RATE, noise: float = NOISE, seed: int = 0):
+    """(t, x) as a transducer would give them: ``rate`` (Hz) from REST s before the impact,
+    linear interpolation of the trajectory, Gaussian noise of ``noise`` x the peak (m)."""
+    t = np.arange(-REST, float(trajectory.t[-1]), 1.0 / rate)
+    x = np.where(t > 0.0, np.interp(t, trajectory.t, trajectory.x), 0.0)
+    rng = np.random.default_rng(seed)
+    return t, x + noise * float(np.max(np.abs(x))) * rng.standard_normal(t.size)
+
+
+def identify_case(case: Case) -> dict:
+    """Simulate, sample, identify both ways; never raises (errors are the outcome)."""
+    from analytic.identification import identify_from_record, pendulum_test_of, truth_of
+    from analytic.parameters import ParameterError
+    from analytic.record_fit import Record, fit_record
+    from compare.backends import get_backend
+
+    out = {"scenario": case.scenario, "e": case.restitution, "crown_ratio": case.crown_ratio,
+           "rung": case.rung}
+    try:
+        scen = _scenario(case)
+        result = get_backend(case.rung).simulate(scen)
+    except Exception as exc:  # noqa: BLE001 - recorded per case
+        out["error"] = f"{type(exc).__name__}: {exc}"
+        return out
+    truth = truth_of(scen)
+    test = pendulum_test_of(scen)
+    t, x = sampled_record(result.trajectory, seed=case.seed)
+    try:
+        fit = fit_record(Record(t, x), test)
+        v = dict(fit.values)
+        v["b"] = v["C_T"] / (2.0 * (v["M_T"] + test.impactor_mass))
+        out["fit"] = {k: v[k] / truth[k] - 1.0 for k in PARAMETERS}
+        truth_c = {"M_T": truth["M_T"], "K_T": truth["K_T"],
+                   "C_T": 2.0 * truth["b"] * (truth["M_T"] + test.impactor_mass)}
+        out["fit_covered"] = {k: bool(fit.intervals[k][0] <= w <= fit.intervals[k][1])
+                              for k, w in truth_c.items()}
+        out["explained"] = bool(fit.explained)
+    except (ParameterError, ValueError, FloatingPointError) as exc:
+        out["fit_error"] = str(exc).splitlines()[0]
+    try:
+        ident, _ = identify_from_record(t, x, test, reading="paper")
+        out["paper"] = {k: float(getattr(ident, k)) / truth[k] - 1.0 for k in PARAMETERS}
+    except (ParameterError, ValueError, FloatingPointError) as exc:
+        text = str(exc).splitlines()[0]
+        out["paper_error"] = "not identifiable" if text.startswith("not identifiable") else text
+    return out
+
+
+def cases(scenario: str = "central-leader", restitutions=RESTITUTIONS,
+          crown_ratios=CROWN_RATIOS, rungs=RUNGS) -> list[Case]:
+    return [Case(scenario, e, c, r) for r in rungs for e in restitutions for c in crown_ratios]
+
+
+def run_identification_study(out, scenario: str = "central-leader", *, workers=None,
+                             restitutions=RESTITUTIONS, crown_ratios=CROWN_RATIOS,
+                             rungs=RUNGS) -> dict:
+    """Identify every case on a process pool; write ident-study.json and one map per method
+    into ``out``; returns {rows, figures, summary}."""
+    import multiprocessing
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+
+    todo = cases(scenario, restitutions, crown_ratios, rungs)
+    workers = workers or os.cpu_count() or 1
+    if workers <= 1:
+        rows = [identify_case(c) for c in todo]
+    else:
+        ctx = multiprocessing.get_context("forkserver")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            rows = list(pool.map(identify_case, todo))
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    summary = summarise(rows)
+    figures = [identification_error_map(rows, method, out / f"ident-{method}.png")
+               for method in METHODS]
+    (out / "ident-study.json").write_text(json.dumps(
+        {"scenario": scenario, "rate_hz": RATE, "noise": NOISE, "rows": rows,
+         "summary": summary}, indent=1, default=_json_default))
+    return {"rows": rows, "figures": figures, "summary": summary}
+
+
+def _json_default(v):
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    raise TypeError(type(v).__name__)
+
+
+def summarise(rows: list[dict]) -> dict:
+    """Per rung and method: worst |error| per parameter over the grid; for the fit, the
+    share of intervals covering the truth and of records the 1-DOF model explains."""
+    out = {}
+    for rung in dict.fromkeys(r["rung"] for r in rows):
+        rr = [r for r in rows if r["rung"] == rung]
+        entry = {}
+        for method in METHODS:
+            got = [r[method] for r in rr if method in r]
+            small_e = [r for r in rr if r["e"] <= GOAL_MAX_E]
+            entry[method] = {
+                "identified": len(got), "cases": len(rr),
+                "within_goal": float(np.mean([method in r and max(
+                    abs(v) for v in r[method].values()) <= GOAL for r in small_e]))
+                if small_e else math.nan,
+                "worst": {k: max((abs(g[k]) for g in got), default=math.nan)
+                          for k in PARAMETERS}}
+        cov = [v for r in rr if "fit_covered" in r for v in r["fit_covered"].values()]
+        entry["fit"]["covered"] = float(np.mean(cov)) if cov else math.nan
+        expl = [r["explained"] for r in rr if "explained" in r]
+        entry["fit"]["explained"] = float(np.mean(expl)) if expl else math.nan
+        out[rung] = entry
+    return out
+
+
+def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
+    """One figure per method: M_T, K_T and xi errors (%) over e x crown ratio, one row of
+    panels per rung; cells print the value, grey cells say why there is none."""
+    from matplotlib.colors import SymLogNorm
+    from matplotlib.figure import Figure
+
+    rungs = list(dict.fromkeys(r["rung"] for r in rows))
+    es = sorted({r["e"] for r in rows})
+    cs = sorted({r["crown_ratio"] for r in rows})
+    fig = Figure(figsize=(3.4 * len(PARAMETERS) + 1.2, 2.6 * len(rungs) + 0.6),
+                 layout="constrained")
+    axes = fig.subplots(len(rungs), len(PARAMETERS), squeeze=False)
+    norm = SymLogNorm(linthresh=0.01, linscale=0.5, vmin=-1.0, vmax=1.0)
+    im = None
+    for i, rung in enumerate(rungs):
+        for j, k in enumerate(PARAMETERS):
+            ax = axes[i][j]
+            Z = np.full((len(cs), len(es)), np.nan)
+            why = {}
+            for r in rows:
+                if r["rung"] != rung:
+                    continue
+                a, b = es.index(r["e"]), cs.index(r["crown_ratio"])
+                if method in r:
+                    Z[b, a] = r[method][k]
+                else:
+                    why[(b, a)] = "not\nidentifiable" if "not identifiable" in str(
+                        r.get(f"{method}_error", r.get("error", ""))) else "failed"
+            cmap = __import__("matplotlib").colormaps["RdBu_r"].with_extremes(bad="0.88")
+            im = ax.pcolormesh(np.arange(len(es) + 1) - 0.5, np.arange(len(cs) + 1) - 0.5,
+                               np.ma.masked_invalid(np.clip(Z, -1, 1)), cmap=cmap, norm=norm)
+            for b in range(len(cs)):
+                for a in range(len(es)):
+                    if np.isfinite(Z[b, a]):
+                        v = Z[b, a]
+                        ax.text(a, b, f"{v:+.0%}" if abs(v) >= 0.01 else f"{v:+.1%}",
+                                ha="center", va="center", fontsize=8,
+                                color="k" if abs(v) < 0.5 else "w")
+                    else:
+                        ax.text(a, b, why.get((b, a), "n/a"), ha="center", va="center",
+                                fontsize=7, color="0.3")
+            ax.set_xticks(range(len(es)), [f"{e:g}" for e in es], fontsize=9)
+            ax.set_yticks(range(len(cs)), [f"{c:g}" for c in cs], fontsize=9)
+            ax.set_title(f"{rung}: {k}", fontsize=10)
+            if i == len(rungs) - 1:
+                ax.set_xlabel("restitution e (1)", fontsize=9)
+            if j == 0:
+                ax.set_ylabel("crown ratio m_f / m_trunk (1)", fontsize=9)
+    label = "full-record fit" if method == "fit" else "paper's procedure (eqs 39-48)"
+    cb = fig.colorbar(im, ax=axes, shrink=0.6, extend="both")
+    cb.set_label("(identified - true) / true (saturates at +-100 %)", fontsize=9)
+    fig.suptitle(f"Identification error, {label}: {RATE / 1e3:g} kHz records with "
+                 f"{100 * NOISE:g} % noise", fontsize=10)
+    fig.savefig(path, dpi=100)
+    return path
