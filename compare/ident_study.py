@@ -108,22 +108,37 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
     from concurrent.futures import ProcessPoolExecutor
 
     todo = cases(scenario, restitutions, crown_ratios, rungs)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    spec = {"scenario": scenario, "cases": [c.__dict__ for c in todo], "rate_hz": RATE,
+            "noise": NOISE, "rest_s": REST}
+    rows = _resumed(out / "ident-study.json", spec)
     workers = workers or os.cpu_count() or 1
-    if workers <= 1:
+    if rows is not None:
+        pass  # the same study was finished here: a resume has nothing to run
+    elif workers <= 1:
         rows = [identify_case(c) for c in todo]
     else:
         ctx = multiprocessing.get_context("forkserver")
         with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
             rows = list(pool.map(identify_case, todo))
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     summary = summarise(rows)
     figures = [identification_error_map(rows, method, out / f"ident-{method}.png")
                for method in METHODS]
     (out / "ident-study.json").write_text(json.dumps(
-        {"scenario": scenario, "rate_hz": RATE, "noise": NOISE, "rows": rows,
+        {"spec": spec, "scenario": scenario, "rate_hz": RATE, "noise": NOISE, "rows": rows,
          "summary": summary}, indent=1, default=_json_default))
     return {"rows": rows, "figures": figures, "summary": summary}
+
+
+def _resumed(path: Path, spec: dict) -> list | None:
+    """The rows of an earlier run of the same study (same cases, rate, noise), else None."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return data["rows"] if data.get("spec") == spec and len(data.get("rows", [])) == len(
+        spec["cases"]) else None
 
 
 def _json_default(v):

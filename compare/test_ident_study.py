@@ -45,3 +45,16 @@ def test_summary_counts_and_worst():
     assert s["fit"]["identified"] == 1 and s["fit"]["worst"]["K_T"] == 0.03
     assert s["fit"]["covered"] == pytest.approx(2 / 3) and s["fit"]["within_goal"] == 0.0
     assert s["paper"]["identified"] == 1 and not math.isnan(s["paper"]["worst"]["M_T"])
+
+
+def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
+    """A rerun of the same study into the same directory reads its rows back; a different
+    grid runs again (the spec is stored in ident-study.json)."""
+    import compare.ident_study as study
+
+    kw = dict(workers=1, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",))
+    first = study.run_identification_study(tmp_path, **kw)
+    monkeypatch.setattr(study, "identify_case", lambda c: pytest.fail("reran a finished case"))
+    assert study.run_identification_study(tmp_path, **kw)["rows"] == first["rows"]
+    with pytest.raises(pytest.fail.Exception):
+        study.run_identification_study(tmp_path, **{**kw, "restitutions": (0.3,)})
