@@ -373,7 +373,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
         backend="beam", metrics=metrics, model=model_dict, scenario=scen,
         trajectory=Trajectory(t=record.t, x=record.x, vx=record.vx, y=record.y, vy=record.vy,
                               force=record.force),
-        extra={"record": record, "crown": crown, "collision_duration": t_col})
+        record=record, collision_duration=t_col, extra={"crown": crown})
 
 
 def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int = 3) -> dict:

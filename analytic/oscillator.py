@@ -247,6 +247,23 @@ class Oscillator:
         return f0 / -slope if slope < 0.0 else math.inf
 
 
+def first_peak_time(osc: Oscillator, x0: float, v0: float) -> float:
+    """First s > 0 (s) at which x of ``osc`` from (x0 m, v0 m/s) has a local maximum, inf if
+    never. The velocity solves the same equation, so its zeros have the closed forms of
+    :meth:`Oscillator.first_zero`; at a zero x'' = -Omega^2 x, and later maxima of a damped
+    oscillation are lower (underdamped: one every 2 pi / w)."""
+    if v0 > 0.0:
+        return osc.first_zero(v0, osc.acceleration(x0, v0))
+    if osc.regime != "under":  # the velocity vanishes at most once: at a minimum, if at all
+        return math.inf
+    half = math.pi / math.sqrt(osc.omega_sq - osc.beta ** 2)  # between zeros of v
+    if v0 < 0.0:  # x falls to a minimum first
+        return osc.first_zero(-v0, -osc.acceleration(x0, v0)) + half
+    if x0 == 0.0:  # at rest at the equilibrium
+        return math.inf
+    return half if x0 < 0.0 else 2.0 * half  # at rest at a minimum / a maximum
+
+
 @lru_cache(maxsize=256)
 def _from_mck(cls, mass: float, damping: float, stiffness: float) -> Oscillator:
     return cls(beta=damping / (2.0 * mass), omega_sq=stiffness / mass)

@@ -9,7 +9,8 @@ a point load at a (eq 1, eq 5), normalised to 1 at a. With that shape the Lagran
 
 An optional rotational spring k_theta at the ground (root/soil compliance) adds a rigid
 rotation to the static shape; with k_theta = inf this is exactly the paper's model.
-The shape is piecewise cubic, so the integrals are evaluated exactly with polynomials.
+The shape is piecewise cubic, so its integrals have closed forms (checked against
+numpy polynomials in tests/test_reduction.py).
 """
 
 from __future__ import annotations
@@ -62,20 +63,38 @@ def static_flexibility(trunk: Trunk) -> float:
     return f
 
 
+def _shape_coefficients(trunk: Trunk) -> tuple[float, ...]:
+    """(c1, c2, c3, d0, d1) of the static shape of eq 5 normalised at a: phi = c1 x + c2 x^2
+    + c3 x^3 on [0, a] (bending of eq 1 plus the base rotation), phi = d0 + d1 x on [a, l]."""
+    a, ei = trunk.clamp_height, trunk.bending_stiffness
+    rot = a / trunk.base_stiffness if math.isfinite(trunk.base_stiffness) else 0.0
+    ya = static_flexibility(trunk)  # unit load F = 1 at a
+    return (rot / ya, a / (2.0 * ei * ya), -1.0 / (6.0 * ei * ya),
+            -a ** 3 / (6.0 * ei * ya), (a ** 2 / (2.0 * ei) + rot) / ya)
+
+
 def static_mode_shape(trunk: Trunk) -> StaticModeShape:
     """The static shape of eq 5 (with the base-spring rotation when k_theta is finite)."""
-    a, l, ei = trunk.clamp_height, trunk.length, trunk.bending_stiffness
-    rot = a / trunk.base_stiffness if math.isfinite(trunk.base_stiffness) else 0.0
-    # Unit load F = 1 at a: bending part (eq 1) plus the rigid rotation theta = F a / k_theta.
-    inner = Polynomial([0.0, rot, 3.0 * a / (6.0 * ei), -1.0 / (6.0 * ei)])
-    outer = Polynomial([-a ** 3 / (6.0 * ei), 3.0 * a ** 2 / (6.0 * ei) + rot])
-    ya = static_flexibility(trunk)
-    return StaticModeShape(inner / ya, outer / ya, a, l)
+    c1, c2, c3, d0, d1 = _shape_coefficients(trunk)
+    return StaticModeShape(Polynomial([0.0, c1, c2, c3]), Polynomial([d0, d1]),
+                           trunk.clamp_height, trunk.length)
+
+
+def _square_integral(trunk: Trunk) -> float:
+    """J = int_0^l phi^2 dx (m) of :func:`static_mode_shape` expanded term by term (the
+    polynomial integral :meth:`StaticModeShape.square_integral` checks it in the tests)."""
+    c1, c2, c3, d0, d1 = _shape_coefficients(trunk)
+    a, l = trunk.clamp_height, trunk.length
+    inner = (c1 * c1 * a ** 3 / 3.0 + c1 * c2 * a ** 4 / 2.0 + (c2 * c2 + 2.0 * c1 * c3) * a ** 5
+             / 5.0 + c2 * c3 * a ** 6 / 3.0 + c3 * c3 * a ** 7 / 7.0)
+    outer = d0 * d0 * (l - a) + d0 * d1 * (l * l - a * a) + d1 * d1 * (l ** 3 - a ** 3) / 3.0
+    return inner + outer
 
 
 def crown_factor(trunk: Trunk) -> float:
     """phi(l): crown displacement per unit displacement at a in the static shape of eq 5."""
-    return float(static_mode_shape(trunk).outer(trunk.length))
+    _, _, _, d0, d1 = _shape_coefficients(trunk)
+    return d0 + d1 * trunk.length
 
 
 @dataclass(frozen=True)
@@ -103,9 +122,8 @@ def reduce_trunk(trunk: Trunk) -> TreeSDOF:
     Follows the derivation, not the printed eq 10: the printed C_T carries an extra factor
     1/2 (see ``analytic.paper.DISCREPANCIES``).
     """
-    shape = static_mode_shape(trunk)
-    j = shape.square_integral()
-    tip = float(shape.outer(trunk.length))
+    j = _square_integral(trunk)
+    tip = crown_factor(trunk)
     dynamic_mass = trunk.density * trunk.area * j + trunk.clamp_mass + trunk.crown_mass * tip ** 2
     return TreeSDOF(
         dynamic_mass=dynamic_mass,

@@ -9,8 +9,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .records import ImpactRecord
+    from .solver import ImpactSolution
 
 #: Metric keys, their units and meaning (paper's symbols).
 METRIC_UNITS = {
@@ -58,10 +63,34 @@ class Trajectory:
     vy: np.ndarray  # m/s
     force: np.ndarray | None = None  # N, contact force on the trunk (>= 0)
 
+    @classmethod
+    def deferred(cls, sample) -> "Trajectory":
+        """A trajectory sampled on first read of any field: ``sample()`` returns the full
+        :class:`Trajectory` (the exact solver's results; sweeps never read it, so they never
+        pay for it). ``sample`` must pickle (a module-level function or a partial of one)."""
+        obj = cls.__new__(cls)
+        object.__setattr__(obj, "_sample", sample)
+        return obj
+
+    def __getattr__(self, name):  # called only for fields not set yet: a deferred trajectory
+        sample = self.__dict__.get("_sample")
+        if sample is None or name not in self.__dataclass_fields__:
+            raise AttributeError(name)
+        full = sample()
+        for f in self.__dataclass_fields__:
+            object.__setattr__(self, f, getattr(full, f))
+        del self.__dict__["_sample"]
+        return getattr(self, name)
+
 
 @dataclass(frozen=True)
 class SimulationResult:
-    """What every backend returns."""
+    """What every backend returns: metrics (METRIC_KEYS, SI), the model and scenario as
+    dicts, the sampled motion, and what the backend solved: ``solution`` (the exact solver's
+    :class:`analytic.solver.ImpactSolution`, Newton rungs) or ``record`` (the sampled
+    :class:`analytic.records.ImpactRecord` with forces and energies, soft-contact rungs) with
+    ``collision_duration`` (s, the free-collision duration its impacts are told apart by).
+    ``extra``: backend diagnostics for people (JSON-able); no code reads it."""
 
     backend: str
     metrics: dict
@@ -69,10 +98,13 @@ class SimulationResult:
     scenario: dict
     trajectory: Trajectory | None = None
     extra: dict = field(default_factory=dict)
+    solution: "ImpactSolution | None" = None
+    record: "ImpactRecord | None" = None
+    collision_duration: float = math.nan
 
     def to_json(self) -> dict:
-        return {"backend": self.backend, "model": _clean(self.model),
-                "metrics": _clean(self.metrics), "scenario": _clean(self.scenario)}
+        return {"backend": self.backend, "model": to_jsonable(self.model),
+                "metrics": to_jsonable(self.metrics), "scenario": to_jsonable(self.scenario)}
 
 
 #: Largest energy-ledger error (fraction of the input energy) a result may carry: every rung's
@@ -105,12 +137,13 @@ def _finite(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def _clean(obj):
-    """JSON-safe copy: NaN and inf become None (JSON has neither)."""
+def to_jsonable(obj):
+    """JSON-safe copy of dicts, lists and numbers: NaN and inf become None (JSON has
+    neither), numpy scalars become Python numbers."""
     if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
+        return {k: to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
+        return [to_jsonable(v) for v in obj]
     if isinstance(obj, (np.floating, float)):
         f = float(obj)
         return f if math.isfinite(f) else None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
@@ -118,17 +119,22 @@ def simulate(scenario: Scenario, *, restitution: float | None = None, t_end: flo
 
 def result_from_solution(sol: ImpactSolution, scenario: Scenario | None = None, *,
                          samples: int = 2001, backend: str = "analytic") -> SimulationResult:
-    t = np.linspace(0.0, sol.t_end, samples)
-    x, vx, y, vy = sol.state(t)
     scen = scenario.to_dict() if scenario is not None else {}
     if scenario is not None:
         scen["contact"]["restitution"] = sol.model.restitution
         scen["t_end"] = sol.t_end
     return SimulationResult(
         backend=backend, metrics=impact_metrics(sol, scenario), model=sol.model.as_dict(),
-        scenario=scen, trajectory=Trajectory(t=t, x=x, vx=vx, y=y, vy=vy),
-        extra={"solution": sol},
+        scenario=scen, trajectory=Trajectory.deferred(partial(sampled_trajectory, sol, samples)),
+        solution=sol,
     )
+
+
+def sampled_trajectory(sol: ImpactSolution, samples: int) -> Trajectory:
+    """The exact motion at ``samples`` equally spaced times from 0 to t_end (s, m, m/s)."""
+    t = np.linspace(0.0, sol.t_end, samples)
+    x, vx, y, vy = sol.state(t)
+    return Trajectory(t=t, x=x, vx=vx, y=y, vy=vy)
 
 
 def simulate_model(model: TwoBodyModel, t_end: float, **kw) -> SimulationResult:

@@ -154,7 +154,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     return SimulationResult(
         backend="analytic-soft", metrics=metrics, model=model_dict, scenario=scen,
         trajectory=Trajectory(t=rec.t, x=rec.x, vx=rec.vx, y=rec.y, vy=rec.vy, force=rec.force),
-        extra={"record": rec, "collision_duration": t_col})
+        record=rec, collision_duration=t_col)
 
 
 def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sample: float):

@@ -36,7 +36,7 @@ import numpy as np
 
 from .model import TwoBodyModel
 from .parameters import ParameterError
-from .oscillator import Oscillator, gauss_legendre_integral
+from .oscillator import Oscillator, first_peak_time, gauss_legendre_integral
 from .results import SimulationDiverged
 from .roots import first_zero
 
@@ -254,27 +254,18 @@ class ImpactSolution:
 
     @cached_property
     def x_max(self) -> tuple[float, float]:
-        """(x_max, t_xmax): largest trunk displacement and its time (eq 37)."""
-        from scipy.optimize import brentq
-
+        """(x_max, t_xmax): largest trunk displacement and its time (eq 37), in closed form:
+        per phase the larger of its end points and its first interior maximum."""
         tree, _, both = self._osc
-        rate = max(tree.fastest_rate, both.fastest_rate)
         best = (0.0, 0.0)
-        for k, ph in enumerate(self.phases):
-            n = max(8, int(math.ceil((ph.t1 - ph.t0) * rate / 0.2)))
-            s = np.linspace(0.0, ph.t1 - ph.t0, n + 1)
-            x, vx, _, _ = self._phase_state(ph, s)
-            i = int(np.argmax(x))
-            cand = (float(x[i]), ph.t0 + float(s[i]))
-            for j in (i - 1, i):  # a sign change of vx next to the best sample: refine
-                if 0 <= j < n and vx[j] > 0.0 >= vx[j + 1]:
-                    sr = brentq(lambda q: float(self._phase_state(ph, q)[1]), s[j], s[j + 1],
-                                xtol=1e-15)
-                    xr = float(self._phase_state(ph, sr)[0])
-                    if xr > cand[0]:
-                        cand = (xr, ph.t0 + sr)
-            if cand[0] > best[0]:
-                best = cand
+        for ph in self.phases:
+            osc = both if ph.kind == "together" else tree
+            duration = ph.t1 - ph.t0
+            for s in (0.0, first_peak_time(osc, ph.x0, ph.vx0), duration):
+                if 0.0 <= s <= duration:
+                    x = ph.x0 + osc.scalar_advance(s, ph.x0, ph.vx0)[0]
+                    if x > best[0]:
+                        best = (x, ph.t0 + s)
         return best
 
     @property

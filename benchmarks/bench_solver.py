@@ -97,9 +97,10 @@ def _verdict(r_exact: float, r_ivp: float) -> str:
 
 
 def _bench_simulate(names, repeats: int) -> None:
-    """analytic.simulate (solver, every metric, the ledger) with the phase integrals in
-    closed form against the same with them by quadrature (the code before issue 13),
-    interleaved; and the largest difference of any metric between the two."""
+    """analytic.simulate (solver, every metric, the ledger; closed forms, trajectory sampled
+    on first read) against: the same plus reading the 2001-sample trajectory, and the code
+    before issue 13's speed work (phase integrals by quadrature, trajectory sampled up front),
+    interleaved; and the largest difference of any metric between closed and quadrature."""
     from contextlib import contextmanager
 
     from analytic.simulate import simulate
@@ -114,22 +115,30 @@ def _bench_simulate(names, repeats: int) -> None:
         finally:
             ImpactSolution._phase_integral = closed
 
-    print(f"\nanalytic.simulate: {'scenario':16s} {'closed ms':>9s} {'quadrature ms':>13s} "
-          f"{'ratio':>6s} {'max metric rel diff':>19s}")
+    def with_trajectory(scenario):
+        return simulate(scenario).trajectory.x
+
+    print(f"\nanalytic.simulate: {'scenario':16s} {'ms':>6s} {'+traj ms':>8s} "
+          f"{'before ms':>9s} {'ratio':>6s} {'max metric rel diff':>19s}")
+    worst = 0.0
     for name in names:
         scenario = load_scenario(name)
-        closed_t, quad_t = [], []
+        now_t, traj_t, before_t = [], [], []
         for _ in range(max(3, repeats // 20)):
-            closed_t += _time(lambda: simulate(scenario), 10)
+            now_t += _time(lambda: simulate(scenario), 10)
+            traj_t += _time(lambda: with_trajectory(scenario), 10)
             with quadrature():
-                quad_t += _time(lambda: simulate(scenario), 10)
+                before_t += _time(lambda: with_trajectory(scenario), 10)
         a = simulate(scenario).metrics
         with quadrature():
             b = simulate(scenario).metrics
         diff = max(abs(a[k] - b[k]) / max(abs(b[k]), 1e-300) for k in a
                    if isinstance(a[k], float) and math.isfinite(a[k]) and k != "ledger_residual")
-        mc, mq = statistics.median(closed_t) * 1e3, statistics.median(quad_t) * 1e3
-        print(f"{'':19s}{name:16s} {mc:9.3f} {mq:13.3f} {mq / mc:6.1f} {diff:19.1e}")
+        mn, mt, mb = (statistics.median(x) * 1e3 for x in (now_t, traj_t, before_t))
+        worst = max(worst, mn)
+        print(f"{'':19s}{name:16s} {mn:6.3f} {mt:8.3f} {mb:9.3f} {mb / mn:6.1f} {diff:19.1e}")
+    print(f"target (issue 13): simulate < 0.3 ms median: {'met' if worst < 0.3 else 'NOT met'}"
+          f" (worst {worst:.3f} ms)")
 
 
 def main(argv=None) -> int:

@@ -554,8 +554,8 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
     return SimulationResult(
         backend="bullet", metrics=metrics, model=model_dict, scenario=scen,
         trajectory=Trajectory(t=t, x=x, vx=vx, y=y, vy=vy, force=force_rec),
-        extra={"record": record, "collision_duration": setup.collision_duration,
-               "initial_energy": e0})
+        record=record, collision_duration=setup.collision_duration,
+        extra={"initial_energy": e0})
 
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",

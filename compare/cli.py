@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from analytic.parameters import ParameterError
-from analytic.results import METRIC_UNITS, SimulationDiverged, _clean
+from analytic.results import METRIC_UNITS, SimulationDiverged, to_jsonable
 
 from .runs import one_line
 
@@ -148,7 +148,7 @@ def cmd_paper(args) -> int:
 
         res["contact_fit"] = fit_paper_trees()
     if args.json:
-        print(json.dumps(_clean(res), indent=2))
+        print(json.dumps(to_jsonable(res), indent=2))
         return 0
     if "contact_fit" in res:
         _print_contact_fit(res["contact_fit"])
@@ -279,7 +279,7 @@ def cmd_modes(args) -> int:
     scenario = load_scenario(args.scenario)
     res = backend.modes(scenario, **_options(args, ("segments", "elements")))
     if args.json:
-        print(json.dumps(_clean(res), indent=2))
+        print(json.dumps(to_jsonable(res), indent=2))
         return 0
     model, beam = res["model"], res["beam"]
     print(f"{scenario.name} ({args.backend} trunk against the continuous Euler-Bernoulli beam)")

@@ -61,7 +61,7 @@ def _paper(record, test) -> dict:
 
 def run(args) -> int:
     from analytic.record_fit import fit_record, read_record
-    from analytic.results import _clean
+    from analytic.results import to_jsonable
 
     test = _test(args)
     record = read_record(args.record)
@@ -70,7 +70,7 @@ def run(args) -> int:
     if args.plot:
         _plot(args.plot, record, fit, paper, test)
     if args.json:
-        print(json.dumps(_clean({"fit": fit.to_json(), "paper": paper,
+        print(json.dumps(to_jsonable({"fit": fit.to_json(), "paper": paper,
                                  "residual_rms": fit.residual_rms,
                                  "explained": fit.explained}), indent=2))
         return 0

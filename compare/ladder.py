@@ -15,7 +15,7 @@ import numpy as np
 
 from analytic.parameters import ParameterError, Pendulum, Scenario
 from analytic.records import PEAK_AMBIGUITY, peak_times
-from analytic.results import METRIC_UNITS, _clean
+from analytic.results import METRIC_UNITS, to_jsonable
 
 from .backends import ENGINES
 from .rungs import KINDS, Rung, rung_table  # noqa: F401  (KINDS, Rung: public here too)
@@ -139,7 +139,7 @@ class Check:
     band: tuple | None = None
 
     def to_json(self) -> dict:
-        return _clean(self.__dict__ | {"band": list(self.band) if self.band else None})
+        return to_jsonable(self.__dict__ | {"band": list(self.band) if self.band else None})
 
 
 def relative_step(value, reference) -> float:
@@ -209,7 +209,7 @@ def identify_rung(result, scenario: Scenario) -> dict:
         return {"status": SKIPPED, "reason": "the identification procedure needs a pendulum"}
     tr = result.trajectory
     if tr is None:
-        rec = result.extra.get("record")
+        rec = result.record
         if rec is None:
             return {"status": SKIPPED, "reason": "the run has no displacement record"}
         t, x, y = rec.t, rec.x, rec.y
@@ -394,7 +394,7 @@ class Ladder:
         return rows
 
     def to_json(self) -> dict:
-        return _clean({
+        return to_jsonable({
             "scenario": self.name,
             "inputs": self.scenario.to_dict(),
             "truth": self.truth,

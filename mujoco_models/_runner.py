@@ -543,8 +543,8 @@ def _result(setup: Setup, state0, states, sensors) -> SimulationResult:
     return SimulationResult(
         backend="mujoco", metrics=metrics, model=model_dict, scenario=scen,
         trajectory=Trajectory(t=r.t, x=r.x, vx=r.vx, y=r.y, vy=r.vy, force=r.force),
-        extra={"record": record, "collision_duration": setup.collision_duration,
-               "initial_energy": e0, "impact_speed_measured": float(r.vy[0] - r.vx[0]),
+        record=record, collision_duration=setup.collision_duration,
+        extra={"initial_energy": e0, "impact_speed_measured": float(r.vy[0] - r.vx[0]),
                "law": law})
 
 

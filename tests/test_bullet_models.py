@@ -120,7 +120,7 @@ def _two_body_restitution(e, dt_fraction=50):
     setup = dataclasses.replace(setup, model=free)
     from bullet_models._runner import run
 
-    rec = run(setup).extra["record"]
+    rec = run(setup).record
     return (rec.vx[-1] - rec.vy[-1]) / 2.0, setup
 
 
@@ -208,9 +208,9 @@ def test_newton_contact_reproduces_exact_impacts(name, refine):
     exact = analytic.simulate(s)
     dt = make_setup(s, trunk="sdof", contact="newton").dt / refine
     res = simulate(s, trunk="sdof", contact="newton", dt=dt)
-    rec, dt = res.extra["record"], res.model["dt"]
+    rec, dt = res.record, res.model["dt"]
     u1 = s.impactor.impact_speed
-    big = [i for i in exact.extra["solution"].impacts if i.u - i.U > 0.01 * u1]
+    big = [i for i in exact.solution.impacts if i.u - i.U > 0.01 * u1]
     iv = contact_intervals(rec.force, 1e-6 * rec.force.max())
     assert len(iv) >= len(big)
     for imp, (i0, _) in zip(big, iv):
@@ -222,7 +222,7 @@ def test_newton_contact_reproduces_exact_impacts(name, refine):
 
 def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
     res = simulate(central, trunk="sdof", pendulum="full", t_end=0.01)
-    rec = res.extra["record"]
+    rec = res.record
     # speed at the last step before contact vs u1 of eq 48: the bob's own inertia (1e-6
     # m l_e^2) lowers it by 5e-7; symplectic Euler's energy error is O(omega h) mid-swing
     # but vanishes with the weight's torque at the bottom (1.1e-6 measured, all scenarios)

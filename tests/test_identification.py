@@ -41,7 +41,7 @@ def test_eq42_eq43_converge_to_b_and_omega_n_as_the_window_shrinks():
 def test_regression_finds_the_moving_together_point_of_a_chattering_record():
     scen, res, tr = record("open-center", 0.1)
     reg = regress(tr.t, tr.x)
-    sol = res.extra["solution"]
+    sol = res.solution
     # visible impacts: the tree's velocity jumps by more than the 2% threshold of regress()
     vmax = max(i.V for i in sol.impacts)
     t_last_visible = max(i.t for i in sol.impacts if i.V - i.U > 0.02 * vmax)

@@ -222,7 +222,7 @@ def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
     # bottom; the bob's own inertia (1e-6 m l_e^2) lowers the speed by 5e-7: measured 1.1e-6
     assert res.extra["impact_speed_measured"] == pytest.approx(
         central.impactor.impact_speed, rel=1e-5)
-    assert res.extra["record"].t[0] <= 0.0 < res.extra["record"].t[1]  # t = 0 at the touch
+    assert res.record.t[0] <= 0.0 < res.record.t[1]  # t = 0 at the touch
 
 
 @pytest.mark.parametrize("opts", [dict(trunk="sdof"), dict(trunk="sdof", pendulum="full"),
@@ -231,7 +231,7 @@ def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
 def test_energy_ledger_closes_within_one_percent(central, opts):
     res = simulate(central, **opts)
     assert res.metrics["ledger_residual"] < 0.01  # issue: below 1 % (measured <= 3e-4)
-    rec = res.extra["record"]
+    rec = res.record
     assert rec.damping_work[-1] > 0.0 and rec.contact_work[-1] > 0.0  # both ledgers active
 
 

@@ -97,6 +97,17 @@ def test_static_mode_shape_is_one_at_the_clamp_and_continuous():
             float(shape.outer.deriv()(t.clamp_height)), rel=1e-12)
 
 
+def test_closed_form_shape_integrals_match_polynomial_integration():
+    """J and phi(l) of reduce_trunk (expanded by hand) against numpy's polynomial integral of
+    the same shape, with and without the base spring."""
+    from analytic.reduction import _square_integral, crown_factor
+
+    for t in TRUNKS.values():
+        shape = static_mode_shape(t)
+        assert _square_integral(t) == pytest.approx(shape.square_integral(), rel=1e-13)
+        assert crown_factor(t) == pytest.approx(float(shape.outer(t.length)), rel=1e-14)
+
+
 def test_shipped_scenarios_reduce_to_table_1():
     from analytic import load_scenario
 

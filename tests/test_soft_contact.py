@@ -87,7 +87,7 @@ def test_trunk_damping_during_the_first_collision_shifts_the_apparent_restitutio
     # shift is bounded by the impulse of the damper, C_T * (x after the collision)
     scenario = load_scenario("open-center")
     model = two_body_model(scenario, 0.9)
-    rec = simulate_soft(scenario, restitution=0.9, t_end=0.002).extra["record"]
+    rec = simulate_soft(scenario, restitution=0.9, t_end=0.002).record
     after = contact_intervals(rec.force, 0.0)[0][1] + 1
     measured = -(rec.vy[after] - rec.vx[after]) / model.impact_speed
     bound = (model.damping * rec.x[after] + model.stiffness * rec.x[after] * rec.t[after]) * (
@@ -110,7 +110,7 @@ def test_pendulum_never_passes_through_the_trunk(name):
     event stepped over the gap's short negative excursion, missed the next touch, and the
     pendulum went through the trunk (open-center: x_max 6.4 mm instead of 11.2 mm).
     """
-    rec = simulate_soft(load_scenario(name)).extra["record"]
+    rec = simulate_soft(load_scenario(name)).record
     overlap = rec.y - rec.x
     pressed = overlap[rec.force > 0.0].max()
     assert overlap.max() <= pressed * (1 + 1e-9)

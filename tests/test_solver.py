@@ -71,7 +71,7 @@ def test_eq33_is_an_equality_for_the_billet(e):
 @pytest.mark.parametrize("name", ["open-center", "central-leader", "realistic-crown"])
 def test_plastic_impact_is_single_and_loses_eq57_exactly(name):
     res = simulate(load_scenario(name), restitution=0.0)
-    sol = res.extra["solution"]
+    sol = res.solution
     assert len([i for i in sol.impacts if i.t <= sol.together_start[0]]) == 1
     assert res.metrics["n_impacts"] == 1
     assert res.metrics["impact_loss"] == pytest.approx(res.metrics["impact_loss_inelastic"],
@@ -117,7 +117,7 @@ def test_tail_closed_only_when_negligible():
 @pytest.mark.parametrize("name", ["open-center", "central-leader", "realistic-crown"])
 @pytest.mark.parametrize("e", E_VALUES)
 def test_energy_ledger_closes_at_every_event(name, e):
-    sol = simulate(load_scenario(name), restitution=e).extra["solution"]
+    sol = simulate(load_scenario(name), restitution=e).solution
     rows = sol.ledger()
     assert len(rows) >= 2
     assert max(r["residual"] for r in rows) < 1e-9  # the issue's ledger tolerance
@@ -257,7 +257,7 @@ def test_solution_pickles_after_a_solve_for_process_pools():
 
     res = simulate(load_scenario("central-leader"))
     back = pickle.loads(pickle.dumps(res))
-    sol, sol2 = res.extra["solution"], back.extra["solution"]
+    sol, sol2 = res.solution, back.solution
     np.testing.assert_equal(back.metrics, res.metrics)  # NaN (impulsive peak force) == NaN
     assert np.array_equal(sol.state([0.001, 0.02]), sol2.state([0.001, 0.02]))
 
@@ -270,3 +270,42 @@ def test_a_root_search_the_bounds_cannot_certify_ends_in_one_line():
 
     with pytest.raises(SimulationDiverged, match=r"^root search: no certified answer"):
         first_zero(lambda t: 1e-300, lambda t: 0.0, 1.0, (1.0, 1.0, 1e300, 1e300), rate=1.0)
+
+
+@pytest.mark.parametrize("beta,omega_sq", [(30.0, 1.4e4), (100.0, 1e4), (300.0, 1e4),
+                                           (0.0, 6.5)], ids=["under", "critical", "over",
+                                                             "undamped"])
+@pytest.mark.parametrize("x0,v0", [(2e-3, 1.3), (2e-3, -1.3), (-2e-3, 0.0), (2e-3, 0.0),
+                                   (-2e-3, 0.05)])
+def test_first_peak_time_is_the_first_local_maximum_of_dense_samples(beta, omega_sq, x0, v0):
+    """The closed-form first maximum of x (analytic.oscillator.first_peak_time) against the
+    first + to - sign change of the sampled velocity."""
+    from analytic.oscillator import first_peak_time
+
+    osc = Oscillator(beta, omega_sq)
+    s = first_peak_time(osc, x0, v0)
+    d = beta * beta - omega_sq  # sampled while v is far above its round-off (as above)
+    slowest = beta - math.sqrt(d) if d > 0 else beta
+    t_max = min(3.0, 18.0 / slowest) if slowest > 0 else 3.0
+    t = np.linspace(0.0, t_max, 600_001)
+    _, v = osc.advance(t, x0, v0, np)
+    down = np.nonzero((v[:-1] > 0.0) & (v[1:] <= 0.0))[0]
+    if down.size == 0:
+        assert s > t_max
+        return
+    assert t[down[0]] <= s <= t[down[0] + 1]
+
+
+@pytest.mark.parametrize("name", ["open-center", "central-leader", "realistic-crown"])
+@pytest.mark.parametrize("e", [0.0, 0.1, 0.5, 1.0])
+def test_closed_form_x_max_matches_dense_sampling(name, e):
+    """x_max, t_xmax (eq 37) in closed form against the largest of 400 001 samples of the
+    exact motion: x_max within the samples' resolution, never below the best sample."""
+    sol = solve_impacts(two_body_model(load_scenario(name), e), 0.1)
+    t = np.linspace(0.0, 0.1, 400_001)
+    x = sol.state(t)[0]
+    i = int(np.argmax(x))
+    x_max, t_xmax = sol.x_max
+    assert x_max >= x[i] * (1 - 1e-14)
+    assert x_max == pytest.approx(x[i], rel=1e-8)  # samples 2.5e-7 s apart near a flat peak
+    assert t_xmax == pytest.approx(t[i], abs=2.5e-7)

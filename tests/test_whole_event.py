@@ -64,7 +64,7 @@ def test_stiff_soft_contact_tends_to_the_newton_whole_event(name):
 def test_impulse_is_the_integral_of_the_contact_force(name):
     """The metric comes from the pendulum's momentum; the force record integrates to it."""
     res = simulate_soft(load_scenario(name), samples_per_collision=400)
-    rec = res.extra["record"]
+    rec = res.record
     # trapezoid of the force at 400 samples per collision: O(1e-5) of the impulse
     assert res.metrics["impulse"] == pytest.approx(np.trapezoid(rec.force, rec.t), rel=1e-3)
 
@@ -77,11 +77,11 @@ def test_peak_force_is_the_first_collisions_mean_force():
     res = simulate_soft(scen, samples_per_collision=400)
     model = two_body_model(scen)
     m, M, u, e = model.impactor_mass, model.dynamic_mass, model.impact_speed, model.restitution
-    t_c = res.extra["collision_duration"]
+    t_c = res.collision_duration
     free = (1 + e) * m * M / (m + M) * u / t_c
     # the springs and trunk damper act during t_c: omega_n t_c, b t_c ~ 0.03 (3 % measured)
     assert res.metrics["peak_force"] == pytest.approx(free, rel=0.05)
-    rec = res.extra["record"]
+    rec = res.record
     step = rec.t[1] - rec.t[0]
     k = int(round(t_c / step))
     direct = max(np.trapezoid(rec.force[i:i + k + 1], rec.t[i:i + k + 1])
@@ -136,7 +136,7 @@ def test_beam_delivered_energy_is_the_trunks_final_energy(name):
     own account at t_end: its kinetic + elastic energy (total minus the pendulum's) plus the
     work of its damping, from the modal state."""
     res = simulate_beam(load_scenario(name))
-    m, rec = res.metrics, res.extra["record"]
+    m, rec = res.metrics, res.record
     trunk = rec.kinetic[-1] + rec.potential[-1] - rec.pendulum_energy[-1] + rec.damping_work[-1]
     # both closed-form; they differ by the ledger's round-off (< 2e-6 of E0)
     assert m["energy_delivered"] == pytest.approx(trunk, rel=1e-5)

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from analytic.results import _clean
+from analytic.results import to_jsonable
 
 __all__ = ["write_report", "build_sections"]
 
@@ -122,7 +122,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         "runs": sections["runs"].to_json(),
     }
     paths["json"] = out / "report.json"
-    paths["json"].write_text(json.dumps(_clean(data), indent=1), encoding="utf-8")
+    paths["json"].write_text(json.dumps(to_jsonable(data), indent=1), encoding="utf-8")
     return paths
 
 

@@ -143,7 +143,7 @@ def force_figure(ladder) -> Figure:
     for r in [r for r in ladder.rungs if r.ok]:
         st = rung_style(r.rung)
         if r.rung.kind == "newton":
-            sol = r.result.extra.get("solution")
+            sol = r.result.solution
             imp = [(i.t, r.result.model["m"] * (i.u - i.v)) for i in (sol.impacts if sol else ())
                    if i.t <= t_hi]
             if imp:
@@ -187,9 +187,9 @@ def sequence_figure(ladder) -> Figure:
     for ax, r in zip(axes.flat, rungs):
         st = rung_style(r.rung)
         tr = r.result.trajectory
-        if r.rung.kind == "newton" and "solution" in r.result.extra:
+        if r.rung.kind == "newton" and r.result.solution is not None:
             t = np.linspace(0.0, t_hi, 3000)
-            _, vx, _, vy = r.result.extra["solution"].state(t)
+            _, vx, _, vy = r.result.solution.state(t)
         else:
             sel = tr.t <= t_hi
             t, vx, vy = tr.t[sel], tr.vx[sel], tr.vy[sel]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from analytic.results import _clean
+from analytic.results import to_jsonable
 
 from .base import Section
 
@@ -30,4 +30,4 @@ class PaperSection(Section):
                 "discrepancies": self.data["discrepancies"]}
 
     def to_json(self) -> dict:
-        return _clean({**self.data, "units": UNITS})
+        return to_jsonable({**self.data, "units": UNITS})

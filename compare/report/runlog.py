@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from analytic.results import _clean
+from analytic.results import to_jsonable
 
 from .base import Section
 
@@ -21,5 +21,5 @@ class RunsSection(Section):
         return {"runs": self.runs, "timings": self.timings, "wall": self.wall_s}
 
     def to_json(self) -> dict:
-        return _clean({"runs": [r.to_json() for r in self.runs], "timings": self.timings,
+        return to_jsonable({"runs": [r.to_json() for r in self.runs], "timings": self.timings,
                        "wall_s": self.wall_s})

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from analytic.parameters import ParameterError, Pendulum
-from analytic.results import _clean
+from analytic.results import to_jsonable
 
 from ..ladder import (ALL_METRICS, IDENT_METRICS, PASSING, build_ladder, identify_rung,
                       meaning_of, unit_of)
@@ -33,14 +33,14 @@ def energy_ledger(rr) -> dict | None:
     T0 = rr.values.get("T0", math.nan)
     if not math.isfinite(T0):
         return None
-    if "solution" in res.extra:
-        sol = res.extra["solution"]
+    if res.solution is not None:
+        sol = res.solution
         terms = sol.energy_terms(T0)
         e0 = sol.model.initial_energy
         out = {"kinetic": terms["kinetic"], "potential": terms["potential"],
                "damping": terms["damping"], "impact loss": terms["impact_loss"]}
-    elif "record" in res.extra:
-        rec = res.extra["record"]
+    elif res.record is not None:
+        rec = res.record
         e0 = float(rec.kinetic[0] + rec.potential[0] + rec.damping_work[0] + rec.contact_work[0])
 
         def at(a):
@@ -198,8 +198,8 @@ class ScenarioSection(Section):
 
     def to_json(self) -> dict:
         out = self.ladder.to_json()
-        out["energy_ledger"] = _clean({k: v for k, v in self.ledgers.items()})
-        out["identification_vs_e"] = _clean(self.sweep)
-        out["record_fits"] = _clean(self.fits)
-        out["mechanism"] = _clean(self.mechanism)
+        out["energy_ledger"] = to_jsonable({k: v for k, v in self.ledgers.items()})
+        out["identification_vs_e"] = to_jsonable(self.sweep)
+        out["record_fits"] = to_jsonable(self.fits)
+        out["mechanism"] = to_jsonable(self.mechanism)
         return out

@@ -150,8 +150,7 @@ def _identify(result, scenario: Scenario) -> dict:
         return out
     truth = truth_of(scenario)
     out.update({f"truth.{k}": truth[k] for k in IDENT_KEYS})
-    rec = result.extra.get("record") if result.extra else None
-    src = rec if rec is not None else result.trajectory
+    src = result.record if result.record is not None else result.trajectory
     if src is None:
         out["id_error"] = "the run has no displacement record"
         return out
