@@ -58,3 +58,18 @@ def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
     assert study.run_identification_study(tmp_path, **kw)["rows"] == first["rows"]
     with pytest.raises(pytest.fail.Exception):
         study.run_identification_study(tmp_path, **{**kw, "restitutions": (0.3,)})
+
+
+def test_sampling_rows_are_summarised_apart_from_the_grid():
+    """The rate x noise cases (seeds >= 1) go to the sampling table, not to the maps; the
+    worst error is over the parameters and seeds of one cell."""
+    from compare.ident_study import _is_grid, sampling_cases, summarise_sampling
+
+    todo = sampling_cases()
+    assert not any(_is_grid(c.__dict__) for c in todo)
+    rows = [{"rate": 1e3, "noise": 0.01, "fit": {"M_T": 0.01, "K_T": -0.04, "b": 0.0},
+             "fit_covered": {"M_T": True, "K_T": True, "C_T": False}},
+            {"rate": 1e3, "noise": 0.01, "fit_error": "x"}]
+    (cell,) = summarise_sampling(rows)
+    assert cell["worst"] == 0.04 and cell["fitted"] == 1 and cell["trials"] == 2
+    assert cell["covered"] == pytest.approx(2 / 3)
