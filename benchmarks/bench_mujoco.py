@@ -25,7 +25,8 @@ from mujoco import rollout
 from analytic import load_scenario
 from analytic.soft_contact import simulate_soft
 from mujoco_models import simulate
-from mujoco_models._runner import _plan, make_setup
+from mujoco_models._rollout import _plan
+from mujoco_models._runner import make_setup
 
 
 def _median_time(fn, repeat):

@@ -11,6 +11,6 @@ Rules: :mod:`bullet_models._runner` (runner, time step, Newton-contact settings)
 to ``bullet_models/models``).
 """
 
-from ._runner import modes, simulate, simulate_batch
+from ._runner import OPTIONS, make_setup, modes, run, simulate, simulate_batch
 
-__all__ = ["modes", "simulate", "simulate_batch"]
+__all__ = ["OPTIONS", "make_setup", "modes", "run", "simulate", "simulate_batch"]

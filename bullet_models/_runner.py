@@ -7,120 +7,43 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from analytic.chain import (chain_matrices, chain_natural_frequencies, default_segments,
-                            hinged_chain, lateral_jacobian, lateral_motion)
-from analytic.engine_options import check_choice, engine_model
+from analytic.chain import chain_matrices, chain_natural_frequencies, lateral_jacobian
+from analytic.engine import (DAMPINGS, PENDULUMS, TRUNKS, EngineSetup, chain_modes,
+                             check_choice, check_energy, engine_model,
+                             engine_result, trunk_chain, with_crown)
 from analytic.model import TwoBodyModel
 from analytic.parameters import DEFAULT_CONTACT_DURATION, ParameterError, Scenario
-from analytic.records import (ImpactRecord, detection_duration, model_metrics,
-                              with_static_shape_crown)
+from analytic.records import ImpactRecord, detection_duration
 from analytic.reduction import reduce_trunk
-from analytic.results import SimulationDiverged, SimulationResult, Trajectory
+from analytic.results import SimulationDiverged, SimulationResult
 from analytic.soft_contact import (CALIBRATIONS, collision_duration, contact_law,
                                    effective_damping)
 from analytic.timestep import check_time_step, check_work, choose_time_step, sdof_rate
 
 from . import _contact, _urdf
+from ._loops import _loop_chain, _loop_sdof, _swing
+from ._world import (JOINT_VELOCITY_LIMIT, RESTITUTION_THRESHOLD_FRACTION, build_world,
+                     client, engine_matrices, load)
 
-TRUNKS = ("sdof", "chain")
-PENDULUMS = ("linear", "full")
 CONTACTS = ("soft", "newton")
-DAMPINGS = ("distributed", "joint")
-RESTITUTION_THRESHOLD_FRACTION = 1e-3  # of u1: slower bounces are plastic (newton mode)
-SWING_STEP = 1e-4  # s: step of the full pendulum's free swing before the contact
-SWING_SWITCH_STEPS = 20  # switch to the impact step this many swing steps before contact
-ENERGY_GROWTH_LIMIT = 0.05  # relative: mechanical energy above (1 + this) E0 = diverged
-JOINT_VELOCITY_LIMIT = 1e6  # rad/s or m/s: Bullet clamps joint speeds here (default 100)
-
-
-
-# ----------------------------------------------------------------------------------- client
-_CLIENT = {"id": None, "dir": None, "files": {}}
-
-
-def _import_pybullet():
-    """``import pybullet`` without its build-time banner on stderr (CLI: one-line errors)."""
-    import sys
-
-    if "pybullet" in sys.modules:
-        return sys.modules["pybullet"]
-    try:
-        sys.stderr.flush()
-        saved = os.dup(2)
-        devnull = os.open(os.devnull, os.O_WRONLY)
-    except (OSError, ValueError):  # no real stderr (captured): nothing to keep clean
-        import pybullet
-        return pybullet
-    try:
-        os.dup2(devnull, 2)
-        import pybullet
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-        os.close(devnull)
-    return pybullet
-
-
-def client():
-    """This process's PyBullet DIRECT client (created once)."""
-    p = _import_pybullet()
-
-    cid = _CLIENT["id"]
-    if cid is None or not p.isConnected(cid):
-        cid = p.connect(p.DIRECT)
-        _CLIENT["id"] = cid
-    return p, cid
-
-
-def load(p, cid, text: str) -> int:
-    """Load a model's URDF text as a fixed-base multibody with the URDF's own inertias.
-
-    Without ``URDF_USE_INERTIA_FROM_FILE`` PyBullet replaces every link's inertia by that of
-    its collision shapes (a 1 mm default box for the chain segments, the pad's box for the
-    clamp segment, the 5 cm sphere for the bob): measured on the central-leader chain, the
-    mass matrix then differs from :func:`analytic.chain.chain_matrices` by 6e-4 of its
-    largest entry instead of 2e-16. Every link's joint-velocity clamp (Bullet's default is
-    100 rad/s or m/s, reached by the chain's segments at impact) is raised to
-    :data:`JOINT_VELOCITY_LIMIT`; a run that reaches it is reported as diverged.
-    """
-    body = p.loadURDF(_urdf_file(text), useFixedBase=True,
-                      flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
-    for j in range(p.getNumJoints(body, physicsClientId=cid)):
-        p.changeDynamics(body, j, maxJointVelocity=JOINT_VELOCITY_LIMIT, physicsClientId=cid)
-    return body
-
-
-def _urdf_file(text: str) -> str:
-    files = _CLIENT["files"]
-    if text not in files:
-        if _CLIENT["dir"] is None:
-            _CLIENT["dir"] = tempfile.mkdtemp(prefix="bullet_models_")
-        path = os.path.join(_CLIENT["dir"], f"model_{len(files)}.urdf")
-        with open(path, "w") as fh:
-            fh.write(text)
-        files[text] = path
-    return files[text]
+#: The engine interface's options (analytic.engine.Engine): allowed values, None a number.
+OPTIONS = {"trunk": TRUNKS, "segments": None, "pendulum": PENDULUMS, "contact": CONTACTS,
+           "contact_stiffness": None, "dt": None, "restitution": None, "t_end": None,
+           "damping": DAMPINGS, "calibration": CALIBRATIONS}
+__all__ = ["OPTIONS", "build_world", "client", "engine_matrices", "load", "make_setup",
+           "modes", "run", "simulate", "simulate_batch"]
 
 
 # ------------------------------------------------------------------------------------ setup
 @dataclass(frozen=True)
-class Setup:
+class Setup(EngineSetup):
     """Everything a run needs, computed without the engine (SI units)."""
 
-    scenario: Scenario
-    model: TwoBodyModel
-    trunk: str
-    pendulum: str
     contact: str
-    damping: str
-    segments: int | None
-    dt: float
-    t_end: float
     trunk_urdf: str
     pendulum_urdf: str
     contact_stiffness: float | None  # k_c, N/m (soft)
@@ -136,20 +59,15 @@ class Setup:
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
                damping="distributed", calibration="pad") -> Setup:
-    if not isinstance(scenario, Scenario):
-        raise ParameterError("scenario: expected an analytic.Scenario")
-    check_choice("trunk", trunk, TRUNKS)
-    check_choice("pendulum", pendulum, PENDULUMS)
     check_choice("contact", contact, CONTACTS)
-    check_choice("damping", damping, DAMPINGS)
-    check_choice("calibration", calibration, CALIBRATIONS)
-    model, t_end = engine_model(scenario, pendulum=pendulum, restitution=restitution,
+    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum, damping=damping,
+                                calibration=calibration, restitution=restitution,
                                 t_end=t_end)
     tr = scenario.trunk
     matrices = None
-    if trunk == "chain":
-        n = default_segments(tr) if segments is None else segments
-        chain = hinged_chain(tr, n)
+    chain = trunk_chain(scenario, trunk, segments)
+    if chain is not None:
+        n = chain.segments
         M, K, D = chain_matrices(chain)
         ja = lateral_jacobian(chain, tr.clamp_height)[0]
         apparent = float(1.0 / (ja @ np.linalg.solve(M, ja)))
@@ -158,8 +76,6 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
         segments = n
         matrices = (M, K, D)
     else:
-        if segments is not None:
-            raise ParameterError("--segments: only for --trunk chain")
         tree = reduce_trunk(tr)
         apparent = tree.dynamic_mass
         omega_max = None
@@ -216,60 +132,6 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                  matrices=matrices, calibration=calibration)
 
 
-# ------------------------------------------------------------------------------------ world
-@dataclass
-class World:
-    p: object
-    cid: int
-    trunk: int
-    pendulum: int
-    trunk_joints: list
-    contact_link: int
-
-
-def build_world(setup: Setup, client_id: int | None = None) -> World:
-    """Load both bodies into this process's client (or ``client_id``), configured for ``setup``."""
-    p, cid = client()
-    if client_id is not None:
-        cid = client_id
-    p.resetSimulation(physicsClientId=cid)
-    p.setGravity(0.0, 0.0, 0.0, physicsClientId=cid)
-    newton = setup.contact == "newton"
-    u1 = setup.model.impact_speed
-    p.setPhysicsEngineParameter(
-        fixedTimeStep=setup.dt, numSubSteps=0, numSolverIterations=50, contactSlop=0.0,
-        restitutionVelocityThreshold=RESTITUTION_THRESHOLD_FRACTION * u1 if newton else 0.0,
-        contactERP=0.0 if newton else 0.2, globalCFM=0.0, enableConeFriction=0,
-        deterministicOverlappingPairs=1, physicsClientId=cid)
-    tb = load(p, cid, setup.trunk_urdf)
-    pb = load(p, cid, setup.pendulum_urdf)
-    nj = p.getNumJoints(tb, physicsClientId=cid)
-    joints = list(range(nj))
-    p.setJointMotorControlArray(tb, joints, p.VELOCITY_CONTROL, forces=[0.0] * nj,
-                                physicsClientId=cid)
-    p.setJointMotorControl2(pb, 0, p.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
-    for j in joints:  # no native damping anywhere: the runner applies it
-        p.changeDynamics(tb, j, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0,
-                         lateralFriction=0.0, physicsClientId=cid)
-    p.changeDynamics(pb, 0, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0,
-                     lateralFriction=0.0, physicsClientId=cid)
-    pad = joints[-1] if setup.trunk == "sdof" else _clamp_link(setup)
-    for body, link in ((tb, pad), (pb, 0)):
-        if newton:
-            rest = setup.model.restitution if body == pb else 1.0
-            p.changeDynamics(body, link, restitution=rest, contactProcessingThreshold=0.0,
-                             physicsClientId=cid)
-        else:
-            ks, ds = setup.bullet.per_body
-            p.changeDynamics(body, link, restitution=0.0, contactStiffness=ks,
-                             contactDamping=ds, physicsClientId=cid)
-    return World(p, cid, tb, pb, joints, pad)
-
-
-def _clamp_link(setup: Setup) -> int:
-    return hinged_chain(setup.scenario.trunk, setup.segments).clamp_segment
-
-
 # ------------------------------------------------------------------------------------- run
 def run(setup: Setup) -> SimulationResult:
     """Simulate ``setup``; the record starts at the first contact (t = 0)."""
@@ -296,178 +158,6 @@ def run(setup: Setup) -> SimulationResult:
     else:
         rec = _loop_sdof(world, setup, n_steps, full, le, g, m)
     return _result(setup, rec, t_shift, e0, inertia)
-
-
-def _swing(world: World, setup: Setup, le: float, g: float):
-    """Release the full pendulum at -theta_r; step until it is about to touch (eq 48).
-
-    Swings with :data:`SWING_STEP` (or dt if smaller), switching to dt shortly before the
-    contact, and stops at the last step before the bob reaches the trunk. Returns
-    (time of touch measured from now, s; initial energy m g l_e (1 - cos theta_r), J).
-    """
-    p, cid, pb = world.p, world.cid, world.pendulum
-    imp = setup.scenario.impactor
-    m = imp.mass
-    theta_r = imp.release_angle
-    p.resetJointState(pb, 0, -theta_r, 0.0, physicsClientId=cid)
-    h = max(SWING_STEP, setup.dt)
-    p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)
-    mgl = m * g * le
-    steps_max = int(10.0 * math.pi * math.sqrt(le / g) / setup.dt) + 10
-    for _ in range(steps_max):
-        th, om = p.getJointState(pb, 0, physicsClientId=cid)[:2]
-        if th >= 0.0:
-            raise SimulationDiverged("full pendulum passed the trunk before contact")
-        remaining = -th / max(om, 1e-12)
-        if h > setup.dt and remaining < SWING_SWITCH_STEPS * h:
-            h = setup.dt
-            p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)
-        if h == setup.dt and le * math.sin(-th) <= le * math.cos(th) * om * h:
-            # touches within the next step: the record starts here
-            return remaining, mgl * (1.0 - math.cos(theta_r))
-        p.setJointMotorControl2(pb, 0, p.TORQUE_CONTROL, force=-mgl * math.sin(th),
-                                physicsClientId=cid)
-        p.stepSimulation(physicsClientId=cid)
-    raise SimulationDiverged("full pendulum never reached the trunk")
-
-
-def _loop_sdof(world, setup, n_steps, full, le, g, m):
-    """Step the SDOF trunk; per step two joint-state reads, two torques, one contact query.
-
-    The PyBullet calls take their arguments by position (keyword parsing costs ~0.7 us per
-    call against a ~3 us step) and the loop only keeps what the engine returns; the arrays
-    are built after the loop.
-    """
-    p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
-    model = setup.model
-    K, C, kp = model.stiffness, model.damping, model.impactor_stiffness
-    mgl = m * g * le if full else 0.0
-    gjs, sjm, step, gcp = (p.getJointState, p.setJointMotorControl2, p.stepSimulation,
-                           p.getContactPoints)
-    TQ = p.TORQUE_CONTROL
-    states = []  # x, x', q, q' of each step, flat (floats only: nothing for the GC to track)
-    keep = states.append
-    contact_force = {}  # step -> summed normal force, N (steps with contact only)
-    sin, isfinite = math.sin, math.isfinite
-    for n in range(n_steps):
-        xs = gjs(tb, 0, cid)
-        ps = gjs(pb, 0, cid)
-        x, v, y = xs[0], xs[1], ps[0]
-        keep(x)
-        keep(v)
-        keep(y)
-        keep(ps[1])
-        # setJointMotorControl2(body, joint, mode, targetPosition, targetVelocity, force,
-        # positionGain, velocityGain, maxVelocity, client): TORQUE_CONTROL uses force only
-        sjm(tb, 0, TQ, 0.0, 0.0, -K * x - C * v, 0.1, 1.0, -1.0, cid)
-        sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
-        step(cid)
-        points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
-        if points:
-            contact_force[n] = sum(c[9] for c in points)
-        if not (n & 1023) and not isfinite(x + y):
-            raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
-    states.extend(gjs(tb, 0, cid)[:2] + gjs(pb, 0, cid)[:2])
-    x, vx, q, qd = np.array(states).reshape(n_steps + 1, 4).T
-    force = np.zeros(n_steps + 1)
-    force[list(contact_force)] = list(contact_force.values())
-    return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force,
-            "joint_speed": max(float(np.max(np.abs(vx))), float(np.max(np.abs(qd))))}
-
-
-def _loop_chain(world, setup, n_steps, full, le, g, m):
-    p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
-    model = setup.model
-    M, K, _ = setup.matrices
-    kdiag = np.diag(K).copy()
-    Dv, Dq = damping_operators(setup)
-    kp = model.impactor_stiffness
-    mgl = m * g * le if full else 0.0
-    joints = world.trunk_joints
-    nj = len(joints)
-    gjss, sjma, sjm, gjs, step, gcp = (p.getJointStates, p.setJointMotorControlArray,
-                                       p.setJointMotorControl2, p.getJointState,
-                                       p.stepSimulation, p.getContactPoints)
-    TQ = p.TORQUE_CONTROL
-    # the hinge torques -K theta - (Dv theta' - Dq theta) as one operator on the state read
-    # from the engine, (theta_0, theta'_0, theta_1, theta'_1, ...)
-    torque = np.empty((nj, 2 * nj))
-    torque[:, 0::2] = -np.diag(kdiag) + (Dq if Dq is not None else 0.0)
-    torque[:, 1::2] = -Dv
-    trunk_states = []  # (nj, 2) arrays: theta, theta' of each step
-    pendulum_states = []  # q, q' of each step, flat
-    keep, keep_pendulum = trunk_states.append, pendulum_states.append
-    contact_force = {}  # step -> summed normal force, N (steps with contact only)
-    sin = math.sin
-    for n in range(n_steps):
-        z = np.array([s[:2] for s in gjss(tb, joints, cid)])
-        ps = gjs(pb, 0, cid)
-        y = ps[0]
-        keep(z)
-        keep_pendulum(y)
-        keep_pendulum(ps[1])
-        sjma(tb, joints, TQ, forces=(torque @ z.ravel()).tolist(), physicsClientId=cid)
-        # positional arguments as in _loop_sdof
-        sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
-        step(cid)
-        points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
-        if points:
-            contact_force[n] = sum(c[9] for c in points)
-        if not (n & 1023) and not np.all(np.isfinite(z)):
-            raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
-    keep(np.array([s[:2] for s in gjss(tb, joints, cid)]))
-    pendulum_states.extend(gjs(pb, 0, cid)[:2])
-    states = np.array(trunk_states)
-    Q, QD = states[:, :, 0], states[:, :, 1]
-    q, qd = np.array(pendulum_states).reshape(n_steps + 1, 2).T
-    force = np.zeros(n_steps + 1)
-    force[list(contact_force)] = list(contact_force.values())
-    chain = hinged_chain(setup.scenario.trunk, setup.segments)
-    x, vx = lateral_motion(chain, Q, QD, chain.clamp_index)
-    crown, crown_v = lateral_motion(chain, Q, QD, chain.segments)
-    kin = 0.5 * np.einsum("ni,ij,nj->n", QD, M, QD)
-    pot = 0.5 * (Q * Q) @ kdiag
-    tau_d = QD[:-1] @ Dv.T  # the damping torque applied over each step (resisting)
-    if Dq is not None:
-        tau_d -= Q[:-1] @ Dq.T
-    ddot = np.einsum("ni,ni->n", tau_d, 0.5 * (QD[:-1] + QD[1:]))
-    return {"x": x, "vx": vx, "crown": crown, "crown_velocity": crown_v, "q": q, "qd": qd, "force": force, "trunk_kinetic": kin,
-            "trunk_potential": pot, "damping_power": ddot,
-            "joint_speed": max(float(np.max(np.abs(QD))), float(np.max(np.abs(qd))))}
-
-
-def damping_operators(setup: Setup) -> tuple[np.ndarray, np.ndarray | None]:
-    """(Dv, Dq): the chain's damping torque over step n is -(Dv theta'_n - Dq theta_n).
-
-    ``distributed``: explicit, Dv = D of :func:`analytic.chain.chain_matrices`, Dq = None
-    (its largest rate, eig(M^-1 D) ~ C / (rho A) ~ 350 1/s, is far inside stability).
-    ``joint``: the hinge dampers B = diag(beta k_j) (:func:`_joint_damping`) are stiff (beta
-    omega_max^2 dt >> 2 at the default step: explicit, the run diverges), so they act
-    implicitly, as MuJoCo's Euler step treats joint damping: the torque is -B theta'_{n+1}
-    with theta'_{n+1} = (M + dt B)^-1 (M theta'_n - dt K theta_n), the step's velocity
-    without the contact, M the chain's mass matrix at rest (Bullet's own, to round-off). So
-    Dv = B (M + dt B)^-1 M and Dq = -dt B (M + dt B)^-1 K.
-    """
-    M, K, D = setup.matrices
-    if setup.damping != "joint":
-        return D, None
-    B = np.diag(_joint_damping(M, K, D))
-    G = B @ np.linalg.inv(M + setup.dt * B)
-    return G @ M, -setup.dt * (G @ K)
-
-
-def _joint_damping(M, K, D) -> np.ndarray:
-    """Hinge dampers beta k_j (stiffness-proportional) with the first mode's damping of D.
-
-    The documented alternative to the distributed damping: beta = phi^T D phi / phi^T K phi
-    for the first mode phi, so mode 1 keeps its damping ratio; higher modes get more.
-    """
-    import scipy.linalg
-
-    w2, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, 0])
-    phi = vec[:, 0]
-    beta = float(phi @ D @ phi) / float(phi @ K @ phi)
-    return beta * np.diag(K)
 
 
 def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> SimulationResult:
@@ -512,11 +202,7 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
             f"Bullet's clamp {JOINT_VELOCITY_LIMIT:g} (dt = {dt:.3g} s)")
     kinetic = trunk_kin + pend_kin
     potential = trunk_pot + pend_pot
-    mech = kinetic + potential
-    if not np.all(np.isfinite(mech)) or np.max(mech) > (1.0 + ENERGY_GROWTH_LIMIT) * e0:
-        raise SimulationDiverged(
-            f"bullet: mechanical energy reached {np.nanmax(mech):.4g} J > "
-            f"{1 + ENERGY_GROWTH_LIMIT:g} x the input {e0:.4g} J (dt = {dt:.3g} s)")
+    check_energy("bullet", kinetic + potential, e0, dt)
     # the force of step n acts from sample n to n + 1; the last sample repeats it
     force_rec = force.copy()
     force_rec[-1] = force[-2]
@@ -524,38 +210,28 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
                           potential=potential, damping_work=damping_work,
                           contact_work=contact_work, contact_potential=c_pot,
                           pendulum_energy=pend_kin + pend_pot)
-    imp = setup.scenario.impactor
-    if setup.trunk == "sdof":  # the static shape carries the crown (eq 5)
-        record = with_static_shape_crown(record, setup.scenario.trunk)
-    else:  # the chain's top
-        record = replace(record, crown=rec["crown"], crown_velocity=rec["crown_velocity"])
-    metrics = model_metrics(record, model, imp, collision_duration=setup.collision_duration,
-                            initial_energy=e0)
+    if setup.trunk == "chain":  # the chain's top
+        record = with_crown(record, rec["crown"], rec["crown_velocity"])
     b = setup.bullet
-    model_dict = {**model.as_dict(), "segments": setup.segments, "dt": dt,
-                  "contact_stiffness": b.stiffness if b else None,
-                  "contact_damping": b.damping if b else None,
-                  "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping, "calibration": setup.calibration,
-                  "effective_mass": b.reduced_mass if b else None,
-                  "law_stiffness": setup.contact_stiffness,
-                  "law_damping": setup.contact_damping,
-                  "collision_duration": setup.collision_duration,
-                  "integrator": "semi-implicit Euler",  # Bullet's only one (module docstring)
-                  "omega_max": setup.omega_max,
-                  "contact": setup.contact, "apparent_mass": setup.apparent_mass,
-                  "contact_erp": b.erp if b else 0.0,
-                  "contact_cfm": b.cfm if b else 0.0,
-                  "restitution_velocity_threshold": (
-                      RESTITUTION_THRESHOLD_FRACTION * model.impact_speed
-                      if setup.contact == "newton" else 0.0)}
-    scen = setup.scenario.to_dict()
-    scen["contact"]["restitution"] = model.restitution
-    scen["t_end"] = setup.t_end
-    return SimulationResult(
-        backend="bullet", metrics=metrics, model=model_dict, scenario=scen,
-        trajectory=Trajectory(t=t, x=x, vx=vx, y=y, vy=vy, force=force_rec),
-        record=record, collision_duration=setup.collision_duration,
-        extra={"initial_energy": e0})
+    return engine_result(
+        "bullet", record, scenario=setup.scenario, model=model, t_end=setup.t_end,
+        collision_duration=setup.collision_duration,
+        detection_duration=setup.collision_duration, initial_energy=e0, model_fields={
+            "segments": setup.segments, "dt": dt,
+            "contact_stiffness": b.stiffness if b else None,
+            "contact_damping": b.damping if b else None,
+            "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
+            "calibration": setup.calibration,
+            "effective_mass": b.reduced_mass if b else None,
+            "law_stiffness": setup.contact_stiffness, "law_damping": setup.contact_damping,
+            "collision_duration": setup.collision_duration,
+            "integrator": "semi-implicit Euler",  # Bullet's only one (docs/engines.md)
+            "omega_max": setup.omega_max,
+            "contact": setup.contact, "apparent_mass": setup.apparent_mass,
+            "contact_erp": b.erp if b else 0.0, "contact_cfm": b.cfm if b else 0.0,
+            "restitution_velocity_threshold": (
+                RESTITUTION_THRESHOLD_FRACTION * model.impact_speed
+                if setup.contact == "newton" else 0.0)})
 
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
@@ -603,43 +279,12 @@ def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
 
 
 def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
-    """Static stiffness at a (N/m) and natural frequencies (rad/s) of Bullet's chain.
-
-    Mass matrix from the engine (``calculateMassMatrix`` at rest), stiffness from the hinge
-    springs the runner applies, the clamp point's lateral Jacobian from the engine
-    (``calculateJacobian``): K_a = 1 / (J K^-1 J^T), omega^2 = eig(K, M). ``beam``: the
-    continuous-beam reference of :func:`analytic.modes.beam_reference`.
-    """
-    import scipy.linalg
-
-    from analytic.modes import beam_reference
-
-    tr = scenario.trunk
-    n = default_segments(tr) if segments is None else segments
-    chain = hinged_chain(tr, n)
-    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or not 1 <= n_modes <= n:
-        raise ParameterError(f"n_modes = {n_modes!r} is out of range: allowed [1, {n}]")
+    """Static stiffness at a (N/m) and natural frequencies (rad/s) of Bullet's chain: mass
+    matrix (``calculateMassMatrix`` at rest) and clamp Jacobian (``calculateJacobian``) from
+    the engine, the hinge springs the runner applies (:func:`analytic.engine.chain_modes`);
+    ``beam``: the continuous beam."""
+    if not isinstance(scenario, Scenario):
+        raise ParameterError("scenario: expected an analytic.Scenario")
+    chain = trunk_chain(scenario, "chain", segments)
     M, J = engine_matrices(chain)
-    kd = np.asarray(chain.hinge_stiffnesses)
-    static = float(1.0 / np.sum(J ** 2 / kd))
-    w2 = scipy.linalg.eigh(np.diag(kd), M, eigvals_only=True, subset_by_index=[0, n_modes - 1])
-    return {"model": {"static_stiffness": static, "omegas": [float(v) for v in np.sqrt(w2)],
-                      "segments": n},
-            "beam": beam_reference(scenario, n_modes)}
-
-
-def engine_matrices(chain) -> tuple[np.ndarray, np.ndarray]:
-    """(mass matrix at rest from Bullet, kg m^2; d x(a) / d theta from Bullet, m/rad)."""
-    p, cid = client()
-    p.resetSimulation(physicsClientId=cid)
-    text = _urdf.trunk_chain_urdf(chain)
-    body = load(p, cid, text)
-    n = chain.segments
-    zeros = [0.0] * n
-    M = np.asarray(p.calculateMassMatrix(body, zeros, physicsClientId=cid))
-    link = chain.clamp_segment
-    # the top of the clamp segment, z = a, in the link's URDF frame (which is where PyBullet
-    # 3.2.7 takes localPosition from, measured: not the centre-of-mass frame)
-    local = (0.0, 0.0, float(chain.lengths[link]))
-    lin, _ = p.calculateJacobian(body, link, local, zeros, zeros, zeros, physicsClientId=cid)
-    return M, np.asarray(lin)[0]
+    return chain_modes(scenario, M, chain.hinge_stiffnesses, J, n_modes)

@@ -13,6 +13,6 @@ rollout, record, energy ledger). ``python -m mujoco_models.regenerate`` writes t
 shipped scenarios to ``mujoco_models/models``.
 """
 
-from ._runner import build_model, modes, simulate, simulate_batch
+from ._runner import OPTIONS, build_model, make_setup, modes, run, simulate, simulate_batch
 
-__all__ = ["build_model", "modes", "simulate", "simulate_batch"]
+__all__ = ["OPTIONS", "build_model", "make_setup", "modes", "run", "simulate", "simulate_batch"]

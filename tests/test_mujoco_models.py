@@ -22,8 +22,9 @@ from analytic.results import SimulationDiverged  # noqa: E402
 from analytic.soft_contact import simulate_soft  # noqa: E402
 from mujoco_models import _contact, modes, simulate, simulate_batch  # noqa: E402
 from mujoco_models._builder import sensor_slices  # noqa: E402
-from mujoco_models._runner import (_damping_matrices, _plan, _record,  # noqa: E402
-                                   engine_trunk_matrices, make_setup)
+from mujoco_models._record import _damping_matrices, _record  # noqa: E402
+from mujoco_models._rollout import _plan  # noqa: E402
+from mujoco_models._runner import engine_trunk_matrices, make_setup  # noqa: E402
 from analytic.generated_files import MJCF_DIGITS, file_differences  # noqa: E402
 from mujoco_models.regenerate import MODELS_DIR, generated  # noqa: E402
 
@@ -362,7 +363,7 @@ def test_rk4_damping_work_quadrature_is_fourth_order_inside_runs():
     """The RK4 ledger's damping work: the cubic rules inside each run of samples with one
     contact state integrate a smooth power at O(h^4), and no stencil reaches across a
     change of the contact state (there the power may have a kink)."""
-    from mujoco_models._runner import _step_means
+    from analytic.engine import step_means as _step_means
 
     def error(n):
         t = np.linspace(0.0, 2.0, n + 1)

@@ -1,0 +1,187 @@
+"""PyBullet's stepping: the full pendulum's swing to the contact, the SDOF and chain loops
+(spring and damping torques applied by hand each step), and the chain's damping operators.
+SI units."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from analytic.chain import hinged_chain, lateral_motion
+from analytic.results import SimulationDiverged
+
+SWING_STEP = 1e-4  # s: step of the full pendulum's free swing before the contact
+SWING_SWITCH_STEPS = 20  # switch to the impact step this many swing steps before contact
+
+
+def _swing(world, setup, le: float, g: float):
+    """Release the full pendulum at -theta_r; step until it is about to touch (eq 48).
+
+    Swings with :data:`SWING_STEP` (or dt if smaller), switching to dt shortly before the
+    contact, and stops at the last step before the bob reaches the trunk. Returns
+    (time of touch measured from now, s; initial energy m g l_e (1 - cos theta_r), J).
+    """
+    p, cid, pb = world.p, world.cid, world.pendulum
+    imp = setup.scenario.impactor
+    m = imp.mass
+    theta_r = imp.release_angle
+    p.resetJointState(pb, 0, -theta_r, 0.0, physicsClientId=cid)
+    h = max(SWING_STEP, setup.dt)
+    p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)
+    mgl = m * g * le
+    steps_max = int(10.0 * math.pi * math.sqrt(le / g) / setup.dt) + 10
+    for _ in range(steps_max):
+        th, om = p.getJointState(pb, 0, physicsClientId=cid)[:2]
+        if th >= 0.0:
+            raise SimulationDiverged("full pendulum passed the trunk before contact")
+        remaining = -th / max(om, 1e-12)
+        if h > setup.dt and remaining < SWING_SWITCH_STEPS * h:
+            h = setup.dt
+            p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)
+        if h == setup.dt and le * math.sin(-th) <= le * math.cos(th) * om * h:
+            # touches within the next step: the record starts here
+            return remaining, mgl * (1.0 - math.cos(theta_r))
+        p.setJointMotorControl2(pb, 0, p.TORQUE_CONTROL, force=-mgl * math.sin(th),
+                                physicsClientId=cid)
+        p.stepSimulation(physicsClientId=cid)
+    raise SimulationDiverged("full pendulum never reached the trunk")
+
+
+def _loop_sdof(world, setup, n_steps, full, le, g, m):
+    """Step the SDOF trunk; per step two joint-state reads, two torques, one contact query.
+
+    The PyBullet calls take their arguments by position (keyword parsing costs ~0.7 us per
+    call against a ~3 us step) and the loop only keeps what the engine returns; the arrays
+    are built after the loop.
+    """
+    p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
+    model = setup.model
+    K, C, kp = model.stiffness, model.damping, model.impactor_stiffness
+    mgl = m * g * le if full else 0.0
+    gjs, sjm, step, gcp = (p.getJointState, p.setJointMotorControl2, p.stepSimulation,
+                           p.getContactPoints)
+    TQ = p.TORQUE_CONTROL
+    states = []  # x, x', q, q' of each step, flat (floats only: nothing for the GC to track)
+    keep = states.append
+    contact_force = {}  # step -> summed normal force, N (steps with contact only)
+    sin, isfinite = math.sin, math.isfinite
+    for n in range(n_steps):
+        xs = gjs(tb, 0, cid)
+        ps = gjs(pb, 0, cid)
+        x, v, y = xs[0], xs[1], ps[0]
+        keep(x)
+        keep(v)
+        keep(y)
+        keep(ps[1])
+        # setJointMotorControl2(body, joint, mode, targetPosition, targetVelocity, force,
+        # positionGain, velocityGain, maxVelocity, client): TORQUE_CONTROL uses force only
+        sjm(tb, 0, TQ, 0.0, 0.0, -K * x - C * v, 0.1, 1.0, -1.0, cid)
+        sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
+        step(cid)
+        points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
+        if points:
+            contact_force[n] = sum(c[9] for c in points)
+        if not (n & 1023) and not isfinite(x + y):
+            raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
+    states.extend(gjs(tb, 0, cid)[:2] + gjs(pb, 0, cid)[:2])
+    x, vx, q, qd = np.array(states).reshape(n_steps + 1, 4).T
+    force = np.zeros(n_steps + 1)
+    force[list(contact_force)] = list(contact_force.values())
+    return {"x": x, "vx": vx, "q": q, "qd": qd, "force": force,
+            "joint_speed": max(float(np.max(np.abs(vx))), float(np.max(np.abs(qd))))}
+
+
+def _loop_chain(world, setup, n_steps, full, le, g, m):
+    p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
+    model = setup.model
+    M, K, _ = setup.matrices
+    kdiag = np.diag(K).copy()
+    Dv, Dq = damping_operators(setup)
+    kp = model.impactor_stiffness
+    mgl = m * g * le if full else 0.0
+    joints = world.trunk_joints
+    nj = len(joints)
+    gjss, sjma, sjm, gjs, step, gcp = (p.getJointStates, p.setJointMotorControlArray,
+                                       p.setJointMotorControl2, p.getJointState,
+                                       p.stepSimulation, p.getContactPoints)
+    TQ = p.TORQUE_CONTROL
+    # the hinge torques -K theta - (Dv theta' - Dq theta) as one operator on the state read
+    # from the engine, (theta_0, theta'_0, theta_1, theta'_1, ...)
+    torque = np.empty((nj, 2 * nj))
+    torque[:, 0::2] = -np.diag(kdiag) + (Dq if Dq is not None else 0.0)
+    torque[:, 1::2] = -Dv
+    trunk_states = []  # (nj, 2) arrays: theta, theta' of each step
+    pendulum_states = []  # q, q' of each step, flat
+    keep, keep_pendulum = trunk_states.append, pendulum_states.append
+    contact_force = {}  # step -> summed normal force, N (steps with contact only)
+    sin = math.sin
+    for n in range(n_steps):
+        z = np.array([s[:2] for s in gjss(tb, joints, cid)])
+        ps = gjs(pb, 0, cid)
+        y = ps[0]
+        keep(z)
+        keep_pendulum(y)
+        keep_pendulum(ps[1])
+        sjma(tb, joints, TQ, forces=(torque @ z.ravel()).tolist(), physicsClientId=cid)
+        # positional arguments as in _loop_sdof
+        sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
+        step(cid)
+        points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
+        if points:
+            contact_force[n] = sum(c[9] for c in points)
+        if not (n & 1023) and not np.all(np.isfinite(z)):
+            raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
+    keep(np.array([s[:2] for s in gjss(tb, joints, cid)]))
+    pendulum_states.extend(gjs(pb, 0, cid)[:2])
+    states = np.array(trunk_states)
+    Q, QD = states[:, :, 0], states[:, :, 1]
+    q, qd = np.array(pendulum_states).reshape(n_steps + 1, 2).T
+    force = np.zeros(n_steps + 1)
+    force[list(contact_force)] = list(contact_force.values())
+    chain = hinged_chain(setup.scenario.trunk, setup.segments)
+    x, vx = lateral_motion(chain, Q, QD, chain.clamp_index)
+    crown, crown_v = lateral_motion(chain, Q, QD, chain.segments)
+    kin = 0.5 * np.einsum("ni,ij,nj->n", QD, M, QD)
+    pot = 0.5 * (Q * Q) @ kdiag
+    tau_d = QD[:-1] @ Dv.T  # the damping torque applied over each step (resisting)
+    if Dq is not None:
+        tau_d -= Q[:-1] @ Dq.T
+    ddot = np.einsum("ni,ni->n", tau_d, 0.5 * (QD[:-1] + QD[1:]))
+    return {"x": x, "vx": vx, "crown": crown, "crown_velocity": crown_v, "q": q, "qd": qd, "force": force, "trunk_kinetic": kin,
+            "trunk_potential": pot, "damping_power": ddot,
+            "joint_speed": max(float(np.max(np.abs(QD))), float(np.max(np.abs(qd))))}
+
+
+def damping_operators(setup) -> tuple[np.ndarray, np.ndarray | None]:
+    """(Dv, Dq): the chain's damping torque over step n is -(Dv theta'_n - Dq theta_n).
+
+    ``distributed``: explicit, Dv = D of :func:`analytic.chain.chain_matrices`, Dq = None
+    (its largest rate, eig(M^-1 D) ~ C / (rho A) ~ 350 1/s, is far inside stability).
+    ``joint``: the hinge dampers B = diag(beta k_j) (:func:`_joint_damping`) are stiff (beta
+    omega_max^2 dt >> 2 at the default step: explicit, the run diverges), so they act
+    implicitly, as MuJoCo's Euler step treats joint damping: the torque is -B theta'_{n+1}
+    with theta'_{n+1} = (M + dt B)^-1 (M theta'_n - dt K theta_n), the step's velocity
+    without the contact, M the chain's mass matrix at rest (Bullet's own, to round-off). So
+    Dv = B (M + dt B)^-1 M and Dq = -dt B (M + dt B)^-1 K.
+    """
+    M, K, D = setup.matrices
+    if setup.damping != "joint":
+        return D, None
+    B = np.diag(_joint_damping(M, K, D))
+    G = B @ np.linalg.inv(M + setup.dt * B)
+    return G @ M, -setup.dt * (G @ K)
+
+
+def _joint_damping(M, K, D) -> np.ndarray:
+    """Hinge dampers beta k_j (stiffness-proportional) with the first mode's damping of D.
+
+    The documented alternative to the distributed damping: beta = phi^T D phi / phi^T K phi
+    for the first mode phi, so mode 1 keeps its damping ratio; higher modes get more.
+    """
+    import scipy.linalg
+
+    w2, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, 0])
+    phi = vec[:, 0]
+    beta = float(phi @ D @ phi) / float(phi @ K @ phi)
+    return beta * np.diag(K)

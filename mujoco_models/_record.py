@@ -1,0 +1,191 @@
+"""MuJoCo's record: the ImpactRecord of a rollout (sensors, the energy ledger of its
+integrator, t = 0 at the touch) and the SimulationResult of a run. SI units."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from analytic.chain import hinged_chain, lateral_motion
+from analytic.engine import (ENERGY_GROWTH_LIMIT, check_energy, engine_result, step_means,
+                             with_crown)
+from analytic.parameters import ParameterError
+from analytic.records import ImpactRecord
+from analytic.results import SimulationDiverged, SimulationResult
+
+from . import _builder, _contact
+
+
+def _damping_matrices(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
+    """(D explicit, B implicit) generalised damping matrices, N m s/rad (N s/m for slides).
+
+    Euler: tendon dampers are explicit; joint dampers are implicit (eulerdamp: B v_{n+1})
+    unless the model disables eulerdamp (the SDOF trunk, the chain's distributed damping):
+    then MuJoCo applies them explicitly (-b v_n) and they go into D. ``implicit`` and
+    ``implicitfast``: every joint and tendon damper is in qDeriv, so all are implicit (B,
+    then not diagonal with tendons). RK4: all are explicit, evaluated at each stage (D).
+    """
+    nv = m.nv
+    D = np.zeros((nv, nv))
+    for t in range(m.ntendon):
+        J = np.zeros(nv)
+        adr, num = m.tendon_adr[t], m.tendon_num[t]
+        for w in range(adr, adr + num):
+            if m.wrap_type[w] != mujoco.mjtWrap.mjWRAP_JOINT:  # pragma: no cover
+                raise ParameterError("only fixed tendons are expected")
+            J[m.jnt_dofadr[m.wrap_objid[w]]] += m.wrap_prm[w]
+        D += m.tendon_damping[t] * np.outer(J, J)
+    joint = np.diag(m.dof_damping)
+    if m.opt.integrator in _IMPLICIT_ENUMS:
+        return np.zeros_like(joint), D + joint
+    if m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
+        return D + joint, np.zeros_like(joint)
+    if m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP):
+        return D + joint, np.zeros_like(joint)
+    return D, joint
+
+
+_IMPLICIT_ENUMS = (mujoco.mjtIntegrator.mjINT_IMPLICIT, mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
+
+
+def _rest_potential(m: mujoco.MjModel, trunk_root: int) -> float:
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    mujoco.mj_energyPos(m, d)
+    g = -m.opt.gravity[2]
+    return float(d.energy[0] - m.body_subtreemass[trunk_root] * g * d.subtree_com[trunk_root, 2])
+
+
+def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]:
+    """Build the ImpactRecord (t = 0 at the touch); returns (record, initial energy, touch index)."""
+    m = setup.mjmodel
+    sl = _builder.sensor_slices()
+    nq, nv = m.nq, m.nv
+    v_all = np.vstack([state0[1 + nq:1 + nq + nv], states[:, 1 + nq:1 + nq + nv]])  # n..N
+    if not (np.all(np.isfinite(states)) and np.all(np.isfinite(sensors))):
+        raise SimulationDiverged(f"mujoco: non-finite state (dt = {setup.dt:.3g} s)")
+    # a rollout stopped on a warning stops advancing time: every step must add dt (to the
+    # round-off of t + dt, not of n dt, which grows with the number of steps)
+    steps = np.diff(np.concatenate(([state0[0]], states[:, 0])))
+    if not np.all(np.abs(steps - setup.dt) <= 1e-6 * setup.dt):
+        raise SimulationDiverged("mujoco: the rollout stopped on a MuJoCo warning "
+                                 f"(dt = {setup.dt:.3g} s)")
+    force = sensors[:, sl["force"]][:, 0]
+    x = sensors[:, sl["x_pos"]][:, 0]
+    vx = sensors[:, sl["x_vel"]][:, 0]
+    tr = setup.scenario.trunk
+    y = sensors[:, sl["y_pos"]][:, 0] + (tr.diameter / 2.0 + _builder.BOB_RADIUS)
+    vy = sensors[:, sl["y_vel"]][:, 0]
+    kinetic = sensors[:, sl["kinetic"]][:, 0]
+    root = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY,
+                             "trunk" if setup.trunk == "sdof" else "segment_0")
+    g = -m.opt.gravity[2]
+    trunk_grav = m.body_subtreemass[root] * g * sensors[:, sl["trunk_com"]][:, 2]
+    potential = sensors[:, sl["potential"]][:, 0] - trunk_grav - setup.rest_potential
+    model = setup.model
+    mm = model.impactor_mass
+    if setup.pendulum == "full":
+        imp = setup.scenario.impactor
+        pid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "pendulum")
+        inertia = m.body_inertia[pid, 1] + mm * imp.equivalent_length ** 2
+        th = np.concatenate([[state0[nq]], states[:-1, nq]])  # pendulum angle q_n
+        om = v_all[:-1, -1]
+        pend = 0.5 * inertia * om * om + mm * imp.gravity * imp.equivalent_length * (
+            1.0 - np.cos(th))
+        e0 = mm * imp.gravity * imp.equivalent_length * (1.0 - math.cos(imp.release_angle))
+    else:
+        pend = 0.5 * mm * vy * vy + 0.5 * model.impactor_stiffness * y * y
+        e0 = float(kinetic[0] + potential[0])
+    D, B = _damping_matrices(m)
+    w = vy - vx
+    dt = setup.dt
+    rk4 = m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
+    if rk4:  # the stage forces are not recorded: damping work by quadrature (docstring)
+        vs = v_all[:-1]
+        d_power = step_means(np.einsum("ni,ni->n", vs @ D, vs), force > 0.0)
+    else:  # works over step n (n = 0 .. N-2), with v_n and v_{n+1}
+        v0, v1 = v_all[:-2], v_all[1:-1]
+        vbar = 0.5 * (v0 + v1)
+        d_power = np.einsum("ni,ni->n", v0 @ D, vbar)  # v_n^T D vbar (matmul: BLAS, not einsum)
+        if m.opt.integrator in _IMPLICIT_ENUMS:
+            d_power += np.einsum("ni,ni->n", v1 @ B, vbar)  # B: joints and tendons
+        elif B.any():
+            d_power += np.einsum("ni,ni->n", v1 * np.diag(B), vbar)  # B diagonal (joint dampers)
+        c_power = force[:-1] * 0.5 * (w[:-1] + w[1:])
+    damping_work = np.concatenate([[0.0], np.cumsum(d_power) * dt])
+    k_d = setup.law.stiffness
+    overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
+    c_pot = 0.5 * k_d * overlap ** 2
+    mech = kinetic + potential
+    check_energy("mujoco", mech, e0, dt)
+    if rk4:
+        # the contact's work is what left the bodies other than through the dampers; what it
+        # dissipated (work less the elastic energy it still holds) can only grow
+        contact_work = e0 - mech - damping_work
+        dissipated = contact_work - c_pot
+        created = float(np.max(np.maximum.accumulate(dissipated) - dissipated))
+    else:
+        contact_work = np.concatenate([[0.0], np.cumsum(c_power) * dt])
+        created = float(np.max(mech + damping_work + contact_work)) - e0
+    if created > ENERGY_GROWTH_LIMIT * e0:  # the ledger: energy the engine made from nothing
+        raise SimulationDiverged(
+            f"mujoco: the engine created {created:.4g} J > {ENERGY_GROWTH_LIMIT:g} x the input "
+            f"{e0:.4g} J (kinetic + potential + dissipated; dt = {dt:.3g} s)")
+    # t = 0 at the touch: the first sample with force, interpolated on the overlap y - x
+    on = np.flatnonzero(force > 0.0)
+    if not on.size:
+        raise SimulationDiverged("mujoco: the pendulum never touched the trunk")
+    i1 = int(on[0])
+    n = np.arange(len(force), dtype=float)
+    if i1 == 0:
+        start, t_touch = 0, 0.0
+    else:
+        g0, g1 = (y - x)[i1 - 1], (y - x)[i1]
+        frac = min(1.0, max(0.0, -g0 / (g1 - g0))) if g1 != g0 else 1.0
+        start, t_touch = i1 - 1, (i1 - 1 + frac) * dt
+    t = n * dt - t_touch
+    s = slice(start, None)
+    base_d, base_c = damping_work[start], contact_work[start]
+    record = ImpactRecord(
+        t=t[s], x=x[s], vx=vx[s], y=y[s], vy=vy[s], force=force[s], kinetic=kinetic[s],
+        potential=potential[s], damping_work=damping_work[s] - base_d,
+        contact_work=contact_work[s] - base_c, contact_potential=c_pot[s],
+        pendulum_energy=pend[s])
+    if start:  # energy already dissipated before the record starts (none: no contact yet)
+        e0 = e0 - base_d - base_c
+    return record, e0, i1
+
+
+def _with_crown(setup, record: ImpactRecord, states: np.ndarray) -> ImpactRecord:
+    """``record`` with the chain top's x (m) and x' (m/s) over its last states."""
+    m = setup.mjmodel
+    chain = hinged_chain(setup.scenario.trunk, setup.segments)
+    ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"hinge_{j}")
+           for j in range(chain.segments)]
+    n = record.t.size
+    q = states[-n:, [1 + int(m.jnt_qposadr[i]) for i in ids]]
+    v = states[-n:, [1 + m.nq + int(m.jnt_dofadr[i]) for i in ids]]
+    return with_crown(record, *lateral_motion(chain, q, v, chain.segments))
+
+
+def _result(setup, state0, states, sensors) -> SimulationResult:
+    record, e0, _ = _record(setup, state0, states, sensors)
+    if setup.trunk == "chain":  # the chain's top, from the hinge angles of the recorded states
+        record = _with_crown(setup, record, states)
+    law = setup.law
+    return engine_result(
+        "mujoco", record, scenario=setup.scenario, model=setup.model, t_end=setup.t_end,
+        collision_duration=setup.collision_duration,
+        detection_duration=setup.detection_duration, initial_energy=e0, model_fields={
+            "segments": setup.segments, "dt": setup.dt,
+            "contact_stiffness": law.stiffness, "contact_damping": law.damping,
+            "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
+            "integrator": setup.integrator, "calibration": setup.calibration,
+            "effective_mass": setup.effective_mass,
+            "law_stiffness": law.law_stiffness, "law_damping": law.law_damping,
+            "solref": list(setup.solref),
+            "solimp": [_contact.IMPEDANCE, _contact.IMPEDANCE, *_contact.SOLIMP_TAIL],
+            "collision_duration": setup.collision_duration, "omega_max": setup.omega_max},
+        extra={"impact_speed_measured": float(record.vy[0] - record.vx[0])})
