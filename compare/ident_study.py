@@ -122,9 +122,7 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
                              rungs=RUNGS, sampling: bool = True) -> dict:
     """Identify every case on a process pool; write ident-study.json and one map per method
     into ``out``; returns {rows, figures, summary}."""
-    import multiprocessing
-    import os
-    from concurrent.futures import ProcessPoolExecutor
+    from compare.pool import process_map
 
     todo = cases(scenario, restitutions, crown_ratios, rungs)
     if sampling:
@@ -134,15 +132,8 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
     spec = {"scenario": scenario, "cases": [c.__dict__ for c in todo], "rate_hz": RATE,
             "noise": NOISE, "rest_s": REST}
     rows = _resumed(out / "ident-study.json", spec)
-    workers = workers or os.cpu_count() or 1
-    if rows is not None:
-        pass  # the same study was finished here: a resume has nothing to run
-    elif workers <= 1:
-        rows = [identify_case(c) for c in todo]
-    else:
-        ctx = multiprocessing.get_context("forkserver")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-            rows = list(pool.map(identify_case, todo))
+    if rows is None:  # else the same study was finished here: a resume has nothing to run
+        rows = process_map(identify_case, todo, workers=workers)
     grid = [r for r in rows if _is_grid(r)]
     summary = summarise(grid)
     figures = [identification_error_map(grid, method, out / f"ident-{method}.png")

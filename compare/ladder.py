@@ -18,8 +18,9 @@ from analytic.records import PEAK_AMBIGUITY, peak_times
 from analytic.results import METRIC_UNITS, to_jsonable
 
 from .backends import ENGINES
-from .rungs import KINDS, Rung, rung_table  # noqa: F401  (KINDS, Rung: public here too)
-from .runs import OK, SESSION_CACHE, SKIPPED, Run, RunCache, resolve_scenario
+from .rungs import (ANALYTIC_SAMPLE_STEP, KINDS, Rung, analytic_samples,  # noqa: F401
+                    rung_table)  # (ANALYTIC_SAMPLE_STEP, KINDS, Rung: public here too)
+from .runs import OK, SESSION_CACHE, SKIPPED, Run, RunCache, one_line, resolve_scenario
 
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
@@ -37,9 +38,6 @@ IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
                "E": ("Pa", "identified Young's modulus (eq 47)")}
 ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
 
-#: Sampling of the exact solution for the figures and the identification: 20 us, the
-#: record spacing at which analytic.identification's tests recover b and omega_n.
-ANALYTIC_SAMPLE_STEP = 2e-5
 
 
 def unit_of(metric: str) -> str:
@@ -68,7 +66,7 @@ def ladder_rungs(scenario, *, engines=ENGINES, segments: int | None = None) -> l
     """The rungs of one scenario, in ladder order (:func:`compare.rungs.rung_table` with the
     scenario's chain segments and the analytic record's sampling)."""
     scen = resolve_scenario(scenario)
-    samples = int(round(scen.t_end / ANALYTIC_SAMPLE_STEP)) + 1
+    samples = analytic_samples(scen.t_end)
     return rung_table(engines, segments=chain_segments(scen, segments),
                       analytic_options=(("samples", samples),))
 
@@ -107,6 +105,8 @@ def _validate(data: dict, path: str) -> None:
     for metric, entry in data.get("identification", {}).items():
         need_reason(f"identification.{metric}", entry)
     need_reason("identification_reported", data.get("identification_reported"))
+    for name, entry in data.get("study", {}).items():
+        need_reason(f"study.{name}", entry)
     for kind, entry in data.get("ledger", {}).items():
         need_reason(f"ledger.{kind}", entry)
     for i, f in enumerate(data.get("finding", [])):
@@ -207,26 +207,24 @@ def identify_rung(result, scenario: Scenario) -> dict:
 
     if not isinstance(scenario.impactor, Pendulum):
         return {"status": SKIPPED, "reason": "the identification procedure needs a pendulum"}
-    tr = result.trajectory
-    if tr is None:
-        rec = result.record
-        if rec is None:
-            return {"status": SKIPPED, "reason": "the run has no displacement record"}
-        t, x, y = rec.t, rec.x, rec.y
-    else:
-        t, x, y = tr.t, tr.x, tr.y
-    try:
-        ident, reg = identify_from_record(t, x, pendulum_test_of(scenario), y=y, reading="paper")
-    except ParameterError as exc:  # "not identifiable: ..." when the premises fail
-        text = str(exc)
-        return {"status": SKIPPED, "reason": text if text.startswith("not identifiable")
-                else f"identification failed: {text}"}
     truth = truth_of(scenario)
+    shown = {k: truth[k] for k in IDENT_METRICS}
+    src = result.trajectory if result.trajectory is not None else result.record
+    if src is None:
+        return {"status": SKIPPED, "reason": "the run has no displacement record",
+                "truth": shown}
+    try:
+        ident, reg = identify_from_record(src.t, src.x, pendulum_test_of(scenario), y=src.y,
+                                          reading="paper")
+    except (ParameterError, ValueError, FloatingPointError) as exc:
+        text = one_line(exc)  # "not identifiable: ..." when the premises fail
+        return {"status": SKIPPED, "reason": text if text.startswith("not identifiable")
+                else f"identification failed: {text}", "truth": shown}
     errors = identification_errors(ident, truth)
     return {"status": OK, "reason": None,
             "values": {k: getattr(ident, k) for k in IDENT_METRICS},
             "errors": {k: errors[k] for k in IDENT_METRICS},
-            "truth": {k: truth[k] for k in IDENT_METRICS},
+            "truth": shown,
             "regression": {"t_first": reg.t_first, "t_together": reg.t_together,
                            "x_together": reg.x_together, "t_origin": reg.t_origin,
                            "coefficients": list(reg.coefficients), "x_max": reg.x_max,

@@ -10,6 +10,16 @@ from dataclasses import dataclass
 
 from .backends import ENGINES
 
+#: Sampling (s) of the exact solution for the figures and the identification: 20 us, the
+#: record spacing at which analytic.identification's tests recover b and omega_n.
+ANALYTIC_SAMPLE_STEP = 2e-5
+
+
+def analytic_samples(t_end: float) -> int:
+    """Samples of the analytic rungs' trajectory over [0, t_end] (s) at ANALYTIC_SAMPLE_STEP."""
+    return int(round(t_end / ANALYTIC_SAMPLE_STEP)) + 1
+
+
 #: Rung kinds: (level, the one assumption the rung changes against its previous rung).
 KINDS = {
     "newton": (1, "the paper: analytic SDOF + Newton restitution (eqs 12-35)"),

@@ -18,14 +18,40 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 from analytic.parameters import ParameterError, Scenario
 from analytic.results import SimulationDiverged, SimulationResult
 
-OK, SKIPPED, DIVERGED, FAILED = "ok", "skipped", "diverged", "failed"
+class Status(StrEnum):
+    """What became of a run (a row of a sweep): the strings the tables and reports show."""
+
+    OK = "ok"  # numbers
+    SKIPPED = "skipped"  # refused with a one-line ParameterError (an option, an engine)
+    DIVERGED = "diverged"  # SimulationDiverged: never numbers
+    FAILED = "failed"  # any other exception: a bug
+    INVALID = "invalid"  # a sweep point whose parameters the scenario refuses
+
+
+OK, SKIPPED, DIVERGED, FAILED, INVALID = Status
+
+
+def attempt(backend, scenario: Scenario, options: dict):
+    """(status, result or None, reason or None, wall time s) of one backend run
+    (``backend``: a :class:`compare.backends.Backend`); never raises for a failing run."""
+    t0 = time.perf_counter()
+    result, reason, status = None, None, OK
+    try:
+        result = backend.simulate(scenario, **options)
+    except ParameterError as exc:
+        status, reason = SKIPPED, one_line(exc)
+    except SimulationDiverged as exc:
+        status, reason = DIVERGED, f"diverged: {one_line(exc)}"
+    except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests
+        status, reason = FAILED, f"{type(exc).__name__}: {one_line(exc)}"
+    return status, result, reason, time.perf_counter() - t0
 
 
 def resolve_scenario(scenario) -> Scenario:
@@ -88,19 +114,14 @@ class RunCache:
             return hit
         from .backends import get_backend
 
-        t0 = time.perf_counter()
         try:
-            result = get_backend(backend).simulate(scen, **options)
-            run = Run(scen.name, backend, dict(options), OK, result=result)
+            found = get_backend(backend)
         except ParameterError as exc:
-            run = Run(scen.name, backend, dict(options), SKIPPED, reason=one_line(exc))
-        except SimulationDiverged as exc:
-            run = Run(scen.name, backend, dict(options), DIVERGED,
-                      reason=f"diverged: {one_line(exc)}")
-        except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests
-            run = Run(scen.name, backend, dict(options), FAILED,
-                      reason=f"{type(exc).__name__}: {one_line(exc)}")
-        run.wall_s = time.perf_counter() - t0
+            status, result, reason, wall = SKIPPED, None, one_line(exc), 0.0
+        else:
+            status, result, reason, wall = attempt(found, scen, options)
+        run = Run(scen.name, backend, dict(options), status, result=result, reason=reason,
+                  wall_s=wall)
         self.runs[key] = run
         return run
 
@@ -120,34 +141,17 @@ class RunCache:
             if key not in self.runs and key not in seen:
                 seen.add(key)
                 todo.append((key, scen, backend, dict(options)))
-        if workers is None:
-            workers = os.cpu_count() or 1  # as the sweeps' pool and the engines' batches
-        from .progress import Progress
-
-        bar = Progress(len(todo), "runs") if progress and todo else None
-        if workers <= 1 or len(todo) <= 1:
-            for _, scen, backend, options in todo:
-                self.run(scen, backend, **options)
-                if bar is not None:
-                    bar.update()
-            if bar is not None:
-                bar.close()
-            return
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
         from .backends import BACKENDS
+        from .pool import process_map
+        from .progress import Progress
 
         # slowest first; a backend not in the registry is a run that records its own skip
         todo.sort(key=lambda t: -(BACKENDS[t[2]].cost(t[3]) if t[2] in BACKENDS else 0.0))
-        ctx = multiprocessing.get_context("forkserver")
-        with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
-            futures = [(key, pool.submit(_run_uncached, scen, backend, options))
-                       for key, scen, backend, options in todo]
-            for key, fut in futures:
-                self.runs[key] = fut.result()
-                if bar is not None:
-                    bar.update()
+        bar = Progress(len(todo), "runs") if progress and todo else None
+        runs = process_map(_run_uncached, [t[1:] for t in todo], workers=workers,
+                           done=bar.update if bar is not None else None)
+        for (key, *_), run in zip(todo, runs):
+            self.runs[key] = run
         if bar is not None:
             bar.close()
 
@@ -167,8 +171,9 @@ class RunCache:
         return out
 
 
-def _run_uncached(scenario: Scenario, backend: str, options: dict) -> Run:
-    """One run in a worker process (:meth:`RunCache.prefetch`)."""
+def _run_uncached(request: tuple) -> Run:
+    """One (scenario, backend, options) run in a worker process (:meth:`RunCache.prefetch`)."""
+    scenario, backend, options = request
     return RunCache().run(scenario, backend, **options)
 
 

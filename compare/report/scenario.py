@@ -58,9 +58,9 @@ def energy_ledger(rr) -> dict | None:
 
 def identification_sweep(scenario, cache) -> list[dict]:
     """The paper's procedure on exact-solver records for each e of :data:`E_SWEEP`."""
-    from ..ladder import ANALYTIC_SAMPLE_STEP
+    from ..rungs import analytic_samples
 
-    samples = int(round(scenario.t_end / ANALYTIC_SAMPLE_STEP)) + 1
+    samples = analytic_samples(scenario.t_end)
     out = []
     for e in E_SWEEP:
         run = cache.run(scenario, "analytic", restitution=e, samples=samples)

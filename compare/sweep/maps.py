@@ -14,17 +14,13 @@ from analytic.parameters import ParameterError
 
 from .run import IDENT_KEYS, OK
 
-try:  # the ladder's metric list, so a study and the report speak of the same metrics
-    from compare.ladder import LADDER_METRICS
-except ImportError:  # pragma: no cover - compare.ladder is written alongside this package
-    LADDER_METRICS = ("T0", "x0", "V", "x_max", "t_xmax", "t_sep", "impact_loss",
-                      "energy_transferred", "theta_b")
+# the ladder's metrics and tolerance file, so a study and the report speak of the same things
+from compare.ladder import LADDER_METRICS
+from compare.ladder import load_tolerances as _load_tolerances
 
-#: 5 %: a study's validity criterion, not a test tolerance: Table 1 prints M_T and K_T to two
-#: significant figures (+-3 % rounding) and the paper's own identification on exact records
-#: is off by 15-30 % (tolerances.toml [identification]); a model error below 5 % is below
-#: what the paper's measurements resolve. Override with ``tolerance=`` / ``--tolerance``.
-DEFAULT_TOLERANCE = 0.05
+#: A study's validity criterion (5 %), not a test tolerance: tolerances.toml [study] validity
+#: with its reason, the one tolerance source. Override with ``tolerance=`` / ``--tolerance``.
+DEFAULT_TOLERANCE = float(_load_tolerances()["study"]["validity"]["rel"])
 
 #: Letter and meaning of each ladder kind (the step a rung adds to the one below it).
 RUNG_LETTERS = {"contact": ("C", "contact model (spring-dashpot vs Newton's e)"),

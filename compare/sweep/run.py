@@ -17,10 +17,11 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from analytic.parameters import ParameterError, Pendulum, Scenario
-from analytic.results import METRIC_KEYS, SimulationDiverged
+from analytic.parameters import ParameterError, Scenario
+from analytic.results import METRIC_KEYS
 
 from compare.backends import get_backend
+from compare.rungs import analytic_samples
 
 from .apply import apply_point
 from .grid import Grid, parse_grid, point_key
@@ -29,7 +30,8 @@ JOURNAL = "results.csv"
 TABLE = "results.parquet"
 SPEC = "sweep.json"
 
-OK, SKIPPED, DIVERGED, FAILED, INVALID = "ok", "skipped", "diverged", "failed", "invalid"
+from compare.runs import (DIVERGED, FAILED, INVALID, OK, SKIPPED, Status,  # noqa: F401
+                          attempt, one_line)
 
 REFERENCE_BACKENDS = ("analytic", "soft", "beam")
 MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "e", "u1", "segments", "dt", "contact_stiffness",
@@ -39,10 +41,6 @@ BASE_COLUMNS = ("scenario", "point", "target", "backend", "kind", "previous", "s
                 "wall_s", "t_end", "task", "worker", "finished")
 #: Seconds to wait for a Dask scheduler before --scheduler is refused as unreachable.
 SCHEDULER_TIMEOUT_S = 10
-
-#: Spacing (s) of the analytic trajectory handed to the identification: 20 us, the record
-#: spacing at which analytic.identification's tests recover b and omega_n.
-ANALYTIC_SAMPLE_STEP = 2e-5
 
 
 def columns_for(grid: Grid) -> list[str]:
@@ -135,52 +133,26 @@ class Task:
     rows: list = field(default_factory=list)  # (point key, target id)
 
 
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return text or type(exc).__name__
-
-
 def _identify(result, scenario: Scenario) -> dict:
-    """The paper's procedure (eqs 39-48, "paper" reading) on the run's displacement record."""
-    from analytic.identification import identify_from_record, pendulum_test_of, truth_of
+    """The paper's procedure on the run's record (compare.ladder.identify_rung) as the
+    sweep's id.* and truth.* columns, or id_error."""
+    from compare.ladder import identify_rung
 
-    out = {}
-    if not isinstance(scenario.impactor, Pendulum):
-        out["id_error"] = "the identification procedure needs a pendulum"
+    ident = identify_rung(result, scenario)
+    out = {f"truth.{k}": v for k, v in ident.get("truth", {}).items()}
+    if ident["status"] != OK:
+        out["id_error"] = ident["reason"]
         return out
-    truth = truth_of(scenario)
-    out.update({f"truth.{k}": truth[k] for k in IDENT_KEYS})
-    src = result.record if result.record is not None else result.trajectory
-    if src is None:
-        out["id_error"] = "the run has no displacement record"
-        return out
-    try:
-        ident, _ = identify_from_record(src.t, src.x, pendulum_test_of(scenario), y=src.y,
-                                        reading="paper")
-    except (ParameterError, ValueError, FloatingPointError) as exc:
-        text = _one_line(exc)  # "not identifiable: ..." when the premises fail
-        out["id_error"] = text if text.startswith("not identifiable") else (
-            f"identification failed: {text}")
-        return out
-    out.update({f"id.{k}": float(getattr(ident, k)) for k in IDENT_KEYS})
+    out.update({f"id.{k}": float(v) for k, v in ident["values"].items()})
     return out
 
 
 def execute(task: Task) -> dict:
     """Run one task; never raises for a failing run (the error is the outcome)."""
-    out = {"status": OK, "error": None, "t_end": task.scenario.t_end,
-           "worker": f"{socket.gethostname()}:{os.getpid()}"}
-    t0 = time.perf_counter()
-    try:
-        result = task.backend.simulate(task.scenario, **task.options)
-    except ParameterError as exc:
-        out.update(status=SKIPPED, error=_one_line(exc))
-    except SimulationDiverged as exc:
-        out.update(status=DIVERGED, error=f"diverged: {_one_line(exc)}")
-    except Exception as exc:  # noqa: BLE001 - recorded per row; the sweep goes on
-        out.update(status=FAILED, error=f"{type(exc).__name__}: {_one_line(exc)}")
-    out["wall_s"] = time.perf_counter() - t0
-    if out["status"] != OK:
+    status, result, reason, wall = attempt(task.backend, task.scenario, task.options)
+    out = {"status": str(status), "error": reason, "t_end": task.scenario.t_end,
+           "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_s": wall}
+    if status != OK:
         return out
     infinite = [k for k in METRIC_KEYS if math.isinf(_num(result.metrics.get(k)))]
     if infinite:  # a run that returned instead of raising: still a divergence, not numbers
@@ -364,7 +336,7 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
         if isinstance(outcome, ParameterError):
             for t in todo:
                 immediate.append(_row_base(scenario, point, pk, t) | {
-                    "status": INVALID, "error": _one_line(outcome), "t_end": scenario.t_end})
+                    "status": INVALID, "error": one_line(outcome), "t_end": scenario.t_end})
             continue
         scen, popts = outcome
         for t in todo:
@@ -377,7 +349,7 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
                 opts = _trunk_options(opts, accepted[t.id])
             if t.backend == "analytic" and identify and "samples" in accepted[t.id] \
                     and "samples" not in opts:
-                opts["samples"] = int(round(scen.t_end / ANALYTIC_SAMPLE_STEP)) + 1
+                opts["samples"] = analytic_samples(scen.t_end)
             key = json.dumps([scenario_key(scen), t.backend, options_key(opts)], default=str)
             task = tasks.get(key)
             if task is None:
@@ -425,7 +397,7 @@ def check_grid(scenario: Scenario, grid: Grid, targets: list[Target]) -> list[tu
                 f"({', '.join(dict.fromkeys(t.backend for t in targets))}) takes the option "
                 f"{p.target!r}; allowed: {', '.join(sorted(accepted))}")
     applied = apply_points(scenario, grid)
-    errors = [_one_line(o) if isinstance(o, ParameterError) else None for _, o in applied]
+    errors = [one_line(o) if isinstance(o, ParameterError) else None for _, o in applied]
     if not any(errors):
         return applied
     for ax in grid.axes:
@@ -632,7 +604,7 @@ def _end_workers(pool) -> None:
 def _died(task: Task, exc: BaseException) -> dict:
     return {"status": FAILED, "t_end": task.scenario.t_end, "wall_s": math.nan,
             "error": f"worker process died running this point ({type(exc).__name__}: "
-                     f"{_one_line(exc)}); rerun with --retry-failed"}
+                     f"{one_line(exc)}); rerun with --retry-failed"}
 
 
 def _run_pool(tasks, workers, scen, emit) -> int:
@@ -709,7 +681,7 @@ def _connect(scheduler):
     try:
         return Client(scheduler, timeout=SCHEDULER_TIMEOUT_S), True
     except (OSError, ValueError, TypeError) as exc:
-        raise ParameterError(f"--scheduler {scheduler!r}: cannot connect ({_one_line(exc)}); "
+        raise ParameterError(f"--scheduler {scheduler!r}: cannot connect ({one_line(exc)}); "
                              f"allowed: the address of a running Dask scheduler, "
                              f"tcp://HOST:PORT") from None
 
@@ -724,7 +696,7 @@ def _run_dask(tasks, client, scen, emit) -> int:
         client.wait_for_workers(1, timeout=SCHEDULER_TIMEOUT_S)
     except (TimeoutError, OSError) as exc:
         raise ParameterError(f"{where}: no worker joined within {SCHEDULER_TIMEOUT_S} s "
-                             f"({_one_line(exc)}): start dask workers for it") from None
+                             f"({one_line(exc)}): start dask workers for it") from None
     workers = max(1, sum(client.nthreads().values()))
     chunks = _chunks(tasks, workers)
     futures = client.map(run_chunk, chunks, pure=False)
@@ -740,7 +712,7 @@ def _run_dask(tasks, client, scen, emit) -> int:
             ran += len(outcomes)
     except (OSError, TimeoutError) as exc:  # the scheduler went away (CommClosedError too)
         raise ParameterError(f"{where}: lost the scheduler ({type(exc).__name__}: "
-                             f"{_one_line(exc)}); the finished rows are kept: rerun to "
+                             f"{one_line(exc)}); the finished rows are kept: rerun to "
                              "resume") from None
     finally:
         try:
