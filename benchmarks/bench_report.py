@@ -52,12 +52,15 @@ def main(argv=None) -> int:
     from compare.report import write_report
 
     if not args.skip_pytest:
-        runs.SESSION_CACHE.runs.clear()
         t0 = time.perf_counter()
         code = pytest.main([str(ROOT / "compare"), "-q", "-p", "no:cacheprovider",
                             "--no-header", "-o", "addopts="])
         total = time.perf_counter() - t0
-        _table(f"pytest compare (exit {int(code)})", total, runs.SESSION_CACHE.timings())
+        import sys
+
+        conf = sys.modules.get("compare.conftest") or sys.modules.get("conftest")
+        _table(f"pytest compare (exit {int(code)})", total,
+               conf.SESSION_CACHE.timings() if conf is not None else {})
 
     cache = runs.RunCache()
     out = args.out or tempfile.mkdtemp(prefix="treeimpact-report-")

@@ -1,7 +1,7 @@
 """pytest configuration of ``pytest compare``.
 
-* Runs are shared by every test through the session cache (:data:`compare.runs.SESSION_CACHE`)
-  and the ladders built from it (fixture ``ladder_of``): each (scenario, backend, options)
+* Runs are shared by every test through this session's :data:`SESSION_CACHE` (fixture
+  ``run_cache``, passed explicitly) and the ladders built from it (fixture ``ladder_of``): each (scenario, backend, options)
   is simulated once per session.
 * ``--report DIR`` writes the discrepancy report (report.html, report.md, report.json) into
   DIR at the end of the session, from the same runs.
@@ -14,7 +14,10 @@ from __future__ import annotations
 
 import pytest
 
-from compare.runs import DIVERGED, FAILED, SESSION_CACHE, SKIPPED
+from compare.runs import DIVERGED, FAILED, SKIPPED, RunCache
+
+#: The session's runs: every test, the ladders and ``--report DIR`` share them.
+SESSION_CACHE = RunCache()
 
 
 def pytest_addoption(parser):

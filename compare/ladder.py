@@ -20,7 +20,7 @@ from analytic.results import METRIC_UNITS, to_jsonable
 from .backends import ENGINES
 from .rungs import (ANALYTIC_SAMPLE_STEP, KINDS, Rung, analytic_samples,  # noqa: F401
                     rung_table)  # (ANALYTIC_SAMPLE_STEP, KINDS, Rung: public here too)
-from .runs import OK, SESSION_CACHE, SKIPPED, Run, RunCache, one_line, resolve_scenario
+from .runs import OK, SKIPPED, Run, RunCache, one_line, resolve_scenario
 
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
@@ -435,7 +435,7 @@ def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
     from analytic.identification import truth_of
 
     scen = resolve_scenario(scenario)
-    cache = SESSION_CACHE if cache is None else cache
+    cache = RunCache() if cache is None else cache
     tol = load_tolerances() if tolerances is None else tolerances
     out = []
     for rung in ladder_rungs(scen, engines=engines, segments=segments):

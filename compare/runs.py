@@ -183,10 +183,5 @@ def one_line(exc: BaseException) -> str:
     return text[0] if text else type(exc).__name__
 
 
-#: The process-wide cache: ``pytest compare`` and ``write_report`` share it, so
-#: ``pytest compare --report DIR`` writes the report from the runs the tests made.
-SESSION_CACHE = RunCache()
-
-
 def finite(value) -> bool:
     return isinstance(value, (int, float)) and math.isfinite(value)

@@ -116,7 +116,8 @@ def test_every_axis_has_a_unit():
         figs.append(fig)
         return f"figures/{stem}.png"
 
-    ScenarioSection(load_scenario("central-leader"), RunCache(), engines=(), figure_sink=keep)
+    ScenarioSection.from_runs(load_scenario("central-leader"), RunCache(), engines=(),
+                              figure_sink=keep)
     assert len(figs) == 5
     unit = re.compile(r"\((ms|mm|kN|N s|m/s|J|%|1|s|m)\)")
     for fig in figs:
@@ -179,7 +180,7 @@ def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(
     data = json.loads(paths["json"].read_text())
     (fixture,) = data["summary"]["answer"]
     assert fixture["scenario"] == "open-center" and fixture["available"] is True
-    section = ScenarioSection(load_scenario("central-leader"), run_cache)
+    section = ScenarioSection.from_runs(load_scenario("central-leader"), run_cache)
     (answer,) = _answer([section])
     x0 = section.ladder.rungs[0].values["x_max"]
     x_flex = section.ladder.value("beam", "x_max")

@@ -37,7 +37,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
 
     from ..contact_scan import contact_scan, scan_requests
     from ..ladder import prefetch_ladders
-    from ..runs import SESSION_CACHE, resolve_scenario
+    from ..runs import RunCache, resolve_scenario
     from ..progress import Progress
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
@@ -45,7 +45,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from .scenario import ScenarioSection
     from .studies import StudySection
 
-    cache = SESSION_CACHE if runs is None else runs
+    cache = RunCache() if runs is None else runs
     sink = FigureFiles(Path(out_dir) / "figures") if out_dir is not None else None
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)
     wall = {}
@@ -65,8 +65,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     for s in names:
         t0 = time.perf_counter()
         scen = resolve_scenario(s)
-        scen_sections.append(ScenarioSection(scen, cache, engines=engines, segments=segments,
-                                             figure_sink=sink))
+        scen_sections.append(ScenarioSection.from_runs(scen, cache, engines=engines,
+                                                       segments=segments, figure_sink=sink))
         wall[f"scenario {scen.name}"] = time.perf_counter() - t0
         if bar is not None:
             bar.update()
@@ -83,7 +83,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
 
     ``scenarios``: shipped names, TOML paths or Scenario objects (default: the shipped
     scenarios); ``study_dirs``: directories of model-validity studies; ``runs``: the
-    :class:`compare.runs.RunCache` to take runs from (default: the session cache).
+    :class:`compare.runs.RunCache` to take runs from (default: a new one).
     Options ``engines`` (tuple of engine backends) and ``segments`` (hinged trunk) go to
     the ladder. Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
     ``out_dir/figures``.

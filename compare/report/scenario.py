@@ -123,19 +123,29 @@ QUIET = (*PASSING, "n/a", "ambiguous")
 class ScenarioSection(Section):
     template = "scenario"
 
-    def __init__(self, scenario, cache, *, engines=None, segments=None, figure_sink=None):
-        kw = {} if engines is None else {"engines": engines}
-        self.ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
+    def __init__(self, ladder, sweep: list, *, figure_sink=None):
+        """One scenario's section from its finished ladder and identification sweep (no
+        runs here); figures go to ``figure_sink(fig, stem) -> path``."""
+        self.ladder = ladder
         self.title = f"Scenario {self.ladder.name}"
         self.anchor = f"scenario-{self.ladder.name}"
         self.ledgers = {r.rung.id: energy_ledger(r) for r in self.ladder.rungs}
-        self.sweep = identification_sweep(self.ladder.scenario, cache)
+        self.sweep = sweep
         self.fits = record_fits(self.ladder)
         self.mechanism = matched_loss_evidence(self.ladder)
         self.checks = self.ladder.checks()
         self.figures = {}  # name -> path of the figure file, relative to the page
         if figure_sink is not None:
             self._draw(figure_sink)
+
+    @classmethod
+    def from_runs(cls, scenario, cache, *, engines=None, segments=None, figure_sink=None):
+        """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
+        lacks are made here, so prefetch them first)."""
+        kw = {} if engines is None else {"engines": engines}
+        ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
+        return cls(ladder, identification_sweep(ladder.scenario, cache),
+                   figure_sink=figure_sink)
 
     def _draw(self, sink):
         """Draw the figures and hand each to ``sink(fig, stem) -> path``."""
