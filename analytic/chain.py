@@ -230,27 +230,9 @@ def chain_errors(trunk: Trunk, segments: int) -> dict:
 
 
 def default_segments(trunk: Trunk, tolerance: float = DEFAULT_TOLERANCE) -> int:
-    """The smallest N whose static stiffness at a and first two frequencies are within 0.5 % of the beam.
-
-    Searched upwards from N = 2 with :func:`chain_errors`; the rule is the tolerance, not a
-    fixed N, so it holds for any trunk. The errors fall as 1/N^2 (the chain is softer and its
-    frequencies lower than the beam's); the static error depends on N_in only,
-    a^3/(3EI)/(2 N_in^2) over the total flexibility at a, so it falls in steps.
-    Convergence study of the shipped scenarios, relative errors (chain/beam - 1) at the chosen
-    N (``test_default_segments_docstring_table_is_current`` re-measures this table):
-
-    ================  ===  ====  =============  =========  =========
-    scenario           N   N_in  static K at a   omega_1    omega_2
-    ================  ===  ====  =============  =========  =========
-    central-leader     12     4       -0.312 %   -0.055 %   -0.323 %
-    open-center        10     5       -0.199 %   -0.053 %   -0.481 %
-    realistic-crown    12     4       -0.312 %   -0.048 %   -0.296 %
-    ================  ===  ====  =============  =========  =========
-
-    The next smaller N fails on: central-leader N = 11 (N_in = 3): static -0.554 %,
-    omega_2 -0.635 %; open-center N = 9: omega_2 -0.661 %; realistic-crown N = 11: static
-    -0.554 %, omega_2 -0.598 %. At N = 64 all three errors are below 1.4e-4.
-    """
+    """The smallest N whose static stiffness at a and first two frequencies are within
+    ``tolerance`` (0.5 %) of the beam, searched upwards from N = 2 with :func:`chain_errors`
+    (errors fall as 1/N^2; the convergence table: docs/trunk-models.md)."""
     if not isinstance(trunk, Trunk):
         raise ParameterError(f"trunk: expected an analytic.Trunk, got {type(trunk).__name__}")
     if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not (

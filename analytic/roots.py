@@ -1,27 +1,7 @@
-"""Certified search for the *first* zero of a smooth function on (0, t_max].
-
-Used for the next impact (gap x - y returning to 0, eq 12) and for separation (contact
-force returning to 0 after moving together, eq 34). Missing an impact would silently change
-the answer, so the search never trusts a sign pattern alone: it uses bounds B_n on the
-derivatives |f^(n)| over the whole interval.
-
-* On [ta, tb] with f(ta), f(tb) > 0, f >= min(f(ta), f(tb)) - B_2 (tb - ta)^2 / 8, so the
-  interval is certified zero-free when that lower bound is positive.
-* Next to t = 0, where f has a zero of order p (f(0) = ... = f^(p-1)(0) = 0 < f^(p)(0)),
-  q(t) = f(t) / t^p has q(0) = f^(p)(0)/p! and |q'| <= B_{p+1}/(p+1)!, which certifies the
-  first interval (this is what keeps a grazing or closely spaced impact from being skipped).
-* An interval that cannot be certified is bisected; an interval with a sign change is
-  handed to Brent's method only once f is certified monotone on it (f' bounded away from 0
-  by B_2 times the width), so the zero found is the first one.
-
-A fast path handles the short flights of a chattering sequence: with p = 1 and
-f''(0) < 0, q'(t) <= f''(0)/2 + B_3 t / 3 < 0 for t < 3|f''(0)| / (2 B_3), so f has a
-single zero there if f is negative at the end of that range. Given f' as well, Newton steps
-from the cubic Taylor prediction certify that zero without a sign change being sampled:
-at t with f'(t) < 0 and d = f(t) / |f'(t)|, |d| < |f'(t)| / (2 B_2) makes f change sign
-between t and t + 2d (Taylor with the remainder bounded by B_2), so the single zero lies
-there, and within 2 B_2 d^2 / |f'(t)| of the Newton point t + d; that point is accepted
-once this bound is below round-off (usually after one or two evaluations).
+"""Certified search for the *first* zero of a smooth function on (0, t_max]: the next impact
+(gap x - y returning to 0, eq 12) and separation (contact force returning to 0, eq 34).
+Derivative bounds certify zero-free intervals, so no impact is skipped; the derivation and
+the chattering fast path: docs/solver.md.
 """
 
 from __future__ import annotations

@@ -1,28 +1,7 @@
-"""Exact solver of the paper's impact model (eqs 12-35).
-
-Sequence of events from the first contact (t = 0, tree at rest, pendulum at u_1):
-
-1. impact i: Newton's restitution map, momentum (eq 20) and e (eq 21); loss eq 55;
-2. free flight (eq 13) in closed form until the gap x - y closes again (eq 12), found by the
-   certified first-zero search of :mod:`analytic.roots`;
-3. chattering: when the relative velocity left after an impact is so small that the
-   remaining impacts form a geometric sequence under a practically constant relative
-   acceleration, the sequence is closed at its accumulation point. The bouncing-ball
-   sum gives the remaining time 2 gamma / (|a_rel| (1 - e)) and the remaining loss
-   mu gamma^2 / 2 (the whole relative kinetic energy, sum of eq 55 over the tail). The tail
-   is closed only when mu gamma^2 / 2 < 1e-13 of the input energy, so the closure changes
-   no reported digit; how many impacts were resolved and the tail are recorded. Every impact
-   before the closure is resolved exactly, so the work of one chattering sequence grows as
-   ln(1e-13) / ln(e), i.e. as 1 / (1 - e) when e -> 1 (about 1.5e3 impacts at e = 0.99);
-   with e = 1 the tree's damping alone drains the relative motion, as 1 / n. A sequence
-   that needs more than :data:`MAX_CHATTER_IMPACTS` impacts is refused with a one-line
-   :class:`~analytic.parameters.ParameterError` naming ``contact.restitution``, never
-   truncated into a wrong answer;
-4. moving together (eq 34) while the contact force is compressive; separation when it
-   reaches zero. The force is a linear combination of the joint displacement and velocity,
-   so it solves the joint motion's equation itself and its first zero is found in closed
-   form (:meth:`~analytic.oscillator.Oscillator.first_zero`);
-5. further free flights and impacts up to t_end.
+"""Exact solver of the paper's impact model (eqs 12-35): impacts by Newton's restitution
+(eqs 20-21, loss eq 55), free flights in closed form (eq 13) to the next contact found by the
+certified search of analytic.roots, chattering sequences closed at their accumulation point,
+moving together (eq 34) to separation. The sequence of events: docs/solver.md.
 """
 
 from __future__ import annotations
