@@ -11,11 +11,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .parameters import ParameterError
-from .results import METRIC_KEYS
+from .results import METRIC_KEYS, Deferred
 
 
 @dataclass(frozen=True)
-class ImpactRecord:
+class ImpactRecord(Deferred):
     """A sampled simulation, t = 0 at the first contact (all SI: s, m, m/s, N, J).
 
     ``x``/``vx``: trunk impact point; ``y``/``vy``: pendulum contact point; ``force``: contact

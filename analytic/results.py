@@ -52,8 +52,31 @@ class SimulationDiverged(RuntimeError):
     """A simulation went non-finite or gained energy: it has no numbers to report."""
 
 
+class Deferred:
+    """Mixin of frozen dataclasses that can be sampled on first read of any field:
+    ``cls.deferred(sample)`` where ``sample()`` returns the full instance (the exact
+    solver's results: sweeps never read them, so they never pay for them). ``sample`` must
+    pickle (a module-level function or a partial of one)."""
+
+    @classmethod
+    def deferred(cls, sample):
+        obj = cls.__new__(cls)
+        object.__setattr__(obj, "_sample", sample)
+        return obj
+
+    def __getattr__(self, name):  # called only for fields not set yet: a deferred instance
+        sample = self.__dict__.get("_sample")
+        if sample is None or name not in self.__dataclass_fields__:
+            raise AttributeError(name)
+        full = sample()
+        for f in self.__dataclass_fields__:
+            object.__setattr__(self, f, getattr(full, f))
+        del self.__dict__["_sample"]
+        return getattr(self, name)
+
+
 @dataclass(frozen=True)
-class Trajectory:
+class Trajectory(Deferred):
     """Sampled motion; t = 0 at the first contact. x: trunk impact point, y: pendulum."""
 
     t: np.ndarray  # s
@@ -63,24 +86,6 @@ class Trajectory:
     vy: np.ndarray  # m/s
     force: np.ndarray | None = None  # N, contact force on the trunk (>= 0)
 
-    @classmethod
-    def deferred(cls, sample) -> "Trajectory":
-        """A trajectory sampled on first read of any field: ``sample()`` returns the full
-        :class:`Trajectory` (the exact solver's results; sweeps never read it, so they never
-        pay for it). ``sample`` must pickle (a module-level function or a partial of one)."""
-        obj = cls.__new__(cls)
-        object.__setattr__(obj, "_sample", sample)
-        return obj
-
-    def __getattr__(self, name):  # called only for fields not set yet: a deferred trajectory
-        sample = self.__dict__.get("_sample")
-        if sample is None or name not in self.__dataclass_fields__:
-            raise AttributeError(name)
-        full = sample()
-        for f in self.__dataclass_fields__:
-            object.__setattr__(self, f, getattr(full, f))
-        del self.__dict__["_sample"]
-        return getattr(self, name)
 
 
 @dataclass(frozen=True)
