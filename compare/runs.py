@@ -38,9 +38,19 @@ class Status(StrEnum):
 OK, SKIPPED, DIVERGED, FAILED, INVALID = Status
 
 
-def attempt(backend, scenario: Scenario, options: dict):
-    """(status, result or None, reason or None, wall time s) of one backend run
-    (``backend``: a :class:`compare.backends.Backend`); never raises for a failing run."""
+@dataclass(frozen=True)
+class Outcome:
+    """What one backend run gave: its status, the result (OK only) or the reason, wall s."""
+
+    status: Status
+    result: SimulationResult | None = None
+    reason: str | None = None
+    wall_s: float = 0.0
+
+
+def attempt(backend, scenario: Scenario, options: dict) -> Outcome:
+    """The :class:`Outcome` of one backend run (``backend``: a
+    :class:`compare.backends.Backend`); never raises for a failing run."""
     t0 = time.perf_counter()
     result, reason, status = None, None, OK
     try:
@@ -51,7 +61,7 @@ def attempt(backend, scenario: Scenario, options: dict):
         status, reason = DIVERGED, f"diverged: {one_line(exc)}"
     except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests
         status, reason = FAILED, f"{type(exc).__name__}: {one_line(exc)}"
-    return status, result, reason, time.perf_counter() - t0
+    return Outcome(status, result, reason, time.perf_counter() - t0)
 
 
 def resolve_scenario(scenario) -> Scenario:
@@ -115,13 +125,11 @@ class RunCache:
         from .backends import get_backend
 
         try:
-            found = get_backend(backend)
-        except ParameterError as exc:
-            status, result, reason, wall = SKIPPED, None, one_line(exc), 0.0
-        else:
-            status, result, reason, wall = attempt(found, scen, options)
-        run = Run(scen.name, backend, dict(options), status, result=result, reason=reason,
-                  wall_s=wall)
+            out = attempt(get_backend(backend), scen, options)
+        except ParameterError as exc:  # not a backend of the registry
+            out = Outcome(SKIPPED, reason=one_line(exc))
+        run = Run(scen.name, backend, dict(options), out.status, result=out.result,
+                  reason=out.reason, wall_s=out.wall_s)
         self.runs[key] = run
         return run
 

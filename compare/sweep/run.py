@@ -99,20 +99,21 @@ def make_targets(backends=("analytic",), *, ladder: bool = False,
     def opts(backend, extra=()):
         return tuple(sorted({**dict(extra), **options.get(backend, {})}.items()))
 
-    if ladder:  # the ladder's own rung table (compare.rungs), chain segments left to the grid
-        from compare.rungs import rung_table
+    from compare.rungs import rung_table
 
+    if ladder:  # the ladder's own rung table, chain segments left to the grid
         engines = [b for b in names if b not in REFERENCE_BACKENDS]
         return [Target(r.id, r.backend, opts(r.backend, r.options), r.previous, r.kind, r.drop)
                 for r in rung_table(engines)]
-    targets = [Target("analytic", "analytic", opts("analytic"), None, "newton")]
-    below = "analytic"
-    if "soft" in names:
-        targets.append(Target("soft", "soft", opts("soft"), "analytic", "contact"))
-        below = "soft"
-    if "beam" in names:  # the engines' default trunk is the hinged chain: its reference
-        targets.append(Target("beam", "beam", opts("beam"), below, "beam"))
-        below = "beam"
+    # the reference rungs of the same table that were asked for, each compared with the one
+    # below it; the engines' default trunk is the hinged chain: the beam is its reference
+    table = {r.id: r for r in rung_table(())}
+    targets, below = [], None
+    for rid in ("analytic", "soft", "beam"):
+        if rid == "analytic" or rid in names:
+            r = table[rid]
+            targets.append(Target(r.id, r.backend, opts(r.backend, r.options), below, r.kind))
+            below = rid
     for eng in (b for b in names if b not in REFERENCE_BACKENDS):  # engines (or any other)
         targets.append(Target(eng, eng, opts(eng), below, "model"))
     return targets
@@ -149,11 +150,12 @@ def _identify(result, scenario: Scenario) -> dict:
 
 def execute(task: Task) -> dict:
     """Run one task; never raises for a failing run (the error is the outcome)."""
-    status, result, reason, wall = attempt(task.backend, task.scenario, task.options)
-    out = {"status": str(status), "error": reason, "t_end": task.scenario.t_end,
-           "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_s": wall}
-    if status != OK:
+    done = attempt(task.backend, task.scenario, task.options)
+    out = {"status": str(done.status), "error": done.reason, "t_end": task.scenario.t_end,
+           "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_s": done.wall_s}
+    if done.status != OK:
         return out
+    result = done.result
     infinite = [k for k in METRIC_KEYS if math.isinf(_num(result.metrics.get(k)))]
     if infinite:  # a run that returned instead of raising: still a divergence, not numbers
         out.update(status=DIVERGED, error=f"diverged: infinite {', '.join(infinite)}")
