@@ -1,38 +1,228 @@
-"""The local process pool every part of ``compare`` uses for independent runs (the report,
-``pytest compare``, the identification and contact studies); sweeps add journaling, broken
-worker recovery and Dask on top (compare.sweep.run)."""
+"""The one pool every part of ``compare`` runs independent work on: local worker processes
+or a Dask scheduler. ``run_chunks`` hands each chunk's outcomes back as it finishes (sweeps
+journal them); ``process_map`` keeps the items' order (the report's and ``pytest compare``'s
+runs, the identification study). A stop request (SIGTERM in the CLI) ends either loop at
+its next result. Design notes: docs/sweeps.md.
+"""
 
 from __future__ import annotations
 
 import os
+import threading
+from functools import partial
+
+from analytic.parameters import ParameterError
+
+#: Seconds to wait for a Dask scheduler (and its first worker) before it is refused.
+SCHEDULER_TIMEOUT_S = 10
+
+#: Set by a stop request (SIGTERM in the CLI): the pool loops raise KeyboardInterrupt at their
+#: next result, so a request whose asynchronous KeyboardInterrupt was swallowed (raised
+#: inside a finaliser, where Python only prints it) still ends the run.
+STOP = threading.Event()
 
 
-def process_map(fn, items, *, workers: int | None = None, done=None) -> list:
-    """``[fn(item) for item in items]`` in worker processes, in the items' order.
+def check_stop() -> None:
+    if STOP.is_set():
+        raise KeyboardInterrupt
 
-    ``fn`` must pickle (a module-level function). ``workers``: default the CPU count; 1, or
-    a single item, runs in this process. Workers start by ``forkserver`` (the engines' thread
-    pools are never forked). ``done()`` is called once per finished item (progress).
-    """
-    items = list(items)
-    if workers is None:
-        workers = os.cpu_count() or 1
-    if workers <= 1 or len(items) <= 1:
-        out = []
-        for item in items:
-            out.append(fn(item))
-            if done is not None:
-                done()
-        return out
+
+def ignore_sigint() -> None:
+    """Worker initializer: Ctrl-C is the parent's to handle (it ends the workers itself), so a
+    terminal's SIGINT to the whole process group prints no worker tracebacks; SIGTERM takes
+    its default action (a forked worker would inherit the parent's handler, which turns it
+    into a KeyboardInterrupt and a traceback when the parent ends the worker)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _end_workers(pool) -> None:
+    """Terminate the worker processes this pool started (by their Process objects)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _executor(workers: int, start_method: str | None):
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    ctx = multiprocessing.get_context("forkserver")
-    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=ctx) as pool:
-        futures = [pool.submit(fn, item) for item in items]
-        out = []
-        for fut in futures:
-            out.append(fut.result())
+    ctx = multiprocessing.get_context(start_method) if start_method else None
+    return ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint, mp_context=ctx)
+
+
+def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=None,
+               start_method: str | None = None) -> int:
+    """``fn(chunk) -> outcomes`` (a list, one per item) for every chunk, on ``workers`` local
+    processes or the Dask ``client``; ``on_result(chunk, outcomes)`` as each finishes.
+
+    A worker process that dies (a crash inside an engine) breaks a local pool: the chunks it
+    broke run again on a fresh pool, and a chunk broken twice runs one item at a time in a
+    one-worker pool, so only an item that kills its worker gets ``on_died(item, exc)`` as
+    its outcome (on Dask: every item of a chunk that killed every worker it was given).
+    Returns the number of items run."""
+    if client is not None:
+        return _run_dask(fn, chunks, client, on_result, on_died)
+    from concurrent.futures import as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    ran = 0
+    pending = list(chunks)
+    strikes: dict[int, int] = {}
+    suspects = []
+    while pending:
+        broken, unsent, futures = [], [], {}
+        pool = _executor(min(workers, len(pending)), start_method)
+        try:
+            for c in pending:
+                try:
+                    futures[pool.submit(fn, c)] = c
+                except BrokenProcessPool:  # broke while submitting: not this chunk's doing
+                    unsent.append(c)
+            for fut in as_completed(futures):
+                check_stop()
+                try:
+                    outcomes = fut.result()
+                except BrokenProcessPool:
+                    broken.append(futures[fut])
+                    continue
+                on_result(futures[fut], outcomes)
+                ran += len(outcomes)
+        except BaseException:
+            _end_workers(pool)
+            raise
+        pool.shutdown(wait=True)
+        pending = unsent
+        for c in broken:
+            strikes[id(c)] = strikes.get(id(c), 0) + 1
+            (suspects if strikes[id(c)] >= 2 else pending).append(c)
+    pool = None
+    try:
+        for item in (i for c in suspects for i in c):
+            if pool is None:
+                pool = _executor(1, start_method)
+            try:
+                outcome = pool.submit(fn, [item]).result()[0]
+            except BrokenProcessPool as exc:
+                outcome = on_died(item, exc)
+                pool.shutdown(wait=True)
+                pool = None
+            on_result([item], [outcome])
+            ran += 1
+            check_stop()
+    except BaseException:
+        if pool is not None:
+            _end_workers(pool)
+        raise
+    if pool is not None:
+        pool.shutdown(wait=True)
+    return ran
+
+
+def connect(scheduler):
+    """(Dask client, whether this call opened it): ``scheduler`` is an address or a Client."""
+    from distributed import Client
+
+    from .runs import one_line
+
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise ParameterError(f"--scheduler {scheduler!r}: allowed: the address of a running "
+                             f"Dask scheduler, tcp://HOST:PORT")
+    try:
+        return Client(scheduler, timeout=SCHEDULER_TIMEOUT_S), True
+    except (OSError, ValueError, TypeError) as exc:
+        raise ParameterError(f"--scheduler {scheduler!r}: cannot connect ({one_line(exc)}); "
+                             f"allowed: the address of a running Dask scheduler, "
+                             f"tcp://HOST:PORT") from None
+
+
+def dask_workers(client) -> int:
+    """Worker threads of the Dask ``client``'s cluster, once one has joined (else a one-line
+    ParameterError after SCHEDULER_TIMEOUT_S)."""
+    from .runs import one_line
+
+    try:
+        client.wait_for_workers(1, timeout=SCHEDULER_TIMEOUT_S)
+    except (TimeoutError, OSError) as exc:
+        raise ParameterError(f"{_where(client)}: no worker joined within "
+                             f"{SCHEDULER_TIMEOUT_S} s ({one_line(exc)}): start dask "
+                             "workers for it") from None
+    return max(1, sum(client.nthreads().values()))
+
+
+def _where(client) -> str:
+    return f"--scheduler {client.scheduler.address!r}" if client.scheduler else "--scheduler"
+
+
+def _run_dask(fn, chunks, client, on_result, on_died) -> int:
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    from .runs import one_line
+
+    ran = 0
+    futures = client.map(fn, chunks, pure=False)
+    owner = {f.key: c for f, c in zip(futures, chunks)}
+    try:
+        for fut in as_completed(futures):
+            check_stop()
+            try:
+                outcomes = fut.result()
+            except KilledWorker as exc:  # the chunk killed every worker it was given
+                outcomes = [on_died(item, exc) for item in owner[fut.key]]
+            on_result(owner[fut.key], outcomes)
+            ran += len(outcomes)
+    except (OSError, TimeoutError) as exc:  # the scheduler went away (CommClosedError too)
+        raise ParameterError(f"{_where(client)}: lost the scheduler ({type(exc).__name__}: "
+                             f"{one_line(exc)}); the finished rows are kept: rerun to "
+                             "resume") from None
+    finally:
+        try:
+            client.cancel(futures)
+        except (OSError, TimeoutError):  # nothing left to cancel on a lost scheduler
+            pass
+    return ran
+
+
+def process_map(fn, items, *, workers: int | None = None, done=None, died=None) -> list:
+    """``[fn(item) for item in items]`` on :func:`run_chunks`' local processes, in the items'
+    order. ``fn`` must pickle (a module-level function). ``workers``: default the CPU count;
+    1, or a single item, runs in this process. Workers start by ``forkserver`` (the engines'
+    thread pools are never forked). ``done()`` is called once per finished item (progress);
+    ``died(item, exc)`` is the outcome of an item that kills its worker (default: raise)."""
+    items = list(items)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    out = [None] * len(items)
+    if workers <= 1 or len(items) <= 1:
+        for i, item in enumerate(items):
+            out[i] = fn(item)
+            check_stop()
             if done is not None:
                 done()
+        return out
+
+    def on_result(chunk, outcomes):
+        for (i, _), outcome in zip(chunk, outcomes):
+            out[i] = outcome
+            if done is not None:
+                done()
+
+    def on_died(indexed, exc):
+        if died is None:
+            raise exc
+        return died(indexed[1], exc)
+
+    run_chunks(partial(_each_indexed, fn), [[(i, x)] for i, x in enumerate(items)],
+               workers=workers, on_result=on_result, on_died=on_died,
+               start_method="forkserver")
     return out
+
+
+def _each_indexed(fn, chunk: list) -> list:
+    return [fn(item) for _, item in chunk]

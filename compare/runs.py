@@ -157,7 +157,7 @@ class RunCache:
         todo.sort(key=lambda t: -(BACKENDS[t[2]].cost(t[3]) if t[2] in BACKENDS else 0.0))
         bar = Progress(len(todo), "runs") if progress and todo else None
         runs = process_map(_run_uncached, [t[1:] for t in todo], workers=workers,
-                           done=bar.update if bar is not None else None)
+                           done=bar.update if bar is not None else None, died=_died)
         for (key, *_), run in zip(todo, runs):
             self.runs[key] = run
         if bar is not None:
@@ -177,6 +177,13 @@ class RunCache:
             t["runs"] += 1
             t["wall_s"] += r.wall_s
         return out
+
+
+def _died(request: tuple, exc: BaseException) -> Run:
+    """The run whose worker process died (a crash inside an engine): failed, with why."""
+    scenario, backend, options = request
+    return Run(scenario.name, backend, dict(options), FAILED,
+               reason=f"worker process died running this ({type(exc).__name__})")
 
 
 def _run_uncached(request: tuple) -> Run:

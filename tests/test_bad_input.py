@@ -178,9 +178,10 @@ def test_a_scheduler_without_workers_is_one_line_after_its_timeout(tmp_path, mon
     from distributed import Client, LocalCluster
 
     from analytic.parameters import ParameterError
+    from compare import pool
     from compare.sweep import run
 
-    monkeypatch.setattr(run, "SCHEDULER_TIMEOUT_S", 1)
+    monkeypatch.setattr(pool, "SCHEDULER_TIMEOUT_S", 1)
     with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster, \
             Client(cluster) as client:
         with pytest.raises(ParameterError, match=r"no worker joined within 1 s"):

@@ -121,7 +121,7 @@ def run_sweep_command(args) -> int:
     import signal
     import sys
 
-    from .run import STOP
+    from compare.pool import STOP
 
     def terminate(signum, frame):  # SIGTERM ends the sweep as Ctrl-C does: workers stopped
         STOP.set()  # checked again at the next result, should this raise be swallowed

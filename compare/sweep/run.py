@@ -11,7 +11,6 @@ import json
 import math
 import os
 import socket
-import threading
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -21,6 +20,7 @@ from analytic.parameters import ParameterError, Scenario
 from analytic.results import METRIC_KEYS
 
 from compare.backends import get_backend
+from compare.pool import STOP, check_stop, connect, dask_workers, run_chunks  # noqa: F401
 from compare.rungs import analytic_samples
 
 from .apply import apply_point
@@ -39,8 +39,6 @@ MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "e", "u1", "segments", "dt", "conta
 IDENT_KEYS = ("M_T", "K_T", "xi", "E")
 BASE_COLUMNS = ("scenario", "point", "target", "backend", "kind", "previous", "status", "error",
                 "wall_s", "t_end", "task", "worker", "finished")
-#: Seconds to wait for a Dask scheduler before --scheduler is refused as unreachable.
-SCHEDULER_TIMEOUT_S = 10
 
 
 def columns_for(grid: Grid) -> list[str]:
@@ -505,7 +503,7 @@ def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = Fal
         raise ParameterError(f"--workers = {workers!r}: allowed integers >= 0 "
                              f"(0 runs in this process)")
     applied = check_grid(scen, grid, targets)
-    client, own_client = _connect(scheduler) if scheduler is not None else (None, False)
+    client, own_client = connect(scheduler) if scheduler is not None else (None, False)
     try:
         return _sweep(scen, grid, targets, Path(out), workers=workers, client=client,
                       applied=applied, identify=identify, retry_failed=retry_failed,
@@ -554,16 +552,17 @@ def _sweep(scen, grid, targets, out, *, workers, client, applied, identify, retr
     try:
         if immediate:
             emit(immediate)
-        if tasks:
-            if client is not None:
-                ran = _run_dask(tasks, client, scen, emit)
-            elif workers == 0:
-                for task in tasks:
-                    emit(_rows_of(task, execute(task), scen))
-                    _check_stop()
-                    ran += 1
-            else:
-                ran = _run_pool(tasks, workers or os.cpu_count() or 1, scen, emit)
+        if tasks and workers == 0 and client is None:  # in this process
+            for task in tasks:
+                emit(_rows_of(task, execute(task), scen))
+                check_stop()
+                ran += 1
+        elif tasks:
+            n = dask_workers(client) if client is not None else workers or os.cpu_count() or 1
+            ran = run_chunks(run_chunk, _chunks(tasks, n), workers=n, client=client,
+                             on_result=lambda chunk, outcomes: emit(
+                                 _call_rows(chunk, outcomes, scen)),  # one flushed write
+                             on_died=_died)
     finally:
         journal.close()
         if bar is not None:
@@ -573,152 +572,7 @@ def _sweep(scen, grid, targets, out, *, workers, client, applied, identify, retr
                        time.perf_counter() - t_start)
 
 
-def _ignore_sigint() -> None:
-    """Worker initializer: Ctrl-C is the parent's to handle (it ends the workers itself), so a
-    terminal's SIGINT to the whole process group prints no worker tracebacks; SIGTERM takes
-    its default action (a forked worker would inherit the parent's handler, which turns it
-    into a KeyboardInterrupt and a traceback when the parent ends the worker)."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-
-#: Set by a stop request (SIGTERM in the CLI): the pool loops raise KeyboardInterrupt at their
-#: next result, so a request whose asynchronous KeyboardInterrupt was swallowed (raised
-#: inside a finaliser, where Python only prints it) still ends the sweep.
-STOP = threading.Event()
-
-
-def _check_stop() -> None:
-    if STOP.is_set():
-        raise KeyboardInterrupt
-
-
-def _end_workers(pool) -> None:
-    """Terminate the worker processes this pool started (by their Process objects)."""
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
-        if proc.is_alive():
-            proc.terminate()
-    pool.shutdown(wait=False, cancel_futures=True)
-
-
 def _died(task: Task, exc: BaseException) -> dict:
     return {"status": FAILED, "t_end": task.scenario.t_end, "wall_s": math.nan,
             "error": f"worker process died running this point ({type(exc).__name__}: "
                      f"{one_line(exc)}); rerun with --retry-failed"}
-
-
-def _run_pool(tasks, workers, scen, emit) -> int:
-    """Run the tasks on a local process pool. A worker process that dies (a crash inside an
-    engine) breaks the pool: the calls it broke are run again on a fresh pool, and a call
-    broken twice is run one task at a time in a one-worker pool, so only the task that kills
-    its worker is recorded as failed."""
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
-
-    ran = 0
-    pending = _chunks(tasks, workers)
-    strikes: dict[int, int] = {}
-    suspects = []
-    while pending:
-        broken, unsent, futures = [], [], {}
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)),
-                                   initializer=_ignore_sigint)
-        try:
-            for c in pending:
-                try:
-                    futures[pool.submit(run_chunk, c)] = c
-                except BrokenProcessPool:  # broke while submitting: not this chunk's doing
-                    unsent.append(c)
-            for fut in as_completed(futures):
-                _check_stop()
-                try:
-                    outcomes = fut.result()
-                except BrokenProcessPool:
-                    broken.append(futures[fut])
-                    continue
-                emit(_call_rows(futures[fut], outcomes, scen))  # one flushed write per call
-                ran += len(outcomes)
-        except BaseException:
-            _end_workers(pool)
-            raise
-        pool.shutdown(wait=True)
-        pending = unsent
-        for c in broken:
-            strikes[id(c)] = strikes.get(id(c), 0) + 1
-            (suspects if strikes[id(c)] >= 2 else pending).append(c)
-    pool = None
-    try:
-        for task in (t for c in suspects for t in c):
-            if pool is None:
-                pool = ProcessPoolExecutor(max_workers=1, initializer=_ignore_sigint)
-            try:
-                outcome = pool.submit(run_chunk, [task]).result()[0]
-            except BrokenProcessPool as exc:
-                outcome = _died(task, exc)
-                pool.shutdown(wait=True)
-                pool = None
-            emit(_rows_of(task, outcome, scen))
-            ran += 1
-            _check_stop()
-    except BaseException:
-        if pool is not None:
-            _end_workers(pool)
-        raise
-    if pool is not None:
-        pool.shutdown(wait=True)
-    return ran
-
-
-def _connect(scheduler):
-    """(Dask client, whether this sweep opened it): ``scheduler`` is an address or a Client."""
-    from distributed import Client
-
-    if isinstance(scheduler, Client):
-        return scheduler, False
-    if not isinstance(scheduler, str) or not scheduler.strip():
-        raise ParameterError(f"--scheduler {scheduler!r}: allowed: the address of a running "
-                             f"Dask scheduler, tcp://HOST:PORT")
-    try:
-        return Client(scheduler, timeout=SCHEDULER_TIMEOUT_S), True
-    except (OSError, ValueError, TypeError) as exc:
-        raise ParameterError(f"--scheduler {scheduler!r}: cannot connect ({one_line(exc)}); "
-                             f"allowed: the address of a running Dask scheduler, "
-                             f"tcp://HOST:PORT") from None
-
-
-def _run_dask(tasks, client, scen, emit) -> int:
-    from distributed import as_completed
-    from distributed.scheduler import KilledWorker
-
-    ran = 0
-    where = f"--scheduler {client.scheduler.address!r}" if client.scheduler else "--scheduler"
-    try:
-        client.wait_for_workers(1, timeout=SCHEDULER_TIMEOUT_S)
-    except (TimeoutError, OSError) as exc:
-        raise ParameterError(f"{where}: no worker joined within {SCHEDULER_TIMEOUT_S} s "
-                             f"({one_line(exc)}): start dask workers for it") from None
-    workers = max(1, sum(client.nthreads().values()))
-    chunks = _chunks(tasks, workers)
-    futures = client.map(run_chunk, chunks, pure=False)
-    owner = {f.key: c for f, c in zip(futures, chunks)}
-    try:
-        for fut in as_completed(futures):
-            _check_stop()
-            try:
-                outcomes = fut.result()
-            except KilledWorker as exc:  # the chunk killed every worker it was given
-                outcomes = [_died(task, exc) for task in owner[fut.key]]
-            emit(_call_rows(owner[fut.key], outcomes, scen))  # one flushed write per call
-            ran += len(outcomes)
-    except (OSError, TimeoutError) as exc:  # the scheduler went away (CommClosedError too)
-        raise ParameterError(f"{where}: lost the scheduler ({type(exc).__name__}: "
-                             f"{one_line(exc)}); the finished rows are kept: rerun to "
-                             "resume") from None
-    finally:
-        try:
-            client.cancel(futures)
-        except (OSError, TimeoutError):  # nothing left to cancel on a lost scheduler
-            pass
-    return ran

@@ -1,0 +1,33 @@
+"""The one pool (compare.pool): results in the items' order, progress per item, an item that
+kills its worker becomes its own outcome instead of taking the run down."""
+
+import os
+
+import pytest
+
+from compare.pool import process_map
+
+
+def _square_or_crash(x):
+    if x == 3:
+        os._exit(1)  # a crash inside an engine: the worker process dies
+    return x * x
+
+
+def test_process_map_keeps_order_and_reports_each_item():
+    calls = []
+    out = process_map(abs, [-3, 1, -2, 5], workers=2, done=lambda: calls.append(1))
+    assert out == [3, 1, 2, 5] and len(calls) == 4
+
+
+def test_an_item_that_kills_its_worker_is_its_own_outcome():
+    out = process_map(_square_or_crash, [1, 2, 3, 4], workers=2,
+                      died=lambda item, exc: f"died on {item}")
+    assert out == [1, 4, "died on 3", 16]
+
+
+def test_without_died_a_dead_worker_raises():
+    from concurrent.futures.process import BrokenProcessPool
+
+    with pytest.raises(BrokenProcessPool):
+        process_map(_square_or_crash, [3, 4], workers=2)
