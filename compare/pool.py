@@ -40,10 +40,13 @@ def ignore_sigint() -> None:
 
 def _end_workers(pool) -> None:
     """Terminate the worker processes this pool started (by their Process objects)."""
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
-        if proc.is_alive():
-            proc.terminate()
-    pool.shutdown(wait=False, cancel_futures=True)
+    try:
+        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+            if proc.is_alive():
+                proc.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+    except Exception:  # noqa: BLE001 - a pool interrupted mid-start: what raised matters
+        pass
 
 
 def _executor(workers: int, start_method: str | None):

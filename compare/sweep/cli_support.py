@@ -132,11 +132,17 @@ def run_sweep_command(args) -> int:
     try:
         return _run(args)
     except KeyboardInterrupt:
-        print(f"treeimpact: sweep interrupted; the finished rows are kept in {args.out}: "
-              f"rerun the same command to resume", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        pass
+    except Exception:
+        if not STOP.is_set():
+            raise
+        # the stop request interrupted a pool's start or cleanup, which then raised
+        # something else: still an interruption
     finally:
         signal.signal(signal.SIGTERM, previous)
+    print(f"treeimpact: sweep interrupted; the finished rows are kept in {args.out}: "
+          f"rerun the same command to resume", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def _run(args) -> int:
