@@ -30,6 +30,11 @@ SAMPLING_RATES = (1e3, 5e3, 2e4)
 SAMPLING_NOISES = (0.005, 0.01, 0.02)
 SAMPLING_SEEDS = (1, 2)
 SAMPLING_E = 0.1
+#: An engine's hinged-chain records too (a chain run costs 0.5 s: a corner of the grid only),
+#: in the summary table, not on the maps.
+ENGINE_RUNG = "mujoco"
+ENGINE_RESTITUTIONS = (0.1, 0.3)
+ENGINE_CROWN_RATIOS = (0.0, 4.0)
 
 
 @dataclass(frozen=True)
@@ -106,6 +111,12 @@ def cases(scenario: str = "central-leader", restitutions=RESTITUTIONS,
     return [Case(scenario, e, c, r) for r in rungs for e in restitutions for c in crown_ratios]
 
 
+def engine_cases(scenario: str = "central-leader") -> list[Case]:
+    """The engine chain's corner of the grid (ENGINE_RUNG, its default hinged trunk)."""
+    return [Case(scenario, e, c, ENGINE_RUNG) for e in ENGINE_RESTITUTIONS
+            for c in ENGINE_CROWN_RATIOS]
+
+
 def sampling_cases(scenario: str = "central-leader") -> list[Case]:
     """The sampling grid: rate x noise x seed on exact SDOF records (e = SAMPLING_E)."""
     return [Case(scenario, SAMPLING_E, 0.0, "analytic", seed, rate, noise)
@@ -119,12 +130,14 @@ def _is_grid(row: dict) -> bool:
 
 def run_identification_study(out, scenario: str = "central-leader", *, workers=None,
                              restitutions=RESTITUTIONS, crown_ratios=CROWN_RATIOS,
-                             rungs=RUNGS, sampling: bool = True) -> dict:
+                             rungs=RUNGS, sampling: bool = True, engine: bool = True) -> dict:
     """Identify every case on a process pool; write ident-study.json and one map per method
     into ``out``; returns {rows, figures, summary}."""
     from compare.pool import process_map
 
     todo = cases(scenario, restitutions, crown_ratios, rungs)
+    if engine:
+        todo += engine_cases(scenario)
     if sampling:
         todo += sampling_cases(scenario)
     out = Path(out)
@@ -136,8 +149,9 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
         rows = process_map(identify_case, todo, workers=workers)
     grid = [r for r in rows if _is_grid(r)]
     summary = summarise(grid)
-    figures = [identification_error_map(grid, method, out / f"ident-{method}.png")
-               for method in METHODS] if grid else []
+    mapped = [r for r in grid if r["rung"] in RUNGS]
+    figures = [identification_error_map(mapped, method, out / f"ident-{method}.png")
+               for method in METHODS] if mapped else []
     sampling_rows = [r for r in rows if not _is_grid(r)]
     sampling_summary = summarise_sampling(sampling_rows) if sampling_rows else []
     (out / "ident-study.json").write_text(json.dumps(

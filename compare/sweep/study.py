@@ -229,10 +229,14 @@ def _ident_validation_md(iv) -> list[str]:
     """The identification validation (compare.ident_study) as markdown lines."""
     if not iv:
         return []
-    from compare.ident_study import NOISE, RATE
+    from compare.ident_study import (ENGINE_CROWN_RATIOS, ENGINE_RESTITUTIONS, ENGINE_RUNG,
+                                     NOISE, RATE)
 
     L = ["## Identification validation: the full-record fit and the paper's procedure", "",
-         f"Records of the analytic, soft and beam rungs over e x crown ratio, sampled at "
+         f"Records of the analytic, soft and beam rungs over e x crown ratio (and of the "
+         f"{ENGINE_RUNG} hinged chain at e = "
+         f"{', '.join(f'{e:g}' for e in ENGINE_RESTITUTIONS)} x crown ratio "
+         f"{', '.join(f'{c:g}' for c in ENGINE_CROWN_RATIOS)}), sampled at "
          f"{RATE / 1e3:g} kHz with {100 * NOISE:g} % noise (one seed), identified both ways; "
          "errors against the SDOF truth (M_T, K_T and b = C_T / (2 (M_T + m)), eq 42). "
          "`explained`: the fit's residual check says the 1-DOF model explains the record; "
