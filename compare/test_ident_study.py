@@ -52,7 +52,8 @@ def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
     grid runs again (the spec is stored in ident-study.json)."""
     import compare.ident_study as study
 
-    kw = dict(workers=1, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",))
+    kw = dict(workers=1, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",),
+              sampling=False, engine=False)
     first = study.run_identification_study(tmp_path, **kw)
     monkeypatch.setattr(study, "identify_case", lambda c: pytest.fail("reran a finished case"))
     assert study.run_identification_study(tmp_path, **kw)["rows"] == first["rows"]
