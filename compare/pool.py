@@ -22,9 +22,21 @@ SCHEDULER_TIMEOUT_S = 10
 STOP = threading.Event()
 
 
+#: Seconds between looks at STOP while waiting for workers.
+POLL_S = 0.2
+
+
 def check_stop() -> None:
     if STOP.is_set():
         raise KeyboardInterrupt
+
+
+def request_stop() -> None:
+    """What a stop signal's handler calls: only STOP set. The loops raise KeyboardInterrupt
+    at their next look (within POLL_S while waiting for workers): a KeyboardInterrupt raised
+    by the handler itself can land anywhere, e.g. in a fork or import-lock callback, where
+    Python only prints it ('Exception ignored')."""
+    STOP.set()
 
 
 def ignore_sigint() -> None:
@@ -69,7 +81,6 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
     Returns the number of items run."""
     if client is not None:
         return _run_dask(fn, chunks, client, on_result, on_died)
-    from concurrent.futures import as_completed
     from concurrent.futures.process import BrokenProcessPool
 
     ran = 0
@@ -85,7 +96,7 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
                     futures[pool.submit(fn, c)] = c
                 except BrokenProcessPool:  # broke while submitting: not this chunk's doing
                     unsent.append(c)
-            for fut in as_completed(futures):
+            for fut in _as_completed(futures):
                 check_stop()
                 try:
                     outcomes = fut.result()
@@ -108,7 +119,7 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
             if pool is None:
                 pool = _executor(1, start_method)
             try:
-                outcome = pool.submit(fn, [item]).result()[0]
+                outcome = next(_as_completed([pool.submit(fn, [item])])).result()[0]
             except BrokenProcessPool as exc:
                 outcome = on_died(item, exc)
                 pool.shutdown(wait=True)
@@ -123,6 +134,17 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
     if pool is not None:
         pool.shutdown(wait=True)
     return ran
+
+
+def _as_completed(futures):
+    """The futures as they finish, looking at STOP every POLL_S s while none does."""
+    from concurrent.futures import FIRST_COMPLETED, wait
+
+    pending = set(futures)
+    while pending:
+        done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+        check_stop()
+        yield from done
 
 
 def connect(scheduler):

@@ -31,3 +31,23 @@ def test_without_died_a_dead_worker_raises():
 
     with pytest.raises(BrokenProcessPool):
         process_map(_square_or_crash, [3, 4], workers=2)
+
+
+def test_a_stop_request_ends_a_wait_for_workers_within_the_poll_interval():
+    """request_stop (the SIGTERM handler's call) only sets STOP; the pool looks at it while
+    it waits, so two 5 s items are abandoned within about POLL_S of the request."""
+    import threading
+    import time
+
+    from compare import pool
+
+    timer = threading.Timer(0.5, pool.request_stop)
+    t0 = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            process_map(time.sleep, [5.0, 5.0], workers=2)
+    finally:
+        timer.cancel()
+        pool.STOP.clear()
+    assert time.perf_counter() - t0 < 3.0  # start-up + 0.5 s + POLL_S, far below 5 s

@@ -121,23 +121,19 @@ def run_sweep_command(args) -> int:
     import signal
     import sys
 
-    from compare.pool import STOP
+    from compare.pool import STOP, request_stop
 
     def terminate(signum, frame):  # SIGTERM ends the sweep as Ctrl-C does: workers stopped
-        STOP.set()  # checked again at the next result, should this raise be swallowed
-        raise KeyboardInterrupt
+        request_stop()  # the loops raise KeyboardInterrupt at their next look
 
     STOP.clear()
     previous = signal.signal(signal.SIGTERM, terminate)
     try:
-        return _run(args)
+        code = _run(args)
+        if not STOP.is_set():  # else the request came after the last look: still a stop
+            return code
     except KeyboardInterrupt:
         pass
-    except Exception:
-        if not STOP.is_set():
-            raise
-        # the stop request interrupted a pool's start or cleanup, which then raised
-        # something else: still an interruption
     finally:
         signal.signal(signal.SIGTERM, previous)
     print(f"treeimpact: sweep interrupted; the finished rows are kept in {args.out}: "
