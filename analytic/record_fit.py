@@ -191,12 +191,12 @@ def fit_record(record: Record, test: PendulumTest, *, start=None) -> FitResult:
               "t0": float(p[4]), "x_offset": float(p[5])}
     z = Z95
     intervals = {
-        "M_T": (M * float(np.exp(-z * sd[0])), M * float(np.exp(z * sd[0]))),
-        "K_T": (K * float(np.exp(-z * sd[1])), K * float(np.exp(z * sd[1]))),
-        "C_T": (C * float(np.exp(-z * sd_ln_c)), C * float(np.exp(z * sd_ln_c))),
+        "M_T": log_interval(M, z * sd[0]),
+        "K_T": log_interval(K, z * sd[1]),
+        "C_T": log_interval(C, z * sd_ln_c),
         "xi": (xi - z * sd[2], xi + z * sd[2]),
         "e": (float(p[3]) - z * sd[3], float(p[3]) + z * sd[3]),
-        "E": (e_mod * float(np.exp(-z * sd[1])), e_mod * float(np.exp(z * sd[1]))),
+        "E": log_interval(e_mod, z * sd[1]),
         "t0": (float(p[4]) - z * sd[4], float(p[4]) + z * sd[4]),
         "x_offset": (float(p[5]) - z * sd[5], float(p[5]) + z * sd[5]),
     }
@@ -204,3 +204,13 @@ def fit_record(record: Record, test: PendulumTest, *, start=None) -> FitResult:
     peak = float(np.max(np.abs(x - p[5])))
     return FitResult(values=values, intervals=intervals, residual_rms=rms, peak=peak,
                      explained=rms <= EXPLAINED_FRACTION * peak, model_x=fitted)
+
+
+def log_interval(value: float, half_width: float) -> tuple[float, float]:
+    """(value e^-w, value e^w) for a parameter fitted in logarithm with half-width w: a w
+    beyond float range (a direction the record does not determine) gives (0, inf) as
+    such, not an overflow; NaN stays NaN."""
+    w = float(half_width)
+    if not w < 700.0:  # e^700 ~ 1e304; NaN fails the test too and stays NaN below
+        return (0.0, math.inf) if w == w else (math.nan, math.nan)
+    return value * math.exp(-w), value * math.exp(w)

@@ -130,9 +130,11 @@ def _is_grid(row: dict) -> bool:
 
 def run_identification_study(out, scenario: str = "central-leader", *, workers=None,
                              restitutions=RESTITUTIONS, crown_ratios=CROWN_RATIOS,
-                             rungs=RUNGS, sampling: bool = True, engine: bool = True) -> dict:
+                             rungs=RUNGS, sampling: bool = True, engine: bool = True,
+                             progress=None) -> dict:
     """Identify every case on a process pool; write ident-study.json and one map per method
-    into ``out``; returns {rows, figures, summary}."""
+    into ``out``; returns {rows, figures, summary}. ``progress``: as the sweeps' (None: a
+    bar on a terminal, a line every few seconds elsewhere; False: nothing)."""
     from compare.pool import process_map
 
     todo = cases(scenario, restitutions, crown_ratios, rungs)
@@ -146,7 +148,15 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
             "noise": NOISE, "rest_s": REST}
     rows = _resumed(out / "ident-study.json", spec)
     if rows is None:  # else the same study was finished here: a resume has nothing to run
-        rows = process_map(identify_case, todo, workers=workers)
+        from compare.progress import Progress
+
+        bar = None if progress is False else Progress(
+            len(todo), "identification validation", unit="case",
+            bar=True if progress else None)
+        rows = process_map(identify_case, todo, workers=workers,
+                           done=bar.update if bar is not None else None)
+        if bar is not None:
+            bar.close()
     grid = [r for r in rows if _is_grid(r)]
     summary = summarise(grid)
     mapped = [r for r in grid if r["rung"] in RUNGS]

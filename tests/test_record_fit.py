@@ -104,3 +104,19 @@ def test_record_checks_name_the_row():
     t = np.linspace(0.0, 0.1, 50)
     with pytest.raises(ParameterError, match="row 12"):
         Record(t, np.where(np.arange(50) == 10, np.inf, t))
+
+
+def test_log_interval_of_an_undetermined_parameter_is_zero_to_infinity_without_warnings():
+    """A direction the record does not determine (a singular Jacobian) has a huge standard
+    deviation in logarithm: its 95 % interval is (0, inf), said so, not an overflow."""
+    import math
+    import warnings
+
+    from analytic.record_fit import log_interval
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert log_interval(2.0, 1e3) == (0.0, math.inf)
+        lo, hi = log_interval(2.0, 0.1)
+    assert (lo, hi) == pytest.approx((2.0 * math.exp(-0.1), 2.0 * math.exp(0.1)), rel=1e-15)
+    assert all(math.isnan(v) for v in log_interval(2.0, math.nan))

@@ -105,7 +105,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     if p.identification:
         from compare.ident_study import run_identification_study
 
-        ident_study = run_identification_study(out, scen, workers=workers)
+        ident_study = run_identification_study(out, scen, workers=workers, progress=progress)
     return write_study(out, sweeps, speed=speed, tolerance=tolerance,
                        metrics=p.map_metrics, value=p.map_value, ident_study=ident_study,
                        title=f"Model-validity study ({p.name} preset)",
