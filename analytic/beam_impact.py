@@ -179,12 +179,11 @@ def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
     g = systems[True][1]
     zero = np.zeros(N)
     # observables: x, y, x', y', delta, delta', crown, crown velocity
-    base = np.zeros((8, 2 * N))
-    base[0, model.clamp] = base[2, N + model.clamp] = 1.0
-    base[1, n] = base[3, N + n] = 1.0
-    base[4, :N], base[5, N:] = g, g
-    base[6, model.crown] = base[7, N + model.crown] = 1.0
-    rows = base
+    rows = np.zeros((8, 2 * N))
+    rows[0, model.clamp] = rows[2, N + model.clamp] = 1.0
+    rows[1, n] = rows[3, N + n] = 1.0
+    rows[4, :N], rows[5, N:] = g, g
+    rows[6, model.crown] = rows[7, N + model.crown] = 1.0
     Mf = np.zeros((N, N))
     Mf[:n, :n], Mf[n, n] = model.M, model.impactor_mass
     Kf = np.zeros((N, N))
@@ -248,7 +247,7 @@ def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
                 end_s, nxt = _locate(phase, modal, rows, w, s_lo, s_hi, k_c, c_c,
                                      d[k], f[k])
                 jj = j + k  # samples before the event belong to this phase
-            _fill(t_grid, j, jj, t, modal, base, w, forms[contact], obs, energy,
+            _fill(t_grid, j, jj, t, modal, rows, w, forms[contact], obs, energy,
                   in_contact, contact, w_damp, w_contact, U[:jj - j])
             j = jj
             chunk *= 4

@@ -57,6 +57,18 @@ class TwoBodyModel:
         """b = C_T / (2 (M_T + m)), 1/s (eq 35-36)."""
         return self.damping / (2.0 * (self.dynamic_mass + self.impactor_mass))
 
+    def kinetic_energy(self, vx, vy):
+        """1/2 M_T x'^2 + 1/2 m y'^2, J (m/s in; floats or arrays)."""
+        return 0.5 * self.dynamic_mass * vx ** 2 + 0.5 * self.impactor_mass * vy ** 2
+
+    def potential_energy(self, x, y):
+        """1/2 K_T x^2 + 1/2 k y^2, J: the trunk's and the pendulum's springs (eqs 11, 13)."""
+        return 0.5 * self.stiffness * x ** 2 + 0.5 * self.impactor_stiffness * y ** 2
+
+    def pendulum_energy(self, y, vy):
+        """The pendulum's own energy 1/2 m y'^2 + 1/2 k y^2, J (linearised, eq 13)."""
+        return 0.5 * self.impactor_mass * vy ** 2 + 0.5 * self.impactor_stiffness * y ** 2
+
     def with_restitution(self, e: float) -> "TwoBodyModel":
         from dataclasses import replace
 

@@ -47,7 +47,7 @@ def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dic
     if sol.separations:
         t_last = sol.separations[-1].t
         _, _, y, vy = sol._scalar_state(t_last)
-        e_pend = 0.5 * model.impactor_mass * vy ** 2 + 0.5 * model.impactor_stiffness * y ** 2
+        e_pend = model.pendulum_energy(y, vy)
         e_transferred = model.initial_energy - e_pend - loss_process
         if scenario is not None and isinstance(scenario.impactor, Pendulum):
             p = scenario.impactor
@@ -83,8 +83,8 @@ def _whole_event(sol: ImpactSolution, scenario: Scenario | None) -> dict:
     last = sol.phases[-1] if sol.phases else None
     if last is not None and last.kind == "free":
         t = last.t0  # the final free flight starts at the last separation or impact
-        y, vy = last.y0, last.vy0
-        rebound = 0.5 * model.impactor_mass * vy ** 2 + 0.5 * model.impactor_stiffness * y ** 2
+        vy = last.vy0
+        rebound = model.pendulum_energy(last.y0, vy)
         dissipated = sum(i.loss for i in sol.impacts) + sum(c.loss for c in sol.tails)
         out.update(energy_delivered=model.initial_energy - rebound - dissipated,
                    contact_dissipation=dissipated, rebound_energy=rebound,
@@ -141,37 +141,34 @@ def sampled_trajectory(sol: ImpactSolution, samples: int) -> Trajectory:
 
 def sampled_record(sol: ImpactSolution, samples: int, scenario: Scenario | None = None):
     """The exact solution as an :class:`analytic.records.ImpactRecord` at ``samples`` equally
-    spaced times (SI). Its force is the contact force while the bodies move together (eq 34:
-    F = -k y - m a); the impacts are impulses, which no sampled force holds. The contact's
-    work is the impact losses so far (eq 55, the closed tails included), its potential 0;
-    the energies close on the input at every sample (tests)."""
-    from .reduction import crown_factor
+    spaced times (SI). Its force is the contact force while the bodies move together (eq 34,
+    the solver's N = cx x + cv v); the impacts are impulses, which no sampled force holds.
+    The contact's work is the impact losses so far (eq 55, the closed tails included), its
+    potential 0; the energies close on the input at every sample (tests). The crown moves
+    with the static shape when the scenario is given."""
+    from .records import with_static_shape_crown
+    from .solver import _force_coefficients
 
     m = sol.model
     t = np.linspace(0.0, sol.t_end, samples)
     x, vx, y, vy = sol.state(t)
-    force = np.zeros_like(t)
+    cx, cv = _force_coefficients(m)
+    together = np.zeros(t.size, dtype=bool)
     for ph in sol.phases:
         if ph.kind == "together":
-            sel = (t >= ph.t0) & (t <= ph.t1)
-            acc = (-(m.stiffness + m.impactor_stiffness) * x[sel] - m.damping * vx[sel]) / (
-                m.dynamic_mass + m.impactor_mass)
-            force[sel] = np.maximum(-m.impactor_stiffness * y[sel] - m.impactor_mass * acc, 0.0)
+            together |= (t >= ph.t0) & (t <= ph.t1)
+    force = np.where(together, np.maximum(cx * x + cv * vx, 0.0), 0.0)
     events = sorted([(i.t, i.loss) for i in sol.impacts] + [(c.t_start, c.loss)
                                                              for c in sol.tails])
     ev_t = np.array([e[0] for e in events])
     ev_loss = np.concatenate(([0.0], np.cumsum([e[1] for e in events])))
-    contact_work = ev_loss[np.searchsorted(ev_t, t, side="right")]
-    damping_work = np.array([sol._integral("damping", ti) for ti in t])
-    pendulum = 0.5 * m.impactor_mass * vy ** 2 + 0.5 * m.impactor_stiffness * y ** 2
-    tip = crown_factor(scenario.trunk) if scenario is not None else math.nan
-    return ImpactRecord(
-        t=t, x=x, vx=vx, y=y, vy=vy, force=force,
-        kinetic=0.5 * m.dynamic_mass * vx ** 2 + 0.5 * m.impactor_mass * vy ** 2,
-        potential=0.5 * m.stiffness * x ** 2 + 0.5 * m.impactor_stiffness * y ** 2,
-        damping_work=damping_work, contact_work=contact_work,
-        contact_potential=np.zeros_like(t), pendulum_energy=pendulum,
-        crown=tip * x, crown_velocity=tip * vx)
+    record = ImpactRecord(
+        t=t, x=x, vx=vx, y=y, vy=vy, force=force, kinetic=m.kinetic_energy(vx, vy),
+        potential=m.potential_energy(x, y),
+        damping_work=np.array([sol._integral("damping", ti) for ti in t]),
+        contact_work=ev_loss[np.searchsorted(ev_t, t, side="right")],
+        contact_potential=np.zeros_like(t), pendulum_energy=m.pendulum_energy(y, vy))
+    return record if scenario is None else with_static_shape_crown(record, scenario.trunk)
 
 
 def simulate_model(model: TwoBodyModel, t_end: float, **kw) -> SimulationResult:

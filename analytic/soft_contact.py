@@ -242,10 +242,8 @@ def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sa
                 state[2] = np.nextafter(state[0], -np.inf)
     x, vx, y, vy, w_damp, w_contact = out
     force = np.where(contact_flag, np.maximum(0.0, k_c * (y - x) + c_c * (vy - vx)), 0.0)
-    kinetic = 0.5 * M * vx ** 2 + 0.5 * m * vy ** 2
-    potential = 0.5 * K * x ** 2 + 0.5 * kp * y ** 2
     overlap = np.where(contact_flag, np.maximum(y - x, 0.0), 0.0)
     return ImpactRecord(
-        t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force, kinetic=kinetic, potential=potential,
-        damping_work=w_damp, contact_work=w_contact, contact_potential=0.5 * k_c * overlap ** 2,
-        pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2)
+        t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force, kinetic=model.kinetic_energy(vx, vy),
+        potential=model.potential_energy(x, y), damping_work=w_damp, contact_work=w_contact,
+        contact_potential=0.5 * k_c * overlap ** 2, pendulum_energy=model.pendulum_energy(y, vy))

@@ -213,8 +213,8 @@ class ImpactSolution:
         losses = sum(i.loss for i in self.impacts if i.t <= t)
         losses += sum(c.loss for c in self.tails if c.t_start <= t)
         return {
-            "kinetic": 0.5 * m.dynamic_mass * vx ** 2 + 0.5 * m.impactor_mass * vy ** 2,
-            "potential": 0.5 * m.stiffness * x ** 2 + 0.5 * m.impactor_stiffness * y ** 2,
+            "kinetic": m.kinetic_energy(vx, vy),
+            "potential": m.potential_energy(x, y),
             "damping": self._integral("damping", t),
             "impact_loss": losses,
         }
