@@ -16,8 +16,6 @@ DURATIONS = tuple(float(d) for d in np.geomspace(2e-4, 5e-2, 14))
 #: What a harvester designer needs: trunk displacement, energy delivered to the tree, crown
 #: acceleration (mean over t_c).
 HEADLINE_METRICS = ("x_max", "energy_delivered", "crown_peak_acceleration")
-#: The studies' criterion (compare.sweep.maps.DEFAULT_TOLERANCE): below what Table 1 resolves.
-HEADLINE_TOLERANCE = 0.05
 
 
 def scan_requests(scenario, durations=DURATIONS) -> list:
@@ -26,10 +24,15 @@ def scan_requests(scenario, durations=DURATIONS) -> list:
 
 
 def contact_scan(scenario, cache: RunCache, durations=DURATIONS,
-                 metrics=HEADLINE_METRICS, tolerance: float = HEADLINE_TOLERANCE) -> dict:
+                 metrics=HEADLINE_METRICS, tolerance: float | None = None) -> dict:
     """{durations, gaps: {metric: [rel gap beam vs soft per duration]}, shortest: {metric:
     duration (s) from which every longer scanned contact is within ``tolerance``, or None},
-    failed: [reasons]}. Runs come from (or go into) ``cache``."""
+    failed: [reasons]}. Runs come from (or go into) ``cache``. ``tolerance``: default the
+    studies' criterion (compare.ladder.validity_tolerance)."""
+    if tolerance is None:
+        from .ladder import validity_tolerance
+
+        tolerance = validity_tolerance()
     gaps = {m: [] for m in metrics}
     failed = []
     for d in durations:

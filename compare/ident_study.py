@@ -166,7 +166,7 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
     sampling_summary = summarise_sampling(sampling_rows) if sampling_rows else []
     (out / "ident-study.json").write_text(json.dumps(
         {"spec": spec, "scenario": scenario, "rate_hz": RATE, "noise": NOISE, "rows": rows,
-         "summary": summary, "sampling": sampling_summary}, indent=1, default=_json_default))
+         "summary": summary, "sampling": sampling_summary}, indent=1))
     return {"rows": rows, "figures": figures, "summary": summary, "sampling": sampling_summary}
 
 
@@ -178,12 +178,6 @@ def _resumed(path: Path, spec: dict) -> list | None:
         return None
     return data["rows"] if data.get("spec") == spec and len(data.get("rows", [])) == len(
         spec["cases"]) else None
-
-
-def _json_default(v):
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    raise TypeError(type(v).__name__)
 
 
 def summarise(rows: list[dict]) -> dict:

@@ -87,6 +87,12 @@ def load_tolerances(path: str | Path | None = None) -> dict:
     return _load(str(TOLERANCES_PATH if path is None else path))
 
 
+def validity_tolerance() -> float:
+    """The studies' criterion (relative, 5 %: tolerances.toml [study] validity): the maps'
+    contour, the contact scan's headline and the report's answer table."""
+    return float(load_tolerances()["study"]["validity"]["rel"])
+
+
 def _validate(data: dict, path: str) -> None:
     def need_reason(where, entry):
         if not isinstance(entry, dict) or not str(entry.get("reason", "")).strip():

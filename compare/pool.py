@@ -1,8 +1,8 @@
 """The one pool every part of ``compare`` runs independent work on: local worker processes
 or a Dask scheduler. ``run_chunks`` hands each chunk's outcomes back as it finishes (sweeps
 journal them); ``process_map`` keeps the items' order (the report's and ``pytest compare``'s
-runs, the identification study). A stop request (SIGTERM in the CLI) ends either loop at
-its next result. Design notes: docs/sweeps.md.
+runs, the identification study). A stop request (SIGTERM in the CLI: :func:`request_stop`)
+ends a loop at its next look at STOP. Design notes: docs/sweeps.md.
 """
 
 from __future__ import annotations
@@ -16,13 +16,11 @@ from analytic.parameters import ParameterError
 #: Seconds to wait for a Dask scheduler (and its first worker) before it is refused.
 SCHEDULER_TIMEOUT_S = 10
 
-#: Set by a stop request (SIGTERM in the CLI): the pool loops raise KeyboardInterrupt at their
-#: next result, so a request whose asynchronous KeyboardInterrupt was swallowed (raised
-#: inside a finaliser, where Python only prints it) still ends the run.
+#: Set by a stop request (:func:`request_stop`): the loops raise KeyboardInterrupt at their
+#: next look, at each result and, waiting for local workers, every POLL_S s (Dask: at each
+#: result).
 STOP = threading.Event()
-
-
-#: Seconds between looks at STOP while waiting for workers.
+#: Seconds between looks at STOP while waiting for local workers.
 POLL_S = 0.2
 
 
@@ -32,10 +30,9 @@ def check_stop() -> None:
 
 
 def request_stop() -> None:
-    """What a stop signal's handler calls: only STOP set. The loops raise KeyboardInterrupt
-    at their next look (within POLL_S while waiting for workers): a KeyboardInterrupt raised
-    by the handler itself can land anywhere, e.g. in a fork or import-lock callback, where
-    Python only prints it ('Exception ignored')."""
+    """What a stop signal's handler calls: only STOP set, the loops raise at their next look.
+    A KeyboardInterrupt raised by the handler itself can land anywhere, e.g. in a fork or
+    import-lock callback, where Python only prints it ('Exception ignored')."""
     STOP.set()
 
 
@@ -52,13 +49,10 @@ def ignore_sigint() -> None:
 
 def _end_workers(pool) -> None:
     """Terminate the worker processes this pool started (by their Process objects)."""
-    try:
-        for proc in list((getattr(pool, "_processes", None) or {}).values()):
-            if proc.is_alive():
-                proc.terminate()
-        pool.shutdown(wait=False, cancel_futures=True)
-    except Exception:  # noqa: BLE001 - a pool interrupted mid-start: what raised matters
-        pass
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _executor(workers: int, start_method: str | None):

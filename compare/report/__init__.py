@@ -25,6 +25,8 @@ import numpy as np
 
 from analytic.results import to_jsonable
 
+from ..ladder import validity_tolerance
+
 __all__ = ["write_report", "build_sections"]
 
 
@@ -102,6 +104,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     summary = _summary(sections["scenarios"])
     summary["answer"] = _answer(sections["scenarios"])
     summary["answer_metrics"] = ANSWER_METRICS
+    summary["answer_tolerance"] = validity_tolerance()
     summary["contact"] = sections["contact"]
     env = environment()
     paths = {}
@@ -133,9 +136,6 @@ ANSWER_METRICS = (("x_max", "x_max", 1e3, "mm"),
                   ("crown_peak", "crown peak", 1e3, "mm"),
                   ("crown_peak_acceleration", "crown accel.*", 1e-3, "km/s^2"),
                   ("peak_force", "force*", 1e-3, "kN"))
-#: Within this the 1-DOF model is "good enough" for a quantity (the studies' criterion,
-#: compare.sweep.maps.DEFAULT_TOLERANCE).
-ANSWER_TOLERANCE = 0.05
 
 
 def _answer(scen_sections) -> list[dict]:
@@ -144,7 +144,8 @@ def _answer(scen_sections) -> list[dict]:
     :data:`ANSWER_METRICS` at the scenario's contact, and whether the 1-DOF model explains
     the continuum's record at all (the full-record fit). The 1-DOF value is the paper's
     (Newton) model's, or the soft SDOF's with the same pad where Newton's impulses have none
-    (force, acceleration)."""
+    (force, acceleration). Within compare.ladder.validity_tolerance it is good enough."""
+    tolerance = validity_tolerance()
     out = []
     for s in scen_sections:
         L = s.ladder
@@ -168,7 +169,7 @@ def _answer(scen_sections) -> list[dict]:
                      if c.rung.id in fits and "explained" in fits[c.rung.id]]
         contact = L.scenario.contact
         out.append({"scenario": L.name, "available": True, "metrics": rows,
-                    "good_enough": {m: abs(r["rel"]) <= ANSWER_TOLERANCE
+                    "good_enough": {m: abs(r["rel"]) <= tolerance
                                     for m, r in rows.items()},
                     "explained": bool(explained) and all(explained),
                     "contact_duration": contact.duration, "restitution": contact.restitution})

@@ -15,12 +15,11 @@ from analytic.parameters import ParameterError
 from .run import IDENT_KEYS, OK
 
 # the ladder's metrics and tolerance file, so a study and the report speak of the same things
-from compare.ladder import LADDER_METRICS
-from compare.ladder import load_tolerances as _load_tolerances
+from compare.ladder import LADDER_METRICS, validity_tolerance
 
 #: A study's validity criterion (5 %), not a test tolerance: tolerances.toml [study] validity
 #: with its reason, the one tolerance source. Override with ``tolerance=`` / ``--tolerance``.
-DEFAULT_TOLERANCE = float(_load_tolerances()["study"]["validity"]["rel"])
+DEFAULT_TOLERANCE = validity_tolerance()
 
 #: Letter and meaning of each ladder kind (the step a rung adds to the one below it).
 RUNG_LETTERS = {"contact": ("C", "contact model (spring-dashpot vs Newton's e)"),

@@ -20,8 +20,9 @@ from analytic.parameters import ParameterError, Scenario
 from analytic.results import METRIC_KEYS
 
 from compare.backends import get_backend
-from compare.pool import STOP, check_stop, connect, dask_workers, run_chunks  # noqa: F401
+from compare.pool import check_stop, connect, dask_workers, run_chunks
 from compare.rungs import analytic_samples
+from compare.runs import DIVERGED, FAILED, INVALID, OK, attempt, one_line
 
 from .apply import apply_point
 from .grid import Grid, parse_grid, point_key
@@ -29,9 +30,6 @@ from .grid import Grid, parse_grid, point_key
 JOURNAL = "results.csv"
 TABLE = "results.parquet"
 SPEC = "sweep.json"
-
-from compare.runs import (DIVERGED, FAILED, INVALID, OK, SKIPPED, Status,  # noqa: F401
-                          attempt, one_line)
 
 REFERENCE_BACKENDS = ("analytic", "soft", "beam")
 MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "e", "u1", "segments", "dt", "contact_stiffness",
