@@ -24,15 +24,17 @@ PARAMETERS = ("M_T", "K_T", "b")  # b = C_T / (2 (M_T + m)), eq 42: what both me
 METHODS = ("fit", "paper")
 #: The issue's goal for the fit on SDOF records: within 2 % of the truth for e <= 0.3.
 GOAL, GOAL_MAX_E = 0.02, 0.3
-#: How the sampling matters: exact SDOF records (e = 0.1, no crown) at these rates (Hz) and
-#: noise levels (fraction of the peak), a few seeds each.
+#: How the sampling matters: records (e = 0.1, no crown) at these rates (Hz) and noise levels
+#: (fraction of the peak), a few seeds each, of SAMPLING_RUNGS (the default study: exact SDOF
+#: records; every rung in the full preset).
 SAMPLING_RATES = (1e3, 5e3, 2e4)
 SAMPLING_NOISES = (0.005, 0.01, 0.02)
 SAMPLING_SEEDS = (1, 2)
 SAMPLING_E = 0.1
-#: An engine's hinged-chain records too (a chain run costs 0.5 s: a corner of the grid only),
-#: in the summary table, not on the maps.
-ENGINE_RUNG = "mujoco"
+SAMPLING_RUNGS = ("analytic",)
+#: Engine hinged-chain records too, on a corner of the grid (a chain run costs 0.5-2.5 s), in
+#: the summary table, not on the maps; ENGINE_RUNGS in the default study.
+ENGINE_RUNGS = ("mujoco",)
 ENGINE_RESTITUTIONS = (0.1, 0.3)
 ENGINE_CROWN_RATIOS = (0.0, 4.0)
 
@@ -111,15 +113,15 @@ def cases(scenario: str = "central-leader", restitutions=RESTITUTIONS,
     return [Case(scenario, e, c, r) for r in rungs for e in restitutions for c in crown_ratios]
 
 
-def engine_cases(scenario: str = "central-leader") -> list[Case]:
-    """The engine chain's corner of the grid (ENGINE_RUNG, its default hinged trunk)."""
-    return [Case(scenario, e, c, ENGINE_RUNG) for e in ENGINE_RESTITUTIONS
+def engine_cases(scenario: str = "central-leader", engines=ENGINE_RUNGS) -> list[Case]:
+    """The engine chains' corner of the grid (each engine's default hinged trunk)."""
+    return [Case(scenario, e, c, eng) for eng in engines for e in ENGINE_RESTITUTIONS
             for c in ENGINE_CROWN_RATIOS]
 
 
-def sampling_cases(scenario: str = "central-leader") -> list[Case]:
-    """The sampling grid: rate x noise x seed on exact SDOF records (e = SAMPLING_E)."""
-    return [Case(scenario, SAMPLING_E, 0.0, "analytic", seed, rate, noise)
+def sampling_cases(scenario: str = "central-leader", rungs=SAMPLING_RUNGS) -> list[Case]:
+    """The sampling grid: rate x noise x seed on each rung's record (e = SAMPLING_E)."""
+    return [Case(scenario, SAMPLING_E, 0.0, rung, seed, rate, noise) for rung in rungs
             for rate in SAMPLING_RATES for noise in SAMPLING_NOISES for seed in SAMPLING_SEEDS]
 
 
@@ -130,18 +132,15 @@ def _is_grid(row: dict) -> bool:
 
 def run_identification_study(out, scenario: str = "central-leader", *, workers=None,
                              restitutions=RESTITUTIONS, crown_ratios=CROWN_RATIOS,
-                             rungs=RUNGS, sampling: bool = True, engine: bool = True,
-                             progress=None) -> dict:
+                             rungs=RUNGS, sampling_rungs=SAMPLING_RUNGS,
+                             engine_rungs=ENGINE_RUNGS, progress=None) -> dict:
     """Identify every case on a process pool; write ident-study.json and one map per method
     into ``out``; returns {rows, figures, summary}. ``progress``: as the sweeps' (None: a
     bar on a terminal, a line every few seconds elsewhere; False: nothing)."""
     from compare.pool import process_map
 
-    todo = cases(scenario, restitutions, crown_ratios, rungs)
-    if engine:
-        todo += engine_cases(scenario)
-    if sampling:
-        todo += sampling_cases(scenario)
+    todo = (cases(scenario, restitutions, crown_ratios, rungs)
+            + engine_cases(scenario, engine_rungs) + sampling_cases(scenario, sampling_rungs))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     spec = {"scenario": scenario, "cases": [c.__dict__ for c in todo], "rate_hz": RATE,
@@ -206,16 +205,20 @@ def summarise(rows: list[dict]) -> dict:
 
 
 def summarise_sampling(rows: list[dict]) -> list[dict]:
-    """Per (rate, noise) over the seeds: the fit's worst |error| over M_T, K_T and b, and the
-    share of its 95 % intervals covering the truth (M_T, K_T, C_T)."""
+    """Per (rung, rate, noise) over the seeds: the fit's worst |error| over M_T, K_T and b,
+    the share of its 95 % intervals covering the truth (M_T, K_T, C_T) and of records it
+    says the 1-DOF model explains."""
     out = []
-    for rate, noise in dict.fromkeys((r["rate"], r["noise"]) for r in rows):
-        rr = [r for r in rows if (r["rate"], r["noise"]) == (rate, noise)]
+    for cell in dict.fromkeys((r.get("rung"), r["rate"], r["noise"]) for r in rows):
+        rr = [r for r in rows if (r.get("rung"), r["rate"], r["noise"]) == cell]
         fits = [r["fit"] for r in rr if "fit" in r]
         cov = [v for r in rr if "fit_covered" in r for v in r["fit_covered"].values()]
-        out.append({"rate_hz": rate, "noise": noise, "trials": len(rr), "fitted": len(fits),
+        expl = [r["explained"] for r in rr if "explained" in r]
+        out.append({"rung": cell[0], "rate_hz": cell[1], "noise": cell[2], "trials": len(rr),
+                    "fitted": len(fits),
                     "worst": max((abs(v) for f in fits for v in f.values()), default=math.nan),
-                    "covered": float(np.mean(cov)) if cov else math.nan})
+                    "covered": float(np.mean(cov)) if cov else math.nan,
+                    "explained": float(np.mean(expl)) if expl else math.nan})
     return out
 
 

@@ -53,7 +53,7 @@ def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
     import compare.ident_study as study
 
     kw = dict(workers=1, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",),
-              sampling=False, engine=False)
+              sampling_rungs=(), engine_rungs=())
     first = study.run_identification_study(tmp_path, **kw)
     monkeypatch.setattr(study, "identify_case", lambda c: pytest.fail("reran a finished case"))
     assert study.run_identification_study(tmp_path, **kw)["rows"] == first["rows"]
@@ -86,3 +86,18 @@ def test_engine_chain_and_continuum_records_get_the_same_verdict(crown):
     beam = identify_case(Case("central-leader", 0.1, crown, "beam"))
     assert chain["explained"] == beam["explained"] == (crown == 0.0)
     assert abs(chain["fit"]["K_T"] - beam["fit"]["K_T"]) < 0.05
+
+
+def test_full_preset_validates_identification_on_every_rung():
+    """The issue's validation: records from every rung (analytic, soft, beam, both engines'
+    chains) at 1-20 kHz with 0.5-2 % noise; the default study keeps the cheap part."""
+    from compare.backends import ENGINES
+    from compare.ident_study import RUNGS, SAMPLING_NOISES, SAMPLING_RATES, sampling_cases
+    from compare.sweep.study import get_preset
+
+    full = get_preset("full")
+    assert full.identification and set(full.ident_engine_rungs) == set(ENGINES)
+    todo = sampling_cases(rungs=full.ident_sampling_rungs)
+    assert {c.rung for c in todo} == {*RUNGS, *ENGINES}
+    assert {c.rate for c in todo} == set(SAMPLING_RATES) == {1e3, 5e3, 2e4}
+    assert min(SAMPLING_NOISES) == 0.005 and max(SAMPLING_NOISES) == 0.02

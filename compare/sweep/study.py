@@ -35,6 +35,8 @@ class Preset:
     map_metrics: tuple | None = None  # metrics drawn on the maps (None: every ladder metric)
     map_value: str = "rel"  # "rel": against the paper's model; "step": against the rung below
     identification: bool = False  # the identification validation (compare.ident_study)
+    ident_sampling_rungs: tuple = ("analytic",)  # its rate x noise grid on these rungs' records
+    ident_engine_rungs: tuple = ("mujoco",)  # engine chains on a corner of its e x crown grid
     expected: str = ""
     notes: dict = field(default_factory=dict, compare=False)
 
@@ -50,11 +52,14 @@ PRESETS = {
         map_value="step", identification=True,
         expected="about 25 s with 2 workers: 8 contact durations x 6 crown ratios on the "
                  "analytic, soft and beam backends, the engines' chains on 2 x 2 of them, "
-                 "and the identification validation (4 e x 4 crown ratios x 3 rungs)"),
+                 "and the identification validation (4 e x 4 crown ratios x 3 rungs, MuJoCo's "
+                 "chain on 2 x 2, 1-20 kHz x 0.5-2 % noise on exact SDOF records)"),
     "full": Preset(
         "full", "central-leader", ("e=0:0.9:10", "segments=1,2,4,8,16,32",
                                    "crown_ratio=0:4:9"),
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
+        identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
+        ident_engine_rungs=ENGINES,
         expected="about 1.5 CPU-hours: 45 minutes with 2 workers, 6 on 16 (measured on a "
                  "slice of the preset, 65 s of runs per (e, crown) pair; see "
                  "compare/sweep/study.py); resumable"),
@@ -105,7 +110,9 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     if p.identification:
         from compare.ident_study import run_identification_study
 
-        ident_study = run_identification_study(out, scen, workers=workers, progress=progress)
+        ident_study = run_identification_study(
+            out, scen, workers=workers, progress=progress,
+            sampling_rungs=p.ident_sampling_rungs, engine_rungs=p.ident_engine_rungs)
     return write_study(out, sweeps, speed=speed, tolerance=tolerance,
                        metrics=p.map_metrics, value=p.map_value, ident_study=ident_study,
                        title=f"Model-validity study ({p.name} preset)",
@@ -229,14 +236,15 @@ def _ident_validation_md(iv) -> list[str]:
     """The identification validation (compare.ident_study) as markdown lines."""
     if not iv:
         return []
-    from compare.ident_study import (ENGINE_CROWN_RATIOS, ENGINE_RESTITUTIONS, ENGINE_RUNG,
-                                     NOISE, RATE)
+    from compare.ident_study import (ENGINE_CROWN_RATIOS, ENGINE_RESTITUTIONS, NOISE, RATE,
+                                     RUNGS)
 
+    engines = [r for r in iv["summary"] if r not in RUNGS]
+    corner = (f" (and of the {', '.join(engines)} hinged chain at e = "
+              f"{', '.join(f'{e:g}' for e in ENGINE_RESTITUTIONS)} x crown ratio "
+              f"{', '.join(f'{c:g}' for c in ENGINE_CROWN_RATIOS)})") if engines else ""
     L = ["## Identification validation: the full-record fit and the paper's procedure", "",
-         f"Records of the analytic, soft and beam rungs over e x crown ratio (and of the "
-         f"{ENGINE_RUNG} hinged chain at e = "
-         f"{', '.join(f'{e:g}' for e in ENGINE_RESTITUTIONS)} x crown ratio "
-         f"{', '.join(f'{c:g}' for c in ENGINE_CROWN_RATIOS)}), sampled at "
+         f"Records of the {', '.join(RUNGS)} rungs over e x crown ratio{corner}, sampled at "
          f"{RATE / 1e3:g} kHz with {100 * NOISE:g} % noise (one seed), identified both ways; "
          "errors against the SDOF truth (M_T, K_T and b = C_T / (2 (M_T + m)), eq 42). "
          "`explained`: the fit's residual check says the 1-DOF model explains the record; "
@@ -256,15 +264,17 @@ def _ident_validation_md(iv) -> list[str]:
     if iv.get("sampling"):
         from compare.ident_study import SAMPLING_E, SAMPLING_SEEDS
 
-        L += [f"How the sampling matters: exact SDOF records (e = {SAMPLING_E:g}, no crown), "
+        L += [f"How the sampling matters: records at e = {SAMPLING_E:g}, no crown "
+              "(analytic: the exact SDOF), "
               f"{len(SAMPLING_SEEDS)} seeds per cell; the fit's worst |error| over M_T, K_T "
-              "and b, and how often its 95 % intervals cover the truth.", "",
-              "| rate | noise | fitted | worst error | intervals covering |",
-              "|---|---|---|---|---|"]
+              "and b, how often its 95 % intervals cover the truth, and how often it says "
+              "the 1-DOF model explains the record.", "",
+              "| rung | rate | noise | fitted | worst error | intervals covering | explained |",
+              "|---|---|---|---|---|---|---|"]
         for c in iv["sampling"]:
-            L.append(f"| {c['rate_hz'] / 1e3:g} kHz | {100 * c['noise']:g} % | "
-                     f"{c['fitted']} of {c['trials']} | {_fmt_abs(c['worst'])} | "
-                     f"{_fmt_abs(c['covered'])} |")
+            L.append(f"| {c.get('rung')} | {c['rate_hz'] / 1e3:g} kHz | {100 * c['noise']:g} % "
+                     f"| {c['fitted']} of {c['trials']} | {_fmt_abs(c['worst'])} | "
+                     f"{_fmt_abs(c['covered'])} | {_fmt_abs(c.get('explained'))} |")
         L.append("")
     for f in iv["figures"]:
         L += [f"![{f}]({f})", ""]
