@@ -21,13 +21,18 @@ import numpy as np
 
 from .identification import PendulumTest
 from .model import TwoBodyModel
-from .parameters import ParameterError
+from .parameters import ParameterError, check_range
 
 #: The fit explains a record when its residual RMS is at most this fraction of the peak
 #: displacement: 1-2 % sensor noise passes, a flexible trunk's second mode does not.
 EXPLAINED_FRACTION = 0.03
 MIN_SAMPLES = 20
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
+#: Restitutions the fit starts from, the best end kept: e has a local minimum per number
+#: of impacts before the bodies move together or part; 0.1 tends to reach the chattering
+#: branch, 0.5 a few impacts, 0.9 the one-impact branch (docs/identification.md).
+START_RESTITUTIONS = (0.1, 0.5, 0.9)
+DIFF_STEP = 1e-6  # relative forward-difference step of the fit's Jacobian
 NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset")  # fitted: ln M_T, ln K_T, xi, e, s, m
 
 
@@ -93,30 +98,43 @@ class FitResult:
     peak: float  # m, largest |x - offset| of the record
     explained: bool
     model_x: np.ndarray  # m, the fitted x at the record's times
+    determined: dict  # name -> False for a quantity the record does not fix (value NaN)
+    point: np.ndarray  # the optimum (ln M_T, ln K_T, xi, e, t0, offset); one of many if not
+    note: str = ""  # why some quantities are not determined, or ""
 
     def to_json(self) -> dict:
-        out = {k: {"value": v, "low": self.intervals[k][0], "high": self.intervals[k][1]}
-               for k, v in self.values.items()}
-        return out
+        return {k: {"value": v, "low": self.intervals[k][0], "high": self.intervals[k][1],
+                    "determined": self.determined[k]} for k, v in self.values.items()}
+
+
+def _model(p, test: PendulumTest) -> TwoBodyModel:
+    ln_m, ln_k, xi, e = (float(v) for v in p[:4])
+    M, K = math.exp(ln_m), math.exp(ln_k)
+    return TwoBodyModel(dynamic_mass=M, damping=2.0 * xi * math.sqrt(K * M), stiffness=K,
+                        impactor_mass=test.impactor_mass,
+                        impactor_stiffness=test.impactor_stiffness,
+                        impact_speed=test.impact_speed, restitution=e)
 
 
 def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
     """x(t) (m) of the exact model with parameters p = (ln M_T, ln K_T, xi, e, t0, offset)."""
+    return model_motion(p, test, t)[0]
+
+
+def model_motion(p, test: PendulumTest, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(x, v) (m, m/s) of the exact model at the sorted times t: :func:`model_x` and the
+    trunk's velocity, which is -dx/dt0 (the fit's exact Jacobian column for t0)."""
     from .solver import solve_impacts
 
-    ln_m, ln_k, xi, e, t0, off = (float(v) for v in p)
-    M, K = math.exp(ln_m), math.exp(ln_k)
-    model = TwoBodyModel(dynamic_mass=M, damping=2.0 * xi * math.sqrt(K * M), stiffness=K,
-                         impactor_mass=test.impactor_mass,
-                         impactor_stiffness=test.impactor_stiffness,
-                         impact_speed=test.impact_speed, restitution=e)
-    out = np.full(t.shape, off)
-    after = t > t0
-    if after.any():
-        t_rel = t[after] - t0
-        sol = solve_impacts(model, float(t_rel[-1]))
-        out[after] += sol.state(np.minimum(t_rel, sol.t_end))[0]
-    return out
+    t0, off = float(p[4]), float(p[5])
+    x, v = np.full(t.shape, off), np.zeros(t.shape)
+    first = int(np.searchsorted(t, t0, side="right"))  # the first sample after the contact
+    if first < t.size:
+        t_rel = t[first:] - t0
+        sol = solve_impacts(_model(p, test), float(t_rel[-1]))
+        dx, v[first:] = sol.trunk_motion(np.minimum(t_rel, sol.t_end))
+        x[first:] += dx
+    return x, v
 
 
 def _start(record: Record, test: PendulumTest, e: float = 0.1) -> np.ndarray:
@@ -143,67 +161,224 @@ def _start(record: Record, test: PendulumTest, e: float = 0.1) -> np.ndarray:
     return np.array([math.log(M), math.log(K), 0.3, e, t0, rest])
 
 
-def fit_record(record: Record, test: PendulumTest, *, start=None) -> FitResult:
-    """The least-squares fit of the exact model to the whole record (module docstring)."""
+class _Problem:
+    """Residuals (x_model - x) / scale of a record and their Jacobian in the free parameters
+    (indices ``free`` of p; the others held at ``fixed``)."""
+
+    def __init__(self, record: Record, test: PendulumTest, scale: float, upper, fixed, free):
+        self.t, self.x, self.test, self.scale = record.t, record.x, test, scale
+        self.upper, self.fixed, self.free = upper, np.asarray(fixed, float), list(free)
+        self._last = {}  # the motion at the last point evaluated: the Jacobian is asked there
+
+    def full(self, q) -> np.ndarray:
+        p = self.fixed.copy()
+        p[self.free] = q
+        return p
+
+    def residual(self, q) -> np.ndarray:
+        p = self.full(q)
+        self._last.clear()
+        try:
+            self._last[p.tobytes()] = xv = model_motion(p, self.test, self.t)
+        except ParameterError:  # a model the solver refuses: far from the record
+            return np.full(self.x.shape, 1e3)
+        return (xv[0] - self.x) / self.scale
+
+    def jacobian(self, q) -> np.ndarray:
+        """Forward differences in ln M_T, ln K_T, xi, e (relative step DIFF_STEP, turned
+        back at an upper bound); exact columns for t0 (-v: the record shifts with the
+        contact) and the offset (1): four model runs a Jacobian instead of six."""
+        p = self.full(q)
+        if p.tobytes() not in self._last:
+            self.residual(q)
+        xv = self._last.get(p.tobytes())
+        jac = np.zeros((self.x.size, len(self.free)))
+        if xv is None:  # p itself refused: no motion to differentiate
+            return jac
+        r0 = (xv[0] - self.x) / self.scale
+        for col, j in enumerate(self.free):
+            if j == 4:
+                jac[:, col] = -xv[1] / self.scale
+            elif j == 5:
+                jac[:, col] = 1.0 / self.scale
+            else:
+                h = DIFF_STEP * max(1.0, abs(p[j])) * (1.0 if p[j] >= 0 else -1.0)
+                if p[j] + h > self.upper[j]:
+                    h = -h
+                step = q.copy()
+                step[col] += h
+                jac[:, col] = (self.residual(step) - r0) / (step[col] - q[col])
+        self._last.clear()
+        self._last[p.tobytes()] = xv
+        return jac
+
+    def covariance(self, p) -> np.ndarray:
+        """6 x 6 covariance of p (zero rows for fixed parameters): s^2 (J^T J)^-1 in the
+        free ones, s^2 = RSS / (n - k)."""
+        q = p[self.free]
+        rss = float(np.sum((self.residual(q) * self.scale) ** 2))
+        J = self.jacobian(q) * self.scale  # d model / d p, in metres
+        s2 = rss / max(self.x.size - len(self.free), 1)
+        cov = np.zeros((6, 6))
+        try:
+            cov[np.ix_(self.free, self.free)] = s2 * np.linalg.inv(J.T @ J)
+        except np.linalg.LinAlgError:
+            cov[np.ix_(self.free, self.free)] = np.nan
+        return cov
+
+
+def fit_record(record: Record, test: PendulumTest, *, start=None,
+               restitution: float | None = None) -> FitResult:
+    """The least-squares fit of the exact model to the whole record (module docstring);
+    ``restitution`` (known e, e.g. of the pendulum's pad) holds e fixed instead of fitting
+    it. A record the pendulum leaves after one impact fixes omega_1, xi and V_1 but not
+    M_T and e apart: then M_T, K_T, C_T, E and e are given as ranges (:func:`_ridge`)."""
     from scipy.optimize import least_squares
 
     t, x = record.t, record.x
-    starts = ([_start(record, test, e) for e in (0.1, 0.5)] if start is None
-              else [np.asarray(start, float)])
+    if restitution is not None:
+        check_range("restitution", restitution, low=0.0, high=1.0)
+        if start is None:  # from the free fit moved to the given e (same V_1, omega_1)
+            starts = [_start(record, test, restitution)]
+            moved = _on_ridge(fit_record(record, test).point, restitution, test)
+            if np.all(np.isfinite(moved)):
+                starts.append(moved)
+        else:
+            starts = [start]
+    else:
+        starts = ([_start(record, test, e) for e in START_RESTITUTIONS] if start is None
+                  else [start])
+    starts = [np.array(p0, float) for p0 in starts]
+    if restitution is not None:
+        for p0 in starts:
+            p0[3] = restitution
     dt = float(np.median(np.diff(t)))
-    lower = [math.log(1e-2), math.log(1.0), 1e-3, 0.0, t[0] - 10 * dt, -np.inf]
-    upper = [math.log(1e5), math.log(1e10), 5.0, 0.95, t[-1] - 10 * dt, np.inf]
+    lower = np.array([math.log(1e-2), math.log(1.0), 1e-3, 0.0, t[0] - 10 * dt, -np.inf])
+    upper = np.array([math.log(1e5), math.log(1e10), 5.0, 0.95, t[-1] - 10 * dt, np.inf])
     scale = max(float(np.max(np.abs(x - starts[0][5]))), 1e-12)
-
-    def residual(p):
-        try:
-            return (model_x(p, test, t) - x) / scale
-        except ParameterError:  # a model the solver refuses: far from the record
-            return np.full(x.shape, 1e3)
+    free = [0, 1, 2, 4, 5] if restitution is not None else list(range(6))
+    x_scale = np.array([1, 1, 0.1, 0.1, dt, 1e-4])[free]
 
     best = None
-    for p0 in starts:  # e is the parameter with local minima: two starts, the better kept
-        p0 = np.clip(p0, np.array(lower) + 1e-9, np.array(upper) - 1e-9)
-        res = least_squares(residual, p0, bounds=(lower, upper),
-                            x_scale=[1, 1, 0.1, 0.1, dt, 1e-4], diff_step=1e-6, max_nfev=400)
-        if best is None or res.cost < best.cost:
-            best = res
-    res = best
-    p = res.x
+    for p0 in starts:  # e is the parameter with local minima: the best end kept
+        prob = _Problem(record, test, scale, upper, p0, free)
+        q0 = np.clip(p0[free], lower[free] + 1e-9, upper[free] - 1e-9)
+        res = least_squares(prob.residual, q0, jac=prob.jacobian,
+                            bounds=(lower[free], upper[free]), x_scale=x_scale, max_nfev=400)
+        if best is None or res.cost < best[0].cost:
+            best = (res, prob)
+    res, prob = best
+    p = prob.full(res.x)
     fitted = model_x(p, test, t)
-    rss = float(np.sum((fitted - x) ** 2))
-    n, k = x.size, p.size
-    s2 = rss / max(n - k, 1)
-    J = res.jac * scale  # d model / d p, in metres
-    try:
-        cov = s2 * np.linalg.inv(J.T @ J)
-    except np.linalg.LinAlgError:
-        cov = np.full((k, k), np.nan)
-    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    M, K, xi = math.exp(p[0]), math.exp(p[1]), float(p[2])
+    rms = math.sqrt(float(np.mean((fitted - x) ** 2)))
+    peak = float(np.max(np.abs(x - p[5])))
+    explained = rms <= EXPLAINED_FRACTION * peak
+    e_range = _ridge(p, test, t) if restitution is None else None
+    if e_range is None:
+        values, intervals = _estimates(p, prob.covariance(p), test)
+        determined = dict.fromkeys(values, True)
+        note = ""
+    else:  # the record determines omega_1, xi and V_1 only: the ends of the ridge
+        fixed_e = [0, 1, 2, 4, 5]
+        ends = []
+        for e_end in e_range:
+            pe = _on_ridge(p, e_end, test)
+            ends.append(_estimates(pe, _Problem(record, test, scale, upper, pe, fixed_e)
+                                   .covariance(pe), test))
+        values, intervals = _estimates(p, np.zeros((6, 6)), test)
+        determined = {k: k not in RIDGE for k in values}
+        for k in values:
+            if k in RIDGE:
+                values[k] = math.nan
+            intervals[k] = (min(ends[0][1][k][0], ends[1][1][k][0]),
+                            max(ends[0][1][k][1], ends[1][1][k][1]))
+        intervals["e"] = e_range
+        note = (f"the pendulum leaves after one impact and does not return within the "
+                f"record: it fixes omega_1, xi and the trunk's velocity after the impact "
+                f"V_1 = m (1 + e) u_1 / (M_T + m) (eqs 21, 54), not M_T and e apart; M_T, "
+                f"K_T, C_T and E are ranges over e in [{e_range[0]:.3g}, 1] (a smaller e would "
+                f"bring the pendulum back); a known e (--restitution) fixes them")
+    return FitResult(values=values, intervals=intervals, residual_rms=rms, peak=peak,
+                     explained=explained, model_x=fitted, determined=determined, point=p,
+                     note=note)
+
+
+#: What a one-impact record leaves undetermined (it fixes omega_1, xi, V_1, t0, the offset).
+RIDGE = ("M_T", "K_T", "C_T", "e", "E")
+
+
+def _estimates(p, cov, test: PendulumTest) -> tuple[dict, dict]:
+    """Values (SI) and 95 % intervals of every reported quantity at p with covariance cov
+    (intervals of logarithms for the positive ones, by the delta method)."""
+    M, K, xi, e = math.exp(p[0]), math.exp(p[1]), float(p[2]), float(p[3])
+    m, u1 = test.impactor_mass, test.impact_speed
     C = 2.0 * xi * math.sqrt(K * M)
-    # ln C_T = ln 2 + ln xi + (ln K + ln M) / 2: its variance by the delta method
-    g = np.array([0.5, 0.5, 1.0 / xi, 0.0, 0.0, 0.0])
-    sd_ln_c = math.sqrt(max(float(g @ cov @ g), 0.0))
     I = math.pi * test.diameter ** 4 / 64.0
     e_mod = K * test.clamp_height ** 3 / (3.0 * I)  # eq 47
-    values = {"M_T": M, "K_T": K, "C_T": C, "xi": xi, "e": float(p[3]), "E": e_mod,
-              "t0": float(p[4]), "x_offset": float(p[5])}
+    omega = math.sqrt(K / M)  # eq 14: omega_1^2 = K_T / M_T
+    v1 = m * (1.0 + e) * u1 / (M + m)  # eq 21 at the first impact, trunk at rest
+
+    def sd(g):  # standard deviation of g . p
+        return math.sqrt(max(float(np.asarray(g) @ cov @ np.asarray(g)), 0.0))
+
     z = Z95
+    values = {"M_T": M, "K_T": K, "C_T": C, "xi": xi, "e": e, "E": e_mod, "omega_1": omega,
+              "V_1": v1, "t0": float(p[4]), "x_offset": float(p[5])}
     intervals = {
-        "M_T": log_interval(M, z * sd[0]),
-        "K_T": log_interval(K, z * sd[1]),
-        "C_T": log_interval(C, z * sd_ln_c),
-        "xi": (xi - z * sd[2], xi + z * sd[2]),
-        "e": (float(p[3]) - z * sd[3], float(p[3]) + z * sd[3]),
-        "E": log_interval(e_mod, z * sd[1]),
-        "t0": (float(p[4]) - z * sd[4], float(p[4]) + z * sd[4]),
-        "x_offset": (float(p[5]) - z * sd[5], float(p[5]) + z * sd[5]),
+        "M_T": log_interval(M, z * sd([1, 0, 0, 0, 0, 0])),
+        "K_T": log_interval(K, z * sd([0, 1, 0, 0, 0, 0])),
+        "C_T": log_interval(C, z * sd([0.5, 0.5, 1.0 / xi, 0, 0, 0])),
+        "xi": (xi - z * sd([0, 0, 1, 0, 0, 0]), xi + z * sd([0, 0, 1, 0, 0, 0])),
+        "e": (e - z * sd([0, 0, 0, 1, 0, 0]), e + z * sd([0, 0, 0, 1, 0, 0])),
+        "E": log_interval(e_mod, z * sd([0, 1, 0, 0, 0, 0])),
+        "omega_1": log_interval(omega, z * sd([-0.5, 0.5, 0, 0, 0, 0])),
+        "V_1": log_interval(v1, z * sd([-M / (M + m), 0, 0, 1.0 / (1.0 + e), 0, 0])),
+        "t0": (p[4] - z * sd([0, 0, 0, 0, 1, 0]), p[4] + z * sd([0, 0, 0, 0, 1, 0])),
+        "x_offset": (p[5] - z * sd([0, 0, 0, 0, 0, 1]), p[5] + z * sd([0, 0, 0, 0, 0, 1])),
     }
-    rms = math.sqrt(rss / n)
-    peak = float(np.max(np.abs(x - p[5])))
-    return FitResult(values=values, intervals=intervals, residual_rms=rms, peak=peak,
-                     explained=rms <= EXPLAINED_FRACTION * peak, model_x=fitted)
+    return values, {k: (float(lo), float(hi)) for k, (lo, hi) in intervals.items()}
+
+
+def _one_impact(p, test: PendulumTest, span: float) -> bool:
+    """True when the model at p has one impact and no moving together within ``span`` s."""
+    from .solver import solve_impacts
+
+    sol = solve_impacts(_model(p, test), span)
+    return len(sol.impacts) == 1 and not sol.together_starts
+
+
+def _on_ridge(p, e: float, test: PendulumTest) -> np.ndarray:
+    """The parameters with restitution e and the same omega_1, xi and V_1 as p: the same
+    record while the pendulum does not return (M_T + m = m (1 + e) u_1 / V_1); NaN where
+    that needs M_T <= 0."""
+    M, m = math.exp(p[0]), test.impactor_mass
+    M_e = (M + m) * (1.0 + e) / (1.0 + float(p[3])) - m
+    out = np.array(p, float)
+    if not M_e > 0:  # no positive M_T gives that V_1 at this e
+        return np.full(out.shape, np.nan)
+    out[0], out[1], out[3] = math.log(M_e), p[1] + math.log(M_e) - p[0], e
+    return out
+
+
+def _ridge(p, test: PendulumTest, t: np.ndarray) -> tuple[float, float] | None:
+    """(e_min, 1): the restitutions that explain the record as well as p does, when the
+    model at p has one impact within the record (else None): e from 1 down to where the
+    pendulum would come back (bisection to 1e-4)."""
+    span = float(t[-1] - p[4])
+    if span <= 0 or not _one_impact(p, test, span):
+        return None
+    m, M = test.impactor_mass, math.exp(p[0])
+    lo = max(0.0, (m + 1e-2) * (1.0 + p[3]) / (M + m) - 1.0 + 1e-9)  # M_T >= 0.01 kg
+    hi = float(p[3])
+    if _one_impact(_on_ridge(p, lo, test), test, span):
+        return lo, 1.0
+    while hi - lo > 1e-4:
+        mid = 0.5 * (lo + hi)
+        if _one_impact(_on_ridge(p, mid, test), test, span):
+            hi = mid
+        else:
+            lo = mid
+    return hi, 1.0
 
 
 def log_interval(value: float, half_width: float) -> tuple[float, float]:

@@ -136,6 +136,22 @@ class ImpactSolution:
             out[:, sel] = np.array(self._phase_state(ph, t[sel] - ph.t0))
         return out
 
+    def trunk_motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(x, vx) of the trunk (m, m/s) at sorted times t (s, 0 <= t <= t_end): the rows of
+        :meth:`state` that a displacement record needs, without the pendulum's."""
+        starts = np.array(self._starts)
+        bounds = np.searchsorted(t, starts[1:], side="left")  # t[i] in phase k for
+        x, v = np.empty(t.size), np.empty(t.size)  # bounds[k-1] <= i < bounds[k]
+        tree, _, both = self._osc
+        lo = 0
+        for ph, hi in zip(self.phases, [*bounds.tolist(), t.size]):
+            if hi > lo:
+                osc = both if ph.kind == "together" else tree
+                dx, vx = osc.advance(t[lo:hi] - ph.t0, ph.x0, ph.vx0, np)
+                x[lo:hi], v[lo:hi] = ph.x0 + dx, vx
+                lo = hi
+        return x, v
+
     # -- quantities -------------------------------------------------------------------
     @property
     def together_start(self):

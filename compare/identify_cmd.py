@@ -10,7 +10,7 @@ import math
 from analytic.parameters import ParameterError
 
 UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "xi": "-", "e": "-", "E": "Pa",
-         "t0": "s", "x_offset": "m"}
+         "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m"}
 
 
 def add_arguments(sp: argparse.ArgumentParser, number) -> None:
@@ -22,6 +22,9 @@ def add_arguments(sp: argparse.ArgumentParser, number) -> None:
                     help="release angle theta_r, deg")
     sp.add_argument("--clamp-height", type=number, required=True, help="impact height a, m")
     sp.add_argument("--diameter", type=number, required=True, help="trunk diameter d, m")
+    sp.add_argument("--restitution", type=number,
+                    help="the pad's restitution e in [0, 1] if known: held fixed in the fit "
+                         "(a record the pendulum leaves after one impact needs it to fix M_T)")
     sp.add_argument("--json", action="store_true", help="machine-readable output")
     sp.add_argument("--plot", help="write a figure of the record, both fits and the residuals "
                                    "(PNG) to this file")
@@ -37,6 +40,8 @@ def _test(args):
                                ("--diameter", args.diameter, "trunk.diameter")):
         low, high, unit = LIMITS[field]
         check_range(flag, value, low=low, high=high, unit=unit)
+    if args.restitution is not None:
+        check_range("--restitution", args.restitution, low=0.0, high=1.0)
     return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
                         release_angle=pend.release_angle, clamp_height=args.clamp_height,
                         diameter=args.diameter, gravity=pend.gravity)
@@ -65,24 +70,29 @@ def run(args) -> int:
 
     test = _test(args)
     record = read_record(args.record)
-    fit = fit_record(record, test)
+    fit = fit_record(record, test, restitution=args.restitution)
     paper = _paper(record, test)
     if args.plot:
         _plot(args.plot, record, fit, paper, test)
     if args.json:
         print(json.dumps(to_jsonable({"fit": fit.to_json(), "paper": paper,
                                  "residual_rms": fit.residual_rms,
-                                 "explained": fit.explained}), indent=2))
+                                 "explained": fit.explained, "note": fit.note}), indent=2))
         return 0
     print(f"{args.record}: {record.t.size} samples, {record.t[0]:.4g} to {record.t[-1]:.4g} s")
     print(f"  {'quantity':<10}{'value':>13}{'95 % low':>13}{'95 % high':>13}  {'unit':<6}"
           f"{'paper (eqs 39-48)':>19}")
     reading = paper.get("paper", {})
+    given = {"e"} if args.restitution is not None else set()
     for k, v in fit.values.items():
         lo, hi = fit.intervals[k]
         pv = reading.get(k)
         ptext = f"{pv:.5g}" if isinstance(pv, float) and math.isfinite(pv) else ""
-        print(f"  {k:<10}{v:>13.5g}{lo:>13.5g}{hi:>13.5g}  {UNITS[k]:<6}{ptext:>19}")
+        vtext = f"{v:>13.5g}" if fit.determined[k] else f"{'not fixed':>13}"
+        itext = f"{'given':>13}{'':>13}" if k in given else f"{lo:>13.5g}{hi:>13.5g}"
+        print(f"  {k:<10}{vtext}{itext}  {UNITS[k]:<6}{ptext:>19}")
+    if fit.note:
+        print(f"  not fixed: {fit.note}")
     if "error" in reading:
         print(f"  paper's procedure: {reading['error']}")
     verdict = ("explained" if fit.explained else "NOT explained: the 1-DOF model misses it")
@@ -103,14 +113,19 @@ def _plot(path, record, fit, paper, test) -> None:
     ax, axr = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": (3, 1.2)})
     ms = 1e3
     ax.plot(record.t * ms, record.x * ms, ".", ms=2, color="0.5", label="record")
+    if fit.determined["M_T"]:
+        label = f"M_T {fit.values['M_T']:.4g} kg, K_T {fit.values['K_T']:.4g} N/m"
+    else:
+        (m_lo, m_hi), (k_lo, k_hi) = fit.intervals["M_T"], fit.intervals["K_T"]
+        label = (f"M_T {m_lo:.4g}-{m_hi:.4g} kg, K_T {k_lo:.4g}-{k_hi:.4g} N/m:\n"
+                 "the record does not fix M_T and e apart")
     ax.plot(record.t * ms, fit.model_x * ms, "-", color="C0", lw=1.6,
-            label=f"full-record fit (M_T {fit.values['M_T']:.4g} kg, K_T "
-                  f"{fit.values['K_T']:.4g} N/m)")
+            label=f"full-record fit ({label})")
     axr.plot(record.t * ms, (record.x - fit.model_x) * ms, "-", color="C0", lw=1)
     reading = paper.get("paper", {})
     if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading["xi"]:
         p = [math.log(reading["M_T"]), math.log(reading["K_T"]), reading["xi"],
-             fit.values["e"], fit.values["t0"], fit.values["x_offset"]]
+             fit.point[3], fit.values["t0"], fit.values["x_offset"]]
         xp = model_x(p, test, record.t)
         ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
                 label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "

@@ -200,3 +200,26 @@ def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(
     assert answer["explained"] is False  # the full-record fit on the continuum's record
     html = paths["html"].read_text()
     assert html.index("The answer") < html.index("Summary")
+
+
+def test_a_one_impact_record_shows_ranges_not_numbers(tmp_path):
+    """central-leader with a crown of four trunk masses at e = 0.3: the pendulum rebounds
+    off M_T = 557 kg and never returns, so the SDOF rungs' records do not fix M_T and e
+    apart (docs/identification.md): the fit table gives ranges holding the truth, says
+    "not fixed" and why, and the JSON keeps the ranges."""
+    from analytic.model import two_body_model
+    from compare.ident_study import Case, _scenario
+
+    scen = _scenario(Case("central-leader", 0.3, 4.0, "analytic"))
+    paths = write_report(tmp_path, scenarios=[scen], runs=RunCache(),
+                         engines=("no-such-engine",), segments=4)
+    md = paths["md"].read_text()
+    row = next(line for line in md.splitlines() if line.startswith("| analytic |")
+               and "not fixed" in line)
+    assert "the pendulum left after one impact" in md
+    data = json.loads(paths["json"].read_text())
+    fits = next(iter(data["scenarios"].values()))["record_fits"]
+    analytic = next(f for f in fits if f["rung"] == "analytic")
+    lo, hi = analytic["ranges"]["M_T"]
+    assert lo <= two_body_model(scen).dynamic_mass <= hi, (row, lo, hi)
+    assert analytic["ranges"]["e"][0] <= 0.3 <= analytic["ranges"]["e"][1]

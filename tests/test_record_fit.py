@@ -22,10 +22,11 @@ RATE = 5000.0  # Hz: the issue's sampling rate
 NOISE = 0.01  # of the peak: 1 % white noise
 
 
-def synthetic(e: float, seed: int, extra=None):
-    """A 0.1 s record of the central-leader model at RATE with NOISE, contact at 10 ms."""
+def synthetic(e: float, seed: int, extra=None, **changes):
+    """A 0.1 s record of the central-leader model (``changes`` to its TwoBodyModel fields)
+    at RATE with NOISE, contact at 10 ms."""
     s = load_scenario("central-leader")
-    model = dataclasses.replace(two_body_model(s), restitution=e)
+    model = dataclasses.replace(two_body_model(s), restitution=e, **changes)
     t = np.arange(0.0, 0.1, 1.0 / RATE)
     sol = solve_impacts(model, 0.1)
     clean = np.where(t > 0.01, sol.state(np.clip(t - 0.01, 0.0, 0.1))[0], 0.0)
@@ -61,6 +62,73 @@ def test_a_record_the_1dof_model_cannot_explain_is_said_so():
     assert not fit.explained and fit.residual_rms > 0.03 * fit.peak
 
 
+#: The central-leader tree with a crown four times the trunk's mass (M_T 557 kg, the
+#: identification study's crown-4 cell): the pendulum (132 kg) rebounds off it and does not
+#: come back within 0.1 s, so the record is V_1 psi(t) of the tree oscillator alone.
+HEAVY = {"dynamic_mass": 556.8}
+
+
+def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges():
+    """x(t) = V_1 psi(t; omega_1, xi) after a single impact: (M_T, e) on the curve
+    M_T + m = m (1 + e) u_1 / V_1 give the same record, so no fit can pick one (the study's
+    crown-4, e = 0.3 cell landed at +26 % with the best residual). The fit says so, keeps
+    what is fixed, and its ranges hold the truth."""
+    import math
+
+    from analytic.record_fit import _model, _on_ridge, model_x
+
+    model, record, test = synthetic(0.3, 0, **HEAVY)
+    fit = fit_record(record, test)
+    assert "does not return" in fit.note
+    assert not any(fit.determined[k] for k in ("M_T", "K_T", "C_T", "e", "E"))
+    assert all(math.isnan(fit.values[k]) for k in ("M_T", "K_T", "e"))
+    omega = math.sqrt(model.stiffness / model.dynamic_mass)
+    m, u = model.impactor_mass, model.impact_speed
+    v1 = m * (1.0 + model.restitution) * u / (model.dynamic_mass + m)
+    for k, v in (("omega_1", omega), ("V_1", v1)):
+        assert fit.determined[k] and abs(fit.values[k] / v - 1.0) < 0.01, (k, fit.values[k], v)
+    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness), ("e", 0.3)):
+        lo, hi = fit.intervals[k]
+        assert lo <= v <= hi, (k, lo, v, hi)
+    # the ridge is exact while the pendulum stays away: the same x at both of its ends
+    e_min, e_max = fit.intervals["e"]
+    same = model_x(fit.point, test, record.t)
+    for e in (e_min, 0.5 * (e_min + e_max), e_max):
+        assert np.allclose(model_x(_on_ridge(fit.point, e, test), test, record.t), same,
+                           rtol=0.0, atol=1e-12 * np.max(np.abs(same)))
+    # ... and ends at e_min: a little less and the pendulum comes back within the record
+    span = float(record.t[-1] - fit.point[4])
+    sol = solve_impacts(_model(_on_ridge(fit.point, e_min - 2e-4, test), test), span)
+    assert len(sol.impacts) > 1 or sol.together_starts
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_known_restitution_fixes_the_one_impact_record_within_2_percent(seed):
+    """With e given (the pad's, --restitution) the same record fixes M_T, K_T, C_T."""
+    model, record, test = synthetic(0.3, seed, **HEAVY)
+    fit = fit_record(record, test, restitution=0.3)
+    assert fit.note == "" and fit.values["e"] == 0.3
+    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness),
+                 ("C_T", model.damping)):
+        assert abs(fit.values[k] / v - 1.0) < 0.02, (k, fit.values[k], v)
+
+
+def test_identify_says_what_a_one_impact_record_does_not_fix(tmp_path, capsys):
+    _, record, _ = synthetic(0.3, 0, **HEAVY)
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([record.t, record.x]), delimiter=",", header="t,x",
+               comments="")
+    assert main(["identify", str(path), *ARGS]) == 0
+    out = capsys.readouterr().out
+    assert "not fixed" in out and "--restitution" in out
+    assert main(["identify", str(path), *ARGS, "--restitution", "0.3"]) == 0
+    out = capsys.readouterr().out
+    assert "not fixed" not in out and "given" in out
+    assert main(["identify", str(path), *ARGS, "--restitution", "1.5"]) == 2
+    err = capsys.readouterr().err
+    assert "--restitution = 1.5" in err and "[0, 1]" in err and err.count("\n") == 1
+
+
 ARGS = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle", "36.39",
         "--clamp-height", "0.315", "--diameter", "0.126"]
 
@@ -72,9 +140,10 @@ def test_identify_json_layout_and_plot(tmp_path, capsys):
                comments="")
     assert main(["identify", str(path), *ARGS, "--json", "--plot", str(tmp_path / "f.png")]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert set(data) == {"fit", "paper", "residual_rms", "explained"}
-    assert {"M_T", "K_T", "C_T", "xi", "e", "E"} <= set(data["fit"])
-    assert set(data["fit"]["M_T"]) == {"value", "low", "high"}
+    assert set(data) == {"fit", "paper", "residual_rms", "explained", "note"}
+    assert {"M_T", "K_T", "C_T", "xi", "e", "E", "omega_1", "V_1"} <= set(data["fit"])
+    assert set(data["fit"]["M_T"]) == {"value", "low", "high", "determined"}
+    assert data["fit"]["M_T"]["determined"] is True and data["note"] == ""
     assert data["fit"]["M_T"]["value"] == pytest.approx(model.dynamic_mass, rel=0.02)
     assert set(data["paper"]) == {"paper", "printed", "consistent"}
     assert data["explained"] is True

@@ -309,3 +309,22 @@ def test_closed_form_x_max_matches_dense_sampling(name, e):
     assert x_max >= x[i] * (1 - 1e-14)
     assert x_max == pytest.approx(x[i], rel=1e-8)  # samples 2.5e-7 s apart near a flat peak
     assert t_xmax == pytest.approx(t[i], abs=2.5e-7)
+
+
+@pytest.mark.parametrize("e, M, phases", [
+    (0.0, 50.0, 2),  # one impact, moving together, separation
+    (0.3, 5.0, 14),  # 13 chattering impacts, moving together, separation
+    (0.8, 5.0, 3),  # three impacts, no moving together
+    (0.3, 500.0, 1),  # the pendulum rebounds and leaves
+])
+def test_trunk_motion_is_the_state_s_trunk_rows(e, M, phases):
+    """ImpactSolution.trunk_motion (the record fit's path) against state(): the same x and
+    v at every time, phase starts included (a start belongs to the phase it opens)."""
+    model = TwoBodyModel(dynamic_mass=M, damping=30.0, stiffness=2e4, impactor_mass=10.0,
+                         impactor_stiffness=50.0, impact_speed=1.0, restitution=e)
+    sol = solve_impacts(model, 0.5)
+    t = np.sort(np.concatenate([np.linspace(0.0, 0.5, 3001), [p.t0 for p in sol.phases]]))
+    x, v = sol.trunk_motion(t)
+    state = sol.state(t)
+    assert np.array_equal(x, state[0]) and np.array_equal(v, state[1])
+    assert len(sol.phases) == phases

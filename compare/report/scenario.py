@@ -110,6 +110,8 @@ def record_fits(ladder) -> list[dict]:
             continue
         out.append({"rung": r.rung.id, "values": {k: fit.values[k] for k in (*truth, "e")},
                     "errors": {k: fit.values[k] / v - 1.0 for k, v in truth.items()},
+                    "ranges": {k: fit.intervals[k] for k in (*truth, "e")
+                               if not fit.determined[k]},  # a one-impact record: ranges
                     "residual": fit.residual_rms / fit.peak, "explained": fit.explained})
     return out
 
@@ -201,6 +203,7 @@ class ScenarioSection(Section):
             "ident_metrics": IDENT_METRICS, "figures": self.figures,
             "rungs": L.rungs, "skips": [r for r in L.rungs if not r.ok],
             "ledgers": self.ledgers, "sweep": self.sweep, "fits": self.fits,
+            "fits_not_fixed": any(f.get("ranges") for f in self.fits),
             "findings": findings, "mechanism": self.mechanism,
             "problems": problems, "not_compared": L.not_compared(), "unit_of": unit_of, "meaning_of": meaning_of,
             "metrics": ALL_METRICS, "OK": OK,
