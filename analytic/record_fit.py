@@ -4,9 +4,10 @@ The paper's procedure (eqs 39-48, :mod:`analytic.identification`) reads three nu
 the record after the bodies move together. Here the exact model of eqs 12-35 (M_T, C_T, K_T,
 e, the pendulum of eq 13 at u_1 of eq 48) is fitted to every sample of x(t) by nonlinear
 least squares (``scipy.optimize.least_squares``), with the time of the first contact and a
-sensor offset as nuisance parameters. 95 % intervals come from the Jacobian at the optimum
-(residuals independent, equal variance: cov = s^2 (J^T J)^-1, s^2 = RSS / (n - p)); the fit
-"explains" the record when its residual RMS is within :data:`EXPLAINED_FRACTION` of the peak
+sensor offset as nuisance parameters, and to the pendulum's y(t) too when the record has it.
+95 % intervals come from the Jacobian at the optimum (residuals independent, equal variance
+per channel: cov = s^2 (J^T J)^-1, s^2 = RSS / (n - p)); the fit "explains" the record when
+its residual RMS is within :data:`EXPLAINED_FRACTION` of the peak
 displacement. docs/identification.md has the method and the measured accuracy.
 """
 
@@ -21,6 +22,7 @@ import numpy as np
 
 from .identification import PendulumTest
 from .model import TwoBodyModel
+from .oscillator import Oscillator
 from .parameters import ParameterError, check_range
 
 #: The fit explains a record when its residual RMS is at most this fraction of the peak
@@ -33,7 +35,9 @@ Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 #: branch, 0.5 a few impacts, 0.9 the one-impact branch (docs/identification.md).
 START_RESTITUTIONS = (0.1, 0.5, 0.9)
 DIFF_STEP = 1e-6  # relative forward-difference step of the fit's Jacobian
-NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset")  # fitted: ln M_T, ln K_T, xi, e, s, m
+#: The parameters p: ln M_T, ln K_T, xi, e, t0 (s), x_offset (m), y_offset (m; the pendulum
+#: sensor's, fitted when the record has y).
+NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset")
 
 
 @dataclass(frozen=True)
@@ -99,8 +103,10 @@ class FitResult:
     explained: bool
     model_x: np.ndarray  # m, the fitted x at the record's times
     determined: dict  # name -> False for a quantity the record does not fix (value NaN)
-    point: np.ndarray  # the optimum (ln M_T, ln K_T, xi, e, t0, offset); one of many if not
+    point: np.ndarray  # the optimum p (NAMES); one of many if some are not determined
     note: str = ""  # why some quantities are not determined, or ""
+    residual_rms_y: float | None = None  # m, of the pendulum's record if it has one
+    model_y: np.ndarray | None = None  # m, the fitted y at the record's times
 
     def to_json(self) -> dict:
         return {k: {"value": v, "low": self.intervals[k][0], "high": self.intervals[k][1],
@@ -117,31 +123,46 @@ def _model(p, test: PendulumTest) -> TwoBodyModel:
 
 
 def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
-    """x(t) (m) of the exact model with parameters p = (ln M_T, ln K_T, xi, e, t0, offset)."""
+    """x(t) (m) of the exact model with parameters p (:data:`NAMES`)."""
     return model_motion(p, test, t)[0]
 
 
-def model_motion(p, test: PendulumTest, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False) -> tuple:
     """(x, v) (m, m/s) of the exact model at the sorted times t: :func:`model_x` and the
-    trunk's velocity, which is -dx/dt0 (the fit's exact Jacobian column for t0)."""
+    trunk's velocity, which is -dx/dt0 (the fit's exact Jacobian column for t0); with
+    ``pendulum`` also the pendulum's (y, v_y) in the same frame (y = x at contact, y = 0 at
+    the first one): before it, the free swing at u_1 (eq 13) run back from the contact."""
     from .solver import solve_impacts
 
-    t0, off = float(p[4]), float(p[5])
-    x, v = np.full(t.shape, off), np.zeros(t.shape)
+    t0 = float(p[4])
+    x, v = np.full(t.shape, float(p[5])), np.zeros(t.shape)
     first = int(np.searchsorted(t, t0, side="right"))  # the first sample after the contact
+    sol = None
     if first < t.size:
         t_rel = t[first:] - t0
         sol = solve_impacts(_model(p, test), float(t_rel[-1]))
-        dx, v[first:] = sol.trunk_motion(np.minimum(t_rel, sol.t_end))
+        t_rel = np.minimum(t_rel, sol.t_end)
+        dx, v[first:] = sol.trunk_motion(t_rel)
         x[first:] += dx
-    return x, v
+    if not pendulum:
+        return x, v
+    y, vy = np.full(t.shape, float(p[6])), np.empty(t.shape)
+    swing = Oscillator.from_mck(test.impactor_mass, 0.0, test.impactor_stiffness)
+    dy, vy[:first] = swing.advance(t[:first] - t0, 0.0, test.impact_speed, np)
+    y[:first] += dy
+    if sol is not None:
+        state = sol.state(t_rel)
+        y[first:] += state[2]
+        vy[first:] = state[3]
+    return x, v, y, vy
 
 
 def _start(record: Record, test: PendulumTest, e: float = 0.1) -> np.ndarray:
     """A first guess: the contact time extrapolated back from where x first passes 10 % and
     40 % of its range above its resting level (far above 1-2 % noise), M_T from the slope
     there (momentum at e = 0: V = m u1 / (M_T + m)), K_T from the time to the peak as a
-    quarter period of the joint motion."""
+    quarter period of the joint motion; the pendulum sensor's offset (if y is recorded) from
+    the samples before the contact, less the free swing."""
     t, x = record.t, record.x
     rest = float(np.median(x[: max(3, x.size // 50)]))
     span = float(np.max(x) - rest)
@@ -158,16 +179,29 @@ def _start(record: Record, test: PendulumTest, e: float = 0.1) -> np.ndarray:
     M = m * max(u1 / max(V, 1e-3 * u1) - 1.0, 0.05)
     omega = 0.5 * math.pi / max(float(t[i_peak]) - t0, 1e-4)
     K = max(omega ** 2 * (M + m) - test.impactor_stiffness, 1.0)
-    return np.array([math.log(M), math.log(K), 0.3, e, t0, rest])
+    p = np.array([math.log(M), math.log(K), 0.3, e, t0, rest, 0.0])
+    if record.y is not None:
+        before = t < t0
+        if before.any():
+            swing = model_motion(p, test, t[before], pendulum=True)[2]
+            p[6] = float(np.median(record.y[before] - swing))
+        else:
+            p[6] = float(record.y[0])
+    return p
 
 
 class _Problem:
-    """Residuals (x_model - x) / scale of a record and their Jacobian in the free parameters
-    (indices ``free`` of p; the others held at ``fixed``)."""
+    """Residuals of a record, (x_model - x) / scale[0] and, if it has y, (y_model - y) /
+    scale[1], and their Jacobian in the free parameters (indices ``free`` of p, the others
+    held at ``fixed``)."""
 
-    def __init__(self, record: Record, test: PendulumTest, scale: float, upper, fixed, free):
-        self.t, self.x, self.test, self.scale = record.t, record.x, test, scale
-        self.upper, self.fixed, self.free = upper, np.asarray(fixed, float), list(free)
+    def __init__(self, record: Record, test: PendulumTest, scale, upper, fixed, free):
+        self.t, self.test, self.upper = record.t, test, upper
+        self.pendulum = record.y is not None
+        self.data = np.concatenate([record.x, record.y]) if self.pendulum else record.x
+        n = record.t.size
+        self.weight = np.repeat(1.0 / np.asarray(scale[: 2 if self.pendulum else 1]), n)
+        self.fixed, self.free = np.asarray(fixed, float), list(free)
         self._last = {}  # the motion at the last point evaluated: the Jacobian is asked there
 
     def full(self, q) -> np.ndarray:
@@ -175,32 +209,39 @@ class _Problem:
         p[self.free] = q
         return p
 
+    def _motion(self, p):
+        return model_motion(p, self.test, self.t, pendulum=self.pendulum)
+
     def residual(self, q) -> np.ndarray:
         p = self.full(q)
         self._last.clear()
         try:
-            self._last[p.tobytes()] = xv = model_motion(p, self.test, self.t)
+            self._last[p.tobytes()] = m = self._motion(p)
         except ParameterError:  # a model the solver refuses: far from the record
-            return np.full(self.x.shape, 1e3)
-        return (xv[0] - self.x) / self.scale
+            return np.full(self.data.shape, 1e3)
+        model = np.concatenate([m[0], m[2]]) if self.pendulum else m[0]
+        return (model - self.data) * self.weight
 
     def jacobian(self, q) -> np.ndarray:
         """Forward differences in ln M_T, ln K_T, xi, e (relative step DIFF_STEP, turned
-        back at an upper bound); exact columns for t0 (-v: the record shifts with the
-        contact) and the offset (1): four model runs a Jacobian instead of six."""
+        back at an upper bound); exact columns for t0 (minus the velocities: the record
+        shifts with the contact) and the offsets (1 on their channel): four model runs a
+        Jacobian instead of six or seven."""
         p = self.full(q)
         if p.tobytes() not in self._last:
             self.residual(q)
-        xv = self._last.get(p.tobytes())
-        jac = np.zeros((self.x.size, len(self.free)))
-        if xv is None:  # p itself refused: no motion to differentiate
+        m = self._last.get(p.tobytes())
+        jac = np.zeros((self.data.size, len(self.free)))
+        if m is None:  # p itself refused: no motion to differentiate
             return jac
-        r0 = (xv[0] - self.x) / self.scale
+        n = self.t.size
+        model = np.concatenate([m[0], m[2]]) if self.pendulum else m[0]
+        r0 = (model - self.data) * self.weight
         for col, j in enumerate(self.free):
             if j == 4:
-                jac[:, col] = -xv[1] / self.scale
-            elif j == 5:
-                jac[:, col] = 1.0 / self.scale
+                jac[:, col] = -(np.concatenate([m[1], m[3]]) if self.pendulum else m[1])
+            elif j in (5, 6):
+                jac[(j - 5) * n:(j - 4) * n, col] = 1.0
             else:
                 h = DIFF_STEP * max(1.0, abs(p[j])) * (1.0 if p[j] >= 0 else -1.0)
                 if p[j] + h > self.upper[j]:
@@ -208,20 +249,26 @@ class _Problem:
                 step = q.copy()
                 step[col] += h
                 jac[:, col] = (self.residual(step) - r0) / (step[col] - q[col])
+                continue
+            jac[:, col] *= self.weight
         self._last.clear()
-        self._last[p.tobytes()] = xv
+        self._last[p.tobytes()] = m
         return jac
 
     def covariance(self, p) -> np.ndarray:
-        """6 x 6 covariance of p (zero rows for fixed parameters): s^2 (J^T J)^-1 in the
-        free ones, s^2 = RSS / (n - k)."""
+        """Covariance of p (zero rows for fixed parameters), the free block
+        (J^T W J)^-1 with J = d model / d p in metres and W = 1 / s_c^2 per channel,
+        s_c^2 = RSS_c / n_c x n / (n - k) (one channel: s^2 (J^T J)^-1, s^2 = RSS / (n - k))."""
         q = p[self.free]
-        rss = float(np.sum((self.residual(q) * self.scale) ** 2))
-        J = self.jacobian(q) * self.scale  # d model / d p, in metres
-        s2 = rss / max(self.x.size - len(self.free), 1)
-        cov = np.zeros((6, 6))
+        r = self.residual(q) / self.weight  # metres
+        J = self.jacobian(q) / self.weight[:, None]
+        n, k = r.size, len(self.free)
+        channels = r.reshape(2 if self.pendulum else 1, -1)
+        s2 = np.mean(channels ** 2, axis=1) * n / max(n - k, 1)
+        w = np.repeat(1.0 / s2, self.t.size)
+        cov = np.zeros((p.size, p.size))
         try:
-            cov[np.ix_(self.free, self.free)] = s2 * np.linalg.inv(J.T @ J)
+            cov[np.ix_(self.free, self.free)] = np.linalg.inv(J.T @ (J * w[:, None]))
         except np.linalg.LinAlgError:
             cov[np.ix_(self.free, self.free)] = np.nan
         return cov
@@ -229,13 +276,14 @@ class _Problem:
 
 def fit_record(record: Record, test: PendulumTest, *, start=None,
                restitution: float | None = None) -> FitResult:
-    """The least-squares fit of the exact model to the whole record (module docstring);
-    ``restitution`` (known e, e.g. of the pendulum's pad) holds e fixed instead of fitting
-    it. A record the pendulum leaves after one impact fixes omega_1, xi and V_1 but not
-    M_T and e apart: then M_T, K_T, C_T, E and e are given as ranges (:func:`_ridge`)."""
+    """The least-squares fit of the exact model to the whole record (module docstring), to
+    the pendulum's record y too when it has one; ``restitution`` (known e, e.g. of the
+    pendulum's pad) holds e fixed instead of fitting it. A record of x alone that the
+    pendulum leaves after one impact fixes omega_1, xi and V_1 but not M_T and e apart:
+    then M_T, K_T, C_T, E and e are given as ranges (:func:`_ridge`)."""
     from scipy.optimize import least_squares
 
-    t, x = record.t, record.x
+    t, x, y = record.t, record.x, record.y
     if restitution is not None:
         check_range("restitution", restitution, low=0.0, high=1.0)
         if start is None:  # from the free fit moved to the given e (same V_1, omega_1)
@@ -253,11 +301,16 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         for p0 in starts:
             p0[3] = restitution
     dt = float(np.median(np.diff(t)))
-    lower = np.array([math.log(1e-2), math.log(1.0), 1e-3, 0.0, t[0] - 10 * dt, -np.inf])
-    upper = np.array([math.log(1e5), math.log(1e10), 5.0, 0.95, t[-1] - 10 * dt, np.inf])
-    scale = max(float(np.max(np.abs(x - starts[0][5]))), 1e-12)
-    free = [0, 1, 2, 4, 5] if restitution is not None else list(range(6))
-    x_scale = np.array([1, 1, 0.1, 0.1, dt, 1e-4])[free]
+    lower = np.array([math.log(1e-2), math.log(1.0), 1e-3, 0.0, t[0] - 10 * dt, -np.inf,
+                      -np.inf])
+    upper = np.array([math.log(1e5), math.log(1e10), 5.0, 0.95, t[-1] - 10 * dt, np.inf,
+                      np.inf])
+    scale = [max(float(np.max(np.abs(x - starts[0][5]))), 1e-12)]
+    if y is not None:
+        scale.append(max(float(np.max(np.abs(y - starts[0][6]))), 1e-12))
+    free = [j for j in range(7) if not (j == 3 and restitution is not None)
+            and not (j == 6 and y is None)]
+    x_scale = np.array([1, 1, 0.1, 0.1, dt, 1e-4, 1e-4])[free]
 
     best = None
     for p0 in starts:  # e is the parameter with local minima: the best end kept
@@ -269,23 +322,29 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
             best = (res, prob)
     res, prob = best
     p = prob.full(res.x)
-    fitted = model_x(p, test, t)
+    motion = model_motion(p, test, t, pendulum=y is not None)
+    fitted = motion[0]
     rms = math.sqrt(float(np.mean((fitted - x) ** 2)))
     peak = float(np.max(np.abs(x - p[5])))
     explained = rms <= EXPLAINED_FRACTION * peak
-    e_range = _ridge(p, test, t) if restitution is None else None
+    rms_y = None
+    if y is not None:
+        rms_y = math.sqrt(float(np.mean((motion[2] - y) ** 2)))
+        explained = explained and rms_y <= EXPLAINED_FRACTION * float(np.max(np.abs(y - p[6])))
+    # the pendulum's record fixes e (its rebound), so only a record of x alone can be a ridge
+    e_range = _ridge(p, test, t) if restitution is None and y is None else None
     if e_range is None:
-        values, intervals = _estimates(p, prob.covariance(p), test)
+        values, intervals = _estimates(p, prob.covariance(p), test, pendulum=y is not None)
         determined = dict.fromkeys(values, True)
         note = ""
     else:  # the record determines omega_1, xi and V_1 only: the ends of the ridge
-        fixed_e = [0, 1, 2, 4, 5]
+        fixed_e = [j for j in free if j != 3]
         ends = []
         for e_end in e_range:
             pe = _on_ridge(p, e_end, test)
             ends.append(_estimates(pe, _Problem(record, test, scale, upper, pe, fixed_e)
                                    .covariance(pe), test))
-        values, intervals = _estimates(p, np.zeros((6, 6)), test)
+        values, intervals = _estimates(p, np.zeros((7, 7)), test)
         determined = {k: k not in RIDGE for k in values}
         for k in values:
             if k in RIDGE:
@@ -297,19 +356,22 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
                 f"record: it fixes omega_1, xi and the trunk's velocity after the impact "
                 f"V_1 = m (1 + e) u_1 / (M_T + m) (eqs 21, 54), not M_T and e apart; M_T, "
                 f"K_T, C_T and E are ranges over e in [{e_range[0]:.3g}, 1] (a smaller e would "
-                f"bring the pendulum back); a known e (--restitution) fixes them")
+                f"bring the pendulum back); a known e (--restitution) or a record of the "
+                f"pendulum (column y) fixes them")
     return FitResult(values=values, intervals=intervals, residual_rms=rms, peak=peak,
                      explained=explained, model_x=fitted, determined=determined, point=p,
-                     note=note)
+                     note=note, residual_rms_y=rms_y,
+                     model_y=motion[2] if y is not None else None)
 
 
 #: What a one-impact record leaves undetermined (it fixes omega_1, xi, V_1, t0, the offset).
 RIDGE = ("M_T", "K_T", "C_T", "e", "E")
 
 
-def _estimates(p, cov, test: PendulumTest) -> tuple[dict, dict]:
+def _estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[dict, dict]:
     """Values (SI) and 95 % intervals of every reported quantity at p with covariance cov
-    (intervals of logarithms for the positive ones, by the delta method)."""
+    (intervals of logarithms for the positive ones, by the delta method); the pendulum
+    sensor's offset too if ``pendulum``."""
     M, K, xi, e = math.exp(p[0]), math.exp(p[1]), float(p[2]), float(p[3])
     m, u1 = test.impactor_mass, test.impact_speed
     C = 2.0 * xi * math.sqrt(K * M)
@@ -319,7 +381,8 @@ def _estimates(p, cov, test: PendulumTest) -> tuple[dict, dict]:
     v1 = m * (1.0 + e) * u1 / (M + m)  # eq 21 at the first impact, trunk at rest
 
     def sd(g):  # standard deviation of g . p
-        return math.sqrt(max(float(np.asarray(g) @ cov @ np.asarray(g)), 0.0))
+        g = np.concatenate([g, np.zeros(cov.shape[0] - len(g))])
+        return math.sqrt(max(float(g @ cov @ g), 0.0))
 
     z = Z95
     values = {"M_T": M, "K_T": K, "C_T": C, "xi": xi, "e": e, "E": e_mod, "omega_1": omega,
@@ -336,6 +399,10 @@ def _estimates(p, cov, test: PendulumTest) -> tuple[dict, dict]:
         "t0": (p[4] - z * sd([0, 0, 0, 0, 1, 0]), p[4] + z * sd([0, 0, 0, 0, 1, 0])),
         "x_offset": (p[5] - z * sd([0, 0, 0, 0, 0, 1]), p[5] + z * sd([0, 0, 0, 0, 0, 1])),
     }
+    if pendulum:
+        values["y_offset"] = float(p[6])
+        w = z * sd([0, 0, 0, 0, 0, 0, 1])
+        intervals["y_offset"] = (p[6] - w, p[6] + w)
     return values, {k: (float(lo), float(hi)) for k, (lo, hi) in intervals.items()}
 
 

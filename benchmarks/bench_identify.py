@@ -1,8 +1,8 @@
 """Benchmark: one `treeimpact identify` fit (analytic.record_fit.fit_record) on a 0.1 s,
 5 kHz record with 1 % noise (central-leader at e = 0.1, 0.3, and with a crown of 4 trunk
-masses, a one-impact record, free and with e given), and one evaluation of its model (the
-exact solver sampled at the record's times). Prints medians over repeats and the model
-evaluations per fit.
+masses, a one-impact record, free, with e given and with the pendulum's y), and one
+evaluation of its model (the exact solver sampled at the record's times). Prints medians
+over repeats and the model evaluations per fit.
 
 Target (issue 17): one identification under 2 s on one core.
 
@@ -32,11 +32,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     print(f"{'record':<28s} {'fit s':>8s} {'model ms':>9s} {'evaluations':>12s}")
     worst = 0.0
-    cases = [("e = 0.1", 0.1, {}, None), ("e = 0.3", 0.3, {}, None),
-             ("e = 0.3, crown 4 (one impact)", 0.3, HEAVY, None),
-             ("  the same, e given", 0.3, HEAVY, 0.3)]
-    for label, e, changes, given in cases:
-        _, record, test = synthetic(e, 0, **changes)
+    cases = [("e = 0.1", 0.1, {}, None, False), ("e = 0.3", 0.3, {}, None, False),
+             ("e = 0.3, crown 4 (one impact)", 0.3, HEAVY, None, False),
+             ("  the same, e given", 0.3, HEAVY, 0.3, False),
+             ("  the same, y recorded", 0.3, HEAVY, None, True)]
+    for label, e, changes, given, pendulum in cases:
+        _, record, test = synthetic(e, 0, pendulum=pendulum, **changes)
         p = record_fit._start(record, test)
         fits, evals, counts = [], [], []
         original = record_fit.model_motion
@@ -54,7 +55,7 @@ def main(argv=None) -> int:
             record_fit.model_motion = original
             counts.append(calls[0])
             t0 = time.perf_counter()
-            original(p, test, record.t)
+            original(p, test, record.t, pendulum=pendulum)
             evals.append(time.perf_counter() - t0)
         mf = statistics.median(fits)
         worst = max(worst, mf)

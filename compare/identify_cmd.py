@@ -10,7 +10,7 @@ import math
 from analytic.parameters import ParameterError
 
 UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "xi": "-", "e": "-", "E": "Pa",
-         "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m"}
+         "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "y_offset": "m"}
 
 
 def add_arguments(sp: argparse.ArgumentParser, number) -> None:
@@ -77,6 +77,7 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(to_jsonable({"fit": fit.to_json(), "paper": paper,
                                  "residual_rms": fit.residual_rms,
+                                 "residual_rms_y": fit.residual_rms_y,
                                  "explained": fit.explained, "note": fit.note}), indent=2))
         return 0
     print(f"{args.record}: {record.t.size} samples, {record.t[0]:.4g} to {record.t[-1]:.4g} s")
@@ -96,8 +97,11 @@ def run(args) -> int:
     if "error" in reading:
         print(f"  paper's procedure: {reading['error']}")
     verdict = ("explained" if fit.explained else "NOT explained: the 1-DOF model misses it")
+    y_text = ("" if fit.residual_rms_y is None else
+              f", pendulum's record (y, fitted too) {fit.residual_rms_y:.3g} m")
     print(f"fit: full-record least squares of the exact model (eqs 12-35); residual RMS "
-          f"{fit.residual_rms:.3g} m = {fit.residual_rms / fit.peak:.1%} of the peak: {verdict}")
+          f"{fit.residual_rms:.3g} m = {fit.residual_rms / fit.peak:.1%} of the peak"
+          f"{y_text}: {verdict}")
     return 0
 
 
@@ -109,8 +113,11 @@ def _plot(path, record, fit, paper, test) -> None:
 
     from analytic.record_fit import model_x
 
-    fig = Figure(figsize=(10, 6), layout="constrained")
-    ax, axr = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": (3, 1.2)})
+    pendulum = record.y is not None
+    fig = Figure(figsize=(10, 8.5 if pendulum else 6), layout="constrained")
+    axes = fig.subplots(3 if pendulum else 2, 1, sharex=True, gridspec_kw={
+        "height_ratios": (3, 2, 1.2) if pendulum else (3, 1.2)})
+    ax, axr = axes[0], axes[-1]
     ms = 1e3
     ax.plot(record.t * ms, record.x * ms, ".", ms=2, color="0.5", label="record")
     if fit.determined["M_T"]:
@@ -121,7 +128,17 @@ def _plot(path, record, fit, paper, test) -> None:
                  "the record does not fix M_T and e apart")
     ax.plot(record.t * ms, fit.model_x * ms, "-", color="C0", lw=1.6,
             label=f"full-record fit ({label})")
-    axr.plot(record.t * ms, (record.x - fit.model_x) * ms, "-", color="C0", lw=1)
+    axr.plot(record.t * ms, (record.x - fit.model_x) * ms, "-", color="C0", lw=1, zorder=3,
+             label="x, full-record fit")
+    if pendulum:
+        axy = axes[1]
+        axy.plot(record.t * ms, record.y * ms, ".", ms=2, color="0.5", label="record")
+        axy.plot(record.t * ms, fit.model_y * ms, "-", color="C2", lw=1.4,
+                 label="full-record fit")
+        axy.set(ylabel="pendulum displacement y (mm)")
+        axy.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+        axr.plot(record.t * ms, (record.y - fit.model_y) * ms, "-", color="C2", lw=1,
+                 label="y, full-record fit")
     reading = paper.get("paper", {})
     if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading["xi"]:
         p = [math.log(reading["M_T"]), math.log(reading["K_T"]), reading["xi"],
@@ -130,10 +147,12 @@ def _plot(path, record, fit, paper, test) -> None:
         ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
                 label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "
                       f"{reading['K_T']:.4g} N/m)")
-        axr.plot(record.t * ms, (record.x - xp) * ms, "--", color="C3", lw=1)
+        axr.plot(record.t * ms, (record.x - xp) * ms, "--", color="C3", lw=1,
+                 label="x, the paper's procedure")
     ax.set(ylabel="trunk displacement x (mm)",
            title="pendulum test: the record and the exact 1-DOF model fitted to it")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     axr.axhline(0.0, color="k", lw=0.6)
     axr.set(xlabel="time t (ms)", ylabel="residual (mm)")
+    axr.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     fig.savefig(path, dpi=110)

@@ -252,16 +252,18 @@ def _ident_validation_md(iv) -> list[str]:
          "contain the truth (M_T, K_T, C_T). `one impact`: records the pendulum leaves "
          "after one impact fix omega_1, xi and V_1 = m (1 + e) u_1 / (M_T + m) but not M_T "
          "and e apart; the fit gives ranges there (not counted in `identified` or the 2 % "
-         "column) and, with the pad's e given, the worst error shown.", "",
+         "column); the worst error with the pad's e given / with the pendulum's record y "
+         "fitted too is shown.", "",
          "| rung | method | identified | all within 2 % (e <= 0.3) | worst M_T | worst K_T | "
-         "worst b | one impact (e given: worst) | covered | explained |",
+         "worst b | one impact (worst: e given / y recorded) | covered | explained |",
          "|---|---|---|---|---|---|---|---|---|---|"]
     for rung, e in iv["summary"].items():
         for method in ("fit", "paper"):
             m = e[method]
             w = m["worst"]
             extra = (f"{m.get('not_fixed', 0)}"
-                     + (f" ({_fmt_abs(m['known_e_worst'])})" if m.get("not_fixed") else "")
+                     + (f" ({_fmt_abs(m['known_e_worst'])} / "
+                        f"{_fmt_abs(m.get('with_y_worst'))})" if m.get("not_fixed") else "")
                      + f" | {m['covered']:.0%} | {m['explained']:.0%}" if method == "fit"
                      else "- | - | -")
             L.append(f"| {rung} | {method} | {m['identified']} of {m['cases']} | "
