@@ -7,89 +7,34 @@ least squares (``scipy.optimize.least_squares``), with the time of the first con
 sensor offset as nuisance parameters, and to the pendulum's y(t) too when the record has it.
 95 % intervals come from the Jacobian at the optimum (residuals independent, equal variance
 per channel: cov = s^2 (J^T J)^-1, s^2 = RSS / (n - p)); the fit "explains" the record when
-its residual RMS is within :data:`EXPLAINED_FRACTION` of the peak
-displacement. docs/identification.md has the method and the measured accuracy.
+its residual RMS is within :data:`EXPLAINED_FRACTION` of the peak displacement. The record:
+:mod:`analytic.pendulum_record`; the model at p: :mod:`analytic.fit_model`; what a one-impact
+record fixes: :mod:`analytic.one_impact`. docs/identification.md has the method and the
+measured accuracy.
 """
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from .fit_model import NAMES, model_motion, model_x, two_body_at  # noqa: F401 - public
 from .identification import PendulumTest
-from .model import TwoBodyModel
-from .oscillator import Oscillator
+from .one_impact import RIDGE, on_ridge, restitution_range
 from .parameters import ParameterError, check_range
+from .pendulum_record import MIN_SAMPLES, Record, read_record  # noqa: F401 - public
 
 #: The fit explains a record when its residual RMS is at most this fraction of the peak
 #: displacement: 1-2 % sensor noise passes, a flexible trunk's second mode does not.
 EXPLAINED_FRACTION = 0.03
-MIN_SAMPLES = 20
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 #: Restitutions the fit starts from, the best end kept: e has a local minimum per number
 #: of impacts before the bodies move together or part; 0.1 tends to reach the chattering
 #: branch, 0.5 a few impacts, 0.9 the one-impact branch (docs/identification.md).
 START_RESTITUTIONS = (0.1, 0.5, 0.9)
 DIFF_STEP = 1e-6  # relative forward-difference step of the fit's Jacobian
-#: The parameters p: ln M_T, ln K_T, xi, e, t0 (s), x_offset (m), y_offset (m; the pendulum
-#: sensor's, fitted when the record has y).
-NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset")
-
-
-@dataclass(frozen=True)
-class Record:
-    """A displacement record (SI): time t (s), trunk displacement at the clamp x (m), and the
-    pendulum's displacement y (m) if measured."""
-
-    t: np.ndarray
-    x: np.ndarray
-    y: np.ndarray | None = None
-
-    def __post_init__(self):
-        t, x = np.asarray(self.t, float), np.asarray(self.x, float)
-        if t.ndim != 1 or t.shape != x.shape:
-            raise ParameterError("record: t and x must be columns of the same length")
-        if t.size < MIN_SAMPLES:
-            raise ParameterError(f"record: {t.size} samples; at least {MIN_SAMPLES} needed")
-        for name, v in (("t", t), ("x", x)) + ((("y", np.asarray(self.y, float)),)
-                                               if self.y is not None else ()):
-            bad = np.flatnonzero(~np.isfinite(v))
-            if bad.size:
-                raise ParameterError(f"record: {name} is not a finite number at row {bad[0] + 2}")
-        steps = np.diff(t)
-        if np.any(steps <= 0):
-            row = int(np.flatnonzero(steps <= 0)[0]) + 3
-            raise ParameterError(f"record: time t does not increase at row {row} (sorted, "
-                                 "without repeats, is required)")
-        if not np.max(x) - np.min(x) > 0:
-            raise ParameterError("record: x never changes: the record holds no impact")
-
-
-def read_record(path) -> Record:
-    """A :class:`Record` from a CSV file with the header ``t,x`` or ``t,x,y`` (SI units)."""
-    path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8") as f:
-            rows = list(csv.reader(f))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"record {str(path)!r}: cannot be read ({exc})") from None
-    if not rows:
-        raise ParameterError(f"record {str(path)!r}: empty file")
-    header = [h.strip() for h in rows[0]]
-    if header not in (["t", "x"], ["t", "x", "y"]):
-        raise ParameterError(f"record {str(path)!r}: header {','.join(header)!r}; allowed "
-                             "'t,x' or 't,x,y' (s, m, m)")
-    try:
-        data = np.array([[float(v) for v in r] for r in rows[1:] if r], dtype=float)
-    except ValueError as exc:
-        raise ParameterError(f"record {str(path)!r}: not a number ({exc})") from None
-    if data.ndim != 2 or data.shape[1] != len(header):
-        raise ParameterError(f"record {str(path)!r}: every row needs {len(header)} values")
-    return Record(data[:, 0], data[:, 1], data[:, 2] if len(header) == 3 else None)
 
 
 @dataclass(frozen=True)
@@ -111,50 +56,6 @@ class FitResult:
     def to_json(self) -> dict:
         return {k: {"value": v, "low": self.intervals[k][0], "high": self.intervals[k][1],
                     "determined": self.determined[k]} for k, v in self.values.items()}
-
-
-def _model(p, test: PendulumTest) -> TwoBodyModel:
-    ln_m, ln_k, xi, e = (float(v) for v in p[:4])
-    M, K = math.exp(ln_m), math.exp(ln_k)
-    return TwoBodyModel(dynamic_mass=M, damping=2.0 * xi * math.sqrt(K * M), stiffness=K,
-                        impactor_mass=test.impactor_mass,
-                        impactor_stiffness=test.impactor_stiffness,
-                        impact_speed=test.impact_speed, restitution=e)
-
-
-def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
-    """x(t) (m) of the exact model with parameters p (:data:`NAMES`)."""
-    return model_motion(p, test, t)[0]
-
-
-def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False) -> tuple:
-    """(x, v) (m, m/s) of the exact model at the sorted times t: :func:`model_x` and the
-    trunk's velocity, which is -dx/dt0 (the fit's exact Jacobian column for t0); with
-    ``pendulum`` also the pendulum's (y, v_y) in the same frame (y = x at contact, y = 0 at
-    the first one): before it, the free swing at u_1 (eq 13) run back from the contact."""
-    from .solver import solve_impacts
-
-    t0 = float(p[4])
-    x, v = np.full(t.shape, float(p[5])), np.zeros(t.shape)
-    first = int(np.searchsorted(t, t0, side="right"))  # the first sample after the contact
-    sol = None
-    if first < t.size:
-        t_rel = t[first:] - t0
-        sol = solve_impacts(_model(p, test), float(t_rel[-1]))
-        t_rel = np.minimum(t_rel, sol.t_end)
-        dx, v[first:] = sol.trunk_motion(t_rel)
-        x[first:] += dx
-    if not pendulum:
-        return x, v
-    y, vy = np.full(t.shape, float(p[6])), np.empty(t.shape)
-    swing = Oscillator.from_mck(test.impactor_mass, 0.0, test.impactor_stiffness)
-    dy, vy[:first] = swing.advance(t[:first] - t0, 0.0, test.impact_speed, np)
-    y[:first] += dy
-    if sol is not None:
-        state = sol.state(t_rel)
-        y[first:] += state[2]
-        vy[first:] = state[3]
-    return x, v, y, vy
 
 
 def _start(record: Record, test: PendulumTest, e: float = 0.1) -> np.ndarray:
@@ -280,7 +181,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     the pendulum's record y too when it has one; ``restitution`` (known e, e.g. of the
     pendulum's pad) holds e fixed instead of fitting it. A record of x alone that the
     pendulum leaves after one impact fixes omega_1, xi and V_1 but not M_T and e apart:
-    then M_T, K_T, C_T, E and e are given as ranges (:func:`_ridge`)."""
+    then M_T, K_T, C_T, E and e are given as ranges (:mod:`analytic.one_impact`)."""
     from scipy.optimize import least_squares
 
     t, x, y = record.t, record.x, record.y
@@ -288,7 +189,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         check_range("restitution", restitution, low=0.0, high=1.0)
         if start is None:  # from the free fit moved to the given e (same V_1, omega_1)
             starts = [_start(record, test, restitution)]
-            moved = _on_ridge(fit_record(record, test).point, restitution, test)
+            moved = on_ridge(fit_record(record, test).point, restitution, test)
             if np.all(np.isfinite(moved)):
                 starts.append(moved)
         else:
@@ -332,7 +233,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         rms_y = math.sqrt(float(np.mean((motion[2] - y) ** 2)))
         explained = explained and rms_y <= EXPLAINED_FRACTION * float(np.max(np.abs(y - p[6])))
     # the pendulum's record fixes e (its rebound), so only a record of x alone can be a ridge
-    e_range = _ridge(p, test, t) if restitution is None and y is None else None
+    e_range = restitution_range(p, test, t) if restitution is None and y is None else None
     if e_range is None:
         values, intervals = _estimates(p, prob.covariance(p), test, pendulum=y is not None)
         determined = dict.fromkeys(values, True)
@@ -341,7 +242,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         fixed_e = [j for j in free if j != 3]
         ends = []
         for e_end in e_range:
-            pe = _on_ridge(p, e_end, test)
+            pe = on_ridge(p, e_end, test)
             ends.append(_estimates(pe, _Problem(record, test, scale, upper, pe, fixed_e)
                                    .covariance(pe), test))
         values, intervals = _estimates(p, np.zeros((7, 7)), test)
@@ -362,10 +263,6 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
                      explained=explained, model_x=fitted, determined=determined, point=p,
                      note=note, residual_rms_y=rms_y,
                      model_y=motion[2] if y is not None else None)
-
-
-#: What a one-impact record leaves undetermined (it fixes omega_1, xi, V_1, t0, the offset).
-RIDGE = ("M_T", "K_T", "C_T", "e", "E")
 
 
 def _estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[dict, dict]:
@@ -404,48 +301,6 @@ def _estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[d
         w = z * sd([0, 0, 0, 0, 0, 0, 1])
         intervals["y_offset"] = (p[6] - w, p[6] + w)
     return values, {k: (float(lo), float(hi)) for k, (lo, hi) in intervals.items()}
-
-
-def _one_impact(p, test: PendulumTest, span: float) -> bool:
-    """True when the model at p has one impact and no moving together within ``span`` s."""
-    from .solver import solve_impacts
-
-    sol = solve_impacts(_model(p, test), span)
-    return len(sol.impacts) == 1 and not sol.together_starts
-
-
-def _on_ridge(p, e: float, test: PendulumTest) -> np.ndarray:
-    """The parameters with restitution e and the same omega_1, xi and V_1 as p: the same
-    record while the pendulum does not return (M_T + m = m (1 + e) u_1 / V_1); NaN where
-    that needs M_T <= 0."""
-    M, m = math.exp(p[0]), test.impactor_mass
-    M_e = (M + m) * (1.0 + e) / (1.0 + float(p[3])) - m
-    out = np.array(p, float)
-    if not M_e > 0:  # no positive M_T gives that V_1 at this e
-        return np.full(out.shape, np.nan)
-    out[0], out[1], out[3] = math.log(M_e), p[1] + math.log(M_e) - p[0], e
-    return out
-
-
-def _ridge(p, test: PendulumTest, t: np.ndarray) -> tuple[float, float] | None:
-    """(e_min, 1): the restitutions that explain the record as well as p does, when the
-    model at p has one impact within the record (else None): e from 1 down to where the
-    pendulum would come back (bisection to 1e-4)."""
-    span = float(t[-1] - p[4])
-    if span <= 0 or not _one_impact(p, test, span):
-        return None
-    m, M = test.impactor_mass, math.exp(p[0])
-    lo = max(0.0, (m + 1e-2) * (1.0 + p[3]) / (M + m) - 1.0 + 1e-9)  # M_T >= 0.01 kg
-    hi = float(p[3])
-    if _one_impact(_on_ridge(p, lo, test), test, span):
-        return lo, 1.0
-    while hi - lo > 1e-4:
-        mid = 0.5 * (lo + hi)
-        if _one_impact(_on_ridge(p, mid, test), test, span):
-            hi = mid
-        else:
-            lo = mid
-    return hi, 1.0
 
 
 def log_interval(value: float, half_width: float) -> tuple[float, float]:

@@ -84,7 +84,8 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     what is fixed, and its ranges hold the truth."""
     import math
 
-    from analytic.record_fit import _model, _on_ridge, model_x
+    from analytic.fit_model import model_x, two_body_at
+    from analytic.one_impact import on_ridge
 
     model, record, test = synthetic(0.3, 0, **HEAVY)
     fit = fit_record(record, test)
@@ -103,11 +104,11 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     e_min, e_max = fit.intervals["e"]
     same = model_x(fit.point, test, record.t)
     for e in (e_min, 0.5 * (e_min + e_max), e_max):
-        assert np.allclose(model_x(_on_ridge(fit.point, e, test), test, record.t), same,
+        assert np.allclose(model_x(on_ridge(fit.point, e, test), test, record.t), same,
                            rtol=0.0, atol=1e-12 * np.max(np.abs(same)))
     # ... and ends at e_min: a little less and the pendulum comes back within the record
     span = float(record.t[-1] - fit.point[4])
-    sol = solve_impacts(_model(_on_ridge(fit.point, e_min - 2e-4, test), test), span)
+    sol = solve_impacts(two_body_at(on_ridge(fit.point, e_min - 2e-4, test), test), span)
     assert len(sol.impacts) > 1 or sol.together_starts
 
 
