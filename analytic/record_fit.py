@@ -41,7 +41,8 @@ DIFF_STEP = 1e-6  # relative forward-difference step of the fit's Jacobian
 class FitResult:
     """The fitted model (SI) with 95 % intervals, and how well it explains the record."""
 
-    values: dict  # M_T kg, K_T N/m, C_T N s/m, xi 1, e 1, E Pa, t0 s, x_offset m
+    values: dict  # M_T kg, K_T N/m, C_T N s/m, xi 1, e 1, E Pa, omega_1 rad/s, V_1 m/s,
+    #               t0 s, x_offset m (and y_offset m with a pendulum record)
     intervals: dict  # name -> (low, high)
     residual_rms: float  # m
     peak: float  # m, largest |x - offset| of the record
