@@ -45,9 +45,9 @@ def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False
     if first < t.size:
         t_rel = t[first:] - t0
         sol = solve_impacts(two_body_at(p, test), float(t_rel[-1]))
-        t_rel = np.minimum(t_rel, sol.t_end)
-        dx, v[first:] = sol.trunk_motion(t_rel)
-        x[first:] += dx
+        rows = sol.sorted_state(np.minimum(t_rel, sol.t_end), pendulum=pendulum)
+        x[first:] += rows[0]
+        v[first:] = rows[1]
     if not pendulum:
         return x, v
     y, vy = np.full(t.shape, float(p[6])), np.empty(t.shape)
@@ -55,7 +55,6 @@ def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False
     dy, vy[:first] = swing.advance(t[:first] - t0, 0.0, test.impact_speed, np)
     y[:first] += dy
     if sol is not None:
-        state = sol.state(t_rel)
-        y[first:] += state[2]
-        vy[first:] = state[3]
+        y[first:] += rows[2]
+        vy[first:] = rows[3]
     return x, v, y, vy

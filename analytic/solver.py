@@ -96,12 +96,16 @@ class ImpactSolution:
                 Oscillator.from_mck(m.dynamic_mass + m.impactor_mass, m.damping,
                                     m.stiffness + m.impactor_stiffness))
 
-    def _phase_state(self, ph: Phase, s):
+    def _phase_state(self, ph: Phase, s, pendulum: bool = True):
+        """(x, vx, y, vy) of phase ``ph`` at times s (s) after its start; (x, vx) only
+        without ``pendulum``."""
         tree, pend, both = self._osc
         if ph.kind == "together":
             dx, vx = both.advance(s, ph.x0, ph.vx0, np)
-            return ph.x0 + dx, vx, ph.x0 + dx, vx
+            return (ph.x0 + dx, vx, ph.x0 + dx, vx) if pendulum else (ph.x0 + dx, vx)
         dx, vx = tree.advance(s, ph.x0, ph.vx0, np)
+        if not pendulum:
+            return ph.x0 + dx, vx
         dy, vy = pend.advance(s, ph.y0, ph.vy0, np)
         return ph.x0 + dx, vx, ph.y0 + dy, vy
 
@@ -127,30 +131,24 @@ class ImpactSolution:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if np.any(t < 0) or np.any(t > self.t_end * (1 + 1e-12)):
             raise ValueError(f"t: requested times must lie in [0, {self.t_end}] s")
-        out = np.zeros((4, t.size))
-        starts = np.array([p.t0 for p in self.phases])
-        idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.phases) - 1)
-        for k in np.unique(idx):
-            sel = idx == k
-            ph = self.phases[k]
-            out[:, sel] = np.array(self._phase_state(ph, t[sel] - ph.t0))
+        order = np.argsort(t, kind="stable")
+        out = np.empty((4, t.size))
+        out[:, order] = self.sorted_state(t[order])
         return out
 
-    def trunk_motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(x, vx) of the trunk (m, m/s) at sorted times t (s, 0 <= t <= t_end): the rows of
-        :meth:`state` that a displacement record needs, without the pendulum's."""
-        starts = np.array(self._starts)
-        bounds = np.searchsorted(t, starts[1:], side="left")  # t[i] in phase k for
-        x, v = np.empty(t.size), np.empty(t.size)  # bounds[k-1] <= i < bounds[k]
-        tree, _, both = self._osc
+    def sorted_state(self, t: np.ndarray, *, pendulum: bool = True) -> np.ndarray:
+        """:meth:`state` at sorted times t (s, 0 <= t <= t_end, unchecked), each phase
+        evaluated once on its run of samples (a sample at a phase's start belongs to the
+        phase it opens); rows (x, vx, y, vy), or the trunk's (x, vx) alone without
+        ``pendulum`` (what a displacement record needs)."""
+        bounds = np.searchsorted(t, self._starts[1:], side="left")
+        out = np.empty((4 if pendulum else 2, t.size))
         lo = 0
         for ph, hi in zip(self.phases, [*bounds.tolist(), t.size]):
             if hi > lo:
-                osc = both if ph.kind == "together" else tree
-                dx, vx = osc.advance(t[lo:hi] - ph.t0, ph.x0, ph.vx0, np)
-                x[lo:hi], v[lo:hi] = ph.x0 + dx, vx
+                out[:, lo:hi] = self._phase_state(ph, t[lo:hi] - ph.t0, pendulum)
                 lo = hi
-        return x, v
+        return out
 
     # -- quantities -------------------------------------------------------------------
     @property

@@ -317,14 +317,23 @@ def test_closed_form_x_max_matches_dense_sampling(name, e):
     (0.8, 5.0, 3),  # three impacts, no moving together
     (0.3, 500.0, 1),  # the pendulum rebounds and leaves
 ])
-def test_trunk_motion_is_the_state_s_trunk_rows(e, M, phases):
-    """ImpactSolution.trunk_motion (the record fit's path) against state(): the same x and
-    v at every time, phase starts included (a start belongs to the phase it opens)."""
+def test_sorted_state_is_the_state_and_its_trunk_rows(e, M, phases):
+    """ImpactSolution.sorted_state (the record fit's path: trunk rows alone, or all four)
+    against state() on shuffled times and the scalar path: the same values at every time,
+    phase starts included (a start belongs to the phase it opens)."""
     model = TwoBodyModel(dynamic_mass=M, damping=30.0, stiffness=2e4, impactor_mass=10.0,
                          impactor_stiffness=50.0, impact_speed=1.0, restitution=e)
     sol = solve_impacts(model, 0.5)
     t = np.sort(np.concatenate([np.linspace(0.0, 0.5, 3001), [p.t0 for p in sol.phases]]))
-    x, v = sol.trunk_motion(t)
-    state = sol.state(t)
+    x, v = sol.sorted_state(t, pendulum=False)
+    shuffled = np.random.default_rng(0).permutation(t.size)
+    state = np.empty((4, t.size))
+    state[:, shuffled] = sol.state(t[shuffled])
     assert np.array_equal(x, state[0]) and np.array_equal(v, state[1])
+    assert np.array_equal(sol.sorted_state(t), state)
+    # against the solver's own scalar path (bisection on the phase starts, the half-angle
+    # formulas): the same phase for every time, values to round-off
+    scalar = np.array([sol._scalar_state(ti) for ti in t]).T
+    scale = np.max(np.abs(scalar), axis=1, keepdims=True)
+    assert np.all(np.abs(state - scalar) <= 1e-12 * scale)
     assert len(sol.phases) == phases
