@@ -177,12 +177,15 @@ class _Problem:
 
 
 def fit_record(record: Record, test: PendulumTest, *, start=None,
-               restitution: float | None = None) -> FitResult:
+               restitution: float | None = None,
+               free_fit: FitResult | None = None) -> FitResult:
     """The least-squares fit of the exact model to the whole record (module docstring), to
     the pendulum's record y too when it has one; ``restitution`` (known e, e.g. of the
-    pendulum's pad) holds e fixed instead of fitting it. A record of x alone that the
-    pendulum leaves after one impact fixes omega_1, xi and V_1 but not M_T and e apart:
-    then M_T, K_T, C_T, E and e are given as ranges (:mod:`analytic.one_impact`)."""
+    pendulum's pad) holds e fixed instead of fitting it, starting also from the free fit
+    moved to that e (``free_fit``: that fit if already made on this record, else made here).
+    A record of x alone that the pendulum leaves after one impact fixes omega_1, xi and V_1
+    but not M_T and e apart: then M_T, K_T, C_T, E and e are given as ranges
+    (:mod:`analytic.one_impact`)."""
     from scipy.optimize import least_squares
 
     t, x, y = record.t, record.x, record.y
@@ -190,7 +193,8 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         check_range("restitution", restitution, low=0.0, high=1.0)
         if start is None:  # from the free fit moved to the given e (same V_1, omega_1)
             starts = [_start(record, test, restitution)]
-            moved = on_ridge(fit_record(record, test).point, restitution, test)
+            free_fit = fit_record(record, test) if free_fit is None else free_fit
+            moved = on_ridge(free_fit.point, restitution, test)
             if np.all(np.isfinite(moved)):
                 starts.append(moved)
         else:

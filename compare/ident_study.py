@@ -110,7 +110,8 @@ def identify_case(case: Case) -> dict:
             out["fit"] = errors(fit)
         else:  # a one-impact record: ranges; the pad's e given or the pendulum's record fix them
             out["fit_not_fixed"] = True
-            out["fit_known_e"] = errors(fit_record(record, test, restitution=case.restitution))
+            out["fit_known_e"] = errors(fit_record(record, test, restitution=case.restitution,
+                                                   free_fit=fit))
             y = sampled_pendulum(result.trajectory, test, t, case.noise, case.seed)
             out["fit_with_y"] = errors(fit_record(Record(t, x, y), test))
         truth_c = {"M_T": truth["M_T"], "K_T": truth["K_T"],
