@@ -347,7 +347,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
     """
     from .records import detection_duration, model_metrics
-    from .results import SimulationResult, Trajectory
+    from .results import SimulationResult
 
     t_end = scenario.t_end if t_end is None else t_end
     check_range("--t-end", t_end, low=0, low_open=True, unit="s")
@@ -370,8 +370,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     scen["contact"]["restitution"] = sdof.restitution
     return SimulationResult(
         backend="beam", metrics=metrics, model=model_dict, scenario=scen,
-        trajectory=Trajectory(t=record.t, x=record.x, vx=record.vx, y=record.y, vy=record.vy,
-                              force=record.force),
+        trajectory=record.trajectory(),
         record=record, collision_duration=t_col, extra={"crown": crown})
 
 

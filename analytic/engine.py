@@ -140,7 +140,7 @@ def engine_result(backend: str, record, *, scenario: Scenario, model: TwoBodyMod
     :func:`analytic.records.model_metrics` on ``detection_duration`` (s), the model dict
     (two-body model + ``model_fields``), the scenario as run (its e and t_end)."""
     from .records import model_metrics, with_static_shape_crown
-    from .results import SimulationResult, Trajectory
+    from .results import SimulationResult
 
     if record.crown is None:
         record = with_static_shape_crown(record, scenario.trunk)
@@ -150,12 +150,9 @@ def engine_result(backend: str, record, *, scenario: Scenario, model: TwoBodyMod
     scen = scenario.to_dict()
     scen["contact"]["restitution"] = model.restitution
     scen["t_end"] = t_end
-    r = record
     return SimulationResult(
         backend=backend, metrics=metrics, model={**model.as_dict(), **model_fields},
-        scenario=scen, trajectory=Trajectory(t=r.t, x=r.x, vx=r.vx, y=r.y, vy=r.vy,
-                                             force=r.force),
-        record=record, collision_duration=collision_duration,
+        scenario=scen, trajectory=record.trajectory(), record=record, collision_duration=collision_duration,
         extra={"initial_energy": initial_energy, **(extra or {})})
 
 

@@ -55,6 +55,13 @@ class ImpactRecord(Deferred):
             raise ParameterError("--t-end / --dt: the record has fewer than 3 increasing times: a "
                              "longer --t-end or a smaller --dt (record.t)")
 
+    def trajectory(self):
+        """The record's motion and force as the result's :class:`analytic.results.Trajectory`."""
+        from .results import Trajectory
+
+        return Trajectory(t=self.t, x=self.x, vx=self.vx, y=self.y, vy=self.vy,
+                          force=self.force)
+
 
 def detection_duration(model, contact=None, *, stiffness: float | None = None) -> float:
     """Free-collision duration (s) on which impacts are told from moving together: the SDOF

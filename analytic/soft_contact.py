@@ -136,7 +136,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     the same rule the engines use.
     """
     from .records import model_metrics
-    from .results import SimulationResult, Trajectory
+    from .results import SimulationResult
 
     model = two_body_model(scenario, restitution)
     t_end = scenario.t_end if t_end is None else t_end
@@ -153,7 +153,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     scen["contact"]["restitution"] = model.restitution
     return SimulationResult(
         backend="analytic-soft", metrics=metrics, model=model_dict, scenario=scen,
-        trajectory=Trajectory(t=rec.t, x=rec.x, vx=rec.vx, y=rec.y, vy=rec.vy, force=rec.force),
+        trajectory=rec.trajectory(),
         record=rec, collision_duration=t_col)
 
 

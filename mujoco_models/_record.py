@@ -96,7 +96,7 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
             1.0 - np.cos(th))
         e0 = mm * imp.gravity * imp.equivalent_length * (1.0 - math.cos(imp.release_angle))
     else:
-        pend = 0.5 * mm * vy * vy + 0.5 * model.impactor_stiffness * y * y
+        pend = model.pendulum_energy(y, vy)
         e0 = float(kinetic[0] + potential[0])
     D, B = _damping_matrices(m)
     w = vy - vx

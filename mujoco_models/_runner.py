@@ -84,15 +84,26 @@ def _trunk_spec(scenario: Scenario, trunk: str, segments, damping) -> tuple:
     return _builder.TrunkSpec("sdof", reduce_trunk(scenario.trunk), None, damping), None
 
 
-def engine_trunk_matrices(mjmodel: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
-    """(M, K) of the trunk's hinges from the engine: ``mj_fullM`` at rest and the joint stiffnesses."""
+def _mass_matrix_at_rest(mjmodel: mujoco.MjModel) -> np.ndarray:
+    """The full generalised mass matrix (``mj_fullM``) at the initial configuration."""
     data = mujoco.MjData(mjmodel)
     mujoco.mj_forward(mjmodel, data)
     M = np.zeros((mjmodel.nv, mjmodel.nv))
     mujoco.mj_fullM(mjmodel, M, data.qM)
-    hinges = [j for j in range(mjmodel.njnt)
-              if mujoco.mj_id2name(mjmodel, mujoco.mjtObj.mjOBJ_JOINT, j).startswith("hinge_")]
+    return M
+
+
+def _hinges(mjmodel: mujoco.MjModel) -> list[int]:
+    """Ids of the trunk's hinge joints (named hinge_*)."""
+    return [j for j in range(mjmodel.njnt)
+            if mujoco.mj_id2name(mjmodel, mujoco.mjtObj.mjOBJ_JOINT, j).startswith("hinge_")]
+
+
+def engine_trunk_matrices(mjmodel: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
+    """(M, K) of the trunk's hinges from the engine: ``mj_fullM`` at rest and the joint stiffnesses."""
+    hinges = _hinges(mjmodel)
     dofs = [int(mjmodel.jnt_dofadr[j]) for j in hinges]
+    M = _mass_matrix_at_rest(mjmodel)
     return M[np.ix_(dofs, dofs)], np.diag(mjmodel.jnt_stiffness[hinges])
 
 
@@ -198,12 +209,8 @@ def _check_rk4_damping(mjmodel: mujoco.MjModel, dt: float) -> None:
     """Refuse a dt at which RK4's explicit dampers are unstable (module docstring)."""
     import scipy.linalg
 
-    data = mujoco.MjData(mjmodel)
-    mujoco.mj_forward(mjmodel, data)
-    M = np.zeros((mjmodel.nv, mjmodel.nv))
-    mujoco.mj_fullM(mjmodel, M, data.qM)
     C = sum(_damping_matrices(mjmodel))
-    rate = float(np.max(scipy.linalg.eigvalsh(C, M)))
+    rate = float(np.max(scipy.linalg.eigvalsh(C, _mass_matrix_at_rest(mjmodel))))
     if dt * rate >= RK4_DAMPING_LIMIT:
         raise ParameterError(
             f"--integrator = 'RK4': dt = {dt:.3g} s is too large for stability: RK4 applies "
@@ -294,6 +301,4 @@ def impact_jacobian(m: mujoco.MjModel) -> np.ndarray:
     jac = np.zeros((3, m.nv))
     mujoco.mj_jacSite(m, d, jac, None,
                       mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "impact_point"))
-    hinges = [j for j in range(m.njnt)
-              if mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j).startswith("hinge_")]
-    return jac[0, [int(m.jnt_dofadr[j]) for j in hinges]]
+    return jac[0, [int(m.jnt_dofadr[j]) for j in _hinges(m)]]
