@@ -87,7 +87,6 @@ class Trajectory(Deferred):
     force: np.ndarray | None = None  # N, contact force on the trunk (>= 0)
 
 
-
 @dataclass(frozen=True)
 class SimulationResult:
     """What every backend returns: metrics (METRIC_KEYS, SI), the model and scenario as

@@ -1,8 +1,8 @@
 """pytest configuration of ``pytest compare``.
 
 * Runs are shared by every test through this session's :data:`SESSION_CACHE` (fixture
-  ``run_cache``, passed explicitly) and the ladders built from it (fixture ``ladder_of``): each (scenario, backend, options)
-  is simulated once per session.
+  ``run_cache``, passed explicitly) and the ladders built from it (fixture ``ladder_of``):
+  each (scenario, backend, options) is simulated once per session.
 * ``--report DIR`` writes the discrepancy report (report.html, report.md, report.json) into
   DIR at the end of the session, from the same runs.
 * A failing cross-check prints a compact table (metric, every rung's value, the compared

@@ -39,7 +39,6 @@ IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
 ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
 
 
-
 def unit_of(metric: str) -> str:
     if metric.startswith("id_"):
         return IDENT_UNITS[metric[3:]][0]

@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import html
 import json
-
-import numpy as np
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from analytic.parameters import ParameterError
 from compare.backends import ENGINES
