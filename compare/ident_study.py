@@ -60,10 +60,12 @@ def _scenario(case: Case):
     return scen
 
 
-def sampled_record(trajectory, rate: float = RATE, noise: float = NOISE, seed: int = 0):
-    """(t, x) as a transducer would give them: ``rate`` (Hz) from REST s before the impact,
-    linear interpolation of the trajectory, Gaussian noise of ``noise`` x the peak (m)."""
-    t = np.arange(-REST, float(trajectory.t[-1]), 1.0 / rate)
+def sampled_record(trajectory, rate: float = RATE, noise: float = NOISE, seed: int = 0, *,
+                   rest: float = REST):
+    """(t, x) as a transducer would give them: ``rate`` (Hz) from ``rest`` s before the
+    impact, linear interpolation of the trajectory, Gaussian noise of ``noise`` x the peak
+    (m; none at 0)."""
+    t = np.arange(-rest, float(trajectory.t[-1]), 1.0 / rate)
     x = np.where(t > 0.0, np.interp(t, trajectory.t, trajectory.x), 0.0)
     rng = np.random.default_rng(seed)
     return t, x + noise * float(np.max(np.abs(x))) * rng.standard_normal(t.size)

@@ -90,6 +90,8 @@ def record_fits(ladder) -> list[dict]:
     from analytic.model import two_body_model
     from analytic.record_fit import Record, fit_record
 
+    from ..ident_study import sampled_record
+
     scen = ladder.scenario
     if not isinstance(scen.impactor, Pendulum):
         return []
@@ -100,9 +102,7 @@ def record_fits(ladder) -> list[dict]:
     for r in ladder.rungs:
         if not r.ok or r.result.trajectory is None:
             continue
-        tr = r.result.trajectory
-        t = np.arange(-FIT_REST, float(tr.t[-1]), 1.0 / FIT_RATE)
-        x = np.where(t > 0.0, np.interp(t, tr.t, tr.x), 0.0)
+        t, x = sampled_record(r.result.trajectory, FIT_RATE, noise=0.0, rest=FIT_REST)
         try:
             fit = fit_record(Record(t, x), test)
         except ParameterError as exc:
