@@ -20,11 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fit_model import NAMES, model_motion, model_x, two_body_at  # noqa: F401 - public
+from .fit_model import model_motion, model_x  # noqa: F401 - model_x: public here too
 from .identification import PendulumTest
 from .one_impact import RIDGE, on_ridge, restitution_range
 from .parameters import ParameterError, check_range
-from .pendulum_record import MIN_SAMPLES, Record, read_record  # noqa: F401 - public
+from .pendulum_record import Record, read_record  # noqa: F401 - read_record: public here
 
 #: The fit explains a record when its residual RMS is at most this fraction of the peak
 #: displacement: 1-2 % sensor noise passes, a flexible trunk's second mode does not.
@@ -49,7 +49,7 @@ class FitResult:
     explained: bool
     model_x: np.ndarray  # m, the fitted x at the record's times
     determined: dict  # name -> False for a quantity the record does not fix (value NaN)
-    point: np.ndarray  # the optimum p (NAMES); one of many if some are not determined
+    point: np.ndarray  # the optimum p (fit_model.NAMES); one of many if not all fixed
     note: str = ""  # why some quantities are not determined, or ""
     residual_rms_y: float | None = None  # m, of the pendulum's record if it has one
     model_y: np.ndarray | None = None  # m, the fitted y at the record's times
