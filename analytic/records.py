@@ -6,84 +6,25 @@ Design notes and measured figures: docs/ladder.md.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import replace
 
 import numpy as np
 
-from .parameters import ParameterError
-from .results import METRIC_KEYS, Deferred
+from treeimpact.analytic.model.reduction import crown_factor
 
-
-@dataclass(frozen=True)
-class ImpactRecord(Deferred):
-    """A sampled simulation, t = 0 at the first contact (all SI: s, m, m/s, N, J).
-
-    ``x``/``vx``: trunk impact point; ``y``/``vy``: pendulum contact point; ``force``: contact
-    force on the trunk (>= 0). Energies: ``kinetic`` and ``potential`` of both bodies
-    (springs and gravity), ``damping_work`` dissipated by the trunk's damping so far,
-    ``contact_work`` absorbed by the contact so far (integral of F (vy - vx) dt: stored plus
-    dissipated), ``contact_potential`` elastic energy held in the contact now,
-    ``pendulum_energy`` the pendulum's own kinetic + potential energy. Optional: ``crown``
-    (m) and ``crown_velocity`` (m/s), the top mass's motion, where the backend has it.
-    """
-
-    t: np.ndarray
-    x: np.ndarray
-    vx: np.ndarray
-    y: np.ndarray
-    vy: np.ndarray
-    force: np.ndarray
-    kinetic: np.ndarray
-    potential: np.ndarray
-    damping_work: np.ndarray
-    contact_work: np.ndarray
-    contact_potential: np.ndarray
-    pendulum_energy: np.ndarray
-    crown: np.ndarray | None = None
-    crown_velocity: np.ndarray | None = None
-
-    def __post_init__(self):
-        n = np.shape(self.t)
-        for name in self.__dataclass_fields__:
-            if getattr(self, name) is None:
-                continue
-            value = np.asarray(getattr(self, name), dtype=float)
-            if value.shape != n:
-                raise ParameterError(f"record.{name}: shape {value.shape}, expected {n}")
-            object.__setattr__(self, name, value)
-        if n[0] < 3 or np.any(np.diff(self.t) <= 0):
-            raise ParameterError("--t-end / --dt: the record has fewer than 3 increasing times: a "
-                             "longer --t-end or a smaller --dt (record.t)")
-
-    def trajectory(self):
-        """The record's motion and force as the result's :class:`analytic.results.Trajectory`."""
-        from .results import Trajectory
-
-        return Trajectory(t=self.t, x=self.x, vx=self.vx, y=self.y, vy=self.vy,
-                          force=self.force)
-
-
-def detection_duration(model, contact=None, *, stiffness: float | None = None) -> float:
-    """Free-collision duration (s) on which impacts are told from moving together: the SDOF
-    two-body model's collision under the contact law for the model's e (stiffness N/m from
-    ``stiffness``, else the contact's stiffness or duration), whatever trunk the backend has."""
-    from .soft_contact import collision_duration, contact_law
-
-    return collision_duration(model, *contact_law(model, contact, stiffness=stiffness))
+from .errors import ParameterError
+from .results import METRIC_KEYS, ImpactRecord
 
 
 def static_shape_crown(record: "ImpactRecord", tip: float):
     """(crown, crown_velocity) of an SDOF trunk record: the static shape of eq 5 moves the
-    crown by phi(l) x (``tip`` = phi(l), :func:`analytic.reduction.crown_factor`). SI units."""
+    crown by phi(l) x (``tip`` = phi(l), :func:`analytic.model.reduction.crown_factor`). SI
+    units."""
     return tip * record.x, tip * record.vx
 
 
 def with_static_shape_crown(record: "ImpactRecord", trunk) -> "ImpactRecord":
     """``record`` of an SDOF trunk with its crown motion (:func:`static_shape_crown`)."""
-    from dataclasses import replace
-
-    from .reduction import crown_factor
-
     crown, velocity = static_shape_crown(record, crown_factor(trunk))
     return replace(record, crown=crown, crown_velocity=velocity)
 

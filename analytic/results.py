@@ -9,13 +9,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .records import ImpactRecord
-    from .solver import ImpactSolution
+from .errors import ParameterError, SimulationDiverged
 
 #: Metric keys, their units and meaning (paper's symbols).
 METRIC_UNITS = {
@@ -46,10 +43,6 @@ METRIC_UNITS = {
                                          "(NaN for Newton impulses)"),
 }
 METRIC_KEYS = tuple(METRIC_UNITS)
-
-
-class SimulationDiverged(RuntimeError):
-    """A simulation went non-finite or gained energy: it has no numbers to report."""
 
 
 class Deferred:
@@ -88,11 +81,58 @@ class Trajectory(Deferred):
 
 
 @dataclass(frozen=True)
+class ImpactRecord(Deferred):
+    """A sampled simulation, t = 0 at the first contact (all SI: s, m, m/s, N, J).
+
+    ``x``/``vx``: trunk impact point; ``y``/``vy``: pendulum contact point; ``force``: contact
+    force on the trunk (>= 0). Energies: ``kinetic`` and ``potential`` of both bodies
+    (springs and gravity), ``damping_work`` dissipated by the trunk's damping so far,
+    ``contact_work`` absorbed by the contact so far (integral of F (vy - vx) dt: stored plus
+    dissipated), ``contact_potential`` elastic energy held in the contact now,
+    ``pendulum_energy`` the pendulum's own kinetic + potential energy. Optional: ``crown``
+    (m) and ``crown_velocity`` (m/s), the top mass's motion, where the backend has it.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    vx: np.ndarray
+    y: np.ndarray
+    vy: np.ndarray
+    force: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+    damping_work: np.ndarray
+    contact_work: np.ndarray
+    contact_potential: np.ndarray
+    pendulum_energy: np.ndarray
+    crown: np.ndarray | None = None
+    crown_velocity: np.ndarray | None = None
+
+    def __post_init__(self):
+        n = np.shape(self.t)
+        for name in self.__dataclass_fields__:
+            if getattr(self, name) is None:
+                continue
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.shape != n:
+                raise ParameterError(f"record.{name}: shape {value.shape}, expected {n}")
+            object.__setattr__(self, name, value)
+        if n[0] < 3 or np.any(np.diff(self.t) <= 0):
+            raise ParameterError("--t-end / --dt: the record has fewer than 3 increasing times: a "
+                             "longer --t-end or a smaller --dt (record.t)")
+
+    def trajectory(self):
+        """The record's motion and force as the result's :class:`analytic.results.Trajectory`."""
+        return Trajectory(t=self.t, x=self.x, vx=self.vx, y=self.y, vy=self.vy,
+                          force=self.force)
+
+
+@dataclass(frozen=True)
 class SimulationResult:
     """What every backend returns: metrics (METRIC_KEYS, SI), the model and scenario as
     dicts, the sampled motion, and what the backend solved: ``solution`` (the exact solver's
-    :class:`analytic.solver.ImpactSolution`, Newton rungs) or ``record`` (the sampled
-    :class:`analytic.records.ImpactRecord` with forces and energies, soft-contact rungs) with
+    :class:`analytic.impact.solver.ImpactSolution`, Newton rungs) or ``record`` (the sampled
+    :class:`analytic.results.ImpactRecord` with forces and energies, soft-contact rungs) with
     ``collision_duration`` (s, the free-collision duration its impacts are told apart by).
     ``extra``: backend diagnostics for people (JSON-able); no code reads it."""
 
@@ -102,8 +142,8 @@ class SimulationResult:
     scenario: dict
     trajectory: Trajectory | None = None
     extra: dict = field(default_factory=dict)
-    solution: "ImpactSolution | None" = None
-    record: "ImpactRecord | None" = None
+    solution: object | None = None  # analytic.impact.solver.ImpactSolution
+    record: ImpactRecord | None = None
     collision_duration: float = math.nan
 
     def to_json(self) -> dict:
@@ -125,11 +165,11 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
     a = (result.scenario.get("trunk") or {}).get("clamp_height", math.inf)
     x_max, loss, ledger = m.get("x_max"), m.get("impact_loss"), m.get("ledger_residual")
     problem = None
-    if not _finite(x_max) or not 0.0 < x_max <= a:
+    if not finite_number(x_max) or not 0.0 < x_max <= a:
         problem = f"x_max = {x_max!r} m (allowed (0, a = {a:g}] m: the clamp height)"
-    elif not _finite(loss):
+    elif not finite_number(loss):
         problem = f"impact_loss = {loss!r} J"
-    elif not _finite(ledger) or ledger > LEDGER_DIVERGED:
+    elif not finite_number(ledger) or ledger > LEDGER_DIVERGED:
         problem = (f"energy ledger residual {ledger!r} of the input energy (allowed up to "
                    f"{LEDGER_DIVERGED:g})")
     if problem is not None:
@@ -137,8 +177,10 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
     return result
 
 
-def _finite(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+def finite_number(v) -> bool:
+    """True for a finite real number (Python or numpy; not a bool, None or a string)."""
+    return (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+            and math.isfinite(v))
 
 
 def to_jsonable(obj):

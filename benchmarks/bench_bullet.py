@@ -34,12 +34,11 @@ import time
 
 import numpy as np
 
-from analytic import load_scenario, shipped_scenarios
-from analytic.parameters import ParameterError
-from analytic.results import SimulationDiverged
-from analytic.soft_contact import simulate_soft
-from bullet_models import _runner
-from bullet_models._runner import build_world, make_setup, run
+from treeimpact.analytic.contact.soft import simulate_soft
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
+from treeimpact.bullet_models import _runner
+from treeimpact.bullet_models._runner import build_world, make_setup, run
 
 REPEATS = 5
 

@@ -1,4 +1,4 @@
-"""Benchmark: one `treeimpact identify` fit (analytic.record_fit.fit_record) on a 0.1 s,
+"""Benchmark: one `treeimpact identify` fit (analytic.identify.record_fit.fit_record) on a 0.1 s,
 5 kHz record with 1 % noise (central-leader at e = 0.1, 0.3, and with a crown of 4 trunk
 masses, a one-impact record, free, with e given and with the pendulum's y), and one
 evaluation of its model (the exact solver sampled at the record's times). Prints medians
@@ -25,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 def main(argv=None) -> int:
     from test_record_fit import HEAVY, synthetic
 
-    from analytic import record_fit
+    from treeimpact.analytic.identify import record_fit
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=10)

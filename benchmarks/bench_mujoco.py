@@ -8,7 +8,7 @@ Prints, measured in one run:
    bare and runner runs taken in alternating pairs (target >= 0.9); for the SDOF and the
    chain trunk;
 2. for the SDOF trunk with the linearised pendulum, V and x_max against the analytic
-   soft-contact reference (:func:`analytic.soft_contact.simulate_soft`) over a range of time
+   soft-contact reference (:func:`analytic.contact.soft.simulate_soft`) over a range of time
    steps, and the largest dt that keeps both within 1 %, with its wall time per simulated
    second.
 """
@@ -22,11 +22,11 @@ import time
 import mujoco
 from mujoco import rollout
 
-from analytic import load_scenario
-from analytic.soft_contact import simulate_soft
-from mujoco_models import simulate
-from mujoco_models._rollout import _plan
-from mujoco_models._runner import make_setup
+from treeimpact.analytic.contact.soft import simulate_soft
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.mujoco_models import simulate
+from treeimpact.mujoco_models._rollout import _plan
+from treeimpact.mujoco_models._runner import make_setup
 
 
 def _median_time(fn, repeat):

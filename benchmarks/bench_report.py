@@ -48,8 +48,8 @@ def main(argv=None) -> int:
 
     import pytest
 
-    from compare import runs
-    from compare.report import write_report
+    from treeimpact.compare import runs
+    from treeimpact.compare.report import write_report
 
     if not args.skip_pytest:
         t0 = time.perf_counter()

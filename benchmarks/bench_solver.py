@@ -43,11 +43,11 @@ import math
 import statistics
 import time
 
-from analytic import load_scenario
-from analytic.ivp_reference import solve_ivp_impacts
-from analytic.model import two_body_model
-from analytic.simulate import impact_metrics
-from analytic.solver import solve_impacts
+from treeimpact.analytic.impact.ivp_reference import solve_ivp_impacts
+from treeimpact.analytic.impact.simulate import impact_metrics
+from treeimpact.analytic.impact.solver import solve_impacts
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.two_body import two_body_model
 
 _DEFAULT_ATOL = (1e-15, 1e-12, 1e-15, 1e-12)  # solve_ivp_impacts' default
 _EPS = 2.220446049250313e-16
@@ -97,14 +97,14 @@ def _verdict(r_exact: float, r_ivp: float) -> str:
 
 
 def _bench_simulate(names, repeats: int) -> None:
-    """analytic.simulate (solver, every metric, the ledger; closed forms, trajectory sampled
+    """analytic.impact.simulate (solver, every metric, the ledger; closed forms, trajectory sampled
     on first read) against: the same plus reading the 2001-sample trajectory, and the code
     before issue 13's speed work (phase integrals by quadrature, trajectory sampled up front),
     interleaved; and the largest difference of any metric between closed and quadrature."""
     from contextlib import contextmanager
 
-    from analytic.simulate import simulate
-    from analytic.solver import ImpactSolution
+    from treeimpact.analytic.impact.simulate import simulate
+    from treeimpact.analytic.impact.solver import ImpactSolution
 
     @contextmanager
     def quadrature():

@@ -47,7 +47,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from compare.sweep.run import run_sweep  # noqa: E402
+from treeimpact.compare.sweep.run import run_sweep  # noqa: E402
 
 #: Grid per backend: about 10-20 s of work for one worker on this machine.
 GRIDS = {
@@ -109,7 +109,7 @@ def main(argv=None) -> int:
     ap.add_argument("--dask-defaults", action="store_true",
                     help="the LocalCluster with Dask's defaults, not DASK_SWEEP_CONFIG")
     args = ap.parse_args(argv)
-    from compare.backends import get_backend
+    from treeimpact.compare.backends import get_backend
 
     backends = []
     for b in args.backends.split(","):

@@ -7,8 +7,8 @@ Public API (SI units)::
 
 Rules: :mod:`bullet_models._runner` (runner, time step, Newton-contact settings),
 :mod:`bullet_models._contact` (Bullet's ERP/CFM and the time-step correction),
-:mod:`bullet_models._urdf` (the models; ``python -m bullet_models.regenerate`` writes them
-to ``bullet_models/models``).
+:mod:`bullet_models._urdf` (the models; ``python -m treeimpact.bullet_models.regenerate`` writes
+them to ``bullet_models/models``).
 """
 
 from ._runner import OPTIONS, make_setup, modes, run, simulate, simulate_batch

@@ -11,8 +11,11 @@ from dataclasses import dataclass
 
 from scipy.optimize import brentq
 
-from analytic.parameters import ParameterError
-from analytic.soft_contact import damping_ratio_for_restitution, restitution_for_damping_ratio
+from treeimpact.analytic.contact.law import (
+    damping_ratio_for_restitution,
+    restitution_for_damping_ratio,
+)
+from treeimpact.analytic.errors import ParameterError
 
 MAX_COLLISION_STEPS = 1_000_000  # guard: a collision longer than this many steps is a bug
 

@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from analytic.chain import hinged_chain, lateral_motion
-from analytic.results import SimulationDiverged
+from treeimpact.analytic.continuum.chain import hinged_chain, lateral_motion
+from treeimpact.analytic.errors import SimulationDiverged
 
 SWING_STEP = 1e-4  # s: step of the full pendulum's free swing before the contact
 SWING_SWITCH_STEPS = 20  # switch to the impact step this many swing steps before contact
@@ -156,7 +156,7 @@ def _loop_chain(world, setup, n_steps, full, le, g, m):
 def damping_operators(setup) -> tuple[np.ndarray, np.ndarray | None]:
     """(Dv, Dq): the chain's damping torque over step n is -(Dv theta'_n - Dq theta_n).
 
-    ``distributed``: explicit, Dv = D of :func:`analytic.chain.chain_matrices`, Dq = None
+    ``distributed``: explicit, Dv = D of :func:`analytic.continuum.chain.chain_matrices`, Dq = None
     (its largest rate, eig(M^-1 D) ~ C / (rho A) ~ 350 1/s, is far inside stability).
     ``joint``: the hinge dampers B = diag(beta k_j) (:func:`_joint_damping`) are stiff (beta
     omega_max^2 dt >> 2 at the default step: explicit, the run diverges), so they act

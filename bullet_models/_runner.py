@@ -11,26 +11,56 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from analytic.chain import chain_matrices, chain_natural_frequencies, lateral_jacobian
-from analytic.engine import (DAMPINGS, PENDULUMS, TRUNKS, EngineSetup, chain_modes,
-                             check_choice, check_energy, engine_model,
-                             engine_result, trunk_chain, with_crown)
-from analytic.model import TwoBodyModel
-from analytic.parameters import DEFAULT_CONTACT_DURATION, ParameterError, Scenario
-from analytic.records import ImpactRecord, detection_duration
-from analytic.reduction import reduce_trunk
-from analytic.results import SimulationDiverged, SimulationResult
-from analytic.soft_contact import (CALIBRATIONS, collision_duration, contact_law,
-                                   effective_damping)
-from analytic.timestep import check_time_step, check_work, choose_time_step, sdof_rate
+from treeimpact.analytic.contact.law import (
+    CALIBRATIONS,
+    collision_duration,
+    contact_law,
+    detection_duration,
+    effective_damping,
+)
+from treeimpact.analytic.contact.timestep import (
+    check_time_step,
+    check_work,
+    choose_time_step,
+    sdof_rate,
+)
+from treeimpact.analytic.continuum.chain import (
+    chain_matrices,
+    chain_natural_frequencies,
+    lateral_jacobian,
+)
+from treeimpact.analytic.engine.interface import (
+    DAMPINGS,
+    PENDULUMS,
+    TRUNKS,
+    EngineSetup,
+    chain_modes,
+    check_choice,
+    check_energy,
+    engine_model,
+    engine_result,
+    trunk_chain,
+    with_crown,
+)
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.parameters import DEFAULT_CONTACT_DURATION, Scenario
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.two_body import TwoBodyModel
+from treeimpact.analytic.results import ImpactRecord, SimulationResult
 
 from . import _contact, _urdf
 from ._loops import _loop_chain, _loop_sdof, _swing
-from ._world import (JOINT_VELOCITY_LIMIT, RESTITUTION_THRESHOLD_FRACTION, build_world,
-                     client, engine_matrices, load)
+from ._world import (
+    JOINT_VELOCITY_LIMIT,
+    RESTITUTION_THRESHOLD_FRACTION,
+    build_world,
+    client,
+    engine_matrices,
+    load,
+)
 
 CONTACTS = ("soft", "newton")
-#: The engine interface's options (analytic.engine.Engine): allowed values, None a number.
+#: The engine interface's options (analytic.engine.interface.Engine): allowed values, None a number.
 OPTIONS = {"trunk": TRUNKS, "segments": None, "pendulum": PENDULUMS, "contact": CONTACTS,
            "contact_stiffness": None, "dt": None, "restitution": None, "t_end": None,
            "damping": DAMPINGS, "calibration": CALIBRATIONS}
@@ -52,7 +82,7 @@ class Setup(EngineSetup):
     collision_duration: float  # s: t_c of the soft law (soft) or dt (newton: one-step impulses)
     omega_max: float | None
     apparent_mass: float  # kg: trunk mass seen by the contact
-    calibration: str = "pad"  # analytic.soft_contact.CALIBRATIONS
+    calibration: str = "pad"  # analytic.contact.law.CALIBRATIONS
     matrices: tuple | None = field(default=None, repr=False)  # chain (M, K, D)
 
 
@@ -281,7 +311,8 @@ def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
 def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
     """Static stiffness at a (N/m) and natural frequencies (rad/s) of Bullet's chain: mass
     matrix (``calculateMassMatrix`` at rest) and clamp Jacobian (``calculateJacobian``) from
-    the engine, the hinge springs the runner applies (:func:`analytic.engine.chain_modes`);
+    the engine, the hinge springs the runner applies
+    (:func:`analytic.engine.interface.chain_modes`);
     ``beam``: the continuous beam."""
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")

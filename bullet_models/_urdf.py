@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
-from analytic.chain import HingedChain
-from analytic.generated_files import URDF_DIGITS, fixed_precision_xml
-from analytic.parameters import Billet, ParameterError, Pendulum
-from analytic.reduction import TreeSDOF
+from treeimpact.analytic.continuum.chain import HingedChain, default_segments, hinged_chain
+from treeimpact.analytic.engine.generated_files import URDF_DIGITS, fixed_precision_xml
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import Billet, Pendulum
+from treeimpact.analytic.model.reduction import TreeSDOF, reduce_trunk
 
 CONTACT_RADIUS = 0.05  # m: radius of the pendulum's contact sphere (geometry only)
 PAD_HALF = (0.02, 0.05, 0.05)  # m: half extents (x, y, z) of the trunk's contact pad
@@ -156,10 +157,7 @@ def pendulum_urdf(impactor: Pendulum | Billet, clamp_height: float, kind: str = 
 
 def scenario_urdfs(scenario) -> dict[str, str]:
     """File name -> URDF text of every model of a scenario (the checked-in set), numbers at
-    :data:`analytic.generated_files.URDF_DIGITS` significant digits."""
-    from analytic.chain import default_segments, hinged_chain
-    from analytic.reduction import reduce_trunk
-
+    :data:`analytic.engine.generated_files.URDF_DIGITS` significant digits."""
     trunk = scenario.trunk
     n = default_segments(trunk)
     out = {

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analytic.chain import hinged_chain
+from treeimpact.analytic.continuum.chain import hinged_chain
 
 from . import _urdf
 
@@ -60,7 +60,7 @@ def load(p, cid, text: str) -> int:
     Without ``URDF_USE_INERTIA_FROM_FILE`` PyBullet replaces every link's inertia by that of
     its collision shapes (a 1 mm default box for the chain segments, the pad's box for the
     clamp segment, the 5 cm sphere for the bob): measured on the central-leader chain, the
-    mass matrix then differs from :func:`analytic.chain.chain_matrices` by 6e-4 of its
+    mass matrix then differs from :func:`analytic.continuum.chain.chain_matrices` by 6e-4 of its
     largest entry instead of 2e-16. Every link's joint-velocity clamp (Bullet's default is
     100 rad/s or m/s, reached by the chain's segments at impact) is raised to
     :data:`JOINT_VELOCITY_LIMIT`; a run that reaches it is reported as diverged.

@@ -1,9 +1,10 @@
-"""``python -m bullet_models.regenerate``: write the URDF of the shipped scenarios to bullet_models/models/.
+"""``python -m treeimpact.bullet_models.regenerate``: write the URDF of the shipped scenarios to
+bullet_models/models/.
 
 One file per model and scenario (see :func:`bullet_models._urdf.scenario_urdfs`); the
-chain uses :func:`analytic.chain.default_segments`. URDF files of no shipped scenario are
+chain uses :func:`analytic.continuum.chain.default_segments`. URDF files of no shipped scenario are
 removed; ``--check`` only compares and exits 1 if a file would change or be removed
-(:func:`analytic.generated_files.regenerate_main`).
+(:func:`analytic.engine.generated_files.regenerate_main`).
 """
 
 from __future__ import annotations
@@ -11,8 +12,8 @@ from __future__ import annotations
 import pathlib
 import sys
 
-from analytic.generated_files import URDF_DIGITS, regenerate_main
-from analytic.scenario import load_scenario, shipped_scenarios
+from treeimpact.analytic.engine.generated_files import URDF_DIGITS, regenerate_main
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 
 from ._urdf import scenario_urdfs
 
@@ -28,7 +29,8 @@ def generated() -> dict[str, str]:
 
 
 def main(argv=None) -> int:
-    return regenerate_main(argv, prog="python -m bullet_models.regenerate", generated=generated,
+    return regenerate_main(argv, prog="python -m treeimpact.bullet_models.regenerate",
+                           generated=generated,
                            directory=MODELS_DIR, suffix=".urdf", kind="URDF",
                            digits=URDF_DIGITS)
 

@@ -15,7 +15,7 @@ import sys
 from contextlib import contextmanager
 from dataclasses import dataclass
 
-from analytic.parameters import ParameterError
+from treeimpact.analytic.errors import ParameterError
 
 
 @contextmanager
@@ -73,8 +73,8 @@ class Backend:
 
     def simulate(self, scenario, **options):
         """The backend's result, checked before anyone reports it (a diverged run raises
-        :class:`analytic.results.SimulationDiverged`: never numbers)."""
-        from analytic.results import check_plausible
+        :class:`analytic.errors.SimulationDiverged`: never numbers)."""
+        from treeimpact.analytic.results import check_plausible
 
         func = self._load(self.simulate_ref)
         self._check(func, options)
@@ -98,20 +98,25 @@ class Backend:
 
 
 BACKENDS = {
-    "analytic": Backend("analytic", "analytic.simulate:simulate", "analytic.modes:modes",
+    "analytic": Backend("analytic", "treeimpact.analytic.impact.simulate:simulate",
+                        "treeimpact.analytic.continuum.modes:modes",
                         "exact Newton-restitution solver of the paper (eqs 12-35)",
                         run_cost=((None, 0.005),)),
-    "soft": Backend("soft", "analytic.soft_contact:simulate_soft", "analytic.modes:modes",
+    "soft": Backend("soft", "treeimpact.analytic.contact.soft:simulate_soft",
+                    "treeimpact.analytic.continuum.modes:modes",
                     "analytic SDOF with the spring-dashpot contact", run_cost=((None, 0.2),)),
-    "beam": Backend("beam", "analytic.beam_impact:simulate_beam", "analytic.beam_impact:modes",
+    "beam": Backend("beam", "treeimpact.analytic.continuum.beam_impact:simulate_beam",
+                    "treeimpact.analytic.continuum.beam_impact:modes",
                     "continuum Euler-Bernoulli trunk with the same pad, exact between contact "
                     "switches", run_cost=((None, 0.6),)),
-    "mujoco": Backend("mujoco", "mujoco_models:simulate", "mujoco_models:modes",
+    "mujoco": Backend("mujoco", "treeimpact.mujoco_models:simulate",
+                      "treeimpact.mujoco_models:modes",
                       "MuJoCo (MJCF) slide-joint or hinged-segment trunk", engine=True,
                       run_cost=(("sdof", 0.05), ("chain", 0.5)),
                       variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4")),
                       shades=("#1f77b4", "#4f9fd6", "#8cc3ea")),
-    "bullet": Backend("bullet", "bullet_models:simulate", "bullet_models:modes",
+    "bullet": Backend("bullet", "treeimpact.bullet_models:simulate",
+                      "treeimpact.bullet_models:modes",
                       "PyBullet prismatic or hinged-link trunk", engine=True,
                       run_cost=(("sdof", 0.15), ("chain", 2.5)),
                       variants=("contact", ("soft", "newton")),

@@ -13,10 +13,8 @@ import os
 import sys
 from pathlib import Path
 
-from analytic.parameters import ParameterError
-from analytic.results import METRIC_UNITS, SimulationDiverged, to_jsonable
-
-from .runs import one_line
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
+from treeimpact.analytic.results import METRIC_UNITS, to_jsonable
 
 EXIT_BAD_INPUT = 2
 EXIT_DIVERGED = 3
@@ -140,11 +138,11 @@ def _print_contact_fit(fits: dict) -> None:
 
 
 def cmd_paper(args) -> int:
-    from analytic.paper import reproduce
+    from treeimpact.analytic.paper.reproduction import reproduce
 
     res = reproduce()
     if getattr(args, "fit_contact", False):
-        from analytic.contact_fit import fit_paper_trees
+        from treeimpact.analytic.paper.contact_fit import fit_paper_trees
 
         res["contact_fit"] = fit_paper_trees()
     if args.json:
@@ -224,15 +222,15 @@ def _print_simulation(scenario, result, reference) -> None:
         print(line + f"  {meaning}")
 
 
-#: Flag -> (attribute, the field whose plausible range it takes, analytic.parameters.LIMITS).
+#: Flag -> (attribute, the field whose plausible range it takes, analytic.model.parameters.LIMITS).
 _FLAG_LIMITS = {"--e": ("restitution", "contact.restitution"), "--t-end": ("t_end", "t_end"),
                 "--contact-stiffness": ("contact_stiffness", "contact.stiffness")}
 
 
 def _check_flags(args) -> None:
     """One-line errors that name the flag the user typed, with its allowed range."""
-    from analytic.chain import MAX_SEGMENTS
-    from analytic.parameters import LIMITS, check_range
+    from treeimpact.analytic.continuum.chain import MAX_SEGMENTS
+    from treeimpact.analytic.model.parameters import LIMITS, check_range
 
     for flag, (attr, field) in _FLAG_LIMITS.items():
         value = getattr(args, attr, None)
@@ -248,7 +246,7 @@ def _check_flags(args) -> None:
 
 
 def cmd_simulate(args) -> int:
-    from analytic.scenario import load_scenario
+    from treeimpact.analytic.model.scenario import load_scenario
 
     from .backends import get_backend
 
@@ -271,7 +269,7 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_modes(args) -> int:
-    from analytic.scenario import load_scenario
+    from treeimpact.analytic.model.scenario import load_scenario
 
     from .backends import get_backend
 
@@ -294,7 +292,7 @@ def cmd_modes(args) -> int:
 
 
 def cmd_report(args) -> int:
-    from analytic.scenario import load_scenario
+    from treeimpact.analytic.model.scenario import load_scenario
 
     from .report import write_report
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import pytest
 
-from compare.runs import DIVERGED, FAILED, SKIPPED, RunCache
+from treeimpact.compare.runs import DIVERGED, FAILED, SKIPPED, RunCache
 
 #: The session's runs: every test, the ladders and ``--report DIR`` share them.
 SESSION_CACHE = RunCache()
@@ -37,12 +37,12 @@ _LADDERS: dict = {}
 @pytest.fixture(scope="session")
 def ladder_of(run_cache):
     """ladder_of(name) -> the scenario's :class:`compare.ladder.Ladder`, built once."""
-    from compare.ladder import build_ladder
+    from treeimpact.compare.ladder import build_ladder
 
     def get(name):
         if not _LADDERS:  # first use: every shipped ladder's runs at once, on a process pool
-            from analytic.scenario import shipped_scenarios
-            from compare.ladder import prefetch_ladders
+            from treeimpact.analytic.model.scenario import shipped_scenarios
+            from treeimpact.compare.ladder import prefetch_ladders
 
             prefetch_ladders(run_cache, list(shipped_scenarios()))
         if name not in _LADDERS:
@@ -65,7 +65,7 @@ def assert_checks(ladder, checks) -> None:
     """Pass when every check is ``ok``, a ``finding`` in its band, or a peak time flagged
     ``ambiguous`` (x(t) with two near-equal maxima: not judged, by the documented rule of
     compare.ladder; test_ladder checks which rungs are); else print the table."""
-    from compare.ladder import failure_table
+    from treeimpact.compare.ladder import failure_table
 
     bad = [c for c in checks if c.verdict not in ("ok", "finding", "ambiguous")]
     if bad:
@@ -76,7 +76,7 @@ def pytest_sessionfinish(session, exitstatus):
     out = session.config.getoption("--report", default=None)
     if not out:
         return
-    from compare.report import write_report
+    from treeimpact.compare.report import write_report
 
     paths = write_report(out, runs=SESSION_CACHE)
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")

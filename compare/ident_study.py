@@ -1,7 +1,7 @@
 """Validation of the identification as a study: synthetic pendulum-test records from the
 analytic, soft and beam rungs over e x crown ratio, sampled as a test would be (rate, noise),
-identified by the full-record fit (analytic.record_fit) and by the paper's procedure
-(analytic.identification, "paper" reading); errors against the SDOF truth, drawn as maps.
+identified by the full-record fit (analytic.identify.record_fit) and by the paper's procedure
+(analytic.identify.procedure, "paper" reading); errors against the SDOF truth, drawn as maps.
 See docs/identification.md. SI units."""
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ CROWN_RATIOS = (0.0, 1.0, 2.0, 4.0)
 RUNGS = ("analytic", "soft", "beam")
 RATE = 5e3  # Hz: a common displacement-transducer rate
 NOISE = 0.01  # Gaussian noise, fraction of the record's peak
-REST = 0.02  # s of rest recorded before the impact (analytic.record_fit needs a baseline)
+REST = 0.02  # s of rest recorded before the impact (analytic.identify.record_fit needs a baseline)
 PARAMETERS = ("M_T", "K_T", "b")  # b = C_T / (2 (M_T + m)), eq 42: what both methods find
 METHODS = ("fit", "paper")
 #: The issue's goal for the fit on SDOF records: within 2 % of the truth for e <= 0.3.
@@ -51,8 +51,8 @@ class Case:
 
 
 def _scenario(case: Case):
-    from compare.runs import resolve_scenario
-    from compare.sweep.apply import apply_point
+    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.sweep.apply import apply_point
 
     scen, _ = apply_point(resolve_scenario(case.scenario),
                           {"contact.restitution": case.restitution,
@@ -84,10 +84,14 @@ def sampled_pendulum(trajectory, test, t: np.ndarray, noise: float = NOISE, seed
 
 def identify_case(case: Case) -> dict:
     """Simulate, sample, identify both ways; never raises (errors are the outcome)."""
-    from analytic.identification import identify_from_record, pendulum_test_of, truth_of
-    from analytic.parameters import ParameterError
-    from analytic.record_fit import Record, fit_record
-    from compare.backends import get_backend
+    from treeimpact.analytic.errors import ParameterError
+    from treeimpact.analytic.identify.procedure import (
+        identify_from_record,
+        pendulum_test_of,
+        truth_of,
+    )
+    from treeimpact.analytic.identify.record_fit import Record, fit_record
+    from treeimpact.compare.backends import get_backend
 
     out = {"scenario": case.scenario, "e": case.restitution, "crown_ratio": case.crown_ratio,
            "rung": case.rung, "rate": case.rate, "noise": case.noise, "seed": case.seed}
@@ -161,7 +165,7 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
     """Identify every case on a process pool; write ident-study.json and one map per method
     into ``out``; returns {rows, figures, summary}. ``progress``: as the sweeps' (None: a
     bar on a terminal, a line every few seconds elsewhere; False: nothing)."""
-    from compare.pool import process_map
+    from treeimpact.compare.pool import process_map
 
     todo = (cases(scenario, restitutions, crown_ratios, rungs)
             + engine_cases(scenario, engine_rungs) + sampling_cases(scenario, sampling_rungs))
@@ -171,7 +175,7 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
             "noise": NOISE, "rest_s": REST}
     rows = _resumed(out / "ident-study.json", spec)
     if rows is None:  # else the same study was finished here: a resume has nothing to run
-        from compare.progress import Progress
+        from treeimpact.compare.progress import Progress
 
         bar = None if progress is False else Progress(
             len(todo), "identification validation", unit="case",

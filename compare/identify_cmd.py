@@ -1,5 +1,6 @@
 """``treeimpact identify RECORD.csv``: tree properties from a user's own pendulum-test record,
-by the full-record fit (:mod:`analytic.record_fit`) and the paper's procedure side by side."""
+by the full-record fit (:mod:`analytic.identify.record_fit`) and the paper's procedure side by
+side."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import argparse
 import json
 import math
 
-from analytic.parameters import ParameterError
+from treeimpact.analytic.errors import ParameterError
 
 UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "xi": "-", "e": "-", "E": "Pa",
          "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "y_offset": "m"}
@@ -31,8 +32,8 @@ def add_arguments(sp: argparse.ArgumentParser, number) -> None:
 
 
 def _test(args):
-    from analytic.identification import PendulumTest
-    from analytic.parameters import LIMITS, Pendulum, check_range
+    from treeimpact.analytic.identify.procedure import PendulumTest
+    from treeimpact.analytic.model.parameters import LIMITS, Pendulum, check_range
 
     pend = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
                     release_angle=math.radians(args.release_angle))  # validated, one line
@@ -49,7 +50,7 @@ def _test(args):
 
 def _paper(record, test) -> dict:
     """The paper's procedure (eqs 39-48) in each of its readings, or why it cannot run."""
-    from analytic.identification import READINGS, identify_from_record
+    from treeimpact.analytic.identify.procedure import READINGS, identify_from_record
 
     out = {}
     for reading in READINGS:
@@ -65,8 +66,8 @@ def _paper(record, test) -> dict:
 
 
 def run(args) -> int:
-    from analytic.record_fit import fit_record, read_record
-    from analytic.results import to_jsonable
+    from treeimpact.analytic.identify.record_fit import fit_record, read_record
+    from treeimpact.analytic.results import to_jsonable
 
     test = _test(args)
     record = read_record(args.record)
@@ -111,7 +112,7 @@ def _plot(path, record, fit, paper, test) -> None:
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from analytic.record_fit import model_x
+    from treeimpact.analytic.identify.record_fit import model_x
 
     pendulum = record.y is not None
     fig = Figure(figsize=(10, 8.5 if pendulum else 6), layout="constrained")

@@ -11,16 +11,20 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
-import numpy as np
-
-from analytic.parameters import ParameterError, Pendulum, Scenario
-from analytic.records import PEAK_AMBIGUITY, peak_times
-from analytic.results import METRIC_UNITS, to_jsonable
+from treeimpact.analytic.errors import ParameterError, one_line
+from treeimpact.analytic.model.parameters import Pendulum, Scenario
+from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
+from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
 from .backends import ENGINES
-from .rungs import (ANALYTIC_SAMPLE_STEP, KINDS, Rung, analytic_samples,  # noqa: F401
-                    rung_table)  # (ANALYTIC_SAMPLE_STEP, KINDS, Rung: public here too)
-from .runs import OK, SKIPPED, Run, RunCache, one_line, resolve_scenario
+from .rungs import (  # noqa: F401
+    ANALYTIC_SAMPLE_STEP,
+    KINDS,
+    Rung,
+    analytic_samples,
+    rung_table,  # (ANALYTIC_SAMPLE_STEP, KINDS, Rung: public here too)
+)
+from .runs import OK, SKIPPED, Run, RunCache, resolve_scenario
 
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
@@ -52,11 +56,11 @@ def meaning_of(metric: str) -> str:
 
 
 def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
-    """Segments of the hinged trunk: ``segments`` or analytic.chain.default_segments
+    """Segments of the hinged trunk: ``segments`` or analytic.continuum.chain.default_segments
     (the smallest N within 0.5 % of the beam's static stiffness and first two frequencies)."""
     if segments is not None:
         return int(segments)
-    from analytic.chain import default_segments
+    from treeimpact.analytic.continuum.chain import default_segments
 
     return default_segments(scenario.trunk)
 
@@ -148,13 +152,9 @@ class Check:
 
 
 def relative_step(value, reference) -> float:
-    if not (_finite(value) and _finite(reference)) or reference == 0:
+    if not (finite_number(value) and finite_number(reference)) or reference == 0:
         return math.nan
     return (value - reference) / abs(reference)
-
-
-def _finite(v) -> bool:
-    return isinstance(v, (int, float, np.floating, np.integer)) and math.isfinite(v)
 
 
 def _finding_for(tol: dict, scenario: str, kind: str, metric: str, rung_id: str):
@@ -197,7 +197,7 @@ def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: st
 
 
 def _f(v) -> float:
-    return float(v) if _finite(v) else math.nan
+    return float(v) if finite_number(v) else math.nan
 
 
 # --------------------------------------------------------------------------- identification
@@ -207,8 +207,12 @@ def identify_rung(result, scenario: Scenario) -> dict:
     """The paper's procedure run on a rung's displacement record (eqs 39-48, "paper"
     reading, A_y from the pendulum record). Returns the identified values, their relative
     errors against the model's truth, and the regression; or the reason it failed."""
-    from analytic.identification import (identification_errors, identify_from_record,
-                                         pendulum_test_of, truth_of)
+    from treeimpact.analytic.identify.procedure import (
+        identification_errors,
+        identify_from_record,
+        pendulum_test_of,
+        truth_of,
+    )
 
     if not isinstance(scenario.impactor, Pendulum):
         return {"status": SKIPPED, "reason": "the identification procedure needs a pendulum"}
@@ -437,7 +441,7 @@ def prefetch_ladders(cache: RunCache, scenarios, *, engines=None, segments=None,
 def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
                  segments: int | None = None, tolerances: dict | None = None) -> Ladder:
     """Run (or fetch from ``cache``) every rung of one scenario and assemble the ladder."""
-    from analytic.identification import truth_of
+    from treeimpact.analytic.identify.procedure import truth_of
 
     scen = resolve_scenario(scenario)
     cache = RunCache() if cache is None else cache
@@ -468,7 +472,7 @@ def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
 def _fmt(v) -> str:
     if isinstance(v, str):
         return v
-    if v is None or not _finite(v):
+    if v is None or not finite_number(v):
         return "n/a"
     return f"{v:.5g}"
 

@@ -1,13 +1,14 @@
 """The mechanism behind the 1-DOF findings, as evidence: the paper's model with its impact
-loss matched to the continuum's (analytic.matched_loss) against the continuum (beam rung).
+loss matched to the continuum's (analytic.contact.matched_loss) against the continuum (beam rung).
 If the loss is the mechanism, matching it closes the energy gap (docs/whole-event-metrics.md)."""
 
 from __future__ import annotations
 
 import math
 
-from analytic import ParameterError, simulate
-from analytic.matched_loss import matched_loss_restitution
+from treeimpact.analytic.contact.matched_loss import matched_loss_restitution
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.impact.simulate import simulate
 
 #: The quantities compared, with display scale and unit.
 MECHANISM_METRICS = (("energy_delivered", 1.0, "J"), ("x_max", 1e3, "mm"),

@@ -11,7 +11,7 @@ import os
 import threading
 from functools import partial
 
-from analytic.parameters import ParameterError
+from treeimpact.analytic.errors import ParameterError, one_line
 
 #: Seconds to wait for a Dask scheduler (and its first worker) before it is refused.
 SCHEDULER_TIMEOUT_S = 10
@@ -145,8 +145,6 @@ def connect(scheduler):
     """(Dask client, whether this call opened it): ``scheduler`` is an address or a Client."""
     from distributed import Client
 
-    from .runs import one_line
-
     if isinstance(scheduler, Client):
         return scheduler, False
     if not isinstance(scheduler, str) or not scheduler.strip():
@@ -163,8 +161,6 @@ def connect(scheduler):
 def dask_workers(client) -> int:
     """Worker threads of the Dask ``client``'s cluster, once one has joined (else a one-line
     ParameterError after SCHEDULER_TIMEOUT_S)."""
-    from .runs import one_line
-
     try:
         client.wait_for_workers(1, timeout=SCHEDULER_TIMEOUT_S)
     except (TimeoutError, OSError) as exc:
@@ -181,8 +177,6 @@ def _where(client) -> str:
 def _run_dask(fn, chunks, client, on_result, on_died) -> int:
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
-
-    from .runs import one_line
 
     ran = 0
     futures = client.map(fn, chunks, pure=False)

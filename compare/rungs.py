@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from .backends import ENGINES
 
 #: Sampling (s) of the exact solution for the figures and the identification: 20 us, the
-#: record spacing at which analytic.identification's tests recover b and omega_n.
+#: record spacing at which analytic.identify.procedure's tests recover b and omega_n.
 ANALYTIC_SAMPLE_STEP = 2e-5
 
 

@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import time
 from dataclasses import dataclass, field
 from enum import StrEnum
 
-from analytic.parameters import ParameterError, Scenario
-from analytic.results import SimulationDiverged, SimulationResult
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
+from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.results import SimulationResult
+
 
 class Status(StrEnum):
     """What became of a run (a row of a sweep): the strings the tables and reports show."""
@@ -68,7 +69,7 @@ def resolve_scenario(scenario) -> Scenario:
     """A :class:`Scenario` from a shipped name, a TOML path or a Scenario."""
     if isinstance(scenario, Scenario):
         return scenario
-    from analytic.scenario import load_scenario
+    from treeimpact.analytic.model.scenario import load_scenario
 
     return load_scenario(scenario)
 
@@ -190,13 +191,3 @@ def _run_uncached(request: tuple) -> Run:
     """One (scenario, backend, options) run in a worker process (:meth:`RunCache.prefetch`)."""
     scenario, backend, options = request
     return RunCache().run(scenario, backend, **options)
-
-
-def one_line(exc: BaseException) -> str:
-    """The first line of an exception's message (its type's name when empty)."""
-    text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
-
-
-def finite(value) -> bool:
-    return isinstance(value, (int, float)) and math.isfinite(value)

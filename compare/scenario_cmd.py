@@ -1,7 +1,7 @@
 """``treeimpact scenario``: a scenario file for a user's own tree from measured quantities.
 
 The measured M_T, K_T and b (or the regression a1, a2, x_max, tau of Figs 4-5) and the
-chosen l, rho, E, m_c become a trunk by :func:`analytic.calibration.calibrate_trunk`; the
+chosen l, rho, E, m_c become a trunk by :func:`analytic.model.calibration.calibrate_trunk`; the
 file records which values were given, chosen and calibrated, as the shipped files do.
 """
 
@@ -11,9 +11,9 @@ import argparse
 import math
 from pathlib import Path
 
-from analytic.parameters import ParameterError
+from treeimpact.analytic.errors import ParameterError
 
-#: Chosen values when not given: the shipped trees' choices (analytic/scenarios/*.toml).
+#: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml).
 DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
             "contact_duration": 5e-4, "t_end": 0.1}
 
@@ -61,9 +61,14 @@ def _pick(args, key):
 
 def build_scenario(args):
     """The calibrated :class:`Scenario` of the command's arguments."""
-    from analytic.calibration import (MeasuredTree, calibrate_trunk, calibration_notes,
-                                      damping_rate_from_regression, stiffness_from_regression)
-    from analytic.parameters import Contact, Pendulum, Scenario, Trunk
+    from treeimpact.analytic.model.calibration import (
+        MeasuredTree,
+        calibrate_trunk,
+        calibration_notes,
+        damping_rate_from_regression,
+        stiffness_from_regression,
+    )
+    from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario, Trunk
 
     pendulum = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
                         release_angle=math.radians(args.release_angle))
@@ -110,7 +115,7 @@ def build_scenario(args):
 
 
 def run(args) -> int:
-    from analytic.scenario_toml import scenario_toml
+    from treeimpact.analytic.model.scenario_toml import scenario_toml
 
     text = scenario_toml(build_scenario(args))
     if args.out is None:

@@ -5,8 +5,8 @@ import math
 
 import pytest
 
-from compare.contact_scan import contact_scan, shortest_within
-from compare.runs import RunCache
+from treeimpact.compare.contact_scan import contact_scan, shortest_within
+from treeimpact.compare.runs import RunCache
 
 
 def test_shortest_is_where_every_longer_contact_stays_inside():

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import pytest
 
-from analytic.scenario import shipped_scenarios
-from compare.conftest import assert_checks, require_run
-from compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs, load_tolerances
+from treeimpact.analytic.model.scenario import shipped_scenarios
+from treeimpact.compare.conftest import assert_checks, require_run
+from treeimpact.compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs, load_tolerances
 
 SCENARIOS = shipped_scenarios()
 TOL = load_tolerances()

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from compare.ident_study import Case, identify_case, sampled_record, summarise
+from treeimpact.compare.ident_study import Case, identify_case, sampled_record, summarise
 
 
 @pytest.mark.parametrize("e, crown", [(0.1, 0.0), (0.3, 1.0)])
@@ -54,9 +54,9 @@ def test_sampling_has_the_rate_the_rest_and_the_noise():
 def test_the_pendulum_s_samples_swing_in_before_the_contact():
     """y before the contact is the free swing at u_1 (y -> 0 from below, slope u_1 at
     t = 0), after it the trajectory's; noise of the given fraction of its peak."""
-    from analytic import load_scenario
-    from analytic.identification import pendulum_test_of
-    from compare.ident_study import sampled_pendulum
+    from treeimpact.analytic.identify.procedure import pendulum_test_of
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.ident_study import sampled_pendulum
 
     class T:
         t = np.linspace(0.0, 0.1, 1001)
@@ -101,7 +101,7 @@ def test_summary_keeps_one_impact_records_out_of_the_goal_and_reports_them():
 def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
     """A rerun of the same study into the same directory reads its rows back; a different
     grid runs again (the spec is stored in ident-study.json)."""
-    import compare.ident_study as study
+    import treeimpact.compare.ident_study as study
 
     kw = dict(workers=1, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",),
               sampling_rungs=(), engine_rungs=())
@@ -115,7 +115,7 @@ def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
 def test_sampling_rows_are_summarised_apart_from_the_grid():
     """The rate x noise cases (seeds >= 1) go to the sampling table, not to the maps; the
     worst error is over the parameters and seeds of one cell."""
-    from compare.ident_study import _is_grid, sampling_cases, summarise_sampling
+    from treeimpact.compare.ident_study import _is_grid, sampling_cases, summarise_sampling
 
     todo = sampling_cases()
     assert not any(_is_grid(c.__dict__) for c in todo)
@@ -142,9 +142,14 @@ def test_engine_chain_and_continuum_records_get_the_same_verdict(crown):
 def test_full_preset_validates_identification_on_every_rung():
     """The issue's validation: records from every rung (analytic, soft, beam, both engines'
     chains) at 1-20 kHz with 0.5-2 % noise; the default study keeps the cheap part."""
-    from compare.backends import ENGINES
-    from compare.ident_study import RUNGS, SAMPLING_NOISES, SAMPLING_RATES, sampling_cases
-    from compare.sweep.study import get_preset
+    from treeimpact.compare.backends import ENGINES
+    from treeimpact.compare.ident_study import (
+        RUNGS,
+        SAMPLING_NOISES,
+        SAMPLING_RATES,
+        sampling_cases,
+    )
+    from treeimpact.compare.sweep.study import get_preset
 
     full = get_preset("full")
     assert full.identification and set(full.ident_engine_rungs) == set(ENGINES)

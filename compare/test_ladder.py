@@ -7,16 +7,28 @@ import math
 
 import pytest
 
-from analytic import load_scenario, simulate
-from analytic.identification import (identification_errors, identify_from_record,
-                                     pendulum_test_of, truth_of)
-from analytic.parameters import ParameterError
-from analytic.results import SimulationDiverged
-from compare import backends
-from compare.backends import Backend
-from compare.ladder import (ALL_METRICS, ANALYTIC_SAMPLE_STEP, IDENT_METRICS, build_ladder,
-                            failure_table, judge, ladder_rungs, load_tolerances)
-from compare.runs import DIVERGED, FAILED, OK, SKIPPED, RunCache
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.identify.procedure import (
+    identification_errors,
+    identify_from_record,
+    pendulum_test_of,
+    truth_of,
+)
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.compare import backends
+from treeimpact.compare.backends import Backend
+from treeimpact.compare.ladder import (
+    ALL_METRICS,
+    ANALYTIC_SAMPLE_STEP,
+    IDENT_METRICS,
+    build_ladder,
+    failure_table,
+    judge,
+    ladder_rungs,
+    load_tolerances,
+)
+from treeimpact.compare.runs import DIVERGED, FAILED, OK, SKIPPED, RunCache
 
 TOL = load_tolerances()
 
@@ -44,7 +56,7 @@ def test_each_rung_changes_exactly_one_assumption():
 
 
 def test_default_segments_come_from_the_chain_convergence_rule():
-    from analytic.chain import default_segments
+    from treeimpact.analytic.continuum.chain import default_segments
 
     n = default_segments(load_scenario("central-leader").trunk)
     ids = [r.id for r in ladder_rungs("central-leader")]

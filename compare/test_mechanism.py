@@ -3,10 +3,12 @@ continuum's closes the energy gap (compare.mechanism)."""
 
 import pytest
 
-from analytic import ParameterError, load_scenario, simulate
-from analytic.matched_loss import matched_loss_restitution
-from compare.ladder import build_ladder
-from compare.mechanism import matched_loss_evidence
+from treeimpact.analytic.contact.matched_loss import matched_loss_restitution
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.compare.ladder import build_ladder
+from treeimpact.compare.mechanism import matched_loss_evidence
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 

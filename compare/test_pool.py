@@ -5,7 +5,7 @@ import os
 
 import pytest
 
-from compare.pool import process_map
+from treeimpact.compare.pool import process_map
 
 
 def _square_or_crash(x):
@@ -39,7 +39,7 @@ def test_a_stop_request_ends_a_wait_for_workers_within_the_poll_interval():
     import threading
     import time
 
-    from compare import pool
+    from treeimpact.compare import pool
 
     timer = threading.Timer(0.5, pool.request_stop)
     t0 = time.perf_counter()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import io
 
-from compare import progress
+from treeimpact.compare import progress
 
 
 def test_a_line_every_few_seconds_and_the_wall_time_at_the_end(monkeypatch):

@@ -10,10 +10,11 @@ import re
 
 import pytest
 
-from analytic import load_scenario, simulate
-from analytic.paper import reproduce
-from compare.report import write_report
-from compare.runs import RunCache
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.paper.reproduction import reproduce
+from treeimpact.compare.report import write_report
+from treeimpact.compare.runs import RunCache
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +63,7 @@ def test_json_holds_the_numbers_of_the_page(report):
     checks = scen["checks"]
     assert {"value", "reference_value", "rel_diff", "tolerance", "verdict", "reason"} <= set(
         checks[0])
-    # Table 1, printed and recomputed, as analytic.paper gives them
+    # Table 1, printed and recomputed, as analytic.paper.reproduction gives them
     ref = reproduce(with_restitution_estimates=False)
     assert data["paper"]["trees"]["open-center"]["M_T"]["recomputed"] == pytest.approx(
         ref["trees"]["open-center"]["M_T"]["recomputed"])
@@ -108,7 +109,7 @@ def test_findings_are_flagged_in_the_page(report):
 
 
 def test_every_axis_has_a_unit():
-    from compare.report.scenario import ScenarioSection
+    from treeimpact.compare.report.scenario import ScenarioSection
 
     figs = []
 
@@ -156,8 +157,8 @@ def test_json_has_no_nan(report):
 
 
 def test_each_engine_draws_its_rungs_in_its_own_three_shades():
-    from compare.backends import BACKENDS, ENGINES
-    from compare.report.figures import rung_style
+    from treeimpact.compare.backends import BACKENDS, ENGINES
+    from treeimpact.compare.report.figures import rung_style
 
     class Rung:
         def __init__(self, backend, kind):
@@ -173,8 +174,8 @@ def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(
                                                                                run_cache):
     """The answer is the continuum (beam rung) against rung 1, the ladder's own numbers; it
     needs no engine (the fixture's engine does not exist); the engines' chains agree with it."""
-    from compare.report import _answer
-    from compare.report.scenario import ScenarioSection
+    from treeimpact.compare.report import _answer
+    from treeimpact.compare.report.scenario import ScenarioSection
 
     paths, _ = report
     data = json.loads(paths["json"].read_text())
@@ -207,8 +208,8 @@ def test_a_one_impact_record_shows_ranges_not_numbers(tmp_path):
     off M_T = 557 kg and never returns, so the SDOF rungs' records do not fix M_T and e
     apart (docs/identification.md): the fit table gives ranges holding the truth, says
     "not fixed" and why, and the JSON keeps the ranges."""
-    from analytic.model import two_body_model
-    from compare.ident_study import Case, _scenario
+    from treeimpact.analytic.model.two_body import two_body_model
+    from treeimpact.compare.ident_study import Case, _scenario
 
     scen = _scenario(Case("central-leader", 0.3, 4.0, "analytic"))
     paths = write_report(tmp_path, scenarios=[scen], runs=RunCache(),

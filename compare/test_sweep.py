@@ -12,15 +12,16 @@ import math
 import pandas as pd
 import pytest
 
-from analytic import load_scenario, simulate
-from analytic.parameters import ParameterError
-from analytic.reduction import reduce_trunk
-from analytic.results import METRIC_KEYS, SimulationDiverged
-from compare.sweep.apply import apply_point
-from compare.sweep.grid import derived_ratios, parse_axis, parse_grid
-from compare.sweep.maps import discrepancies, identification_maps, validity_maps
-from compare.sweep.run import INVALID, JOURNAL, TABLE, read_table, run_sweep
-from compare.sweep.speed import speed_points
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.results import METRIC_KEYS
+from treeimpact.compare.sweep.apply import apply_point
+from treeimpact.compare.sweep.grid import derived_ratios, parse_axis, parse_grid
+from treeimpact.compare.sweep.maps import discrepancies, identification_maps, validity_maps
+from treeimpact.compare.sweep.run import INVALID, JOURNAL, TABLE, read_table, run_sweep
+from treeimpact.compare.sweep.speed import speed_points
 
 # --------------------------------------------------------------------------- grid specs
 
@@ -131,10 +132,10 @@ def _explode_or_diverge(scenario, *, restitution=None, t_end=None):
 
 @pytest.fixture
 def fake_engine(monkeypatch):
-    from compare import backends
+    from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "fake", backends.Backend(
-        "fake", "compare.test_sweep:_explode_or_diverge", None, "test engine"))
+        "fake", f"{__name__}:_explode_or_diverge", None, "test engine"))
     return "fake"
 
 
@@ -180,10 +181,10 @@ def _infinite_x_max(scenario, *, t_end=None):
 
 
 def test_run_returning_infinite_metrics_is_recorded_as_diverged(tmp_path, monkeypatch):
-    from compare import backends
+    from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "inf", backends.Backend(
-        "inf", "compare.test_sweep:_infinite_x_max", None, "test engine"))
+        "inf", f"{__name__}:_infinite_x_max", None, "test engine"))
     res = run_sweep("central-leader", ["e=0.3"], tmp_path, backends=["analytic", "inf"],
                     workers=0, identify=False)
     row = res.table.set_index("target").loc["inf"]
@@ -202,10 +203,10 @@ def _dies_at_half(scenario, *, t_end=None):
 
 
 def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
-    from compare import backends
+    from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "crash", backends.Backend(
-        "crash", "compare.test_sweep:_dies_at_half", None, "test engine"))
+        "crash", f"{__name__}:_dies_at_half", None, "test engine"))
     res = run_sweep("central-leader", ["e=0.1,0.3,0.5,0.7,0.9"], tmp_path,
                     backends=["analytic", "crash"], workers=2, identify=False, progress=False)
     df = res.table.set_index(["target", "e"])
@@ -220,11 +221,11 @@ def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
 
 
 def test_segments_one_is_the_sdof_trunk_and_shares_its_run(monkeypatch):
-    from compare import backends
-    from compare.sweep.run import make_targets, plan
+    from treeimpact.compare import backends
+    from treeimpact.compare.sweep.run import make_targets, plan
 
     monkeypatch.setitem(backends.BACKENDS, "eng", backends.Backend(
-        "eng", "compare.test_sweep:_engine_with_trunk", None, "test engine"))
+        "eng", f"{__name__}:_engine_with_trunk", None, "test engine"))
     targets = make_targets(["analytic", "eng"], ladder=True)
     tasks, immediate = plan(load_scenario("central-leader"), parse_grid(["segments=1,4"]),
                             targets, identify=False)
@@ -251,10 +252,10 @@ def _takes_segments(scenario, *, segments=None, t_end=None):
 
 
 def test_unavailable_option_is_a_skipped_row_not_a_crash(tmp_path, fake_engine, monkeypatch):
-    from compare import backends
+    from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "seg", backends.Backend(
-        "seg", "compare.test_sweep:_takes_segments", None, "test engine"))
+        "seg", f"{__name__}:_takes_segments", None, "test engine"))
     res = run_sweep("central-leader", ["e=0.2", "segments=4"], tmp_path,
                     backends=["analytic", fake_engine, "seg"], workers=0, identify=False)
     row = res.table.set_index("target")
@@ -367,7 +368,7 @@ def test_validity_map_of_soft_against_analytic(tmp_path):
     assert set(d["target"]) == {"soft"} and set(d["dominant"]) == {"contact"}
     # independently: the soft and exact runs at one point, straight from the backends
     scen, _ = apply_point(load_scenario("central-leader"), {"e": 0.6, "crown_ratio": 1.0})
-    from analytic.soft_contact import simulate_soft
+    from treeimpact.analytic.contact.soft import simulate_soft
 
     want = simulate_soft(scen).metrics["x_max"] / simulate(scen).metrics["x_max"] - 1
     got = d[(d["e"] == 0.6) & (d["crown_ratio"] == 1.0)]["rel"].item()
@@ -381,8 +382,8 @@ def test_validity_map_of_soft_against_analytic(tmp_path):
 
 
 def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tmp_path):
-    from compare.report.studies import StudySection
-    from compare.sweep.study import write_study
+    from treeimpact.compare.report.studies import StudySection
+    from treeimpact.compare.sweep.study import write_study
 
     res = run_sweep("central-leader", ["e=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
                     backends=["analytic", "soft"], workers=0, progress=False)
@@ -412,7 +413,7 @@ def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tm
 
 
 def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_engine):
-    from compare.sweep.run import _chunks, make_targets, plan
+    from treeimpact.compare.sweep.run import _chunks, make_targets, plan
 
     tasks, _ = plan(load_scenario("central-leader"), parse_grid(["e=0:0.9:40"]),
                     make_targets(["analytic", fake_engine]), identify=False)
@@ -462,7 +463,7 @@ def test_speed_point_is_max_relative_error_and_wall_time_per_simulated_second():
 
 
 def test_treeimpact_sweep_writes_table_maps_and_study(tmp_path, capsys):
-    from compare.cli import main
+    from treeimpact.compare.cli import main
 
     out = tmp_path / "sw"
     rc = main(["sweep", "--grid", "e=0.2:0.6:3", "--grid", "mass_ratio=0.5,1",
@@ -488,7 +489,7 @@ def test_treeimpact_sweep_writes_table_maps_and_study(tmp_path, capsys):
     (["--grid", "e=0.1", "--scheduler", "nohost"], ["--scheduler 'nohost'", "tcp://HOST:PORT"]),
 ])
 def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
-    from compare.cli import main
+    from treeimpact.compare.cli import main
 
     rc = main(["sweep", *argv, "--backend", "analytic", "--out", str(tmp_path / "o")]
               if "--backend" not in argv else ["sweep", *argv, "--out", str(tmp_path / "o")])
@@ -501,8 +502,8 @@ def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
 
 def test_interrupted_sweep_command_says_how_to_resume_and_exits_130(tmp_path, capsys,
                                                                      monkeypatch):
-    from compare.cli import main
-    from compare.sweep import run
+    from treeimpact.compare.cli import main
+    from treeimpact.compare.sweep import run
 
     def interrupted(*args, **kw):
         raise KeyboardInterrupt
@@ -522,7 +523,7 @@ def test_map_cells_print_their_values_outline_the_tolerance_and_say_why_na():
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
-    from compare.sweep.maps import _extend, _heat
+    from treeimpact.compare.sweep.maps import _extend, _heat
 
     matplotlib.use("Agg")
     cell = pd.DataFrame({"e": [0.1, 0.5, 0.9], "crown_ratio": [0.0, 0.0, 0.0],

@@ -9,8 +9,8 @@ Rules: :mod:`mujoco_models._builder` (the MJCF, built with ``mujoco.MjSpec``),
 :mod:`mujoco_models._contact` (MuJoCo's solref/solimp as a spring-dashpot and the
 restitution mapping for its Euler step, also exact for ``implicit``/``implicitfast``; RK4
 gets the continuous law), :mod:`mujoco_models._runner` (integrator option, time step,
-rollout, record, energy ledger). ``python -m mujoco_models.regenerate`` writes the models of the
-shipped scenarios to ``mujoco_models/models``.
+rollout, record, energy ledger). ``python -m treeimpact.mujoco_models.regenerate`` writes the
+models of the shipped scenarios to ``mujoco_models/models``.
 """
 
 from ._runner import OPTIONS, build_model, make_setup, modes, run, simulate, simulate_batch

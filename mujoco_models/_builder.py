@@ -10,9 +10,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from analytic.chain import HingedChain, chain_matrices
-from analytic.parameters import Billet, ParameterError, Pendulum, Scenario
-from analytic.reduction import TreeSDOF
+from treeimpact.analytic.continuum.chain import HingedChain, chain_matrices
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import Billet, Pendulum, Scenario
+from treeimpact.analytic.model.reduction import TreeSDOF
 
 from . import _contact
 

@@ -13,8 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from analytic.parameters import ParameterError
-from analytic.soft_contact import damping_ratio_for_restitution, restitution_for_damping_ratio
+from treeimpact.analytic.contact.law import (
+    damping_ratio_for_restitution,
+    restitution_for_damping_ratio,
+)
+from treeimpact.analytic.errors import ParameterError
 
 #: Values of the ``integrator`` option (MuJoCo's names, ``mjtIntegrator``).
 INTEGRATORS = ("Euler", "implicit", "implicitfast", "RK4")
@@ -141,7 +144,7 @@ def engine_law(k: float, e: float, mu: float, h: float, integrator: str = "Euler
     """The (k_d, c_d) MuJoCo needs so that one free collision of reduced mass mu rebounds at e.
 
     k (N/m) is the continuous law's stiffness; c = 2 zeta(e) sqrt(k mu) its damping
-    (:func:`analytic.soft_contact.damping_ratio_for_restitution`); then, for the integrators
+    (:func:`analytic.contact.law.damping_ratio_for_restitution`); then, for the integrators
     with Euler's contact map, pole matching and Brent's method on c_d; for RK4 (k, c)
     unchanged, its own restitution replayed (module docstring).
     """
@@ -176,5 +179,5 @@ def engine_law(k: float, e: float, mu: float, h: float, integrator: str = "Euler
 
 
 def law_restitution(k: float, c: float, mu: float) -> float:
-    """e of the continuous law (k, c) for reduced mass mu (analytic.soft_contact)."""
+    """e of the continuous law (k, c) for reduced mass mu (analytic.contact.soft)."""
     return restitution_for_damping_ratio(c / (2.0 * math.sqrt(k * mu)))

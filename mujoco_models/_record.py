@@ -8,12 +8,16 @@ import math
 import mujoco
 import numpy as np
 
-from analytic.chain import hinged_chain, lateral_motion
-from analytic.engine import (ENERGY_GROWTH_LIMIT, check_energy, engine_result, step_means,
-                             with_crown)
-from analytic.parameters import ParameterError
-from analytic.records import ImpactRecord
-from analytic.results import SimulationDiverged, SimulationResult
+from treeimpact.analytic.continuum.chain import hinged_chain, lateral_motion
+from treeimpact.analytic.engine.interface import (
+    ENERGY_GROWTH_LIMIT,
+    check_energy,
+    engine_result,
+    step_means,
+    with_crown,
+)
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.results import ImpactRecord, SimulationResult
 
 from . import _builder, _contact
 

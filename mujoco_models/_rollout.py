@@ -10,9 +10,9 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from analytic.engine import swing_time
-from analytic.model import TwoBodyModel
-from analytic.parameters import Scenario
+from treeimpact.analytic.engine.interface import swing_time
+from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.model.two_body import TwoBodyModel
 
 INITIAL_OVERLAP = 1e-12  # m: the linear pendulum starts touching, the contact active
 SWING_STEP = 1e-4  # s: step of the full pendulum's free swing (contact disabled)

@@ -14,15 +14,34 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from analytic.engine import (DAMPINGS, PENDULUMS, TRUNKS, EngineSetup, chain_modes,
-                             check_choice, engine_model, trunk_chain)
-from analytic.parameters import ParameterError, Scenario
-from analytic.records import detection_duration
-from analytic.reduction import reduce_trunk
-from analytic.results import SimulationDiverged, SimulationResult
-from analytic.soft_contact import (CALIBRATIONS, contact_law, damping_ratio_for_restitution,
-                                   pad_restitution, release_time)
-from analytic.timestep import check_time_step, check_work, choose_time_step, sdof_rate
+from treeimpact.analytic.contact.law import (
+    CALIBRATIONS,
+    contact_law,
+    damping_ratio_for_restitution,
+    detection_duration,
+    pad_restitution,
+    release_time,
+)
+from treeimpact.analytic.contact.timestep import (
+    check_time_step,
+    check_work,
+    choose_time_step,
+    sdof_rate,
+)
+from treeimpact.analytic.engine.interface import (
+    DAMPINGS,
+    PENDULUMS,
+    TRUNKS,
+    EngineSetup,
+    chain_modes,
+    check_choice,
+    engine_model,
+    trunk_chain,
+)
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.results import SimulationResult
 
 from . import _builder, _contact
 from ._record import _damping_matrices, _rest_potential, _result
@@ -43,7 +62,7 @@ def _warning_to_stderr(message: str) -> None:
 mujoco.set_mju_user_warning(_warning_to_stderr)
 
 INTEGRATORS = _contact.INTEGRATORS  # the ``integrator`` option (MuJoCo's names)
-#: The engine interface's options (analytic.engine.Engine): allowed values, None a number.
+#: The engine interface's options (analytic.engine.interface.Engine): allowed values, None a number.
 OPTIONS = {"trunk": TRUNKS, "segments": None, "pendulum": PENDULUMS,
            "contact_stiffness": None, "dt": None, "restitution": None, "t_end": None,
            "damping": DAMPINGS, "integrator": INTEGRATORS, "calibration": CALIBRATIONS}
@@ -59,13 +78,13 @@ class Setup(EngineSetup):
     """A compiled model and everything the run needs (SI units)."""
     law: _contact.EngineLaw
     collision_duration: float  # s: free collision of the law on mu_eff
-    detection_duration: float  # s: analytic.records.detection_duration, common to all rungs
+    detection_duration: float  # s: analytic.contact.law.detection_duration, common to all rungs
     omega_max: float | None  # rad/s: highest mode of the engine's chain
     inverse_mass: float  # A, 1/kg
     inverse_mass_approx: float  # MuJoCo's diagApprox of the pair, 1/kg
     solref: tuple
     integrator: str
-    calibration: str  # "pad" or "effective" (analytic.soft_contact.CALIBRATIONS)
+    calibration: str  # "pad" or "effective" (analytic.contact.law.CALIBRATIONS)
     mjmodel: mujoco.MjModel = field(repr=False, compare=False)
     spec: mujoco.MjSpec = field(repr=False, compare=False)
     # computed once per setup (a run does not rebuild MjData for them):
@@ -283,7 +302,8 @@ def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
 def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
     """Static stiffness at a (N/m) and natural frequencies (rad/s) of MuJoCo's chain from
     the engine: ``mj_fullM`` at rest, the compiled hinge stiffnesses and the impact point's
-    ``mj_jacSite`` (:func:`analytic.engine.chain_modes`); ``beam``: the continuous beam."""
+    ``mj_jacSite`` (:func:`analytic.engine.interface.chain_modes`); ``beam``: the continuous
+    beam."""
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")
     tspec, _ = _trunk_spec(scenario, "chain", segments, "distributed")

@@ -1,8 +1,10 @@
-"""``python -m mujoco_models.regenerate``: write the MJCF of the shipped scenarios to mujoco_models/models/.
+"""``python -m treeimpact.mujoco_models.regenerate``: write the MJCF of the shipped scenarios to
+mujoco_models/models/.
 
-One file per scenario, trunk (``sdof``, ``chain`` with :func:`analytic.chain.default_segments`)
-and pendulum (``linear``, ``full``): ``<scenario>-<trunk>-<pendulum>.xml``, exactly the model
-the runner steps with its default options (contact law and time step included), written by
+One file per scenario, trunk (``sdof``, ``chain`` with
+:func:`analytic.continuum.chain.default_segments`) and pendulum (``linear``, ``full``):
+``<scenario>-<trunk>-<pendulum>.xml``, exactly the model the runner steps with its default options
+(contact law and time step included), written by
 ``MjSpec.to_xml`` (6 significant digits; see :func:`mujoco_models._builder.mjcf_text`).
 Open one with ``python -m mujoco.viewer --mjcf=<file>``. XML files of no shipped scenario
 are removed. ``--check`` only compares and exits 1 if a file would change
@@ -14,8 +16,11 @@ from __future__ import annotations
 import pathlib
 import sys
 
-from analytic.generated_files import MJCF_DIGITS, regenerate_main
-from analytic.scenario import load_scenario, shipped_scenarios
+from treeimpact.analytic.engine.generated_files import MJCF_DIGITS, regenerate_main
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
+
+from ._builder import mjcf_text
+from ._runner import make_setup
 
 MODELS_DIR = pathlib.Path(__file__).resolve().parent / "models"
 VARIANTS = (("sdof", "linear"), ("sdof", "full"), ("chain", "linear"), ("chain", "full"))
@@ -23,9 +28,6 @@ VARIANTS = (("sdof", "linear"), ("sdof", "full"), ("chain", "linear"), ("chain",
 
 def scenario_mjcf(scenario) -> dict[str, str]:
     """File name -> MJCF text of the runner's models of one scenario (default options)."""
-    from ._builder import mjcf_text
-    from ._runner import make_setup
-
     out = {}
     for trunk, pendulum in VARIANTS:
         setup = make_setup(scenario, trunk=trunk, pendulum=pendulum)
@@ -42,7 +44,8 @@ def generated() -> dict[str, str]:
 
 
 def main(argv=None) -> int:
-    return regenerate_main(argv, prog="python -m mujoco_models.regenerate", generated=generated,
+    return regenerate_main(argv, prog="python -m treeimpact.mujoco_models.regenerate",
+                           generated=generated,
                            directory=MODELS_DIR, suffix=".xml", kind="MJCF",
                            digits=MJCF_DIGITS)
 

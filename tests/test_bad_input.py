@@ -15,10 +15,10 @@ from pathlib import Path
 
 import pytest
 
-from compare.cli import main
+from treeimpact.compare.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
-SCENARIO = (ROOT / "analytic" / "scenarios" / "open-center.toml").read_text()
+SCENARIO = (ROOT / "analytic" / "model" / "scenarios" / "open-center.toml").read_text()
 
 
 def edited(tmp_path, **fields) -> str:
@@ -69,9 +69,9 @@ def test_a_steel_stiff_trunk_is_refused(tmp_path, capsys):
 
 def test_the_sdof_trunk_frequency_sets_the_engine_time_step():
     """The stiffest plausible SDOF trunk: its own omega enters the step (omega dt < 2)."""
-    from analytic import load_scenario
-    from analytic.parameters import Trunk
-    from mujoco_models._runner import make_setup
+    from treeimpact.analytic.model.parameters import Trunk
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.mujoco_models._runner import make_setup
 
     s = load_scenario("open-center")
     stiff = Trunk(length=1.0, clamp_height=0.05, diameter=1.0, density=950.0,
@@ -131,8 +131,10 @@ def test_calibration_that_is_not_a_table(tmp_path, capsys):
 def test_results_beyond_the_geometry_or_the_ledger_are_divergences():
     import dataclasses
 
-    from analytic import load_scenario, simulate
-    from analytic.results import SimulationDiverged, check_plausible
+    from treeimpact.analytic.errors import SimulationDiverged
+    from treeimpact.analytic.impact.simulate import simulate
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.analytic.results import check_plausible
 
     good = simulate(load_scenario("open-center"))
     assert check_plausible(good) is good
@@ -161,7 +163,7 @@ def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tm
 def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
     out = tmp_path / "sweep"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "compare.cli", "sweep", "--grid", "e=0.1:0.9:300",
+        [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--grid", "e=0.1:0.9:300",
          "--grid", "crown_ratio=0,1,2", "--backend", "analytic,soft", "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
@@ -177,9 +179,9 @@ def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
 def test_a_scheduler_without_workers_is_one_line_after_its_timeout(tmp_path, monkeypatch):
     from distributed import Client, LocalCluster
 
-    from analytic.parameters import ParameterError
-    from compare import pool
-    from compare.sweep import run
+    from treeimpact.analytic.errors import ParameterError
+    from treeimpact.compare import pool
+    from treeimpact.compare.sweep import run
 
     monkeypatch.setattr(pool, "SCHEDULER_TIMEOUT_S", 1)
     with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster, \
@@ -197,8 +199,8 @@ def test_a_scheduler_lost_during_the_sweep_is_one_line_and_keeps_the_rows(tmp_pa
     from distributed import Client, LocalCluster
     from distributed.comm.core import CommClosedError
 
-    from analytic.parameters import ParameterError
-    from compare.sweep import run
+    from treeimpact.analytic.errors import ParameterError
+    from treeimpact.compare.sweep import run
 
     def lost(futures, *a, **k):
         raise CommClosedError("in <TCP (closed)>: Stream is closed")

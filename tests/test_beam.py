@@ -1,4 +1,5 @@
-"""Continuous Euler-Bernoulli trunk (analytic.beam) against exact solutions of the beam equation."""
+"""Continuous Euler-Bernoulli trunk (analytic.continuum.beam) against exact solutions of the beam
+equation."""
 
 import dataclasses
 import math
@@ -7,12 +8,21 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from analytic import ParameterError, Trunk, load_scenario, reduce_trunk, shipped_scenarios
-from analytic.beam import (assemble, beam_mode_shapes, beam_natural_frequencies,
-                           beam_static_stiffness, flexibility, mesh)
-from analytic.reduction import static_flexibility
+from treeimpact.analytic.continuum.beam import (
+    assemble,
+    beam_mode_shapes,
+    beam_natural_frequencies,
+    beam_static_stiffness,
+    flexibility,
+    mesh,
+)
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import Trunk
+from treeimpact.analytic.model.reduction import reduce_trunk, static_flexibility
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 
-MESH_RULE = 1e-8  # relative accuracy of the first 3 frequencies promised by the mesh rule (analytic.beam)
+#: relative accuracy of the first 3 frequencies promised by the mesh rule (analytic.continuum.beam)
+MESH_RULE = 1e-8
 UNIFORM = Trunk(length=1.3, clamp_height=1.3, diameter=0.1, density=900.0, youngs_modulus=1.0e10)
 
 

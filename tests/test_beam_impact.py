@@ -1,4 +1,5 @@
-"""The continuum-beam impact backend (analytic.beam_impact) against independent references."""
+"""The continuum-beam impact backend (analytic.continuum.beam_impact) against independent
+references."""
 
 import dataclasses
 import math
@@ -7,12 +8,22 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from analytic import ParameterError
-from analytic.beam import beam_matrices, beam_natural_frequencies, deflection_dof
-from analytic.beam_impact import (_system, beam_impact_model, beam_record, simulate_beam)
-from analytic.reduction import static_flexibility
-from analytic.scenario import load_scenario
-from analytic.soft_contact import restitution_for_damping_ratio, simulate_soft
+from treeimpact.analytic.contact.law import restitution_for_damping_ratio
+from treeimpact.analytic.contact.soft import simulate_soft
+from treeimpact.analytic.continuum.beam import (
+    beam_matrices,
+    beam_natural_frequencies,
+    deflection_dof,
+)
+from treeimpact.analytic.continuum.beam_impact import (
+    _system,
+    beam_impact_model,
+    beam_record,
+    simulate_beam,
+)
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.reduction import static_flexibility
+from treeimpact.analytic.model.scenario import load_scenario
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 

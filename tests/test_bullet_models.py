@@ -9,17 +9,17 @@ import pytest
 
 pybullet = pytest.importorskip("pybullet")
 
-import analytic  # noqa: E402
-from analytic import load_scenario  # noqa: E402
-from analytic.beam import beam_natural_frequencies, beam_static_stiffness  # noqa: E402
-from analytic.chain import hinged_chain, lateral_jacobian  # noqa: E402
-from analytic.parameters import ParameterError  # noqa: E402
-from analytic.records import contact_intervals  # noqa: E402
-from analytic.soft_contact import simulate_soft  # noqa: E402
-from bullet_models import _contact, modes, simulate, simulate_batch  # noqa: E402
-from bullet_models._runner import build_world, engine_matrices, load, make_setup  # noqa: E402
-from analytic.generated_files import URDF_DIGITS, file_differences  # noqa: E402
-from bullet_models.regenerate import MODELS_DIR, generated  # noqa: E402
+from treeimpact.analytic.contact.soft import simulate_soft  # noqa: E402
+from treeimpact.analytic.continuum.beam import beam_natural_frequencies, beam_static_stiffness  # noqa: E402
+from treeimpact.analytic.continuum.chain import hinged_chain, lateral_jacobian  # noqa: E402
+from treeimpact.analytic.engine.generated_files import URDF_DIGITS, file_differences  # noqa: E402
+from treeimpact.analytic.errors import ParameterError  # noqa: E402
+from treeimpact.analytic.impact.simulate import simulate as simulate_exact  # noqa: E402
+from treeimpact.analytic.model.scenario import load_scenario  # noqa: E402
+from treeimpact.analytic.records import contact_intervals  # noqa: E402
+from treeimpact.bullet_models import _contact, modes, simulate, simulate_batch  # noqa: E402
+from treeimpact.bullet_models._runner import build_world, engine_matrices, load, make_setup  # noqa: E402
+from treeimpact.bullet_models.regenerate import MODELS_DIR, generated  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +35,7 @@ def test_regenerated_urdf_equals_checked_in_files():
     on_disk = {p.name for p in MODELS_DIR.glob("*.urdf")}
     assert on_disk == set(files)
     diff = file_differences(MODELS_DIR, files, URDF_DIGITS)
-    assert not diff, f"run python -m bullet_models.regenerate: {diff}"
+    assert not diff, f"run python -m treeimpact.bullet_models.regenerate: {diff}"
 
 
 def test_urdf_parses_in_yourdfpy_and_loads_in_pybullet():
@@ -86,7 +86,7 @@ def _free_collision(setup, per_body):
 def test_bullet_combines_stiffness_in_series_and_damping_in_sum(central):
     """Unequal per-link values: PyBullet's rebound is the replay with (series k, summed d),
     and not what other combination rules would give."""
-    from analytic.parameters import Billet, Contact, Scenario
+    from treeimpact.analytic.model.parameters import Billet, Contact, Scenario
 
     billet = Scenario(name="two-body", trunk=central.trunk,
                       impactor=Billet(central.impactor.mass, 2.0),
@@ -107,7 +107,7 @@ def test_bullet_combines_stiffness_in_series_and_damping_in_sum(central):
 
 def _two_body_restitution(e, dt_fraction=50):
     """Free collision of M_T and m in PyBullet with the corrected soft contact; measured e."""
-    from analytic.parameters import Billet, Contact, Scenario
+    from treeimpact.analytic.model.parameters import Billet, Contact, Scenario
 
     s = load_scenario("central-leader")
     billet = Scenario(name="two-body", trunk=s.trunk, impactor=Billet(s.impactor.mass, 2.0),
@@ -118,7 +118,7 @@ def _two_body_restitution(e, dt_fraction=50):
 
     free = dataclasses.replace(setup.model, stiffness=1e-12, damping=0.0)
     setup = dataclasses.replace(setup, model=free)
-    from bullet_models._runner import run
+    from treeimpact.bullet_models._runner import run
 
     rec = run(setup).record
     return (rec.vx[-1] - rec.vy[-1]) / 2.0, setup
@@ -148,8 +148,8 @@ def test_time_step_correction_is_needed_uncorrected_law_loses_restitution():
 @pytest.mark.parametrize("n", [12, 33])
 def test_engine_mass_matrix_and_jacobian_match_the_chain_model(central, n):
     """Bullet's Featherstone mass matrix and clamp Jacobian at rest equal the linearised chain
-    (analytic.chain) to double round-off: the same rigid links, computed independently."""
-    from analytic.chain import chain_matrices
+    (analytic.continuum.chain) to double round-off: the same rigid links, computed independently."""
+    from treeimpact.analytic.continuum.chain import chain_matrices
 
     chain = hinged_chain(central.trunk, n)
     M, J = engine_matrices(chain)
@@ -205,7 +205,7 @@ def test_sdof_soft_contact_peak_and_loss_match_at_default_step(name):
                                          ("realistic-crown", 8)])
 def test_newton_contact_reproduces_exact_impacts(name, refine):
     s = load_scenario(name)
-    exact = analytic.simulate(s)
+    exact = simulate_exact(s)
     dt = make_setup(s, trunk="sdof", contact="newton").dt / refine
     res = simulate(s, trunk="sdof", contact="newton", dt=dt)
     rec, dt = res.record, res.model["dt"]
@@ -252,7 +252,7 @@ def test_newton_contact_on_the_chain_is_eq_21_with_the_apparent_mass(central):
     """First step of the rigid impact on the hinged trunk: the impulse is eq 21's with the
     clamp's apparent mass 1 / (J M^-1 J^T), and Bullet's joint velocities are M^-1 J^T P
     (fails if Bullet's inertias or its 100 rad/s joint-speed clamp were in the way)."""
-    from analytic.chain import chain_matrices
+    from treeimpact.analytic.continuum.chain import chain_matrices
 
     setup = make_setup(central, trunk="chain", contact="newton", t_end=1e-3)
     world = build_world(setup)
@@ -291,7 +291,7 @@ def test_joint_damping_alternative_matches_mujoco(central):
     """The documented hinge-damping alternative, against the other engine with the same rule
     (MuJoCo integrates joint damping implicitly, as the runner does): integrator differences
     only, 1 % as engines.trunk in compare/tolerances.toml (0.11 %, 0.27 % measured)."""
-    mujoco_models = pytest.importorskip("mujoco_models")
+    mujoco_models = pytest.importorskip("treeimpact.mujoco_models")
     got = simulate(central, trunk="chain", damping="joint", t_end=0.02)
     ref = mujoco_models.simulate(central, trunk="chain", damping="joint", t_end=0.02)
     for key in ("x_max", "t_xmax"):
@@ -301,7 +301,7 @@ def test_joint_damping_alternative_matches_mujoco(central):
 
 def test_json_model_keys_include_the_mujoco_backends(central):
     """Same JSON keys as the MuJoCo backend (its engine-specific solref/solimp aside)."""
-    mujoco_models = pytest.importorskip("mujoco_models")
+    mujoco_models = pytest.importorskip("treeimpact.mujoco_models")
     got = simulate(central, trunk="sdof", t_end=2e-3).to_json()
     ref = mujoco_models.simulate(central, trunk="sdof", t_end=2e-3).to_json()
     assert set(got) == set(ref)

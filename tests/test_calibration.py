@@ -1,5 +1,5 @@
-"""A tree's scenario from measured M_T, K_T, b: the reduction inverted (analytic.calibration),
-the scenario file written (analytic.scenario_toml) and `treeimpact scenario`."""
+"""A tree's scenario from measured M_T, K_T, b: the reduction inverted (analytic.model.calibration),
+the scenario file written (analytic.model.scenario_toml) and `treeimpact scenario`."""
 
 from __future__ import annotations
 
@@ -9,14 +9,18 @@ import tomllib
 
 import pytest
 
-from analytic import load_scenario, reduce_trunk, shipped_scenarios
-from analytic.calibration import (MeasuredTree, calibrate_trunk, damping_rate_from_regression,
-                                  stiffness_from_regression)
-from analytic.paper import TABLE_1
-from analytic.parameters import ParameterError
-from analytic.scenario import scenario_from_dict
-from analytic.scenario_toml import scenario_toml
-from compare.cli import main
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.calibration import (
+    MeasuredTree,
+    calibrate_trunk,
+    damping_rate_from_regression,
+    stiffness_from_regression,
+)
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.scenario import load_scenario, scenario_from_dict, shipped_scenarios
+from treeimpact.analytic.model.scenario_toml import scenario_toml
+from treeimpact.analytic.paper.reproduction import TABLE_1
+from treeimpact.compare.cli import main
 
 
 @pytest.mark.parametrize("name", ["open-center", "central-leader"])

@@ -1,20 +1,31 @@
-"""Hinged rigid-segment trunk (analytic.chain): Hencky closed forms, exact energies, convergence to the beam."""
+"""Hinged rigid-segment trunk (analytic.continuum.chain): Hencky closed forms, exact energies,
+convergence to the beam."""
 
 import dataclasses
 import math
-from pathlib import Path
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import quad
 from scipy.linalg import eigh
 
-from analytic import ParameterError, Trunk, load_scenario, reduce_trunk, shipped_scenarios
-from analytic.beam import beam_natural_frequencies, beam_static_stiffness
-from analytic.chain import (chain_errors, chain_matrices, chain_natural_frequencies,
-                            chain_reduced_sdof, chain_static_stiffness, default_segments,
-                            hinged_chain, split_segments)
+from treeimpact.analytic.continuum.beam import beam_natural_frequencies, beam_static_stiffness
+from treeimpact.analytic.continuum.chain import (
+    chain_errors,
+    chain_matrices,
+    chain_natural_frequencies,
+    chain_reduced_sdof,
+    chain_static_stiffness,
+    default_segments,
+    hinged_chain,
+    split_segments,
+)
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import Trunk
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 
 UNIFORM = Trunk(length=1.3, clamp_height=1.3, diameter=0.1, density=900.0, youngs_modulus=1.0e10)
 # a/l = 1/2 so that N_in = N/2 exactly for even N: smooth convergence curves

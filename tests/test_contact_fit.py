@@ -1,10 +1,11 @@
-"""Fitting the contact to measured x_max and tau (analytic.contact_fit)."""
+"""Fitting the contact to measured x_max and tau (analytic.paper.contact_fit)."""
 
 import pytest
 
-from analytic import ParameterError, load_scenario
-from analytic.beam_impact import simulate_beam
-from analytic.contact_fit import fit_contact
+from treeimpact.analytic.continuum.beam_impact import simulate_beam
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.paper.contact_fit import fit_contact
 
 
 def test_the_fit_recovers_a_contact_it_generated():

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from compare.cli import build_parser, main
+from treeimpact.compare.cli import build_parser, main
 
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -79,7 +79,7 @@ def test_every_test_id_shown_is_collected():
 
 
 def test_the_readme_limits_table_is_the_code_s():
-    from analytic.parameters import LIMITS
+    from treeimpact.analytic.model.parameters import LIMITS
 
     readme = (ROOT / "README.md").read_text()
     rows = dict(re.findall(r"^\| `([a-z_.]+)` \| (\[[^|]+\]) \|", readme, flags=re.M))

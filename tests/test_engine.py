@@ -1,4 +1,4 @@
-"""The engine interface (analytic.engine): both engine packages implement it, and the run
+"""The engine interface (analytic.engine.interface): both engine packages implement it, and the run
 protocol they share is checked against closed forms and the analytic chain."""
 
 import inspect
@@ -7,14 +7,18 @@ import math
 import numpy as np
 import pytest
 
-from analytic import load_scenario
-from analytic.chain import (chain_matrices, chain_natural_frequencies, chain_static_stiffness,
-                            hinged_chain, lateral_jacobian)
-from analytic.engine import Engine, chain_modes, check_energy, swing_time
-from analytic.parameters import ParameterError
-from analytic.results import SimulationDiverged
+from treeimpact.analytic.continuum.chain import (
+    chain_matrices,
+    chain_natural_frequencies,
+    chain_static_stiffness,
+    hinged_chain,
+    lateral_jacobian,
+)
+from treeimpact.analytic.engine.interface import Engine, chain_modes, check_energy, swing_time
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.scenario import load_scenario
 
-ENGINES = ["mujoco_models", "bullet_models"]
+ENGINES = ["treeimpact.mujoco_models", "treeimpact.bullet_models"]
 
 
 @pytest.mark.parametrize("package", ENGINES)
@@ -37,7 +41,7 @@ def test_run_of_a_setup_is_simulate(package):
 
 def test_chain_modes_match_the_analytic_chain():
     """From the chain's own M, k_j and J: the static stiffness at a and the frequencies of
-    analytic.chain (what an engine that reproduces the chain's matrices must print)."""
+    analytic.continuum.chain (what an engine that reproduces the chain's matrices must print)."""
     scen = load_scenario("central-leader")
     chain = hinged_chain(scen.trunk, 10)
     M, K, _ = chain_matrices(chain)

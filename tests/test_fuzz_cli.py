@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from compare.cli import main
+from treeimpact.compare.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
-SCENARIO = (ROOT / "analytic" / "scenarios" / "central-leader.toml").read_text()
+SCENARIO = (ROOT / "analytic" / "model" / "scenarios" / "central-leader.toml").read_text()
 FIELDS = ("length", "clamp_height", "diameter", "density", "youngs_modulus", "clamp_mass",
           "crown_mass", "damping", "base_stiffness", "mass", "equivalent_length",
           "release_angle_deg", "restitution", "duration", "t_end")
@@ -88,5 +88,5 @@ def test_fuzzed_scenarios_and_flags_never_traceback_hang_or_print_garbage(chunk,
     assert outcomes[0] > 0 and outcomes[2] > 0  # the fuzz reaches both sides of the limits
     import resource
 
-    # the memory bound (2 GB, analytic.timestep.MAX_BYTES) held for the whole process so far
+    # the memory bound (2 GB, analytic.contact.timestep.MAX_BYTES) held for the whole process so far
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 < 2e9

@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
-from analytic.generated_files import (URDF_DIGITS, file_differences, fixed_digits,
-                                      fixed_precision_xml, xml_differences)
+from treeimpact.analytic.engine.generated_files import (
+    URDF_DIGITS,
+    file_differences,
+    fixed_digits,
+    fixed_precision_xml,
+    xml_differences,
+)
 
 URDF = '<robot name="r"><link name="l"><inertia ixx="{0}" iyy="{1}" izz="0"/></link></robot>'
 

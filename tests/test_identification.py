@@ -5,10 +5,18 @@ import math
 import numpy as np
 import pytest
 
-from analytic import load_scenario, simulate
-from analytic.identification import (READINGS, identification_errors, identify,
-                                     identify_from_record, pendulum_test_of, regress, truth_of)
-from analytic.parameters import ParameterError
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.identify.procedure import (
+    READINGS,
+    identification_errors,
+    identify,
+    identify_from_record,
+    pendulum_test_of,
+    regress,
+    truth_of,
+)
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.scenario import load_scenario
 
 
 def record(name, e, dt=2e-5):
@@ -94,7 +102,7 @@ def test_a_record_that_breaks_the_premises_is_not_identifiable():
     u1, a negative M_T are refused with the premise that failed."""
     import dataclasses
 
-    from analytic.identification import check_identifiable
+    from treeimpact.analytic.identify.procedure import check_identifiable
 
     scen = load_scenario("central-leader")
     res = simulate(scen, samples=5001)

@@ -14,19 +14,22 @@ mujoco = pytest.importorskip("mujoco")
 
 from mujoco import rollout  # noqa: E402
 
-from analytic import load_scenario  # noqa: E402
-from analytic.beam import beam_natural_frequencies, beam_static_stiffness  # noqa: E402
-from analytic.chain import chain_matrices, hinged_chain  # noqa: E402
-from analytic.parameters import Contact, ParameterError  # noqa: E402
-from analytic.results import SimulationDiverged  # noqa: E402
-from analytic.soft_contact import simulate_soft  # noqa: E402
-from mujoco_models import _contact, modes, simulate, simulate_batch  # noqa: E402
-from mujoco_models._builder import sensor_slices  # noqa: E402
-from mujoco_models._record import _damping_matrices, _record  # noqa: E402
-from mujoco_models._rollout import _plan  # noqa: E402
-from mujoco_models._runner import engine_trunk_matrices, make_setup  # noqa: E402
-from analytic.generated_files import MJCF_DIGITS, file_differences  # noqa: E402
-from mujoco_models.regenerate import MODELS_DIR, generated  # noqa: E402
+from treeimpact.analytic.contact.soft import simulate_soft  # noqa: E402
+from treeimpact.analytic.continuum.beam import beam_natural_frequencies, beam_static_stiffness  # noqa: E402
+from treeimpact.analytic.continuum.chain import chain_matrices, hinged_chain  # noqa: E402
+from treeimpact.analytic.engine.generated_files import MJCF_DIGITS, file_differences  # noqa: E402
+from treeimpact.analytic.errors import (
+    ParameterError,  # noqa: E402
+    SimulationDiverged,  # noqa: E402
+)
+from treeimpact.analytic.model.parameters import Contact
+from treeimpact.analytic.model.scenario import load_scenario  # noqa: E402
+from treeimpact.mujoco_models import _contact, modes, simulate, simulate_batch  # noqa: E402
+from treeimpact.mujoco_models._builder import sensor_slices  # noqa: E402
+from treeimpact.mujoco_models._record import _damping_matrices, _record  # noqa: E402
+from treeimpact.mujoco_models._rollout import _plan  # noqa: E402
+from treeimpact.mujoco_models._runner import engine_trunk_matrices, make_setup  # noqa: E402
+from treeimpact.mujoco_models.regenerate import MODELS_DIR, generated  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -301,7 +304,7 @@ def test_long_fine_step_run_is_not_mistaken_for_a_stopped_rollout(central):
 def test_energy_growing_engine_run_is_reported_as_diverged(central, integrator):
     """A real rollout that gains energy (the trunk's damper made negative: finite growth at
     C_T / M_T = 131 1/s) is reported as diverged, never turned into metrics."""
-    from mujoco_models._runner import run_setups
+    from treeimpact.mujoco_models._runner import run_setups
 
     setup = make_setup(central, trunk="sdof", integrator=integrator)
     m = copy.deepcopy(setup.mjmodel)
@@ -363,7 +366,7 @@ def test_rk4_damping_work_quadrature_is_fourth_order_inside_runs():
     """The RK4 ledger's damping work: the cubic rules inside each run of samples with one
     contact state integrate a smooth power at O(h^4), and no stencil reaches across a
     change of the contact state (there the power may have a kink)."""
-    from analytic.engine import step_means as _step_means
+    from treeimpact.analytic.engine.interface import step_means as _step_means
 
     def error(n):
         t = np.linspace(0.0, 2.0, n + 1)
@@ -406,7 +409,7 @@ def test_each_integrator_matches_the_soft_contact_at_its_default_step(central, i
 
 
 def test_integrator_option_builds_that_integrator_and_keeps_the_default(central):
-    from mujoco_models._builder import mjcf_text
+    from treeimpact.mujoco_models._builder import mjcf_text
 
     default = make_setup(central, trunk="sdof")
     assert make_setup(central, trunk="sdof", integrator="Euler") is default  # one cache key
@@ -444,8 +447,8 @@ def test_rk4_refuses_a_step_its_explicit_dampers_cannot_take(central):
 
 
 def test_speed_study_runs_one_curve_per_mujoco_integrator():
-    from compare.backends import get_backend
-    from compare.sweep.speed import engine_variants
+    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.sweep.speed import engine_variants
 
     name, values, reason, runnable = engine_variants("mujoco")
     assert (name, reason, runnable) == ("integrator", None, True)
@@ -467,13 +470,12 @@ def test_regenerated_mjcf_equals_checked_in_files():
     files = generated()
     assert {p.name for p in MODELS_DIR.glob("*.xml")} == set(files)
     diff = file_differences(MODELS_DIR, files, MJCF_DIGITS)
-    assert not diff, f"run python -m mujoco_models.regenerate: {diff}"
+    assert not diff, f"run python -m treeimpact.mujoco_models.regenerate: {diff}"
 
 
 def test_checked_in_models_compile_without_warnings_and_are_the_runners_models():
-    from analytic.scenario import shipped_scenarios
-
-    from mujoco_models.regenerate import VARIANTS
+    from treeimpact.analytic.model.scenario import shipped_scenarios
+    from treeimpact.mujoco_models.regenerate import VARIANTS
 
     for name in shipped_scenarios():
         s = load_scenario(name)
@@ -500,7 +502,7 @@ def test_checked_in_models_compile_without_warnings_and_are_the_runners_models()
 def test_regenerate_writes_changed_and_removes_stale_files(tmp_path, monkeypatch, capsys):
     """The command's file logic (the MJCF text itself is checked above): --check reports a
     difference or a stale file with exit 1, a plain run fixes both, then --check passes."""
-    from mujoco_models import regenerate
+    from treeimpact.mujoco_models import regenerate
 
     monkeypatch.setattr(regenerate, "MODELS_DIR", tmp_path)
     monkeypatch.setattr(regenerate, "generated", lambda: {"a-sdof-linear.xml": "<mujoco/>\n"})
@@ -519,8 +521,8 @@ def test_regenerate_writes_changed_and_removes_stale_files(tmp_path, monkeypatch
 def test_cli_simulate_and_modes_with_the_mujoco_backend(capsys):
     import json
 
-    from analytic.results import METRIC_KEYS
-    from compare.cli import main
+    from treeimpact.analytic.results import METRIC_KEYS
+    from treeimpact.compare.cli import main
 
     code = main(["simulate", "central-leader", "--backend", "mujoco", "--trunk", "chain",
                  "--segments", "8", "--t-end", "0.005", "--json"])
@@ -536,7 +538,7 @@ def test_cli_simulate_and_modes_with_the_mujoco_backend(capsys):
 def test_cli_simulate_with_an_integrator(capsys):
     import json
 
-    from compare.cli import main
+    from treeimpact.compare.cli import main
 
     code = main(["simulate", "central-leader", "--backend", "mujoco", "--integrator", "RK4",
                  "--t-end", "0.005", "--json"])
@@ -548,7 +550,7 @@ def test_cli_simulate_with_an_integrator(capsys):
                                   ["--backend", "bullet", "--integrator", "RK4"],
                                   ["--integrator", "RK4"]])  # analytic: no integrator
 def test_cli_integrator_refused_with_one_line(capsys, args):
-    from compare.cli import main
+    from treeimpact.compare.cli import main
 
     code = main(["simulate", "central-leader", *args])
     err = capsys.readouterr().err
@@ -561,7 +563,7 @@ def test_cli_integrator_refused_with_one_line(capsys, args):
                                          (["--contact-stiffness", "-5"], "stiffness"),
                                          (["--trunk", "sdof", "--segments", "4"], "segments")])
 def test_cli_bad_mujoco_options_are_one_line_errors(capsys, args, field):
-    from compare.cli import main
+    from treeimpact.compare.cli import main
 
     code = main(["simulate", "central-leader", "--backend", "mujoco", *args])
     err = capsys.readouterr().err
@@ -573,8 +575,8 @@ def test_cli_bad_mujoco_options_are_one_line_errors(capsys, args, field):
 def test_pad_calibration_keeps_the_soft_sdofs_contact_law(central, trunk):
     """Default "pad": MuJoCo integrates the soft SDOF rung's (k_c, c_c) on any trunk; its e on
     the chain's light effective mass is the law's, smaller than the scenario's."""
-    from analytic.model import two_body_model
-    from analytic.soft_contact import contact_law, restitution_for_damping_ratio
+    from treeimpact.analytic.contact.law import contact_law, restitution_for_damping_ratio
+    from treeimpact.analytic.model.two_body import two_body_model
 
     setup = make_setup(central, trunk=trunk, t_end=1e-3)
     k, c = contact_law(two_body_model(central), central.contact)
@@ -589,10 +591,11 @@ def test_pad_calibration_keeps_the_soft_sdofs_contact_law(central, trunk):
 
 
 def test_chain_converges_to_the_beam():
-    """The hinged chain with the pad converges to the exact continuum (analytic.beam_impact)
-    at second order in 1/N: the gap of x_max and t_xmax at least thirds per doubling of N."""
-    from analytic.beam_impact import simulate_beam
-    from analytic.chain import default_segments
+    """The hinged chain with the pad converges to the exact continuum
+    (analytic.continuum.beam_impact) at second order in 1/N: the gap of x_max and t_xmax at least
+    thirds per doubling of N."""
+    from treeimpact.analytic.continuum.beam_impact import simulate_beam
+    from treeimpact.analytic.continuum.chain import default_segments
 
     s = load_scenario("open-center")
     n = default_segments(s.trunk)
@@ -611,8 +614,8 @@ def test_chain_whole_event_metrics_converge_to_the_beam():
     """Crown motion, impulse and contact loss of the chain approach the continuum's as N
     doubles (first order in 1/N for the crown's acceleration over t_c): the evidence behind
     step.chain's tolerances."""
-    from analytic.beam_impact import simulate_beam
-    from analytic.chain import default_segments
+    from treeimpact.analytic.continuum.beam_impact import simulate_beam
+    from treeimpact.analytic.continuum.chain import default_segments
 
     s = load_scenario("central-leader")
     n = default_segments(s.trunk)

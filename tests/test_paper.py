@@ -4,8 +4,13 @@ import math
 
 import pytest
 
-from analytic.identification import identify
-from analytic.paper import DISCREPANCIES, QUANTITIES, TABLE_1, reproduce_tree
+from treeimpact.analytic.identify.procedure import identify
+from treeimpact.analytic.paper.reproduction import (
+    DISCREPANCIES,
+    QUANTITIES,
+    TABLE_1,
+    reproduce_tree,
+)
 
 # Table 1 prints 2-4 significant digits; a recomputation agrees when it rounds to the print.
 ROUNDING = {"u1": 5e-4, "M_T": 0.5 / 87, "K_T": 0.05 / 1.2, "b": 0.5 / 28, "omega_n": 0.05 / 79.2,

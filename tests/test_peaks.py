@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from analytic.records import peak_times
+from treeimpact.analytic.records import peak_times
 
 T = np.linspace(0.0, 0.05, 5001)
 

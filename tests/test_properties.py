@@ -11,10 +11,10 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from analytic.model import TwoBodyModel
-from analytic.parameters import ParameterError
-from analytic.simulate import impact_metrics
-from analytic.solver import MAX_CHATTER_IMPACTS, solve_impacts
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.impact.simulate import impact_metrics
+from treeimpact.analytic.impact.solver import MAX_CHATTER_IMPACTS, solve_impacts
+from treeimpact.analytic.model.two_body import TwoBodyModel
 
 models = st.builds(
     TwoBodyModel,
@@ -93,8 +93,8 @@ def test_a_separation_starts_the_flight_at_third_order_and_the_bodies_separate()
 
 def test_a_loop_that_stops_advancing_time_is_a_one_line_divergence(monkeypatch):
     """The guard against a solver that no longer advances (it used to loop for hours)."""
-    from analytic import solver
-    from analytic.results import SimulationDiverged
+    from treeimpact.analytic.errors import SimulationDiverged
+    from treeimpact.analytic.impact import solver
 
     monkeypatch.setattr(solver, "first_zero", lambda *a, **k: 0.0)  # every flight: no time
     with pytest.raises(SimulationDiverged, match=r"^exact solver: 1001 events without "):

@@ -1,5 +1,5 @@
-"""The full-record fit (analytic.record_fit) and `treeimpact identify`: accuracy and interval
-coverage on seeded synthetic records of the exact model (the truth known), the residual
+"""The full-record fit (analytic.identify.record_fit) and `treeimpact identify`: accuracy and
+interval coverage on seeded synthetic records of the exact model (the truth known), the residual
 check, bad records, the JSON layout."""
 
 from __future__ import annotations
@@ -11,13 +11,13 @@ import math
 import numpy as np
 import pytest
 
-from analytic import load_scenario
-from analytic.identification import pendulum_test_of
-from analytic.model import two_body_model
-from analytic.parameters import ParameterError
-from analytic.record_fit import Record, fit_record
-from analytic.solver import solve_impacts
-from compare.cli import main
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.identify.procedure import pendulum_test_of
+from treeimpact.analytic.identify.record_fit import Record, fit_record
+from treeimpact.analytic.impact.solver import solve_impacts
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.two_body import two_body_model
+from treeimpact.compare.cli import main
 
 RATE = 5000.0  # Hz: the issue's sampling rate
 NOISE = 0.01  # of the peak: 1 % white noise
@@ -84,8 +84,8 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     what is fixed, and its ranges hold the truth."""
     import math
 
-    from analytic.fit_model import model_x, two_body_at
-    from analytic.one_impact import on_ridge
+    from treeimpact.analytic.identify.fit_model import model_x, two_body_at
+    from treeimpact.analytic.identify.one_impact import on_ridge
 
     model, record, test = synthetic(0.3, 0, **HEAVY)
     fit = fit_record(record, test)
@@ -211,7 +211,7 @@ def test_log_interval_of_an_undetermined_parameter_is_zero_to_infinity_without_w
     import math
     import warnings
 
-    from analytic.record_fit import log_interval
+    from treeimpact.analytic.identify.record_fit import log_interval
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")

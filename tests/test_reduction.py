@@ -5,8 +5,14 @@ import math
 import pytest
 import sympy as sp
 
-from analytic import Trunk, reduce_trunk, static_mode_shape
-from analytic.reduction import printed_damping, printed_dynamic_mass, printed_stiffness
+from treeimpact.analytic.model.parameters import Trunk
+from treeimpact.analytic.model.reduction import (
+    printed_damping,
+    printed_dynamic_mass,
+    printed_stiffness,
+    reduce_trunk,
+    static_mode_shape,
+)
 
 x, a, l, E, I, rho, A, C, mc, mf, kth = sp.symbols("x a l E I rho A C m_c m_f k_theta",
                                                    positive=True)
@@ -68,7 +74,7 @@ def test_printed_eq7_dynamic_mass_equals_derivation():
 def test_printed_eq10_damping_is_half_the_derivation():
     _, C_T, _ = symbolic_reduction(False)
     printed = C * l / 2 * ((3 * l * (l - a) + a ** 2) / (4 * a ** 2) - (a / l) / 70)
-    assert sp.simplify(C_T / printed) == 2  # recorded in analytic.paper.DISCREPANCIES
+    assert sp.simplify(C_T / printed) == 2  # recorded in analytic.paper.reproduction.DISCREPANCIES
     t = TRUNKS["rigid-clamp"]
     assert reduce_trunk(t).damping == pytest.approx(2 * printed_damping(t), rel=1e-12)
 
@@ -100,7 +106,7 @@ def test_static_mode_shape_is_one_at_the_clamp_and_continuous():
 def test_closed_form_shape_integrals_match_polynomial_integration():
     """J and phi(l) of reduce_trunk (expanded by hand) against numpy's polynomial integral of
     the same shape, with and without the base spring."""
-    from analytic.reduction import _square_integral, crown_factor
+    from treeimpact.analytic.model.reduction import _square_integral, crown_factor
 
     for t in TRUNKS.values():
         shape = static_mode_shape(t)
@@ -109,7 +115,7 @@ def test_closed_form_shape_integrals_match_polynomial_integration():
 
 
 def test_shipped_scenarios_reduce_to_table_1():
-    from analytic import load_scenario
+    from treeimpact.analytic.model.scenario import load_scenario
 
     for name, (mt, kt) in {"open-center": (87.0, 1.2e6), "central-leader": (110.0, 1.5e6)}.items():
         red = reduce_trunk(load_scenario(name).trunk)

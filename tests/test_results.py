@@ -8,12 +8,13 @@ import pickle
 import numpy as np
 import pytest
 
-from analytic import load_scenario, simulate
-from analytic.results import Trajectory, to_jsonable
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.results import Trajectory, to_jsonable
 
 
 def test_exact_results_carry_the_solution_and_a_record_soft_results_a_record():
-    from compare.backends import get_backend
+    from treeimpact.compare.backends import get_backend
 
     scen = load_scenario("open-center")
     exact, soft = simulate(scen), get_backend("soft").simulate(scen)

@@ -7,15 +7,20 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-import analytic
-from analytic import load_scenario
-from analytic.model import TwoBodyModel, two_body_model
-from analytic.parameters import ParameterError
-from analytic.records import ImpactRecord, contact_intervals, metrics_from_record
-from analytic.soft_contact import (collision_duration, contact_law, damping_ratio_for_restitution,
-                                   restitution_for_damping_ratio, simulate_soft,
-                                   soft_record)
-from analytic.timestep import check_time_step, choose_time_step, stability_limit
+from treeimpact.analytic.contact.law import (
+    collision_duration,
+    contact_law,
+    damping_ratio_for_restitution,
+    restitution_for_damping_ratio,
+)
+from treeimpact.analytic.contact.soft import simulate_soft, soft_record
+from treeimpact.analytic.contact.timestep import check_time_step, choose_time_step, stability_limit
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.impact.simulate import simulate as simulate_exact
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
+from treeimpact.analytic.records import contact_intervals, metrics_from_record
+from treeimpact.analytic.results import ImpactRecord
 
 
 def integrated_restitution(zeta: float) -> float:
@@ -119,7 +124,7 @@ def test_pendulum_never_passes_through_the_trunk(name):
 
 def test_stiff_contact_limit_recovers_the_rigid_newton_model():
     scenario = load_scenario("open-center")
-    rigid = analytic.simulate(scenario).metrics
+    rigid = simulate_exact(scenario).metrics
     errors = []
     for duration in (1e-3, 2.5e-4, 6.25e-5):
         soft = simulate_soft(scenario, duration=duration).metrics

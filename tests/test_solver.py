@@ -6,12 +6,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from analytic import load_scenario, simulate, solve_impacts, two_body_model
-from analytic.ivp_reference import solve_ivp_impacts
-from analytic.model import TwoBodyModel
-from analytic.oscillator import Oscillator
-from analytic.roots import first_zero
-from analytic.solver import TAIL_ENERGY_FRACTION
+from treeimpact.analytic.impact.ivp_reference import solve_ivp_impacts
+from treeimpact.analytic.impact.oscillator import Oscillator
+from treeimpact.analytic.impact.roots import first_zero
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.impact.solver import TAIL_ENERGY_FRACTION, solve_impacts
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 
 
 def paper_model(e=0.1, name="open-center"):
@@ -253,7 +254,8 @@ def test_solution_pickles_after_a_solve_for_process_pools():
     whose oscillators hold cached closures, pickles and gives the same states back."""
     import pickle
 
-    from analytic import load_scenario, simulate
+    from treeimpact.analytic.impact.simulate import simulate
+    from treeimpact.analytic.model.scenario import load_scenario
 
     res = simulate(load_scenario("central-leader"))
     back = pickle.loads(pickle.dumps(res))
@@ -265,8 +267,8 @@ def test_solution_pickles_after_a_solve_for_process_pools():
 def test_a_root_search_the_bounds_cannot_certify_ends_in_one_line():
     """f hugging zero from above (never certified at these bounds): a bounded number of
     bisections, then a one-line divergence, never a hang (issue 12)."""
-    from analytic.results import SimulationDiverged
-    from analytic.roots import first_zero
+    from treeimpact.analytic.errors import SimulationDiverged
+    from treeimpact.analytic.impact.roots import first_zero
 
     with pytest.raises(SimulationDiverged, match=r"^root search: no certified answer"):
         first_zero(lambda t: 1e-300, lambda t: 0.0, 1.0, (1.0, 1.0, 1e300, 1e300), rate=1.0)
@@ -278,9 +280,9 @@ def test_a_root_search_the_bounds_cannot_certify_ends_in_one_line():
 @pytest.mark.parametrize("x0,v0", [(2e-3, 1.3), (2e-3, -1.3), (-2e-3, 0.0), (2e-3, 0.0),
                                    (-2e-3, 0.05)])
 def test_first_peak_time_is_the_first_local_maximum_of_dense_samples(beta, omega_sq, x0, v0):
-    """The closed-form first maximum of x (analytic.oscillator.first_peak_time) against the
+    """The closed-form first maximum of x (analytic.impact.oscillator.first_peak_time) against the
     first + to - sign change of the sampled velocity."""
-    from analytic.oscillator import first_peak_time
+    from treeimpact.analytic.impact.oscillator import first_peak_time
 
     osc = Oscillator(beta, omega_sq)
     s = first_peak_time(osc, x0, v0)

@@ -7,13 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from analytic import load_scenario, simulate
-from analytic.beam import beam_matrices, deflection_dof
-from analytic.beam_impact import beam_impact_model, beam_record, simulate_beam
-from analytic.reduction import crown_factor
-from analytic.scenario import load_scenario as load
-from analytic.soft_contact import simulate_soft
-from analytic.model import two_body_model
+from treeimpact.analytic.contact.soft import simulate_soft
+from treeimpact.analytic.continuum.beam import beam_matrices, deflection_dof
+from treeimpact.analytic.continuum.beam_impact import beam_impact_model, beam_record, simulate_beam
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.reduction import crown_factor
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.scenario import load_scenario as load
+from treeimpact.analytic.model.two_body import two_body_model
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 WHOLE = ("energy_delivered", "contact_dissipation", "rebound_energy", "impulse")

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from analytic.results import to_jsonable
+from treeimpact.analytic.results import to_jsonable
 
 from ..ladder import validity_tolerance
 
@@ -35,12 +35,12 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     """The report's sections (not yet rendered) and the wall time each took (s); figures
     are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
     sections reported on stderr as they finish."""
-    from analytic.scenario import shipped_scenarios
+    from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..contact_scan import contact_scan, scan_requests
     from ..ladder import prefetch_ladders
-    from ..runs import RunCache, resolve_scenario
     from ..progress import Progress
+    from ..runs import RunCache, resolve_scenario
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection

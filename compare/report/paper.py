@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from analytic.results import to_jsonable
+from treeimpact.analytic.results import to_jsonable
 
 from .base import Section
 
@@ -17,7 +17,7 @@ class PaperSection(Section):
     anchor = "paper"
 
     def __init__(self):
-        from analytic.paper import reproduce
+        from treeimpact.analytic.paper.reproduction import reproduce
 
         self.data = reproduce()
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from analytic.results import to_jsonable
+from treeimpact.analytic.results import to_jsonable
 
 from .base import Section
 

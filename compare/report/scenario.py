@@ -8,11 +8,19 @@ import math
 
 import numpy as np
 
-from analytic.parameters import ParameterError, Pendulum
-from analytic.results import to_jsonable
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import Pendulum
+from treeimpact.analytic.results import to_jsonable
 
-from ..ladder import (ALL_METRICS, IDENT_METRICS, PASSING, build_ladder, identify_rung,
-                      meaning_of, unit_of)
+from ..ladder import (
+    ALL_METRICS,
+    IDENT_METRICS,
+    PASSING,
+    build_ladder,
+    identify_rung,
+    meaning_of,
+    unit_of,
+)
 from ..mechanism import matched_loss_evidence
 from ..runs import OK
 from . import figures
@@ -83,12 +91,12 @@ FIT_REST = 5e-3
 
 
 def record_fits(ladder) -> list[dict]:
-    """The exact 1-DOF model fitted to each rung's whole record (analytic.record_fit): the
+    """The exact 1-DOF model fitted to each rung's whole record (analytic.identify.record_fit): the
     1-DOF properties that best explain it, their errors against the model's truth, and
     whether the 1-DOF model explains the record at all."""
-    from analytic.identification import pendulum_test_of
-    from analytic.model import two_body_model
-    from analytic.record_fit import Record, fit_record
+    from treeimpact.analytic.identify.procedure import pendulum_test_of
+    from treeimpact.analytic.identify.record_fit import Record, fit_record
+    from treeimpact.analytic.model.two_body import two_body_model
 
     from ..ident_study import sampled_record
 

@@ -16,7 +16,7 @@ import os
 import re
 from pathlib import Path
 
-from analytic.parameters import ParameterError
+from treeimpact.analytic.errors import ParameterError
 
 from .base import Section
 
@@ -64,7 +64,7 @@ class StudySection(Section):
             self._from_study(d / "study.md")
 
     def _from_study(self, path: Path) -> None:
-        from compare.sweep.study import markdown_body
+        from treeimpact.compare.sweep.study import markdown_body
 
         md = path.read_text()
         uris = {i["name"]: i["uri"] for i in self.images}

@@ -18,7 +18,8 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from analytic.parameters import ParameterError, Scenario
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import Scenario
 
 from .grid import DERIVED_RATIOS, OPTION, SCENARIO, resolve_parameter
 
@@ -45,7 +46,7 @@ def _set(scenario: Scenario, target: str, value) -> Scenario:
 
 
 def _ratio(scenario: Scenario, name: str, ratio: float) -> Scenario:
-    from analytic.reduction import reduce_trunk
+    from treeimpact.analytic.model.reduction import reduce_trunk
 
     t = scenario.trunk
     if name == "a_over_l":

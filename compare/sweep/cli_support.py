@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from analytic.parameters import ParameterError
+from treeimpact.analytic.errors import ParameterError
 
 from .grid import GRID_FORM
 
@@ -83,7 +83,7 @@ def add_sweep_arguments(parser) -> None:
 
 def parse_options(specs, backends) -> dict:
     """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine)."""
-    from compare.backends import ENGINES
+    from treeimpact.compare.backends import ENGINES
 
     out: dict = {}
     for spec in specs or []:
@@ -121,7 +121,7 @@ def run_sweep_command(args) -> int:
     import signal
     import sys
 
-    from compare.pool import STOP, request_stop
+    from treeimpact.compare.pool import STOP, request_stop
 
     def terminate(signum, frame):  # SIGTERM ends the sweep as Ctrl-C does: workers stopped
         request_stop()  # the loops raise KeyboardInterrupt at their next look

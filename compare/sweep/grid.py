@@ -14,8 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analytic.chain import MAX_SEGMENTS
-from analytic.parameters import Billet, Contact, ParameterError, Pendulum, Scenario, Trunk
+from treeimpact.analytic.continuum.chain import MAX_SEGMENTS
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import Billet, Contact, Pendulum, Scenario, Trunk
 
 #: Bounds of a grid: values per axis and points in all (the --preset full study has 540).
 MAX_AXIS_VALUES = 1000
@@ -48,7 +49,7 @@ DERIVED_RATIOS = {
 INTEGER_OPTIONS = {"segments"}
 
 #: Allowed range of numeric engine options: (low, high, low included), checked when parsed.
-#: segments: 1 (the SDOF trunk) to analytic.chain.MAX_SEGMENTS; dt: any positive step (the
+#: segments: 1 (the SDOF trunk) to analytic.continuum.chain.MAX_SEGMENTS; dt: any positive step (the
 #: engine refuses an unstable one per run, recorded as a skipped row with its limit).
 OPTION_RANGES = {"segments": (1, MAX_SEGMENTS, True), "dt": (0.0, math.inf, False)}
 
@@ -288,7 +289,7 @@ def point_from_key(key: str) -> dict:
 
 def derived_ratios(scenario: Scenario) -> dict:
     """The derived ratios of a scenario: a_over_l, crown_ratio, mass_ratio (see module doc)."""
-    from analytic.reduction import reduce_trunk
+    from treeimpact.analytic.model.reduction import reduce_trunk
 
     t = scenario.trunk
     return {"a_over_l": t.clamp_height / t.length,

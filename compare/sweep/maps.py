@@ -10,12 +10,12 @@ from pathlib import Path
 
 import numpy as np
 
-from analytic.parameters import ParameterError
-
-from .run import IDENT_KEYS, OK
+from treeimpact.analytic.errors import ParameterError
 
 # the ladder's metrics and tolerance file, so a study and the report speak of the same things
-from compare.ladder import LADDER_METRICS, validity_tolerance
+from treeimpact.compare.ladder import LADDER_METRICS, validity_tolerance
+
+from .run import IDENT_KEYS, OK
 
 #: A study's validity criterion (5 %), not a test tolerance: tolerances.toml [study] validity
 #: with its reason, the one tolerance source. Override with ``tolerance=`` / ``--tolerance``.
@@ -101,7 +101,7 @@ _NON_AXIS = {"scenario", "point", "target", "backend", "kind", "previous", "stat
 
 def axis_names(df) -> list[str]:
     """The swept parameters of a sweep table (columns between the base and metric columns)."""
-    from analytic.results import METRIC_KEYS
+    from treeimpact.analytic.results import METRIC_KEYS
 
     return [c for c in df.columns if c not in _NON_AXIS and c not in METRIC_KEYS
             and not c.startswith(("model.", "id.", "truth.")) and c != "id_error"]

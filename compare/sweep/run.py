@@ -16,13 +16,13 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from analytic.parameters import ParameterError, Scenario
-from analytic.results import METRIC_KEYS
-
-from compare.backends import get_backend
-from compare.pool import check_stop, connect, dask_workers, run_chunks
-from compare.rungs import analytic_samples
-from compare.runs import DIVERGED, FAILED, INVALID, OK, attempt, one_line
+from treeimpact.analytic.errors import ParameterError, one_line
+from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.results import METRIC_KEYS
+from treeimpact.compare.backends import get_backend
+from treeimpact.compare.pool import check_stop, connect, dask_workers, run_chunks
+from treeimpact.compare.rungs import analytic_samples
+from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, attempt
 
 from .apply import apply_point
 from .grid import Grid, parse_grid, point_key
@@ -74,7 +74,7 @@ def _check_backends(backends) -> list[str]:
         try:
             get_backend(b)
         except ParameterError:
-            from compare.backends import BACKENDS
+            from treeimpact.compare.backends import BACKENDS
 
             raise ParameterError(f"--backend {b!r}: allowed {', '.join(BACKENDS)} "
                                  f"(comma-separated)") from None
@@ -95,7 +95,7 @@ def make_targets(backends=("analytic",), *, ladder: bool = False,
     def opts(backend, extra=()):
         return tuple(sorted({**dict(extra), **options.get(backend, {})}.items()))
 
-    from compare.rungs import rung_table
+    from treeimpact.compare.rungs import rung_table
 
     if ladder:  # the ladder's own rung table, chain segments left to the grid
         engines = [b for b in names if b not in REFERENCE_BACKENDS]
@@ -133,7 +133,7 @@ class Task:
 def _identify(result, scenario: Scenario) -> dict:
     """The paper's procedure on the run's record (compare.ladder.identify_rung) as the
     sweep's id.* and truth.* columns, or id_error."""
-    from compare.ladder import identify_rung
+    from treeimpact.compare.ladder import identify_rung
 
     ident = identify_rung(result, scenario)
     out = {f"truth.{k}": v for k, v in ident.get("truth", {}).items()}
@@ -320,7 +320,7 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
          done: set | None = None, applied: list | None = None):
     """(tasks to run, rows already decided without running: invalid points).
     ``applied``: :func:`apply_points` of this scenario and grid, when already computed."""
-    from compare.runs import options_key, scenario_key
+    from treeimpact.compare.runs import options_key, scenario_key
 
     done = done or set()
     tasks: OrderedDict[str, Task] = OrderedDict()
@@ -490,7 +490,7 @@ def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = Fal
     ``--grid`` specs; ``scheduler``: a Dask scheduler address or ``Client``; ``on_rows``:
     called with each batch of rows after it is written (tests interrupt a sweep there).
     """
-    from compare.runs import resolve_scenario
+    from treeimpact.compare.runs import resolve_scenario
 
     t_start = time.perf_counter()
     scen = resolve_scenario(scenario)

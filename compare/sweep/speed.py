@@ -21,13 +21,12 @@ not installed likewise. The sweep behind a curve is an ordinary sweep directory 
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
-from analytic.parameters import ParameterError
-from compare.backends import ENGINES
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.compare.backends import ENGINES
 
 from .grid import Axis, Grid, Parameter, resolve_parameter
 from .run import OK, read_table, run_sweep
@@ -41,18 +40,19 @@ SPEED_METRICS = ("x_max", "t_xmax", "t_sep", "impact_loss", "energy_transferred"
 #: whose exact reference is the analytic soft-contact solution.
 SPEED_ENGINE_OPTIONS = {"trunk": "sdof", "pendulum": "linear"}
 
-def stiffness_for_duration(scenario, duration: float) -> float:
-    """k_c (N/m) whose undamped two-body collision lasts ``duration`` s: mu (pi / t)^2."""
-    from analytic.model import two_body_model
+def rounded_stiffness(scenario, duration: float) -> float:
+    """k_c (N/m, 3 digits) whose undamped two-body collision lasts ``duration`` s
+    (:func:`analytic.contact.law.stiffness_for_duration` on the scenario's reduced mass)."""
+    from treeimpact.analytic.contact.law import stiffness_for_duration
+    from treeimpact.analytic.model.two_body import two_body_model
 
-    mu = two_body_model(scenario).reduced_mass
-    return float(f"{mu * (math.pi / duration) ** 2:.3g}")
+    return float(f"{stiffness_for_duration(two_body_model(scenario).reduced_mass, duration):.3g}")
 
 
 def engine_variants(engine: str) -> tuple[str | None, tuple, str | None, bool]:
     """(option name or None, values, reason when the variants cannot be run, whether the
     engine runs at all)."""
-    from compare.backends import get_backend
+    from treeimpact.compare.backends import get_backend
 
     try:
         backend = get_backend(engine)
@@ -75,15 +75,15 @@ def speed_sweep(scenario, out, *, engines=ENGINES, dts=(1e-4, 3e-5, 1e-5),
     """Run the speed-accuracy sweeps (one sweep directory per engine under ``out``).
 
     ``stiffnesses`` (N/m) or, when None, ``durations`` (s) converted with
-    :func:`stiffness_for_duration`. Returns {"engines": {engine: sweep dir}, "skipped":
+    :func:`rounded_stiffness`. Returns {"engines": {engine: sweep dir}, "skipped":
     [{"engine", "reason"}], "stiffnesses": [...], "dts": [...]}.
     """
-    from compare.runs import resolve_scenario
+    from treeimpact.compare.runs import resolve_scenario
 
     scen = resolve_scenario(scenario)
     out = Path(out)
     if stiffnesses is None:
-        stiffnesses = tuple(stiffness_for_duration(scen, d) for d in durations)
+        stiffnesses = tuple(rounded_stiffness(scen, d) for d in durations)
     result = {"engines": {}, "skipped": [], "stiffnesses": [float(k) for k in stiffnesses],
               "dts": [float(d) for d in dts]}
     for eng in engines:
@@ -110,7 +110,7 @@ def _warm_up(engine: str, scenario, dt: float) -> None:
     """One short run first, so that the first timed run does not pay the imports."""
     import dataclasses
 
-    from compare.backends import get_backend
+    from treeimpact.compare.backends import get_backend
 
     try:
         get_backend(engine).simulate(dataclasses.replace(scenario, t_end=0.01),

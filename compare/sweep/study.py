@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from analytic.parameters import ParameterError
-from compare.backends import ENGINES
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.compare.backends import ENGINES
 
-from .maps import (DEFAULT_TOLERANCE, RUNG_LETTERS, identification_maps, validity_maps)
+from .maps import DEFAULT_TOLERANCE, RUNG_LETTERS, identification_maps, validity_maps
 from .run import JOURNAL, TABLE, make_out, read_table, run_sweep
 
 
@@ -108,7 +108,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
         speed["curves"] = speed_curves(speed, out)
     ident_study = None
     if p.identification:
-        from compare.ident_study import run_identification_study
+        from treeimpact.compare.ident_study import run_identification_study
 
         ident_study = run_identification_study(
             out, scen, workers=workers, progress=progress,
@@ -236,8 +236,13 @@ def _ident_validation_md(iv) -> list[str]:
     """The identification validation (compare.ident_study) as markdown lines."""
     if not iv:
         return []
-    from compare.ident_study import (ENGINE_CROWN_RATIOS, ENGINE_RESTITUTIONS, NOISE, RATE,
-                                     RUNGS)
+    from treeimpact.compare.ident_study import (
+        ENGINE_CROWN_RATIOS,
+        ENGINE_RESTITUTIONS,
+        NOISE,
+        RATE,
+        RUNGS,
+    )
 
     engines = [r for r in iv["summary"] if r not in RUNGS]
     corner = (f" (and of the {', '.join(engines)} hinged chain at e = "
@@ -272,7 +277,7 @@ def _ident_validation_md(iv) -> list[str]:
                      f"{extra} |")
     L.append("")
     if iv.get("sampling"):
-        from compare.ident_study import SAMPLING_E, SAMPLING_SEEDS
+        from treeimpact.compare.ident_study import SAMPLING_E, SAMPLING_SEEDS
 
         L += [f"How the sampling matters: records at e = {SAMPLING_E:g}, no crown "
               "(analytic: the exact SDOF), "

@@ -1,0 +1,85 @@
+"""The time-step rule of the engine runners (MuJoCo and PyBullet share it).
+
+Design notes and measured figures: docs/time-step.md.
+"""
+
+from __future__ import annotations
+
+import math
+
+from treeimpact.analytic.errors import ParameterError
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+            math.isfinite(value) and value > 0):
+        raise ParameterError(f"{name} = {value!r} is out of range: allowed (0, inf)")
+    return float(value)
+
+
+def stability_limit(collision_duration: float, highest_frequency: float | None = None) -> float:
+    """Largest stable step (s): 2 / omega for the contact and the highest trunk mode."""
+    t_c = _positive("collision_duration", collision_duration)
+    limit = 2.0 * t_c / math.pi
+    if highest_frequency is not None:
+        limit = min(limit, 2.0 / _positive("highest_frequency", highest_frequency))
+    return limit
+
+
+def choose_time_step(collision_duration: float, highest_frequency: float | None = None, *,
+                     steps_per_collision: int = 50, steps_per_period: int = 20) -> float:
+    """The documented default step (s), see the module docstring."""
+    t_c = _positive("collision_duration", collision_duration)
+    dt = t_c / steps_per_collision
+    if highest_frequency is not None:
+        w = _positive("highest_frequency", highest_frequency)
+        dt = min(dt, 2.0 * math.pi / w / steps_per_period)
+    return dt
+
+
+def check_time_step(dt, collision_duration: float, highest_frequency: float | None = None
+                    ) -> float:
+    """Return ``dt`` (s) if it can be stable, else raise a one-line ParameterError."""
+    dt = _positive("dt", dt)
+    limit = stability_limit(collision_duration, highest_frequency)
+    if dt >= limit:
+        what = f"contact duration {collision_duration:.3g} s"
+        if highest_frequency is not None:
+            what += f", highest trunk mode {highest_frequency:.4g} rad/s"
+        raise ParameterError(f"--dt = {dt:.3g} s is too large for stability: allowed "
+                             f"(0, {limit:.3g}) s ({what})")
+    return dt
+
+
+def sdof_rate(model) -> float:
+    """Fastest rate (1/s) of the engines' SDOF trunk and linear pendulum: the natural
+    frequencies sqrt(K_T / M_T) and sqrt(k / m) and the damping rate C_T / M_T (the engines
+    step the trunk's damper explicitly, stable for dt < 2 M_T / C_T, as for a frequency)."""
+    return max(math.sqrt(model.stiffness / model.dynamic_mass),
+               model.damping / model.dynamic_mass,
+               math.sqrt(model.impactor_stiffness / model.impactor_mass))
+
+
+#: The work budget of one engine run, checked before it starts (raise them deliberately with
+#: the environment variables TREEIMPACT_MAX_STEPS and TREEIMPACT_MAX_BYTES).
+MAX_STEPS = 20_000_000  # the shipped runs take 2e4-6e4 steps, --preset full up to ~1e6
+MAX_BYTES = 2_000_000_000  # B: the record of one run
+
+
+def check_work(t_end: float, dt: float, bytes_per_step: float) -> int:
+    """The steps of a run (t_end / dt), or a one-line ParameterError when they or their
+    record exceed the budget (:data:`MAX_STEPS`, :data:`MAX_BYTES`)."""
+    import os
+
+    max_steps = float(os.environ.get("TREEIMPACT_MAX_STEPS", MAX_STEPS))
+    max_bytes = float(os.environ.get("TREEIMPACT_MAX_BYTES", MAX_BYTES))
+    steps = math.ceil(t_end / dt)
+    need = steps * bytes_per_step
+    if steps > max_steps or need > max_bytes:
+        raise ParameterError(
+            f"--t-end / --dt: the run needs {steps:.3g} steps (t_end {t_end:.3g} s / dt "
+            f"{dt:.3g} s) and {need / 1e9:.3g} GB: allowed up to {max_steps:.3g} steps and "
+            f"{max_bytes / 1e9:.3g} GB (a shorter --t-end, a softer contact or a stiffer "
+            "time-step limit; raise deliberately with TREEIMPACT_MAX_STEPS, "
+            "TREEIMPACT_MAX_BYTES)")
+    return steps

@@ -1,0 +1,393 @@
+"""The continuum trunk struck through the pad: the 1-DOF assumption's reference.
+
+The Euler-Bernoulli trunk of :mod:`analytic.continuum.beam` (Hermite cubics, clamp and crown point
+masses, root spring, consistent damping of the distributed C of eq 9) and the linearised
+pendulum (eq 13) meet through the spring-dashpot contact F = max(0, k_c delta + c_c delta'),
+delta = y - x >= 0, of :mod:`analytic.contact.soft`. In each contact state the system is
+linear, z' = A z, and is solved exactly by its eigen-decomposition; every contact switch
+is located by root finding on the exact solution. Design notes: docs/beam-impact.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from treeimpact.analytic.contact.law import (
+    CALIBRATIONS,
+    collision_duration,
+    contact_law,
+    detection_duration,
+    effective_damping,
+)
+from treeimpact.analytic.contact.timestep import check_work
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.parameters import Scenario, check_range
+from treeimpact.analytic.model.two_body import two_body_model
+from treeimpact.analytic.records import model_metrics
+from treeimpact.analytic.results import ImpactRecord, SimulationResult
+
+from .beam import beam_matrices, deflection_dof
+from .modes import beam_reference
+
+#: Elements of the default mesh: x_max within 0.05 % of the 48-element mesh
+#: (tests/test_beam_impact.py::test_x_max_converges_in_elements).
+DEFAULT_ELEMENTS = 12
+#: Finer meshes lose accuracy in the eigenvectors (ledger 3e-6 at 48 elements, 4e-5 at 80)
+#: and resolve wavelengths shorter than Euler-Bernoulli theory holds for (docs/beam-impact.md).
+MAX_ELEMENTS = 48
+#: Samples per free collision of the pad (the soft SDOF rung's record spacing).
+SAMPLES_PER_COLLISION = 100
+
+
+@dataclass(frozen=True)
+class BeamImpactModel:
+    """Matrices and parameters of one beam-impact problem (SI units)."""
+
+    M: np.ndarray = field(repr=False)  # kg, trunk mass matrix (dofs w_i, l w_i')
+    D: np.ndarray = field(repr=False)  # N s/m, consistent damping matrix
+    K: np.ndarray = field(repr=False)  # N/m, stiffness with the root spring
+    clamp: int  # dof of the deflection at a
+    crown: int  # dof of the deflection at l
+    impactor_mass: float  # m, kg
+    impactor_stiffness: float  # k = m g / l_e, N/m (eq 13)
+    impact_speed: float  # u_1, m/s (eq 48)
+    contact_stiffness: float  # k_c, N/m
+    contact_damping: float  # c_c, N s/m
+    elements: int
+
+    @property
+    def dofs(self) -> int:
+        return len(self.M)
+
+    @property
+    def effective_mass(self) -> float:
+        """Instantaneous effective mass of the trunk at the clamp, 1 / (M^-1)_aa, kg."""
+        e = np.zeros(self.dofs)
+        e[self.clamp] = 1.0
+        return float(1.0 / np.linalg.solve(self.M, e)[self.clamp])
+
+
+def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
+                      restitution: float | None = None, contact_stiffness: float | None = None,
+                      duration: float | None = None, calibration: str = "pad"):
+    """``(BeamImpactModel, TwoBodyModel)``: the beam problem and the SDOF model it refines.
+
+    k_c comes from :func:`analytic.contact.law.contact_law` on the SDOF model (the pad's
+    stiffness, from ``contact_stiffness`` N/m, ``duration`` s or the scenario); c_c per
+    ``calibration`` (:data:`CALIBRATIONS`).
+    """
+    if isinstance(elements, bool) or not isinstance(elements, (int, np.integer)) or not (
+            2 <= elements <= MAX_ELEMENTS):
+        raise ParameterError(f"--elements = {elements!r}: allowed integers [2, {MAX_ELEMENTS}]")
+    if calibration not in CALIBRATIONS:
+        raise ParameterError(f"--calibration = {calibration!r}: allowed "
+                             f"{', '.join(CALIBRATIONS)}")
+    sdof = two_body_model(scenario, restitution)
+    k_c, c_c = contact_law(sdof, scenario.contact, stiffness=contact_stiffness,
+                           duration=duration)
+    M, D, K, nodes, keep = beam_matrices(scenario.trunk, int(elements))
+    trunk = scenario.trunk
+    model = BeamImpactModel(
+        M=M, D=D, K=K, clamp=deflection_dof(nodes, keep, trunk.clamp_height),
+        crown=deflection_dof(nodes, keep, trunk.length), impactor_mass=sdof.impactor_mass,
+        impactor_stiffness=sdof.impactor_stiffness, impact_speed=sdof.impact_speed,
+        contact_stiffness=k_c, contact_damping=c_c, elements=int(elements))
+    if calibration == "effective":
+        mu = 1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass)
+        c_c = effective_damping(k_c, sdof.restitution, mu)
+        from dataclasses import replace
+
+        model = replace(model, contact_damping=c_c)
+    return model, sdof
+
+
+class _Modal:
+    """Exact solution of z' = A z as z(s) = V (exp(lambda s) w), w = V^-1 z(0)."""
+
+    def __init__(self, A: np.ndarray):
+        self.lam, self.V = np.linalg.eig(A)
+        self.W = np.linalg.inv(self.V)
+
+    def modal(self, w: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """U[k] = exp(lambda s_k) w: the modal coordinates at the times s (len(s) x n)."""
+        return np.exp(np.outer(s, self.lam)) * w
+
+    def observe(self, rows: np.ndarray, w: np.ndarray, s: np.ndarray, U=None) -> np.ndarray:
+        """Observables ``rows @ z(s)`` (r x len(s))."""
+        U = self.modal(w, s) if U is None else U
+        return (U @ (rows @ self.V).T).real.T
+
+    def state(self, w: np.ndarray, s: float) -> np.ndarray:
+        return (self.V @ (np.exp(self.lam * s) * w)).real
+
+    def quadratic(self, Q: np.ndarray) -> "_Quadratic":
+        return _Quadratic(self, Q)
+
+
+class _Quadratic:
+    """z(s)^T Q z(s) and its integral from 0 to s, in closed form on a :class:`_Modal`."""
+
+    def __init__(self, modal: _Modal, Q: np.ndarray):
+        self.modal = modal
+        H = modal.V.T @ Q @ modal.V
+        total = modal.lam[:, None] + modal.lam[None, :]
+        small = np.abs(total) < 1e-9 * max(1.0, float(np.max(np.abs(modal.lam))))
+        self.H = H
+        self.H_int = np.where(small, 0.0, H / np.where(small, 1.0, total))
+        self.H_lin = np.where(small, H, 0.0)  # secular part: constant integrand
+
+    def value(self, w, s, U=None):
+        U = self.modal.modal(w, s) if U is None else U
+        return ((U @ self.H) * U).sum(axis=1).real
+
+    def integral(self, w, s, U=None):
+        U = self.modal.modal(w, s) if U is None else U
+        start = w @ self.H_int @ w
+        return (((U @ self.H_int) * U).sum(axis=1) - start
+                + np.asarray(s) * (w @ self.H_lin @ w)).real
+
+
+def _system(model: BeamImpactModel, contact: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(A, g): state matrix and delta = g . z[:N] of one contact state."""
+    n, N = model.dofs, model.dofs + 1
+    Kf = np.zeros((N, N))
+    Cf = np.zeros((N, N))
+    Mf = np.zeros((N, N))
+    Kf[:n, :n], Cf[:n, :n], Mf[:n, :n] = model.K, model.D, model.M
+    Kf[n, n], Mf[n, n] = model.impactor_stiffness, model.impactor_mass
+    g = np.zeros(N)
+    g[n], g[model.clamp] = 1.0, -1.0
+    if contact:  # F = k_c delta + c_c delta' pushes the trunk (+g_clamp) and the pendulum back
+        Kf = Kf + model.contact_stiffness * np.outer(g, g)
+        Cf = Cf + model.contact_damping * np.outer(g, g)
+    A = np.zeros((2 * N, 2 * N))
+    A[:N, N:] = np.eye(N)
+    A[N:, :N] = -np.linalg.solve(Mf, Kf)
+    A[N:, N:] = -np.linalg.solve(Mf, Cf)
+    return A, g
+
+
+def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
+    """Solve the beam impact exactly to ``t_end`` (s); an ``ImpactRecord`` every ``dt_sample``.
+
+    Also returns the crown deflection (m) at the same times.
+    """
+    n, N = model.dofs, model.dofs + 1
+    k_c, c_c = model.contact_stiffness, model.contact_damping
+    systems = {}
+    for contact in (False, True):
+        A, g = _system(model, contact)
+        modal = _Modal(A)
+        if not np.all(np.isfinite(modal.W)):
+            raise SimulationDiverged("beam: the state matrix could not be diagonalised")
+        systems[contact] = (modal, g)
+    g = systems[True][1]
+    zero = np.zeros(N)
+    # observables: x, y, x', y', delta, delta', crown, crown velocity
+    rows = np.zeros((8, 2 * N))
+    rows[0, model.clamp] = rows[2, N + model.clamp] = 1.0
+    rows[1, n] = rows[3, N + n] = 1.0
+    rows[4, :N], rows[5, N:] = g, g
+    rows[6, model.crown] = rows[7, N + model.crown] = 1.0
+    Mf = np.zeros((N, N))
+    Mf[:n, :n], Mf[n, n] = model.M, model.impactor_mass
+    Kf = np.zeros((N, N))
+    Kf[:n, :n], Kf[n, n] = model.K, model.impactor_stiffness
+    Df = np.zeros((N, N))
+    Df[:n, :n] = model.D
+
+    def block(lower_right: bool, Q):
+        out = np.zeros((2 * N, 2 * N))
+        if lower_right:
+            out[N:, N:] = Q
+        else:
+            out[:N, :N] = Q
+        return out
+
+    q_kin, q_pot, q_damp = block(True, 0.5 * Mf), block(False, 0.5 * Kf), block(True, Df)
+    gg = np.concatenate([g, zero])
+    gv = np.concatenate([zero, g])
+    q_contact = 0.5 * k_c * (np.outer(gg, gv) + np.outer(gv, gg)) + c_c * np.outer(gv, gv)
+    forms = {c: {"kin": systems[c][0].quadratic(q_kin), "pot": systems[c][0].quadratic(q_pot),
+                 "damp": systems[c][0].quadratic(q_damp)} for c in (False, True)}
+    forms[True]["contact"] = systems[True][0].quadratic(q_contact)
+
+    steps = int(math.ceil(t_end / dt_sample - 1e-9))
+    t_grid = np.linspace(0.0, t_end, steps + 1)
+    obs = np.zeros((8, t_grid.size))
+    energy = np.zeros((4, t_grid.size))  # kinetic, potential, damping work, contact work
+    in_contact = np.zeros(t_grid.size, dtype=bool)
+    z = np.zeros(2 * N)
+    z[2 * N - 1] = model.impact_speed
+    t, phase = 0.0, "contact"
+    w_damp = w_contact = 0.0
+    switches = 0
+    max_switches = 100_000
+    while True:
+        contact = phase == "contact"
+        modal, _ = systems[contact]
+        w = modal.W @ z
+        j0 = int(np.searchsorted(t_grid, t, side="left"))
+        if j0 < t_grid.size and t_grid[j0] == t and t > 0:
+            j0 += 1  # that sample was written by the previous phase
+        # scan the samples ahead for the phase's end, in growing chunks
+        end_s, nxt, j = None, None, j0
+        chunk = 64
+        while j < t_grid.size and end_s is None:
+            jj = min(t_grid.size, j + chunk)
+            s = t_grid[j:jj] - t
+            U = modal.modal(w, s)
+            d, dd = modal.observe(rows[4:6], w, s, U)
+            f = k_c * d + c_c * dd
+            if phase == "contact":
+                hit = np.flatnonzero(f <= 0.0)
+            elif phase == "overlap":
+                hit = np.flatnonzero((f > 0.0) | (d < 0.0))
+            else:
+                hit = np.flatnonzero(d > 0.0)
+            if hit.size:
+                k = int(hit[0])
+                s_hi = s[k]
+                s_lo = s[k - 1] if k > 0 else (t_grid[j - 1] - t if j > j0 else 0.0)
+                end_s, nxt = _locate(phase, modal, rows, w, s_lo, s_hi, k_c, c_c,
+                                     d[k], f[k])
+                jj = j + k  # samples before the event belong to this phase
+            _fill(t_grid, j, jj, t, modal, rows, w, forms[contact], obs, energy,
+                  in_contact, contact, w_damp, w_contact, U[:jj - j])
+            j = jj
+            chunk *= 4
+        if end_s is None:
+            break
+        # advance the state and the dissipation to the switch
+        wd = float(forms[contact]["damp"].integral(w, np.array([end_s]))[0])
+        wc = float(forms[contact]["contact"].integral(w, np.array([end_s]))[0]) if contact \
+            else 0.0
+        z = modal.state(w, end_s)
+        if not np.all(np.isfinite(z)):
+            raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
+        w_damp, w_contact = w_damp + wd, w_contact + wc
+        t += end_s
+        phase = nxt
+        switches += 1
+        if switches > max_switches:
+            raise SimulationDiverged(f"beam: more than {max_switches} contact switches by "
+                                     f"t = {t:.6g} s (chatter does not end)")
+    x, y, vx, vy, delta, ddelta, crown, crown_v = obs
+    force = np.where(in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
+    kinetic, potential, damping_work, contact_work = energy
+    m, kp = model.impactor_mass, model.impactor_stiffness
+    record = ImpactRecord(
+        t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force, kinetic=kinetic, potential=potential,
+        damping_work=damping_work, contact_work=contact_work,
+        contact_potential=np.where(in_contact, 0.5 * k_c * np.maximum(delta, 0.0) ** 2, 0.0),
+        pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2, crown=crown,
+        crown_velocity=crown_v)
+    return record, crown, switches
+
+
+def _fill(t_grid, j, jj, t, modal, rows, w, forms, obs, energy, in_contact, contact,
+          w_damp, w_contact, U):
+    """Write samples j..jj-1 of one phase (started at t with modal coefficients w)."""
+    if jj <= j:
+        return
+    s = t_grid[j:jj] - t
+    obs[:, j:jj] = modal.observe(rows, w, s, U)
+    energy[0, j:jj] = forms["kin"].value(w, s, U)
+    energy[1, j:jj] = forms["pot"].value(w, s, U)
+    energy[2, j:jj] = w_damp + forms["damp"].integral(w, s, U)
+    energy[3, j:jj] = w_contact + (forms["contact"].integral(w, s, U) if contact else 0.0)
+    in_contact[j:jj] = contact
+
+
+def _locate(phase, modal, rows, w, s_lo, s_hi, k_c, c_c, d_hi, f_hi):
+    """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]."""
+
+    def d(s):
+        return float(modal.observe(rows[4:5], w, np.array([s]))[0, 0])
+
+    def f(s):
+        dd = modal.observe(rows[4:6], w, np.array([s]))
+        return float(k_c * dd[0, 0] + c_c * dd[1, 0])
+
+    if phase == "contact":
+        s = _root(f, s_lo, s_hi)
+        return s, ("overlap" if d(s) > 0.0 else "free")
+    if phase == "free":
+        return _root(d, s_lo, s_hi), "contact"
+    # overlap: whichever of "law rises through 0" and "delta falls through 0" comes first
+    cand = []
+    if f_hi > 0.0:
+        cand.append((_root(f, s_lo, s_hi), "contact"))
+    if d_hi < 0.0:
+        cand.append((_root(d, s_lo, s_hi), "free"))
+    return min(cand)
+
+
+def _root(func, lo, hi):
+    """Zero of ``func`` in [lo, hi]; a phase that starts on its own boundary (func(lo) = 0)
+    is bracketed from just after its start."""
+    f_hi = func(hi)
+    f_lo = func(lo)
+    if f_lo * f_hi > 0 or f_lo == 0.0:
+        # the bracket's low end sits on the previous switch: move it in until the sign differs
+        step = (hi - lo) * 1e-9
+        while step < (hi - lo):
+            f_lo = func(lo + step)
+            if f_lo * f_hi < 0:
+                lo = lo + step
+                break
+            step *= 10.0
+        else:
+            return hi
+    return brentq(func, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+
+
+def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
+                  calibration: str = "pad", restitution: float | None = None,
+                  contact_stiffness: float | None = None, duration: float | None = None,
+                  t_end: float | None = None):
+    """The scenario with the continuum trunk and the pad, solved exactly to ``t_end`` (s).
+
+    Returns a SimulationResult (backend "beam") with the metrics of
+    :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
+    """
+    t_end = scenario.t_end if t_end is None else t_end
+    check_range("--t-end", t_end, low=0, low_open=True, unit="s")
+    model, sdof = beam_impact_model(scenario, elements=elements, restitution=restitution,
+                                    contact_stiffness=contact_stiffness, duration=duration,
+                                    calibration=calibration)
+    t_col = collision_duration(sdof, model.contact_stiffness, model.contact_damping)
+
+    dt = t_col / SAMPLES_PER_COLLISION
+    check_work(t_end, dt, 8.0 * 16)
+    record, crown, switches = beam_record(model, t_end, dt)
+    t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
+    metrics = model_metrics(record, sdof, scenario.impactor, collision_duration=t_detect)
+    model_dict = {**sdof.as_dict(), "elements": model.elements, "calibration": calibration,
+                  "contact_stiffness": model.contact_stiffness,
+                  "contact_damping": model.contact_damping,
+                  "effective_mass": model.effective_mass, "contact_switches": switches}
+    scen = scenario.to_dict()
+    scen["contact"]["restitution"] = sdof.restitution
+    return SimulationResult(
+        backend="beam", metrics=metrics, model=model_dict, scenario=scen,
+        trajectory=record.trajectory(),
+        record=record, collision_duration=t_col, extra={"crown": crown})
+
+
+def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int = 3) -> dict:
+    """``model``: the backend's mesh (static stiffness at a, N/m; frequencies, rad/s);
+    ``beam``: the 160-element reference of :func:`analytic.continuum.modes.beam_reference`."""
+    import scipy.linalg
+
+    model, _ = beam_impact_model(scenario, elements=elements)
+    e = np.zeros(model.dofs)
+    e[model.clamp] = 1.0
+    stiffness = 1.0 / float(np.linalg.solve(model.K, e)[model.clamp])
+    w2 = scipy.linalg.eigh(model.K, model.M, eigvals_only=True, subset_by_index=[0, n_modes - 1])
+    return {"model": {"static_stiffness": stiffness, "omegas": [float(v) for v in np.sqrt(w2)]},
+            "beam": beam_reference(scenario, n_modes)}

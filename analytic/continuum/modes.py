@@ -1,0 +1,24 @@
+"""Static stiffness at a and natural frequencies: SDOF reduction next to the continuous beam."""
+
+from __future__ import annotations
+
+import math
+
+from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.model.reduction import reduce_trunk
+
+from .beam import beam_natural_frequencies, beam_static_stiffness
+
+
+def beam_reference(scenario: Scenario, n_modes: int = 3) -> dict:
+    """The continuous Euler-Bernoulli trunk (analytic.continuum.beam): N/m and rad/s."""
+    return {"static_stiffness": float(beam_static_stiffness(scenario.trunk)),
+            "omegas": [float(w) for w in beam_natural_frequencies(scenario.trunk, n_modes)]}
+
+
+def modes(scenario: Scenario, *, n_modes: int = 3) -> dict:
+    """``model``: the SDOF trunk of eq 11 (K_T, omega_1 = sqrt(K_T/M_T)); ``beam``: reference."""
+    tree = reduce_trunk(scenario.trunk)
+    return {"model": {"static_stiffness": tree.stiffness,
+                      "omegas": [math.sqrt(tree.stiffness / tree.dynamic_mass)]},
+            "beam": beam_reference(scenario, n_modes)}

@@ -1,0 +1,212 @@
+"""What every physics-engine backend shares (MuJoCo, PyBullet): the interface they implement,
+their common options, and the run protocol around the engine's own stepping (validation,
+divergence checks, record to metrics and result, modes from M, K, J). SI units throughout;
+design notes in docs/engines.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from treeimpact.analytic.contact.law import CALIBRATIONS
+from treeimpact.analytic.continuum.chain import default_segments, hinged_chain
+from treeimpact.analytic.continuum.modes import beam_reference
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario
+from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
+from treeimpact.analytic.records import model_metrics, with_static_shape_crown
+from treeimpact.analytic.results import SimulationResult
+
+#: Options every engine takes: trunk model, pendulum model, chain damping model.
+TRUNKS = ("sdof", "chain")
+PENDULUMS = ("linear", "full")
+DAMPINGS = ("distributed", "joint")
+#: Mechanical energy above (1 + this) x the input, or created by the engine beyond this
+#: fraction of it, is a diverged run (every rung's own ledger tolerance is below 2 %).
+ENERGY_GROWTH_LIMIT = 0.05
+
+
+@dataclass(frozen=True)
+class EngineSetup:
+    """What every engine's setup holds: the scenario and its two-body model, the trunk,
+    pendulum and damping models, the chain's segments (None: SDOF), dt and t_end (s)."""
+
+    scenario: Scenario
+    model: TwoBodyModel
+    trunk: str
+    pendulum: str
+    damping: str
+    segments: int | None
+    dt: float
+    t_end: float
+
+
+@runtime_checkable
+class Engine(Protocol):
+    """A physics-engine backend: a module with these four names (mujoco_models,
+    bullet_models); ``compare.backends`` registers it by name."""
+
+    OPTIONS: dict  # option -> allowed values (a tuple) or None for a number
+
+    def make_setup(self, scenario: Scenario, **options) -> EngineSetup:
+        """Validate the options and build the engine's model: everything a run needs."""
+
+    def run(self, setup: EngineSetup):
+        """Step one setup; a SimulationResult, or SimulationDiverged raised."""
+
+    def simulate(self, scenario: Scenario, **options):
+        """``run(make_setup(scenario, **options))``."""
+
+    def modes(self, scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
+        """Static stiffness at a (N/m) and natural frequencies (rad/s) of the engine's chain
+        (:func:`chain_modes`) beside the continuous beam's."""
+
+
+def check_choice(name: str, value, allowed):
+    """``value`` if it is one of ``allowed``, else a one-line error naming ``--name``."""
+    if value not in allowed:
+        raise ParameterError(f"--{name} = {value!r}: allowed {', '.join(allowed)}")
+    return value
+
+
+def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, damping: str,
+                 calibration: str, restitution, t_end) -> tuple[TwoBodyModel, float]:
+    """The options every engine shares, checked (one-line errors), and the scenario's
+    two-body model (eqs 7-13, 48) with the end time (s) of an engine run.
+
+    ``restitution`` overrides the scenario's e (validated as ``contact.restitution``);
+    ``pendulum = "full"`` needs a pendulum impactor; ``t_end`` (default the scenario's)
+    must be a finite positive number.
+    """
+    check_choice("trunk", trunk, TRUNKS)
+    check_choice("pendulum", pendulum, PENDULUMS)
+    check_choice("damping", damping, DAMPINGS)
+    check_choice("calibration", calibration, CALIBRATIONS)
+    if not isinstance(scenario, Scenario):
+        raise ParameterError("scenario: expected an analytic.Scenario")
+    if restitution is not None:
+        Contact(restitution=restitution)
+    if pendulum == "full" and not isinstance(scenario.impactor, Pendulum):
+        raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
+    model = two_body_model(scenario, restitution)
+    t_end = scenario.t_end if t_end is None else t_end
+    if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
+            math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"--t-end = {t_end!r} s is out of range: allowed (0, inf) s")
+    return model, float(t_end)
+
+
+def trunk_chain(scenario: Scenario, trunk: str, segments):
+    """The hinged chain of a ``chain`` trunk (default segment count when ``segments`` is
+    None), None for ``sdof`` (which takes no --segments)."""
+    if trunk == "chain":
+        return hinged_chain(scenario.trunk, default_segments(scenario.trunk)
+                            if segments is None else segments)
+    if segments is not None:
+        raise ParameterError("--segments: only for --trunk chain")
+    return None
+
+
+def swing_time(pendulum: Pendulum) -> float:
+    """Exact time (s) of the full pendulum's swing from rest at theta_r to the bottom:
+    K(sin(theta_r / 2)) sqrt(l_e / g)."""
+    from scipy.special import ellipk
+
+    s = math.sin(pendulum.release_angle / 2.0)
+    return float(ellipk(s * s) * math.sqrt(pendulum.equivalent_length / pendulum.gravity))
+
+
+def check_energy(backend: str, mechanical: np.ndarray, initial_energy: float, dt: float
+                 ) -> None:
+    """SimulationDiverged when the bodies' mechanical energy (J) leaves the finite or
+    exceeds (1 + ENERGY_GROWTH_LIMIT) x the input ``initial_energy`` (J)."""
+    mech = np.asarray(mechanical)
+    if not np.all(np.isfinite(mech)) or np.max(mech) > (1.0 + ENERGY_GROWTH_LIMIT) * (
+            initial_energy):
+        raise SimulationDiverged(
+            f"{backend}: mechanical energy reached {np.nanmax(mech):.4g} J > "
+            f"{1 + ENERGY_GROWTH_LIMIT:g} x the input {initial_energy:.4g} J (dt = {dt:.3g} s)")
+
+
+def engine_result(backend: str, record, *, scenario: Scenario, model: TwoBodyModel,
+                  t_end: float, collision_duration: float, detection_duration: float,
+                  initial_energy: float, model_fields: dict, extra: dict | None = None):
+    """The SimulationResult of an engine's ImpactRecord (t = 0 at the touch): the crown from
+    the static shape of eq 5 unless the record has the chain's own, the metrics of
+    :func:`analytic.records.model_metrics` on ``detection_duration`` (s), the model dict
+    (two-body model + ``model_fields``), the scenario as run (its e and t_end)."""
+    if record.crown is None:
+        record = with_static_shape_crown(record, scenario.trunk)
+    metrics = model_metrics(record, model, scenario.impactor,
+                            collision_duration=detection_duration,
+                            initial_energy=initial_energy)
+    scen = scenario.to_dict()
+    scen["contact"]["restitution"] = model.restitution
+    scen["t_end"] = t_end
+    return SimulationResult(
+        backend=backend, metrics=metrics, model={**model.as_dict(), **model_fields},
+        scenario=scen, trajectory=record.trajectory(), record=record, collision_duration=collision_duration,
+        extra={"initial_energy": initial_energy, **(extra or {})})
+
+
+def with_crown(record, crown: np.ndarray, crown_velocity: np.ndarray):
+    """``record`` with the chain top's motion (m, m/s)."""
+    return replace(record, crown=crown, crown_velocity=crown_velocity)
+
+
+def chain_modes(scenario: Scenario, mass_matrix: np.ndarray, hinge_stiffness: np.ndarray,
+                impact_jacobian: np.ndarray, n_modes) -> dict:
+    """An engine chain's modes from its mass matrix M (kg m^2), hinge stiffnesses k_j
+    (N m/rad) and the impact point's Jacobian J = dx(a)/dtheta (m/rad): static stiffness
+    K_a = 1 / (J K^-1 J^T) (N/m), omega^2 = eig(K, M) (rad/s); ``beam``: the continuous
+    beam (:func:`analytic.continuum.modes.beam_reference`)."""
+    import scipy.linalg
+
+    kd = np.asarray(hinge_stiffness, dtype=float)
+    n = kd.size
+    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or not 1 <= n_modes <= n:
+        raise ParameterError(f"n_modes = {n_modes!r} is out of range: allowed [1, {n}]")
+    static = float(1.0 / np.sum(np.asarray(impact_jacobian) ** 2 / kd))
+    w2 = scipy.linalg.eigh(np.diag(kd), mass_matrix, eigvals_only=True,
+                           subset_by_index=[0, n_modes - 1])
+    return {"model": {"static_stiffness": static, "omegas": [float(v) for v in np.sqrt(w2)],
+                      "segments": n},
+            "beam": beam_reference(scenario, n_modes)}
+
+
+def step_means(p: np.ndarray, on: np.ndarray) -> np.ndarray:
+    """Mean of a sampled power over each step n (samples n, n+1), n = 0 .. N-2, for an
+    integrator whose stage forces are not recorded (RK4's damping work).
+
+    Inside a run of samples with the same contact state ``on`` (the power is smooth there)
+    the cubic through four samples of the run is integrated: (-1, 13, 13, -1) / 24 centred,
+    (9, 19, -5, 1) / 24 or (1, -5, 19, 9) / 24 at the ends of the run (error O(h^4)); the
+    trapezoid where the run is shorter and on a step where the contact state changes.
+    """
+    N = len(p)
+    out = 0.5 * (p[:-1] + p[1:])
+    if N < 2:
+        return out
+    n = np.arange(N - 1)
+    run = np.concatenate([[0], np.cumsum(on[1:] != on[:-1])])
+    same = run[:-1] == run[1:]
+
+    def inrun(i):
+        return (i >= 0) & (i < N) & (run[np.clip(i, 0, N - 1)] == run[n])
+
+    def at(i):
+        return p[np.clip(i, 0, N - 1)]
+
+    central = same & inrun(n - 1) & inrun(n + 2)
+    forward = same & ~central & inrun(n + 2) & inrun(n + 3)
+    backward = same & ~central & ~forward & inrun(n - 2) & inrun(n - 1)
+    out = np.where(central, (-at(n - 1) + 13.0 * at(n) + 13.0 * at(n + 1) - at(n + 2)) / 24.0,
+                   out)
+    out = np.where(forward, (9.0 * at(n) + 19.0 * at(n + 1) - 5.0 * at(n + 2) + at(n + 3))
+                   / 24.0, out)
+    return np.where(backward, (at(n - 2) - 5.0 * at(n - 1) + 19.0 * at(n) + 9.0 * at(n + 1))
+                    / 24.0, out)

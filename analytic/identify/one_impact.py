@@ -1,0 +1,57 @@
+"""What a record of x alone fixes when the pendulum leaves after one impact: x(t) =
+V_1 psi(t; omega_1, xi), V_1 = m (1 + e) u_1 / (M_T + m) (eqs 21, 54), the same for every
+(M_T, e) on a curve (the ridge). docs/identification.md, "What a record fixes"."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from treeimpact.analytic.impact.solver import solve_impacts
+
+from .fit_model import two_body_at
+from .procedure import PendulumTest
+
+#: What a one-impact record leaves undetermined (it fixes omega_1, xi, V_1, t0, the offset).
+RIDGE = ("M_T", "K_T", "C_T", "e", "E")
+
+
+def one_impact(p, test: PendulumTest, span: float) -> bool:
+    """True when the model at p has one impact and no moving together within ``span`` s."""
+    sol = solve_impacts(two_body_at(p, test), span)
+    return len(sol.impacts) == 1 and not sol.together_starts
+
+
+def on_ridge(p, e: float, test: PendulumTest) -> np.ndarray:
+    """The parameters with restitution e and the same omega_1, xi and V_1 as p: the same
+    record while the pendulum does not return (M_T + m = m (1 + e) u_1 / V_1); NaN where
+    that needs M_T <= 0."""
+    M, m = math.exp(p[0]), test.impactor_mass
+    M_e = (M + m) * (1.0 + e) / (1.0 + float(p[3])) - m
+    out = np.array(p, float)
+    if not M_e > 0:  # no positive M_T gives that V_1 at this e
+        return np.full(out.shape, np.nan)
+    out[0], out[1], out[3] = math.log(M_e), p[1] + math.log(M_e) - p[0], e
+    return out
+
+
+def restitution_range(p, test: PendulumTest, t: np.ndarray) -> tuple[float, float] | None:
+    """(e_min, 1): the restitutions that explain the record as well as p does, when the
+    model at p has one impact within the record (else None): e from 1 down to where the
+    pendulum would come back (bisection to 1e-4)."""
+    span = float(t[-1] - p[4])
+    if span <= 0 or not one_impact(p, test, span):
+        return None
+    m, M = test.impactor_mass, math.exp(p[0])
+    lo = max(0.0, (m + 1e-2) * (1.0 + p[3]) / (M + m) - 1.0 + 1e-9)  # M_T >= 0.01 kg
+    hi = float(p[3])
+    if one_impact(on_ridge(p, lo, test), test, span):
+        return lo, 1.0
+    while hi - lo > 1e-4:
+        mid = 0.5 * (lo + hi)
+        if one_impact(on_ridge(p, mid, test), test, span):
+            hi = mid
+        else:
+            lo = mid
+    return hi, 1.0

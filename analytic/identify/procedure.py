@@ -1,0 +1,266 @@
+"""The paper's identification procedure (eqs 39-48): tree properties from a pendulum test.
+
+Steps (paper, "Determination of physical properties"):
+
+1. find where the bodies begin to move together (the last sudden increase of slope of
+   x(t), within a few ms of the first impact);
+2. extrapolate x(t) linearly from there to the time axis and take that point as origin;
+3. fit a polynomial to at most 10 ms of the record after the moving-together point;
+4. with x0 = 0 at the new origin, V = a1 and b = -a2/a1 (eq 42);
+5. omega_n = V / beta, beta = x_max e^(b tau) (eq 43, eq 38 with x0 = 0), xi = b / omega_n;
+6. M_T from eq 44, K_T from eq 46, E from eq 47, u_1 from eq 48.
+
+Readings of eqs 44 and 46 (see ``analytic.paper.reproduction.DISCREPANCIES``):
+
+* ``"paper"``: the reading that reproduces Table 1: eq 44 with the + sign of its own
+  derivation and, in eqs 44 and 46, omega_1 = the damped frequency omega_n sqrt(1 - xi^2)
+  of the moving-together motion, xi = b / omega_n;
+* ``"printed"``: eq 44 as printed (minus sign) with omega_1 = omega_n;
+* ``"consistent"``: the momentum balance of the impact process, exact for any e,
+  m u_1 - (M_T + m) V = K_T A_x + C_T x_0 + k A_y, closed with K_T = omega_n^2 (M_T + m) - k
+  and C_T = 2 b (M_T + m) from the moving-together motion (eq 34).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import STANDARD_GRAVITY
+from treeimpact.analytic.model.two_body import two_body_model
+
+READINGS = ("paper", "printed", "consistent")
+
+
+@dataclass(frozen=True)
+class PendulumTest:
+    """What the experimenter knows: the pendulum and where it struck (SI, angle in rad)."""
+
+    impactor_mass: float  # m, kg
+    equivalent_length: float  # l_e, m
+    release_angle: float  # theta_r, rad
+    clamp_height: float  # a, m
+    diameter: float  # d, m
+    gravity: float = STANDARD_GRAVITY
+
+    @property
+    def impact_speed(self) -> float:
+        """eq 48: u_1 = 2 sqrt(g l_e) sin(theta_r / 2)."""
+        return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
+            self.release_angle / 2.0)
+
+    @property
+    def impactor_stiffness(self) -> float:
+        return self.impactor_mass * self.gravity / self.equivalent_length
+
+    @property
+    def omega2_sq(self) -> float:
+        return self.gravity / self.equivalent_length
+
+
+@dataclass(frozen=True)
+class Identified:
+    """Result of the procedure (SI units)."""
+
+    reading: str
+    V: float
+    b: float  # 1/s, eq 42
+    omega_n: float  # rad/s, eq 43
+    xi: float  # b / omega_n
+    omega_1: float  # rad/s, the frequency used in eqs 44 and 46 under this reading
+    u1: float  # m/s, eq 48
+    x0: float  # m
+    T0: float  # s
+    A_x: float  # m s
+    A_y: float  # m s
+    M_T: float  # kg, eq 44
+    K_T: float  # N/m, eq 46
+    E: float  # Pa, eq 47
+    x_max: float
+    tau: float  # s, time of x_max from the extrapolated origin
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: float,
+             test: PendulumTest, A_x: float | None = None, A_y: float | None = None,
+             reading: str = "paper") -> Identified:
+    """Steps 4-6 from the regression coefficients a1 (m/s), a2 (m/s^2) and the record's
+    x_max (m), tau (s), x0 (m), T0 (s). A_x, A_y default to eq 45 as the table uses it,
+    x0 T0 / 2 (the printed (x0 T0)^2 / 2 is dimensionally wrong)."""
+    if reading not in READINGS:
+        raise ParameterError(f"reading = {reading!r}: allowed {', '.join(READINGS)}")
+    if not (a1 > 0):
+        raise ParameterError(f"a1 = {a1!r} m/s: the fitted velocity must be > 0")
+    b = -a2 / a1  # eq 42
+    beta = x_max * math.exp(b * tau)
+    omega_n = a1 / beta  # eq 43
+    xi = b / omega_n
+    A_x = 0.5 * x0 * T0 if A_x is None else A_x
+    A_y = 0.5 * x0 * T0 if A_y is None else A_y
+    m, k, w2 = test.impactor_mass, test.impactor_stiffness, test.omega2_sq
+    u1, V = test.impact_speed, a1
+    if reading == "consistent":
+        omega_1 = omega_n
+        M_T = ((m * (u1 - V) - k * A_y + k * A_x - m * omega_n ** 2 * A_x - 2 * b * m * x0)
+               / (V + omega_n ** 2 * A_x + 2 * b * x0))
+        K_T = omega_n ** 2 * (M_T + m) - k
+    else:
+        if reading == "paper":
+            omega_1, sign = omega_n * math.sqrt(max(0.0, 1.0 - xi * xi)), 1.0
+        else:
+            omega_1, sign = omega_n, -1.0
+        M_T = m * (u1 - V - w2 * A_y) / (V + omega_1 ** 2 * A_x + sign * 2 * xi * omega_1 * x0)
+        K_T = omega_1 ** 2 * (M_T + m) - k  # eq 46
+    I = math.pi * test.diameter ** 4 / 64.0
+    E = K_T * test.clamp_height ** 3 / (3.0 * I)  # eq 47
+    return Identified(reading=reading, V=V, b=b, omega_n=omega_n, xi=xi, omega_1=omega_1,
+                      u1=u1, x0=x0, T0=T0, A_x=A_x, A_y=A_y, M_T=M_T, K_T=K_T, E=E,
+                      x_max=x_max, tau=tau)
+
+
+@dataclass(frozen=True)
+class Regression:
+    """Steps 1-3 on a record: where the bodies move together and the fitted polynomial."""
+
+    t_first: float  # s, first impact (first slope increase)
+    t_together: float  # s, last slope increase: bodies move together
+    x_together: float  # m, x at t_together (the paper's x0)
+    t_origin: float  # s, origin after the linear extrapolation
+    coefficients: tuple  # a0, a1, a2, ... in the shifted time
+    x_max: float
+    tau: float  # s, from t_origin
+
+
+def slope_increases(t: np.ndarray, x: np.ndarray, threshold: float) -> np.ndarray:
+    """Times where the slope of x(t) jumps up by more than ``threshold`` (m/s): impacts."""
+    s = np.diff(x) / np.diff(t)
+    jumps = np.diff(s)
+    idx = np.nonzero(jumps > threshold)[0]
+    if idx.size == 0:
+        return np.array([])
+    # Merge neighbouring samples of one jump; report the sample at the kink.
+    groups = np.split(idx, np.nonzero(np.diff(idx) > 1)[0] + 1)
+    return np.array([t[g[np.argmax(jumps[g])] + 1] for g in groups])
+
+
+def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: float = 0.02,
+            search_time: float = 0.02, t_together: float | None = None) -> Regression:
+    """Steps 1-3 of the procedure on a sampled displacement record x(t) (m, s).
+
+    An impact is a slope increase larger than ``jump_fraction`` of the largest slope; the
+    bodies move together at the last one within ``search_time`` (s) of the first (or at
+    ``t_together`` if given, e.g. from a contact channel as recorded by Pellerin et al.).
+    """
+    t = np.asarray(t, float)
+    x = np.asarray(x, float)
+    if t.ndim != 1 or t.shape != x.shape or t.size < 10:
+        raise ParameterError("record: t and x must be 1-D arrays of the same length (>= 10)")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise ParameterError("record: t and x must be finite")
+    if not (0 < window <= 0.010 + 1e-12):
+        raise ParameterError(f"window = {window!r} s is out of range: allowed (0, 0.01] s")
+    slope_max = float(np.max(np.diff(x) / np.diff(t)))
+    kinks = slope_increases(t, x, jump_fraction * slope_max)
+    t_first = float(kinks[0]) if kinks.size else float(t[0])
+    if t_together is None:
+        cand = kinks[kinks <= t_first + search_time] if kinks.size else np.array([t_first])
+        t_together = float(cand[-1]) if cand.size else t_first
+    sel = (t >= t_together) & (t <= t_together + window)
+    if np.count_nonzero(sel) <= degree + 1:
+        raise ParameterError("record: too few samples in the regression window")
+    s = t[sel] - t_together
+    local = np.polynomial.polynomial.polyfit(s, x[sel], degree)
+    x_tog, v_tog = local[0], local[1]
+    t_origin = t_together - x_tog / v_tog  # linear extrapolation to x = 0
+    coeffs = np.polynomial.polynomial.polyfit(t[sel] - t_origin, x[sel], degree)
+    i = int(np.argmax(x))
+    x_max, t_max = float(x[i]), float(t[i])
+    if 0 < i < x.size - 1:  # parabola through the three samples around the maximum
+        h0, h1 = t[i] - t[i - 1], t[i + 1] - t[i]
+        d0, d1 = (x[i] - x[i - 1]) / h0, (x[i + 1] - x[i]) / h1
+        curv = (d1 - d0) / (0.5 * (h0 + h1))
+        if curv < 0:
+            dt = -(0.5 * (d0 + d1)) / curv
+            dt = float(np.clip(dt, -h0, h1))
+            t_max = float(t[i] + dt)
+            x_max = float(x[i] + 0.5 * (d0 + d1) * dt + 0.5 * curv * dt * dt)
+    return Regression(t_first=t_first, t_together=t_together, x_together=float(x_tog),
+                      t_origin=float(t_origin), coefficients=tuple(float(c) for c in coeffs),
+                      x_max=x_max, tau=t_max - float(t_origin))
+
+
+def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "paper",
+                         **regress_kw) -> tuple[Identified, Regression]:
+    """The whole procedure on a record. A_x comes from the record (trapezoid from the first
+    impact to the moving-together point); A_y from the pendulum record ``y`` if given,
+    else eq 45 (x0 T0 / 2)."""
+    t = np.asarray(t, float)
+    x = np.asarray(x, float)
+    reg = regress(t, x, **regress_kw)
+    x0 = reg.x_together
+    T0 = reg.t_together - reg.t_first
+    sel = (t >= reg.t_first) & (t <= reg.t_together)
+    A_x = float(np.trapezoid(x[sel], t[sel])) if np.count_nonzero(sel) > 1 else 0.0
+    A_y = None
+    if y is not None:
+        A_y = float(np.trapezoid(np.asarray(y, float)[sel], t[sel])) if np.count_nonzero(
+            sel) > 1 else 0.0
+    ident = identify(a1=reg.coefficients[1], a2=reg.coefficients[2], x_max=reg.x_max,
+                     tau=reg.tau, x0=x0, T0=T0, test=test, A_x=A_x, A_y=A_y, reading=reading)
+    check_identifiable(ident)
+    return ident, reg
+
+
+def check_identifiable(ident: Identified) -> Identified:
+    """``ident`` if the procedure's premises hold on the record, else a one-line
+    ParameterError starting "not identifiable": the moving-together motion decays and
+    oscillates (0 < xi < 1, eqs 35-36), the common velocity is below the impact speed
+    (V < u1: the pendulum gave the trunk momentum, eq 44), and M_T and K_T come out positive
+    (eqs 44 and 46). A number that breaks them is not a property of the tree."""
+    problem = None
+    if not 0.0 < ident.xi < 1.0:
+        problem = (f"xi = {ident.xi:.3g} (b = {ident.b:.3g} 1/s, omega_n = "
+                   f"{ident.omega_n:.3g} rad/s): the motion after moving together does not "
+                   "decay as a damped oscillation (eqs 35-36 need 0 < xi < 1)")
+    elif not ident.V < ident.u1:
+        problem = (f"V = {ident.V:.3g} m/s is not below the impact speed u1 = "
+                   f"{ident.u1:.3g} m/s (eq 44)")
+    elif not (ident.M_T > 0.0 and ident.K_T > 0.0):
+        problem = (f"M_T = {ident.M_T:.3g} kg, K_T = {ident.K_T:.3g} N/m: eqs 44 and 46 give "
+                   "a non-positive mass or stiffness")
+    if problem is not None:
+        raise ParameterError(f"not identifiable: {problem}")
+    return ident
+
+
+def pendulum_test_of(scenario) -> PendulumTest:
+    """The experimenter's knowledge of a shipped scenario (pendulum impactor only)."""
+    imp = scenario.impactor
+    if not hasattr(imp, "equivalent_length"):
+        raise ParameterError("impactor.type: the identification procedure needs a pendulum")
+    return PendulumTest(impactor_mass=imp.mass, equivalent_length=imp.equivalent_length,
+                        release_angle=imp.release_angle, clamp_height=scenario.trunk.clamp_height,
+                        diameter=scenario.trunk.diameter, gravity=imp.gravity)
+
+
+def truth_of(scenario) -> dict:
+    """What the procedure should find for a scenario's SDOF model (SI)."""
+    mod = two_body_model(scenario)
+    mt, kt, ct, m, k = (mod.dynamic_mass, mod.stiffness, mod.damping, mod.impactor_mass,
+                        mod.impactor_stiffness)
+    wn = math.sqrt((kt + k) / (mt + m))
+    b = ct / (2 * (mt + m))
+    I = math.pi * scenario.trunk.diameter ** 4 / 64.0
+    return {"M_T": mt, "K_T": kt, "b": b, "omega_n": wn, "xi": b / wn,
+            "E": kt * scenario.trunk.clamp_height ** 3 / (3 * I)}
+
+
+def identification_errors(ident: Identified, truth: dict) -> dict:
+    """Relative errors (identified - true) / true for M_T, K_T, xi, E, b, omega_n."""
+    vals = ident.as_dict()
+    return {k: (vals[k] - v) / v for k, v in truth.items()}

@@ -1,0 +1,117 @@
+"""A tree's scenario from measured quantities: the reduction of eqs 7-11 inverted.
+
+A researcher knows the clamp height a, the trunk diameter d, the pendulum (m, l_e,
+theta_r) and measured M_T, K_T and the damping rate b of the moving-together motion (or
+the regression of Figs 4-5: a1, a2, x_max, tau). With chosen l, rho, E and m_c, the trunk
+of :class:`analytic.model.parameters.Trunk` that reduces
+(:func:`analytic.model.reduction.reduce_trunk`) to exactly those M_T, K_T and C_T has
+
+* base_stiffness k_theta from K_T: 1 / K_T = a^3 / (3 E I) + a^2 / k_theta (eq 8 with the
+  root spring), so K_T must lie below the rigid-clamp value 3 E I / a^3;
+* crown_mass m_f from M_T (eq 7): M_T = rho A J + m_c + m_f phi(l)^2 with the static shape
+  phi of that k_theta;
+* damping C from C_T = 2 b (M_T + m) (eq 34: the moving-together motion decays at b) and
+  C_T = C J (eq 10 as derived).
+
+The shipped scenarios were calibrated this way; :func:`calibration_notes` records it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from treeimpact.analytic.errors import ParameterError
+
+from .parameters import Trunk
+from .reduction import reduce_trunk, static_mode_shape
+
+
+@dataclass(frozen=True)
+class MeasuredTree:
+    """Measured properties of a tree at its clamp (SI units)."""
+
+    dynamic_mass: float  # M_T, kg (Table 1)
+    stiffness: float  # K_T, N/m (Table 1)
+    damping_rate: float  # b, 1/s: decay rate of the moving-together motion (eq 42)
+
+    def __post_init__(self):
+        for name, v, unit in (("dynamic_mass", self.dynamic_mass, "kg"),
+                              ("stiffness", self.stiffness, "N/m")):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ParameterError(f"{name} = {v!r} {unit}: allowed (0, inf) {unit}")
+        b = self.damping_rate
+        if not (isinstance(b, (int, float)) and math.isfinite(b) and b >= 0):
+            raise ParameterError(f"damping_rate = {b!r} 1/s: allowed [0, inf) 1/s")
+
+
+def damping_rate_from_regression(a1: float, a2: float) -> float:
+    """b = -a2 / a1, 1/s (eq 42), from the regression x = a1 t + a2 t^2 (eq 40)."""
+    if not (math.isfinite(a1) and a1 > 0):
+        raise ParameterError(f"a1 = {a1!r} m/s: allowed (0, inf) m/s (the common velocity V)")
+    if not (math.isfinite(a2) and a2 <= 0):
+        raise ParameterError(f"a2 = {a2!r} m/s^2: allowed (-inf, 0] m/s^2 (decelerating)")
+    return -a2 / a1
+
+
+def stiffness_from_regression(*, a1: float, a2: float, x_max: float, tau: float,
+                              dynamic_mass: float, impactor_mass: float,
+                              impactor_stiffness: float) -> float:
+    """K_T, N/m: omega_n = a1 / (x_max e^(b tau)) (eqs 38 and 43 with x0 = 0), then
+    K_T = omega_n^2 (M_T + m) - k (eq 46 with omega_1 = omega_n, the moving-together motion)."""
+    b = damping_rate_from_regression(a1, a2)
+    for name, v, unit in (("x_max", x_max, "m"), ("tau", tau, "s")):
+        if not (math.isfinite(v) and v > 0):
+            raise ParameterError(f"{name} = {v!r} {unit}: allowed (0, inf) {unit}")
+    omega_n = a1 / (x_max * math.exp(b * tau))
+    if b >= omega_n:
+        raise ParameterError(f"x_max = {x_max!r} m, tau = {tau!r} s: give omega_n = "
+                             f"{omega_n:.4g} rad/s <= b = {b:.4g} 1/s, an overdamped motion "
+                             "with no maximum of that kind (eq 37)")
+    k_t = omega_n ** 2 * (dynamic_mass + impactor_mass) - impactor_stiffness
+    if k_t <= 0:
+        raise ParameterError(f"x_max = {x_max!r} m, tau = {tau!r} s: give K_T = {k_t:.4g} N/m "
+                             "<= 0 (eq 46)")
+    return k_t
+
+
+def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: float) -> Trunk:
+    """``chosen`` (l, a, d, rho, E, m_c) with base_stiffness, crown_mass and damping set so
+    that it reduces to the measured M_T, K_T and C_T = 2 b (M_T + m) (module docstring).
+
+    ``chosen``'s own crown_mass, damping and base_stiffness are ignored.
+    """
+    a = chosen.clamp_height
+    rigid = a ** 3 / (3.0 * chosen.bending_stiffness)  # m/N: flexibility of the rigid clamp
+    flexibility = 1.0 / measured.stiffness
+    if flexibility < rigid * (1.0 - 1e-12):
+        raise ParameterError(
+            f"stiffness = {measured.stiffness:.6g} N/m: above the rigid-clamp trunk's "
+            f"3 E I / a^3 = {1.0 / rigid:.6g} N/m (eq 8); allowed (0, {1.0 / rigid:.6g}] N/m "
+            "for this E, d and a (a stiffer tree needs a larger E)")
+    base = math.inf if flexibility <= rigid else a ** 2 / (flexibility - rigid)
+    trunk = replace(chosen, base_stiffness=base, crown_mass=0.0, damping=0.0)
+    shape = static_mode_shape(trunk)
+    j = shape.square_integral()
+    tip = float(shape.outer(trunk.length))
+    own = reduce_trunk(trunk).dynamic_mass  # rho A J + m_c: the trunk without its crown
+    crown = (measured.dynamic_mass - own) / tip ** 2
+    if crown < 0:
+        raise ParameterError(
+            f"dynamic_mass = {measured.dynamic_mass:.6g} kg: below the bare trunk's "
+            f"{own:.6g} kg (rho A J + m_c, eq 7); allowed [{own:.6g}, inf) kg for this "
+            "l, d, rho and m_c (lower the density or the clamp mass)")
+    c_t = 2.0 * measured.damping_rate * (measured.dynamic_mass + impactor_mass)
+    return replace(trunk, crown_mass=crown, damping=c_t / j)
+
+
+def calibration_notes(measured: MeasuredTree, *, given: str, chosen: str) -> dict:
+    """The ``[calibration]`` table of a scenario file calibrated by :func:`calibrate_trunk`."""
+    return {
+        "given": given,
+        "chosen": chosen,
+        "calibrated": (f"m_f from M_T = {measured.dynamic_mass:.6g} kg (eq 7), base_stiffness "
+                       f"from K_T = {measured.stiffness:.6g} N/m (eq 8 with the root spring), "
+                       f"C from C_T = 2 b (M_T + m), b = {measured.damping_rate:.6g} 1/s"),
+    }
+

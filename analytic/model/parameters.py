@@ -1,0 +1,253 @@
+"""Physical parameters of the paper's trunk, impactor and contact (SI units).
+
+Every dataclass is frozen and validates itself on construction: a bad value raises
+:class:`ParameterError` with one line naming the field and its allowed range.
+
+Symbols follow the paper (Figs 1-3): trunk length ``l``, clamp (impact) height ``a``,
+diameter ``d``, density ``rho``, Young's modulus ``E``, clamp mass ``m_c``, crown mass
+``m_f``, distributed viscous damping ``C`` (eq 9), pendulum mass ``m``, equivalent length
+``l_e`` and release angle ``theta_r`` (eq 48), restitution ``e`` (eq 21).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from treeimpact.analytic.errors import ParameterError
+
+STANDARD_GRAVITY = 9.81  # m/s^2, the value the paper uses (after eq 48)
+
+
+#: Physical plausibility limits (SI) of every field: what an orchard tree, a harvester's
+#: pendulum or billet, and a contact pad can be, with generous margins (README table).
+#: Beyond them the models leave their assumptions (small deflections, a beam) or the
+#: numbers leave what double precision and a bounded run can resolve.
+LIMITS = {
+    "trunk.length": (0.1, 30.0, "m"),
+    "trunk.clamp_height": (0.01, 30.0, "m"),
+    "trunk.diameter": (0.005, 3.0, "m"),
+    "trunk.density": (100.0, 2000.0, "kg/m^3"),
+    "trunk.youngs_modulus": (1e7, 1e11, "Pa"),
+    "trunk.clamp_mass": (0.0, 1000.0, "kg"),
+    "trunk.crown_mass": (0.0, 1e4, "kg"),
+    "trunk.damping": (0.0, 1e6, "N s/m^2"),
+    "trunk.base_stiffness": (10.0, math.inf, "N m/rad"),
+    "impactor.mass": (0.1, 1e4, "kg"),
+    "impactor.equivalent_length": (0.05, 30.0, "m"),
+    "impactor.release_angle_deg": (0.01, 180.0, "deg"),
+    "impactor.gravity": (1.0, 30.0, "m/s^2"),
+    "impactor.impact_speed": (0.01, 50.0, "m/s"),
+    "contact.restitution": (0.0, 1.0, "1"),
+    "contact.stiffness": (1e2, 1e12, "N/m"),
+    "contact.duration": (1e-6, 0.1, "s"),
+    "t_end": (1e-4, 10.0, "s"),
+}
+
+
+def check_limit(path: str, value, *, high=None) -> float:
+    """:func:`check_range` against :data:`LIMITS` (``high``: a tighter bound, e.g. a <= l)."""
+    low, top, unit = LIMITS[path]
+    if high is not None and high < top:
+        top = high
+    return check_range(path, value, low=low, high=None if math.isinf(top) else top,
+                       unit=unit if unit != "1" else "", allow_inf=math.isinf(top))
+
+
+def check_range(path: str, value, *, low=None, high=None, low_open=False, high_open=False,
+           unit: str = "", allow_inf: bool = False) -> float:
+    """Return ``value`` as float or raise a one-line :class:`ParameterError`."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{path}: expected a number{f' in {unit}' if unit else ''}, got {value!r}")
+    v = float(value)
+    lo = "(" if low_open else "["
+    hi = ")" if high_open else "]"
+    rng = f"{lo}{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}{hi}"
+    u = f" {unit}" if unit else ""
+    if math.isnan(v) or (math.isinf(v) and not allow_inf):
+        raise ParameterError(f"{path} = {value!r}{u}: must be a finite number in {rng}{u}")
+    bad = ((low is not None and (v < low or (low_open and v == low)))
+           or (high is not None and (v > high or (high_open and v == high))))
+    if bad:
+        raise ParameterError(f"{path} = {value!r}{u} is out of range: allowed {rng}{u}")
+    return v
+
+
+@dataclass(frozen=True)
+class Trunk:
+    """Uniform cantilever trunk with clamp and crown point masses (eqs 1-11).
+
+    ``base_stiffness`` is an optional rotational spring at the ground (root/soil
+    compliance), N m/rad; ``math.inf`` is the paper's rigid clamp.
+    """
+
+    length: float  # l, m: height of the lumped crown mass above the ground
+    clamp_height: float  # a, m: height of the impact point (clamp)
+    diameter: float  # d, m
+    density: float  # rho, kg/m^3
+    youngs_modulus: float  # E, Pa
+    clamp_mass: float = 0.0  # m_c, kg
+    crown_mass: float = 0.0  # m_f, kg
+    damping: float = 0.0  # C, N s/m^2: viscous damping force per unit length per unit velocity
+    base_stiffness: float = math.inf  # k_theta, N m/rad
+
+    def __post_init__(self):
+        check_limit("trunk.length", self.length)
+        check_limit("trunk.clamp_height", self.clamp_height,
+               high=self.length if isinstance(self.length, (int, float)) else None)
+        check_limit("trunk.diameter", self.diameter)
+        check_limit("trunk.density", self.density)
+        check_limit("trunk.youngs_modulus", self.youngs_modulus)
+        check_limit("trunk.clamp_mass", self.clamp_mass)
+        check_limit("trunk.crown_mass", self.crown_mass)
+        check_limit("trunk.damping", self.damping)
+        check_limit("trunk.base_stiffness", self.base_stiffness)
+
+    @property
+    def area(self) -> float:
+        """Cross-section A = pi d^2 / 4, m^2."""
+        return math.pi * self.diameter ** 2 / 4.0
+
+    @property
+    def second_moment(self) -> float:
+        """Area moment of inertia I = pi d^4 / 64, m^4."""
+        return math.pi * self.diameter ** 4 / 64.0
+
+    @property
+    def bending_stiffness(self) -> float:
+        """E I, N m^2."""
+        return self.youngs_modulus * self.second_moment
+
+    @property
+    def trunk_mass(self) -> float:
+        """m_t = rho A l, kg (after eq 7)."""
+        return self.density * self.area * self.length
+
+
+@dataclass(frozen=True)
+class Pendulum:
+    """Pendulum impactor released from rest at ``release_angle`` (rad), eq 48.
+
+    After the first impact it is linearised as mass ``m`` on a spring ``k = m g / l_e``
+    (Fig 3, eq 13), natural frequency omega_2 = sqrt(g / l_e).
+    """
+
+    mass: float  # m, kg
+    equivalent_length: float  # l_e, m
+    release_angle: float  # theta_r, rad
+    gravity: float = STANDARD_GRAVITY  # g, m/s^2
+
+    def __post_init__(self):
+        check_limit("impactor.mass", self.mass)
+        check_limit("impactor.equivalent_length", self.equivalent_length)
+        check_range("impactor.release_angle", self.release_angle, low=math.radians(
+            LIMITS["impactor.release_angle_deg"][0]), high=math.pi, unit="rad")
+        check_limit("impactor.gravity", self.gravity)
+
+    @property
+    def stiffness(self) -> float:
+        """Equivalent spring k = m g / l_e, N/m (Fig 3)."""
+        return self.mass * self.gravity / self.equivalent_length
+
+    @property
+    def natural_frequency(self) -> float:
+        """omega_2 = sqrt(g / l_e), rad/s (eq 14)."""
+        return math.sqrt(self.gravity / self.equivalent_length)
+
+    @property
+    def impact_speed(self) -> float:
+        """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48)."""
+        return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
+            self.release_angle / 2.0)
+
+    @property
+    def release_angle_deg(self) -> float:
+        return math.degrees(self.release_angle)
+
+
+@dataclass(frozen=True)
+class Billet:
+    """Unrestrained mass (spring-loaded billet) striking at ``impact_speed``: omega_2 = 0."""
+
+    mass: float  # m, kg
+    impact_speed: float  # u_1, m/s
+
+    def __post_init__(self):
+        check_limit("impactor.mass", self.mass)
+        check_limit("impactor.impact_speed", self.impact_speed)
+
+    stiffness = 0.0
+    natural_frequency = 0.0
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Contact between impactor and trunk.
+
+    ``restitution`` is Newton's e of eq 21. For the soft (spring-dashpot) models a contact
+    ``stiffness`` (N/m) or a contact ``duration`` (s, for the undamped two-body collision
+    pi / sqrt(k / mu)) sets the stiffness; give at most one of them.
+    """
+
+    restitution: float  # e, dimensionless
+    stiffness: float | None = None  # k_c, N/m
+    duration: float | None = None  # s
+
+    def __post_init__(self):
+        check_limit("contact.restitution", self.restitution)
+        if self.stiffness is not None:
+            check_limit("contact.stiffness", self.stiffness)
+        if self.duration is not None:
+            check_limit("contact.duration", self.duration)
+        if self.stiffness is not None and self.duration is not None:
+            raise ParameterError("contact: give either stiffness (N/m) or duration (s), not both")
+
+
+DEFAULT_CONTACT_DURATION = 5e-4  # s: half a millisecond, well inside the paper's T0 of 4-6 ms
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One impact experiment: trunk, impactor and contact, simulated until ``t_end`` (s)."""
+
+    name: str
+    trunk: Trunk
+    impactor: Pendulum | Billet
+    contact: Contact
+    t_end: float = 0.1  # s
+    description: str = ""
+    notes: dict = field(default_factory=dict, compare=False, hash=False)
+
+    def __post_init__(self):
+        if not isinstance(self.trunk, Trunk):
+            raise ParameterError("trunk: expected a Trunk")
+        if not isinstance(self.impactor, (Pendulum, Billet)):
+            raise ParameterError("impactor: expected a Pendulum or a Billet")
+        if not isinstance(self.contact, Contact):
+            raise ParameterError("contact: expected a Contact")
+        check_limit("t_end", self.t_end)
+
+    def to_dict(self) -> dict:
+        """The scenario as run, in the JSON layout of ``treeimpact simulate``."""
+        t = self.trunk
+        imp = self.impactor
+        impactor = {"mass": imp.mass}
+        if isinstance(imp, Pendulum):
+            impactor.update(type="pendulum", equivalent_length=imp.equivalent_length,
+                            release_angle_deg=imp.release_angle_deg, gravity=imp.gravity)
+        else:
+            impactor.update(type="billet", impact_speed=imp.impact_speed)
+        return {
+            "name": self.name,
+            "t_end": self.t_end,
+            "trunk": {
+                "length": t.length, "clamp_height": t.clamp_height, "diameter": t.diameter,
+                "density": t.density, "youngs_modulus": t.youngs_modulus,
+                "clamp_mass": t.clamp_mass, "crown_mass": t.crown_mass, "damping": t.damping,
+                "base_stiffness": None if math.isinf(t.base_stiffness) else t.base_stiffness,
+            },
+            "impactor": impactor,
+            "contact": {"restitution": self.contact.restitution,
+                        "stiffness": self.contact.stiffness,
+                        "duration": self.contact.duration},
+        }

@@ -1,0 +1,154 @@
+"""Scenario files (TOML) and the shipped paper-tree scenarios.
+
+Layout of a scenario file (SI units; angles in degrees where the key says ``_deg``)::
+
+    name = "open-center"
+    t_end = 0.1                      # s
+    [trunk]       length, clamp_height, diameter, density, youngs_modulus,
+                  clamp_mass, crown_mass, damping, base_stiffness (inf: a rigid clamp)
+    [impactor]    type = "pendulum": mass, equivalent_length, release_angle_deg, gravity?
+                  type = "billet":   mass, impact_speed
+    [contact]     restitution, stiffness? | duration?
+    [calibration] free text: which values are calibrated and from what (not used)
+
+Any error is a :class:`~analytic.errors.ParameterError` whose one-line message names
+the field and the allowed range.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+from treeimpact.analytic.errors import ParameterError
+
+from .parameters import Billet, Contact, Pendulum, Scenario, Trunk, check_limit
+
+_TRUNK_KEYS = {"length", "clamp_height", "diameter", "density", "youngs_modulus", "clamp_mass",
+               "crown_mass", "damping", "base_stiffness"}
+_TRUNK_REQUIRED = {"length", "clamp_height", "diameter", "density", "youngs_modulus"}
+#: Required too (a missing mass or damping is not silently 0), but reported after the
+#: values that are given have been checked: what is wrong comes before what is missing.
+_TRUNK_REQUIRED_LATER = ("clamp_mass", "crown_mass", "damping", "base_stiffness")
+_PENDULUM_KEYS = {"type", "mass", "equivalent_length", "release_angle_deg", "gravity"}
+_BILLET_KEYS = {"type", "mass", "impact_speed"}
+_CONTACT_KEYS = {"restitution", "stiffness", "duration"}
+_TOP_KEYS = {"name", "description", "t_end", "trunk", "impactor", "contact", "calibration"}
+
+
+def shipped_scenarios() -> list[str]:
+    """Names of the scenarios shipped with the package."""
+    folder = resources.files(__package__) / "scenarios"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def _table(data: dict, key: str) -> dict:
+    if key not in data:
+        raise ParameterError(f"{key}: missing table [{key}]")
+    if not isinstance(data[key], dict):
+        raise ParameterError(f"{key}: expected a table [{key}]")
+    return data[key]
+
+
+def _keys(table: dict, prefix: str, allowed: set, required: set) -> None:
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ParameterError(f"{prefix}.{unknown[0]}: unknown key (allowed: {', '.join(sorted(allowed))})")
+    missing = sorted(required - set(table))
+    if missing:
+        raise ParameterError(f"{prefix}.{missing[0]}: missing required value")
+
+
+def _number(table: dict, prefix: str, key: str):
+    v = table[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        name = f"{prefix}.{key}" if prefix else key
+        raise ParameterError(f"{name}: expected a number, got {v!r}")
+    return v
+
+
+def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
+    """Build a validated :class:`Scenario` from the parsed TOML layout."""
+    if not isinstance(data, dict):
+        raise ParameterError("scenario: expected a table")
+    unknown = sorted(set(data) - _TOP_KEYS)
+    if unknown:
+        raise ParameterError(f"{unknown[0]}: unknown key (allowed: {', '.join(sorted(_TOP_KEYS))})")
+    trunk_t = _table(data, "trunk")
+    _keys(trunk_t, "trunk", _TRUNK_KEYS, _TRUNK_REQUIRED)
+    trunk_kw = {k: _number(trunk_t, "trunk", k) for k in trunk_t}
+    trunk = Trunk(**trunk_kw)
+
+    imp_t = _table(data, "impactor")
+    kind = imp_t.get("type", "pendulum")
+    if kind == "pendulum":
+        _keys(imp_t, "impactor", _PENDULUM_KEYS, {"mass", "equivalent_length", "release_angle_deg"})
+        deg = check_limit("impactor.release_angle_deg", _number(imp_t, "impactor",
+                                                           "release_angle_deg"))
+        kw = dict(mass=_number(imp_t, "impactor", "mass"),
+                  equivalent_length=_number(imp_t, "impactor", "equivalent_length"),
+                  release_angle=math.radians(deg))
+        if "gravity" in imp_t:
+            kw["gravity"] = _number(imp_t, "impactor", "gravity")
+        impactor = Pendulum(**kw)
+    elif kind == "billet":
+        _keys(imp_t, "impactor", _BILLET_KEYS, {"mass", "impact_speed"})
+        impactor = Billet(mass=_number(imp_t, "impactor", "mass"),
+                          impact_speed=_number(imp_t, "impactor", "impact_speed"))
+    else:
+        raise ParameterError(f"impactor.type = {kind!r}: allowed 'pendulum' or 'billet'")
+
+    con_t = _table(data, "contact")
+    _keys(con_t, "contact", _CONTACT_KEYS, {"restitution"})
+    contact = Contact(**{k: _number(con_t, "contact", k) for k in con_t})
+
+    later = [k for k in _TRUNK_REQUIRED_LATER if k not in trunk_t]
+    if later:
+        raise ParameterError(f"trunk.{later[0]}: missing required value"
+                             + (" (base_stiffness = inf: a rigid clamp)"
+                                if later[0] == "base_stiffness" else ""))
+    notes = data.get("calibration", {})
+    if not isinstance(notes, dict):
+        raise ParameterError("calibration: expected a table [calibration] of notes")
+    name = data.get("name", default_name)
+    if not isinstance(name, str) or not name:
+        raise ParameterError("name: expected a non-empty string")
+    kw = {}
+    if "t_end" in data:
+        kw["t_end"] = _number(data, "", "t_end")
+    return Scenario(name=name, trunk=trunk, impactor=impactor, contact=contact,
+                    description=str(data.get("description", "")),
+                    notes=dict(notes), **kw)
+
+
+def load_scenario(source: str | Path) -> Scenario:
+    """Load a shipped scenario by name (``open-center``) or a TOML file by path."""
+    text: str
+    path = Path(source)
+    if isinstance(source, str) and source in shipped_scenarios():
+        raw = (resources.files(__package__) / "scenarios" / f"{source}.toml").read_bytes()
+        default = source
+    elif path.is_file():
+        try:
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise ParameterError(f"scenario {str(source)!r}: cannot be read "
+                                 f"({exc.strerror})") from None
+        default = path.stem
+    else:
+        raise ParameterError(
+            f"scenario {str(source)!r}: no such file or shipped scenario "
+            f"(shipped: {', '.join(shipped_scenarios())})")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"scenario {str(source)!r}: not UTF-8 text (byte "
+                             f"0x{raw[exc.start]:02x} at offset {exc.start}); TOML files are "
+                             "UTF-8") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"scenario {str(source)!r}: malformed TOML: {exc}") from None
+    return scenario_from_dict(data, default_name=default)

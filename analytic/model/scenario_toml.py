@@ -1,0 +1,49 @@
+"""A :class:`~analytic.model.parameters.Scenario` written as a scenario file (the layout that
+:func:`analytic.model.scenario.load_scenario` reads; SI units, release angle in degrees)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+from .parameters import STANDARD_GRAVITY, Scenario
+
+_UNITS = {"length": "m", "clamp_height": "m", "diameter": "m", "density": "kg/m^3",
+          "youngs_modulus": "Pa", "clamp_mass": "kg", "crown_mass": "kg",
+          "damping": "N s/m^2", "base_stiffness": "N m/rad", "mass": "kg",
+          "equivalent_length": "m", "release_angle_deg": "deg", "gravity": "m/s^2",
+          "impact_speed": "m/s", "restitution": "1", "stiffness": "N/m", "duration": "s",
+          "t_end": "s"}
+
+
+def _value(v) -> str:
+    if isinstance(v, str):
+        return json.dumps(v)  # a JSON string is a valid TOML basic string
+    v = float(v)
+    return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf")  # round-trip exact
+
+
+def _line(key, v, units: bool = True) -> str:
+    unit = _UNITS.get(key) if units else None
+    return f"{key} = {_value(v)}" + (f"  # {unit}" if unit else "")
+
+
+def scenario_toml(scenario: Scenario) -> str:
+    """The scenario file's text; loading it gives back an equal scenario (notes included)."""
+    d = scenario.to_dict()
+    lines = [_line("name", d["name"])]
+    if scenario.description:
+        lines.append(_line("description", scenario.description))
+    lines.append(_line("t_end", d["t_end"]))
+    for table in ("trunk", "impactor", "contact"):
+        lines += ["", f"[{table}]"]
+        for key, v in d[table].items():
+            if table == "trunk" and key == "base_stiffness" and v is None:
+                v = math.inf  # the paper's rigid clamp, written out
+            if v is None or (key == "gravity" and v == STANDARD_GRAVITY):
+                continue  # an optional value left at its default
+            lines.append(f'type = "{v}"' if key == "type" else _line(key, v))
+    if scenario.notes:
+        lines += ["", "[calibration]"]
+        lines += [_line(k, str(v), units=False) for k, v in scenario.notes.items()]
+    return "\n".join(lines) + "\n"

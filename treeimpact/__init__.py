@@ -1,0 +1,60 @@
+"""treeimpact: the paper's one-degree-of-freedom model of a pendulum striking a fruit-tree
+trunk, checked one assumption at a time against a continuum beam, MuJoCo and PyBullet.
+
+The public API (SI units; docs/api.md)::
+
+    import treeimpact as ti
+    scenario = ti.load_scenario("open-center")        # or a TOML path, or ti.Scenario(...)
+    result = ti.simulate(scenario, backend="beam")     # analytic, soft, beam, mujoco, bullet
+    result.metrics["x_max"]                            # m, largest trunk displacement
+    ladder = ti.ladder(scenario)                       # one assumption per rung, judged
+    ti.report("reports")                               # report.html, .md, .json
+
+Everything else (``treeimpact.analytic``, ``treeimpact.compare``, the engine packages) is
+the implementation. Names load on first use, so ``import treeimpact`` stays fast.
+"""
+
+from importlib import import_module
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    # scenarios: load, build, write
+    "Scenario": "treeimpact.analytic.model.parameters",
+    "Trunk": "treeimpact.analytic.model.parameters",
+    "Pendulum": "treeimpact.analytic.model.parameters",
+    "Billet": "treeimpact.analytic.model.parameters",
+    "Contact": "treeimpact.analytic.model.parameters",
+    "load_scenario": "treeimpact.analytic.model.scenario",
+    "shipped_scenarios": "treeimpact.analytic.model.scenario",
+    "scenario_toml": "treeimpact.analytic.model.scenario_toml",
+    "MeasuredTree": "treeimpact.analytic.model.calibration",
+    "calibrate_trunk": "treeimpact.analytic.model.calibration",
+    # runs, ladders, sweeps, identification, the report
+    "simulate": "treeimpact.compare.api",
+    "modes": "treeimpact.compare.api",
+    "backends": "treeimpact.compare.api",
+    "ladder": "treeimpact.compare.api",
+    "sweep": "treeimpact.compare.api",
+    "read_record": "treeimpact.compare.api",
+    "identify": "treeimpact.compare.api",
+    "report": "treeimpact.compare.api",
+    # results and errors
+    "SimulationResult": "treeimpact.analytic.results",
+    "METRIC_UNITS": "treeimpact.analytic.results",
+    "ParameterError": "treeimpact.analytic.errors",
+    "SimulationDiverged": "treeimpact.analytic.errors",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'treeimpact' has no attribute {name!r}")
+    value = getattr(import_module(_EXPORTS[name]), name)
+    globals()[name] = value  # later reads skip this hook
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
