@@ -51,10 +51,10 @@ from treeimpact.compare.sweep.run import run_sweep  # noqa: E402
 
 #: Grid per backend: about 10-20 s of work for one worker on this machine.
 GRIDS = {
-    "analytic": ["e=0.05:0.95:40", "crown_ratio=0:4:40"],  # 1600 points, ~4 ms each
-    "soft": ["e=0.1:0.9:10", "crown_ratio=0:4:10"],  # 100 points, ~0.05-0.15 s each
-    "mujoco": ["e=0.1:0.9:20", "crown_ratio=0:4:10"],  # 200 points, SDOF trunk ~0.05 s each
-    "bullet": ["e=0.1:0.9:12", "crown_ratio=0:4:5"],  # 60 points, SDOF trunk ~0.15 s each
+    "analytic": ["restitution=0.05:0.95:40", "crown_ratio=0:4:40"],  # 1600 points, ~4 ms each
+    "soft": ["restitution=0.1:0.9:10", "crown_ratio=0:4:10"],  # 100 points, ~0.05-0.15 s each
+    "mujoco": ["restitution=0.1:0.9:20", "crown_ratio=0:4:10"],  # 200 points, SDOF trunk ~0.05 s each
+    "bullet": ["restitution=0.1:0.9:12", "crown_ratio=0:4:5"],  # 60 points, SDOF trunk ~0.15 s each
 }
 #: The Dask configuration the README recommends for a sweep's cluster (see the docstring).
 DASK_SWEEP_CONFIG = {"distributed.worker.profile.enabled": False,
@@ -96,7 +96,7 @@ def local_cluster(config: dict, backend: str):
 def warm(backend: str = "soft", **kw) -> None:
     """A small sweep of ``backend`` (its imports, in every worker of a cluster)."""
     with tempfile.TemporaryDirectory() as d:
-        run_sweep("central-leader", ["e=0.1,0.2,0.3,0.4"], Path(d) / "w",
+        run_sweep("central-leader", ["restitution=0.1,0.2,0.3,0.4"], Path(d) / "w",
                   backends=["analytic", backend],
                   options={k: v for k, v in ENGINE_OPTIONS.items() if k == backend},
                   progress=False, **kw)

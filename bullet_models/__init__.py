@@ -2,7 +2,7 @@
 
 Public API (SI units)::
 
-    from bullet_models import simulate, simulate_batch, modes
+    from treeimpact.bullet_models import simulate, simulate_batch, modes
     result = simulate(load_scenario("open-center"), trunk="sdof", contact="soft")
 
 Rules: :mod:`bullet_models._runner` (runner, time step, Newton-contact settings),
@@ -11,6 +11,18 @@ Rules: :mod:`bullet_models._runner` (runner, time step, Newton-contact settings)
 them to ``bullet_models/models``).
 """
 
-from ._runner import OPTIONS, make_setup, modes, run, simulate, simulate_batch
+from .options import OPTIONS
 
-__all__ = ["OPTIONS", "make_setup", "modes", "run", "simulate", "simulate_batch"]
+#: The engine interface (treeimpact.analytic.engine.interface.Engine), loaded on first use:
+#: the options above are read without importing the engine.
+_RUNNER = ("make_setup", "modes", "run", "simulate", "simulate_batch")
+
+__all__ = ["OPTIONS", *_RUNNER]
+
+
+def __getattr__(name: str):
+    if name in _RUNNER:
+        from . import _runner
+
+        return getattr(_runner, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from treeimpact.analytic.contact.law import (
-    CALIBRATIONS,
     collision_duration,
     contact_law,
     detection_duration,
@@ -30,9 +29,6 @@ from treeimpact.analytic.continuum.chain import (
     lateral_jacobian,
 )
 from treeimpact.analytic.engine.interface import (
-    DAMPINGS,
-    PENDULUMS,
-    TRUNKS,
     EngineSetup,
     chain_modes,
     check_choice,
@@ -58,12 +54,8 @@ from ._world import (
     engine_matrices,
     load,
 )
+from .options import CONTACTS, OPTIONS  # noqa: F401 - OPTIONS: public here too
 
-CONTACTS = ("soft", "newton")
-#: The engine interface's options (analytic.engine.interface.Engine): allowed values, None a number.
-OPTIONS = {"trunk": TRUNKS, "segments": None, "pendulum": PENDULUMS, "contact": CONTACTS,
-           "contact_stiffness": None, "dt": None, "restitution": None, "t_end": None,
-           "damping": DAMPINGS, "calibration": CALIBRATIONS}
 __all__ = ["OPTIONS", "build_world", "client", "engine_matrices", "load", "make_setup",
            "modes", "run", "simulate", "simulate_batch"]
 

@@ -53,6 +53,9 @@ class Backend:
     variants: tuple | None = None
     #: the report's line colours of an engine's rungs (SDOF, chain, chain + full pendulum)
     shades: tuple = ()
+    #: ``module:NAME`` of the backend's options table; None: the ``OPTIONS`` of the module
+    #: its ``simulate`` lives in
+    options_ref: str | None = None
 
     def cost(self, options: dict) -> float:
         """Rough wall time (s) of one run with ``options`` (:attr:`run_cost`; 1 s unknown)."""
@@ -67,9 +70,10 @@ class Backend:
         except (ImportError, AttributeError) as exc:
             raise ParameterError(f"backend {self.name!r} is not available here: {exc}") from None
 
-    def options(self) -> set[str]:
-        sig = inspect.signature(self._load(self.simulate_ref))
-        return {p.name for p in sig.parameters.values() if p.kind == p.KEYWORD_ONLY}
+    def options(self) -> dict:
+        """The backend's options, name -> :class:`treeimpact.analytic.model.options.Option`:
+        the ``OPTIONS`` of the module its ``simulate`` lives in (read without running it)."""
+        return self._load(self.options_ref or self.simulate_ref.split(":")[0] + ":OPTIONS")
 
     def simulate(self, scenario, **options):
         """The backend's result, checked before anyone reports it (a diverged run raises
@@ -77,25 +81,30 @@ class Backend:
         from treeimpact.analytic.results import check_plausible
 
         func = self._load(self.simulate_ref)
-        self._check(func, options)
-        return check_plausible(func(scenario, **options))
+        table = self.options()
+        return check_plausible(func(scenario, **self._checked(options, table, set(table))))
 
     def modes(self, scenario, **options):
         if self.modes_ref is None:
             raise ParameterError(f"backend {self.name!r} has no modes")
         func = self._load(self.modes_ref)
-        self._check(func, options)
-        return func(scenario, **options)
+        accepted = {p.name for p in inspect.signature(func).parameters.values()
+                    if p.kind == p.KEYWORD_ONLY}
+        return func(scenario, **self._checked(options, self.options(), accepted))
 
-    def _check(self, func, options):
-        allowed = {p.name for p in inspect.signature(func).parameters.values()
-                   if p.kind == p.KEYWORD_ONLY}
-        for key in options:
-            if key not in allowed:
-                flag = "--" + key.replace("_", "-")
-                raise ParameterError(f"{flag}: not an option of backend {self.name!r} "
-                                     f"(its options: {', '.join(sorted(allowed)) or 'none'})")
-
+    def _checked(self, options: dict, table: dict, accepted: set) -> dict:
+        """``options`` with each value checked by its Option (one line naming the flag);
+        an option ``accepted`` does not hold is refused, naming what the backend takes."""
+        out = {}
+        for key, value in options.items():
+            if key not in accepted:
+                shown = ", ".join("--" + k.replace("_", "-") for k in sorted(accepted)
+                                  if k not in table or table[k].cli)
+                raise ParameterError(f"--{key.replace('_', '-')}: not an option of backend "
+                                     f"{self.name!r} (its options: {shown or 'none'})")
+            out[key] = table[key].check(key, value) if key in table and value is not None \
+                else value
+        return out
 
 BACKENDS = {
     "analytic": Backend("analytic", "treeimpact.analytic.impact.simulate:simulate",

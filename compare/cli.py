@@ -39,7 +39,42 @@ def _count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
 
 
+#: The options of ``treeimpact modes`` (the backends' modes() take these of their OPTIONS).
+MODES_OPTIONS = ("segments", "elements")
+
+
+def backend_options() -> dict:
+    """option name -> (its Option, the backends that take it), over every backend's
+    ``OPTIONS`` (read without loading an engine)."""
+    from .backends import BACKENDS
+
+    out: dict = {}
+    for name, backend in BACKENDS.items():
+        try:
+            table = backend.options()
+        except ParameterError:  # a backend that is not installed offers no flags
+            continue
+        for key, option in table.items():
+            out.setdefault(key, (option, []))[1].append(name)
+    return out
+
+
+def _add_option_flags(parser, names=None) -> None:
+    """One flag per backend option (``--contact-stiffness``), its type or choices and help
+    from the backends' OPTIONS, the backends that take it named."""
+    for key, (option, takers) in sorted(backend_options().items()):
+        if not option.cli or (names is not None and key not in names):
+            continue
+        unit = f", {option.unit}" if option.unit not in ("", "1") else ""
+        kind = {"type": _count} if option.kind is int else {"type": _number} \
+            if option.choices is None else {"choices": option.choices}
+        parser.add_argument("--" + key.replace("_", "-"), dest=key, **kind,
+                            help=f"{option.help}{unit} ({', '.join(takers)})".replace("%", "%%"))
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from .backends import BACKENDS
+
     p = _Parser(prog="treeimpact", description="The fruit-tree trunk impact model of the paper "
                 "and its cross-checks against MuJoCo and PyBullet (SI units; exit codes: 0 "
                 "success, 2 bad input, 3 the simulation diverged).")
@@ -53,34 +88,17 @@ def build_parser() -> argparse.ArgumentParser:
 
     ss = sub.add_parser("simulate", help="simulate one scenario")
     ss.add_argument("scenario", help="shipped scenario name or TOML path")
-    ss.add_argument("--backend", default="analytic",
-                    help="analytic, soft, beam, mujoco or bullet")
-    ss.add_argument("--e", type=_number, dest="restitution", help="restitution e in [0, 1]")
-    ss.add_argument("--t-end", type=_number, dest="t_end", help="end time, s")
-    ss.add_argument("--trunk", choices=("sdof", "chain"), help="engine trunk model")
-    ss.add_argument("--segments", type=_count, help="segments of the hinged trunk")
-    ss.add_argument("--pendulum", choices=("linear", "full"), help="engine pendulum model")
-    ss.add_argument("--contact", choices=("soft", "newton"), help="Bullet contact mode")
-    ss.add_argument("--contact-stiffness", type=_number, dest="contact_stiffness",
-                    help="contact stiffness, N/m")
-    ss.add_argument("--dt", type=_number, help="time step, s")
-    ss.add_argument("--elements", type=_count, help="beam backend: elements of the trunk mesh")
-    ss.add_argument("--calibration", choices=("pad", "effective"),
-                    help="beam, mujoco, bullet: the contact damping of the SDOF's pad (default) "
-                         "or recalibrated so that e holds on the trunk's effective mass")
-    ss.add_argument("--damping", choices=("distributed", "joint"),
-                    help="engine trunk damping: the paper's distributed C, or joint damping")
-    ss.add_argument("--integrator", choices=("Euler", "implicit", "implicitfast", "RK4"),
-                    help="MuJoCo integrator (default Euler)")
+    ss.add_argument("--backend", default="analytic", choices=tuple(BACKENDS),
+                    help="the model to run (default: analytic, the paper's)")
+    _add_option_flags(ss)
     ss.add_argument("--json", action="store_true", help="machine-readable output")
 
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
     sm.add_argument("scenario", help="shipped scenario name or TOML path")
-    sm.add_argument("--backend", default="analytic",
+    sm.add_argument("--backend", default="analytic", choices=tuple(BACKENDS),
                     help="analytic (the SDOF trunk), beam (its mesh), mujoco or bullet (their "
                          "hinged trunks)")
-    sm.add_argument("--segments", type=_count, help="segments of the hinged trunk")
-    sm.add_argument("--elements", type=_count, help="beam backend: elements of the trunk mesh")
+    _add_option_flags(sm, MODES_OPTIONS)
     sm.add_argument("--json", action="store_true", help="machine-readable output")
     sr = sub.add_parser("report", help="write the discrepancy report (html, md, json)")
     sr.add_argument("--out", default="reports", help="output directory (default: reports)")
@@ -175,7 +193,7 @@ def _options(args, names) -> dict:
 
 
 #: Units of the ``model`` keys every backend reports (README); others print without one.
-MODEL_UNITS = {"M_T": "kg", "C_T": "N s/m", "K_T": "N/m", "m": "kg", "k": "N/m", "e": "1",
+MODEL_UNITS = {"M_T": "kg", "C_T": "N s/m", "K_T": "N/m", "m": "kg", "k": "N/m", "restitution": "1",
                "u1": "m/s", "dt": "s", "contact_stiffness": "N/m", "contact_damping": "N s/m",
                "law_stiffness": "N/m", "law_damping": "N s/m", "effective_mass": "kg",
                "collision_duration": "s", "omega_max": "rad/s"}
@@ -191,7 +209,7 @@ def _unit(u: str) -> str:
 
 def _rel(value, reference) -> str:
     """:func:`compare.ladder.relative_step` as text ('' where it has no value)."""
-    from .ladder import relative_step
+    from .verdicts import relative_step
 
     rel = relative_step(value, reference)
     return f"{rel:+.1%}" if math.isfinite(rel) else ""
@@ -222,29 +240,6 @@ def _print_simulation(scenario, result, reference) -> None:
         print(line + f"  {meaning}")
 
 
-#: Flag -> (attribute, the field whose plausible range it takes, analytic.model.parameters.LIMITS).
-_FLAG_LIMITS = {"--e": ("restitution", "contact.restitution"), "--t-end": ("t_end", "t_end"),
-                "--contact-stiffness": ("contact_stiffness", "contact.stiffness")}
-
-
-def _check_flags(args) -> None:
-    """One-line errors that name the flag the user typed, with its allowed range."""
-    from treeimpact.analytic.continuum.chain import MAX_SEGMENTS
-    from treeimpact.analytic.model.parameters import LIMITS, check_range
-
-    for flag, (attr, field) in _FLAG_LIMITS.items():
-        value = getattr(args, attr, None)
-        if value is not None:
-            low, high, unit = LIMITS[field]
-            check_range(flag, value, low=low, high=high, unit="" if unit == "1" else unit)
-    dt = getattr(args, "dt", None)
-    if dt is not None:
-        check_range("--dt", dt, low=0.0, low_open=True, high=1e-3, unit="s")
-    segments = getattr(args, "segments", None)
-    if segments is not None and not 1 <= segments <= MAX_SEGMENTS:
-        raise ParameterError(f"--segments = {segments}: allowed 1 to {MAX_SEGMENTS}")
-
-
 def cmd_simulate(args) -> int:
     from treeimpact.analytic.model.scenario import load_scenario
 
@@ -252,10 +247,7 @@ def cmd_simulate(args) -> int:
 
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
-    _check_flags(args)
-    opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
-                           "contact_stiffness", "dt", "damping", "integrator", "elements",
-                           "calibration"))
+    opts = _options(args, backend_options())
     result = backend.simulate(scenario, **opts)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
@@ -275,7 +267,7 @@ def cmd_modes(args) -> int:
 
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
-    res = backend.modes(scenario, **_options(args, ("segments", "elements")))
+    res = backend.modes(scenario, **_options(args, MODES_OPTIONS))
     if args.json:
         print(json.dumps(to_jsonable(res), indent=2))
         return 0

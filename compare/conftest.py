@@ -62,12 +62,13 @@ def require_run(ladder, rung_id: str) -> None:
 
 
 def assert_checks(ladder, checks) -> None:
-    """Pass when every check is ``ok``, a ``finding`` in its band, or a peak time flagged
-    ``ambiguous`` (x(t) with two near-equal maxima: not judged, by the documented rule of
-    compare.ladder; test_ladder checks which rungs are); else print the table."""
+    """Pass when every check's verdict passes (compare.verdicts.Verdict.passes: ``ok``, a
+    ``finding`` in its band, or a peak time flagged ``ambiguous``, x(t) with two near-equal
+    maxima, not judged by the documented rule; test_ladder checks which rungs are); else
+    print the table."""
     from treeimpact.compare.ladder import failure_table
 
-    bad = [c for c in checks if c.verdict not in ("ok", "finding", "ambiguous")]
+    bad = [c for c in checks if not c.verdict.passes]
     if bad:
         pytest.fail("\n" + failure_table(ladder, checks), pytrace=False)
 

@@ -20,7 +20,7 @@ HEADLINE_METRICS = ("x_max", "energy_delivered", "crown_peak_acceleration")
 
 def scan_requests(scenario, durations=DURATIONS) -> list:
     """The (scenario, backend, options) runs of one scan, for RunCache.prefetch."""
-    return [(scenario, b, {"duration": d}) for d in durations for b in ("soft", "beam")]
+    return [(scenario, b, {"contact_duration": d}) for d in durations for b in ("soft", "beam")]
 
 
 def contact_scan(scenario, cache: RunCache, durations=DURATIONS,
@@ -30,14 +30,14 @@ def contact_scan(scenario, cache: RunCache, durations=DURATIONS,
     failed: [reasons]}. Runs come from (or go into) ``cache``. ``tolerance``: default the
     studies' criterion (compare.ladder.validity_tolerance)."""
     if tolerance is None:
-        from .ladder import validity_tolerance
+        from .verdicts import validity_tolerance
 
         tolerance = validity_tolerance()
     gaps = {m: [] for m in metrics}
     failed = []
     for d in durations:
-        soft = cache.run(scenario, "soft", duration=d)
-        beam = cache.run(scenario, "beam", duration=d)
+        soft = cache.run(scenario, "soft", contact_duration=d)
+        beam = cache.run(scenario, "beam", contact_duration=d)
         for m in metrics:
             if soft.status == OK and beam.status == OK:
                 a, b = soft.result.metrics[m], beam.result.metrics[m]

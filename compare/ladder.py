@@ -6,40 +6,30 @@ Design notes and measured figures: docs/ladder.md.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
-from functools import lru_cache
-from pathlib import Path
 
-from treeimpact.analytic.errors import ParameterError, one_line
 from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
 from .backends import ENGINES
+from .identification import IDENT_METRICS, IDENT_UNITS, RungIdentification, rung_identification
 from .rungs import (  # noqa: F401
     ANALYTIC_SAMPLE_STEP,
-    KINDS,
+    ENGINE_KINDS,
     Rung,
+    RungKind,
     analytic_samples,
-    rung_table,  # (ANALYTIC_SAMPLE_STEP, KINDS, Rung: public here too)
+    rung_table,  # (ANALYTIC_SAMPLE_STEP, Rung: public here too)
 )
-from .runs import OK, SKIPPED, Run, RunCache, resolve_scenario
-
-TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
-
+from .runs import SKIPPED, Run, RunCache, Status, resolve_scenario
+from .verdicts import Check, Verdict, _f, judge, load_tolerances, relative_step
 
 #: Impact metrics of the ladder (keys of analytic.results.METRIC_KEYS).
 LADDER_METRICS = ("T0", "x0", "V", "x_max", "t_xmax", "t_sep", "impact_loss",
                   "energy_transferred", "theta_b", "energy_delivered", "contact_dissipation",
                   "rebound_energy", "impulse", "peak_force", "contact_episodes", "crown_peak",
                   "crown_peak_acceleration")
-#: Parameters recovered by the identification procedure, compared with the model's truth.
-IDENT_METRICS = ("M_T", "K_T", "xi", "E")
-IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
-               "K_T": ("N/m", "identified stiffness (eq 46)"),
-               "xi": ("1", "identified damping ratio b / omega_n (eqs 42-43)"),
-               "E": ("Pa", "identified Young's modulus (eq 47)")}
 ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
 
 
@@ -74,173 +64,6 @@ def ladder_rungs(scenario, *, engines=ENGINES, segments: int | None = None) -> l
                       analytic_options=(("samples", samples),))
 
 
-# --------------------------------------------------------------------------- tolerances
-
-
-@lru_cache(maxsize=4)
-def _load(path: str) -> dict:
-    with open(path, "rb") as fh:
-        data = tomllib.load(fh)
-    _validate(data, path)
-    return data
-
-
-def load_tolerances(path: str | Path | None = None) -> dict:
-    """The tolerance file (``compare/tolerances.toml``), validated: every entry has a reason."""
-    return _load(str(TOLERANCES_PATH if path is None else path))
-
-
-def validity_tolerance() -> float:
-    """The studies' criterion (relative, 5 %: tolerances.toml [study] validity): the maps'
-    contour, the contact scan's headline and the report's answer table."""
-    return float(load_tolerances()["study"]["validity"]["rel"])
-
-
-def _validate(data: dict, path: str) -> None:
-    def need_reason(where, entry):
-        if not isinstance(entry, dict) or not str(entry.get("reason", "")).strip():
-            raise ParameterError(f"{path}: {where}: every tolerance needs a one-line reason")
-        if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
-            raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
-        if "rel" not in entry and not entry.get("report_only") and not entry.get("undefined") \
-                and where != "identification_reported":
-            raise ParameterError(f"{path}: {where}: give rel or report_only = true (or "
-                                 "undefined = true: no check)")
-
-    for section in ("step", "engines"):
-        for kind, metrics in data.get(section, {}).items():
-            for metric, entry in metrics.items():
-                need_reason(f"{section}.{kind}.{metric}", entry)
-    for metric, entry in data.get("identification", {}).items():
-        need_reason(f"identification.{metric}", entry)
-    need_reason("identification_reported", data.get("identification_reported"))
-    for name, entry in data.get("study", {}).items():
-        need_reason(f"study.{name}", entry)
-    for kind, entry in data.get("ledger", {}).items():
-        need_reason(f"ledger.{kind}", entry)
-    for i, f in enumerate(data.get("finding", [])):
-        for key in ("name", "scenario", "metric", "band", "reason", "kinds"):
-            if key not in f:
-                raise ParameterError(f"{path}: finding[{i}].{key}: missing")
-        lo, hi = f["band"]
-        if not lo < hi:
-            raise ParameterError(f"{path}: finding[{i}].band: need lo < hi")
-
-
-# --------------------------------------------------------------------------- checks
-
-
-@dataclass(frozen=True)
-class Check:
-    """One comparison of the ladder: a rung's value against a reference, with its verdict."""
-
-    scenario: str
-    rung: str
-    metric: str
-    value: float
-    reference: str  # the reference rung id, or "truth"
-    reference_value: float
-    rel_diff: float  # (value - reference) / |reference|
-    tolerance: float | None  # relative, None when only reported
-    verdict: str
-    reason: str
-    finding: str | None = None
-    band: tuple | None = None
-
-    def to_json(self) -> dict:
-        return to_jsonable(self.__dict__ | {"band": list(self.band) if self.band else None})
-
-
-def relative_step(value, reference) -> float:
-    if not (finite_number(value) and finite_number(reference)) or reference == 0:
-        return math.nan
-    return (value - reference) / abs(reference)
-
-
-def _finding_for(tol: dict, scenario: str, kind: str, metric: str, rung_id: str):
-    for f in tol.get("finding", []):
-        if f["scenario"] == scenario and f["metric"] == metric and kind in f["kinds"]:
-            if "rungs" in f and rung_id not in f["rungs"]:
-                continue
-            return f
-    return None
-
-
-def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: str,
-          reference_value, entry: dict | None, tol: dict) -> Check:
-    """The verdict of one comparison (see the module docstring)."""
-    rel = relative_step(value, reference_value)
-    finding = _finding_for(tol, scenario, kind, metric, rung)
-    tolerance = None if entry is None or entry.get("report_only") else float(entry["rel"])
-    reason = entry["reason"] if entry else "no tolerance entry"
-    if finding is not None:
-        band = tuple(finding["band"])
-        reason = finding["reason"]
-        if not math.isfinite(rel):
-            verdict = "n/a"
-        elif tolerance is not None and abs(rel) <= tolerance:
-            verdict = "finding-lost"
-        elif band[0] <= rel <= band[1]:
-            verdict = "finding"
-        else:
-            verdict = "out-of-band"
-        return Check(scenario, rung, metric, _f(value), reference, _f(reference_value), rel,
-                     tolerance, verdict, reason, finding["name"], band)
-    if not math.isfinite(rel):
-        verdict = "n/a"
-    elif tolerance is None:
-        verdict = "reported"
-    else:
-        verdict = "ok" if abs(rel) <= tolerance else "exceeds"
-    return Check(scenario, rung, metric, _f(value), reference, _f(reference_value), rel,
-                 tolerance, verdict, reason)
-
-
-def _f(v) -> float:
-    return float(v) if finite_number(v) else math.nan
-
-
-# --------------------------------------------------------------------------- identification
-
-
-def identify_rung(result, scenario: Scenario) -> dict:
-    """The paper's procedure run on a rung's displacement record (eqs 39-48, "paper"
-    reading, A_y from the pendulum record). Returns the identified values, their relative
-    errors against the model's truth, and the regression; or the reason it failed."""
-    from treeimpact.analytic.identify.procedure import (
-        identification_errors,
-        identify_from_record,
-        pendulum_test_of,
-        truth_of,
-    )
-
-    if not isinstance(scenario.impactor, Pendulum):
-        return {"status": SKIPPED, "reason": "the identification procedure needs a pendulum"}
-    truth = truth_of(scenario)
-    shown = {k: truth[k] for k in IDENT_METRICS}
-    src = result.trajectory if result.trajectory is not None else result.record
-    if src is None:
-        return {"status": SKIPPED, "reason": "the run has no displacement record",
-                "truth": shown}
-    try:
-        ident, reg = identify_from_record(src.t, src.x, pendulum_test_of(scenario), y=src.y,
-                                          reading="paper")
-    except (ParameterError, ValueError, FloatingPointError) as exc:
-        text = one_line(exc)  # "not identifiable: ..." when the premises fail
-        return {"status": SKIPPED, "reason": text if text.startswith("not identifiable")
-                else f"identification failed: {text}", "truth": shown}
-    errors = identification_errors(ident, truth)
-    return {"status": OK, "reason": None,
-            "values": {k: getattr(ident, k) for k in IDENT_METRICS},
-            "errors": {k: errors[k] for k in IDENT_METRICS},
-            "truth": shown,
-            "regression": {"t_first": reg.t_first, "t_together": reg.t_together,
-                           "x_together": reg.x_together, "t_origin": reg.t_origin,
-                           "coefficients": list(reg.coefficients), "x_max": reg.x_max,
-                           "tau": reg.tau},
-            "identified": ident.as_dict()}
-
-
 # --------------------------------------------------------------------------- the ladder
 
 
@@ -249,7 +72,7 @@ class RungResult:
     rung: Rung
     run: Run
     values: dict = field(default_factory=dict)  # metric -> value (NaN when missing)
-    identification: dict = field(default_factory=dict)
+    identification: RungIdentification | None = None
     peaks: list = field(default_factory=list)  # s: the times of x(t)'s near-equal maxima
 
     @property
@@ -257,7 +80,7 @@ class RungResult:
         return self.run.ok
 
     @property
-    def status(self) -> str:
+    def status(self) -> Status:
         return self.run.status
 
     @property
@@ -342,7 +165,7 @@ class Ladder:
         which, times = (rung_id, a) if len(a) > 1 else (reference, b)
         value, ref = self.value(rung_id, metric), self.value(reference, metric)
         return Check(self.name, rung_id, metric, _f(value), reference, _f(ref),
-                     relative_step(value, ref), None, "ambiguous",
+                     relative_step(value, ref), None, Verdict.AMBIGUOUS,
                      f"x(t) of {which} has maxima within {100 * PEAK_AMBIGUITY:.0f} % of each other at "
                      + ", ".join(f"{1e3 * s:.1f}" for s in times) + " ms: the time of the "
                      "maximum is not a robust quantity")
@@ -378,9 +201,9 @@ class Ladder:
             if r.rung.previous is not None and self[r.rung.previous].ok:
                 out += [self.step_check(r.rung.id, m) for m in ALL_METRICS
                         if not self._undefined("step", r.rung.kind, m)]
-            if r.identification.get("status") == OK and r.rung.kind == "newton":
+            if r.identification.ok and r.rung.kind == RungKind.NEWTON:
                 out += [self.identification_check(r.rung.id, m) for m in IDENT_METRICS]
-        for kind in ("engine", "chain", "pendulum"):
+        for kind in ENGINE_KINDS:
             ids = [r for r in self.rungs if r.rung.kind == kind]
             if len(ids) == 2 and all(r.ok for r in ids):
                 out += [self.engines_check(kind, m) for m in ALL_METRICS
@@ -413,18 +236,16 @@ class Ladder:
                 "model": r.result.model if r.ok else None,
                 "values": r.values,
                 "steps": {m: self.step(r.rung.id, m) for m in ALL_METRICS},
-                "identification": {k: v for k, v in r.identification.items()
-                                    if k != "identified"},
+                "identification": r.identification.to_json(),
             } for r in self.rungs],
             "checks": [c.to_json() for c in self.checks()],
         })
 
 
-def rung_values(result, identification: dict) -> dict:
+def rung_values(result, identification: RungIdentification) -> dict:
     vals = {m: _f(result.metrics.get(m)) for m in LADDER_METRICS}
     for k in IDENT_METRICS:
-        vals[f"id_{k}"] = _f(identification.get("values", {}).get(k)) if identification.get(
-            "status") == OK else math.nan
+        vals[f"id_{k}"] = _f(identification.values.get(k)) if identification.ok else math.nan
     return vals
 
 
@@ -451,15 +272,13 @@ def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
         run = cache.run(scen, rung.backend, **dict(rung.options))
         rr = RungResult(rung, run)
         if run.ok:
-            if "identification" not in run.memo:
-                run.memo["identification"] = identify_rung(run.result, scen)
-            rr.identification = run.memo["identification"]
+            rr.identification = rung_identification(run, scen)
             rr.values = rung_values(run.result, rr.identification)
             tr = run.result.trajectory
             rr.peaks = peak_times(tr.t, tr.x) if tr is not None else []
         else:
             rr.values = {m: math.nan for m in ALL_METRICS}
-            rr.identification = {"status": SKIPPED, "reason": f"rung not run: {run.reason}"}
+            rr.identification = RungIdentification(SKIPPED, f"rung not run: {run.reason}")
         out.append(rr)
     truth = {k: v for k, v in truth_of(scen).items()} if isinstance(
         scen.impactor, Pendulum) else {}
@@ -497,6 +316,3 @@ def failure_table(ladder: Ladder, checks: list[Check]) -> str:
     for r in rows:
         lines.append("  ".join(str(c).ljust(w) for c, w in zip(r[:-1], widths)) + "  " + r[-1])
     return f"scenario {ladder.name}\n" + "\n".join(lines)
-
-
-PASSING = ("ok", "finding", "reported")

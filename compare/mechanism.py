@@ -10,6 +10,8 @@ from treeimpact.analytic.contact.matched_loss import matched_loss_restitution
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.impact.simulate import simulate
 
+from .rungs import RungKind
+
 #: The quantities compared, with display scale and unit.
 MECHANISM_METRICS = (("energy_delivered", 1.0, "J"), ("x_max", 1e3, "mm"),
                      ("crown_peak", 1e3, "mm"))
@@ -19,7 +21,7 @@ def matched_loss_evidence(ladder) -> dict | None:
     """{restitution, matched_restitution, rows: [{metric, one_dof, matched, continuum,
     gap, matched_gap}]} for a ladder with a beam rung; ``{"error": ...}`` when the loss cannot
     be matched; None without a beam rung."""
-    beam = [r for r in ladder.rungs if r.rung.kind == "beam" and r.ok]
+    beam = [r for r in ladder.rungs if r.rung.kind == RungKind.BEAM and r.ok]
     ref = ladder.rungs[0]
     if not beam or not ref.ok:
         return None

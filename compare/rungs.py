@@ -7,6 +7,7 @@ Design notes: docs/ladder.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 from .backends import ENGINES
 
@@ -20,17 +21,69 @@ def analytic_samples(t_end: float) -> int:
     return int(round(t_end / ANALYTIC_SAMPLE_STEP)) + 1
 
 
-#: Rung kinds: (level, the one assumption the rung changes against its previous rung).
-KINDS = {
-    "newton": (1, "the paper: analytic SDOF + Newton restitution (eqs 12-35)"),
-    "contact": (2, "contact model: the spring-dashpot pad (k_c, c_c) with the same e"),
-    "beam": (3, "1-DOF assumption: continuum Euler-Bernoulli trunk, the same pad"),
-    "convention": (4, "restitution convention: c_c recalibrated so e holds on the clamp's "
-                      "effective mass"),
-    "engine": (5, "engine numerics: engine SDOF (slide joint) + the pad"),
-    "chain": (6, "discretisation: the engine's hinged-segment trunk against the continuum"),
-    "pendulum": (7, "pendulum linearisation: full pendulum released from theta_r"),
+class RungKind(StrEnum):
+    """What a rung changes against the rung it is compared with (the strings tables show)."""
+
+    NEWTON = "newton"
+    CONTACT = "contact"
+    BEAM = "beam"
+    CONVENTION = "convention"
+    ENGINE = "engine"
+    CHAIN = "chain"
+    PENDULUM = "pendulum"
+    MODEL = "model"  # a sweep's engine as configured, compared with the soft SDOF
+
+    @property
+    def level(self) -> int:
+        """Place in the ladder (1 the paper's model); a sweep's MODEL target stands with the
+        engine rungs."""
+        return _KINDS[self][0]
+
+    @property
+    def assumption(self) -> str:
+        """The one assumption this rung changes against its previous rung."""
+        return _KINDS[self][1]
+
+    @property
+    def letter(self) -> str:
+        """The letter a validity map marks the dominating step with."""
+        return _KINDS[self][2]
+
+    @property
+    def step(self) -> str:
+        """The step, in a few words, as the maps' legend names it."""
+        return _KINDS[self][3]
+
+    @property
+    def engine_rung(self) -> bool:
+        """An engine's own rung (run by each engine, compared across the engines)."""
+        return self in ENGINE_KINDS
+
+
+#: kind -> (level, assumption, map letter, map step)
+_KINDS = {
+    RungKind.NEWTON: (1, "the paper: analytic SDOF + Newton restitution (eqs 12-35)", "N",
+                      "the paper's model"),
+    RungKind.CONTACT: (2, "contact model: the spring-dashpot pad (k_c, c_c) with the same e",
+                       "C", "contact model (spring-dashpot vs Newton's e)"),
+    RungKind.BEAM: (3, "1-DOF assumption: continuum Euler-Bernoulli trunk, the same pad", "B",
+                    "1-DOF assumption (continuum trunk vs SDOF, same pad)"),
+    RungKind.CONVENTION: (4, "restitution convention: c_c recalibrated so e holds on the "
+                             "clamp's effective mass", "R",
+                          "restitution convention (c_c for e on the clamp's mass)"),
+    RungKind.ENGINE: (5, "engine numerics: engine SDOF (slide joint) + the pad", "E",
+                      "engine numerics (engine SDOF vs analytic soft contact)"),
+    RungKind.CHAIN: (6, "discretisation: the engine's hinged-segment trunk against the "
+                        "continuum", "D", "discretisation (engine's hinged chain vs continuum)"),
+    RungKind.PENDULUM: (7, "pendulum linearisation: full pendulum released from theta_r", "P",
+                        "pendulum linearisation (full vs linear pendulum)"),
+    RungKind.MODEL: (5, "engine as configured against the soft SDOF (numerics, trunk and "
+                        "pendulum together)", "M",
+                     "engine as configured vs analytic soft contact (numerics, trunk and "
+                     "pendulum together; run a ladder sweep to separate them)"),
 }
+#: The kinds each engine runs (the ladder compares the engines with each other on these).
+ENGINE_KINDS = (RungKind.ENGINE, RungKind.CHAIN, RungKind.PENDULUM)
 
 
 @dataclass(frozen=True)
@@ -38,7 +91,7 @@ class Rung:
     """One rung: which backend with which options, and the rung it is compared with."""
 
     id: str
-    kind: str
+    kind: RungKind
     backend: str
     options: tuple  # sorted (name, value) pairs passed to the backend
     previous: str | None
@@ -46,11 +99,11 @@ class Rung:
 
     @property
     def level(self) -> int:
-        return KINDS[self.kind][0]
+        return self.kind.level
 
     @property
     def assumption(self) -> str:
-        return KINDS[self.kind][1]
+        return self.kind.assumption
 
     @property
     def engine(self) -> str | None:
@@ -63,19 +116,20 @@ def rung_table(engines=ENGINES, *, segments: int | None = None,
     options; None leaves it to the backend or a sweep axis)."""
     chain_opts = (("segments", segments),) if segments is not None else ()
     suffix = "" if segments is None else str(segments)
-    rungs = [Rung("analytic", "newton", "analytic", tuple(analytic_options), None),
-             Rung("soft", "contact", "soft", (), "analytic"),
-             Rung("beam", "beam", "beam", (), "soft"),
-             Rung("beam-effective", "convention", "beam", (("calibration", "effective"),),
-                  "beam")]
+    rungs = [Rung("analytic", RungKind.NEWTON, "analytic", tuple(analytic_options), None),
+             Rung("soft", RungKind.CONTACT, "soft", (), "analytic"),
+             Rung("beam", RungKind.BEAM, "beam", (), "soft"),
+             Rung("beam-effective", RungKind.CONVENTION, "beam",
+                  (("calibration", "effective"),), "beam")]
     for eng in engines:
         sdof, chain = f"{eng}-sdof", f"{eng}-chain{suffix}"
         rungs += [
-            Rung(sdof, "engine", eng, (("pendulum", "linear"), ("trunk", "sdof")), "soft",
-                 drop=("segments",)),
-            Rung(chain, "chain", eng, tuple(sorted((("pendulum", "linear"), ("trunk", "chain"),
-                                                    *chain_opts))), "beam"),
-            Rung(f"{chain}-full", "pendulum", eng,
+            Rung(sdof, RungKind.ENGINE, eng, (("pendulum", "linear"), ("trunk", "sdof")),
+                 "soft", drop=("segments",)),
+            Rung(chain, RungKind.CHAIN, eng,
+                 tuple(sorted((("pendulum", "linear"), ("trunk", "chain"), *chain_opts))),
+                 "beam"),
+            Rung(f"{chain}-full", RungKind.PENDULUM, eng,
                  tuple(sorted((("pendulum", "full"), ("trunk", "chain"), *chain_opts))), chain),
         ]
     return rungs

@@ -39,18 +39,38 @@ class Status(StrEnum):
 OK, SKIPPED, DIVERGED, FAILED, INVALID = Status
 
 
-@dataclass(frozen=True)
-class Outcome:
-    """What one backend run gave: its status, the result (OK only) or the reason, wall s."""
+@dataclass
+class Run:
+    """One backend run, the one record of it that the cache, the ladder, the sweeps and the
+    report share: what ran, its :class:`Status`, the result (OK only) or the reason it has
+    none, and its wall time (s). ``identification``: the paper's procedure on its record
+    (:func:`compare.identification.rung_identification`), computed once when asked for."""
 
+    scenario: str
+    backend: str
+    options: dict
     status: Status
     result: SimulationResult | None = None
     reason: str | None = None
     wall_s: float = 0.0
+    identification: object = None
+
+    @property
+    def ok(self) -> bool:
+        return self.status == OK
+
+    def describe(self) -> str:
+        opts = ", ".join(f"{k}={v}" for k, v in sorted(self.options.items()))
+        return f"{self.scenario} {self.backend}({opts})"
+
+    def to_json(self) -> dict:
+        return {"scenario": self.scenario, "backend": self.backend,
+                "options": dict(self.options), "status": self.status,
+                "reason": self.reason, "wall_s": self.wall_s}
 
 
-def attempt(backend, scenario: Scenario, options: dict) -> Outcome:
-    """The :class:`Outcome` of one backend run (``backend``: a
+def attempt(backend, scenario: Scenario, options: dict) -> Run:
+    """The :class:`Run` of one backend run (``backend``: a
     :class:`compare.backends.Backend`); never raises for a failing run."""
     t0 = time.perf_counter()
     result, reason, status = None, None, OK
@@ -62,7 +82,8 @@ def attempt(backend, scenario: Scenario, options: dict) -> Outcome:
         status, reason = DIVERGED, f"diverged: {one_line(exc)}"
     except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests
         status, reason = FAILED, f"{type(exc).__name__}: {one_line(exc)}"
-    return Outcome(status, result, reason, time.perf_counter() - t0)
+    return Run(scenario.name, backend.name, dict(options), status, result, reason,
+               time.perf_counter() - t0)
 
 
 def resolve_scenario(scenario) -> Scenario:
@@ -85,33 +106,6 @@ def options_key(options: dict) -> tuple:
 
 
 @dataclass
-class Run:
-    """One backend run: its result, or the reason it has none, and its wall time (s)."""
-
-    scenario: str
-    backend: str
-    options: dict
-    status: str
-    result: SimulationResult | None = None
-    reason: str | None = None
-    wall_s: float = 0.0
-    memo: dict = field(default_factory=dict)  # derived data (the identification), computed once
-
-    @property
-    def ok(self) -> bool:
-        return self.status == OK
-
-    def describe(self) -> str:
-        opts = ", ".join(f"{k}={v}" for k, v in sorted(self.options.items()))
-        return f"{self.scenario} {self.backend}({opts})"
-
-    def to_json(self) -> dict:
-        return {"scenario": self.scenario, "backend": self.backend,
-                "options": dict(self.options), "status": self.status,
-                "reason": self.reason, "wall_s": self.wall_s}
-
-
-@dataclass
 class RunCache:
     """Runs keyed by (scenario inputs, backend, options); see the module docstring."""
 
@@ -126,11 +120,9 @@ class RunCache:
         from .backends import get_backend
 
         try:
-            out = attempt(get_backend(backend), scen, options)
+            run = attempt(get_backend(backend), scen, options)
         except ParameterError as exc:  # not a backend of the registry
-            out = Outcome(SKIPPED, reason=one_line(exc))
-        run = Run(scen.name, backend, dict(options), out.status, result=out.result,
-                  reason=out.reason, wall_s=out.wall_s)
+            run = Run(scen.name, backend, dict(options), SKIPPED, reason=one_line(exc))
         self.runs[key] = run
         return run
 

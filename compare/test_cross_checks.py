@@ -13,7 +13,8 @@ import pytest
 
 from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.compare.conftest import assert_checks, require_run
-from treeimpact.compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs, load_tolerances
+from treeimpact.compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs
+from treeimpact.compare.verdicts import load_tolerances
 
 SCENARIOS = shipped_scenarios()
 TOL = load_tolerances()
@@ -114,7 +115,7 @@ def ident_cases():
 def test_identification_against_truth(ladder_of, scenario, rung, metric):
     ladder = ladder_of(scenario)
     require_run(ladder, rung.id)
-    assert ladder[rung.id].identification["status"] == "ok", ladder[rung.id].identification
+    assert ladder[rung.id].identification.ok, ladder[rung.id].identification
     assert_checks(ladder, [ladder.identification_check(rung.id, metric)])
 
 

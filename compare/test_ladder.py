@@ -15,6 +15,7 @@ from treeimpact.analytic.identify.procedure import (
     truth_of,
 )
 from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.options import Option
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare import backends
 from treeimpact.compare.backends import Backend
@@ -24,11 +25,10 @@ from treeimpact.compare.ladder import (
     IDENT_METRICS,
     build_ladder,
     failure_table,
-    judge,
     ladder_rungs,
-    load_tolerances,
 )
 from treeimpact.compare.runs import DIVERGED, FAILED, OK, SKIPPED, RunCache
+from treeimpact.compare.verdicts import judge, load_tolerances
 
 TOL = load_tolerances()
 
@@ -69,6 +69,7 @@ def _fake_backend(monkeypatch, name, func):
 
     mod = types.ModuleType(f"_fake_{name}")
     mod.simulate = func
+    mod.OPTIONS = {"trunk": Option(("sdof", "chain"), "trunk")}
     monkeypatch.setitem(sys.modules, mod.__name__, mod)
     monkeypatch.setitem(backends.BACKENDS, name, Backend(name, f"{mod.__name__}:simulate",
                                                          None, "test double"))
@@ -112,7 +113,7 @@ def test_ladder_keeps_unavailable_rungs_as_explicit_skips():
     for r in skipped:
         assert r.status == SKIPPED and "no-such-engine" in r.reason
         assert all(math.isnan(v) for v in r.values.values())
-        assert "rung not run" in r.identification["reason"]
+        assert "rung not run" in r.identification.reason
     js = ladder.to_json()
     assert [r["status"] for r in js["rungs"]] == ["ok"] * 4 + ["skipped"] * 3
     # no check is made against a rung that did not run

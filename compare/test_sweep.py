@@ -12,8 +12,10 @@ import math
 import pandas as pd
 import pytest
 
+from treeimpact.analytic.continuum.chain import SEGMENTS
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.options import RESTITUTION, T_END, Option
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import METRIC_KEYS
@@ -27,7 +29,7 @@ from treeimpact.compare.sweep.speed import speed_points
 
 
 def test_range_spec_has_count_values_with_both_ends():
-    ax = parse_axis("e=0:0.9:10")
+    ax = parse_axis("restitution=0:0.9:10")
     assert ax.values == pytest.approx([0.1 * i for i in range(10)], abs=1e-15)
     assert ax.values[0] == 0.0 and ax.values[-1] == 0.9
     assert ax.parameter.target == "contact.restitution"
@@ -40,15 +42,16 @@ def test_list_spec_of_segments_is_integers_for_the_engine_option():
 
 
 def test_grid_points_are_the_cartesian_product_first_axis_slowest():
-    g = parse_grid(["e=0.1,0.2", "crown_ratio=0:4:3"])
+    g = parse_grid(["restitution=0.1,0.2", "crown_ratio=0:4:3"])
     assert len(g) == 6
-    assert g.points()[:3] == [{"e": 0.1, "crown_ratio": c} for c in (0.0, 2.0, 4.0)]
+    assert g.points()[:3] == [{"restitution": 0.1, "crown_ratio": c} for c in (0.0, 2.0, 4.0)]
 
 
 @pytest.mark.parametrize("spec", [
-    "e", "e=", "e=0:1", "e=0:1:2:3", "e=a:1:3", "e=0:1:0", "e=0:1:2.5", "e=0:1:1",
-    "e=0.1,,0.2", "e=0.1,nan", "e=1,1", "segments=1.5,2", "foo=1", "trunk.bark=1",
-    "pendulum.mass=1", "e=low,high", "a b=1",
+    "restitution", "restitution=", "restitution=0:1", "restitution=0:1:2:3",
+    "restitution=a:1:3", "restitution=0:1:0", "restitution=0:1:2.5", "restitution=0:1:1",
+    "restitution=0.1,,0.2", "restitution=0.1,nan", "restitution=1,1", "segments=1.5,2",
+    "foo=1", "trunk.bark=1", "pendulum.mass=1", "restitution=low,high", "a b=1",
 ])
 def test_bad_grid_spec_is_one_line_naming_the_flag_and_the_form(spec):
     with pytest.raises(ParameterError) as exc:
@@ -60,7 +63,7 @@ def test_bad_grid_spec_is_one_line_naming_the_flag_and_the_form(spec):
 
 def test_same_parameter_twice_or_with_its_ratio_is_refused():
     with pytest.raises(ParameterError, match="same parameter"):
-        parse_grid(["e=0.1", "contact.restitution=0.2"])
+        parse_grid(["restitution=0.1", "contact.restitution=0.2"])
     with pytest.raises(ParameterError, match="ratio"):
         parse_grid(["trunk.crown_mass=1", "crown_ratio=0.5"])
 
@@ -74,8 +77,8 @@ def test_option_words_are_kept_for_engine_options_only():
 
 def test_dotted_names_and_aliases_rebuild_the_scenario():
     s = load_scenario("central-leader")
-    scen, opts = apply_point(s, {"e": 0.4, "trunk.crown_mass": 7.5, "segments": 8, "dt": 1e-5,
-                                 "impactor.release_angle_deg": 20.0})
+    scen, opts = apply_point(s, {"restitution": 0.4, "trunk.crown_mass": 7.5, "segments": 8,
+                                 "dt": 1e-5, "impactor.release_angle_deg": 20.0})
     assert scen.contact.restitution == 0.4
     assert scen.trunk.crown_mass == 7.5
     assert scen.impactor.release_angle == pytest.approx(math.pi / 9, rel=1e-15)
@@ -120,6 +123,14 @@ def test_point_outside_a_range_names_the_grid_parameter():
 # --------------------------------------------------------------------------- the runner
 
 
+#: The stand-in engines' options tables (compare.backends reads a backend's options there).
+FAKE_OPTIONS = {"restitution": RESTITUTION, "t_end": T_END}
+T_END_OPTIONS = {"t_end": T_END}
+TRUNK_OPTIONS = {"trunk": Option(("sdof", "chain"), "trunk"), "segments": SEGMENTS,
+                 "pendulum": Option(("linear", "full"), "pendulum"), "t_end": T_END}
+SEGMENTS_OPTIONS = {"segments": SEGMENTS, "t_end": T_END}
+
+
 def _explode_or_diverge(scenario, *, restitution=None, t_end=None):
     """A stand-in engine: fails at e >= 0.8, diverges at e = 0.5, else the analytic run."""
     e = scenario.contact.restitution
@@ -135,13 +146,14 @@ def fake_engine(monkeypatch):
     from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "fake", backends.Backend(
-        "fake", f"{__name__}:_explode_or_diverge", None, "test engine"))
+        "fake", f"{__name__}:_explode_or_diverge", None, "test engine",
+        options_ref=f"{__name__}:FAKE_OPTIONS"))
     return "fake"
 
 
 def test_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path, fake_engine):
     # central-leader: l = 1 m; a clamp height of 0.8 m is invalid on the 0.5 m trunk only
-    grid = ["e=0.2,0.5,0.9", "trunk.clamp_height=0.315,0.8", "trunk.length=0.5,1"]
+    grid = ["restitution=0.2,0.5,0.9", "trunk.clamp_height=0.315,0.8", "trunk.length=0.5,1"]
     res = run_sweep("central-leader", grid, tmp_path, backends=["analytic", fake_engine],
                     workers=0, identify=False)
     df = res.table
@@ -151,21 +163,21 @@ def test_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path, fake_engine):
     assert df[combo]["error"].str.contains("trunk.clamp_height").all()
     valid = df[~combo]
     fake = valid[valid["target"] == "fake"]
-    assert set(fake[fake["e"] == 0.2]["status"]) == {"ok"}
-    div = fake[fake["e"] == 0.5]
+    assert set(fake[fake["restitution"] == 0.2]["status"]) == {"ok"}
+    div = fake[fake["restitution"] == 0.5]
     assert set(div["status"]) == {"diverged"} and div["error"].str.contains("energy grew").all()
     assert div[["x_max", "T0"]].isna().all().all()  # a diverged row carries no numbers
-    bad = fake[fake["e"] == 0.9]
+    bad = fake[fake["restitution"] == 0.9]
     assert set(bad["status"]) == {"failed"} and bad["error"].str.contains("RuntimeError").all()
     assert set(valid[valid["target"] == "analytic"]["status"]) == {"ok"}
 
 
 def test_value_invalid_at_every_point_is_refused_before_anything_runs(tmp_path):
     with pytest.raises(ParameterError) as exc:
-        run_sweep("central-leader", ["e=0.2,2", "crown_ratio=0,1"], tmp_path / "s",
+        run_sweep("central-leader", ["restitution=0.2,2", "crown_ratio=0,1"], tmp_path / "s",
                   workers=0, identify=False)
     msg = str(exc.value)
-    assert "\n" not in msg and msg.startswith("--grid 'e=0.2,2.0': e = 2.0")
+    assert "\n" not in msg and msg.startswith("--grid 'restitution=0.2,2.0': restitution = 2.0")
     assert "allowed [0, 1]" in msg  # analytic.Contact's range of the restitution
     assert not (tmp_path / "s").exists()
     with pytest.raises(ParameterError, match=r"^--grid 'option.foo=1.0': no backend .*"
@@ -184,8 +196,9 @@ def test_run_returning_infinite_metrics_is_recorded_as_diverged(tmp_path, monkey
     from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "inf", backends.Backend(
-        "inf", f"{__name__}:_infinite_x_max", None, "test engine"))
-    res = run_sweep("central-leader", ["e=0.3"], tmp_path, backends=["analytic", "inf"],
+        "inf", f"{__name__}:_infinite_x_max", None, "test engine",
+        options_ref=f"{__name__}:T_END_OPTIONS"))
+    res = run_sweep("central-leader", ["restitution=0.3"], tmp_path, backends=["analytic", "inf"],
                     workers=0, identify=False)
     row = res.table.set_index("target").loc["inf"]
     assert row["status"] == "diverged" and "x_max" in row["error"]
@@ -206,17 +219,18 @@ def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
     from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "crash", backends.Backend(
-        "crash", f"{__name__}:_dies_at_half", None, "test engine"))
-    res = run_sweep("central-leader", ["e=0.1,0.3,0.5,0.7,0.9"], tmp_path,
+        "crash", f"{__name__}:_dies_at_half", None, "test engine",
+        options_ref=f"{__name__}:T_END_OPTIONS"))
+    res = run_sweep("central-leader", ["restitution=0.1,0.3,0.5,0.7,0.9"], tmp_path,
                     backends=["analytic", "crash"], workers=2, identify=False, progress=False)
-    df = res.table.set_index(["target", "e"])
+    df = res.table.set_index(["target", "restitution"])
     assert len(df) == 10
     assert df.loc[("crash", 0.5), "status"] == "failed"
     assert "worker process died" in df.loc[("crash", 0.5), "error"]
     others = df.drop(index=("crash", 0.5))
     assert set(others["status"]) == {"ok"}
     # the rows of the surviving points are the in-process runs' numbers
-    ref = simulate(apply_point(load_scenario("central-leader"), {"e": 0.7})[0])
+    ref = simulate(apply_point(load_scenario("central-leader"), {"restitution": 0.7})[0])
     assert df.loc[("crash", 0.7), "x_max"] == ref.metrics["x_max"]
 
 
@@ -225,7 +239,8 @@ def test_segments_one_is_the_sdof_trunk_and_shares_its_run(monkeypatch):
     from treeimpact.compare.sweep.run import make_targets, plan
 
     monkeypatch.setitem(backends.BACKENDS, "eng", backends.Backend(
-        "eng", f"{__name__}:_engine_with_trunk", None, "test engine"))
+        "eng", f"{__name__}:_engine_with_trunk", None, "test engine",
+        options_ref=f"{__name__}:TRUNK_OPTIONS"))
     targets = make_targets(["analytic", "eng"], ladder=True)
     tasks, immediate = plan(load_scenario("central-leader"), parse_grid(["segments=1,4"]),
                             targets, identify=False)
@@ -255,8 +270,9 @@ def test_unavailable_option_is_a_skipped_row_not_a_crash(tmp_path, fake_engine, 
     from treeimpact.compare import backends
 
     monkeypatch.setitem(backends.BACKENDS, "seg", backends.Backend(
-        "seg", f"{__name__}:_takes_segments", None, "test engine"))
-    res = run_sweep("central-leader", ["e=0.2", "segments=4"], tmp_path,
+        "seg", f"{__name__}:_takes_segments", None, "test engine",
+        options_ref=f"{__name__}:SEGMENTS_OPTIONS"))
+    res = run_sweep("central-leader", ["restitution=0.2", "segments=4"], tmp_path,
                     backends=["analytic", fake_engine, "seg"], workers=0, identify=False)
     row = res.table.set_index("target")
     assert row.loc["analytic", "status"] == "ok"  # segments does not apply to the reference
@@ -274,7 +290,7 @@ def _metric_frame(df):
 
 
 def test_resume_after_interruption_loses_nothing(tmp_path):
-    grid = ["e=0.1:0.9:5", "mass_ratio=0.5,1,2"]
+    grid = ["restitution=0.1:0.9:5", "mass_ratio=0.5,1,2"]
     seen = []
 
     def interrupt(rows):
@@ -289,7 +305,7 @@ def test_resume_after_interruption_loses_nothing(tmp_path):
     first = read_table(tmp_path / "a")
     assert 4 <= len(first) < 15
     with open(journal, "a") as fh:  # a sweep killed while writing a row
-        fh.write('open-center,"[[""e"",0.9],[""mass_')
+        fh.write('open-center,"[[""restitution"",0.9],[""mass_')
     res = run_sweep("open-center", grid, tmp_path / "a", workers=2, progress=False)
     assert res.rows_done_before == len(first)
     assert res.rows_written == 15 - len(first)
@@ -302,21 +318,21 @@ def test_resume_after_interruption_loses_nothing(tmp_path):
 
 
 def test_progress_bar_counts_every_row(tmp_path, capsys):
-    run_sweep("central-leader", ["e=0.1,0.2,0.3"], tmp_path, workers=0, identify=False,
+    run_sweep("central-leader", ["restitution=0.1,0.2,0.3"], tmp_path, workers=0, identify=False,
               progress=True)
     err = capsys.readouterr().err
     assert "sweep: 100%" in err and "3/3" in err  # tqdm's bar on stderr
 
 
 def test_resume_refuses_another_scenario_in_the_same_directory(tmp_path):
-    run_sweep("open-center", ["e=0.1"], tmp_path, workers=0, identify=False)
+    run_sweep("open-center", ["restitution=0.1"], tmp_path, workers=0, identify=False)
     with pytest.raises(ParameterError, match="--out"):
-        run_sweep("central-leader", ["e=0.1"], tmp_path, workers=0, identify=False)
+        run_sweep("central-leader", ["restitution=0.1"], tmp_path, workers=0, identify=False)
 
 
 def test_dask_local_cluster_gives_the_process_pool_results(tmp_path):
     distributed = pytest.importorskip("distributed")
-    grid = ["e=0.1,0.4,0.7", "crown_ratio=0,1.5"]
+    grid = ["restitution=0.1,0.4,0.7", "crown_ratio=0,1.5"]
     local = run_sweep("central-leader", grid, tmp_path / "pool", workers=2, progress=False)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
                                   dashboard_address=None) as cluster:
@@ -329,7 +345,7 @@ def test_dask_local_cluster_gives_the_process_pool_results(tmp_path):
 
 def test_bad_scheduler_address_is_one_line(tmp_path):
     with pytest.raises(ParameterError, match="--scheduler"):
-        run_sweep("central-leader", ["e=0.1"], tmp_path, scheduler="not-a-scheme://x:1")
+        run_sweep("central-leader", ["restitution=0.1"], tmp_path, scheduler="not-a-scheme://x:1")
 
 
 # --------------------------------------------------------------------------- maps
@@ -348,7 +364,7 @@ def _synthetic_ladder():
             rows.append({"scenario": "s", "point": p, "target": t, "backend": b, "kind": k,
                          "previous": prev, "status": "ok", "error": None, "wall_s": 0.1,
                          "t_end": 0.1, "task": f"{p}{t}", "worker": "w", "finished": 0.0,
-                         "e": 0.1 * (i + 1), "x_max": v})
+                         "restitution": 0.1 * (i + 1), "x_max": v})
     return pd.DataFrame(rows)
 
 
@@ -362,20 +378,21 @@ def test_discrepancy_is_relative_to_analytic_and_dominant_rung_is_the_largest_st
 
 
 def test_validity_map_of_soft_against_analytic(tmp_path):
-    res = run_sweep("central-leader", ["e=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
+    res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
                     backends=["analytic", "soft"], workers=2, progress=False)
     d = discrepancies(res.table, metrics=("x_max",))
     assert set(d["target"]) == {"soft"} and set(d["dominant"]) == {"contact"}
     # independently: the soft and exact runs at one point, straight from the backends
-    scen, _ = apply_point(load_scenario("central-leader"), {"e": 0.6, "crown_ratio": 1.0})
+    scen, _ = apply_point(load_scenario("central-leader"), {"restitution": 0.6, "crown_ratio": 1.0})
     from treeimpact.analytic.contact.soft import simulate_soft
 
     want = simulate_soft(scen).metrics["x_max"] / simulate(scen).metrics["x_max"] - 1
-    got = d[(d["e"] == 0.6) & (d["crown_ratio"] == 1.0)]["rel"].item()
+    got = d[(d["restitution"] == 0.6) & (d["crown_ratio"] == 1.0)]["rel"].item()
     assert got == pytest.approx(want, rel=1e-12)
     figs = validity_maps(res.table, tmp_path / "fig")
     assert [f["target"] for f in figs] == ["soft"]
-    assert figs[0]["path"].stat().st_size > 10_000 and figs[0]["axes"] == ["e", "crown_ratio"]
+    assert figs[0]["path"].stat().st_size > 10_000
+    assert figs[0]["axes"] == ["restitution", "crown_ratio"]
     xmax = next(s for s in figs[0]["summary"] if s["metric"] == "x_max")
     # x_max: the contact model moves it by at most b t_c <= 1.5 % (tolerances.toml)
     assert xmax["within"] == 1.0 and abs(xmax["worst_rel"]) <= 0.015
@@ -385,13 +402,13 @@ def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tm
     from treeimpact.compare.report.studies import StudySection
     from treeimpact.compare.sweep.study import write_study
 
-    res = run_sweep("central-leader", ["e=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
+    res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
                     backends=["analytic", "soft"], workers=0, progress=False)
     paths = write_study(tmp_path / "study", {"validity": res.out})
     names = sorted(p.name for p in paths["figures"])
     # soft's validity map and one identification map per target (analytic, soft)
     assert names == ["identification-analytic.png", "identification-soft.png",
-                     "validity-soft-e-crown_ratio.png"]
+                     "validity-soft-restitution-crown_ratio.png"]
     md = paths["md"].read_text()
     assert all(f"]({n})" in md for n in names)  # study.md shows every figure
     table = pd.read_parquet(paths["table"])
@@ -409,13 +426,13 @@ def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tm
     assert "<h4>Validity maps</h4>" in html
     text = sec.render("md")
     assert "\n#### Validity maps" in text and "\n# " not in text and "\n## Validity" not in text
-    assert "](study/validity-soft-e-crown_ratio.png)" in text  # report.md shows it too
+    assert "](study/validity-soft-restitution-crown_ratio.png)" in text  # report.md shows it too
 
 
 def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_engine):
     from treeimpact.compare.sweep.run import _chunks, make_targets, plan
 
-    tasks, _ = plan(load_scenario("central-leader"), parse_grid(["e=0:0.9:40"]),
+    tasks, _ = plan(load_scenario("central-leader"), parse_grid(["restitution=0:0.9:40"]),
                     make_targets(["analytic", fake_engine]), identify=False)
     chunks = _chunks(tasks, 2)
     assert sorted(t.key for c in chunks for t in c) == sorted(t.key for t in tasks)
@@ -424,7 +441,7 @@ def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_en
     analytic = [c for c in chunks if c[0].backend.name == "analytic"]
     assert all({t.backend.name for t in c} == {"analytic"} for c in analytic)
     assert len(analytic) == 20  # 40 runs // (8 calls x 2 workers) = 2 a call
-    many, _ = plan(load_scenario("central-leader"), parse_grid(["e=0:0.9:400"]),
+    many, _ = plan(load_scenario("central-leader"), parse_grid(["restitution=0:0.9:400"]),
                    make_targets(["analytic"]), identify=False)
     assert max(len(c) for c in _chunks(many, 2)) == 25  # 400 // (8 calls x 2 workers)
     # the call budget bounds a call: 1 s / 5 ms (the registry's analytic run) = 200 runs
@@ -432,16 +449,16 @@ def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_en
 
 
 def test_identification_map_matches_the_documented_floor_and_finding(tmp_path):
-    res = run_sweep("central-leader", ["e=0,0.1", "impactor.mass=132.4,140"], tmp_path,
+    res = run_sweep("central-leader", ["restitution=0,0.1", "impactor.mass=132.4,140"], tmp_path,
                     workers=0, progress=False)
-    df = res.table.set_index(["e", "impactor.mass"])
+    df = res.table.set_index(["restitution", "impactor.mass"])
     rel = (df["id.M_T"] - df["truth.M_T"]) / df["truth.M_T"]
     # tolerances.toml [identification]: floor of the procedure at e = 0 is 3 % on M_T;
     # [[finding]] central-leader at e = 0.1: M_T low by 10-22 %
     assert abs(rel[(0.0, 132.4)]) <= 0.03
     assert -0.22 <= rel[(0.1, 132.4)] <= -0.10
     figs = identification_maps(res.table, tmp_path / "fig")
-    assert len(figs) == 1 and figs[0]["axes"] == ["e", "impactor.mass"]
+    assert len(figs) == 1 and figs[0]["axes"] == ["restitution", "impactor.mass"]
     assert figs[0]["path"].exists()
 
 
@@ -466,27 +483,34 @@ def test_treeimpact_sweep_writes_table_maps_and_study(tmp_path, capsys):
     from treeimpact.compare.cli import main
 
     out = tmp_path / "sw"
-    rc = main(["sweep", "--grid", "e=0.2:0.6:3", "--grid", "mass_ratio=0.5,1",
+    rc = main(["sweep", "--grid", "restitution=0.2:0.6:3", "--grid", "mass_ratio=0.5,1",
                "--backend", "analytic", "--workers", "0", "--out", str(out)])
     assert rc == 0
     for name in ("results.csv", "results.parquet", "study.md", "study.html", "study.json"):
         assert (out / name).exists(), name
     assert len(read_table(out)) == 6
-    rc = main(["sweep", "--grid", "e=0:0.9", "--out", str(out)])
+    rc = main(["sweep", "--grid", "restitution=0:0.9", "--out", str(out)])
     err = capsys.readouterr().err.strip()
-    assert rc == 2 and "\n" not in err and "--grid 'e=0:0.9'" in err
+    assert rc == 2 and "\n" not in err and "--grid 'restitution=0:0.9'" in err
     assert "START:STOP:COUNT" in err
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--grid", "e=abc"], ["--grid 'e=abc'", "not a number", "START:STOP:COUNT"]),
+    (["--grid", "restitution=abc"], ["--grid 'restitution=abc'", "not a number",
+                                     "START:STOP:COUNT"]),
     (["--grid", "nosuch=1"], ["--grid 'nosuch=1'", "unknown name", "allowed"]),
-    (["--grid", "e=2"], ["--grid 'e=2.0'", "contact.restitution", "allowed [0, 1]"]),
+    (["--grid", "restitution=2"], ["--grid 'restitution=2.0'", "contact.restitution",
+                                          "allowed [0, 1]"]),
     (["--grid", "segments=0,4"], ["--grid 'segments=0,4'", "allowed [1, 1000]"]),
-    (["--grid", "dt=-1e-5"], ["--grid 'dt=-1e-5'", "allowed (0, inf)"]),
-    (["--grid", "e=0.1", "--workers", "-1"], ["--workers", "integer >= 0"]),
-    (["--grid", "e=0.1", "--backend", "nosuch"], ["--backend 'nosuch'", "allowed"]),
-    (["--grid", "e=0.1", "--scheduler", "nohost"], ["--scheduler 'nohost'", "tcp://HOST:PORT"]),
+    (["--grid", "dt=-1e-5"], ["--grid 'dt=-1e-5'", "allowed (0, 0.001] s"]),
+    (["--grid", "restitution=0.1", "--workers", "-1"], ["--workers", "integer >= 0"]),
+    (["--grid", "restitution=0.1", "--backend", "nosuch"], ["--backend 'nosuch'", "allowed"]),
+    (["--grid", "restitution=0.1", "--scheduler", "nohost"], ["--scheduler 'nohost'", "tcp://HOST:PORT"]),
+    # a fixed option is checked against the backend's OPTIONS before anything runs
+    (["--grid", "restitution=0.1", "--backend", "analytic,mujoco", "--option", "foo=bar"],
+     ["--option 'foo=bar'", "has no option 'foo'", "allowed"]),
+    (["--grid", "restitution=0.1", "--backend", "analytic,mujoco", "--option", "dt=-1"],
+     ["--option 'dt=-1'", "allowed (0, 0.001] s"]),
 ])
 def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
     from treeimpact.compare.cli import main
@@ -509,7 +533,8 @@ def test_interrupted_sweep_command_says_how_to_resume_and_exits_130(tmp_path, ca
         raise KeyboardInterrupt
 
     monkeypatch.setattr(run, "run_sweep", interrupted)
-    rc = main(["sweep", "--grid", "e=0.1", "--backend", "analytic", "--out", str(tmp_path)])
+    rc = main(["sweep", "--grid", "restitution=0.1", "--backend", "analytic", "--out",
+               str(tmp_path)])
     err = capsys.readouterr().err.strip()
     assert rc == 130 and "\n" not in err and "rerun the same command to resume" in err
 
@@ -526,11 +551,11 @@ def test_map_cells_print_their_values_outline_the_tolerance_and_say_why_na():
     from treeimpact.compare.sweep.maps import _extend, _heat
 
     matplotlib.use("Agg")
-    cell = pd.DataFrame({"e": [0.1, 0.5, 0.9], "crown_ratio": [0.0, 0.0, 0.0],
+    cell = pd.DataFrame({"restitution": [0.1, 0.5, 0.9], "crown_ratio": [0.0, 0.0, 0.0],
                          "rel": [0.01, 3.0, math.nan], "value": [1.0, 4.0, 1.0],
                          "analytic": [0.99, 1.0, math.nan]})
     ax = Figure().add_subplot()
-    _heat(ax, cell, "e", "crown_ratio", "rel", 0.05, "x_max", vmax=1.0)
+    _heat(ax, cell, "restitution", "crown_ratio", "rel", 0.05, "x_max", vmax=1.0)
     texts = [t.get_text() for t in ax.texts]
     assert texts == ["+1%", "+300%", "n/a\npaper model:\nno value"]
     outlined = [p.get_xy() for p in ax.patches if isinstance(p, Rectangle)]

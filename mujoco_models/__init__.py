@@ -2,7 +2,7 @@
 
 Public API (SI units)::
 
-    from mujoco_models import simulate, simulate_batch, modes, build_model
+    from treeimpact.mujoco_models import simulate, simulate_batch, modes, build_model
     result = simulate(load_scenario("open-center"), trunk="sdof")
 
 Rules: :mod:`mujoco_models._builder` (the MJCF, built with ``mujoco.MjSpec``),
@@ -13,6 +13,18 @@ rollout, record, energy ledger). ``python -m treeimpact.mujoco_models.regenerate
 models of the shipped scenarios to ``mujoco_models/models``.
 """
 
-from ._runner import OPTIONS, build_model, make_setup, modes, run, simulate, simulate_batch
+from .options import OPTIONS
 
-__all__ = ["OPTIONS", "build_model", "make_setup", "modes", "run", "simulate", "simulate_batch"]
+#: The engine interface (treeimpact.analytic.engine.interface.Engine), loaded on first use:
+#: the options above are read without importing the engine.
+_RUNNER = ("build_model", "make_setup", "modes", "run", "simulate", "simulate_batch")
+
+__all__ = ["OPTIONS", *_RUNNER]
+
+
+def __getattr__(name: str):
+    if name in _RUNNER:
+        from . import _runner
+
+        return getattr(_runner, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -19,8 +19,8 @@ from treeimpact.analytic.contact.law import (
 )
 from treeimpact.analytic.errors import ParameterError
 
-#: Values of the ``integrator`` option (MuJoCo's names, ``mjtIntegrator``).
-INTEGRATORS = ("Euler", "implicit", "implicitfast", "RK4")
+from .options import INTEGRATORS
+
 #: Integrators that take a free collision with Euler's map (module docstring).
 EULER_CONTACT_MAP = ("Euler", "implicit", "implicitfast")
 IMPEDANCE = 1e-4  # d: MuJoCo's mjMINIMP, the smallest impedance it accepts (see docstring)

@@ -15,7 +15,6 @@ import mujoco
 import numpy as np
 
 from treeimpact.analytic.contact.law import (
-    CALIBRATIONS,
     contact_law,
     damping_ratio_for_restitution,
     detection_duration,
@@ -29,9 +28,6 @@ from treeimpact.analytic.contact.timestep import (
     sdof_rate,
 )
 from treeimpact.analytic.engine.interface import (
-    DAMPINGS,
-    PENDULUMS,
-    TRUNKS,
     EngineSetup,
     chain_modes,
     check_choice,
@@ -46,6 +42,7 @@ from treeimpact.analytic.results import SimulationResult
 from . import _builder, _contact
 from ._record import _damping_matrices, _rest_potential, _result
 from ._rollout import _initial_qpos_qvel, _plan, _run_group, _signature, _state
+from .options import INTEGRATORS, OPTIONS  # noqa: F401 - OPTIONS: public here too
 
 _WARNED: set = set()
 
@@ -61,11 +58,6 @@ def _warning_to_stderr(message: str) -> None:
 
 mujoco.set_mju_user_warning(_warning_to_stderr)
 
-INTEGRATORS = _contact.INTEGRATORS  # the ``integrator`` option (MuJoCo's names)
-#: The engine interface's options (analytic.engine.interface.Engine): allowed values, None a number.
-OPTIONS = {"trunk": TRUNKS, "segments": None, "pendulum": PENDULUMS,
-           "contact_stiffness": None, "dt": None, "restitution": None, "t_end": None,
-           "damping": DAMPINGS, "integrator": INTEGRATORS, "calibration": CALIBRATIONS}
 PLACEHOLDER_DT = 1e-5  # s: time step of the first compile (only its masses are used)
 RK4_DAMPING_LIMIT = 2.785  # h lambda: RK4's stability limit on the negative real axis (2.7853)
 RK4_RESTITUTION_TOLERANCE = 0.01  # |e - target| of the replayed RK4 free collision (RK4 gets

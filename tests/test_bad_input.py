@@ -105,11 +105,12 @@ def test_work_budget_is_checked_before_a_run(capsys, monkeypatch):
 
 @pytest.mark.parametrize("argv, code, words", [
     (["simulate", "open-center", "--backend", "soft", "--t-end", "-1"], 2, ["--t-end = -1.0"]),
-    (["simulate", "open-center", "--backend", "mujoco", "--e", "1e-308"], 2,
+    (["simulate", "open-center", "--backend", "mujoco", "--restitution", "1e-308"], 2,
      ["contact.restitution = 1e-308", "soft contact"]),  # was a ZeroDivisionError
     (["report", "--out", "/dev/null/x"], 2, ["--out '/dev/null/x'"]),  # NotADirectoryError
     (["report", "--study", "/nonexistent"], 2, ["--study '/nonexistent'"]),  # after the runs
-    (["sweep", "--grid", "e=0:1:100000000", "--out", "/tmp/never"], 2, ["COUNT"]),  # unbounded
+    (["sweep", "--grid", "restitution=0:1:100000000", "--out", "/tmp/never"], 2,
+     ["COUNT"]),  # unbounded
 ], ids=["soft-t-end-negative", "mujoco-e-1e-308", "report-out-not-a-dir",
         "report-study-missing", "sweep-count-1e8"])
 def test_bad_flags_are_one_line(capsys, argv, code, words):
@@ -163,8 +164,8 @@ def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tm
 def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
     out = tmp_path / "sweep"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--grid", "e=0.1:0.9:300",
-         "--grid", "crown_ratio=0,1,2", "--backend", "analytic,soft", "--out", str(out)],
+        [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--grid",
+         "restitution=0.1:0.9:300", "--grid", "crown_ratio=0,1,2", "--backend", "analytic,soft", "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
     while not (out / "results.csv").exists() and time.monotonic() < deadline:
@@ -187,7 +188,7 @@ def test_a_scheduler_without_workers_is_one_line_after_its_timeout(tmp_path, mon
     with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster, \
             Client(cluster) as client:
         with pytest.raises(ParameterError, match=r"no worker joined within 1 s"):
-            run.run_sweep("central-leader", ["e=0.3"], tmp_path / "s", scheduler=client,
+            run.run_sweep("central-leader", ["restitution=0.3"], tmp_path / "s", scheduler=client,
                           identify=False, progress=False)
 
 
@@ -210,5 +211,5 @@ def test_a_scheduler_lost_during_the_sweep_is_one_line_and_keeps_the_rows(tmp_pa
     with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster, \
             Client(cluster) as client:
         with pytest.raises(ParameterError, match=r"lost the scheduler \(CommClosedError: "):
-            run.run_sweep("central-leader", ["e=0.3"], tmp_path / "s", scheduler=client,
+            run.run_sweep("central-leader", ["restitution=0.3"], tmp_path / "s", scheduler=client,
                           identify=False, progress=False)

@@ -32,13 +32,13 @@ def test_paper_json_layout(capsys):
 
 
 def test_simulate_json_layout(capsys):
-    code, out, _ = run(capsys, "simulate", "open-center", "--e", "0.2", "--t-end", "0.05",
-                       "--json")
+    code, out, _ = run(capsys, "simulate", "open-center", "--restitution", "0.2", "--t-end",
+                       "0.05", "--json")
     assert code == 0
     data = json.loads(out)
-    assert set(data["model"]) >= {"M_T", "C_T", "K_T", "m", "k", "e", "u1"}
+    assert set(data["model"]) >= {"M_T", "C_T", "K_T", "m", "k", "restitution", "u1"}
     assert tuple(data["metrics"]) == METRIC_KEYS
-    assert data["model"]["e"] == 0.2
+    assert data["model"]["restitution"] == 0.2
     assert set(data["scenario"]["trunk"]) >= {"length", "clamp_height", "diameter", "density",
                                               "youngs_modulus", "clamp_mass", "crown_mass",
                                               "damping", "base_stiffness"}
@@ -87,14 +87,15 @@ def test_a_missing_trunk_key_is_an_error_not_a_silent_zero(capsys, tmp_path, key
 
 @pytest.mark.parametrize("argv,field", [
     # the flag as the user typed it (issue 12), with its range
-    (["simulate", "open-center", "--e", "1.5"], "--e = 1.5 is out of range: allowed [0, 1]"),
-    (["simulate", "open-center", "--e", "-0.1"], "--e = -0.1"),
-    (["simulate", "open-center", "--e", "nan"], "--e = nan"),
+    (["simulate", "open-center", "--restitution", "1.5"],
+     "--restitution = 1.5 is out of range: allowed [0, 1]"),
+    (["simulate", "open-center", "--restitution", "-0.1"], "--restitution = -0.1"),
+    (["simulate", "open-center", "--restitution", "nan"], "--restitution = nan"),
     (["simulate", "open-center", "--t-end", "-1"], "--t-end = -1.0 s"),
     (["simulate", "no-such-tree"], "no-such-tree"),
     (["simulate", "open-center", "--backend", "ode"], "--backend"),
     (["simulate", "open-center", "--segments", "4"], "--segments"),
-    (["simulate", "open-center", "--e", "abc"], "--e"),
+    (["simulate", "open-center", "--restitution", "abc"], "--restitution"),
     (["frobnicate"], "command"),
 ])
 def test_bad_input_gives_one_line_and_exit_2(capsys, argv, field):
@@ -146,9 +147,9 @@ def test_modes_side_by_side(capsys):
 
 def test_console_script_exit_code_without_traceback():
     proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", "simulate",
-                           "open-center", "--e", "2"], capture_output=True, text=True)
+                           "open-center", "--restitution", "2"], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert "Traceback" not in proc.stderr and "--e = 2.0" in proc.stderr  # the flag typed
+    assert "Traceback" not in proc.stderr and "--restitution = 2.0" in proc.stderr  # the flag typed
 
 
 def test_soft_backend_takes_the_engines_contact_stiffness_flag(capsys):

@@ -13,7 +13,7 @@ def test_the_fit_recovers_a_contact_it_generated():
     reproduces them (the contact it finds may differ where x_max and tau do not determine
     it uniquely, but the observables must match)."""
     scen = load_scenario("open-center")
-    m = simulate_beam(scen, duration=3e-3, restitution=0.3).metrics
+    m = simulate_beam(scen, contact_duration=3e-3, restitution=0.3).metrics
     fit = fit_contact(scen, {"x_max": m["x_max"], "t_xmax": m["t_xmax"]}, model="beam")
     # least squares to ftol 1e-8 on relative residuals; t_xmax is refined between samples
     assert fit["rms"] < 2e-3, fit

@@ -44,7 +44,7 @@ def _case(seed: int) -> tuple[str, list[str]]:
         text = text[:m.start(1)] + _value(rng, float(m.group(1))) + text[m.end(1):]
     args = []
     if rng.random() < 0.3:
-        flag = rng.choice(["--e", "--t-end", "--contact-stiffness"])
+        flag = rng.choice(["--restitution", "--t-end", "--contact-stiffness"])
         args += [flag, rng.choice(["-1", "0", "nan", "1e-308", "1e308", "0.5", "2", "1e9"])]
     if "--contact-stiffness" in args or rng.random() < 0.1:
         args += ["--backend", "soft"]

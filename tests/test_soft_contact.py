@@ -127,7 +127,7 @@ def test_stiff_contact_limit_recovers_the_rigid_newton_model():
     rigid = simulate_exact(scenario).metrics
     errors = []
     for duration in (1e-3, 2.5e-4, 6.25e-5):
-        soft = simulate_soft(scenario, duration=duration).metrics
+        soft = simulate_soft(scenario, contact_duration=duration).metrics
         errors.append(max(abs(soft[k] / rigid[k] - 1.0)
                           for k in ("x_max", "t_sep", "energy_transferred")))
     # the soft contact converges to Newton's law as its duration goes to zero

@@ -55,7 +55,7 @@ def test_stiff_soft_contact_tends_to_the_newton_whole_event(name):
     newton = simulate(scen).metrics
     errs = []
     for duration in (2e-4, 1e-4, 5e-5):
-        soft = simulate_soft(scen, duration=duration).metrics
+        soft = simulate_soft(scen, contact_duration=duration).metrics
         errs.append(max(abs(soft[k] / newton[k] - 1) for k in WHOLE))
     assert errs[-1] < 0.03  # first order in the collision duration (measured 0.3-2 %)
     assert errs[-1] < errs[0]  # and shrinking with it

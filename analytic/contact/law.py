@@ -7,9 +7,8 @@ from __future__ import annotations
 
 import math
 
-from scipy.optimize import brentq
-
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.options import Option
 from treeimpact.analytic.model.parameters import DEFAULT_CONTACT_DURATION, Contact
 from treeimpact.analytic.model.two_body import TwoBodyModel
 
@@ -59,6 +58,8 @@ def damping_ratio_for_restitution(e: float) -> float:
     hi = 1.0
     while restitution_for_damping_ratio(hi) > e:
         hi *= 2.0
+    from scipy.optimize import brentq  # here, not at import: `treeimpact --help` is fast
+
     return brentq(lambda z: restitution_for_damping_ratio(z) - e, 0.0, hi, xtol=1e-15,
                   rtol=1e-14)
 
@@ -98,6 +99,9 @@ def contact_law(model: TwoBodyModel, contact: Contact | None = None, *,
 #: free collision with the trunk's instantaneous effective mass at the clamp rebounds at e
 #: (the restitution convention; docs/contact-law.md).
 CALIBRATIONS = ("pad", "effective")
+CALIBRATION = Option(CALIBRATIONS, "the contact damping of a non-SDOF trunk: the SDOF's pad "
+                     "(pad) or recalibrated so that e holds on its effective mass at the clamp "
+                     "(effective)")
 
 
 def pad_restitution(stiffness: float, damping: float, reduced_mass: float) -> float:

@@ -8,9 +8,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.errors import SimulationDiverged
+from treeimpact.analytic.model.options import (
+    CONTACT_DURATION,
+    CONTACT_STIFFNESS,
+    RESTITUTION,
+    T_END,
+    Option,
+)
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import model_metrics, with_static_shape_crown
@@ -18,13 +24,20 @@ from treeimpact.analytic.results import ImpactRecord, SimulationResult
 
 from .law import collision_duration, contact_law
 
+#: The options of :func:`simulate_soft` (the ``soft`` backend).
+OPTIONS = {"restitution": RESTITUTION, "contact_stiffness": CONTACT_STIFFNESS,
+           "contact_duration": CONTACT_DURATION, "t_end": T_END,
+           "samples_per_collision": Option(int, "record samples per free collision", low=2,
+                                           cli=False)}
+
 
 def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
-                  contact_stiffness: float | None = None, duration: float | None = None,
+                  contact_stiffness: float | None = None,
+                  contact_duration: float | None = None,
                   t_end: float | None = None, samples_per_collision: int = 100):
     """The scenario's two-body model with the soft contact, integrated to ``t_end`` (s).
 
-    ``contact_stiffness`` (N/m, the engines' and the CLI's name) or ``duration`` (s) replace
+    ``contact_stiffness`` (N/m) or ``contact_duration`` (s) replace
     the scenario's contact stiffness (:func:`contact_law`).
 
     Piecewise-smooth integration (DOP853, rtol 1e-11) with events at touch (delta = 0,
@@ -35,7 +48,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     model = two_body_model(scenario, restitution)
     t_end = scenario.t_end if t_end is None else t_end
     k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness,
-                           duration=duration)
+                           duration=contact_duration)
     t_col = collision_duration(model, k_c, c_c)
     rec = soft_record(model, k_c, c_c, t_end, dt_sample=t_col / samples_per_collision)
     rec = with_static_shape_crown(rec, scenario.trunk)
@@ -51,6 +64,8 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
 
 def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sample: float):
     """Integrate the soft-contact two-body model; return an ``ImpactRecord`` sampled every dt."""
+    from scipy.integrate import solve_ivp  # here, not at import: `treeimpact --help` is fast
+
     M, C, K = model.dynamic_mass, model.damping, model.stiffness
     m, kp = model.impactor_mass, model.impactor_stiffness
 

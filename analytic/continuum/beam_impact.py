@@ -14,9 +14,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
 
 from treeimpact.analytic.contact.law import (
+    CALIBRATION,
     CALIBRATIONS,
     collision_duration,
     contact_law,
@@ -25,6 +25,13 @@ from treeimpact.analytic.contact.law import (
 )
 from treeimpact.analytic.contact.timestep import check_work
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.options import (
+    CONTACT_DURATION,
+    CONTACT_STIFFNESS,
+    RESTITUTION,
+    T_END,
+    Option,
+)
 from treeimpact.analytic.model.parameters import Scenario, check_range
 from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.records import model_metrics
@@ -41,6 +48,12 @@ DEFAULT_ELEMENTS = 12
 MAX_ELEMENTS = 48
 #: Samples per free collision of the pad (the soft SDOF rung's record spacing).
 SAMPLES_PER_COLLISION = 100
+#: The options of :func:`simulate_beam` (the ``beam`` backend).
+OPTIONS = {"elements": Option(int, "elements of the beam trunk's mesh", low=1,
+                              high=MAX_ELEMENTS),
+           "calibration": CALIBRATION, "restitution": RESTITUTION,
+           "contact_stiffness": CONTACT_STIFFNESS, "contact_duration": CONTACT_DURATION,
+           "t_end": T_END}
 
 
 @dataclass(frozen=True)
@@ -330,6 +343,8 @@ def _locate(phase, modal, rows, w, s_lo, s_hi, k_c, c_c, d_hi, f_hi):
 def _root(func, lo, hi):
     """Zero of ``func`` in [lo, hi]; a phase that starts on its own boundary (func(lo) = 0)
     is bracketed from just after its start."""
+    from scipy.optimize import brentq  # here, not at import: `treeimpact --help` is fast
+
     f_hi = func(hi)
     f_lo = func(lo)
     if f_lo * f_hi > 0 or f_lo == 0.0:
@@ -348,8 +363,8 @@ def _root(func, lo, hi):
 
 def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                   calibration: str = "pad", restitution: float | None = None,
-                  contact_stiffness: float | None = None, duration: float | None = None,
-                  t_end: float | None = None):
+                  contact_stiffness: float | None = None,
+                  contact_duration: float | None = None, t_end: float | None = None):
     """The scenario with the continuum trunk and the pad, solved exactly to ``t_end`` (s).
 
     Returns a SimulationResult (backend "beam") with the metrics of
@@ -358,8 +373,8 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     t_end = scenario.t_end if t_end is None else t_end
     check_range("--t-end", t_end, low=0, low_open=True, unit="s")
     model, sdof = beam_impact_model(scenario, elements=elements, restitution=restitution,
-                                    contact_stiffness=contact_stiffness, duration=duration,
-                                    calibration=calibration)
+                                    contact_stiffness=contact_stiffness,
+                                    duration=contact_duration, calibration=calibration)
     t_col = collision_duration(sdof, model.contact_stiffness, model.contact_damping)
 
     dt = t_col / SAMPLES_PER_COLLISION

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.options import Option
 from treeimpact.analytic.model.parameters import Trunk
 from treeimpact.analytic.model.reduction import TreeSDOF
 
@@ -19,6 +20,10 @@ from .beam import beam_natural_frequencies, beam_static_stiffness
 
 MIN_SEGMENTS = 2
 MAX_SEGMENTS = 1000
+#: The engines' ``segments`` option: 1 is the SDOF trunk in a sweep (a chain has 2 or more).
+SEGMENTS = Option(int, "segments of the hinged trunk (default: the fewest within 0.5 % of "
+                  "the beam's static stiffness and first two frequencies)", low=1,
+                  high=MAX_SEGMENTS)
 DEFAULT_TOLERANCE = 0.005  # relative: static stiffness at a and the first two frequencies
 GAUSS_OFFSET = 1.0 / (2.0 * math.sqrt(3.0))  # Gauss-Legendre points z_c -+ h/(2 sqrt 3)
 

@@ -12,10 +12,11 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from treeimpact.analytic.contact.law import CALIBRATIONS
-from treeimpact.analytic.continuum.chain import default_segments, hinged_chain
+from treeimpact.analytic.contact.law import CALIBRATION, CALIBRATIONS
+from treeimpact.analytic.continuum.chain import SEGMENTS, default_segments, hinged_chain
 from treeimpact.analytic.continuum.modes import beam_reference
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.options import CONTACT_STIFFNESS, RESTITUTION, T_END, Option
 from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import model_metrics, with_static_shape_crown
@@ -25,6 +26,24 @@ from treeimpact.analytic.results import SimulationResult
 TRUNKS = ("sdof", "chain")
 PENDULUMS = ("linear", "full")
 DAMPINGS = ("distributed", "joint")
+#: Largest time step an engine run is asked for (s): the pad's collision lasts 0.5 ms by
+#: default and needs several steps (the engines refuse an unstable step with its limit).
+MAX_DT = 1e-3
+#: The options every engine's ``simulate`` takes (each engine adds its own:
+#: ``mujoco_models.options``, ``bullet_models.options``).
+ENGINE_OPTIONS = {
+    "trunk": Option(TRUNKS, "trunk model: the paper's SDOF (slide joint) or the hinged chain"),
+    "segments": SEGMENTS,
+    "pendulum": Option(PENDULUMS, "pendulum model: linearised (eq 13) or released from "
+                                  "theta_r"),
+    "damping": Option(DAMPINGS, "trunk damping: the paper's distributed C, or joint damping"),
+    "contact_stiffness": CONTACT_STIFFNESS,
+    "dt": Option(float, "time step (default: from the contact and the chain's highest mode)",
+                 "s", 0.0, MAX_DT, low_open=True),
+    "restitution": RESTITUTION,
+    "t_end": T_END,
+    "calibration": CALIBRATION,
+}
 #: Mechanical energy above (1 + this) x the input, or created by the engine beyond this
 #: fraction of it, is a diverged run (every rung's own ledger tolerance is below 2 %).
 ENERGY_GROWTH_LIMIT = 0.05
@@ -50,7 +69,7 @@ class Engine(Protocol):
     """A physics-engine backend: a module with these four names (mujoco_models,
     bullet_models); ``compare.backends`` registers it by name."""
 
-    OPTIONS: dict  # option -> allowed values (a tuple) or None for a number
+    OPTIONS: dict  # option name -> treeimpact.analytic.model.options.Option
 
     def make_setup(self, scenario: Scenario, **options) -> EngineSetup:
         """Validate the options and build the engine's model: everything a run needs."""

@@ -8,6 +8,7 @@ from functools import partial
 import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.options import RESTITUTION, T_END, Option
 from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario
 from treeimpact.analytic.model.reduction import crown_factor
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
@@ -96,6 +97,11 @@ def _whole_event(sol: ImpactSolution, scenario: Scenario | None) -> dict:
     if scenario is not None:
         out["crown_peak"] = crown_factor(scenario.trunk) * sol.x_max[0]
     return out
+
+
+#: The options of :func:`simulate` (the ``analytic`` backend).
+OPTIONS = {"restitution": RESTITUTION, "t_end": T_END,
+           "samples": Option(int, "samples of the trajectory", low=2, cli=False)}
 
 
 def simulate(scenario: Scenario, *, restitution: float | None = None, t_end: float | None = None,

@@ -77,7 +77,7 @@ class TwoBodyModel:
     def as_dict(self) -> dict:
         return {"M_T": self.dynamic_mass, "C_T": self.damping, "K_T": self.stiffness,
                 "m": self.impactor_mass, "k": self.impactor_stiffness,
-                "e": self.restitution, "u1": self.impact_speed}
+                "restitution": self.restitution, "u1": self.impact_speed}
 
 
 def two_body_model(scenario: Scenario, restitution: float | None = None) -> TwoBodyModel:

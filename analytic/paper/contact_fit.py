@@ -58,7 +58,7 @@ def fit_contact(scenario: Scenario, measured: dict, *, model: str = "beam",
         if key not in cache:
             d = 10.0 ** x[0]
             e = float(x[1]) if fit_restitution else e0
-            cache[key] = simulate(scenario, duration=d, restitution=e).metrics
+            cache[key] = simulate(scenario, contact_duration=d, restitution=e).metrics
         return cache[key]
 
     def residuals(x):
@@ -102,7 +102,7 @@ def fit_paper_trees(models=MODELS) -> dict:
         row = {"measured": measured, "fits": fits}
         if "beam" in fits:
             f = fits["beam"]
-            soft = _simulate("soft")(scen, duration=f["duration"],
+            soft = _simulate("soft")(scen, contact_duration=f["duration"],
                                      restitution=f["restitution"]).metrics
             row["one_dof_cost"] = {k: f["values"][k] / soft[k] - 1.0
                                    for k in ("x_max", "energy_delivered")}

@@ -25,7 +25,8 @@ import numpy as np
 
 from treeimpact.analytic.results import to_jsonable
 
-from ..ladder import validity_tolerance
+from ..rungs import RungKind
+from ..verdicts import Verdict, validity_tolerance
 
 __all__ = ["write_report", "build_sections"]
 
@@ -149,9 +150,9 @@ def _answer(scen_sections) -> list[dict]:
     out = []
     for s in scen_sections:
         L = s.ladder
-        chains = [r for r in L.rungs if r.rung.kind == "beam" and r.ok]
+        chains = [r for r in L.rungs if r.rung.kind == RungKind.BEAM and r.ok]
         ref = L.rungs[0]
-        soft = [r for r in L.rungs if r.rung.kind == "contact" and r.ok]
+        soft = [r for r in L.rungs if r.rung.kind == RungKind.CONTACT and r.ok]
         if not chains or not ref.ok:
             out.append({"scenario": L.name, "available": False})
             continue
@@ -184,8 +185,6 @@ def _summary(scen_sections) -> dict:
     """Counts of verdicts over all checks, the findings, the rungs not run, and the
     :data:`LARGEST` largest relative discrepancies between rungs whatever their verdict
     (the identification has its own table per scenario)."""
-    from .scenario import QUIET
-
     counts: dict = {}
     findings, problems, skipped = [], [], []
     for s in scen_sections:
@@ -194,8 +193,9 @@ def _summary(scen_sections) -> dict:
             if c.finding:
                 findings.append({"scenario": c.scenario, "rung": c.rung, "metric": c.metric,
                                  "finding": c.finding, "rel_diff": c.rel_diff,
-                                 "verdict": c.verdict})
-            elif c.verdict not in QUIET:
+                                 "verdict": c.verdict,
+                                 "css": "finding" if c.verdict == Verdict.FINDING else "flag"})
+            elif c.verdict.flagged:
                 problems.append({"scenario": c.scenario, "rung": c.rung, "metric": c.metric,
                                  "rel_diff": c.rel_diff, "tolerance": c.tolerance,
                                  "verdict": c.verdict, "reason": c.reason})

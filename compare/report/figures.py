@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from treeimpact.compare.backends import BACKENDS  # noqa: E402
+from treeimpact.compare.rungs import ENGINE_KINDS, RungKind  # noqa: E402
 
 DPI = 110
 plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10,
@@ -28,21 +29,20 @@ plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10
 
 #: shades of an engine without its own (:attr:`compare.backends.Backend.shades`)
 _DEFAULT_SHADES = ("#2ca02c", "#5fd35f", "#98df8a")
+#: the analytic rungs' colour and line style
+_REFERENCE_STYLES = {RungKind.NEWTON: {"color": "black", "ls": "-", "lw": 1.8},
+                     RungKind.CONTACT: {"color": "#7f7f7f", "ls": "--", "lw": 1.6},
+                     RungKind.BEAM: {"color": "#9467bd", "ls": "-", "lw": 1.6},
+                     RungKind.CONVENTION: {"color": "#c5b0d5", "ls": "--", "lw": 1.4}}
 
 
 def rung_style(rung) -> dict:
     """Colour and line style of a rung (by its kind and engine)."""
-    if rung.kind == "newton":
-        return {"color": "black", "ls": "-", "lw": 1.8}
-    if rung.kind == "contact":
-        return {"color": "#7f7f7f", "ls": "--", "lw": 1.6}
-    if rung.kind == "beam":
-        return {"color": "#9467bd", "ls": "-", "lw": 1.6}
-    if rung.kind == "convention":
-        return {"color": "#c5b0d5", "ls": "--", "lw": 1.4}
+    if rung.kind in _REFERENCE_STYLES:
+        return dict(_REFERENCE_STYLES[rung.kind])
     backend = BACKENDS.get(rung.backend)
     shades = (backend.shades if backend is not None else ()) or _DEFAULT_SHADES
-    i = {"engine": 0, "chain": 1, "pendulum": 2}[rung.kind]
+    i = ENGINE_KINDS.index(rung.kind)
     return {"color": shades[i], "ls": ("-", "-.", ":")[i], "lw": 1.4}
 
 
@@ -142,7 +142,7 @@ def force_figure(ladder) -> Figure:
     peak = 0.0
     for r in [r for r in ladder.rungs if r.ok]:
         st = rung_style(r.rung)
-        if r.rung.kind == "newton":
+        if r.rung.kind == RungKind.NEWTON:
             sol = r.result.solution
             imp = [(i.t, r.result.model["m"] * (i.u - i.v)) for i in (sol.impacts if sol else ())
                    if i.t <= t_hi]
@@ -187,7 +187,7 @@ def sequence_figure(ladder) -> Figure:
     for ax, r in zip(axes.flat, rungs):
         st = rung_style(r.rung)
         tr = r.result.trajectory
-        if r.rung.kind == "newton" and r.result.solution is not None:
+        if r.rung.kind == RungKind.NEWTON and r.result.solution is not None:
             t = np.linspace(0.0, t_hi, 3000)
             _, vx, _, vy = r.result.solution.state(t)
         else:
@@ -243,7 +243,7 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
 def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> Figure:
     """Identification error against e (exact solver records), with the procedure's floor."""
     fig, ax = plt.subplots(figsize=(11, 3.6))
-    es = [s["e"] for s in sweep]
+    es = [s["restitution"] for s in sweep]
     for key, st in (("M_T", "o-"), ("K_T", "s-"), ("xi", "^-")):
         ax.plot(es, [100 * s["errors"].get(key, math.nan) for s in sweep], st, label=key)
         tol = tolerances.get("identification", {}).get(key, {}).get("rel")

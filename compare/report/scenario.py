@@ -12,17 +12,11 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Pendulum
 from treeimpact.analytic.results import to_jsonable
 
-from ..ladder import (
-    ALL_METRICS,
-    IDENT_METRICS,
-    PASSING,
-    build_ladder,
-    identify_rung,
-    meaning_of,
-    unit_of,
-)
+from ..identification import IDENT_METRICS, rung_identification
+from ..ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
 from ..mechanism import matched_loss_evidence
 from ..runs import OK
+from ..verdicts import Verdict
 from . import figures
 from .base import Section
 
@@ -73,14 +67,13 @@ def identification_sweep(scenario, cache) -> list[dict]:
     for e in E_SWEEP:
         run = cache.run(scenario, "analytic", restitution=e, samples=samples)
         if not run.ok:
-            out.append({"e": e, "status": run.status, "reason": run.reason, "errors": {}})
+            out.append({"restitution": e, "status": run.status, "reason": run.reason,
+                        "errors": {}})
             continue
-        if "identification" not in run.memo:
-            run.memo["identification"] = identify_rung(run.result, scenario)
-        ident = run.memo["identification"]
-        out.append({"e": e, "status": ident["status"], "reason": ident.get("reason"),
-                    "T0": run.result.metrics["T0"],
-                    "errors": ident.get("errors", {}), "values": ident.get("values", {})})
+        ident = rung_identification(run, scenario)
+        out.append({"restitution": e, "status": ident.status, "reason": ident.reason,
+                    "T0": run.result.metrics["T0"], "errors": ident.errors,
+                    "values": ident.values})
     return out
 
 
@@ -124,10 +117,12 @@ def record_fits(ladder) -> list[dict]:
     return out
 
 
-#: Verdicts the page does not flag: passing ones, n/a (a value that does not exist, e.g. a
-#: record that is not identifiable) and ambiguous (a peak time of two near-equal maxima):
-#: shown with their reason, not as failed checks.
-QUIET = (*PASSING, "n/a", "ambiguous")
+def css(check) -> str:
+    """The page's class of a checked cell: a documented finding, a flagged check, or none."""
+    if check is None:
+        return ""
+    return "finding" if check.verdict == Verdict.FINDING else "flag" if check.verdict.flagged \
+        else ""
 
 
 class ScenarioSection(Section):
@@ -189,8 +184,8 @@ class ScenarioSection(Section):
             for cell in row["cells"]:
                 r = L[cell["rung"]]
                 c = verdicts.get((cell["rung"], row["metric"], r.rung.previous))
-                cells.append({**cell, "verdict": c.verdict if c else "",
-                              "flag": bool(c and c.verdict not in QUIET)})
+                cells.append({**cell, "verdict": c.verdict if c else "", "css": css(c),
+                              "flag": bool(c and c.verdict.flagged)})
             rows.append({**row, "cells": cells})
         ident_rows = []
         for r in L.rungs:
@@ -198,14 +193,13 @@ class ScenarioSection(Section):
             cols = []
             for k in IDENT_METRICS:
                 c = verdicts.get((r.rung.id, f"id_{k}", "truth"))
-                cols.append({"metric": k, "value": idr.get("values", {}).get(k),
-                             "error": idr.get("errors", {}).get(k),
-                             "verdict": c.verdict if c else "",
-                             "flag": bool(c and c.verdict not in QUIET)})
-            ident_rows.append({"rung": r.rung.id, "status": idr.get("status"),
-                               "reason": idr.get("reason"), "cols": cols})
+                cols.append({"metric": k, "value": idr.values.get(k),
+                             "error": idr.errors.get(k), "verdict": c.verdict if c else "",
+                             "css": css(c), "flag": bool(c and c.verdict.flagged)})
+            ident_rows.append({"rung": r.rung.id, "status": idr.status, "reason": idr.reason,
+                               "cols": cols})
         findings = [c for c in self.checks if c.finding]
-        problems = [c for c in self.checks if c.verdict not in QUIET and not c.finding]
+        problems = [c for c in self.checks if c.verdict.flagged and not c.finding]
         return {
             "L": L, "rows": rows, "ident_rows": ident_rows, "truth": L.truth,
             "ident_metrics": IDENT_METRICS, "figures": self.figures,

@@ -1,6 +1,6 @@
 """Model-validity studies: parameter sweeps, validity maps, speed-accuracy curves (issue 6).
 
-* :mod:`.grid` - ``--grid`` specs (``e=0:0.9:10``, ``segments=1,2,4``), names and ratios;
+* :mod:`.grid` - ``--grid`` specs (``restitution=0:0.9:10``, ``segments=1,2,4``), names and ratios;
 * :mod:`.apply` - a grid point applied to a scenario (``dataclasses.replace``, validated);
 * :mod:`.run` - the runner: process pool or Dask, resumable CSV/Parquet table;
 * :mod:`.maps` - validity maps (discrepancy vs analytic, tolerance contour, dominating rung)

@@ -1,6 +1,6 @@
 """``treeimpact sweep``: arguments and command (wired into compare/cli.py by the lead).
 
-    treeimpact sweep --grid e=0:0.9:10 --grid crown_ratio=0:4:9 [--scenario NAME]
+    treeimpact sweep --grid restitution=0:0.9:10 --grid crown_ratio=0:4:9 [--scenario NAME]
         [--backend analytic,soft,mujoco,bullet] [--ladder] [--option [BACKEND.]NAME=VALUE]
         [--workers N] [--scheduler ADDRESS] [--tolerance REL] [--retry-failed]
         [--no-identify] --out DIR
@@ -49,9 +49,10 @@ def add_sweep_arguments(parser) -> None:
     """Add the arguments of ``treeimpact sweep`` to ``parser``."""
     parser.add_argument("--grid", action="append", default=[], metavar="SPEC",
                         help=f"swept parameter, repeatable: {GRID_FORM}; NAME is a dotted "
-                             "scenario field (trunk.crown_mass), e, segments, dt, "
-                             "contact_stiffness, contact_duration, mass_ratio, a_over_l, "
-                             "crown_ratio or option.NAME")
+                             "scenario field (trunk.crown_mass), restitution, "
+                             "contact_stiffness, contact_duration, a ratio (mass_ratio, "
+                             "a_over_l, crown_ratio) or a backend option (segments, dt, "
+                             "integrator, ...)")
     parser.add_argument("--scenario", default="central-leader",
                         help="shipped scenario name or TOML path (default: central-leader)")
     parser.add_argument("--backend", default="analytic,soft,mujoco,bullet",
@@ -69,7 +70,7 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--preset", default=None, choices=("default", "full"),
                         help="run a whole study: default (contact duration x crown ratio on "
                              "the analytic, soft and beam backends, engines on 2 x 2 points) "
-                             "takes about 25 s on 2 cores; full (e=0:0.9:10, "
+                             "takes about 25 s on 2 cores; full (restitution=0:0.9:10, "
                              "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 1.5 CPU-hours, "
                              "45 min with 2 workers; --grid replaces the preset's validity grid")
     parser.add_argument("--tolerance", type=_tolerance, default=None,
@@ -82,20 +83,15 @@ def add_sweep_arguments(parser) -> None:
 
 
 def parse_options(specs, backends) -> dict:
-    """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine)."""
-    from treeimpact.compare.backends import ENGINES
+    """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine), each name
+    and value checked against the backend's OPTIONS (one line naming the spec)."""
+    from treeimpact.compare.backends import ENGINES, get_backend
 
     out: dict = {}
     for spec in specs or []:
         if spec.count("=") != 1 or not spec.split("=")[0].strip() or not spec.split("=")[1]:
             raise ParameterError(f"--option {spec!r}: expected {OPTION_FORM}")
         name, text = (s.strip() for s in spec.split("="))
-        try:
-            value = float(text)
-            if value == int(value) and "." not in text and "e" not in text.lower():
-                value = int(value)
-        except ValueError:
-            value = text
         if "." in name:
             backend, name = name.split(".", 1)
             if not name:
@@ -107,8 +103,24 @@ def parse_options(specs, backends) -> dict:
                 raise ParameterError(f"--option {spec!r}: no engine among --backend "
                                      f"{','.join(backends)}; write BACKEND.NAME=VALUE")
         for b in targets:
-            out.setdefault(b, {})[name] = value
+            table = get_backend(b).options()
+            option = table.get(name)
+            if option is None:
+                raise ParameterError(
+                    f"--option {spec!r}: backend {b!r} has no option {name!r}; allowed: "
+                    f"{', '.join(sorted(k for k, o in table.items() if o.cli))}")
+            value = text if option.choices else _option_number(text)
+            out.setdefault(b, {})[name] = option.check(name, value,
+                                                       label=f"--option {spec!r}: {name}")
     return out
+
+
+def _option_number(text: str):
+    """The number an --option value spells, or the text (the option's check names it)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 #: Exit code of an interrupted sweep (Ctrl-C): 128 + SIGINT, as a shell reports it.

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from treeimpact.analytic.continuum.chain import MAX_SEGMENTS
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Billet, Contact, Pendulum, Scenario, Trunk
 
@@ -27,16 +26,14 @@ SCENARIO = "scenario"
 OPTION = "option"
 DERIVED = "derived"
 
-#: Short names and what they stand for.
+#: Short names of scenario fields: the spelling every table, CLI flag and JSON key uses
+#: (an axis given by its dotted field is stored under its short name).
 ALIASES = {
-    "e": "contact.restitution",
     "restitution": "contact.restitution",
     "contact_stiffness": "contact.stiffness",
     "contact_duration": "contact.duration",
-    "segments": "option.segments",
-    "dt": "option.dt",
-    "integrator": "option.integrator",
 }
+SHORT_NAMES = {target: name for name, target in ALIASES.items()}
 
 #: Derived ratios: (underlying dotted parameter, meaning); applied in this order.
 DERIVED_RATIOS = {
@@ -45,13 +42,22 @@ DERIVED_RATIOS = {
     "mass_ratio": ("impactor.mass", "m / M_T: impactor mass over the dynamic mass (eq 7)"),
 }
 
-#: Engine options whose values must be integers.
-INTEGER_OPTIONS = {"segments"}
 
-#: Allowed range of numeric engine options: (low, high, low included), checked when parsed.
-#: segments: 1 (the SDOF trunk) to analytic.continuum.chain.MAX_SEGMENTS; dt: any positive step (the
-#: engine refuses an unstable one per run, recorded as a skipped row with its limit).
-OPTION_RANGES = {"segments": (1, MAX_SEGMENTS, True), "dt": (0.0, math.inf, False)}
+def backend_option(name: str):
+    """The :class:`~treeimpact.analytic.model.options.Option` that a backend's OPTIONS give
+    ``name`` (the first backend that has it; they share one definition), or None: an option
+    axis takes its type, range and words from there."""
+    from treeimpact.compare.backends import BACKENDS
+
+    for backend in BACKENDS.values():
+        try:
+            option = backend.options().get(name)
+        except ParameterError:  # a backend not installed here
+            continue
+        if option is not None:
+            return option
+    return None
+
 
 _SECTIONS = {"trunk": (Trunk,), "impactor": (Pendulum, Billet), "contact": (Contact,)}
 _EXTRA_FIELDS = {"impactor": {"release_angle_deg"}}
@@ -67,10 +73,12 @@ class Parameter:
     name: str
     kind: str
     target: str
+    given: str = ""  # the name as typed (messages name it), when it differs
 
     @property
-    def integer(self) -> bool:
-        return self.kind == OPTION and self.target in INTEGER_OPTIONS
+    def option(self):
+        """The backend Option of an option axis (None for scenario fields and ratios)."""
+        return backend_option(self.target) if self.kind == OPTION else None
 
 
 def _fields(cls) -> set[str]:
@@ -78,23 +86,27 @@ def _fields(cls) -> set[str]:
 
 
 def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
-    """The :class:`Parameter` a grid NAME refers to, or a one-line ParameterError."""
+    """The :class:`Parameter` a grid NAME refers to, named by its one spelling (a short name
+    of :data:`ALIASES` where the field has one), or a one-line ParameterError."""
     if not isinstance(name, str) or not _NAME_RE.match(name):
         raise ParameterError(f"{flag} {name!r}: not a NAME; allowed: a scenario field "
-                             f"(trunk.crown_mass), an alias ({', '.join(sorted(ALIASES))}), a ratio "
-                             f"({', '.join(DERIVED_RATIOS)}) or option.NAME")
+                             f"(trunk.crown_mass), a short name ({', '.join(sorted(ALIASES))}), "
+                             f"a ratio ({', '.join(DERIVED_RATIOS)}) or a backend option")
     if name in DERIVED_RATIOS:
         return Parameter(name, DERIVED, name)
     target = ALIASES.get(name, name)
-    if target.startswith("option."):
-        return Parameter(name, OPTION, target.split(".", 1)[1])
+    if target.startswith("option."):  # any option: check_grid refuses one no backend takes
+        option = target.split(".", 1)[1]
+        return Parameter(option, OPTION, option, name)
+    if "." not in target and target not in _TOP_FIELDS and backend_option(target) is not None:
+        return Parameter(target, OPTION, target, name)
     if "." not in target:
         if target in _TOP_FIELDS:
             return Parameter(name, SCENARIO, target)
         raise ParameterError(
             f"{flag} {name!r}: unknown name; allowed: dotted scenario fields "
-            f"(trunk.*, impactor.*, contact.*, t_end), aliases {', '.join(sorted(ALIASES))}, "
-            f"ratios {', '.join(DERIVED_RATIOS)}, or option.NAME for an engine option")
+            f"(trunk.*, impactor.*, contact.*, t_end), short names {', '.join(sorted(ALIASES))}, "
+            f"ratios {', '.join(DERIVED_RATIOS)}, or a backend option (segments, dt, ...)")
     section, field = target.split(".")
     if section not in _SECTIONS:
         raise ParameterError(f"{flag} {name!r}: unknown section {section!r}; allowed: "
@@ -104,7 +116,7 @@ def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
     if field not in allowed:
         raise ParameterError(f"{flag} {name!r}: {section} has no field {field!r}; allowed: "
                              f"{', '.join(sorted(allowed))}")
-    return Parameter(name, SCENARIO, target)
+    return Parameter(SHORT_NAMES.get(target, target), SCENARIO, target, name)
 
 
 @dataclass(frozen=True)
@@ -124,7 +136,8 @@ class Axis:
         return all(isinstance(v, (int, float)) for v in self.values)
 
     def spec(self) -> str:
-        return f"{self.name}=" + ",".join(_fmt(v) for v in self.values)
+        """The axis as a ``--grid`` spec, in the name the user gave it."""
+        return f"{self.parameter.given or self.name}=" + ",".join(_fmt(v) for v in self.values)
 
 
 def _fmt(v) -> str:
@@ -147,8 +160,8 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
     """Parse one ``--grid`` spec into an :class:`Axis` (one-line ParameterError naming
     ``flag`` and the allowed form on any mistake)."""
     if not isinstance(spec, str) or spec.count("=") != 1:
-        raise ParameterError(f"{flag} {spec!r}: expected {GRID_FORM}, e.g. e=0:0.9:10 or "
-                             f"segments=1,2,4")
+        raise ParameterError(f"{flag} {spec!r}: expected {GRID_FORM}, e.g. "
+                             f"restitution=0:0.9:10 or segments=1,2,4")
     name, body = (s.strip() for s in spec.split("="))
     try:
         param = resolve_parameter(name, flag)
@@ -195,22 +208,10 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
                     raise ParameterError(f"{flag} {spec!r}: value {s!r} must be finite; "
                                          f"expected {GRID_FORM}")
             values.append(v)
-    if param.integer:
-        ints = []
-        for v in values:
-            if isinstance(v, str) or v != int(v):
-                raise ParameterError(f"{flag} {spec!r}: {name} takes integers, got {v!r}; "
-                                     f"expected {GRID_FORM} with integer values")
-            ints.append(int(v))
-        values = ints
-    if param.kind == OPTION and param.target in OPTION_RANGES:
-        lo, hi, closed = OPTION_RANGES[param.target]
-        for v in values:
-            if isinstance(v, str) or not ((lo <= v if closed else lo < v) and v <= hi):
-                rng = (f"{'[' if closed else '('}{lo:g}, {hi:g}"
-                       f"{']' if math.isfinite(hi) else ')'}")
-                raise ParameterError(f"{flag} {spec!r}: {name} = {v!r} is out of range: "
-                                     f"allowed {rng}")
+    option = param.option
+    if option is not None:  # its words, integers and range, from the backends' OPTIONS
+        label = f"{flag} {spec!r}: {param.name}"
+        values = [option.check(param.name, v, label=label) for v in values]
     if len(set(values)) != len(values):
         raise ParameterError(f"{flag} {spec!r}: repeated values; expected {GRID_FORM}")
     return Axis(param, tuple(values))
@@ -223,7 +224,7 @@ class Grid:
     axes: tuple
 
     def __post_init__(self):
-        names = [a.name for a in self.axes]
+        names = [a.parameter.given or a.name for a in self.axes]
         targets = [(a.parameter.kind, a.parameter.target) for a in self.axes]
         for i, t in enumerate(targets):
             if t in targets[:i]:

@@ -13,7 +13,9 @@ import numpy as np
 from treeimpact.analytic.errors import ParameterError
 
 # the ladder's metrics and tolerance file, so a study and the report speak of the same things
-from treeimpact.compare.ladder import LADDER_METRICS, validity_tolerance
+from treeimpact.compare.ladder import LADDER_METRICS
+from treeimpact.compare.rungs import RungKind
+from treeimpact.compare.verdicts import validity_tolerance
 
 from .run import IDENT_KEYS, OK
 
@@ -21,15 +23,12 @@ from .run import IDENT_KEYS, OK
 #: with its reason, the one tolerance source. Override with ``tolerance=`` / ``--tolerance``.
 DEFAULT_TOLERANCE = validity_tolerance()
 
-#: Letter and meaning of each ladder kind (the step a rung adds to the one below it).
-RUNG_LETTERS = {"contact": ("C", "contact model (spring-dashpot vs Newton's e)"),
-                "beam": ("B", "1-DOF assumption (continuum trunk vs SDOF, same pad)"),
-                "convention": ("R", "restitution convention (c_c for e on the clamp's mass)"),
-                "engine": ("E", "engine numerics (engine SDOF vs analytic soft contact)"),
-                "chain": ("D", "discretisation (engine's hinged chain vs continuum)"),
-                "pendulum": ("P", "pendulum linearisation (full vs linear pendulum)"),
-                "model": ("M", "engine as configured vs analytic soft contact (numerics, trunk "
-                               "and pendulum together; run a ladder sweep to separate them)")}
+def _letter(kind) -> str:
+    """The map letter of a rung kind (:attr:`compare.rungs.RungKind.letter`); ? if unknown."""
+    try:
+        return RungKind(kind).letter
+    except ValueError:
+        return "?"
 
 
 def _rel(value, reference):
@@ -146,11 +145,10 @@ def _tolerance_of(tolerance, metric: str) -> float:
 def _label(name: str) -> str:
     from .grid import DERIVED_RATIOS
 
-    units = {"e": "e", "contact.restitution": "e", "segments": "segments",
+    units = {"restitution": "e", "segments": "segments",
              "trunk.crown_mass": "m_f (kg)", "impactor.mass": "m (kg)", "dt": "dt (s)",
              "contact_stiffness": "k_c (N/m)", "trunk.clamp_height": "a (m)",
-             "t_end": "t_end (s)", "contact.duration": "contact duration (s)",
-             "contact.stiffness": "k_c (N/m)"}
+             "t_end": "t_end (s)", "contact_duration": "contact duration (s)"}
     if name in DERIVED_RATIOS:
         return {"a_over_l": "a / l", "crown_ratio": "m_f / m_trunk",
                 "mass_ratio": "m / M_T"}[name]
@@ -177,7 +175,7 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annota
         j, i = yi[r[b]], xi[r[a]]
         Z[j, i] = r[value_col]
         if letters is not None and isinstance(r.get(letters), str):
-            L[j, i] = RUNG_LETTERS.get(r[letters], ("?",))[0]
+            L[j, i] = _letter(r[letters])
         why[j, i] = _why_missing(r)
     finite = np.isfinite(Z)
     if vmax is None:
@@ -414,7 +412,7 @@ def identification_errors(df):
     return pd.concat(frames, ignore_index=True)
 
 
-_E_NAMES = ("e", "contact.restitution", "restitution")
+_E_NAMES = ("restitution",)
 _CROWN_NAMES = ("crown_ratio", "trunk.crown_mass")
 
 

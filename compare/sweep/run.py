@@ -21,7 +21,7 @@ from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS
 from treeimpact.compare.backends import get_backend
 from treeimpact.compare.pool import check_stop, connect, dask_workers, run_chunks
-from treeimpact.compare.rungs import analytic_samples
+from treeimpact.compare.rungs import RungKind, analytic_samples
 from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, attempt
 
 from .apply import apply_point
@@ -32,8 +32,8 @@ TABLE = "results.parquet"
 SPEC = "sweep.json"
 
 REFERENCE_BACKENDS = ("analytic", "soft", "beam")
-MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "e", "u1", "segments", "dt", "contact_stiffness",
-              "contact_damping")
+MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "restitution", "u1", "segments", "dt",
+              "contact_stiffness", "contact_damping")
 IDENT_KEYS = ("M_T", "K_T", "xi", "E")
 BASE_COLUMNS = ("scenario", "point", "target", "backend", "kind", "previous", "status", "error",
                 "wall_s", "t_end", "task", "worker", "finished")
@@ -56,8 +56,8 @@ class Target:
     backend: str
     options: tuple = ()  # sorted (name, value) pairs
     previous: str | None = None
-    kind: str = "model"  # ladder kind (compare.rungs.KINDS); "model" for
-    # an engine run as configured, compared with soft (numerics and trunk/pendulum together)
+    kind: RungKind = RungKind.MODEL  # the ladder's kind; MODEL for an engine run as
+    # configured, compared with soft (numerics and trunk/pendulum together)
     drop: tuple = ()  # swept options this target ignores (segments for an SDOF trunk)
 
     @property
@@ -111,7 +111,7 @@ def make_targets(backends=("analytic",), *, ladder: bool = False,
             targets.append(Target(r.id, r.backend, opts(r.backend, r.options), below, r.kind))
             below = rid
     for eng in (b for b in names if b not in REFERENCE_BACKENDS):  # engines (or any other)
-        targets.append(Target(eng, eng, opts(eng), below, "model"))
+        targets.append(Target(eng, eng, opts(eng), below, RungKind.MODEL))
     return targets
 
 
@@ -131,16 +131,16 @@ class Task:
 
 
 def _identify(result, scenario: Scenario) -> dict:
-    """The paper's procedure on the run's record (compare.ladder.identify_rung) as the
+    """The paper's procedure on the run's record (compare.identification.identify_rung) as the
     sweep's id.* and truth.* columns, or id_error."""
-    from treeimpact.compare.ladder import identify_rung
+    from treeimpact.compare.identification import identify_rung
 
     ident = identify_rung(result, scenario)
-    out = {f"truth.{k}": v for k, v in ident.get("truth", {}).items()}
-    if ident["status"] != OK:
-        out["id_error"] = ident["reason"]
+    out = {f"truth.{k}": v for k, v in ident.truth.items()}
+    if not ident.ok:
+        out["id_error"] = ident.reason
         return out
-    out.update({f"id.{k}": float(v) for k, v in ident["values"].items()})
+    out.update({f"id.{k}": float(v) for k, v in ident.values.items()})
     return out
 
 
@@ -382,7 +382,7 @@ def _trunk_options(opts: dict, accepted: set) -> dict:
 def check_grid(scenario: Scenario, grid: Grid, targets: list[Target]) -> list[tuple]:
     """Refuse, before anything runs, what no grid point could run (one-line ParameterError
     naming the ``--grid`` spec): an engine option that no backend of the sweep takes, and an
-    axis value outside its parameter's range at every point (``e=2``). A point that is
+    axis value outside its parameter's range at every point (``restitution=2``). A point that is
     invalid only in combination with other axes (a clamp height above one of the swept
     lengths) is kept: it becomes an ``invalid`` row and the sweep goes on. Returns
     :func:`apply_points` of the grid, for :func:`plan`."""

@@ -15,8 +15,9 @@ import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
+from treeimpact.compare.rungs import RungKind
 
-from .maps import DEFAULT_TOLERANCE, RUNG_LETTERS, identification_maps, validity_maps
+from .maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
 from .run import JOURNAL, TABLE, make_out, read_table, run_sweep
 
 
@@ -55,7 +56,7 @@ PRESETS = {
                  "and the identification validation (4 e x 4 crown ratios x 3 rungs, MuJoCo's "
                  "chain on 2 x 2, 1-20 kHz x 0.5-2 % noise on exact SDOF records)"),
     "full": Preset(
-        "full", "central-leader", ("e=0:0.9:10", "segments=1,2,4,8,16,32",
+        "full", "central-leader", ("restitution=0:0.9:10", "segments=1,2,4,8,16,32",
                                    "crown_ratio=0:4:9"),
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
         identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
@@ -326,7 +327,8 @@ def _markdown(summary, validity, ident, curves) -> str:
           f"contour: {summary['tolerance'] if isinstance(summary['tolerance'], dict) else format(summary['tolerance'], '.0%')} "
           "(a study criterion: Table 1 prints M_T and K_T to two figures, and the paper's "
           "own identification is off by 15-30 % on exact records).", "",
-          "Rung letters: " + "; ".join(f"**{v[0]}** {v[1]}" for v in RUNG_LETTERS.values()),
+          "Rung letters: " + "; ".join(f"**{k.letter}** {k.step}" for k in RungKind
+                                        if k is not RungKind.NEWTON),
           ""]
     for v in validity:
         L.append(f"### {v['target']}")

@@ -1,0 +1,86 @@
+"""The paper's identification procedure run on a rung's record: one typed result, read by
+the ladder, the sweeps and the report.
+
+Design notes: docs/identification.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from treeimpact.analytic.errors import ParameterError, one_line
+from treeimpact.analytic.identify.procedure import (
+    identification_errors,
+    identify_from_record,
+    pendulum_test_of,
+    truth_of,
+)
+from treeimpact.analytic.model.parameters import Pendulum, Scenario
+
+from .runs import OK, SKIPPED, Status
+
+#: Parameters recovered by the identification procedure, compared with the model's truth.
+IDENT_METRICS = ("M_T", "K_T", "xi", "E")
+IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
+               "K_T": ("N/m", "identified stiffness (eq 46)"),
+               "xi": ("1", "identified damping ratio b / omega_n (eqs 42-43)"),
+               "E": ("Pa", "identified Young's modulus (eq 47)")}
+
+
+@dataclass(frozen=True)
+class RungIdentification:
+    """The procedure's outcome on one record: ``status`` OK with the identified ``values``
+    (IDENT_METRICS, SI), their relative ``errors`` against the scenario's ``truth`` and the
+    ``regression`` of Figs 4-5 (s, m, m/s, m/s^2); else SKIPPED and the ``reason`` (a
+    record the premises do not hold on says "not identifiable: ...")."""
+
+    status: Status
+    reason: str | None = None
+    values: dict = field(default_factory=dict)
+    errors: dict = field(default_factory=dict)
+    truth: dict = field(default_factory=dict)
+    regression: dict | None = None
+    identified: dict | None = None  # every quantity of the procedure (Identified.as_dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == OK
+
+    def to_json(self) -> dict:
+        return {"status": self.status, "reason": self.reason, "values": self.values,
+                "errors": self.errors, "truth": self.truth, "regression": self.regression}
+
+
+def identify_rung(result, scenario: Scenario) -> RungIdentification:
+    """The paper's procedure run on a rung's displacement record (eqs 39-48, "paper"
+    reading, A_y from the pendulum record)."""
+    if not isinstance(scenario.impactor, Pendulum):
+        return RungIdentification(SKIPPED, "the identification procedure needs a pendulum")
+    truth = truth_of(scenario)
+    shown = {k: truth[k] for k in IDENT_METRICS}
+    src = result.trajectory if result.trajectory is not None else result.record
+    if src is None:
+        return RungIdentification(SKIPPED, "the run has no displacement record", truth=shown)
+    try:
+        ident, reg = identify_from_record(src.t, src.x, pendulum_test_of(scenario), y=src.y,
+                                          reading="paper")
+    except (ParameterError, ValueError, FloatingPointError) as exc:
+        text = one_line(exc)  # "not identifiable: ..." when the premises fail
+        return RungIdentification(SKIPPED, text if text.startswith("not identifiable")
+                                  else f"identification failed: {text}", truth=shown)
+    errors = identification_errors(ident, truth)
+    return RungIdentification(
+        OK, values={k: getattr(ident, k) for k in IDENT_METRICS},
+        errors={k: errors[k] for k in IDENT_METRICS}, truth=shown,
+        regression={"t_first": reg.t_first, "t_together": reg.t_together,
+                    "x_together": reg.x_together, "t_origin": reg.t_origin,
+                    "coefficients": list(reg.coefficients), "x_max": reg.x_max,
+                    "tau": reg.tau},
+        identified=ident.as_dict())
+
+
+def rung_identification(run, scenario: Scenario) -> RungIdentification:
+    """:func:`identify_rung` of a finished run, computed once and kept with the run."""
+    if run.identification is None:
+        run.identification = identify_rung(run.result, scenario)
+    return run.identification

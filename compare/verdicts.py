@@ -1,0 +1,169 @@
+"""Judging the ladder: the tolerance file (compare/tolerances.toml, every entry with its
+reason), the verdict of one comparison, and what each verdict means.
+
+Design notes: docs/ladder.md.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from enum import StrEnum
+from functools import lru_cache
+from pathlib import Path
+
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.results import finite_number, to_jsonable
+
+TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
+
+
+class Verdict(StrEnum):
+    """What a comparison of a value with its reference found (the strings tables show)."""
+
+    OK = "ok"  # within its tolerance
+    EXCEEDS = "exceeds"  # beyond its tolerance
+    REPORTED = "reported"  # shown without a tolerance (report_only in the file)
+    FINDING = "finding"  # a documented finding, inside its band
+    OUT_OF_BAND = "out-of-band"  # a documented finding, outside its band
+    FINDING_LOST = "finding-lost"  # a documented finding that is now within tolerance
+    AMBIGUOUS = "ambiguous"  # a peak time of two near-equal maxima: not a robust quantity
+    NOT_AVAILABLE = "n/a"  # a value does not exist (a rung without it, a NaN)
+
+    @property
+    def flagged(self) -> bool:
+        """A failed check: the report flags it (exceeds, out-of-band, finding-lost)."""
+        return self in (Verdict.EXCEEDS, Verdict.OUT_OF_BAND, Verdict.FINDING_LOST)
+
+    @property
+    def passes(self) -> bool:
+        """A cross-check in ``pytest compare`` passes on it: judged and held (ok, finding) or
+        documented as not judged (ambiguous); reported and n/a are no pass there."""
+        return self in (Verdict.OK, Verdict.FINDING, Verdict.AMBIGUOUS)
+
+
+# --------------------------------------------------------------------------- tolerances
+
+
+@lru_cache(maxsize=4)
+def _load(path: str) -> dict:
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    _validate(data, path)
+    return data
+
+
+def load_tolerances(path: str | Path | None = None) -> dict:
+    """The tolerance file (``compare/tolerances.toml``), validated: every entry has a reason."""
+    return _load(str(TOLERANCES_PATH if path is None else path))
+
+
+def validity_tolerance() -> float:
+    """The studies' criterion (relative, 5 %: tolerances.toml [study] validity): the maps'
+    contour, the contact scan's headline and the report's answer table."""
+    return float(load_tolerances()["study"]["validity"]["rel"])
+
+
+def _validate(data: dict, path: str) -> None:
+    def need_reason(where, entry):
+        if not isinstance(entry, dict) or not str(entry.get("reason", "")).strip():
+            raise ParameterError(f"{path}: {where}: every tolerance needs a one-line reason")
+        if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
+            raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
+        if "rel" not in entry and not entry.get("report_only") and not entry.get("undefined") \
+                and where != "identification_reported":
+            raise ParameterError(f"{path}: {where}: give rel or report_only = true (or "
+                                 "undefined = true: no check)")
+
+    for section in ("step", "engines"):
+        for kind, metrics in data.get(section, {}).items():
+            for metric, entry in metrics.items():
+                need_reason(f"{section}.{kind}.{metric}", entry)
+    for metric, entry in data.get("identification", {}).items():
+        need_reason(f"identification.{metric}", entry)
+    need_reason("identification_reported", data.get("identification_reported"))
+    for name, entry in data.get("study", {}).items():
+        need_reason(f"study.{name}", entry)
+    for kind, entry in data.get("ledger", {}).items():
+        need_reason(f"ledger.{kind}", entry)
+    for i, f in enumerate(data.get("finding", [])):
+        for key in ("name", "scenario", "metric", "band", "reason", "kinds"):
+            if key not in f:
+                raise ParameterError(f"{path}: finding[{i}].{key}: missing")
+        lo, hi = f["band"]
+        if not lo < hi:
+            raise ParameterError(f"{path}: finding[{i}].band: need lo < hi")
+
+
+# --------------------------------------------------------------------------- checks
+
+
+@dataclass(frozen=True)
+class Check:
+    """One comparison of the ladder: a rung's value against a reference, with its verdict."""
+
+    scenario: str
+    rung: str
+    metric: str
+    value: float
+    reference: str  # the reference rung id, or "truth"
+    reference_value: float
+    rel_diff: float  # (value - reference) / |reference|
+    tolerance: float | None  # relative, None when only reported
+    verdict: Verdict
+    reason: str
+    finding: str | None = None
+    band: tuple | None = None
+
+    def to_json(self) -> dict:
+        return to_jsonable(self.__dict__ | {"band": list(self.band) if self.band else None})
+
+
+def relative_step(value, reference) -> float:
+    if not (finite_number(value) and finite_number(reference)) or reference == 0:
+        return math.nan
+    return (value - reference) / abs(reference)
+
+
+def _finding_for(tol: dict, scenario: str, kind: str, metric: str, rung_id: str):
+    for f in tol.get("finding", []):
+        if f["scenario"] == scenario and f["metric"] == metric and kind in f["kinds"]:
+            if "rungs" in f and rung_id not in f["rungs"]:
+                continue
+            return f
+    return None
+
+
+def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: str,
+          reference_value, entry: dict | None, tol: dict) -> Check:
+    """The verdict of one comparison of ``value`` with ``reference_value`` (:class:`Verdict`)."""
+    rel = relative_step(value, reference_value)
+    finding = _finding_for(tol, scenario, kind, metric, rung)
+    tolerance = None if entry is None or entry.get("report_only") else float(entry["rel"])
+    reason = entry["reason"] if entry else "no tolerance entry"
+    if finding is not None:
+        band = tuple(finding["band"])
+        reason = finding["reason"]
+        if not math.isfinite(rel):
+            verdict = Verdict.NOT_AVAILABLE
+        elif tolerance is not None and abs(rel) <= tolerance:
+            verdict = Verdict.FINDING_LOST
+        elif band[0] <= rel <= band[1]:
+            verdict = Verdict.FINDING
+        else:
+            verdict = Verdict.OUT_OF_BAND
+        return Check(scenario, rung, metric, _f(value), reference, _f(reference_value), rel,
+                     tolerance, verdict, reason, finding["name"], band)
+    if not math.isfinite(rel):
+        verdict = Verdict.NOT_AVAILABLE
+    elif tolerance is None:
+        verdict = Verdict.REPORTED
+    else:
+        verdict = Verdict.OK if abs(rel) <= tolerance else Verdict.EXCEEDS
+    return Check(scenario, rung, metric, _f(value), reference, _f(reference_value), rel,
+                 tolerance, verdict, reason)
+
+
+def _f(v) -> float:
+    return float(v) if finite_number(v) else math.nan
