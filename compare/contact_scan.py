@@ -1,14 +1,16 @@
 """The headline: the shortest contact duration for which the 1-DOF model is within a
 tolerance of the continuum trunk. Per scenario, the soft SDOF and the beam rung (the same
-pad: only the trunk differs) over a log grid of contact durations. SI units."""
+pad: only the trunk differs) over a log grid of contact durations, run as a sweep
+(resumable, on the sweeps' pool). SI units."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
-from .runs import OK, RunCache
+from .runs import OK
 
 #: Contact durations scanned (s): 0.2 ms (a hard impactor) to 50 ms (half the trunk's
 #: quarter period; a very soft pad), 14 points, log-spaced.
@@ -18,34 +20,49 @@ DURATIONS = tuple(float(d) for d in np.geomspace(2e-4, 5e-2, 14))
 HEADLINE_METRICS = ("x_max", "energy_delivered", "crown_peak_acceleration")
 
 
-def scan_requests(scenario, durations=DURATIONS) -> list:
-    """The (scenario, backend, options) runs of one scan, for RunCache.prefetch."""
-    return [(scenario, b, {"contact_duration": d}) for d in durations for b in ("soft", "beam")]
+def scan_sweep(scenario, out, durations=DURATIONS):
+    """The scan of one scenario as a sweep (:class:`compare.sweep.run.SweepSpec`) into
+    ``out``: ``contact_duration`` over ``durations`` on the soft and beam rungs."""
+    from .sweep.run import SweepSpec
+
+    return SweepSpec(scenario, ["contact_duration=" + ",".join(repr(float(d))
+                                                               for d in durations)],
+                     Path(out), ("soft", "beam"), identify=False)
 
 
-def contact_scan(scenario, cache: RunCache, durations=DURATIONS,
-                 metrics=HEADLINE_METRICS, tolerance: float | None = None) -> dict:
+def contact_scan(scenario, out, durations=DURATIONS, metrics=HEADLINE_METRICS,
+                 tolerance: float | None = None, *, workers=None, progress=False) -> dict:
+    """Run (or resume) the scan of ``scenario`` into the directory ``out`` and read it
+    (:func:`scan_result`)."""
+    from .sweep.run import run_sweeps
+
+    (res,) = run_sweeps([scan_sweep(scenario, out, durations)], workers=workers,
+                        progress=progress)
+    return scan_result(res.table, durations, metrics, tolerance)
+
+
+def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
+                tolerance: float | None = None) -> dict:
     """{durations, gaps: {metric: [rel gap beam vs soft per duration]}, shortest: {metric:
     duration (s) from which every longer scanned contact is within ``tolerance``, or None},
-    failed: [reasons]}. Runs come from (or go into) ``cache``. ``tolerance``: default the
-    studies' criterion (compare.ladder.validity_tolerance)."""
+    failed: [reasons]} from a scan's sweep table. ``tolerance``: default the studies'
+    criterion (compare.verdicts.validity_tolerance)."""
     if tolerance is None:
         from .verdicts import validity_tolerance
 
         tolerance = validity_tolerance()
+    rows = {(r["target"], float(r["contact_duration"])): r
+            for r in table.to_dict("records")}
     gaps = {m: [] for m in metrics}
     failed = []
     for d in durations:
-        soft = cache.run(scenario, "soft", contact_duration=d)
-        beam = cache.run(scenario, "beam", contact_duration=d)
+        soft, beam = rows.get(("soft", float(d))), rows.get(("beam", float(d)))
+        both = soft is not None and beam is not None and soft["status"] == beam["status"] == OK
         for m in metrics:
-            if soft.status == OK and beam.status == OK:
-                a, b = soft.result.metrics[m], beam.result.metrics[m]
-                gaps[m].append((b - a) / abs(a) if a and math.isfinite(a) else math.nan)
-            else:
-                gaps[m].append(math.nan)
-        failed += [f"{r.backend} at {1e3 * d:.3g} ms: {r.reason}" for r in (soft, beam)
-                   if r.status != OK]
+            a, b = (float(soft[m]), float(beam[m])) if both else (math.nan, math.nan)
+            gaps[m].append((b - a) / abs(a) if a and math.isfinite(a) else math.nan)
+        failed += [f"{r['target']} at {1e3 * d:.3g} ms: {r['error']}" for r in (soft, beam)
+                   if r is not None and r["status"] != OK]
     return {"durations": list(durations), "gaps": gaps, "tolerance": tolerance,
             "shortest": {m: shortest_within(durations, g, tolerance) for m, g in gaps.items()},
             "failed": failed}

@@ -82,8 +82,18 @@ def sampled_pendulum(trajectory, test, t: np.ndarray, noise: float = NOISE, seed
     return y + noise * float(np.max(np.abs(y))) * rng.standard_normal(t.size)
 
 
-def identify_case(case: Case) -> dict:
-    """Simulate, sample, identify both ways; never raises (errors are the outcome)."""
+#: The columns of one identified record in a sweep table (nested keys joined by '.').
+_FITTED = tuple(f"{m}.{k}" for m in ("fit", "fit_known_e", "fit_with_y", "paper")
+                for k in PARAMETERS)
+RECORD_COLUMNS = (*_FITTED, "fit_not_fixed", "fit_covered.M_T", "fit_covered.K_T",
+                  "fit_covered.C_T", "explained", "fit_error", "paper_error")
+
+
+def record_identification(result, scenario, record: dict) -> dict:
+    """The sweep analysis of the study: the run's record sampled as a test would be
+    (``record``: rate Hz, noise fraction of the peak, seed), identified by the full-record
+    fit and by the paper's procedure; errors against the scenario's SDOF truth as flat
+    columns (:data:`RECORD_COLUMNS`). Never raises: a failing method is its column's text."""
     from treeimpact.analytic.errors import ParameterError
     from treeimpact.analytic.identify.procedure import (
         identify_from_record,
@@ -91,34 +101,30 @@ def identify_case(case: Case) -> dict:
         truth_of,
     )
     from treeimpact.analytic.identify.record_fit import Record, fit_record
-    from treeimpact.compare.backends import get_backend
 
-    out = {"scenario": case.scenario, "e": case.restitution, "crown_ratio": case.crown_ratio,
-           "rung": case.rung, "rate": case.rate, "noise": case.noise, "seed": case.seed}
-    try:
-        scen = _scenario(case)
-        result = get_backend(case.rung).simulate(scen)
-    except Exception as exc:  # noqa: BLE001 - recorded per case
-        out["error"] = f"{type(exc).__name__}: {exc}"
-        return out
-    truth = truth_of(scen)
-    test = pendulum_test_of(scen)
-    t, x = sampled_record(result.trajectory, case.rate, case.noise, seed=case.seed)
+    rate, noise = record.get("rate", RATE), record.get("noise", NOISE)
+    seed = int(record.get("seed", 0))
+    truth = truth_of(scenario)
+    test = pendulum_test_of(scenario)
+    t, x = sampled_record(result.trajectory, rate, noise, seed=seed)
+    out: dict = {}
+
     def errors(fit) -> dict:
         v = dict(fit.values)
         v["b"] = v["C_T"] / (2.0 * (v["M_T"] + test.impactor_mass))
         return {k: v[k] / truth[k] - 1.0 for k in PARAMETERS}
 
     try:
-        record = Record(t, x)
-        fit = fit_record(record, test)
+        rec = Record(t, x)
+        fit = fit_record(rec, test)
         if fit.determined["M_T"]:
             out["fit"] = errors(fit)
         else:  # a one-impact record: ranges; the pad's e given or the pendulum's record fix them
             out["fit_not_fixed"] = True
-            out["fit_known_e"] = errors(fit_record(record, test, restitution=case.restitution,
+            out["fit_known_e"] = errors(fit_record(rec, test,
+                                                   restitution=scenario.contact.restitution,
                                                    free_fit=fit))
-            y = sampled_pendulum(result.trajectory, test, t, case.noise, case.seed)
+            y = sampled_pendulum(result.trajectory, test, t, noise, seed)
             out["fit_with_y"] = errors(fit_record(Record(t, x, y), test))
         truth_c = {"M_T": truth["M_T"], "K_T": truth["K_T"],
                    "C_T": 2.0 * truth["b"] * (truth["M_T"] + test.impactor_mass)}
@@ -133,78 +139,145 @@ def identify_case(case: Case) -> dict:
     except (ParameterError, ValueError, FloatingPointError) as exc:
         text = str(exc).splitlines()[0]
         out["paper_error"] = "not identifiable" if text.startswith("not identifiable") else text
+    return _flat(out)
+
+
+record_identification.columns = RECORD_COLUMNS
+#: The analysis's reference, as the sweeps load it in a worker.
+ANALYSIS = "treeimpact.compare.ident_study:record_identification"
+
+
+def _flat(nested: dict) -> dict:
+    """{"fit": {"M_T": v}} as {"fit.M_T": v}; plain keys as they are."""
+    out = {}
+    for key, value in nested.items():
+        if isinstance(value, dict):
+            out.update({f"{key}.{k}": v for k, v in value.items()})
+        else:
+            out[key] = value
     return out
 
 
-def cases(scenario: str = "central-leader", restitutions=RESTITUTIONS,
-          crown_ratios=CROWN_RATIOS, rungs=RUNGS) -> list[Case]:
-    return [Case(scenario, e, c, r) for r in rungs for e in restitutions for c in crown_ratios]
+def _missing(v) -> bool:
+    """An empty cell of a sweep table (None, NaN or pandas' NA)."""
+    import pandas as pd
+
+    return v is None or (not isinstance(v, str) and bool(pd.isna(v)))
 
 
-def engine_cases(scenario: str = "central-leader", engines=ENGINE_RUNGS) -> list[Case]:
-    """The engine chains' corner of the grid (each engine's default hinged trunk)."""
-    return [Case(scenario, e, c, eng) for eng in engines for e in ENGINE_RESTITUTIONS
-            for c in ENGINE_CROWN_RATIOS]
+def _nested(row: dict) -> dict:
+    """A table row as the study's case dict: the analysis's columns nested again, empty
+    ones dropped, with the case's rung, restitution, crown ratio, rate, noise and seed."""
+    out = {"scenario": row.get("scenario"), "rung": row["target"],
+           "restitution": float(row["restitution"]),
+           "crown_ratio": float(row.get("crown_ratio", 0.0)),
+           "rate": float(row.get("record.rate", RATE)),
+           "noise": float(row.get("record.noise", NOISE)),
+           "seed": int(row.get("record.seed", 0))}
+    if row.get("status") != "ok":
+        out["error"] = row.get("error")
+        return out
+    for col in RECORD_COLUMNS:
+        v = row.get(col)
+        if _missing(v):
+            continue
+        if col in ("fit_not_fixed", "explained") or col.startswith("fit_covered."):
+            v = v if isinstance(v, bool) else str(v) == "True" if isinstance(v, str) \
+                else bool(v)
+        elif not isinstance(v, str):
+            v = float(v)
+        head, _, tail = col.partition(".")
+        if tail:
+            out.setdefault(head, {})[tail] = v
+        else:
+            out[head] = v
+    return out
 
 
-def sampling_cases(scenario: str = "central-leader", rungs=SAMPLING_RUNGS) -> list[Case]:
-    """The sampling grid: rate x noise x seed on each rung's record (e = SAMPLING_E)."""
-    return [Case(scenario, SAMPLING_E, 0.0, rung, seed, rate, noise) for rung in rungs
-            for rate in SAMPLING_RATES for noise in SAMPLING_NOISES for seed in SAMPLING_SEEDS]
+def identify_case(case: Case) -> dict:
+    """Simulate, sample, identify both ways (:func:`record_identification`); never raises
+    (errors are the outcome). The case as the study's rows hold it."""
+    from treeimpact.compare.backends import get_backend
+
+    row = {"scenario": case.scenario, "restitution": case.restitution,
+           "crown_ratio": case.crown_ratio, "target": case.rung, "record.rate": case.rate,
+           "record.noise": case.noise, "record.seed": case.seed}
+    try:
+        scen = _scenario(case)
+        result = get_backend(case.rung).simulate(scen)
+    except Exception as exc:  # noqa: BLE001 - recorded per case
+        return _nested(row | {"status": "failed", "error": f"{type(exc).__name__}: {exc}"})
+    return _nested(row | {"status": "ok"} | record_identification(
+        result, scen, {"rate": case.rate, "noise": case.noise, "seed": case.seed}))
 
 
-def _is_grid(row: dict) -> bool:
-    return row.get("seed", 0) == 0 and row.get("rate", RATE) == RATE and row.get(
-        "noise", NOISE) == NOISE
+def _axis(name: str, values) -> str:
+    return f"{name}=" + ",".join(str(v) for v in values)
+
+
+def study_sweeps(out, scenario: str = "central-leader", *, restitutions=RESTITUTIONS,
+                 crown_ratios=CROWN_RATIOS, rungs=RUNGS, sampling_rungs=SAMPLING_RUNGS,
+                 engine_rungs=ENGINE_RUNGS) -> dict:
+    """The study as sweeps (name -> :class:`compare.sweep.run.SweepSpec`) into
+    ``out/identification/``: the e x crown grid on ``rungs``, the engines' corner, and the
+    sampling grid (rate x noise x seed on ``sampling_rungs``' records); each runs
+    :func:`record_identification` on its records."""
+    from treeimpact.compare.sweep.run import SweepSpec
+
+    base = Path(out) / "identification"
+    specs = {}
+    if rungs:
+        specs["grid"] = SweepSpec(scenario, [_axis("restitution", restitutions),
+                                             _axis("crown_ratio", crown_ratios)],
+                                  base / "grid", tuple(rungs), identify=False,
+                                  analysis=ANALYSIS)
+    if engine_rungs:
+        specs["engines"] = SweepSpec(
+            scenario, [_axis("restitution", ENGINE_RESTITUTIONS),
+                       _axis("crown_ratio", ENGINE_CROWN_RATIOS)], base / "engines",
+            tuple(engine_rungs), identify=False, analysis=ANALYSIS)
+    if sampling_rungs:
+        specs["sampling"] = SweepSpec(
+            scenario, [_axis("restitution", (SAMPLING_E,)), _axis("crown_ratio", (0.0,)),
+                       _axis("record.rate", SAMPLING_RATES),
+                       _axis("record.noise", SAMPLING_NOISES),
+                       _axis("record.seed", SAMPLING_SEEDS)], base / "sampling",
+            tuple(sampling_rungs), identify=False, analysis=ANALYSIS)
+    return specs
 
 
 def run_identification_study(out, scenario: str = "central-leader", *, workers=None,
                              restitutions=RESTITUTIONS, crown_ratios=CROWN_RATIOS,
                              rungs=RUNGS, sampling_rungs=SAMPLING_RUNGS,
                              engine_rungs=ENGINE_RUNGS, progress=None) -> dict:
-    """Identify every case on a process pool; write ident-study.json and one map per method
-    into ``out``; returns {rows, figures, summary}. ``progress``: as the sweeps' (None: a
-    bar on a terminal, a line every few seconds elsewhere; False: nothing)."""
-    from treeimpact.compare.pool import process_map
+    """Run (or resume) the study's sweeps (:func:`study_sweeps`, one pool); write
+    ident-study.json and one map per method into ``out``; returns {rows, figures, summary,
+    sampling}. ``progress``: as the sweeps' (None: a bar on a terminal, a line every few
+    seconds elsewhere; False: nothing)."""
+    from treeimpact.compare.sweep.run import run_sweeps
 
-    todo = (cases(scenario, restitutions, crown_ratios, rungs)
-            + engine_cases(scenario, engine_rungs) + sampling_cases(scenario, sampling_rungs))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    spec = {"scenario": scenario, "cases": [c.__dict__ for c in todo], "rate_hz": RATE,
-            "noise": NOISE, "rest_s": REST}
-    rows = _resumed(out / "ident-study.json", spec)
-    if rows is None:  # else the same study was finished here: a resume has nothing to run
-        from treeimpact.compare.progress import Progress
-
-        bar = None if progress is False else Progress(
-            len(todo), "identification validation", unit="case",
-            bar=True if progress else None)
-        rows = process_map(identify_case, todo, workers=workers,
-                           done=bar.update if bar is not None else None)
-        if bar is not None:
-            bar.close()
-    grid = [r for r in rows if _is_grid(r)]
+    specs = study_sweeps(out, scenario, restitutions=restitutions, crown_ratios=crown_ratios,
+                         rungs=rungs, sampling_rungs=sampling_rungs, engine_rungs=engine_rungs)
+    results = dict(zip(specs, run_sweeps(list(specs.values()), workers=workers,
+                                         progress=progress)))
+    wanted = {"grid": set(rungs), "engines": set(engine_rungs),
+              "sampling": set(sampling_rungs)}
+    rows = {name: [_nested(r) for r in res.table.to_dict("records")
+                   if r["target"] in wanted[name]] for name, res in results.items()}
+    grid = rows.get("grid", []) + rows.get("engines", [])
     summary = summarise(grid)
     mapped = [r for r in grid if r["rung"] in RUNGS]
     figures = [identification_error_map(mapped, method, out / f"ident-{method}.png")
                for method in METHODS] if mapped else []
-    sampling_rows = [r for r in rows if not _is_grid(r)]
-    sampling_summary = summarise_sampling(sampling_rows) if sampling_rows else []
+    sampling_summary = summarise_sampling(rows["sampling"]) if rows.get("sampling") else []
     (out / "ident-study.json").write_text(json.dumps(
-        {"spec": spec, "scenario": scenario, "rate_hz": RATE, "noise": NOISE, "rows": rows,
+        {"scenario": scenario, "rate_hz": RATE, "noise": NOISE,
+         "sweeps": {name: str(res.out.relative_to(out)) for name, res in results.items()},
          "summary": summary, "sampling": sampling_summary}, indent=1))
-    return {"rows": rows, "figures": figures, "summary": summary, "sampling": sampling_summary}
-
-
-def _resumed(path: Path, spec: dict) -> list | None:
-    """The rows of an earlier run of the same study (same cases, rate, noise), else None."""
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    return data["rows"] if data.get("spec") == spec and len(data.get("rows", [])) == len(
-        spec["cases"]) else None
+    return {"rows": grid + rows.get("sampling", []), "figures": figures, "summary": summary,
+            "sampling": sampling_summary}
 
 
 def summarise(rows: list[dict]) -> dict:
@@ -219,7 +292,8 @@ def summarise(rows: list[dict]) -> dict:
         entry = {}
         for method in METHODS:
             got = [r[method] for r in rr if method in r]
-            small_e = [r for r in rr if r["e"] <= GOAL_MAX_E and not r.get(f"{method}_not_fixed")]
+            small_e = [r for r in rr if r["restitution"] <= GOAL_MAX_E
+                       and not r.get(f"{method}_not_fixed")]
             entry[method] = {
                 "identified": len(got), "cases": len(rr),
                 "within_goal": float(np.mean([method in r and max(
@@ -267,7 +341,7 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
     from matplotlib.figure import Figure
 
     rungs = list(dict.fromkeys(r["rung"] for r in rows))
-    es = sorted({r["e"] for r in rows})
+    es = sorted({r["restitution"] for r in rows})
     cs = sorted({r["crown_ratio"] for r in rows})
     fig = Figure(figsize=(3.4 * len(PARAMETERS) + 1.2, 2.6 * len(rungs) + 0.6),
                  layout="constrained")
@@ -282,7 +356,7 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
             for r in rows:
                 if r["rung"] != rung:
                     continue
-                a, b = es.index(r["e"]), cs.index(r["crown_ratio"])
+                a, b = es.index(r["restitution"]), cs.index(r["crown_ratio"])
                 if method in r:
                     Z[b, a] = r[method][k]
                 elif r.get(f"{method}_not_fixed"):

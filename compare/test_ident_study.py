@@ -73,10 +73,10 @@ def test_the_pendulum_s_samples_swing_in_before_the_contact():
 
 
 def test_summary_counts_and_worst():
-    rows = [{"rung": "analytic", "e": 0.1, "fit": {"M_T": 0.01, "K_T": -0.03, "b": 0.0},
+    rows = [{"rung": "analytic", "restitution": 0.1, "fit": {"M_T": 0.01, "K_T": -0.03, "b": 0.0},
              "fit_covered": {"M_T": True, "K_T": False, "C_T": True}, "explained": True,
              "paper": {"M_T": 0.2, "K_T": 0.1, "b": 0.0}},
-            {"rung": "analytic", "e": 0.5, "fit_error": "x", "paper_error": "not identifiable"}]
+            {"rung": "analytic", "restitution": 0.5, "fit_error": "x", "paper_error": "not identifiable"}]
     s = summarise(rows)["analytic"]
     assert s["fit"]["identified"] == 1 and s["fit"]["worst"]["K_T"] == 0.03
     assert s["fit"]["covered"] == pytest.approx(2 / 3) and s["fit"]["within_goal"] == 0.0
@@ -86,9 +86,9 @@ def test_summary_counts_and_worst():
 def test_summary_keeps_one_impact_records_out_of_the_goal_and_reports_them():
     """A one-impact record is not a miss of the 2 % goal (the record does not fix M_T) nor
     an identified case; it is counted with its error when e is given."""
-    fixed = {"rung": "analytic", "e": 0.1, "fit": {"M_T": 0.01, "K_T": 0.0, "b": 0.0},
+    fixed = {"rung": "analytic", "restitution": 0.1, "fit": {"M_T": 0.01, "K_T": 0.0, "b": 0.0},
              "fit_covered": {"M_T": True}, "explained": True}
-    ridge = {"rung": "analytic", "e": 0.3, "fit_not_fixed": True,
+    ridge = {"rung": "analytic", "restitution": 0.3, "fit_not_fixed": True,
              "fit_known_e": {"M_T": 0.004, "K_T": -0.006, "b": 0.0},
              "fit_with_y": {"M_T": 0.003, "K_T": 0.0, "b": -0.001},
              "fit_covered": {"M_T": True}, "explained": True}
@@ -99,26 +99,32 @@ def test_summary_keeps_one_impact_records_out_of_the_goal_and_reports_them():
 
 
 def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
-    """A rerun of the same study into the same directory reads its rows back; a different
-    grid runs again (the spec is stored in ident-study.json)."""
+    """A rerun of the same study into the same directory reads its rows back from its
+    sweeps' tables; a different grid runs again (only its new points)."""
     import treeimpact.compare.ident_study as study
 
-    kw = dict(workers=1, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",),
+    kw = dict(workers=0, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",),
               sampling_rungs=(), engine_rungs=())
     first = study.run_identification_study(tmp_path, **kw)
-    monkeypatch.setattr(study, "identify_case", lambda c: pytest.fail("reran a finished case"))
+    def rerun(*args):
+        pytest.fail("reran a finished case")
+
+    rerun.columns = study.RECORD_COLUMNS
+    monkeypatch.setattr(study, "record_identification", rerun)
     assert study.run_identification_study(tmp_path, **kw)["rows"] == first["rows"]
     with pytest.raises(pytest.fail.Exception):
         study.run_identification_study(tmp_path, **{**kw, "restitutions": (0.3,)})
 
 
 def test_sampling_rows_are_summarised_apart_from_the_grid():
-    """The rate x noise cases (seeds >= 1) go to the sampling table, not to the maps; the
+    """The rate x noise cases are a sweep of their own (record axes), not on the maps; the
     worst error is over the parameters and seeds of one cell."""
-    from treeimpact.compare.ident_study import _is_grid, sampling_cases, summarise_sampling
+    from treeimpact.compare.ident_study import study_sweeps, summarise_sampling
 
-    todo = sampling_cases()
-    assert not any(_is_grid(c.__dict__) for c in todo)
+    specs = study_sweeps("out")
+    assert {a.split("=")[0] for a in specs["sampling"].grid} >= {
+        "record.rate", "record.noise", "record.seed"}
+    assert not any(a.startswith("record.") for a in specs["grid"].grid)
     rows = [{"rate": 1e3, "noise": 0.01, "fit": {"M_T": 0.01, "K_T": -0.04, "b": 0.0},
              "fit_covered": {"M_T": True, "K_T": True, "C_T": False}},
             {"rate": 1e3, "noise": 0.01, "fit_error": "x"}]
@@ -147,13 +153,15 @@ def test_full_preset_validates_identification_on_every_rung():
         RUNGS,
         SAMPLING_NOISES,
         SAMPLING_RATES,
-        sampling_cases,
+        study_sweeps,
     )
+    from treeimpact.compare.sweep.grid import parse_grid
     from treeimpact.compare.sweep.study import get_preset
 
     full = get_preset("full")
     assert full.identification and set(full.ident_engine_rungs) == set(ENGINES)
-    todo = sampling_cases(rungs=full.ident_sampling_rungs)
-    assert {c.rung for c in todo} == {*RUNGS, *ENGINES}
-    assert {c.rate for c in todo} == set(SAMPLING_RATES) == {1e3, 5e3, 2e4}
+    sampling = study_sweeps("out", sampling_rungs=full.ident_sampling_rungs)["sampling"]
+    assert set(sampling.backends) == {*RUNGS, *ENGINES}
+    rates = parse_grid(sampling.grid).axis("record.rate").values
+    assert set(rates) == set(SAMPLING_RATES) == {1e3, 5e3, 2e4}
     assert min(SAMPLING_NOISES) == 0.005 and max(SAMPLING_NOISES) == 0.02

@@ -108,8 +108,9 @@ def test_findings_are_flagged_in_the_page(report):
     assert "e too large for the identification" in paths["html"].read_text()
 
 
-def test_every_axis_has_a_unit():
-    from treeimpact.compare.report.scenario import ScenarioSection
+def test_every_axis_has_a_unit(tmp_path):
+    from treeimpact.compare.report.scenario import ScenarioSection, identification_spec
+    from treeimpact.compare.sweep.run import run_sweeps
 
     figs = []
 
@@ -117,8 +118,9 @@ def test_every_axis_has_a_unit():
         figs.append(fig)
         return f"figures/{stem}.png"
 
-    ScenarioSection.from_runs(load_scenario("central-leader"), RunCache(), engines=(),
-                              figure_sink=keep)
+    scen = load_scenario("central-leader")
+    (e_sweep,) = run_sweeps([identification_spec(scen, tmp_path)], workers=0)
+    ScenarioSection.from_runs(scen, RunCache(), e_sweep.table, engines=(), figure_sink=keep)
     assert len(figs) == 5
     unit = re.compile(r"\((ms|mm|kN|N s|m/s|J|%|1|s|m)\)")
     for fig in figs:

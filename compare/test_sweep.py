@@ -245,7 +245,7 @@ def test_segments_one_is_the_sdof_trunk_and_shares_its_run(monkeypatch):
     tasks, immediate = plan(load_scenario("central-leader"), parse_grid(["segments=1,4"]),
                             targets, identify=False)
     assert not immediate
-    opts = {(pk, t.id): dict(task.options) for task in tasks for _, pk, t in task.rows}
+    opts = {(pk, t.id): dict(task.options) for task in tasks for _, pk, t, _ in task.rows}
     one, four = '[["segments",1]]', '[["segments",4]]'
     assert opts[(one, "eng-chain")] == {"trunk": "sdof", "pendulum": "linear"}
     assert opts[(one, "eng-chain-full")] == {"trunk": "sdof", "pendulum": "full"}

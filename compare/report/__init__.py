@@ -15,9 +15,12 @@ cache that ``pytest compare`` fills, so ``pytest compare --report DIR`` reuses i
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import json
 import math
+import shutil
+import tempfile
 import time
 from pathlib import Path
 
@@ -30,6 +33,9 @@ from ..verdicts import Verdict, validity_tolerance
 
 __all__ = ["write_report", "build_sections"]
 
+#: The folder of the report's own sweeps (contact scans, identification against e).
+SWEEPS = "sweeps"
+
 
 def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, segments=None,
                    out_dir=None, progress: bool = False) -> dict:
@@ -38,28 +44,34 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     sections reported on stderr as they finish."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
-    from ..contact_scan import contact_scan, scan_requests
+    from ..contact_scan import scan_result, scan_sweep
     from ..ladder import prefetch_ladders
     from ..progress import Progress
     from ..runs import RunCache, resolve_scenario
+    from ..sweep.run import run_sweeps
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection
-    from .scenario import ScenarioSection
+    from .scenario import ScenarioSection, identification_spec
     from .studies import StudySection
 
     cache = RunCache() if runs is None else runs
     sink = FigureFiles(Path(out_dir) / "figures") if out_dir is not None else None
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)
+    scens = [resolve_scenario(s) for s in names]
     wall = {}
     t0 = time.perf_counter()
-    cache.prefetch([r for s in names for r in scan_requests(s)], progress=progress)
-    prefetch_ladders(cache, names, engines=engines, segments=segments, progress=progress)
+    prefetch_ladders(cache, scens, engines=engines, segments=segments, progress=progress)
     wall["runs (process pool)"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    scans = {resolve_scenario(s).name: contact_scan(s, cache) for s in names}
+    t0 = time.perf_counter()  # the report's own sweeps, one pool: contact scans, e sweeps
+    with _sweep_dir(out_dir) as folder:  # the tables are read before a temporary one goes
+        specs = [scan_sweep(s, folder / f"contact-scan-{s.name}") for s in scens] + [
+            identification_spec(s, folder / f"identification-vs-e-{s.name}") for s in scens]
+        done = run_sweeps(specs, progress=progress or False)
+    scans = {s.name: scan_result(r.table) for s, r in zip(scens, done)}
+    e_tables = {s.name: r.table for s, r in zip(scens, done[len(scens):])}
     scan_figure = sink(contact_scan_figure(scans), "contact-scan") if sink else None
-    wall["contact scan"] = time.perf_counter() - t0
+    wall["sweeps (contact scan, identification against e)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     paper = PaperSection()
     wall["paper"] = time.perf_counter() - t0
@@ -68,8 +80,9 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     for s in names:
         t0 = time.perf_counter()
         scen = resolve_scenario(s)
-        scen_sections.append(ScenarioSection.from_runs(scen, cache, engines=engines,
-                                                       segments=segments, figure_sink=sink))
+        scen_sections.append(ScenarioSection.from_runs(scen, cache, e_tables[scen.name],
+                                                       engines=engines, segments=segments,
+                                                       figure_sink=sink))
         wall[f"scenario {scen.name}"] = time.perf_counter() - t0
         if bar is not None:
             bar.update()
@@ -79,6 +92,16 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log,
             "contact": {"scans": scans, "figure": scan_figure}}
+
+
+@contextlib.contextmanager
+def _sweep_dir(out_dir):
+    """``out_dir/sweeps``, or a temporary directory removed afterwards (no ``out_dir``)."""
+    if out_dir is not None:
+        yield Path(out_dir) / SWEEPS
+        return
+    with tempfile.TemporaryDirectory(prefix="treeimpact-sweeps-") as tmp:
+        yield Path(tmp)
 
 
 def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -> dict:
@@ -98,6 +121,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     out.mkdir(parents=True, exist_ok=True)
     for old in (out / "figures").glob("*.png"):  # figures of an earlier report
         old.unlink()
+    shutil.rmtree(out / SWEEPS, ignore_errors=True)  # its sweeps: rows of older code
     sections = build_sections(scenarios, study_dirs, runs, out_dir=out, **options)
     ordered = [sections["paper"], *sections["scenarios"], *sections["studies"],
                sections["runs"]]

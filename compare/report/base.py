@@ -39,6 +39,14 @@ def pct(v, digits: int = 2) -> str:
     return f"{100 * v:+.{digits}f} %"
 
 
+def frac(v, digits: int = 0) -> str:
+    """A fraction or an unsigned relative error as a percentage; n/a for None/NaN."""
+    if v is None or isinstance(v, bool) or not isinstance(v, (int, float)) \
+            or not math.isfinite(v):
+        return "n/a"
+    return f"{100 * v:.{digits}f} %"
+
+
 _ENV = None
 
 
@@ -51,6 +59,7 @@ def environment() -> jinja2.Environment:
                                   lstrip_blocks=True, keep_trailing_newline=True)
         _ENV.filters["num"] = num
         _ENV.filters["pct"] = pct
+        _ENV.filters["frac"] = frac
     return _ENV
 
 

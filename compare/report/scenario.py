@@ -5,6 +5,7 @@ identification against the truth (including its dependence on e)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -12,10 +13,10 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Pendulum
 from treeimpact.analytic.results import to_jsonable
 
-from ..identification import IDENT_METRICS, rung_identification
+from ..identification import IDENT_METRICS
 from ..ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
 from ..mechanism import matched_loss_evidence
-from ..runs import OK
+from ..runs import OK, SKIPPED
 from ..verdicts import Verdict
 from . import figures
 from .base import Section
@@ -58,22 +59,34 @@ def energy_ledger(rr) -> dict | None:
     return {"t": T0, "terms": out, "initial": e0, "residual": (total - e0) / e0}
 
 
-def identification_sweep(scenario, cache) -> list[dict]:
-    """The paper's procedure on exact-solver records for each e of :data:`E_SWEEP`."""
-    from ..rungs import analytic_samples
+def identification_spec(scenario, out):
+    """The identification against e as a sweep (:class:`compare.sweep.run.SweepSpec`) into
+    ``out``: the exact solver's records for each e of :data:`E_SWEEP`, the paper's procedure
+    run on each (the sweep's id.* and truth.* columns)."""
+    from ..sweep.run import SweepSpec
 
-    samples = analytic_samples(scenario.t_end)
+    return SweepSpec(scenario, ["restitution=" + ",".join(repr(e) for e in E_SWEEP)],
+                     Path(out), ("analytic",), identify=True)
+
+
+def identification_sweep(table) -> list[dict]:
+    """Per e of the sweep's table: the procedure's values and relative errors against the
+    SDOF truth (M_T, K_T, xi, E), or why there are none."""
     out = []
-    for e in E_SWEEP:
-        run = cache.run(scenario, "analytic", restitution=e, samples=samples)
-        if not run.ok:
-            out.append({"restitution": e, "status": run.status, "reason": run.reason,
+    for r in sorted(table.to_dict("records"), key=lambda r: float(r["restitution"])):
+        e = float(r["restitution"])
+        if r["status"] != OK:
+            out.append({"restitution": e, "status": r["status"], "reason": r["error"],
                         "errors": {}})
-            continue
-        ident = rung_identification(run, scenario)
-        out.append({"restitution": e, "status": ident.status, "reason": ident.reason,
-                    "T0": run.result.metrics["T0"], "errors": ident.errors,
-                    "values": ident.values})
+        elif isinstance(r.get("id_error"), str):
+            out.append({"restitution": e, "status": SKIPPED, "reason": r["id_error"],
+                        "T0": float(r["T0"]), "errors": {}, "values": {}})
+        else:
+            values = {k: float(r[f"id.{k}"]) for k in IDENT_METRICS}
+            truth = {k: float(r[f"truth.{k}"]) for k in IDENT_METRICS}
+            out.append({"restitution": e, "status": OK, "reason": None, "T0": float(r["T0"]),
+                        "errors": {k: (values[k] - truth[k]) / truth[k] for k in values},
+                        "values": values})
     return out
 
 
@@ -144,13 +157,15 @@ class ScenarioSection(Section):
             self._draw(figure_sink)
 
     @classmethod
-    def from_runs(cls, scenario, cache, *, engines=None, segments=None, figure_sink=None):
+    def from_runs(cls, scenario, cache, e_table=None, *, engines=None, segments=None,
+                  figure_sink=None):
         """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
-        lacks are made here, so prefetch them first)."""
+        lacks are made here, so prefetch them first) and its identification sweep's table
+        (:func:`identification_spec`; None: the section has no identification against e)."""
         kw = {} if engines is None else {"engines": engines}
         ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
-        return cls(ladder, identification_sweep(ladder.scenario, cache),
-                   figure_sink=figure_sink)
+        sweep = identification_sweep(e_table) if e_table is not None else []
+        return cls(ladder, sweep, figure_sink=figure_sink)
 
     def _draw(self, sink):
         """Draw the figures and hand each to ``sink(fig, stem) -> path``."""
@@ -163,8 +178,9 @@ class ScenarioSection(Section):
         if ledgers:
             e0 = next(iter(ledgers.values()))["initial"]
             drawn["energy"] = figures.energy_figure(ledgers, e0, L.name)
-        drawn["identification"] = figures.identification_figure(self.sweep, L.name,
-                                                                L.tolerances)
+        if self.sweep:
+            drawn["identification"] = figures.identification_figure(self.sweep, L.name,
+                                                                    L.tolerances)
         self.figures = {name: sink(fig, f"{L.name}-{name}") for name, fig in drawn.items()}
 
     def _verdicts(self) -> dict:

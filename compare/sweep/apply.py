@@ -65,7 +65,7 @@ def apply_point(scenario: Scenario, point: dict) -> tuple[Scenario, dict]:
     params = {name: resolve_parameter(name) for name in point}
     options = {}
     scen = scenario
-    for name, p in params.items():
+    for name, p in params.items():  # record.* axes are the analysis's, not the run's
         if p.kind == OPTION:
             options[p.target] = point[name]
     try:

@@ -25,6 +25,12 @@ GRID_FORM = "NAME=START:STOP:COUNT (COUNT values, both ends included) or NAME=V1
 SCENARIO = "scenario"
 OPTION = "option"
 DERIVED = "derived"
+RECORD = "record"
+
+#: How a run's record is sampled before an analysis reads it (``record.NAME`` axes; a sweep
+#: with such axes needs an analysis that takes them): (type, low, low included, unit).
+RECORD_FIELDS = {"rate": (float, 0.0, False, "Hz"), "noise": (float, 0.0, True, "1"),
+                 "seed": (int, 0, True, "")}
 
 #: Short names of scenario fields: the spelling every table, CLI flag and JSON key uses
 #: (an axis given by its dotted field is stored under its short name).
@@ -94,6 +100,12 @@ def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
                              f"a ratio ({', '.join(DERIVED_RATIOS)}) or a backend option")
     if name in DERIVED_RATIOS:
         return Parameter(name, DERIVED, name)
+    if name.startswith("record."):
+        field = name.split(".", 1)[1]
+        if field not in RECORD_FIELDS:
+            raise ParameterError(f"{flag} {name!r}: the record has no parameter {field!r}; "
+                                 f"allowed: {', '.join('record.' + f for f in RECORD_FIELDS)}")
+        return Parameter(name, RECORD, field)
     target = ALIASES.get(name, name)
     if target.startswith("option."):  # any option: check_grid refuses one no backend takes
         option = target.split(".", 1)[1]
@@ -156,6 +168,15 @@ def _number(text: str, spec: str, flag: str, what: str) -> float:
     return v
 
 
+def _record_value(v, kind, low, closed, unit, label):
+    if isinstance(v, str) or (kind is int and v != int(v)) or not (
+            v >= low if closed else v > low):
+        what = "integers" if kind is int else "numbers"
+        raise ParameterError(f"{label} = {v!r}: allowed {what} {'>=' if closed else '>'} "
+                             f"{low:g}{' ' + unit if unit and unit != '1' else ''}")
+    return kind(v)
+
+
 def parse_axis(spec: str, flag: str = "--grid") -> Axis:
     """Parse one ``--grid`` spec into an :class:`Axis` (one-line ParameterError naming
     ``flag`` and the allowed form on any mistake)."""
@@ -212,6 +233,10 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
     if option is not None:  # its words, integers and range, from the backends' OPTIONS
         label = f"{flag} {spec!r}: {param.name}"
         values = [option.check(param.name, v, label=label) for v in values]
+    if param.kind == RECORD:
+        kind, low, closed, unit = RECORD_FIELDS[param.target]
+        values = [_record_value(v, kind, low, closed, unit, f"{flag} {spec!r}: {name}")
+                  for v in values]
     if len(set(values)) != len(values):
         raise ParameterError(f"{flag} {spec!r}: repeated values; expected {GRID_FORM}")
     return Axis(param, tuple(values))

@@ -25,7 +25,7 @@ from treeimpact.compare.rungs import RungKind, analytic_samples
 from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, attempt
 
 from .apply import apply_point
-from .grid import Grid, parse_grid, point_key
+from .grid import RECORD, Grid, parse_grid, point_key
 
 JOURNAL = "results.csv"
 TABLE = "results.parquet"
@@ -39,10 +39,23 @@ BASE_COLUMNS = ("scenario", "point", "target", "backend", "kind", "previous", "s
                 "wall_s", "t_end", "task", "worker", "finished")
 
 
-def columns_for(grid: Grid) -> list[str]:
+def columns_for(grid: Grid, analysis: str | None = None) -> list[str]:
+    """The table's columns: the run's, the grid's axes, then the metrics, model and the
+    identification (the standard analysis) or the columns ``analysis`` declares."""
+    if analysis is not None:
+        return list(BASE_COLUMNS) + list(grid.names) + list(load_analysis(analysis).columns)
     return (list(BASE_COLUMNS) + list(grid.names) + list(METRIC_KEYS)
             + [f"model.{k}" for k in MODEL_KEYS] + [f"id.{k}" for k in IDENT_KEYS]
             + [f"truth.{k}" for k in IDENT_KEYS] + ["id_error"])
+
+
+def load_analysis(ref: str):
+    """The analysis function of a ``module:function`` reference: ``fn(result, scenario,
+    record) -> {column: value}`` with its ``columns`` (a tuple) as an attribute."""
+    import importlib
+
+    module, name = ref.split(":")
+    return getattr(importlib.import_module(module), name)
 
 
 # --------------------------------------------------------------------------- targets
@@ -120,14 +133,18 @@ def make_targets(backends=("analytic",), *, ladder: bool = False,
 
 @dataclass
 class Task:
-    """One backend call, shared by every (point, target) row whose inputs are identical."""
+    """One backend call, shared by every (point, target) row whose inputs are identical;
+    ``analysis`` (``module:function``) runs on its result once per distinct record
+    parameters of the rows (grid axes ``record.*``) instead of the standard columns."""
 
     key: str
     scenario: Scenario
     backend: object  # compare.backends.Backend (pickled whole, so a worker needs no registry)
     options: dict
     identify: bool
-    rows: list = field(default_factory=list)  # (point key, target id)
+    analysis: str | None = None
+    part: int = 0  # the sweep of run_sweeps it belongs to
+    rows: list = field(default_factory=list)  # (point, point key, target, record parameters)
 
 
 def _identify(result, scenario: Scenario) -> dict:
@@ -144,28 +161,39 @@ def _identify(result, scenario: Scenario) -> dict:
     return out
 
 
-def execute(task: Task) -> dict:
-    """Run one task; never raises for a failing run (the error is the outcome)."""
+def execute(task: Task) -> list[dict]:
+    """Run one task: the outcome of each of its rows; never raises for a failing run (the
+    error is the outcome)."""
     done = attempt(task.backend, task.scenario, task.options)
     out = {"status": str(done.status), "error": done.reason, "t_end": task.scenario.t_end,
            "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_s": done.wall_s}
-    if done.status != OK:
-        return out
     result = done.result
-    infinite = [k for k in METRIC_KEYS if math.isinf(_num(result.metrics.get(k)))]
-    if infinite:  # a run that returned instead of raising: still a divergence, not numbers
-        out.update(status=DIVERGED, error=f"diverged: infinite {', '.join(infinite)}")
-        return out
-    out.update({k: _num(result.metrics.get(k)) for k in METRIC_KEYS})
-    model = result.model or {}
-    out.update({f"model.{k}": _num(model.get(k)) for k in MODEL_KEYS})
-    if task.identify:
-        out.update(_identify(result, task.scenario))
-    return out
+    if done.status == OK:
+        infinite = [k for k in METRIC_KEYS if math.isinf(_num(result.metrics.get(k)))]
+        if infinite:  # a run that returned instead of raising: a divergence, not numbers
+            out.update(status=DIVERGED, error=f"diverged: infinite {', '.join(infinite)}")
+    if out["status"] != OK:
+        return [out] * len(task.rows)
+    if task.analysis is None:
+        out.update({k: _num(result.metrics.get(k)) for k in METRIC_KEYS})
+        model = result.model or {}
+        out.update({f"model.{k}": _num(model.get(k)) for k in MODEL_KEYS})
+        if task.identify:
+            out.update(_identify(result, task.scenario))
+        return [out] * len(task.rows)
+    analyse = load_analysis(task.analysis)
+    made: dict = {}
+    outcomes = []
+    for *_, record in task.rows:  # one analysis per distinct record parameters
+        key = json.dumps(record, sort_keys=True)
+        if key not in made:
+            made[key] = out | analyse(result, task.scenario, record)
+        outcomes.append(made[key])
+    return outcomes
 
 
 def run_chunk(tasks: list) -> list:
-    """Worker entry point: the outcomes of a list of tasks, in order."""
+    """Worker entry point: each task's row outcomes, in order."""
     return [execute(t) for t in tasks]
 
 
@@ -229,8 +257,10 @@ def _drop_partial_line(path: Path) -> None:
         fh.truncate(data.rfind(b"\n") + 1)
 
 
-def read_table(out, *, dedupe: bool = True):
-    """The sweep's rows as a pandas DataFrame (last row per (point, target) when ``dedupe``)."""
+def read_table(out, *, dedupe: bool = True, grid: Grid | None = None):
+    """The sweep's rows as a pandas DataFrame (last row per (point, target) when ``dedupe``;
+    only the points of ``grid`` when given: a directory resumed with other values keeps the
+    earlier rows in its journal)."""
     import pandas as pd
 
     out = Path(out)
@@ -244,6 +274,8 @@ def read_table(out, *, dedupe: bool = True):
         raise ParameterError(f"--out {out}: no sweep table ({JOURNAL} or {TABLE}) there")
     if dedupe and len(df):
         df = df.drop_duplicates(subset=["point", "target"], keep="last").reset_index(drop=True)
+    if grid is not None and len(df):
+        df = df[df["point"].isin({point_key(p) for p in grid.points()})].reset_index(drop=True)
     return df
 
 
@@ -287,9 +319,9 @@ def make_out(out) -> Path:
     return out
 
 
-def _spec(scenario: Scenario, grid: Grid, identify: bool) -> dict:
+def _spec(scenario: Scenario, grid: Grid, identify: bool, analysis: str | None) -> dict:
     return {"version": 1, "scenario": scenario.to_dict(), "grid": grid.specs(),
-            "axes": list(grid.names), "identify": identify}
+            "axes": list(grid.names), "identify": identify, "analysis": analysis}
 
 
 def _check_spec(out: Path, spec: dict) -> None:
@@ -297,7 +329,7 @@ def _check_spec(out: Path, spec: dict) -> None:
     if not path.exists():
         return
     old = json.loads(path.read_text())
-    for key in ("scenario", "axes", "identify"):
+    for key in ("scenario", "axes", "identify", "analysis"):
         if json.dumps(old.get(key), sort_keys=True) != json.dumps(spec[key], sort_keys=True):
             raise ParameterError(f"--out {out}: holds a sweep with another {key} "
                                  f"({SPEC}); use a new --out to start a different sweep")
@@ -317,7 +349,8 @@ def apply_points(scenario: Scenario, grid: Grid) -> list[tuple]:
 
 
 def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: bool = True,
-         done: set | None = None, applied: list | None = None):
+         done: set | None = None, applied: list | None = None, analysis: str | None = None,
+         part: int = 0):
     """(tasks to run, rows already decided without running: invalid points).
     ``applied``: :func:`apply_points` of this scenario and grid, when already computed."""
     from treeimpact.compare.runs import options_key, scenario_key
@@ -328,6 +361,8 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
     accepted = {t.id: _accepted(t.backend) for t in targets}
     for point, outcome in (applied if applied is not None else apply_points(scenario, grid)):
         pk = point_key(point)
+        record = {a.parameter.target: point[a.name] for a in grid.axes
+                  if a.parameter.kind == RECORD}
         todo = [t for t in targets if (pk, t.id) not in done]
         if not todo:
             continue
@@ -351,8 +386,9 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
             key = json.dumps([scenario_key(scen), t.backend, options_key(opts)], default=str)
             task = tasks.get(key)
             if task is None:
-                task = tasks[key] = Task(key, scen, get_backend(t.backend), opts, identify)
-            task.rows.append((point, pk, t))
+                task = tasks[key] = Task(key, scen, get_backend(t.backend), opts, identify,
+                                         analysis, part)
+            task.rows.append((point, pk, t, record))
     return list(tasks.values()), immediate
 
 
@@ -413,19 +449,13 @@ def _row_base(scenario, point, pk, target: Target) -> dict:
             **point}
 
 
-def _rows_of(task: Task, outcome: dict, scenario: Scenario) -> list[dict]:
+def _rows_of(task: Task, outcomes: list, scenario: Scenario) -> list[dict]:
     import hashlib
 
     tid = hashlib.sha1(task.key.encode()).hexdigest()[:12]
     now = time.time()
     return [_row_base(scenario, point, pk, t) | outcome | {"task": tid, "finished": now}
-            for point, pk, t in task.rows]
-
-
-def _call_rows(tasks: list, outcomes: list, scenario: Scenario) -> list[dict]:
-    """The rows of one worker call's tasks."""
-    return [row for task, outcome in zip(tasks, outcomes)
-            for row in _rows_of(task, outcome, scenario)]
+            for (point, pk, t, _), outcome in zip(task.rows, outcomes)]
 
 
 #: Seconds of estimated work per worker call. A call costs scheduling: measured on the 2-core
@@ -480,47 +510,101 @@ def _progress(total: int, enabled):
     return Progress(total, "sweep", unit="row", bar=True if enabled else None)
 
 
+@dataclass(frozen=True)
+class SweepSpec:
+    """One sweep of :func:`run_sweeps`: ``scenario`` (a Scenario, shipped name or TOML path)
+    over ``grid`` (a :class:`Grid` or ``--grid`` specs) on ``backends`` into the directory
+    ``out``; ``analysis``: ``module:function`` run on each result instead of the standard
+    metrics (:func:`load_analysis`), its record parameters from ``record.*`` axes."""
+
+    scenario: object
+    grid: object
+    out: object
+    backends: tuple = ("analytic",)
+    ladder: bool = False
+    options: dict | None = None
+    identify: bool = True
+    analysis: str | None = None
+
+
 def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = False,
               options: dict | None = None, workers: int | None = None, scheduler=None,
               identify: bool = True, retry_failed: bool = False, progress=None,
-              on_rows=None) -> SweepResult:
+              on_rows=None, analysis: str | None = None) -> SweepResult:
     """Run (or resume) a sweep into the directory ``out``; see the module docstring.
 
     ``scenario``: a Scenario, shipped name or TOML path; ``grid``: a :class:`Grid` or
     ``--grid`` specs; ``scheduler``: a Dask scheduler address or ``Client``; ``on_rows``:
     called with each batch of rows after it is written (tests interrupt a sweep there).
     """
+    spec = SweepSpec(scenario, grid, out, tuple(backends) if not isinstance(backends, str)
+                     else backends, ladder, options, identify, analysis)
+    return run_sweeps([spec], workers=workers, scheduler=scheduler,
+                      retry_failed=retry_failed, progress=progress, on_rows=on_rows)[0]
+
+
+@dataclass
+class _Part:
+    """A sweep being run: its spec resolved, its tasks and its journal."""
+
+    scenario: Scenario
+    grid: Grid
+    targets: list
+    out: Path
+    identify: bool
+    analysis: str | None
+    applied: list
+    done: set = field(default_factory=set)
+    tasks: list = field(default_factory=list)
+    immediate: list = field(default_factory=list)
+    journal: Journal | None = None
+    written: int = 0
+
+
+def run_sweeps(specs, *, workers: int | None = None, scheduler=None,
+               retry_failed: bool = False, progress=None, on_rows=None) -> list[SweepResult]:
+    """Run (or resume) several sweeps on one pool, with one progress report: every spec is
+    checked before anything runs, each sweep writes its own directory (table, spec), and
+    the runs of all of them are grouped into worker calls together. Returns one
+    :class:`SweepResult` per spec, in order."""
     from treeimpact.compare.runs import resolve_scenario
 
     t_start = time.perf_counter()
-    scen = resolve_scenario(scenario)
-    grid = grid if isinstance(grid, Grid) else parse_grid(grid)
-    targets = make_targets(backends, ladder=ladder, options=options)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 0):
         raise ParameterError(f"--workers = {workers!r}: allowed integers >= 0 "
                              f"(0 runs in this process)")
-    applied = check_grid(scen, grid, targets)
+    parts = []
+    for spec in specs:  # every check before anything runs or is written
+        scen = resolve_scenario(spec.scenario)
+        grid = spec.grid if isinstance(spec.grid, Grid) else parse_grid(spec.grid)
+        targets = make_targets(spec.backends, ladder=spec.ladder, options=spec.options)
+        records = [a.spec() for a in grid.axes if a.parameter.kind == RECORD]
+        if records and spec.analysis is None:
+            raise ParameterError(f"--grid {records[0]!r}: record parameters are read by an "
+                                 "analysis of the records (the identification study), not by "
+                                 "a plain sweep")
+        parts.append(_Part(scen, grid, targets, Path(spec.out), spec.identify, spec.analysis,
+                           check_grid(scen, grid, targets)))
     client, own_client = connect(scheduler) if scheduler is not None else (None, False)
     try:
-        return _sweep(scen, grid, targets, Path(out), workers=workers, client=client,
-                      applied=applied, identify=identify, retry_failed=retry_failed,
+        return _sweep(parts, workers=workers, client=client, retry_failed=retry_failed,
                       progress=progress, on_rows=on_rows, t_start=t_start)
     finally:
         if own_client:
             client.close()
 
 
-def _sweep(scen, grid, targets, out, *, workers, client, applied, identify, retry_failed,
-           progress, on_rows, t_start) -> SweepResult:
-    out = make_out(out)
-    spec = _spec(scen, grid, identify)
-    _check_spec(out, spec)
-    (out / SPEC).write_text(json.dumps(spec | {"targets": [dataclasses.asdict(t)
-                                                           for t in targets]}, indent=2))
-    columns = columns_for(grid)
-    done = set()
-    journal_path = out / JOURNAL
+def _open(part: _Part, index: int, retry_failed: bool) -> None:
+    """Create the part's directory and spec, read what an earlier run finished, plan the
+    rest and open its journal."""
+    part.out = make_out(part.out)
+    spec = _spec(part.scenario, part.grid, part.identify, part.analysis)
+    _check_spec(part.out, spec)
+    (part.out / SPEC).write_text(json.dumps(spec | {"targets": [dataclasses.asdict(t)
+                                                                for t in part.targets]},
+                                            indent=2))
+    journal_path = part.out / JOURNAL
     if journal_path.exists() and journal_path.stat().st_size:
         import pandas as pd
 
@@ -529,48 +613,65 @@ def _sweep(scen, grid, targets, out, *, workers, client, applied, identify, retr
         prev = prev.drop_duplicates(subset=["point", "target"], keep="last")
         if retry_failed:
             prev = prev[prev["status"] == OK]
-        done = set(zip(prev["point"], prev["target"]))
-    tasks, immediate = plan(scen, grid, targets, identify=identify, done=done,
-                            applied=applied)
-    journal = Journal(journal_path, columns)
-    total = len(immediate) + sum(len(t.rows) for t in tasks)
-    bar = _progress(total, progress)
-    written = 0
-    ran = 0
+        part.done = set(zip(prev["point"], prev["target"]))
+    part.tasks, part.immediate = plan(part.scenario, part.grid, part.targets,
+                                      identify=part.identify, done=part.done,
+                                      applied=part.applied, analysis=part.analysis,
+                                      part=index)
+    part.journal = Journal(journal_path, columns_for(part.grid, part.analysis))
 
-    def emit(rows):
-        nonlocal written
-        journal.append(rows)
-        written += len(rows)
-        if bar is not None:
-            bar.update(len(rows))
-        if on_rows is not None:
-            on_rows(rows)
 
+def _sweep(parts, *, workers, client, retry_failed, progress, on_rows,
+           t_start) -> list[SweepResult]:
     try:
-        if immediate:
-            emit(immediate)
-        if tasks and workers == 0 and client is None:  # in this process
-            for task in tasks:
-                emit(_rows_of(task, execute(task), scen))
-                check_stop()
-                ran += 1
-        elif tasks:
-            n = dask_workers(client) if client is not None else workers or os.cpu_count() or 1
-            ran = run_chunks(run_chunk, _chunks(tasks, n), workers=n, client=client,
-                             on_result=lambda chunk, outcomes: emit(
-                                 _call_rows(chunk, outcomes, scen)),  # one flushed write
-                             on_died=_died)
+        for i, part in enumerate(parts):
+            _open(part, i, retry_failed)
+        tasks = [t for part in parts for t in part.tasks]
+        total = sum(len(p.immediate) for p in parts) + sum(len(t.rows) for t in tasks)
+        bar = _progress(total, progress)
+
+        def emit(part, rows):
+            part.journal.append(rows)
+            part.written += len(rows)
+            if bar is not None:
+                bar.update(len(rows))
+            if on_rows is not None:
+                on_rows(rows)
+
+        def emit_tasks(chunk, outcomes):  # one flushed write per sweep per call
+            for part in parts:
+                rows = [r for t, o in zip(chunk, outcomes) if t.part == parts.index(part)
+                        for r in _rows_of(t, o, part.scenario)]
+                if rows:
+                    emit(part, rows)
+
+        try:
+            for part in parts:
+                if part.immediate:
+                    emit(part, part.immediate)
+            if tasks and workers == 0 and client is None:  # in this process
+                for task in tasks:
+                    emit_tasks([task], [execute(task)])
+                    check_stop()
+            elif tasks:
+                n = dask_workers(client) if client is not None else workers or os.cpu_count() \
+                    or 1
+                run_chunks(run_chunk, _chunks(tasks, n), workers=n, client=client,
+                           on_result=emit_tasks, on_died=_died)
+        finally:
+            if bar is not None:
+                bar.close()
     finally:
-        journal.close()
-        if bar is not None:
-            bar.close()
-        write_parquet(out)
-    return SweepResult(out, read_table(out), ran, written, len(done),
-                       time.perf_counter() - t_start)
+        for part in parts:
+            if part.journal is not None:
+                part.journal.close()
+                write_parquet(part.out)
+    wall = time.perf_counter() - t_start
+    return [SweepResult(p.out, read_table(p.out, grid=p.grid), len(p.tasks), p.written,
+                        len(p.done), wall) for p in parts]
 
 
-def _died(task: Task, exc: BaseException) -> dict:
-    return {"status": FAILED, "t_end": task.scenario.t_end, "wall_s": math.nan,
-            "error": f"worker process died running this point ({type(exc).__name__}: "
-                     f"{one_line(exc)}); rerun with --retry-failed"}
+def _died(task: Task, exc: BaseException) -> list[dict]:
+    return [{"status": FAILED, "t_end": task.scenario.t_end, "wall_s": math.nan,
+             "error": f"worker process died running this point ({type(exc).__name__}: "
+                      f"{one_line(exc)}); rerun with --retry-failed"}] * len(task.rows)
