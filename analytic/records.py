@@ -70,8 +70,12 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
     out = {"energy_delivered": nan, "contact_dissipation": nan, "rebound_energy": nan,
            "impulse": nan, "peak_force": _peak(window_means(
                r.t, _running_integral(r.t, r.force), collision_duration)),
-           "contact_episodes": len(intervals), "crown_peak": nan,
+           "contact_episodes": len(intervals), "first_contact_duration": nan,
+           "crown_peak": nan,
            "crown_peak_acceleration": nan}
+    if intervals and intervals[0][1] < r.t.size - 1:  # released within the record
+        i0, i1 = intervals[0]
+        out["first_contact_duration"] = _release_time(r.t, r.force, i0, i1) - float(r.t[i0])
     if intervals and intervals[-1][1] < r.t.size - 1:
         after = intervals[-1][1] + 1
         rebound = float(r.pendulum_energy[after])

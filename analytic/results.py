@@ -38,6 +38,8 @@ METRIC_UNITS = {
     "peak_force": ("N", "largest contact force averaged over one collision duration t_c (NaN "
                         "for Newton impulses)"),
     "contact_episodes": ("1", "separate contacts (Newton: impacts + moving-together phases)"),
+    "first_contact_duration": ("s", "the first contact, first touch to release: what the pad "
+                                    "does against the clamp (NaN for Newton impulses)"),
     "crown_peak": ("m", "largest |displacement| of the crown (top mass) at l"),
     "crown_peak_acceleration": ("m/s^2", "largest |acceleration| of the crown averaged over t_c "
                                          "(NaN for Newton impulses)"),

@@ -16,6 +16,7 @@ from treeimpact.analytic.contact.law import (
     contact_law,
     detection_duration,
     effective_damping,
+    pad_fields,
 )
 from treeimpact.analytic.contact.timestep import (
     check_time_step,
@@ -244,7 +245,8 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
             "contact_damping": b.damping if b else None,
             "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
             "calibration": setup.calibration,
-            "effective_mass": b.reduced_mass if b else None,
+            **pad_fields(setup.contact_stiffness, setup.contact_damping,
+                         b.reduced_mass if b else None),
             "law_stiffness": setup.contact_stiffness, "law_damping": setup.contact_damping,
             "collision_duration": setup.collision_duration,
             "integrator": "semi-implicit Euler",  # Bullet's only one (docs/engines.md)

@@ -45,7 +45,10 @@ def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
                 tolerance: float | None = None) -> dict:
     """{durations, gaps: {metric: [rel gap beam vs soft per duration]}, shortest: {metric:
     duration (s) from which every longer scanned contact is within ``tolerance``, or None},
-    failed: [reasons]} from a scan's sweep table. ``tolerance``: default the studies'
+    contact: {soft|beam: {first_contact_duration: [s], pad_damping_ratio: [1]}} (what the
+    pad does against each trunk's clamp: the scanned duration is the pad's collision time
+    on the 1-DOF pair, not the contact the continuum sees), failed: [reasons]} from a scan's
+    sweep table. ``tolerance``: default the studies'
     criterion (compare.verdicts.validity_tolerance)."""
     if tolerance is None:
         from .verdicts import validity_tolerance
@@ -54,6 +57,8 @@ def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
     rows = {(r["target"], float(r["contact_duration"])): r
             for r in table.to_dict("records")}
     gaps = {m: [] for m in metrics}
+    contact = {rung: {"first_contact_duration": [], "pad_damping_ratio": []}
+               for rung in ("soft", "beam")}
     failed = []
     for d in durations:
         soft, beam = rows.get(("soft", float(d))), rows.get(("beam", float(d)))
@@ -61,11 +66,17 @@ def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
         for m in metrics:
             a, b = (float(soft[m]), float(beam[m])) if both else (math.nan, math.nan)
             gaps[m].append((b - a) / abs(a) if a and math.isfinite(a) else math.nan)
+        for rung, row in (("soft", soft), ("beam", beam)):
+            ok = row is not None and row["status"] == OK
+            contact[rung]["first_contact_duration"].append(
+                float(row["first_contact_duration"]) if ok else math.nan)
+            contact[rung]["pad_damping_ratio"].append(
+                float(row["model.pad_damping_ratio"]) if ok else math.nan)
         failed += [f"{r['target']} at {1e3 * d:.3g} ms: {r['error']}" for r in (soft, beam)
                    if r is not None and r["status"] != OK]
     return {"durations": list(durations), "gaps": gaps, "tolerance": tolerance,
             "shortest": {m: shortest_within(durations, g, tolerance) for m, g in gaps.items()},
-            "failed": failed}
+            "contact": contact, "failed": failed}
 
 
 def shortest_within(durations, gaps, tolerance: float) -> float | None:

@@ -8,6 +8,7 @@ import math
 import mujoco
 import numpy as np
 
+from treeimpact.analytic.contact.law import pad_fields
 from treeimpact.analytic.continuum.chain import hinged_chain, lateral_motion
 from treeimpact.analytic.engine.interface import (
     ENERGY_GROWTH_LIMIT,
@@ -187,7 +188,7 @@ def _result(setup, state0, states, sensors) -> SimulationResult:
             "contact_stiffness": law.stiffness, "contact_damping": law.damping,
             "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
             "integrator": setup.integrator, "calibration": setup.calibration,
-            "effective_mass": setup.effective_mass,
+            **pad_fields(law.law_stiffness, law.law_damping, setup.effective_mass),
             "law_stiffness": law.law_stiffness, "law_damping": law.law_damping,
             "solref": list(setup.solref),
             "solimp": [_contact.IMPEDANCE, _contact.IMPEDANCE, *_contact.SOLIMP_TAIL],

@@ -124,6 +124,18 @@ def effective_damping(stiffness: float, restitution: float, reduced_mass: float)
     return 2.0 * zeta * math.sqrt(stiffness * reduced_mass)
 
 
+def pad_fields(stiffness: float | None, damping: float | None,
+               reduced_mass: float | None) -> dict:
+    """What the pad is against the mass it strikes (a backend's model dict): the reduced mass
+    mu (kg) of the pendulum and the trunk's instantaneous effective mass at the clamp, and
+    the pad's damping ratio c_c / (2 sqrt(k_c mu)) there (1; above 1 the pad is overdamped
+    against the clamp and rebounds at far less than its nominal e). None where unknown."""
+    if not (stiffness and reduced_mass) or damping is None:
+        return {"contact_reduced_mass": reduced_mass, "pad_damping_ratio": None}
+    return {"contact_reduced_mass": reduced_mass,
+            "pad_damping_ratio": damping / (2.0 * math.sqrt(stiffness * reduced_mass))}
+
+
 def collision_duration(model: TwoBodyModel, stiffness: float, damping: float) -> float:
     """Duration (s) of one free two-body collision under the law, first touch to release."""
     mu = model.reduced_mass

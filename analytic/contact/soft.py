@@ -22,7 +22,7 @@ from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import model_metrics, with_static_shape_crown
 from treeimpact.analytic.results import ImpactRecord, SimulationResult
 
-from .law import collision_duration, contact_law
+from .law import collision_duration, contact_law, pad_fields
 
 #: The options of :func:`simulate_soft` (the ``soft`` backend).
 OPTIONS = {"restitution": RESTITUTION, "contact_stiffness": CONTACT_STIFFNESS,
@@ -53,7 +53,8 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     rec = soft_record(model, k_c, c_c, t_end, dt_sample=t_col / samples_per_collision)
     rec = with_static_shape_crown(rec, scenario.trunk)
     metrics = model_metrics(rec, model, scenario.impactor, collision_duration=t_col)
-    model_dict = {**model.as_dict(), "contact_stiffness": k_c, "contact_damping": c_c}
+    model_dict = {**model.as_dict(), "contact_stiffness": k_c, "contact_damping": c_c,
+                  **pad_fields(k_c, c_c, model.reduced_mass)}
     scen = scenario.to_dict()
     scen["contact"]["restitution"] = model.restitution
     return SimulationResult(

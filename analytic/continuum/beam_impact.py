@@ -22,6 +22,7 @@ from treeimpact.analytic.contact.law import (
     contact_law,
     detection_duration,
     effective_damping,
+    pad_fields,
 )
 from treeimpact.analytic.contact.timestep import check_work
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
@@ -385,7 +386,9 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     model_dict = {**sdof.as_dict(), "elements": model.elements, "calibration": calibration,
                   "contact_stiffness": model.contact_stiffness,
                   "contact_damping": model.contact_damping,
-                  "effective_mass": model.effective_mass, "contact_switches": switches}
+                  "effective_mass": model.effective_mass, "contact_switches": switches,
+                  **pad_fields(model.contact_stiffness, model.contact_damping,
+                               1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass))}
     scen = scenario.to_dict()
     scen["contact"]["restitution"] = sdof.restitution
     return SimulationResult(

@@ -83,7 +83,7 @@ def _whole_event(sol: ImpactSolution, scenario: Scenario | None) -> dict:
     out = {"energy_delivered": nan, "contact_dissipation": nan, "rebound_energy": nan,
            "impulse": nan, "peak_force": nan,
            "contact_episodes": len(sol.impacts) + len(sol.together_starts),
-           "crown_peak": nan, "crown_peak_acceleration": nan}
+           "first_contact_duration": nan, "crown_peak": nan, "crown_peak_acceleration": nan}
     last = sol.phases[-1] if sol.phases else None
     if last is not None and last.kind == "free":
         t = last.t0  # the final free flight starts at the last separation or impact

@@ -115,3 +115,16 @@ def calibration_notes(measured: MeasuredTree, *, given: str, chosen: str) -> dic
                        f"C from C_T = 2 b (M_T + m), b = {measured.damping_rate:.6g} 1/s"),
     }
 
+
+
+def with_clamp_mass(trunk: Trunk, clamp_mass: float, *, impactor_mass: float) -> Trunk:
+    """``trunk`` with the clamp mass m_c (kg), recalibrated (crown mass, root spring,
+    damping; :func:`calibrate_trunk`) so that it reduces to the same M_T, K_T and C_T as
+    before (eqs 7, 8, 10): the unmeasured clamp varied on the same measured tree.
+    ``impactor_mass`` (kg) fixes b = C_T / (2 (M_T + m))."""
+    tree = reduce_trunk(trunk)
+    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, stiffness=tree.stiffness,
+                            damping_rate=tree.damping / (2.0 * (tree.dynamic_mass
+                                                                + impactor_mass)))
+    return calibrate_trunk(replace(trunk, clamp_mass=clamp_mass), measured,
+                           impactor_mass=impactor_mass)

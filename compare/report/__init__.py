@@ -28,6 +28,7 @@ import numpy as np
 
 from treeimpact.analytic.results import to_jsonable
 
+from ..provenance import provenance, scenario_digest
 from ..rungs import RungKind
 from ..verdicts import Verdict, validity_tolerance
 
@@ -142,6 +143,8 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     sections["runs"].wall_s["total"] = time.perf_counter() - t_start
     data = {
         "generated": stamp,
+        "provenance": provenance(scenarios={s.ladder.name: scenario_digest(s.ladder.scenario)
+                                            for s in sections["scenarios"]}),
         "tolerances": "compare/tolerances.toml",
         "summary": summary,
         "paper": sections["paper"].to_json(),
@@ -193,7 +196,12 @@ def _answer(scen_sections) -> list[dict]:
         explained = [fits[c.rung.id]["explained"] for c in chains
                      if c.rung.id in fits and "explained" in fits[c.rung.id]]
         contact = L.scenario.contact
+        pads = {"one_dof": soft[0] if soft else None, "continuum": chains[0]}
         out.append({"scenario": L.name, "available": True, "metrics": rows,
+                    "pad": {side: {"first_contact_duration": r.result.metrics.get(
+                        "first_contact_duration") if r else None,
+                        "damping_ratio": r.result.model.get("pad_damping_ratio") if r else None}
+                        for side, r in pads.items()},
                     "good_enough": {m: abs(r["rel"]) <= tolerance
                                     for m, r in rows.items()},
                     "explained": bool(explained) and all(explained),

@@ -262,8 +262,9 @@ def contact_scan_figure(scans: dict) -> Figure:
     against the contact duration (ms, log), with the +-tolerance band: where the 1-DOF model
     is good enough. Symmetric-log y so that +200 % and -3 % both read."""
     names = list(scans)
-    fig, axes = plt.subplots(1, len(names), figsize=(4.2 * len(names) + 1.6, 3.6),
-                             sharey=True, squeeze=False)
+    fig, axes = plt.subplots(2, len(names), figsize=(4.2 * len(names) + 1.6, 6.2),
+                             sharey="row", sharex=True, squeeze=False,
+                             gridspec_kw={"height_ratios": [3, 2]})
     styles = {"x_max": ("o-", "tab:blue", "x_max"),
               "energy_delivered": ("s-", "tab:red", "energy delivered"),
               "crown_peak_acceleration": ("^-", "tab:green", "crown accel. (mean over t_c)")}
@@ -281,11 +282,26 @@ def contact_scan_figure(scans: dict) -> Figure:
         ax.set_yscale("symlog", linthresh=10)
         ticks = [-100, -30, -10, -5, 0, 5, 10, 30, 100, 300]
         ax.set_yticks(ticks, [f"{t:+d}" if t else "0" for t in ticks])
-        ax.set(title=name, xlabel="contact duration t_c (ms)")
+        ax.set(title=name)
         ax.grid(True, which="major", lw=0.3)
+        low = axes[1][list(names).index(name)]  # what the pad does against each clamp
+        for rung, mk, label in (("soft", "o--", "1-DOF (M_T)"), ("beam", "s-", "continuum")):
+            c = s.get("contact", {}).get(rung)
+            if c:
+                low.plot(d, 1e3 * np.asarray(c["first_contact_duration"], float), mk,
+                         color="0.3" if rung == "soft" else "tab:purple", ms=3,
+                         label=f"first contact, {label}")
+        low.plot(d, d, ":", color="0.6", lw=0.8, label="= the pad's 1-DOF time")
+        low.set_xscale("log")
+        low.set_yscale("log")
+        low.set(xlabel="the pad: its collision time on the 1-DOF pair (ms)")
+        low.grid(True, which="major", lw=0.3)
     axes[0][0].set_ylabel("continuum vs 1-DOF (%)")
+    axes[1][0].set_ylabel("first contact, touch to\nrelease (ms)")
     _legend_right(axes[0][-1])
+    _legend_right(axes[1][-1])
     fig.suptitle(f"Where the 1-DOF model holds: grey band +-{tol:.0f} %, dotted lines the "
-                 "shortest contact from which it stays inside", fontsize=10)
+                 "shortest pad from which it stays inside; below, how long the first contact "
+                 "really lasts", fontsize=10)
     fig.tight_layout()
     return fig

@@ -21,6 +21,7 @@ from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS
 from treeimpact.compare.backends import get_backend
 from treeimpact.compare.pool import check_stop, connect, dask_workers, run_chunks
+from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind, analytic_samples
 from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, attempt
 
@@ -33,7 +34,8 @@ SPEC = "sweep.json"
 
 REFERENCE_BACKENDS = ("analytic", "soft", "beam")
 MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "restitution", "u1", "segments", "dt",
-              "contact_stiffness", "contact_damping")
+              "contact_stiffness", "contact_damping", "contact_reduced_mass",
+              "pad_damping_ratio")
 IDENT_KEYS = ("M_T", "K_T", "xi", "E")
 BASE_COLUMNS = ("scenario", "point", "target", "backend", "kind", "previous", "status", "error",
                 "wall_s", "t_end", "task", "worker", "finished")
@@ -601,9 +603,9 @@ def _open(part: _Part, index: int, retry_failed: bool) -> None:
     part.out = make_out(part.out)
     spec = _spec(part.scenario, part.grid, part.identify, part.analysis)
     _check_spec(part.out, spec)
-    (part.out / SPEC).write_text(json.dumps(spec | {"targets": [dataclasses.asdict(t)
-                                                                for t in part.targets]},
-                                            indent=2))
+    (part.out / SPEC).write_text(json.dumps(spec | {
+        "targets": [dataclasses.asdict(t) for t in part.targets],
+        "provenance": provenance(part.scenario)}, indent=2, default=str))
     journal_path = part.out / JOURNAL
     if journal_path.exists() and journal_path.stat().st_size:
         import pandas as pd

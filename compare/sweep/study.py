@@ -14,6 +14,7 @@ import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
+from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
 
 from .maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
@@ -200,6 +201,7 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
         "problems": problems,
     }
     summary["map_value"] = value
+    summary["provenance"] = provenance()
     if ident_study is not None:
         summary["identification_validation"] = {
             "summary": ident_study["summary"], "sampling": ident_study.get("sampling", []),
