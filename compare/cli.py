@@ -364,10 +364,27 @@ COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes,
             "identify": cmd_identify}
 
 
+#: Exit code of an interrupted command (Ctrl-C or SIGTERM): 128 + SIGINT, as a shell says.
+EXIT_INTERRUPTED = 130
+
+
 def main(argv=None) -> int:
+    import signal
+
+    from .pool import STOP, on_stop_signal
+
+    STOP.clear()
+    previous = signal.signal(signal.SIGTERM, on_stop_signal)
     try:
         args = build_parser().parse_args(argv)
-        return COMMANDS[args.command](args)
+        code = COMMANDS[args.command](args)
+        if STOP.is_set() and code != EXIT_INTERRUPTED:  # asked after the last look
+            raise KeyboardInterrupt
+        return code
+    except KeyboardInterrupt:
+        print("treeimpact: interrupted (Ctrl-C or SIGTERM); nothing more was written",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
     except ParameterError as exc:
         print(f"treeimpact: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -389,6 +406,8 @@ def main(argv=None) -> int:
         where = f" {exc.filename!r}" if exc.filename else ""
         print(f"treeimpact: error:{where} {exc.strerror or one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

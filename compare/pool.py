@@ -24,6 +24,11 @@ STOP = threading.Event()
 POLL_S = 0.2
 
 
+#: Set while a pool's loop runs (it looks at STOP itself); outside one a stop request ends
+#: the command at once.
+ACTIVE = threading.Event()
+
+
 def check_stop() -> None:
     if STOP.is_set():
         raise KeyboardInterrupt
@@ -34,6 +39,15 @@ def request_stop() -> None:
     A KeyboardInterrupt raised by the handler itself can land anywhere, e.g. in a fork or
     import-lock callback, where Python only prints it ('Exception ignored')."""
     STOP.set()
+
+
+def on_stop_signal(signum, frame) -> None:
+    """SIGTERM's handler in every command: a stop request (:func:`request_stop`) that a
+    pool's loop answers at its next look; with no pool running, the command ends at once
+    (KeyboardInterrupt, as Ctrl-C; no fork or worker is in flight then)."""
+    request_stop()
+    if not ACTIVE.is_set():
+        raise KeyboardInterrupt
 
 
 def ignore_sigint() -> None:
@@ -73,6 +87,16 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
     one-worker pool, so only an item that kills its worker gets ``on_died(item, exc)`` as
     its outcome (on Dask: every item of a chunk that killed every worker it was given).
     Returns the number of items run."""
+    ACTIVE.set()
+    try:
+        return _run_chunks(fn, chunks, workers=workers, on_result=on_result,
+                           on_died=on_died, client=client, start_method=start_method)
+    finally:
+        ACTIVE.clear()
+
+
+def _run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client,
+                start_method: str | None) -> int:
     if client is not None:
         return _run_dask(fn, chunks, client, on_result, on_died)
     from concurrent.futures.process import BrokenProcessPool

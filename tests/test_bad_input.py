@@ -165,7 +165,8 @@ def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
     out = tmp_path / "sweep"
     proc = subprocess.Popen(
         [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--grid",
-         "restitution=0.1:0.9:300", "--grid", "crown_ratio=0,1,2", "--backend", "analytic,soft", "--out", str(out)],
+         "restitution=0.1:0.9:300", "--grid", "crown_ratio=0,1,2", "--backend",
+         "analytic,soft", "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
     while not (out / "results.csv").exists() and time.monotonic() < deadline:
@@ -175,6 +176,42 @@ def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1].startswith("treeimpact: sweep interrupted")
     assert "Traceback" not in err
+
+
+def _children(pid: int) -> list[int]:
+    """The live processes whose parent is ``pid`` (Linux /proc)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out.append(int(stat.parent.name))
+    return out
+
+
+@pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_signal_ends_the_report_with_one_line_and_no_orphans(tmp_path, how):
+    """`treeimpact report` stopped while its runs are on the pool: exit 130, one line on
+    stderr, no traceback, no report page written, and no worker left behind."""
+    out = tmp_path / "rep"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "treeimpact.compare.cli", "report", "--out", str(out)],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not _children(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)  # its pool has started
+    time.sleep(1.0)
+    workers = _children(proc.pid)
+    proc.send_signal(how)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.strip().count("\n") == 0 and "Traceback" not in err, err
+    assert not (out / "report.html").exists()
+    time.sleep(0.5)
+    assert not [p for p in workers if Path(f"/proc/{p}").exists()
+                and "Z" not in Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1][:3]]
 
 
 def test_a_scheduler_without_workers_is_one_line_after_its_timeout(tmp_path, monkeypatch):

@@ -123,31 +123,23 @@ def _option_number(text: str):
         return text
 
 
-#: Exit code of an interrupted sweep (Ctrl-C): 128 + SIGINT, as a shell reports it.
+#: Exit code of an interrupted sweep (Ctrl-C or SIGTERM): 128 + SIGINT, as a shell says.
 EXIT_INTERRUPTED = 130
 
 
 def run_sweep_command(args) -> int:
     """Run ``treeimpact sweep``; returns the exit code (0; 130 when interrupted by Ctrl-C or
     SIGTERM, with one line saying how to resume; bad input raises ParameterError)."""
-    import signal
     import sys
 
-    from treeimpact.compare.pool import STOP, request_stop
+    from treeimpact.compare.pool import STOP
 
-    def terminate(signum, frame):  # SIGTERM ends the sweep as Ctrl-C does: workers stopped
-        request_stop()  # the loops raise KeyboardInterrupt at their next look
-
-    STOP.clear()
-    previous = signal.signal(signal.SIGTERM, terminate)
     try:
         code = _run(args)
         if not STOP.is_set():  # else the request came after the last look: still a stop
             return code
     except KeyboardInterrupt:
         pass
-    finally:
-        signal.signal(signal.SIGTERM, previous)
     print(f"treeimpact: sweep interrupted; the finished rows are kept in {args.out}: "
           f"rerun the same command to resume", file=sys.stderr)
     return EXIT_INTERRUPTED
