@@ -143,9 +143,9 @@ class _Modal:
     """Exact solution of M q'' + C q' + K q = 0 (one contact state) in the energy
     coordinates of its undamped modes.
 
-    K Phi = M Phi diag(om^2) with Phi^T M Phi = I; the state u = (s eta, eta'), q = Phi eta,
-    s = om (1 for a rigid mode), so that 0.5 |u|^2 is the kinetic plus elastic energy and
-    u' = B u with B = [[0, diag(s)], [-diag(om^2 / s), -Phi^T C Phi]]: a skew-symmetric
+    K Phi = M Phi diag(om^2) with Phi^T M Phi = I; the state u = (om eta, eta'), q = Phi eta,
+    so that 0.5 |u|^2 is the kinetic plus elastic energy and
+    u' = B u with B = [[0, diag(om)], [-diag(om), -Phi^T C Phi]]: a skew-symmetric
     matrix plus a dissipative block, whose eigenvectors are well conditioned (cond(V) 1.4-2.1
     on the shipped trees at 12-48 elements, where those of the state matrix of z = (q, q')
     have 3e7-1e9: their round-off changed the chattering sequence, docs/beam-impact.md).
@@ -159,26 +159,27 @@ class _Modal:
 
         N = len(M)
         if not (np.any(K[-1, :-1]) or np.any(M[-1, :-1]) or np.any(C[-1, :-1])):
-            # the free state: the pendulum's own mode, k / m exactly (0 for a billet), beside
-            # the trunk's (whose round-off, eps om_max^2, could exceed a slow pendulum's om^2)
+            # the free state: the pendulum's own mode, k / m exactly, beside the trunk's
+            # (whose round-off, eps om_max^2, could exceed a slow pendulum's om^2)
             om2_t, Phi_t = scipy.linalg.eigh(K[:-1, :-1], M[:-1, :-1])
             om2 = np.append(om2_t, K[-1, -1] / M[-1, -1])
             Phi = np.zeros((N, N))
             Phi[:-1, :-1], Phi[-1, -1] = Phi_t, 1.0 / math.sqrt(M[-1, -1])
         else:
             om2, Phi = scipy.linalg.eigh(K, M)
-        rigid = om2 <= 0.0  # a free billet: no spring
-        om2 = np.where(rigid, 0.0, om2)
-        s = np.where(rigid, 1.0, np.sqrt(om2))
+        if np.any(om2 <= 0.0):  # the trunk is clamped: only a free billet has no spring
+            raise ParameterError("impactor.type = 'billet': the beam backend needs a pendulum "
+                                 "(a free billet's flight, y'' = 0, has no eigen-decomposition)")
+        om = np.sqrt(om2)
         B = np.zeros((2 * N, 2 * N))
-        B[:N, N:] = np.diag(s)
-        B[N:, :N] = -np.diag(om2 / s)
+        B[:N, N:] = np.diag(om)
+        B[N:, :N] = -np.diag(om)
         B[N:, N:] = -(Phi.T @ C @ Phi)
         lam, Vu = np.linalg.eig(B)
         Wu = np.linalg.inv(Vu)
         if not (np.all(np.isfinite(Wu)) and np.all(np.isfinite(lam))):
             raise SimulationDiverged("beam: the state matrix could not be diagonalised")
-        self.N, self.M, self.Phi, self.s, self.om2, self.elastic = N, M, Phi, s, om2, ~rigid
+        self.N, self.M, self.Phi, self.om = N, M, Phi, om
         self.lam, self.Vu, self.Wu = lam, Vu, Wu
 
     @cached_property
@@ -186,16 +187,16 @@ class _Modal:
         """z = (q, q') = T u."""
         N = self.N
         T = np.zeros((2 * N, 2 * N))
-        T[:N, :N], T[N:, N:] = self.Phi / self.s, self.Phi
+        T[:N, :N], T[N:, N:] = self.Phi / self.om, self.Phi
         return T
 
     @cached_property
     def Tinv(self) -> np.ndarray:
-        """u = T^-1 z: T^-1 = diag(s Phi^T M, Phi^T M)."""
+        """u = T^-1 z: T^-1 = diag(om Phi^T M, Phi^T M)."""
         N = self.N
         PtM = self.Phi.T @ self.M
         Tinv = np.zeros((2 * N, 2 * N))
-        Tinv[:N, :N], Tinv[N:, N:] = self.s[:, None] * PtM, PtM
+        Tinv[:N, :N], Tinv[N:, N:] = self.om[:, None] * PtM, PtM
         return Tinv
 
     @cached_property
@@ -215,7 +216,7 @@ class _Modal:
 
     def displacement_row(self, r: np.ndarray) -> np.ndarray:
         """The row of u giving r . q (r over the N coordinates)."""
-        return np.concatenate([(self.Phi.T @ r) / self.s, np.zeros(self.N)])
+        return np.concatenate([(self.Phi.T @ r) / self.om, np.zeros(self.N)])
 
     def velocity_row(self, r: np.ndarray) -> np.ndarray:
         """The row of u giving r . q'."""
@@ -275,7 +276,7 @@ def _forms(model: BeamImpactModel, modal: _Modal, contact: bool, g: np.ndarray,
     kin = np.zeros((2 * N, 2 * N))
     kin[N:, N:] = 0.5 * np.eye(N)
     pot = np.zeros((2 * N, 2 * N))
-    pot[:N, :N] = 0.5 * np.diag(modal.elastic.astype(float))
+    pot[:N, :N] = 0.5 * np.eye(N)
     gd, gv = modal.displacement_row(g), modal.velocity_row(g)
     damp = np.zeros((2 * N, 2 * N))
     Dfull = np.zeros((N, N))
