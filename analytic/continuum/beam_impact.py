@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 from scipy.optimize import brentq
@@ -30,7 +30,7 @@ from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.parameters import Scenario, check_range
 from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.records import model_metrics
-from treeimpact.analytic.results import ImpactRecord, SimulationResult
+from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajectory
 
 from .beam import beam_matrices, deflection_dof
 from .modes import beam_reference
@@ -43,6 +43,11 @@ DEFAULT_ELEMENTS = 12
 MAX_ELEMENTS = 48
 #: Samples per free collision of the pad (the soft SDOF rung's record spacing).
 SAMPLES_PER_COLLISION = 100
+#: How :func:`simulate_beam` evaluates the exact solution: ``exact`` the observables on the
+#: sample grid, the energies where the metrics read them and the record when first read;
+#: ``exact-full`` every sample's state and energies as it goes (the original implementation:
+#: the reference of benchmarks/bench_beam.py and of the tests).
+METHODS = ("exact", "exact-full")
 
 
 @dataclass(frozen=True)
@@ -151,7 +156,9 @@ class _Modal:
     have 3e7-1e9: their round-off changed the chattering sequence, docs/beam-impact.md).
     B = V diag(lambda) V^-1 and u(s) = V (exp(lambda s) w), w = V^-1 u(0).
 
-    For the raw state z = (q, q') = T u: ``V = T Vu`` and ``W = Vu^-1 T^-1``.
+    For the raw state z = (q, q') = T u: ``V = T Vu`` and ``W = Vu^-1 T^-1`` (the
+    ``exact-full`` loop's interface). The kept half of the spectrum (Im lambda >= 0; a
+    conjugate pair counted twice through ``weight``) serves the ``exact`` method.
     """
 
     def __init__(self, M: np.ndarray, C: np.ndarray, K: np.ndarray):
@@ -181,6 +188,8 @@ class _Modal:
             raise SimulationDiverged("beam: the state matrix could not be diagonalised")
         self.N, self.M, self.Phi, self.om = N, M, Phi, om
         self.lam, self.Vu, self.Wu = lam, Vu, Wu
+        self.kept = np.flatnonzero(lam.imag >= 0.0)
+        self.weight = np.where(lam.imag[self.kept] > 0.0, 2.0, 1.0)  # Re(V w) over the pairs
 
     @cached_property
     def T(self) -> np.ndarray:
@@ -209,6 +218,15 @@ class _Modal:
         """Modal coefficients from the raw state z: w = W z."""
         return self.Wu @ self.Tinv
 
+    def transfer(self, other: "_Modal") -> np.ndarray:
+        """The matrix taking ``other``'s energy coordinates to this one's (the same q, q'):
+        T^-1 T_other = diag(om X / om_other, X), X = Phi^T M Phi_other."""
+        N = self.N
+        X = self.Phi.T @ self.M @ other.Phi
+        P = np.zeros((2 * N, 2 * N))
+        P[:N, :N], P[N:, N:] = self.om[:, None] * X / other.om[None, :], X
+        return P
+
     @property
     def condition(self) -> float:
         """cond(V) of the eigenvectors in the energy coordinates (2-norm)."""
@@ -222,6 +240,7 @@ class _Modal:
         """The row of u giving r . q'."""
         return np.concatenate([np.zeros(self.N), self.Phi.T @ r])
 
+    # --- the exact-full loop's interface (raw coordinates z) ---
     def modal(self, w: np.ndarray, s: np.ndarray) -> np.ndarray:
         """U[k] = exp(lambda s_k) w: the modal coordinates at the times s (len(s) x n)."""
         return np.exp(np.outer(s, self.lam)) * w
@@ -313,7 +332,8 @@ def _initial_state(model: BeamImpactModel) -> np.ndarray:
 def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
     """Solve the beam impact exactly to ``t_end`` (s); an ``ImpactRecord`` every ``dt_sample``.
 
-    Every sample's observables and energies as it goes. Also returns the crown deflection (m) at the same times and the number of contact switches.
+    The ``exact-full`` method: every sample's observables and energies as it goes. Also
+    returns the crown deflection (m) at the same times and the number of contact switches.
     """
     n, N = model.dofs, model.dofs + 1
     k_c, c_c = model.contact_stiffness, model.contact_damping
@@ -454,17 +474,291 @@ def _root(func, lo, hi):
     return brentq(func, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
 
 
+#: Largest block of samples the ``exact`` method evaluates at once (32, 256, then this).
+_BLOCK = 1024
+
+
+class _State:
+    """One contact state of the ``exact`` method: its :class:`_Modal` solution, the
+    observation rows over the kept half of the spectrum, exp(lambda i h) for the sample
+    spacing h (i = 0.._BLOCK) and the work integrals of the ledger."""
+
+    def __init__(self, model: BeamImpactModel, contact: bool, h: float):
+        M, C, K, g = _matrices(model, contact)
+        self.modal = modal = _Modal(M, C, K)
+        self.contact = contact
+        forms = _forms(model, modal, contact, g, names=("damp", "contact"))
+        # the works' integrals: H_int stacked (damping; and the pad's, in contact)
+        self.H_int = np.stack([f.H_int for f in forms.values()])
+        self.H_lin = np.stack([f.H_lin for f in forms.values()])
+        self.secular = bool(np.any(self.H_lin))  # undamped pairs: the free pendulum's
+        k_c, c_c = model.contact_stiffness, model.contact_damping
+        kept = modal.kept
+        self.lam = modal.lam[kept]
+        rows = _observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
+        self.rows = (rows[:, kept] * modal.weight).T.copy()  # m x 8: obs = Re(U @ rows)
+        # delta and the law F = k_c delta + c_c delta', and their slopes
+        law = np.stack([self.rows[:, 4], k_c * self.rows[:, 4] + c_c * self.rows[:, 5]])
+        self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
+        # exp(lambda i h), i = 0.._BLOCK, by doubling (round-off log2(_BLOCK) eps)
+        steps = np.ones((_BLOCK + 1, len(kept)), dtype=complex)
+        steps[1] = np.exp(self.lam * h)
+        n = 1
+        while n < _BLOCK:
+            m = min(n, _BLOCK - n)
+            steps[n + 1:n + 1 + m] = steps[1:1 + m] * steps[n]
+            n += m
+        self.steps = steps
+        self.gd = modal.displacement_row(g)
+        self.k_c = k_c
+
+    def works(self, w: np.ndarray, s: float) -> np.ndarray:
+        """The works of the trunk's damping (and of the pad, in contact) over [0, s] of a
+        phase started with modal coefficients w, J (the closed form of :class:`_Quadratic`)."""
+        a = np.exp(self.modal.lam * s) * w
+        out = (self.H_int @ a) @ a - (self.H_int @ w) @ w
+        if self.secular:
+            out = out + s * ((self.H_lin @ w) @ w)
+        return out.real
+
+    def energies(self, u: np.ndarray) -> tuple[float, float, float]:
+        """(kinetic, elastic energy of the trunk's and pendulum's springs, the pad's elastic
+        energy k_c delta^2 / 2 when in contact; J) of the state u."""
+        N = self.modal.N
+        kin = 0.5 * float(u[N:] @ u[N:])
+        pot = 0.5 * float(u[:N] @ u[:N])
+        pad = 0.5 * self.k_c * float(self.gd @ u) ** 2 if self.contact else 0.0
+        return kin, pot - pad, pad
+
+
+@dataclass(frozen=True)
+class _Phase:
+    """One phase of the solution: start (s), kind ("contact", "overlap", "free"), modal
+    coefficients at its start over the full spectrum, damping and contact work so far (J)."""
+
+    t: float
+    kind: str
+    w: np.ndarray = field(repr=False)
+    damping_work: float
+    contact_work: float
+
+
+@dataclass(frozen=True)
+class _Solution:
+    """The exact solution as its phases, and its values at any time (SI units)."""
+
+    states: dict = field(repr=False)
+    phases: tuple
+    t_end: float
+    ledger: float  # max |energy ledger| / initial energy at every switch and at t_end
+
+    def phase_at(self, t: float) -> _Phase:
+        starts = [p.t for p in self.phases]
+        return self.phases[max(0, int(np.searchsorted(starts, t, side="right")) - 1)]
+
+    def contact_loss(self, t: float) -> float:
+        """The pad's work so far less the elastic energy it holds at ``t`` (s), J."""
+        p = self.phase_at(t)
+        if p.kind != "contact":
+            return p.contact_work
+        st = self.states[True]
+        work = p.contact_work + float(st.works(p.w, t - p.t)[1])
+        u = (st.modal.Vu @ (np.exp(st.modal.lam * (t - p.t)) * p.w)).real
+        return work - st.energies(u)[2]
+
+
+@dataclass(frozen=True)
+class _ExactSamples:
+    """What :func:`analytic.records.metrics_from_record` reads, from the exact solution:
+    the motion on the sample grid (SI) and the energies in closed form where it reads them."""
+
+    t: np.ndarray
+    x: np.ndarray
+    vx: np.ndarray
+    y: np.ndarray
+    vy: np.ndarray
+    force: np.ndarray
+    pendulum_energy: np.ndarray
+    crown: np.ndarray
+    crown_velocity: np.ndarray
+    solution: _Solution = field(repr=False)
+
+    def contact_loss(self, t: float) -> float:
+        return self.solution.contact_loss(t)
+
+    def ledger_residual(self, initial_energy: float) -> float:
+        return self.solution.ledger
+
+
+def _solve_exact(model: BeamImpactModel, t_end: float, dt_sample: float):
+    """The ``exact`` method: the solution's phases and the observables on the sample grid.
+
+    The same phases, switches and samples as :func:`beam_record`, evaluated where needed:
+    within a phase the modal coordinates at the samples are exp(lambda i h) times those at a
+    block's first sample (no exponential per sample), only the 8 observables are formed, and
+    each switch is refined by Newton's method on the exact solution. The energy ledger is
+    checked at every switch and at t_end. Returns ``(_ExactSamples, switches)``.
+    """
+    steps = int(math.ceil(t_end / dt_sample - 1e-9))
+    t_grid = np.linspace(0.0, t_end, steps + 1)
+    states = {c: _State(model, c, t_end / steps) for c in (False, True)}
+    to_state = {True: states[True].modal.transfer(states[False].modal),
+                False: states[False].modal.transfer(states[True].modal)}
+    n_t = t_grid.size
+    obs = np.empty((n_t, 8))
+    in_contact = np.zeros(n_t, dtype=bool)
+    e0 = model.initial_energy
+    u = states[True].modal.Tinv @ _initial_state(model)
+    t, kind = 0.0, "contact"
+    work = np.zeros(2)  # damping, pad
+    phases, ledger = [], 0.0
+    switches, max_switches = 0, 100_000
+    k_c, c_c = model.contact_stiffness, model.contact_damping
+    while True:
+        contact = kind == "contact"
+        st = states[contact]
+        w = st.modal.Wu @ u
+        phases.append(_Phase(t, kind, w, float(work[0]), float(work[1])))
+        wk = w[st.modal.kept]
+        j0 = int(np.searchsorted(t_grid, t, side="left"))
+        end = None
+        j, block = j0, 32
+        base = np.exp(st.lam * (t_grid[j0] - t)) * wk if j0 < n_t else None
+        while j < n_t:
+            jj = min(n_t, j + block)
+            ob = (st.steps[:jj - j] @ (base[:, None] * st.rows)).real
+            d, f = ob[:, 4], k_c * ob[:, 4] + c_c * ob[:, 5]
+            if contact:
+                cond = f <= 0.0
+            elif kind == "overlap":
+                cond = (f > 0.0) | (d < 0.0)
+            else:
+                cond = d > 0.0
+            if j == j0 and t_grid[j0] == t:
+                cond[0] = False  # the phase's own start
+            k = int(np.argmax(cond))
+            if cond[k]:
+                s_hi = t_grid[j + k] - t
+                s_lo = max(t_grid[j + k - 1] - t, 0.0) if j + k > j0 else 0.0
+                end = _locate_exact(kind, st, wk, s_lo, s_hi, d[k], f[k])
+                jj = j + k
+                obs[j:jj] = ob[:k]
+                in_contact[j:jj] = contact
+                break
+            obs[j:jj] = ob
+            in_contact[j:jj] = contact
+            base = base * st.steps[jj - j]
+            j, block = jj, min(8 * block, _BLOCK)
+        end_s, nxt = end if end is not None else (t_end - t, None)
+        # the state and the works at the switch (or at t_end), and the ledger there
+        work += st.works(w, end_s) if contact else (st.works(w, end_s)[0], 0.0)
+        u = (st.modal.Vu @ (np.exp(st.modal.lam * end_s) * w)).real
+        if not np.all(np.isfinite(u)):
+            raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
+        kin, pot, _ = st.energies(u)
+        ledger = max(ledger, abs(kin + pot + work.sum() - e0) / e0)
+        if nxt is None:
+            break
+        t += end_s
+        if (nxt == "contact") != contact:  # to the other state's energy coordinates
+            u = to_state[nxt == "contact"] @ u
+        kind = nxt
+        switches += 1
+        if switches > max_switches:
+            raise SimulationDiverged(f"beam: more than {max_switches} contact switches by "
+                                     f"t = {t:.6g} s (chatter does not end)")
+    x, y, vx, vy, delta, ddelta, crown, crown_v = obs.T
+    force = np.where(in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
+    m, kp = model.impactor_mass, model.impactor_stiffness
+    solution = _Solution(states=states, phases=tuple(phases), t_end=t_end, ledger=ledger)
+    samples = _ExactSamples(t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force,
+                            pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2, crown=crown,
+                            crown_velocity=crown_v, solution=solution)
+    return samples, switches
+
+
+def _locate_exact(kind: str, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
+                  d_hi: float, f_hi: float):
+    """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]: the rule
+    of :func:`_locate`, on the exact solution's delta and law with their slopes (Newton)."""
+    lam, law = st.lam, st.law
+
+    def at(s):  # delta, F, delta', F'
+        return (np.exp(lam * s) * wk) @ law
+
+    def fun(i):
+        def value(s):
+            v = at(s).real
+            return float(v[i]), float(v[i + 2])
+        return value
+
+    d, f = fun(0), fun(1)
+    if kind == "contact":
+        s = _root_exact(f, s_lo, s_hi, f_hi)
+        return s, ("overlap" if d(s)[0] > 0.0 else "free")
+    if kind == "free":
+        return _root_exact(d, s_lo, s_hi, d_hi), "contact"
+    cand = []
+    if f_hi > 0.0:
+        cand.append((_root_exact(f, s_lo, s_hi, f_hi), "contact"))
+    if d_hi < 0.0:
+        cand.append((_root_exact(d, s_lo, s_hi, d_hi), "free"))
+    return min(cand)
+
+
+def _root_exact(fun, lo: float, hi: float, f_hi: float) -> float:
+    """:func:`_root` for ``fun`` returning (value, slope), ``f_hi`` its value at hi: a phase
+    that starts on its own boundary (value 0 at lo) is bracketed from just after its start;
+    then Newton's steps inside the shrinking bracket (bisection otherwise), to 1e-15 s."""
+    f_lo = fun(lo)[0]
+    if f_lo * f_hi > 0 or f_lo == 0.0:
+        step = (hi - lo) * 1e-9
+        while step < (hi - lo):
+            f_lo = fun(lo + step)[0]
+            if f_lo * f_hi < 0:
+                lo = lo + step
+                break
+            step *= 10.0
+        else:
+            return hi
+    s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
+    tol = 1e-15 + 4 * np.finfo(float).eps * abs(hi)
+    for _ in range(100):
+        f, slope = fun(s)
+        if f == 0.0:
+            return s
+        if (f > 0.0) == (f_lo > 0.0):
+            lo, f_lo = s, f
+        else:
+            hi = s
+        nxt = s - f / slope if slope != 0.0 else 0.5 * (lo + hi)
+        if not lo < nxt < hi:
+            nxt = 0.5 * (lo + hi)
+        if abs(nxt - s) <= tol or hi - lo <= tol:
+            return nxt
+        s = nxt
+    return s
+
+
+def _sampled_record(model: BeamImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:
+    """The ``exact`` method's record when first read: :func:`beam_record`'s samples."""
+    return beam_record(model, t_end, dt_sample)[0]
+
+
 def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                   calibration: str = "pad", restitution: float | None = None,
                   contact_stiffness: float | None = None, duration: float | None = None,
-                  t_end: float | None = None):
+                  t_end: float | None = None, method: str = "exact"):
     """The scenario with the continuum trunk and the pad, solved exactly to ``t_end`` (s).
 
     Returns a SimulationResult (backend "beam") with the metrics of
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
+    ``method`` (:data:`METHODS`) changes the cost, not the solution.
     """
     t_end = scenario.t_end if t_end is None else t_end
     check_range("--t-end", t_end, low=0, low_open=True, unit="s")
+    if method not in METHODS:
+        raise ParameterError(f"--method = {method!r}: allowed {', '.join(METHODS)}")
     model, sdof = beam_impact_model(scenario, elements=elements, restitution=restitution,
                                     contact_stiffness=contact_stiffness, duration=duration,
                                     calibration=calibration)
@@ -473,8 +767,16 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     dt = t_col / SAMPLES_PER_COLLISION
     check_work(t_end, dt, 8.0 * 16)
     t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
-    record, crown, switches = beam_record(model, t_end, dt)
-    metrics = model_metrics(record, sdof, scenario.impactor, collision_duration=t_detect)
+    if method == "exact-full":
+        record, crown, switches = beam_record(model, t_end, dt)
+        samples, trajectory = record, record.trajectory()
+    else:
+        samples, switches = _solve_exact(model, t_end, dt)
+        record = ImpactRecord.deferred(partial(_sampled_record, model, t_end, dt))
+        crown = samples.crown
+        trajectory = Trajectory(t=samples.t, x=samples.x, vx=samples.vx, y=samples.y,
+                                vy=samples.vy, force=samples.force)
+    metrics = model_metrics(samples, sdof, scenario.impactor, collision_duration=t_detect)
     model_dict = {**sdof.as_dict(), "elements": model.elements, "calibration": calibration,
                   "contact_stiffness": model.contact_stiffness,
                   "contact_damping": model.contact_damping,
@@ -483,7 +785,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     scen["contact"]["restitution"] = sdof.restitution
     return SimulationResult(
         backend="beam", metrics=metrics, model=model_dict, scenario=scen,
-        trajectory=record.trajectory(), record=record, collision_duration=t_col,
+        trajectory=trajectory, record=record, collision_duration=t_col,
         extra={"crown": crown})
 
 
