@@ -13,6 +13,7 @@ import os
 import sys
 from pathlib import Path
 
+from treeimpact.analytic.continuum.timoshenko import BEAM_THEORIES
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
 from treeimpact.analytic.results import METRIC_UNITS, to_jsonable
 
@@ -65,6 +66,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="contact stiffness, N/m")
     ss.add_argument("--dt", type=_number, help="time step, s")
     ss.add_argument("--elements", type=_count, help="beam backend: elements of the trunk mesh")
+    ss.add_argument("--beam-theory", choices=BEAM_THEORIES, dest="beam_theory",
+                    help="beam backend: the trunk's beam theory (default euler-bernoulli; "
+                         "timoshenko adds shear and rotary inertia, with the scenario's "
+                         "trunk.shear_modulus and shear_coefficient)")
     ss.add_argument("--calibration", choices=("pad", "effective"),
                     help="beam, mujoco, bullet: the contact damping of the SDOF's pad (default) "
                          "or recalibrated so that e holds on the trunk's effective mass")
@@ -81,6 +86,8 @@ def build_parser() -> argparse.ArgumentParser:
                          "hinged trunks)")
     sm.add_argument("--segments", type=_count, help="segments of the hinged trunk")
     sm.add_argument("--elements", type=_count, help="beam backend: elements of the trunk mesh")
+    sm.add_argument("--beam-theory", choices=BEAM_THEORIES, dest="beam_theory",
+                    help="beam backend: the trunk's beam theory (default euler-bernoulli)")
     sm.add_argument("--json", action="store_true", help="machine-readable output")
     sr = sub.add_parser("report", help="write the discrepancy report (html, md, json)")
     sr.add_argument("--out", default="reports", help="output directory (default: reports)")
@@ -255,7 +262,7 @@ def cmd_simulate(args) -> int:
     _check_flags(args)
     opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
                            "contact_stiffness", "dt", "damping", "integrator", "elements",
-                           "calibration"))
+                           "calibration", "beam_theory"))
     result = backend.simulate(scenario, **opts)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
@@ -275,12 +282,13 @@ def cmd_modes(args) -> int:
 
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
-    res = backend.modes(scenario, **_options(args, ("segments", "elements")))
+    res = backend.modes(scenario, **_options(args, ("segments", "elements", "beam_theory")))
     if args.json:
         print(json.dumps(to_jsonable(res), indent=2))
         return 0
     model, beam = res["model"], res["beam"]
-    print(f"{scenario.name} ({args.backend} trunk against the continuous Euler-Bernoulli beam)")
+    theory = "Timoshenko" if args.beam_theory == "timoshenko" else "Euler-Bernoulli"
+    print(f"{scenario.name} ({args.backend} trunk against the continuous {theory} beam)")
     print(f"  {'quantity':<26}{'model':>14}{'beam':>14}{'difference':>12}  unit")
     rows = [("static stiffness at a", model["static_stiffness"], beam["static_stiffness"],
              "N/m")]

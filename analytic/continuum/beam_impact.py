@@ -34,6 +34,7 @@ from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajecto
 
 from .beam import beam_matrices, deflection_dof
 from .modes import beam_reference
+from .timoshenko import check_beam_theory
 
 #: Elements of the default mesh: x_max within 0.05 % of the 48-element mesh
 #: (tests/test_beam_impact.py::test_x_max_converges_in_elements).
@@ -65,6 +66,7 @@ class BeamImpactModel:
     contact_stiffness: float  # k_c, N/m
     contact_damping: float  # c_c, N s/m
     elements: int
+    beam_theory: str = "euler-bernoulli"  # analytic.continuum.timoshenko.BEAM_THEORIES
 
     @property
     def dofs(self) -> int:
@@ -85,12 +87,14 @@ class BeamImpactModel:
 
 def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                       restitution: float | None = None, contact_stiffness: float | None = None,
-                      duration: float | None = None, calibration: str = "pad"):
+                      duration: float | None = None, calibration: str = "pad",
+                      beam_theory: str = "euler-bernoulli"):
     """``(BeamImpactModel, TwoBodyModel)``: the beam problem and the SDOF model it refines.
 
     k_c comes from :func:`analytic.contact.law.contact_law` on the SDOF model (the pad's
     stiffness, from ``contact_stiffness`` N/m, ``duration`` s or the scenario); c_c per
-    ``calibration`` (:data:`CALIBRATIONS`).
+    ``calibration`` (:data:`CALIBRATIONS`); the trunk's ``beam_theory`` of
+    :data:`analytic.continuum.timoshenko.BEAM_THEORIES`.
     """
     if isinstance(elements, bool) or not isinstance(elements, (int, np.integer)) or not (
             2 <= elements <= MAX_ELEMENTS):
@@ -98,16 +102,18 @@ def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     if calibration not in CALIBRATIONS:
         raise ParameterError(f"--calibration = {calibration!r}: allowed "
                              f"{', '.join(CALIBRATIONS)}")
+    check_beam_theory(beam_theory)
     sdof = two_body_model(scenario, restitution)
     k_c, c_c = contact_law(sdof, scenario.contact, stiffness=contact_stiffness,
                            duration=duration)
-    M, D, K, nodes, keep = beam_matrices(scenario.trunk, int(elements))
+    M, D, K, nodes, keep = beam_matrices(scenario.trunk, int(elements), beam_theory)
     trunk = scenario.trunk
     model = BeamImpactModel(
         M=M, D=D, K=K, clamp=deflection_dof(nodes, keep, trunk.clamp_height),
         crown=deflection_dof(nodes, keep, trunk.length), impactor_mass=sdof.impactor_mass,
         impactor_stiffness=sdof.impactor_stiffness, impact_speed=sdof.impact_speed,
-        contact_stiffness=k_c, contact_damping=c_c, elements=int(elements))
+        contact_stiffness=k_c, contact_damping=c_c, elements=int(elements),
+        beam_theory=beam_theory)
     if calibration == "effective":
         mu = 1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass)
         c_c = effective_damping(k_c, sdof.restitution, mu)
@@ -748,12 +754,15 @@ def _sampled_record(model: BeamImpactModel, t_end: float, dt_sample: float) -> I
 def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                   calibration: str = "pad", restitution: float | None = None,
                   contact_stiffness: float | None = None, duration: float | None = None,
-                  t_end: float | None = None, method: str = "exact"):
+                  t_end: float | None = None, method: str = "exact",
+                  beam_theory: str = "euler-bernoulli"):
     """The scenario with the continuum trunk and the pad, solved exactly to ``t_end`` (s).
 
     Returns a SimulationResult (backend "beam") with the metrics of
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
-    ``method`` (:data:`METHODS`) changes the cost, not the solution.
+    ``method`` (:data:`METHODS`) changes the cost, not the solution; ``beam_theory``
+    (``euler-bernoulli`` or ``timoshenko``: shear deformation and rotary inertia, the
+    scenario's trunk.shear_modulus and shear_coefficient) the trunk.
     """
     t_end = scenario.t_end if t_end is None else t_end
     check_range("--t-end", t_end, low=0, low_open=True, unit="s")
@@ -761,7 +770,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
         raise ParameterError(f"--method = {method!r}: allowed {', '.join(METHODS)}")
     model, sdof = beam_impact_model(scenario, elements=elements, restitution=restitution,
                                     contact_stiffness=contact_stiffness, duration=duration,
-                                    calibration=calibration)
+                                    calibration=calibration, beam_theory=beam_theory)
     t_col = collision_duration(sdof, model.contact_stiffness, model.contact_damping)
 
     dt = t_col / SAMPLES_PER_COLLISION
@@ -777,7 +786,8 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
         trajectory = Trajectory(t=samples.t, x=samples.x, vx=samples.vx, y=samples.y,
                                 vy=samples.vy, force=samples.force)
     metrics = model_metrics(samples, sdof, scenario.impactor, collision_duration=t_detect)
-    model_dict = {**sdof.as_dict(), "elements": model.elements, "calibration": calibration,
+    model_dict = {**sdof.as_dict(), "elements": model.elements, "beam_theory": beam_theory,
+                  "calibration": calibration,
                   "contact_stiffness": model.contact_stiffness,
                   "contact_damping": model.contact_damping,
                   "effective_mass": model.effective_mass, "contact_switches": switches}
@@ -789,15 +799,17 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
         extra={"crown": crown})
 
 
-def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int = 3) -> dict:
+def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int = 3,
+          beam_theory: str = "euler-bernoulli") -> dict:
     """``model``: the backend's mesh (static stiffness at a, N/m; frequencies, rad/s);
-    ``beam``: the 160-element reference of :func:`analytic.continuum.modes.beam_reference`."""
+    ``beam``: the 160-element reference of :func:`analytic.continuum.modes.beam_reference`,
+    both in ``beam_theory``."""
     import scipy.linalg
 
-    model, _ = beam_impact_model(scenario, elements=elements)
+    model, _ = beam_impact_model(scenario, elements=elements, beam_theory=beam_theory)
     e = np.zeros(model.dofs)
     e[model.clamp] = 1.0
     stiffness = 1.0 / float(np.linalg.solve(model.K, e)[model.clamp])
     w2 = scipy.linalg.eigh(model.K, model.M, eigvals_only=True, subset_by_index=[0, n_modes - 1])
     return {"model": {"static_stiffness": stiffness, "omegas": [float(v) for v in np.sqrt(w2)]},
-            "beam": beam_reference(scenario, n_modes)}
+            "beam": beam_reference(scenario, n_modes, beam_theory)}
