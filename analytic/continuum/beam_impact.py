@@ -482,6 +482,7 @@ def _root(func, lo, hi):
 
 #: Largest block of samples the ``exact`` method evaluates at once (32, 256, then this).
 _BLOCK = 1024
+_EPS = float(np.finfo(float).eps)
 
 
 class _State:
@@ -518,10 +519,11 @@ class _State:
         self.gd = modal.displacement_row(g)
         self.k_c = k_c
 
-    def works(self, w: np.ndarray, s: float) -> np.ndarray:
+    def works(self, w: np.ndarray, s: float, a: np.ndarray | None = None) -> np.ndarray:
         """The works of the trunk's damping (and of the pad, in contact) over [0, s] of a
-        phase started with modal coefficients w, J (the closed form of :class:`_Quadratic`)."""
-        a = np.exp(self.modal.lam * s) * w
+        phase started with modal coefficients w (``a`` = exp(lambda s) w if known), J: the
+        closed form of :class:`_Quadratic`."""
+        a = np.exp(self.modal.lam * s) * w if a is None else a
         out = (self.H_int @ a) @ a - (self.H_int @ w) @ w
         if self.secular:
             out = out + s * ((self.H_lin @ w) @ w)
@@ -657,11 +659,12 @@ def _solve_exact(model: BeamImpactModel, t_end: float, dt_sample: float):
             j, block = jj, min(8 * block, _BLOCK)
         end_s, nxt = end if end is not None else (t_end - t, None)
         # the state and the works at the switch (or at t_end), and the ledger there
-        work += st.works(w, end_s) if contact else (st.works(w, end_s)[0], 0.0)
-        u = (st.modal.Vu @ (np.exp(st.modal.lam * end_s) * w)).real
-        if not np.all(np.isfinite(u)):
-            raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
+        a = np.exp(st.modal.lam * end_s) * w
+        work += st.works(w, end_s, a) if contact else (st.works(w, end_s, a)[0], 0.0)
+        u = (st.modal.Vu @ a).real
         kin, pot, _ = st.energies(u)
+        if not math.isfinite(kin + pot):
+            raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
         ledger = max(ledger, abs(kin + pot + work.sum() - e0) / e0)
         if nxt is None:
             break
@@ -728,7 +731,7 @@ def _root_exact(fun, lo: float, hi: float, f_hi: float) -> float:
         else:
             return hi
     s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
-    tol = 1e-15 + 4 * np.finfo(float).eps * abs(hi)
+    tol = 1e-15 + 4 * _EPS * abs(hi)
     for _ in range(100):
         f, slope = fun(s)
         if f == 0.0:
