@@ -17,13 +17,12 @@ from treeimpact.analytic.continuum.beam import (
     beam_matrices,
     beam_natural_frequencies,
     beam_static_stiffness,
-    deflection_dof,
     flexibility,
     mesh,
 )
 from treeimpact.analytic.continuum.beam_impact import modes, simulate_beam
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.parameters import DEFAULT_SHEAR_COEFFICIENT, Trunk
+from treeimpact.analytic.model.parameters import Trunk
 from treeimpact.analytic.model.scenario import load_scenario, scenario_from_dict
 from treeimpact.analytic.model.scenario_toml import scenario_toml
 from treeimpact.compare.cli import main
