@@ -123,6 +123,18 @@ class ImpactRecord(Deferred):
             raise ParameterError("--t-end / --dt: the record has fewer than 3 increasing times: a "
                              "longer --t-end or a smaller --dt (record.t)")
 
+    def contact_loss(self, t: float) -> float:
+        """The contact's work less the elastic energy it holds at time ``t`` (s), J: what the
+        contact has lost so far, interpolated linearly between samples."""
+        return float(np.interp(t, self.t, self.contact_work)) - float(
+            np.interp(t, self.t, self.contact_potential))
+
+    def ledger_residual(self, initial_energy: float) -> float:
+        """max |kinetic + potential + damping work + contact work - initial| / initial over the
+        samples (``initial_energy`` J)."""
+        total = self.kinetic + self.potential + self.damping_work + self.contact_work
+        return float(np.max(np.abs(total - initial_energy)) / initial_energy)
+
     def trajectory(self):
         """The record's motion and force as the result's :class:`analytic.results.Trajectory`."""
         return Trajectory(t=self.t, x=self.x, vx=self.vx, y=self.y, vy=self.vy,

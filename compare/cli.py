@@ -40,7 +40,7 @@ def _count(text: str) -> int:
 
 
 #: The options of ``treeimpact modes`` (the backends' modes() take these of their OPTIONS).
-MODES_OPTIONS = ("segments", "elements")
+MODES_OPTIONS = ("segments", "elements", "beam_theory")
 
 
 def backend_options() -> dict:
@@ -301,7 +301,9 @@ def cmd_modes(args) -> int:
         print(json.dumps(to_jsonable(res), indent=2))
         return 0
     model, beam = res["model"], res["beam"]
-    print(f"{scenario.name} ({args.backend} trunk against the continuous Euler-Bernoulli beam)")
+    theory = "Timoshenko" if getattr(args, "beam_theory", None) == "timoshenko" \
+        else "Euler-Bernoulli"
+    print(f"{scenario.name} ({args.backend} trunk against the continuous {theory} beam)")
     print(f"  {'quantity':<26}{'model':>14}{'beam':>14}{'difference':>12}  unit")
     rows = [("static stiffness at a", model["static_stiffness"], beam["static_stiffness"],
              "N/m")]

@@ -1,6 +1,8 @@
-"""Continuous Euler-Bernoulli trunk: the reference the SDOF reduction and the engines are checked against.
+"""Continuous trunk: the reference the SDOF reduction and the engines are checked against.
 
-Design notes and measured figures: docs/trunk-models.md.
+Euler-Bernoulli (Hermite cubics, the default) or Timoshenko (:mod:`analytic.continuum.timoshenko`:
+shear deformation and rotary inertia) beam theory, ``beam_theory`` of the functions below.
+Design notes and measured figures: docs/trunk-models.md, docs/beam-impact.md.
 """
 
 from __future__ import annotations
@@ -12,6 +14,10 @@ import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Trunk
+
+from .timoshenko import check_beam_theory, element_matrices
+
+EULER_BERNOULLI = "euler-bernoulli"
 
 FREQUENCY_ELEMENTS = 160  # elements for the frequencies and mode shapes (rule in the module docstring)
 MAX_MODES = 20  # the mesh rule guarantees 1e-8 for n_modes <= 3; more modes are less accurate
@@ -63,25 +69,46 @@ def _element_matrices(h: float, ei: float, rho_a: float):
     return k, m
 
 
-def assemble(trunk: Trunk, nodes: np.ndarray):
+def _elements(trunk: Trunk, nodes: np.ndarray, beam_theory: str):
+    """Per element (K, M, D), dofs (w1, r1, w2, r2), r the slope w' (Euler-Bernoulli) or the
+    section's rotation psi (Timoshenko); D the consistent damping of the distributed C."""
+    ei, rho_a = trunk.bending_stiffness, trunk.density * trunk.area
+    for h in np.diff(nodes):
+        if beam_theory == EULER_BERNOULLI:
+            k, m = _element_matrices(h, ei, rho_a)
+            yield k, m, _element_matrices(h, 1.0, trunk.damping)[1]
+        else:
+            k, m, shape = element_matrices(h, ei, rho_a, trunk.density * trunk.second_moment,
+                                           trunk.shear_rigidity)
+            yield k, m, trunk.damping * shape
+
+
+def _scatter(blocks, n: int, l: float) -> np.ndarray:
+    """Global matrix (2n x 2n, dofs (w_i, l r_i)) of 4 x 4 element blocks in node order."""
+    scale = np.outer(*(2 * [np.tile([1.0, 1.0 / l], 2)]))  # r = (l r) / l
+    out = np.zeros((2 * n, 2 * n))
+    for e, b in enumerate(blocks):
+        out[2 * e:2 * e + 4, 2 * e:2 * e + 4] += b * scale
+    return out
+
+
+def assemble(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOULLI):
     """Global (K, M) on the free dofs and the index of each node's deflection dof.
 
-    Dofs are (w_i, l * w_i') per node (the slope scaled by the trunk length, which leaves the
-    eigenvalues unchanged and balances the matrices); w_0 = 0 always, and w_0' = 0 for a rigid
-    clamp. Returns ``K, M, free`` where ``free`` maps the 2 * len(nodes) full dofs to the kept ones.
+    Dofs are (w_i, l * r_i) per node, r the slope w' (Euler-Bernoulli) or the section's
+    rotation psi (Timoshenko), scaled by the trunk length (which leaves the eigenvalues
+    unchanged and balances the matrices); w_0 = 0 always, and r_0 = 0 for a rigid clamp (the
+    root spring acts on r_0). Returns ``K, M, free`` where ``free`` maps the 2 * len(nodes)
+    full dofs to the kept ones.
     """
     _check_trunk(trunk)
+    check_beam_theory(beam_theory)
     nodes = np.asarray(nodes, dtype=float)
     n = len(nodes)
-    ei, rho_a, l = trunk.bending_stiffness, trunk.density * trunk.area, trunk.length
-    scale = np.tile([1.0, 1.0 / l], 2)  # w' = (l w') / l
-    K = np.zeros((2 * n, 2 * n))
-    M = np.zeros((2 * n, 2 * n))
-    for e in range(n - 1):
-        k, m = _element_matrices(nodes[e + 1] - nodes[e], ei, rho_a)
-        s = slice(2 * e, 2 * e + 4)
-        K[s, s] += k * np.outer(scale, scale)
-        M[s, s] += m * np.outer(scale, scale)
+    l = trunk.length
+    els = list(_elements(trunk, nodes, beam_theory))
+    K = _scatter([k for k, _, _ in els], n, l)
+    M = _scatter([m for _, m, _ in els], n, l)
     i_a = int(np.argmin(np.abs(nodes - trunk.clamp_height)))
     M[2 * i_a, 2 * i_a] += trunk.clamp_mass
     M[2 * (n - 1), 2 * (n - 1)] += trunk.crown_mass
@@ -94,16 +121,16 @@ def assemble(trunk: Trunk, nodes: np.ndarray):
     return K[np.ix_(keep, keep)], M[np.ix_(keep, keep)], keep
 
 
-def beam_static_stiffness(trunk: Trunk) -> float:
-    """Force at ``a`` per unit deflection at ``a``, N/m (eq 1 / eq 8 with the root spring).
+def beam_static_stiffness(trunk: Trunk, beam_theory: str = EULER_BERNOULLI) -> float:
+    """Force at ``a`` per unit deflection at ``a``, N/m (eq 1 / eq 8 with the root spring;
+    Timoshenko: 1 / (a^3 / (3 E I) + a / (kappa G A) + a^2 / k_theta)).
 
-    Exact (Hermite cubics hold the piecewise-cubic static solution): solved on the mesh
-    {0, a, l}.
+    Exact (both elements hold the static solution): solved on the mesh {0, a, l}.
     """
     _check_trunk(trunk)
     a, l = trunk.clamp_height, trunk.length
     nodes = np.array([0.0, a, l]) if a < l else np.array([0.0, a])
-    K, _, keep = assemble(trunk, nodes)
+    K, _, keep = assemble(trunk, nodes, beam_theory)
     f = np.zeros(len(keep))
     i = int(np.nonzero(keep == 2)[0][0])  # deflection dof of the node at a
     f[i] = 1.0
@@ -111,16 +138,18 @@ def beam_static_stiffness(trunk: Trunk) -> float:
     return float(1.0 / u[i])
 
 
-def flexibility(trunk: Trunk, nodes: np.ndarray):
-    """Closed-form inverse of the assembled Hermite stiffness: the exact flexibility matrix.
+def flexibility(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOULLI):
+    """Closed-form inverse of the assembled stiffness: the exact flexibility matrix.
 
-    Hermite cubics are nodally exact for nodal forces and moments on a uniform beam, so
+    Both elements are nodally exact for nodal forces and moments on a uniform beam, so
     K^-1 of :func:`assemble` equals the influence matrix of the continuous cantilever at the
-    nodes (dofs w_i, l w_i'); it is built here from the closed-form influence functions
-    (unit force / unit moment at zeta, deflection and slope at z, plus the rigid rotation of
-    the root spring), which avoids the h^-4 conditioning of K. Returns ``F, keep``.
+    nodes (dofs w_i, l r_i); it is built here from the closed-form influence functions
+    (unit force / unit moment at zeta, deflection and rotation at z, plus the rigid rotation
+    of the root spring; Timoshenko adds the shear deflection min(z, zeta) / (kappa G A) of a
+    unit force), which avoids the h^-4 conditioning of K. Returns ``F, keep``.
     """
     _check_trunk(trunk)
+    check_beam_theory(beam_theory)
     z = np.asarray(nodes, dtype=float)
     ei, l, kt = trunk.bending_stiffness, trunk.length, trunk.base_stiffness
     zz, ze = z[:, None], z[None, :]  # response at zz, load at ze
@@ -132,6 +161,8 @@ def flexibility(trunk: Trunk, nodes: np.ndarray):
     # unit moment at ze
     w_m = np.where(below, zz ** 2 / 2, ze ** 2 / 2 + ze * (zz - ze)) / ei
     t_m = lo / ei
+    if beam_theory != EULER_BERNOULLI and math.isfinite(trunk.shear_rigidity):
+        w_f = w_f + lo / trunk.shear_rigidity  # shear force 1 below zeta: w' - psi = 1 / kGA
     if math.isfinite(kt):  # root rotation = base moment / k_theta, a rigid rotation above
         w_f = w_f + zz * ze / kt
         t_f = t_f + ze / kt + 0 * zz
@@ -150,29 +181,46 @@ def flexibility(trunk: Trunk, nodes: np.ndarray):
     return F[np.ix_(keep, keep)], keep
 
 
-def _consistent_mass(trunk: Trunk, nodes: np.ndarray, keep: np.ndarray) -> np.ndarray:
+def _consistent_mass(trunk: Trunk, nodes: np.ndarray, keep: np.ndarray,
+                     beam_theory: str = EULER_BERNOULLI) -> np.ndarray:
     n = len(nodes)
-    rho_a, l = trunk.density * trunk.area, trunk.length
-    scale = np.tile([1.0, 1.0 / l], 2)
-    M = np.zeros((2 * n, 2 * n))
-    for e in range(n - 1):
-        _, m = _element_matrices(nodes[e + 1] - nodes[e], 1.0, rho_a)
-        s = slice(2 * e, 2 * e + 4)
-        M[s, s] += m * np.outer(scale, scale)
+    M = _scatter([m for _, m, _ in _elements(trunk, nodes, beam_theory)], n, trunk.length)
     i_a = int(np.argmin(np.abs(nodes - trunk.clamp_height)))
     M[2 * i_a, 2 * i_a] += trunk.clamp_mass
     M[2 * (n - 1), 2 * (n - 1)] += trunk.crown_mass
     return M[np.ix_(keep, keep)]
 
 
+def _halved(nodes: np.ndarray) -> np.ndarray:
+    """The mesh with every element split in two."""
+    mid = 0.5 * (nodes[:-1] + nodes[1:])
+    return np.insert(nodes, np.arange(1, len(nodes)), mid)
+
+
 @functools.lru_cache(maxsize=64)
-def _modes(trunk: Trunk, n_modes: int):
-    """Lowest modes of K v = w^2 M v, solved as the largest of F M v = v / w^2 (F = K^-1)."""
+def _modes(trunk: Trunk, n_modes: int, beam_theory: str = EULER_BERNOULLI):
+    """Lowest modes of K v = w^2 M v, solved as the largest of F M v = v / w^2 (F = K^-1).
+
+    Euler-Bernoulli on :func:`mesh` (h^4 convergence). Timoshenko: the element's shear
+    strain is constant, so its frequencies converge as h^2 (1e-7 to 7e-5 off at 160
+    elements for modes 1-3); they are extrapolated from 80 elements and those halved,
+    (4 w_h/2 - w_h) / 3 (Richardson), to 1e-8 (modes 1-2) and 1e-7 (3) of the exact
+    frequency equation (tests/test_timoshenko.py); the shapes are the halved mesh's.
+    """
+    if beam_theory == EULER_BERNOULLI:
+        return _mesh_modes(trunk, n_modes, beam_theory, mesh(trunk))
+    coarse = mesh(trunk, FREQUENCY_ELEMENTS // 2)
+    w_h = _mesh_modes(trunk, n_modes, beam_theory, coarse)[0]
+    w, nodes, full = _mesh_modes(trunk, n_modes, beam_theory, _halved(coarse))
+    return (4.0 * w - w_h) / 3.0, nodes, full
+
+
+def _mesh_modes(trunk: Trunk, n_modes: int, beam_theory: str, nodes: np.ndarray):
+    """(omegas, nodes, nodal (w, r) of each mode) on ``nodes`` (see :func:`_modes`)."""
     import scipy.linalg  # here, not at import: `treeimpact --help` loads no scipy
 
-    nodes = mesh(trunk)
-    F, keep = flexibility(trunk, nodes)
-    M = _consistent_mass(trunk, nodes, keep)
+    F, keep = flexibility(trunk, nodes, beam_theory)
+    M = _consistent_mass(trunk, nodes, keep, beam_theory)
     L = np.linalg.cholesky(M)
     A = L.T @ F @ L
     A = 0.5 * (A + A.T)
@@ -181,17 +229,19 @@ def _modes(trunk: Trunk, n_modes: int):
     vec = scipy.linalg.solve_triangular(L.T, y, lower=False)  # v = L^-T y
     full = np.zeros((2 * len(nodes), n_modes))
     full[keep] = vec
-    full[1::2] /= trunk.length  # back to slopes, 1/m
+    full[1::2] /= trunk.length  # back to slopes (rotations), 1/m
     return 1.0 / np.sqrt(mu), nodes, full
 
 
-def beam_natural_frequencies(trunk: Trunk, n_modes: int = 3) -> np.ndarray:
+def beam_natural_frequencies(trunk: Trunk, n_modes: int = 3,
+                             beam_theory: str = EULER_BERNOULLI) -> np.ndarray:
     """The first ``n_modes`` natural frequencies of the continuous trunk, rad/s, ascending.
 
-    Relative accuracy better than 1e-8 for n_modes <= 3 (mesh rule in the module docstring).
+    Relative accuracy better than 1e-8 for n_modes <= 3 (mesh rule in the module docstring;
+    Timoshenko: :func:`_modes`).
     """
     n_modes = _check_modes(n_modes)
-    w, _, _ = _modes(_check_trunk(trunk), n_modes)
+    w, _, _ = _modes(_check_trunk(trunk), n_modes, check_beam_theory(beam_theory))
     return w.copy()
 
 
@@ -260,22 +310,17 @@ def beam_mode_shapes(trunk: Trunk, n_modes: int = 3, z=None, *, normalise: str =
     return w.copy(), z, shapes
 
 
-def beam_matrices(trunk: Trunk, elements: int):
+def beam_matrices(trunk: Trunk, elements: int, beam_theory: str = EULER_BERNOULLI):
     """``(M, D, K, nodes, keep)`` of the trunk on :func:`mesh` (kg, N s/m, N/m, SI dofs).
 
-    Dofs as in :func:`assemble` (w_i, l w_i'); ``D`` is the consistent damping matrix of the
-    distributed damping C (eq 9: force C w' per unit length), the mass matrix's shape
-    functions with C in place of rho A, no point masses.
+    Dofs as in :func:`assemble` (w_i, l r_i); ``D`` is the consistent damping matrix of the
+    distributed damping C (eq 9: force C w' per unit length), the lateral mass matrix's
+    shape functions with C in place of rho A (no rotary part), no point masses.
     """
     nodes = mesh(trunk, elements)
-    K, M, keep = assemble(trunk, nodes)
-    n, l = len(nodes), trunk.length
-    scale = np.tile([1.0, 1.0 / l], 2)
-    D = np.zeros((2 * n, 2 * n))
-    for e in range(n - 1):
-        _, d = _element_matrices(nodes[e + 1] - nodes[e], 1.0, trunk.damping)
-        s = slice(2 * e, 2 * e + 4)
-        D[s, s] += d * np.outer(scale, scale)
+    K, M, keep = assemble(trunk, nodes, beam_theory)
+    D = _scatter([d for _, _, d in _elements(trunk, nodes, beam_theory)], len(nodes),
+                 trunk.length)
     return M, D[np.ix_(keep, keep)], K, nodes, keep
 
 

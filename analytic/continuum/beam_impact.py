@@ -1,17 +1,19 @@
 """The continuum trunk struck through the pad: the 1-DOF assumption's reference.
 
-The Euler-Bernoulli trunk of :mod:`analytic.continuum.beam` (Hermite cubics, clamp and crown point
-masses, root spring, consistent damping of the distributed C of eq 9) and the linearised
-pendulum (eq 13) meet through the spring-dashpot contact F = max(0, k_c delta + c_c delta'),
+The trunk of :mod:`analytic.continuum.beam` (Hermite cubics, clamp and crown point masses,
+root spring, consistent damping of the distributed C of eq 9) and the linearised pendulum
+(eq 13) meet through the spring-dashpot contact F = max(0, k_c delta + c_c delta'),
 delta = y - x >= 0, of :mod:`analytic.contact.soft`. In each contact state the system is
-linear, z' = A z, and is solved exactly by its eigen-decomposition; every contact switch
-is located by root finding on the exact solution. Design notes: docs/beam-impact.md.
+linear and is solved exactly by the eigen-decomposition of its state matrix written in the
+energy coordinates of its undamped modes (:class:`_Modal`); every contact switch is located
+by root finding on the exact solution. Design notes: docs/beam-impact.md.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -36,25 +38,37 @@ from treeimpact.analytic.model.options import (
 from treeimpact.analytic.model.parameters import Scenario, check_range
 from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.records import model_metrics
-from treeimpact.analytic.results import ImpactRecord, SimulationResult
+from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajectory
 
 from .beam import beam_matrices, deflection_dof
 from .modes import beam_reference
+from .timoshenko import BEAM_THEORIES, check_beam_theory
 
 #: Elements of the default mesh: x_max within 0.05 % of the 48-element mesh
 #: (tests/test_beam_impact.py::test_x_max_converges_in_elements).
 DEFAULT_ELEMENTS = 12
-#: Finer meshes lose accuracy in the eigenvectors (ledger 3e-6 at 48 elements, 4e-5 at 80)
-#: and resolve wavelengths shorter than Euler-Bernoulli theory holds for (docs/beam-impact.md).
+#: Elements shorter than the trunk's diameter resolve wavelengths shorter than beam theory
+#: holds for (docs/beam-impact.md).
 MAX_ELEMENTS = 48
 #: Samples per free collision of the pad (the soft SDOF rung's record spacing).
 SAMPLES_PER_COLLISION = 100
+#: How :func:`simulate_beam` evaluates the exact solution: ``exact`` the observables on the
+#: sample grid, the energies where the metrics read them and the record when first read;
+#: ``exact-full`` every sample's state and energies as it goes (the original implementation:
+#: the reference of benchmarks/bench_beam.py and of the tests).
+METHODS = ("exact", "exact-full")
 #: The options of :func:`simulate_beam` (the ``beam`` backend).
 OPTIONS = {"elements": Option(int, "elements of the beam trunk's mesh", low=1,
                               high=MAX_ELEMENTS),
            "calibration": CALIBRATION, "restitution": RESTITUTION,
            "contact_stiffness": CONTACT_STIFFNESS, "contact_duration": CONTACT_DURATION,
-           "t_end": T_END}
+           "t_end": T_END,
+           "beam_theory": Option(BEAM_THEORIES, "the trunk's beam theory: euler-bernoulli "
+                                                "(the paper's) or timoshenko (shear and rotary "
+                                                "inertia, the scenario's trunk.shear_modulus "
+                                                "and shear_coefficient)"),
+           "method": Option(METHODS, "how the exact solution is evaluated (the same "
+                                     "solution)", cli=False)}
 
 
 @dataclass(frozen=True)
@@ -72,6 +86,7 @@ class BeamImpactModel:
     contact_stiffness: float  # k_c, N/m
     contact_damping: float  # c_c, N s/m
     elements: int
+    beam_theory: str = "euler-bernoulli"  # analytic.continuum.timoshenko.BEAM_THEORIES
 
     @property
     def dofs(self) -> int:
@@ -84,15 +99,22 @@ class BeamImpactModel:
         e[self.clamp] = 1.0
         return float(1.0 / np.linalg.solve(self.M, e)[self.clamp])
 
+    @property
+    def initial_energy(self) -> float:
+        """The pendulum's kinetic energy at the first touch, 0.5 m u_1^2, J."""
+        return 0.5 * self.impactor_mass * self.impact_speed ** 2
+
 
 def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                       restitution: float | None = None, contact_stiffness: float | None = None,
-                      duration: float | None = None, calibration: str = "pad"):
+                      duration: float | None = None, calibration: str = "pad",
+                      beam_theory: str = "euler-bernoulli"):
     """``(BeamImpactModel, TwoBodyModel)``: the beam problem and the SDOF model it refines.
 
     k_c comes from :func:`analytic.contact.law.contact_law` on the SDOF model (the pad's
     stiffness, from ``contact_stiffness`` N/m, ``duration`` s or the scenario); c_c per
-    ``calibration`` (:data:`CALIBRATIONS`).
+    ``calibration`` (:data:`CALIBRATIONS`); the trunk's ``beam_theory`` of
+    :data:`analytic.continuum.timoshenko.BEAM_THEORIES`.
     """
     if isinstance(elements, bool) or not isinstance(elements, (int, np.integer)) or not (
             2 <= elements <= MAX_ELEMENTS):
@@ -100,54 +122,177 @@ def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     if calibration not in CALIBRATIONS:
         raise ParameterError(f"--calibration = {calibration!r}: allowed "
                              f"{', '.join(CALIBRATIONS)}")
+    check_beam_theory(beam_theory)
     sdof = two_body_model(scenario, restitution)
     k_c, c_c = contact_law(sdof, scenario.contact, stiffness=contact_stiffness,
                            duration=duration)
-    M, D, K, nodes, keep = beam_matrices(scenario.trunk, int(elements))
+    M, D, K, nodes, keep = beam_matrices(scenario.trunk, int(elements), beam_theory)
     trunk = scenario.trunk
     model = BeamImpactModel(
         M=M, D=D, K=K, clamp=deflection_dof(nodes, keep, trunk.clamp_height),
         crown=deflection_dof(nodes, keep, trunk.length), impactor_mass=sdof.impactor_mass,
         impactor_stiffness=sdof.impactor_stiffness, impact_speed=sdof.impact_speed,
-        contact_stiffness=k_c, contact_damping=c_c, elements=int(elements))
+        contact_stiffness=k_c, contact_damping=c_c, elements=int(elements),
+        beam_theory=beam_theory)
     if calibration == "effective":
         mu = 1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass)
         c_c = effective_damping(k_c, sdof.restitution, mu)
-        from dataclasses import replace
-
         model = replace(model, contact_damping=c_c)
     return model, sdof
 
 
+def _matrices(model: BeamImpactModel, contact: bool):
+    """``(M, C, K, g)`` of trunk and pendulum (N = dofs + 1 coordinates q = (trunk, y)) in
+    one contact state; delta = g . q. In contact the pad's k_c and c_c act along g."""
+    n, N = model.dofs, model.dofs + 1
+    K = np.zeros((N, N))
+    C = np.zeros((N, N))
+    M = np.zeros((N, N))
+    K[:n, :n], C[:n, :n], M[:n, :n] = model.K, model.D, model.M
+    K[n, n], M[n, n] = model.impactor_stiffness, model.impactor_mass
+    g = np.zeros(N)
+    g[n], g[model.clamp] = 1.0, -1.0
+    if contact:  # F = k_c delta + c_c delta' pushes the trunk (+g_clamp) and the pendulum back
+        K = K + model.contact_stiffness * np.outer(g, g)
+        C = C + model.contact_damping * np.outer(g, g)
+    return M, C, K, g
+
+
+def _system(model: BeamImpactModel, contact: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(A, g): the state matrix of z = (q, q'), z' = A z, of one contact state (what the
+    independent references of the tests integrate) and delta = g . q."""
+    M, C, K, g = _matrices(model, contact)
+    N = len(g)
+    A = np.zeros((2 * N, 2 * N))
+    A[:N, N:] = np.eye(N)
+    A[N:, :N] = -np.linalg.solve(M, K)
+    A[N:, N:] = -np.linalg.solve(M, C)
+    return A, g
+
+
 class _Modal:
-    """Exact solution of z' = A z as z(s) = V (exp(lambda s) w), w = V^-1 z(0)."""
+    """Exact solution of M q'' + C q' + K q = 0 (one contact state) in the energy
+    coordinates of its undamped modes.
 
-    def __init__(self, A: np.ndarray):
-        self.lam, self.V = np.linalg.eig(A)
-        self.W = np.linalg.inv(self.V)
+    K Phi = M Phi diag(om^2) with Phi^T M Phi = I; the state u = (om eta, eta'), q = Phi eta,
+    so that 0.5 |u|^2 is the kinetic plus elastic energy and
+    u' = B u with B = [[0, diag(om)], [-diag(om), -Phi^T C Phi]]: a skew-symmetric
+    matrix plus a dissipative block, whose eigenvectors are well conditioned (cond(V) 1.4-2.1
+    on the shipped trees at 12-48 elements, where those of the state matrix of z = (q, q')
+    have 3e7-1e9: their round-off changed the chattering sequence, docs/beam-impact.md).
+    B = V diag(lambda) V^-1 and u(s) = V (exp(lambda s) w), w = V^-1 u(0).
 
+    For the raw state z = (q, q') = T u: ``V = T Vu`` and ``W = Vu^-1 T^-1`` (the
+    ``exact-full`` loop's interface). The kept half of the spectrum (Im lambda >= 0; a
+    conjugate pair counted twice through ``weight``) serves the ``exact`` method.
+    """
+
+    def __init__(self, M: np.ndarray, C: np.ndarray, K: np.ndarray):
+        import scipy.linalg
+
+        N = len(M)
+        if not (np.any(K[-1, :-1]) or np.any(M[-1, :-1]) or np.any(C[-1, :-1])):
+            # the free state: the pendulum's own mode, k / m exactly, beside the trunk's
+            # (whose round-off, eps om_max^2, could exceed a slow pendulum's om^2)
+            om2_t, Phi_t = scipy.linalg.eigh(K[:-1, :-1], M[:-1, :-1])
+            om2 = np.append(om2_t, K[-1, -1] / M[-1, -1])
+            Phi = np.zeros((N, N))
+            Phi[:-1, :-1], Phi[-1, -1] = Phi_t, 1.0 / math.sqrt(M[-1, -1])
+        else:
+            om2, Phi = scipy.linalg.eigh(K, M)
+        if np.any(om2 <= 0.0):  # the trunk is clamped: only a free billet has no spring
+            raise ParameterError("impactor.type = 'billet': the beam backend needs a pendulum "
+                                 "(a free billet's flight, y'' = 0, has no eigen-decomposition)")
+        om = np.sqrt(om2)
+        B = np.zeros((2 * N, 2 * N))
+        B[:N, N:] = np.diag(om)
+        B[N:, :N] = -np.diag(om)
+        B[N:, N:] = -(Phi.T @ C @ Phi)
+        lam, Vu = np.linalg.eig(B)
+        Wu = np.linalg.inv(Vu)
+        if not (np.all(np.isfinite(Wu)) and np.all(np.isfinite(lam))):
+            raise SimulationDiverged("beam: the state matrix could not be diagonalised")
+        self.N, self.M, self.Phi, self.om = N, M, Phi, om
+        self.lam, self.Vu, self.Wu = lam, Vu, Wu
+        self.kept = np.flatnonzero(lam.imag >= 0.0)
+        self.weight = np.where(lam.imag[self.kept] > 0.0, 2.0, 1.0)  # Re(V w) over the pairs
+
+    @cached_property
+    def T(self) -> np.ndarray:
+        """z = (q, q') = T u."""
+        N = self.N
+        T = np.zeros((2 * N, 2 * N))
+        T[:N, :N], T[N:, N:] = self.Phi / self.om, self.Phi
+        return T
+
+    @cached_property
+    def Tinv(self) -> np.ndarray:
+        """u = T^-1 z: T^-1 = diag(om Phi^T M, Phi^T M)."""
+        N = self.N
+        PtM = self.Phi.T @ self.M
+        Tinv = np.zeros((2 * N, 2 * N))
+        Tinv[:N, :N], Tinv[N:, N:] = self.om[:, None] * PtM, PtM
+        return Tinv
+
+    @cached_property
+    def V(self) -> np.ndarray:
+        """Eigenvectors over the raw state z."""
+        return self.T @ self.Vu
+
+    @cached_property
+    def W(self) -> np.ndarray:
+        """Modal coefficients from the raw state z: w = W z."""
+        return self.Wu @ self.Tinv
+
+    def transfer(self, other: "_Modal") -> np.ndarray:
+        """The matrix taking ``other``'s energy coordinates to this one's (the same q, q'):
+        T^-1 T_other = diag(om X / om_other, X), X = Phi^T M Phi_other."""
+        N = self.N
+        X = self.Phi.T @ self.M @ other.Phi
+        P = np.zeros((2 * N, 2 * N))
+        P[:N, :N], P[N:, N:] = self.om[:, None] * X / other.om[None, :], X
+        return P
+
+    @property
+    def condition(self) -> float:
+        """cond(V) of the eigenvectors in the energy coordinates (2-norm)."""
+        return float(np.linalg.cond(self.Vu))
+
+    def displacement_row(self, r: np.ndarray) -> np.ndarray:
+        """The row of u giving r . q (r over the N coordinates)."""
+        return np.concatenate([(self.Phi.T @ r) / self.om, np.zeros(self.N)])
+
+    def velocity_row(self, r: np.ndarray) -> np.ndarray:
+        """The row of u giving r . q'."""
+        return np.concatenate([np.zeros(self.N), self.Phi.T @ r])
+
+    # --- the exact-full loop's interface (raw coordinates z) ---
     def modal(self, w: np.ndarray, s: np.ndarray) -> np.ndarray:
         """U[k] = exp(lambda s_k) w: the modal coordinates at the times s (len(s) x n)."""
         return np.exp(np.outer(s, self.lam)) * w
 
     def observe(self, rows: np.ndarray, w: np.ndarray, s: np.ndarray, U=None) -> np.ndarray:
-        """Observables ``rows @ z(s)`` (r x len(s))."""
+        """Observables ``rows @ u(s)`` for rows over u (r x len(s))."""
         U = self.modal(w, s) if U is None else U
-        return (U @ (rows @ self.V).T).real.T
+        return (U @ (rows @ self.Vu).T).real.T
 
     def state(self, w: np.ndarray, s: float) -> np.ndarray:
+        """The raw state z = (q, q') at s."""
         return (self.V @ (np.exp(self.lam * s) * w)).real
 
     def quadratic(self, Q: np.ndarray) -> "_Quadratic":
+        """The quadratic form u^T Q u (Q over u) on this solution."""
         return _Quadratic(self, Q)
 
 
 class _Quadratic:
-    """z(s)^T Q z(s) and its integral from 0 to s, in closed form on a :class:`_Modal`."""
+    """u(s)^T Q u(s) and its integral from 0 to s, in closed form on a :class:`_Modal`:
+    int_0^s u^T Q u = sum_ij H_ij w_i w_j (exp((lambda_i + lambda_j) s) - 1) / (lambda_i +
+    lambda_j), H = V^T Q V; pairs with lambda_i + lambda_j = 0 (undamped) integrate to s."""
 
     def __init__(self, modal: _Modal, Q: np.ndarray):
         self.modal = modal
-        H = modal.V.T @ Q @ modal.V
+        H = modal.Vu.T @ Q @ modal.Vu
         total = modal.lam[:, None] + modal.lam[None, :]
         small = np.abs(total) < 1e-9 * max(1.0, float(np.max(np.abs(modal.lam))))
         self.H = H
@@ -165,85 +310,80 @@ class _Quadratic:
                 + np.asarray(s) * (w @ self.H_lin @ w)).real
 
 
-def _system(model: BeamImpactModel, contact: bool) -> tuple[np.ndarray, np.ndarray]:
-    """(A, g): state matrix and delta = g . z[:N] of one contact state."""
-    n, N = model.dofs, model.dofs + 1
-    Kf = np.zeros((N, N))
-    Cf = np.zeros((N, N))
-    Mf = np.zeros((N, N))
-    Kf[:n, :n], Cf[:n, :n], Mf[:n, :n] = model.K, model.D, model.M
-    Kf[n, n], Mf[n, n] = model.impactor_stiffness, model.impactor_mass
-    g = np.zeros(N)
-    g[n], g[model.clamp] = 1.0, -1.0
-    if contact:  # F = k_c delta + c_c delta' pushes the trunk (+g_clamp) and the pendulum back
-        Kf = Kf + model.contact_stiffness * np.outer(g, g)
-        Cf = Cf + model.contact_damping * np.outer(g, g)
-    A = np.zeros((2 * N, 2 * N))
-    A[:N, N:] = np.eye(N)
-    A[N:, :N] = -np.linalg.solve(Mf, Kf)
-    A[N:, N:] = -np.linalg.solve(Mf, Cf)
-    return A, g
+def _forms(model: BeamImpactModel, modal: _Modal, contact: bool, g: np.ndarray,
+           names=("kin", "pot", "damp", "contact")) -> dict:
+    """The energy ledger's quadratic forms over u of one contact state: kinetic energy,
+    elastic energy of the trunk's and pendulum's springs (the pad's excluded), the rates of
+    the trunk's damping work and of the pad's work F delta' (contact only). The elastic form
+    is written in the modal coordinates exactly (0.5 |u_1|^2 less the pad's spring), not
+    as Phi^T K Phi, whose round-off is eps |K| / om_1^2 of the low modes' energy."""
+    N, k_c, c_c = modal.N, model.contact_stiffness, model.contact_damping
+    kin = np.zeros((2 * N, 2 * N))
+    kin[N:, N:] = 0.5 * np.eye(N)
+    pot = np.zeros((2 * N, 2 * N))
+    pot[:N, :N] = 0.5 * np.eye(N)
+    gd, gv = modal.displacement_row(g), modal.velocity_row(g)
+    damp = np.zeros((2 * N, 2 * N))
+    Dfull = np.zeros((N, N))
+    Dfull[:model.dofs, :model.dofs] = model.D
+    damp[N:, N:] = modal.Phi.T @ Dfull @ modal.Phi
+    if contact:
+        pot = pot - 0.5 * k_c * np.outer(gd, gd)
+    forms = {"kin": kin, "pot": pot, "damp": damp}
+    if contact:
+        forms["contact"] = (0.5 * k_c * (np.outer(gd, gv) + np.outer(gv, gd))
+                            + c_c * np.outer(gv, gv))
+    return {k: modal.quadratic(q) for k, q in forms.items() if k in names}
+
+
+def _observation_rows(model: BeamImpactModel, modal: _Modal, g: np.ndarray) -> np.ndarray:
+    """Rows over u of x, y, x', y', delta, delta', crown, crown velocity (8 x 2N)."""
+    N = modal.N
+    e = np.eye(N)
+    clamp, pend, crown = e[model.clamp], e[N - 1], e[model.crown]
+    return np.array([modal.displacement_row(clamp), modal.displacement_row(pend),
+                     modal.velocity_row(clamp), modal.velocity_row(pend),
+                     modal.displacement_row(g), modal.velocity_row(g),
+                     modal.displacement_row(crown), modal.velocity_row(crown)])
+
+
+def _initial_state(model: BeamImpactModel) -> np.ndarray:
+    """z(0): everything at rest but the pendulum, at u_1 (the first touch, delta = 0)."""
+    N = model.dofs + 1
+    z = np.zeros(2 * N)
+    z[2 * N - 1] = model.impact_speed
+    return z
 
 
 def beam_record(model: BeamImpactModel, t_end: float, dt_sample: float):
     """Solve the beam impact exactly to ``t_end`` (s); an ``ImpactRecord`` every ``dt_sample``.
 
-    Also returns the crown deflection (m) at the same times.
+    The ``exact-full`` method: every sample's observables and energies as it goes. Also
+    returns the crown deflection (m) at the same times and the number of contact switches.
     """
     n, N = model.dofs, model.dofs + 1
     k_c, c_c = model.contact_stiffness, model.contact_damping
-    systems = {}
+    systems, forms, rows_of = {}, {}, {}
     for contact in (False, True):
-        A, g = _system(model, contact)
-        modal = _Modal(A)
-        if not np.all(np.isfinite(modal.W)):
-            raise SimulationDiverged("beam: the state matrix could not be diagonalised")
-        systems[contact] = (modal, g)
-    g = systems[True][1]
-    zero = np.zeros(N)
-    # observables: x, y, x', y', delta, delta', crown, crown velocity
-    rows = np.zeros((8, 2 * N))
-    rows[0, model.clamp] = rows[2, N + model.clamp] = 1.0
-    rows[1, n] = rows[3, N + n] = 1.0
-    rows[4, :N], rows[5, N:] = g, g
-    rows[6, model.crown] = rows[7, N + model.crown] = 1.0
-    Mf = np.zeros((N, N))
-    Mf[:n, :n], Mf[n, n] = model.M, model.impactor_mass
-    Kf = np.zeros((N, N))
-    Kf[:n, :n], Kf[n, n] = model.K, model.impactor_stiffness
-    Df = np.zeros((N, N))
-    Df[:n, :n] = model.D
-
-    def block(lower_right: bool, Q):
-        out = np.zeros((2 * N, 2 * N))
-        if lower_right:
-            out[N:, N:] = Q
-        else:
-            out[:N, :N] = Q
-        return out
-
-    q_kin, q_pot, q_damp = block(True, 0.5 * Mf), block(False, 0.5 * Kf), block(True, Df)
-    gg = np.concatenate([g, zero])
-    gv = np.concatenate([zero, g])
-    q_contact = 0.5 * k_c * (np.outer(gg, gv) + np.outer(gv, gg)) + c_c * np.outer(gv, gv)
-    forms = {c: {"kin": systems[c][0].quadratic(q_kin), "pot": systems[c][0].quadratic(q_pot),
-                 "damp": systems[c][0].quadratic(q_damp)} for c in (False, True)}
-    forms[True]["contact"] = systems[True][0].quadratic(q_contact)
+        M, C, K, g = _matrices(model, contact)
+        modal = _Modal(M, C, K)
+        systems[contact] = modal
+        forms[contact] = _forms(model, modal, contact, g)
+        rows_of[contact] = _observation_rows(model, modal, g)
 
     steps = int(math.ceil(t_end / dt_sample - 1e-9))
     t_grid = np.linspace(0.0, t_end, steps + 1)
     obs = np.zeros((8, t_grid.size))
     energy = np.zeros((4, t_grid.size))  # kinetic, potential, damping work, contact work
     in_contact = np.zeros(t_grid.size, dtype=bool)
-    z = np.zeros(2 * N)
-    z[2 * N - 1] = model.impact_speed
+    z = _initial_state(model)
     t, phase = 0.0, "contact"
     w_damp = w_contact = 0.0
     switches = 0
     max_switches = 100_000
     while True:
         contact = phase == "contact"
-        modal, _ = systems[contact]
+        modal, rows = systems[contact], rows_of[contact]
         w = modal.W @ z
         j0 = int(np.searchsorted(t_grid, t, side="left"))
         if j0 < t_grid.size and t_grid[j0] == t and t > 0:
@@ -362,28 +502,318 @@ def _root(func, lo, hi):
     return brentq(func, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
 
 
+#: Largest block of samples the ``exact`` method evaluates at once (32, 256, then this).
+_BLOCK = 1024
+_EPS = float(np.finfo(float).eps)
+
+
+class _State:
+    """One contact state of the ``exact`` method: its :class:`_Modal` solution, the
+    observation rows over the kept half of the spectrum, exp(lambda i h) for the sample
+    spacing h (i = 0.._BLOCK) and the work integrals of the ledger."""
+
+    def __init__(self, model: BeamImpactModel, contact: bool, h: float):
+        M, C, K, g = _matrices(model, contact)
+        self.modal = modal = _Modal(M, C, K)
+        self.contact = contact
+        forms = _forms(model, modal, contact, g, names=("damp", "contact"))
+        # the works' integrals: H_int stacked (damping; and the pad's, in contact)
+        self.H_int = np.stack([f.H_int for f in forms.values()])
+        self.H_lin = np.stack([f.H_lin for f in forms.values()])
+        self.secular = bool(np.any(self.H_lin))  # undamped pairs: the free pendulum's
+        k_c, c_c = model.contact_stiffness, model.contact_damping
+        kept = modal.kept
+        self.lam = modal.lam[kept]
+        rows = _observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
+        self.rows = (rows[:, kept] * modal.weight).T.copy()  # m x 8: obs = Re(U @ rows)
+        # delta and the law F = k_c delta + c_c delta', and their slopes
+        law = np.stack([self.rows[:, 4], k_c * self.rows[:, 4] + c_c * self.rows[:, 5]])
+        self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
+        # exp(lambda i h), i = 0.._BLOCK, by doubling (round-off log2(_BLOCK) eps)
+        steps = np.ones((_BLOCK + 1, len(kept)), dtype=complex)
+        steps[1] = np.exp(self.lam * h)
+        n = 1
+        while n < _BLOCK:
+            m = min(n, _BLOCK - n)
+            steps[n + 1:n + 1 + m] = steps[1:1 + m] * steps[n]
+            n += m
+        self.steps = steps
+        self.gd = modal.displacement_row(g)
+        self.k_c = k_c
+
+    def works(self, w: np.ndarray, s: float, a: np.ndarray | None = None) -> np.ndarray:
+        """The works of the trunk's damping (and of the pad, in contact) over [0, s] of a
+        phase started with modal coefficients w (``a`` = exp(lambda s) w if known), J: the
+        closed form of :class:`_Quadratic`."""
+        a = np.exp(self.modal.lam * s) * w if a is None else a
+        out = (self.H_int @ a) @ a - (self.H_int @ w) @ w
+        if self.secular:
+            out = out + s * ((self.H_lin @ w) @ w)
+        return out.real
+
+    def energies(self, u: np.ndarray) -> tuple[float, float, float]:
+        """(kinetic, elastic energy of the trunk's and pendulum's springs, the pad's elastic
+        energy k_c delta^2 / 2 when in contact; J) of the state u."""
+        N = self.modal.N
+        kin = 0.5 * float(u[N:] @ u[N:])
+        pot = 0.5 * float(u[:N] @ u[:N])
+        pad = 0.5 * self.k_c * float(self.gd @ u) ** 2 if self.contact else 0.0
+        return kin, pot - pad, pad
+
+
+@dataclass(frozen=True)
+class _Phase:
+    """One phase of the solution: start (s), kind ("contact", "overlap", "free"), modal
+    coefficients at its start over the full spectrum, damping and contact work so far (J)."""
+
+    t: float
+    kind: str
+    w: np.ndarray = field(repr=False)
+    damping_work: float
+    contact_work: float
+
+
+@dataclass(frozen=True)
+class _Solution:
+    """The exact solution as its phases, and its values at any time (SI units)."""
+
+    states: dict = field(repr=False)
+    phases: tuple
+    t_end: float
+    ledger: float  # max |energy ledger| / initial energy at every switch and at t_end
+
+    def phase_at(self, t: float) -> _Phase:
+        starts = [p.t for p in self.phases]
+        return self.phases[max(0, int(np.searchsorted(starts, t, side="right")) - 1)]
+
+    def contact_loss(self, t: float) -> float:
+        """The pad's work so far less the elastic energy it holds at ``t`` (s), J."""
+        p = self.phase_at(t)
+        if p.kind != "contact":
+            return p.contact_work
+        st = self.states[True]
+        work = p.contact_work + float(st.works(p.w, t - p.t)[1])
+        u = (st.modal.Vu @ (np.exp(st.modal.lam * (t - p.t)) * p.w)).real
+        return work - st.energies(u)[2]
+
+
+@dataclass(frozen=True)
+class _ExactSamples:
+    """What :func:`analytic.records.metrics_from_record` reads, from the exact solution:
+    the motion on the sample grid (SI) and the energies in closed form where it reads them."""
+
+    t: np.ndarray
+    x: np.ndarray
+    vx: np.ndarray
+    y: np.ndarray
+    vy: np.ndarray
+    force: np.ndarray
+    pendulum_energy: np.ndarray
+    crown: np.ndarray
+    crown_velocity: np.ndarray
+    solution: _Solution = field(repr=False)
+
+    def contact_loss(self, t: float) -> float:
+        return self.solution.contact_loss(t)
+
+    def ledger_residual(self, initial_energy: float) -> float:
+        return self.solution.ledger
+
+
+def _solve_exact(model: BeamImpactModel, t_end: float, dt_sample: float):
+    """The ``exact`` method: the solution's phases and the observables on the sample grid.
+
+    The same phases, switches and samples as :func:`beam_record`, evaluated where needed:
+    within a phase the modal coordinates at the samples are exp(lambda i h) times those at a
+    block's first sample (no exponential per sample), only the 8 observables are formed, and
+    each switch is refined by Newton's method on the exact solution. The energy ledger is
+    checked at every switch and at t_end. Returns ``(_ExactSamples, switches)``.
+    """
+    steps = int(math.ceil(t_end / dt_sample - 1e-9))
+    t_grid = np.linspace(0.0, t_end, steps + 1)
+    states = {c: _State(model, c, t_end / steps) for c in (False, True)}
+    to_state = {True: states[True].modal.transfer(states[False].modal),
+                False: states[False].modal.transfer(states[True].modal)}
+    n_t = t_grid.size
+    obs = np.empty((n_t, 8))
+    in_contact = np.zeros(n_t, dtype=bool)
+    e0 = model.initial_energy
+    u = states[True].modal.Tinv @ _initial_state(model)
+    t, kind = 0.0, "contact"
+    work = np.zeros(2)  # damping, pad
+    phases, ledger = [], 0.0
+    switches, max_switches = 0, 100_000
+    k_c, c_c = model.contact_stiffness, model.contact_damping
+    while True:
+        contact = kind == "contact"
+        st = states[contact]
+        w = st.modal.Wu @ u
+        phases.append(_Phase(t, kind, w, float(work[0]), float(work[1])))
+        wk = w[st.modal.kept]
+        j0 = int(np.searchsorted(t_grid, t, side="left"))
+        end = None
+        j, block = j0, 32
+        base = np.exp(st.lam * (t_grid[j0] - t)) * wk if j0 < n_t else None
+        while j < n_t:
+            jj = min(n_t, j + block)
+            ob = (st.steps[:jj - j] @ (base[:, None] * st.rows)).real
+            d, f = ob[:, 4], k_c * ob[:, 4] + c_c * ob[:, 5]
+            if contact:
+                cond = f <= 0.0
+            elif kind == "overlap":
+                cond = (f > 0.0) | (d < 0.0)
+            else:
+                cond = d > 0.0
+            if j == j0 and t_grid[j0] == t:
+                cond[0] = False  # the phase's own start
+            k = int(np.argmax(cond))
+            if cond[k]:
+                s_hi = t_grid[j + k] - t
+                s_lo = max(t_grid[j + k - 1] - t, 0.0) if j + k > j0 else 0.0
+                end = _locate_exact(kind, st, wk, s_lo, s_hi, d[k], f[k])
+                jj = j + k
+                obs[j:jj] = ob[:k]
+                in_contact[j:jj] = contact
+                break
+            obs[j:jj] = ob
+            in_contact[j:jj] = contact
+            base = base * st.steps[jj - j]
+            j, block = jj, min(8 * block, _BLOCK)
+        end_s, nxt = end if end is not None else (t_end - t, None)
+        # the state and the works at the switch (or at t_end), and the ledger there
+        a = np.exp(st.modal.lam * end_s) * w
+        work += st.works(w, end_s, a) if contact else (st.works(w, end_s, a)[0], 0.0)
+        u = (st.modal.Vu @ a).real
+        kin, pot, _ = st.energies(u)
+        if not math.isfinite(kin + pot):
+            raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
+        ledger = max(ledger, abs(kin + pot + work.sum() - e0) / e0)
+        if nxt is None:
+            break
+        t += end_s
+        if (nxt == "contact") != contact:  # to the other state's energy coordinates
+            u = to_state[nxt == "contact"] @ u
+        kind = nxt
+        switches += 1
+        if switches > max_switches:
+            raise SimulationDiverged(f"beam: more than {max_switches} contact switches by "
+                                     f"t = {t:.6g} s (chatter does not end)")
+    x, y, vx, vy, delta, ddelta, crown, crown_v = obs.T
+    force = np.where(in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
+    m, kp = model.impactor_mass, model.impactor_stiffness
+    solution = _Solution(states=states, phases=tuple(phases), t_end=t_end, ledger=ledger)
+    samples = _ExactSamples(t=t_grid, x=x, vx=vx, y=y, vy=vy, force=force,
+                            pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2, crown=crown,
+                            crown_velocity=crown_v, solution=solution)
+    return samples, switches
+
+
+def _locate_exact(kind: str, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
+                  d_hi: float, f_hi: float):
+    """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]: the rule
+    of :func:`_locate`, on the exact solution's delta and law with their slopes (Newton)."""
+    lam, law = st.lam, st.law
+
+    def at(s):  # delta, F, delta', F'
+        return (np.exp(lam * s) * wk) @ law
+
+    def fun(i):
+        def value(s):
+            v = at(s).real
+            return float(v[i]), float(v[i + 2])
+        return value
+
+    d, f = fun(0), fun(1)
+    if kind == "contact":
+        s = _root_exact(f, s_lo, s_hi, f_hi)
+        return s, ("overlap" if d(s)[0] > 0.0 else "free")
+    if kind == "free":
+        return _root_exact(d, s_lo, s_hi, d_hi), "contact"
+    cand = []
+    if f_hi > 0.0:
+        cand.append((_root_exact(f, s_lo, s_hi, f_hi), "contact"))
+    if d_hi < 0.0:
+        cand.append((_root_exact(d, s_lo, s_hi, d_hi), "free"))
+    return min(cand)
+
+
+def _root_exact(fun, lo: float, hi: float, f_hi: float) -> float:
+    """:func:`_root` for ``fun`` returning (value, slope), ``f_hi`` its value at hi: a phase
+    that starts on its own boundary (value 0 at lo) is bracketed from just after its start;
+    then Newton's steps inside the shrinking bracket (bisection otherwise), to 1e-15 s."""
+    f_lo = fun(lo)[0]
+    if f_lo * f_hi > 0 or f_lo == 0.0:
+        step = (hi - lo) * 1e-9
+        while step < (hi - lo):
+            f_lo = fun(lo + step)[0]
+            if f_lo * f_hi < 0:
+                lo = lo + step
+                break
+            step *= 10.0
+        else:
+            return hi
+    s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
+    tol = 1e-15 + 4 * _EPS * abs(hi)
+    for _ in range(100):
+        f, slope = fun(s)
+        if f == 0.0:
+            return s
+        if (f > 0.0) == (f_lo > 0.0):
+            lo, f_lo = s, f
+        else:
+            hi = s
+        nxt = s - f / slope if slope != 0.0 else 0.5 * (lo + hi)
+        if not lo < nxt < hi:
+            nxt = 0.5 * (lo + hi)
+        if abs(nxt - s) <= tol or hi - lo <= tol:
+            return nxt
+        s = nxt
+    return s
+
+
+def _sampled_record(model: BeamImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:
+    """The ``exact`` method's record when first read: :func:`beam_record`'s samples."""
+    return beam_record(model, t_end, dt_sample)[0]
+
+
 def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                   calibration: str = "pad", restitution: float | None = None,
                   contact_stiffness: float | None = None,
-                  contact_duration: float | None = None, t_end: float | None = None):
+                  contact_duration: float | None = None, t_end: float | None = None,
+                  method: str = "exact", beam_theory: str = "euler-bernoulli"):
     """The scenario with the continuum trunk and the pad, solved exactly to ``t_end`` (s).
 
     Returns a SimulationResult (backend "beam") with the metrics of
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
+    ``method`` (:data:`METHODS`) changes the cost, not the solution; ``beam_theory``
+    (``euler-bernoulli`` or ``timoshenko``: shear deformation and rotary inertia, the
+    scenario's trunk.shear_modulus and shear_coefficient) the trunk.
     """
     t_end = scenario.t_end if t_end is None else t_end
     check_range("--t-end", t_end, low=0, low_open=True, unit="s")
+    if method not in METHODS:
+        raise ParameterError(f"--method = {method!r}: allowed {', '.join(METHODS)}")
     model, sdof = beam_impact_model(scenario, elements=elements, restitution=restitution,
                                     contact_stiffness=contact_stiffness,
-                                    duration=contact_duration, calibration=calibration)
+                                    duration=contact_duration, calibration=calibration,
+                                    beam_theory=beam_theory)
     t_col = collision_duration(sdof, model.contact_stiffness, model.contact_damping)
 
     dt = t_col / SAMPLES_PER_COLLISION
     check_work(t_end, dt, 8.0 * 16)
-    record, crown, switches = beam_record(model, t_end, dt)
     t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
-    metrics = model_metrics(record, sdof, scenario.impactor, collision_duration=t_detect)
-    model_dict = {**sdof.as_dict(), "elements": model.elements, "calibration": calibration,
+    if method == "exact-full":
+        record, crown, switches = beam_record(model, t_end, dt)
+        samples, trajectory = record, record.trajectory()
+    else:
+        samples, switches = _solve_exact(model, t_end, dt)
+        record = ImpactRecord.deferred(partial(_sampled_record, model, t_end, dt))
+        crown = samples.crown
+        trajectory = Trajectory(t=samples.t, x=samples.x, vx=samples.vx, y=samples.y,
+                                vy=samples.vy, force=samples.force)
+    metrics = model_metrics(samples, sdof, scenario.impactor, collision_duration=t_detect)
+    model_dict = {**sdof.as_dict(), "elements": model.elements, "beam_theory": beam_theory,
+                  "calibration": calibration,
                   "contact_stiffness": model.contact_stiffness,
                   "contact_damping": model.contact_damping,
                   "effective_mass": model.effective_mass, "contact_switches": switches,
@@ -393,19 +823,21 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     scen["contact"]["restitution"] = sdof.restitution
     return SimulationResult(
         backend="beam", metrics=metrics, model=model_dict, scenario=scen,
-        trajectory=record.trajectory(),
-        record=record, collision_duration=t_col, extra={"crown": crown})
+        trajectory=trajectory, record=record, collision_duration=t_col,
+        extra={"crown": crown})
 
 
-def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int = 3) -> dict:
+def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int = 3,
+          beam_theory: str = "euler-bernoulli") -> dict:
     """``model``: the backend's mesh (static stiffness at a, N/m; frequencies, rad/s);
-    ``beam``: the 160-element reference of :func:`analytic.continuum.modes.beam_reference`."""
+    ``beam``: the 160-element reference of :func:`analytic.continuum.modes.beam_reference`,
+    both in ``beam_theory``."""
     import scipy.linalg
 
-    model, _ = beam_impact_model(scenario, elements=elements)
+    model, _ = beam_impact_model(scenario, elements=elements, beam_theory=beam_theory)
     e = np.zeros(model.dofs)
     e[model.clamp] = 1.0
     stiffness = 1.0 / float(np.linalg.solve(model.K, e)[model.clamp])
     w2 = scipy.linalg.eigh(model.K, model.M, eigvals_only=True, subset_by_index=[0, n_modes - 1])
     return {"model": {"static_stiffness": stiffness, "omegas": [float(v) for v in np.sqrt(w2)]},
-            "beam": beam_reference(scenario, n_modes)}
+            "beam": beam_reference(scenario, n_modes, beam_theory)}

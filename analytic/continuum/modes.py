@@ -10,10 +10,13 @@ from treeimpact.analytic.model.reduction import reduce_trunk
 from .beam import beam_natural_frequencies, beam_static_stiffness
 
 
-def beam_reference(scenario: Scenario, n_modes: int = 3) -> dict:
-    """The continuous Euler-Bernoulli trunk (analytic.continuum.beam): N/m and rad/s."""
-    return {"static_stiffness": float(beam_static_stiffness(scenario.trunk)),
-            "omegas": [float(w) for w in beam_natural_frequencies(scenario.trunk, n_modes)]}
+def beam_reference(scenario: Scenario, n_modes: int = 3,
+                   beam_theory: str = "euler-bernoulli") -> dict:
+    """The continuous trunk (analytic.continuum.beam) in ``beam_theory``, Euler-Bernoulli by
+    default: static stiffness at a (N/m) and natural frequencies (rad/s)."""
+    trunk = scenario.trunk
+    return {"static_stiffness": float(beam_static_stiffness(trunk, beam_theory)),
+            "omegas": [float(w) for w in beam_natural_frequencies(trunk, n_modes, beam_theory)]}
 
 
 def modes(scenario: Scenario, *, n_modes: int = 3) -> dict:

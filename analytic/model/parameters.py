@@ -33,6 +33,8 @@ LIMITS = {
     "trunk.crown_mass": (0.0, 1e4, "kg"),
     "trunk.damping": (0.0, 1e6, "N s/m^2"),
     "trunk.base_stiffness": (10.0, math.inf, "N m/rad"),
+    "trunk.shear_modulus": (1e6, math.inf, "Pa"),
+    "trunk.shear_coefficient": (0.1, 1.0, "1"),
     "impactor.mass": (0.1, 1e4, "kg"),
     "impactor.equivalent_length": (0.05, 30.0, "m"),
     "impactor.release_angle_deg": (0.01, 180.0, "deg"),
@@ -43,6 +45,21 @@ LIMITS = {
     "contact.duration": (1e-6, 0.1, "s"),
     "t_end": (1e-4, 10.0, "s"),
 }
+
+
+#: Default E / G of the trunk's wood (Timoshenko beam theory only): the USDA Wood Handbook
+#: (FPL-GTR-282, 2021, Table 5-1, about 12 % moisture) lists G_LR / E_L and G_LT / E_L of
+#: hardwoods between about 0.04 and 0.15, typically 0.06-0.09 (white ash 0.109 and 0.077,
+#: eastern cottonwood 0.076 and 0.052, yellow birch G_LR / E_L 0.074); a round stem shears in
+#: both planes, so G = E / 13 (G / E = 0.077), the middle of the typical range. No green-wood
+#: ratios are tabulated: the ratio is taken as is. docs/beam-impact.md.
+DEFAULT_E_OVER_G = 13.0
+#: Poisson's ratio for the shear coefficient: a typical longitudinal ratio of hardwoods
+#: (Wood Handbook Table 5-2: white ash mu_LR 0.371, mu_LT 0.440).
+DEFAULT_POISSON = 0.4
+#: kappa = 6 (1 + nu) / (7 + 6 nu) of a solid circular section (Cowper 1966, J. Appl. Mech.
+#: 33:335-340) at DEFAULT_POISSON: 0.8936 (0.886-0.900 for nu in [0.3, 0.5]).
+DEFAULT_SHEAR_COEFFICIENT = 6.0 * (1.0 + DEFAULT_POISSON) / (7.0 + 6.0 * DEFAULT_POISSON)
 
 
 def check_limit(path: str, value, *, high=None) -> float:
@@ -90,6 +107,9 @@ class Trunk:
     crown_mass: float = 0.0  # m_f, kg
     damping: float = 0.0  # C, N s/m^2: viscous damping force per unit length per unit velocity
     base_stiffness: float = math.inf  # k_theta, N m/rad
+    # Timoshenko beam theory only (None: the defaults above); inf: rigid in shear
+    shear_modulus: float | None = None  # G, Pa (default E / DEFAULT_E_OVER_G)
+    shear_coefficient: float | None = None  # kappa, 1 (default DEFAULT_SHEAR_COEFFICIENT)
 
     def __post_init__(self):
         check_limit("trunk.length", self.length)
@@ -102,6 +122,10 @@ class Trunk:
         check_limit("trunk.crown_mass", self.crown_mass)
         check_limit("trunk.damping", self.damping)
         check_limit("trunk.base_stiffness", self.base_stiffness)
+        if self.shear_modulus is not None:
+            check_limit("trunk.shear_modulus", self.shear_modulus)
+        if self.shear_coefficient is not None:
+            check_limit("trunk.shear_coefficient", self.shear_coefficient)
 
     @property
     def area(self) -> float:
@@ -117,6 +141,16 @@ class Trunk:
     def bending_stiffness(self) -> float:
         """E I, N m^2."""
         return self.youngs_modulus * self.second_moment
+
+    @property
+    def shear_rigidity(self) -> float:
+        """kappa G A, N: the section's shear stiffness (Timoshenko; inf when rigid in shear),
+        with the defaults for a G or kappa not given."""
+        g = (self.youngs_modulus / DEFAULT_E_OVER_G if self.shear_modulus is None
+             else self.shear_modulus)
+        kappa = (DEFAULT_SHEAR_COEFFICIENT if self.shear_coefficient is None
+                 else self.shear_coefficient)
+        return kappa * g * self.area
 
     @property
     def trunk_mass(self) -> float:
@@ -245,6 +279,7 @@ class Scenario:
                 "density": t.density, "youngs_modulus": t.youngs_modulus,
                 "clamp_mass": t.clamp_mass, "crown_mass": t.crown_mass, "damping": t.damping,
                 "base_stiffness": None if math.isinf(t.base_stiffness) else t.base_stiffness,
+                "shear_modulus": t.shear_modulus, "shear_coefficient": t.shear_coefficient,
             },
             "impactor": impactor,
             "contact": {"restitution": self.contact.restitution,

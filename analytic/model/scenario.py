@@ -5,7 +5,8 @@ Layout of a scenario file (SI units; angles in degrees where the key says ``_deg
     name = "open-center"
     t_end = 0.1                      # s
     [trunk]       length, clamp_height, diameter, density, youngs_modulus,
-                  clamp_mass, crown_mass, damping, base_stiffness (inf: a rigid clamp)
+                  clamp_mass, crown_mass, damping, base_stiffness (inf: a rigid clamp),
+                  shear_modulus?, shear_coefficient? (Timoshenko theory; default E / 13, 0.894)
     [impactor]    type = "pendulum": mass, equivalent_length, release_angle_deg, gravity?
                   type = "billet":   mass, impact_speed
     [contact]     restitution, stiffness? | duration?
@@ -27,7 +28,7 @@ from treeimpact.analytic.errors import ParameterError
 from .parameters import Billet, Contact, Pendulum, Scenario, Trunk, check_limit
 
 _TRUNK_KEYS = {"length", "clamp_height", "diameter", "density", "youngs_modulus", "clamp_mass",
-               "crown_mass", "damping", "base_stiffness"}
+               "crown_mass", "damping", "base_stiffness", "shear_modulus", "shear_coefficient"}
 _TRUNK_REQUIRED = {"length", "clamp_height", "diameter", "density", "youngs_modulus"}
 #: Required too (a missing mass or damping is not silently 0), but reported after the
 #: values that are given have been checked: what is wrong comes before what is missing.

@@ -10,7 +10,8 @@ from .parameters import STANDARD_GRAVITY, Scenario
 
 _UNITS = {"length": "m", "clamp_height": "m", "diameter": "m", "density": "kg/m^3",
           "youngs_modulus": "Pa", "clamp_mass": "kg", "crown_mass": "kg",
-          "damping": "N s/m^2", "base_stiffness": "N m/rad", "mass": "kg",
+          "damping": "N s/m^2", "base_stiffness": "N m/rad", "shear_modulus": "Pa",
+          "shear_coefficient": "1", "mass": "kg",
           "equivalent_length": "m", "release_angle_deg": "deg", "gravity": "m/s^2",
           "impact_speed": "m/s", "restitution": "1", "stiffness": "N/m", "duration": "s",
           "t_end": "s"}
