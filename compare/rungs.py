@@ -27,6 +27,7 @@ class RungKind(StrEnum):
     NEWTON = "newton"
     CONTACT = "contact"
     BEAM = "beam"
+    BEAM_THEORY = "beam_theory"
     CONVENTION = "convention"
     ENGINE = "engine"
     CHAIN = "chain"
@@ -68,16 +69,19 @@ _KINDS = {
                        "C", "contact model (spring-dashpot vs Newton's e)"),
     RungKind.BEAM: (3, "1-DOF assumption: continuum Euler-Bernoulli trunk, the same pad", "B",
                     "1-DOF assumption (continuum trunk vs SDOF, same pad)"),
-    RungKind.CONVENTION: (4, "restitution convention: c_c recalibrated so e holds on the "
+    RungKind.BEAM_THEORY: (4, "beam theory: the continuum with shear and rotary inertia "
+                              "(Timoshenko, the scenario's shear modulus), the same pad", "T",
+                           "beam theory (Timoshenko vs Euler-Bernoulli continuum)"),
+    RungKind.CONVENTION: (5, "restitution convention: c_c recalibrated so e holds on the "
                              "clamp's effective mass", "R",
                           "restitution convention (c_c for e on the clamp's mass)"),
-    RungKind.ENGINE: (5, "engine numerics: engine SDOF (slide joint) + the pad", "E",
+    RungKind.ENGINE: (6, "engine numerics: engine SDOF (slide joint) + the pad", "E",
                       "engine numerics (engine SDOF vs analytic soft contact)"),
-    RungKind.CHAIN: (6, "discretisation: the engine's hinged-segment trunk against the "
+    RungKind.CHAIN: (7, "discretisation: the engine's hinged-segment trunk against the "
                         "continuum", "D", "discretisation (engine's hinged chain vs continuum)"),
-    RungKind.PENDULUM: (7, "pendulum linearisation: full pendulum released from theta_r", "P",
+    RungKind.PENDULUM: (8, "pendulum linearisation: full pendulum released from theta_r", "P",
                         "pendulum linearisation (full vs linear pendulum)"),
-    RungKind.MODEL: (5, "engine as configured against the soft SDOF (numerics, trunk and "
+    RungKind.MODEL: (6, "engine as configured against the soft SDOF (numerics, trunk and "
                         "pendulum together)", "M",
                      "engine as configured vs analytic soft contact (numerics, trunk and "
                      "pendulum together; run a ladder sweep to separate them)"),
@@ -119,6 +123,8 @@ def rung_table(engines=ENGINES, *, segments: int | None = None,
     rungs = [Rung("analytic", RungKind.NEWTON, "analytic", tuple(analytic_options), None),
              Rung("soft", RungKind.CONTACT, "soft", (), "analytic"),
              Rung("beam", RungKind.BEAM, "beam", (), "soft"),
+             Rung("beam-timoshenko", RungKind.BEAM_THEORY, "beam",
+                  (("beam_theory", "timoshenko"),), "beam"),
              Rung("beam-effective", RungKind.CONVENTION, "beam",
                   (("calibration", "effective"),), "beam")]
     for eng in engines:

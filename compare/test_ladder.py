@@ -36,10 +36,12 @@ TOL = load_tolerances()
 def test_each_rung_changes_exactly_one_assumption():
     rungs = {r.id: r for r in ladder_rungs("open-center", engines=("mujoco", "bullet"),
                                            segments=7)}
-    assert [r.level for r in rungs.values()] == [1, 2, 3, 4, 5, 6, 7, 5, 6, 7]
+    assert [r.level for r in rungs.values()] == [1, 2, 3, 4, 5, 6, 7, 8, 6, 7, 8]
     assert rungs["analytic"].previous is None and rungs["soft"].previous == "analytic"
     # the trunk alone: the beam backend takes the soft SDOF's pad (k_c, c_c) by default
     assert rungs["beam"].previous == "soft" and rungs["beam"].options == ()
+    theory = rungs["beam-timoshenko"]  # the beam theory alone, the same pad
+    assert theory.previous == "beam" and dict(theory.options) == {"beam_theory": "timoshenko"}
     convention = rungs["beam-effective"]
     assert convention.previous == "beam" and convention.backend == "beam"
     assert dict(convention.options) == {"calibration": "effective"}
@@ -115,7 +117,7 @@ def test_ladder_keeps_unavailable_rungs_as_explicit_skips():
         assert all(math.isnan(v) for v in r.values.values())
         assert "rung not run" in r.identification.reason
     js = ladder.to_json()
-    assert [r["status"] for r in js["rungs"]] == ["ok"] * 4 + ["skipped"] * 3
+    assert [r["status"] for r in js["rungs"]] == ["ok"] * 5 + ["skipped"] * 3
     # no check is made against a rung that did not run
     assert not {c.rung for c in ladder.checks()} & {r.rung.id for r in skipped}
 

@@ -33,6 +33,7 @@ _DEFAULT_SHADES = ("#2ca02c", "#5fd35f", "#98df8a")
 _REFERENCE_STYLES = {RungKind.NEWTON: {"color": "black", "ls": "-", "lw": 1.8},
                      RungKind.CONTACT: {"color": "#7f7f7f", "ls": "--", "lw": 1.6},
                      RungKind.BEAM: {"color": "#9467bd", "ls": "-", "lw": 1.6},
+                     RungKind.BEAM_THEORY: {"color": "#8c564b", "ls": "-.", "lw": 1.4},
                      RungKind.CONVENTION: {"color": "#c5b0d5", "ls": "--", "lw": 1.4}}
 
 
