@@ -9,6 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.contact.law import collision_duration, restitution_for_damping_ratio
+from treeimpact.analytic.contact.linear_impact import Modal, matrices, record, solve, system
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam import (
     beam_matrices,
@@ -17,12 +18,7 @@ from treeimpact.analytic.continuum.beam import (
 )
 from treeimpact.analytic.continuum.beam_impact import (
     SAMPLES_PER_COLLISION,
-    _matrices,
-    _Modal,
-    _solve_exact,
-    _system,
     beam_impact_model,
-    beam_record,
     simulate_beam,
 )
 from treeimpact.analytic.errors import ParameterError
@@ -66,8 +62,8 @@ def test_consistent_damping_is_the_distributed_damping():
 def _ode_reference(model, t_end, t_eval):
     """The same matrices integrated by DOP853 with the stateless law F = max(0, k d + c d') for
     d > 0: an independent solution of the piecewise-linear system."""
-    A_free, g = _system(model, False)
-    A_touch, _ = _system(model, True)
+    A_free, g = system(model, False)
+    A_touch, _ = system(model, True)
     N = len(g)
 
     def rhs(_t, z):
@@ -88,14 +84,14 @@ def test_exact_stepping_matches_an_ode_integration(method):
     model, _ = beam_impact_model(scenario, elements=4)
     t_end = 0.02
     if method == "exact-full":
-        record, _, switches = beam_record(model, t_end, 5e-6)
+        got, _, switches = record(model, t_end, 5e-6)
     else:
-        record, switches = _solve_exact(model, t_end, 5e-6)
-    x_ref, y_ref = _ode_reference(model, t_end, record.t)
+        got, switches = solve(model, t_end, 5e-6)
+    x_ref, y_ref = _ode_reference(model, t_end, got.t)
     assert switches >= 4  # the window holds the chattering, not one smooth contact
     # the reference's error: its steps straddle each kink of the law (2 us max step)
-    np.testing.assert_allclose(record.x, x_ref, atol=1e-6 * np.abs(x_ref).max())
-    np.testing.assert_allclose(record.y, y_ref, atol=1e-6 * np.abs(y_ref).max())
+    np.testing.assert_allclose(got.x, x_ref, atol=1e-6 * np.abs(x_ref).max())
+    np.testing.assert_allclose(got.y, y_ref, atol=1e-6 * np.abs(y_ref).max())
 
 
 def _whole_event_reference(model, t_end):
@@ -103,8 +99,8 @@ def _whole_event_reference(model, t_end):
     integrated by DOP853 (rtol 1e-11), restarted at every switch of the law (terminal events
     on delta and on k_c delta + c_c delta', so that no step straddles a kink), with the pad's
     work int F delta' dt as an extra state: independent of the modal solution."""
-    A = {c: _system(model, c)[0] for c in (False, True)}
-    g = _system(model, True)[1]
+    A = {c: system(model, c)[0] for c in (False, True)}
+    g = system(model, True)[1]
     N, k_c, c_c = len(g), model.contact_stiffness, model.contact_damping
 
     def rhs(contact):
@@ -167,8 +163,8 @@ def _expm_rebound(model, t_end, h, bits=45):
     the phases' rule of :func:`analytic.continuum.beam_impact._locate`."""
     import scipy.linalg
 
-    A = {c: _system(model, c)[0] for c in (False, True)}
-    g = _system(model, True)[1]
+    A = {c: system(model, c)[0] for c in (False, True)}
+    g = system(model, True)[1]
     N, k_c, c_c = len(g), model.contact_stiffness, model.contact_damping
     E = {c: [scipy.linalg.expm(A[c] * (h / 2.0 ** b)) for b in range(bits + 1)] for c in A}
 
@@ -228,11 +224,11 @@ def test_fine_meshes_rebound_as_a_matrix_exponential_says(elements):
 def test_energy_coordinates_keep_the_eigenvectors_well_conditioned(name):
     """The cause of the 48-element drift and its fix: the eigenvectors of the raw state
     matrix of (q, q') have cond 3e7 (12 elements) to 1e9 (48); in the energy coordinates of
-    the undamped modes (analytic.continuum.beam_impact._Modal) 1.4-2.1."""
+    the undamped modes (analytic.continuum.beam_impact.Modal) 1.4-2.1."""
     model, _ = beam_impact_model(load_scenario(name), elements=48)
     for contact in (False, True):
-        assert _Modal(*_matrices(model, contact)[:3]).condition < 10.0  # measured <= 2.1
-        raw = np.linalg.eig(_system(model, contact)[0])[1]
+        assert Modal(*matrices(model, contact)[:3]).condition < 10.0  # measured <= 2.1
+        raw = np.linalg.eig(system(model, contact)[0])[1]
         assert np.linalg.cond(raw) > 1e8  # what the solver no longer diagonalises
 
 

@@ -7,9 +7,10 @@ import math
 import numpy as np
 import pytest
 
+from treeimpact.analytic.contact.linear_impact import record
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam import beam_matrices, deflection_dof
-from treeimpact.analytic.continuum.beam_impact import beam_impact_model, beam_record, simulate_beam
+from treeimpact.analytic.continuum.beam_impact import beam_impact_model, simulate_beam
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.reduction import crown_factor
 from treeimpact.analytic.model.scenario import load_scenario
@@ -111,7 +112,7 @@ def test_beam_crown_velocity_is_the_derivative_of_its_motion():
     """The beam's exact crown velocity against a central difference of its crown motion."""
     model, _ = beam_impact_model(load_scenario("central-leader"))
     dt = 1e-7  # (omega dt)^2 / 6 < 1e-4 for the mesh's highest mode (~1e5 rad/s)
-    rec, _, _ = beam_record(model, 0.0101, dt)
+    rec, _, _ = record(model, 0.0101, dt)
     t, c, v = rec.t, rec.crown, rec.crown_velocity
     k = np.flatnonzero(t > 0.01)[:-1]
     fd = (c[k + 1] - c[k - 1]) / (2 * dt)
