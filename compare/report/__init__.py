@@ -129,6 +129,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     summary = _summary(sections["scenarios"])
     summary["answer"] = _answer(sections["scenarios"])
+    _with_sensitivity(summary["answer"], sections["studies"])
     summary["answer_metrics"] = ANSWER_METRICS
     summary["answer_tolerance"] = validity_tolerance()
     summary["contact"] = sections["contact"]
@@ -207,6 +208,15 @@ def _answer(scen_sections) -> list[dict]:
                     "explained": bool(explained) and all(explained),
                     "contact_duration": contact.duration, "restitution": contact.restitution})
     return out
+
+
+def _with_sensitivity(answer: list[dict], studies) -> None:
+    """Each answer row with its cells' ranges over the unmeasured inputs and the input that
+    moves each most, from a study with a sensitivity part (compare.sensitivity)."""
+    trees = next((s.study["sensitivity"]["trees"] for s in studies
+                  if s.study and s.study.get("sensitivity")), {})
+    for row in answer:
+        row["sensitivity"] = (trees.get(row["scenario"]) or {}).get("outputs") or {}
 
 
 #: How many of the largest discrepancies the summary lists, whatever their verdict.

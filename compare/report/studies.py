@@ -33,6 +33,7 @@ def _figures_of(study: dict) -> set:
                                                                             [])]
     named += [c.get("figure") for c in study.get("speed", {}).get("curves", [])]
     named += list((study.get("identification_validation") or {}).get("figures", []))
+    named.append((study.get("sensitivity") or {}).get("figure"))
     return {n for n in named if n}
 
 

@@ -26,6 +26,7 @@ SCENARIO = "scenario"
 OPTION = "option"
 DERIVED = "derived"
 RECORD = "record"
+INPUT = "input"
 
 #: How a run's record is sampled before an analysis reads it (``record.NAME`` axes; a sweep
 #: with such axes needs an analysis that takes them): (type, low, low included, unit).
@@ -100,6 +101,8 @@ def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
                              f"a ratio ({', '.join(DERIVED_RATIOS)}) or a backend option")
     if name in DERIVED_RATIOS:
         return Parameter(name, DERIVED, name)
+    if name.startswith("input.") and _NAME_RE.match(name.split(".", 1)[1]):
+        return Parameter(name, INPUT, name.split(".", 1)[1])  # read by an analysis
     if name.startswith("record."):
         field = name.split(".", 1)[1]
         if field not in RECORD_FIELDS:
@@ -287,6 +290,35 @@ class Grid:
             if a.name == name:
                 return a
         raise KeyError(name)
+
+
+@dataclass(frozen=True)
+class Design(Grid):
+    """Explicit points instead of a cartesian product (a sampling design, e.g. Morris):
+    ``design`` holds one tuple of values per point, in the axes' order."""
+
+    design: tuple = ()
+
+    @classmethod
+    def of(cls, names, points) -> "Design":
+        """A design over ``names`` (grid NAMEs) with ``points`` (tuples of numbers)."""
+        params = [resolve_parameter(n) for n in names]
+        points = tuple(tuple(float(v) for v in p) for p in points)
+        if not points or any(len(p) != len(params) for p in points):
+            raise ParameterError(f"design: {len(points)} points, each needs {len(params)} "
+                                 f"values ({', '.join(names)})")
+        axes = tuple(Axis(p, tuple(sorted({pt[i] for pt in points})))
+                     for i, p in enumerate(params))
+        return cls(axes, points)
+
+    def __len__(self) -> int:
+        return len(self.design)
+
+    def points(self) -> list[dict]:
+        return [dict(zip(self.names, p)) for p in self.design]
+
+    def specs(self) -> list[str]:
+        return [f"design of {len(self.design)} points over {', '.join(self.names)}"]
 
 
 def parse_grid(specs, flag: str = "--grid") -> Grid:

@@ -474,3 +474,56 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
                                 f"{DEFAULT_TOLERANCE:.0%}; grey: the procedure failed (n/a)."),
                     "summary": summary})
     return out
+
+
+#: Short labels of the sensitivity study's inputs and outputs on its figure.
+_INPUT_LABELS = {"clamp_mass": "clamp\nmass", "e_over_g": "E / G\n(shear)",
+                 "log10_pad_duration": "pad\nstiffness", "restitution": "pad e",
+                 "root_share": "root\ncompliance", "density": "wood\ndensity"}
+_OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
+                  "gap.crown_peak": "crown peak gap",
+                  "gap.crown_peak_acceleration": "crown accel. gap",
+                  "gap.peak_force": "force gap", "crossing.x_max": "crossing, x_max",
+                  "crossing.energy_delivered": "crossing, energy"}
+
+
+def sensitivity_figure(trees: dict, path: Path) -> Path | None:
+    """One panel per tree: each output's Morris mu* as a share of its row (which unmeasured
+    input moves that answer most), the dominant input outlined; one colour scale for all."""
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    trees = {n: t for n, t in trees.items() if t.get("outputs")}
+    if not trees:
+        return None
+    names = list(trees)
+    outputs = list(next(iter(trees.values()))["outputs"])
+    inputs = list(_INPUT_LABELS)
+    fig = Figure(figsize=(3.3 * len(names) + 1.6, 0.42 * len(outputs) + 1.9),
+                 layout="constrained")
+    axes = fig.subplots(1, len(names), squeeze=False, sharey=True)[0]
+    im = None
+    for ax, name in zip(axes, names):
+        rows = trees[name]["outputs"]
+        Z = np.array([[rows[o]["mu_star"][i] for i in inputs] for o in outputs], float)
+        Z = Z / np.maximum(Z.sum(axis=1, keepdims=True), 1e-300)
+        im = ax.imshow(Z, vmin=0.0, vmax=1.0, cmap="Blues", aspect="auto")
+        for r, o in enumerate(outputs):
+            for c, i in enumerate(inputs):
+                ax.text(c, r, f"{100 * Z[r, c]:.0f}", ha="center", va="center", fontsize=8,
+                        color="w" if Z[r, c] > 0.55 else "k")
+            c = inputs.index(rows[o]["dominant"])
+            ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, lw=1.6, ec="k"))
+        ax.set_xticks(range(len(inputs)), [_INPUT_LABELS[i] for i in inputs], fontsize=8)
+        ax.set_yticks(range(len(outputs)), [_OUTPUT_LABELS.get(o, o) for o in outputs],
+                      fontsize=9)
+        ax.set_title(name, fontsize=10)
+        ax.grid(False)
+    cb = fig.colorbar(im, ax=list(axes), shrink=0.8)
+    cb.set_label("share of the output's mu* (%)", fontsize=9)
+    cb.set_ticks([0, 0.25, 0.5, 0.75, 1.0], labels=["0", "25", "50", "75", "100"])
+    fig.suptitle("Which unmeasured input moves each answer most (Morris mu*, outlined: the "
+                 "dominant one)", fontsize=10)
+    path = Path(path)
+    fig.savefig(path, dpi=100)
+    return path

@@ -26,7 +26,7 @@ from treeimpact.compare.rungs import RungKind, analytic_samples
 from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, attempt
 
 from .apply import apply_point
-from .grid import RECORD, Grid, parse_grid, point_key
+from .grid import INPUT, RECORD, Grid, parse_grid, point_key
 
 JOURNAL = "results.csv"
 TABLE = "results.parquet"
@@ -364,7 +364,7 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
     for point, outcome in (applied if applied is not None else apply_points(scenario, grid)):
         pk = point_key(point)
         record = {a.parameter.target: point[a.name] for a in grid.axes
-                  if a.parameter.kind == RECORD}
+                  if a.parameter.kind in (RECORD, INPUT)}  # the analysis's, not the run's
         todo = [t for t in targets if (pk, t.id) not in done]
         if not todo:
             continue
@@ -581,11 +581,11 @@ def run_sweeps(specs, *, workers: int | None = None, scheduler=None,
         scen = resolve_scenario(spec.scenario)
         grid = spec.grid if isinstance(spec.grid, Grid) else parse_grid(spec.grid)
         targets = make_targets(spec.backends, ladder=spec.ladder, options=spec.options)
-        records = [a.spec() for a in grid.axes if a.parameter.kind == RECORD]
+        records = [a.spec() for a in grid.axes if a.parameter.kind in (RECORD, INPUT)]
         if records and spec.analysis is None:
-            raise ParameterError(f"--grid {records[0]!r}: record parameters are read by an "
-                                 "analysis of the records (the identification study), not by "
-                                 "a plain sweep")
+            raise ParameterError(f"--grid {records[0]!r}: record and input parameters are "
+                                 "read by an analysis (the identification and sensitivity "
+                                 "studies), not by a plain sweep")
         parts.append(_Part(scen, grid, targets, Path(spec.out), spec.identify, spec.analysis,
                            check_grid(scen, grid, targets)))
     client, own_client = connect(scheduler) if scheduler is not None else (None, False)

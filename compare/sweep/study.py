@@ -38,6 +38,8 @@ class Preset:
     identification: bool = False  # the identification validation (compare.ident_study)
     ident_sampling_rungs: tuple = ("analytic",)  # its rate x noise grid on these rungs' records
     ident_engine_rungs: tuple = ("mujoco",)  # engine chains on a corner of its e x crown grid
+    sensitivity: int = 0  # Morris trajectories of the sensitivity study (0: none)
+    sensitivity_crossings: bool = False  # its crossing durations too (8 pads a point)
     expected: str = ""
     notes: dict = field(default_factory=dict, compare=False)
 
@@ -50,7 +52,7 @@ PRESETS = {
         ladder=False, speed=False, backends=("analytic", "soft", "beam"),
         engine_grid=("contact_duration=5e-4,5e-3", "crown_ratio=0,4"),
         map_metrics=("x_max", "energy_delivered", "crown_peak_acceleration"),
-        map_value="step", identification=True,
+        map_value="step", identification=True, sensitivity=2,
         expected="about 25 s with 2 workers: 8 contact durations x 6 crown ratios on the "
                  "analytic, soft and beam backends, the engines' chains on 2 x 2 of them, "
                  "and the identification validation (4 e x 4 crown ratios x 3 rungs, MuJoCo's "
@@ -60,7 +62,7 @@ PRESETS = {
                                    "crown_ratio=0:4:9"),
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
         identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
-        ident_engine_rungs=ENGINES,
+        ident_engine_rungs=ENGINES, sensitivity=10, sensitivity_crossings=True,
         expected="about 1.5 CPU-hours: 45 minutes with 2 workers, 6 on 16 (measured on a "
                  "slice of the preset, 65 s of runs per (e, crown) pair; see "
                  "compare/sweep/study.py); resumable"),
@@ -114,11 +116,39 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
         ident_study = run_identification_study(
             out, scen, workers=workers, progress=progress,
             sampling_rungs=p.ident_sampling_rungs, engine_rungs=p.ident_engine_rungs)
+    sensitivity = None
+    if p.sensitivity:
+        sensitivity = run_sensitivity(out, p.sensitivity, crossings=p.sensitivity_crossings,
+                                      workers=workers, scheduler=scheduler, progress=progress,
+                                      retry_failed=retry_failed)
     return write_study(out, sweeps, speed=speed, tolerance=tolerance,
                        metrics=p.map_metrics, value=p.map_value, ident_study=ident_study,
+                       sensitivity=sensitivity,
                        title=f"Model-validity study ({p.name} preset)",
                        meta={"preset": p.name, "expected_run_time": p.expected,
                              "wall_s": time.perf_counter() - t0})
+
+
+def run_sensitivity(out, trajectories: int, *, crossings: bool = False, workers=None,
+                    scheduler=None, progress=None, retry_failed: bool = False) -> dict:
+    """The sensitivity study of every shipped tree (compare.sensitivity), one sweep each in
+    ``out/sensitivity/`` on one pool; {trajectories, crossings, trees: {name: analysis},
+    figure}."""
+    from treeimpact.analytic.model.scenario import shipped_scenarios
+    from treeimpact.compare.sensitivity import analyse, sensitivity_sweep
+
+    from .maps import sensitivity_figure
+    from .run import run_sweeps
+
+    names = list(shipped_scenarios())
+    specs = [sensitivity_sweep(n, Path(out) / "sensitivity" / n, trajectories,
+                               crossings=crossings) for n in names]
+    done = run_sweeps(specs, workers=workers, scheduler=scheduler, progress=progress,
+                      retry_failed=retry_failed)
+    trees = {n: analyse(r.table, trajectories) for n, r in zip(names, done)}
+    path = sensitivity_figure(trees, Path(out) / "sensitivity.png")
+    return {"trajectories": trajectories, "crossings": crossings, "trees": trees,
+            "figure": path.name if path else None}
 
 
 def _combined_table(out: Path, sweeps: dict, speed: dict | None):
@@ -154,7 +184,8 @@ def _fmt_point(point) -> str:
 
 def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
                 metrics=None, value: str = "rel", title: str = "Model-validity study",
-                meta: dict | None = None, ident_study: dict | None = None) -> dict:
+                meta: dict | None = None, ident_study: dict | None = None,
+                sensitivity: dict | None = None) -> dict:
     """Draw the maps of finished sweeps (``{name: sweep dir}``) and write study.md,
     study.html, study.json and the combined results table into ``out``."""
     out = make_out(out)
@@ -201,6 +232,8 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
         "problems": problems,
     }
     summary["map_value"] = value
+    if sensitivity is not None:
+        summary["sensitivity"] = sensitivity
     summary["provenance"] = provenance()
     if ident_study is not None:
         summary["identification_validation"] = {

@@ -1,0 +1,198 @@
+"""The answer with error bars: a global sensitivity study (Morris elementary effects, SALib)
+of every cell of the report's answer table and of the crossing durations, over the inputs
+nobody measured. Each tree keeps its measured M_T, K_T and C_T (Table 1); what varies is
+how the continuum carries them (clamp mass, wood density, root compliance, shear) and the
+pad (its stiffness, as its 1-DOF collision time, and e). Runs on the sweep machinery: one
+sweep per tree whose points are the Morris design (``input.*`` axes), the analysis
+:func:`answer_under` running the 1-DOF models and the continuum at each point. Design notes:
+docs/sensitivity.md. SI units.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+#: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it).
+INPUTS = {
+    "clamp_mass": (1.0, 16.0, "kg", "the harvester's clamp: not weighed (the shipped 4 kg "
+                   "chosen)", "weigh the clamp and the trunk section it grips"),
+    "e_over_g": (0.0, 20.0, "1", "E / G of the trunk: 0 is the paper's Euler-Bernoulli "
+                 "beam; green hardwood 10-20 (Wood Handbook)", "a static push test at two "
+                 "heights, or the shear modulus of a core sample"),
+    "log10_pad_duration": (math.log10(2e-4), math.log10(2e-2), "log10 s", "the pad's "
+                           "stiffness as its 1-DOF collision time: a hard impactor (0.2 ms) "
+                           "to a padded one (20 ms)", "the contact force of one strike (a "
+                           "load cell at the pad)"),
+    "restitution": (0.05, 0.5, "1", "the pad's e: not measured (the paper: small)",
+                    "the pendulum's rebound off a rigid stop (a drop test of the pad)"),
+    "root_share": (0.0, 0.9, "1", "the root's share of the static flexibility at the clamp: "
+                   "0 reads Table 1's K_T by eq 47 (a rigid clamp, E 8.9e8 / 1.3e9 Pa), 0.9 "
+                   "the printed E (8.9e9 / 12.6e9 Pa) with a compliant root", "a static "
+                   "push test measuring the root's rotation"),
+    "density": (500.0, 1100.0, "kg/m^3", "green wood: the trunk's share of M_T (the crown "
+                "mass follows from the measured M_T)", "weigh a trunk section"),
+}
+#: The outputs: the answer table's cells (continuum vs 1-DOF, relative) and the crossing
+#: durations (s) from which the 1-DOF model stays within the validity tolerance.
+ANSWER = ("x_max", "energy_delivered", "crown_peak", "crown_peak_acceleration", "peak_force")
+CROSSING = ("x_max", "energy_delivered")
+OUTPUTS = tuple(f"gap.{m}" for m in ANSWER) + tuple(f"crossing.{m}" for m in CROSSING)
+#: The Morris design: grid levels and the seed of its trajectories.
+LEVELS = 4
+SEED = 20261125
+#: The pads the crossing durations are read on (s, log-spaced over the contact scan's range).
+DURATIONS = tuple(float(d) for d in np.geomspace(2e-4, 5e-2, 8))
+
+
+def problem() -> dict:
+    """The SALib problem: names and bounds of :data:`INPUTS`."""
+    return {"num_vars": len(INPUTS), "names": list(INPUTS),
+            "bounds": [[lo, hi] for lo, hi, *_ in INPUTS.values()]}
+
+
+def vary(scenario, p: dict):
+    """``scenario`` at the unmeasured inputs ``p`` (:data:`INPUTS`) on the same measured
+    tree: M_T, K_T and C_T kept (the crown, root spring and damping recalibrated, eqs 7, 8,
+    10), E from the root's share of K_T's flexibility, G = E / (E/G), the pad's duration and
+    e. Returns (scenario, the beam backend's beam theory)."""
+    from treeimpact.analytic.model.calibration import MeasuredTree, calibrate_trunk
+    from treeimpact.analytic.model.parameters import Contact
+    from treeimpact.analytic.model.reduction import reduce_trunk
+
+    trunk = scenario.trunk
+    tree = reduce_trunk(trunk)
+    m = scenario.impactor.mass
+    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, stiffness=tree.stiffness,
+                            damping_rate=tree.damping / (2.0 * (tree.dynamic_mass + m)))
+    a = trunk.clamp_height
+    e_mod = a ** 3 * tree.stiffness / (3.0 * trunk.second_moment * (1.0 - p["root_share"]))
+    ratio = p["e_over_g"]
+    chosen = replace(trunk, clamp_mass=p["clamp_mass"], density=p["density"],
+                     youngs_modulus=e_mod, shear_modulus=e_mod / ratio if ratio > 0 else None)
+    contact = Contact(restitution=p["restitution"],
+                      duration=10.0 ** p["log10_pad_duration"])
+    varied = replace(scenario, trunk=calibrate_trunk(chosen, measured, impactor_mass=m),
+                     contact=contact)
+    return varied, "timoshenko" if ratio > 0 else "euler-bernoulli"
+
+
+def _gap(one_dof: float, continuum: float) -> float:
+    return (continuum - one_dof) / abs(one_dof) if one_dof and math.isfinite(one_dof) \
+        else math.nan
+
+
+def _answer(scen, theory: str) -> dict:
+    """The answer table's gaps at one varied scenario: the continuum against the paper's
+    model, or the soft 1-DOF with the same pad where Newton's impulses have none (force,
+    acceleration)."""
+    from treeimpact.analytic.contact.soft import simulate_soft
+    from treeimpact.analytic.continuum.beam_impact import simulate_beam
+    from treeimpact.analytic.impact.simulate import simulate
+
+    newton = simulate(scen, samples=2).metrics
+    soft = simulate_soft(scen).metrics
+    beam = simulate_beam(scen, beam_theory=theory).metrics
+    return {f"gap.{m}": _gap(newton[m] if math.isfinite(newton[m]) else soft[m], beam[m])
+            for m in ANSWER}
+
+
+def answer_under(result, scenario, params: dict) -> dict:
+    """The sweep analysis of the cheap study: at the inputs ``params`` (``input.*`` axes;
+    the run's own result is the base tree's, unused) the answer table's gaps."""
+    return _answer(*vary(scenario, params))
+
+
+answer_under.columns = tuple(f"gap.{m}" for m in ANSWER)
+
+
+def answer_and_crossings(result, scenario, params: dict) -> dict:
+    """:func:`answer_under` and the crossing durations: the shortest of :data:`DURATIONS`
+    (s) from which every longer pad keeps the continuum within the validity tolerance of the
+    soft 1-DOF model with the same pad (inf: none up to the longest)."""
+    from treeimpact.analytic.contact.soft import simulate_soft
+    from treeimpact.analytic.continuum.beam_impact import simulate_beam
+
+    from .contact_scan import shortest_within
+    from .verdicts import validity_tolerance
+
+    scen, theory = vary(scenario, params)
+    out = _answer(scen, theory)
+    gaps = {m: [] for m in CROSSING}
+    for d in DURATIONS:
+        s = simulate_soft(scen, contact_duration=d).metrics
+        b = simulate_beam(scen, contact_duration=d, beam_theory=theory).metrics
+        for m in CROSSING:
+            gaps[m].append(_gap(s[m], b[m]))
+    for m in CROSSING:
+        found = shortest_within(DURATIONS, gaps[m], validity_tolerance())
+        out[f"crossing.{m}"] = found if found is not None else math.inf
+    return out
+
+
+answer_and_crossings.columns = OUTPUTS
+#: The analyses' references, as the sweeps load them in a worker.
+ANALYSES = {False: "treeimpact.compare.sensitivity:answer_under",
+            True: "treeimpact.compare.sensitivity:answer_and_crossings"}
+
+
+def design(trajectories: int, seed: int = SEED) -> np.ndarray:
+    """The Morris design: ``trajectories`` x (inputs + 1) points over :data:`INPUTS`."""
+    from SALib.sample import morris
+
+    return morris.sample(problem(), trajectories, num_levels=LEVELS, seed=seed)
+
+
+def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
+                      crossings: bool = False):
+    """The study of one tree as a sweep (:class:`compare.sweep.run.SweepSpec`) into ``out``:
+    the Morris design as ``input.*`` axes, :func:`answer_under` (with ``crossings``,
+    :func:`answer_and_crossings`) at each point."""
+    from .sweep.grid import Design
+    from .sweep.run import SweepSpec
+
+    X = design(trajectories, seed)
+    return SweepSpec(scenario, Design.of([f"input.{n}" for n in INPUTS],
+                                         [tuple(float(v) for v in row) for row in X]),
+                     Path(out), ("analytic",), identify=False, analysis=ANALYSES[crossings])
+
+
+def analyse(table, trajectories: int, seed: int = SEED) -> dict:
+    """Per output: its range over the design, the Morris mu* (mean |elementary effect|,
+    in the output's units) and sigma of each input, the dominant input and the measurement
+    that would settle it. Crossing durations enter as log10 s, 'never' as twice the longest
+    duration scanned (a censored value: the ranking holds, the mu* of a crossing that
+    leaves the range is a lower bound)."""
+    from SALib.analyze import morris
+
+    X = design(trajectories, seed)
+    rows = {tuple(round(float(r[f"input.{n}"]), 12) for n in INPUTS): r
+            for r in table.to_dict("records")}
+    ok = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
+    failed = [r for r in ok if r is None or r.get("status") != "ok"]
+    out = {"inputs": {n: {"low": v[0], "high": v[1], "unit": v[2], "why": v[3],
+                          "settle": v[4]} for n, v in INPUTS.items()},
+           "points": len(X), "failed": len(failed), "outputs": {}}
+    if failed:
+        out["errors"] = sorted({str(r.get("error")) for r in failed if r is not None})[:5]
+        return out
+    for name in (o for o in OUTPUTS if o in ok[0]):
+        y = np.array([float(r[name]) for r in ok])
+        if name.startswith("crossing."):
+            y = np.log10(np.where(np.isfinite(y), y, 2.0 * DURATIONS[-1]))
+        with warnings.catch_warnings():  # one trajectory: sigma is undefined (NaN), fine
+            warnings.simplefilter("ignore", RuntimeWarning)
+            res = morris.analyze(problem(), X, y, num_levels=LEVELS)
+        mu = dict(zip(INPUTS, (float(v) for v in res["mu_star"])))
+        dominant = max(mu, key=mu.get)
+        out["outputs"][name] = {
+            "low": float(np.min(y)), "high": float(np.max(y)),
+            "never": int(np.sum(y >= math.log10(2.0 * DURATIONS[-1]) - 1e-12))
+            if name.startswith("crossing.") else 0,
+            "mu_star": mu, "sigma": dict(zip(INPUTS, (float(v) for v in res["sigma"]))),
+            "dominant": dominant, "settle": INPUTS[dominant][4]}
+    return out
