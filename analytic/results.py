@@ -171,12 +171,20 @@ LEDGER_DIVERGED = 0.05
 
 
 def check_plausible(result: SimulationResult) -> SimulationResult:
-    """``result`` if its numbers can be reported, else :class:`SimulationDiverged` in one line:
-    x_max finite and within the geometry (0 < x_max <= a: the small-deflection beam of
-    eq 1 cannot move further than its clamp height), impact loss finite, ledger residual
-    finite and at most :data:`LEDGER_DIVERGED`."""
+    """``result`` if its numbers can be reported, else :class:`SimulationDiverged` naming the
+    check that failed, in one line:
+
+    * x_max finite and within the geometry (0 < x_max <= a: the small-deflection beam of
+      eq 1 cannot move further than its clamp height), impact loss finite, the energy ledger
+      finite and at most :data:`LEDGER_DIVERGED` of the input;
+    * no energy beyond the input: the energy delivered, the rebound energy and the contact's
+      dissipation each in [-tol, 1 + tol] x 0.5 m u_1^2 (tol: :data:`LEDGER_DIVERGED`), and
+      no negative dissipation beyond the run's own ledger error (a contact cannot create
+      energy);
+    * times within the run: T0, t_xmax, t_sep and the first contact in [0, t_end]."""
     m = result.metrics
-    a = (result.scenario.get("trunk") or {}).get("clamp_height", math.inf)
+    model, scen = result.model or {}, result.scenario or {}
+    a = (scen.get("trunk") or {}).get("clamp_height", math.inf)
     x_max, loss, ledger = m.get("x_max"), m.get("impact_loss"), m.get("ledger_residual")
     problem = None
     if not finite_number(x_max) or not 0.0 < x_max <= a:
@@ -186,9 +194,47 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
     elif not finite_number(ledger) or ledger > LEDGER_DIVERGED:
         problem = (f"energy ledger residual {ledger!r} of the input energy (allowed up to "
                    f"{LEDGER_DIVERGED:g})")
+    else:
+        problem = _energy_problem(m, model, ledger) or _time_problem(m, scen.get("t_end"))
     if problem is not None:
         raise SimulationDiverged(f"{result.backend}: {problem}")
     return result
+
+
+def _energy_problem(m: dict, model: dict, ledger: float) -> str | None:
+    """An energy beyond the input, or a contact that created energy, or None."""
+    mass, u1 = model.get("m"), model.get("u1")
+    if not (finite_number(mass) and finite_number(u1)):
+        return None
+    e0 = 0.5 * mass * u1 ** 2
+    for key in ("energy_delivered", "rebound_energy", "contact_dissipation"):
+        v = m.get(key)
+        if finite_number(v) and not -LEDGER_DIVERGED * e0 <= v <= (1 + LEDGER_DIVERGED) * e0:
+            return (f"{key} = {v:.4g} J beyond the input energy {e0:.4g} J (allowed "
+                    f"[{-LEDGER_DIVERGED:g}, {1 + LEDGER_DIVERGED:g}] of it)")
+    for key in ("contact_dissipation", "impact_loss"):
+        v = m.get(key)
+        if finite_number(v) and v < -(ledger + 1e-9) * e0:
+            return (f"{key} = {v:.4g} J < 0 beyond the run's energy ledger error "
+                    f"({ledger:.2g} of {e0:.4g} J): the contact created energy")
+    return None
+
+
+TIME_SLACK = 0.01
+"""Times may pass t_end by this fraction of it: an engine's last step ends past t_end by up
+to one step (MuJoCo at dt = 2 us over a 5 ms run: 4e-4 of it); a gross error is far beyond."""
+
+
+def _time_problem(m: dict, t_end) -> str | None:
+    """A time outside [0, t_end] (beyond :data:`TIME_SLACK`), or None."""
+    if not finite_number(t_end):
+        return None
+    for key in ("T0", "t_xmax", "t_sep", "first_contact_duration"):
+        v = m.get(key)
+        if finite_number(v) and not 0.0 <= v <= t_end * (1.0 + TIME_SLACK):
+            return (f"{key} = {v:.4g} s outside the run [0, t_end = {t_end:.4g}] s (a longer "
+                    "--t-end: the peak or the separation lies beyond it)")
+    return None
 
 
 def finite_number(v) -> bool:

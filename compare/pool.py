@@ -24,6 +24,24 @@ STOP = threading.Event()
 POLL_S = 0.2
 
 
+def max_workers() -> int:
+    """The most local worker processes a pool starts: twice the cores (more only thrash)."""
+    return 2 * (os.cpu_count() or 1)
+
+
+def check_workers(workers) -> int | None:
+    """``workers`` (None: one per core) if it is an integer in [0, :func:`max_workers`],
+    else a one-line ParameterError naming --workers."""
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, int) or not (
+            0 <= workers <= max_workers()):
+        raise ParameterError(f"--workers = {workers!r}: allowed integers 0 to {max_workers()} "
+                             f"(0 runs in this process; twice this machine's "
+                             f"{os.cpu_count() or 1} cores at most)")
+    return workers
+
+
 #: Set while a pool's loop runs (it looks at STOP itself); outside one a stop request ends
 #: the command at once.
 ACTIVE = threading.Event()

@@ -141,14 +141,17 @@ def test_results_beyond_the_geometry_or_the_ledger_are_divergences():
     assert check_plausible(good) is good
     for change, words in (({"x_max": 2.0}, "x_max = 2.0 m"),  # a = 0.354 m
                           ({"x_max": math.nan}, "x_max = nan"),
-                          ({"ledger_residual": 0.3}, "ledger residual 0.3")):
+                          ({"ledger_residual": 0.3}, "ledger residual 0.3"),
+                          ({"energy_delivered": 1e6}, "energy_delivered = 1e+06 J beyond"),
+                          ({"impact_loss": -50.0}, "the contact created energy"),
+                          ({"t_xmax": 1e3}, "t_xmax = 1000 s outside the run")):
         bad = dataclasses.replace(good, metrics={**good.metrics, **change})
         with pytest.raises(SimulationDiverged, match=re.escape(words)):
             check_plausible(bad)
 
 
 def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tmp_path):
-    code = ("import mujoco, mujoco_models._runner\n"
+    code = ("import mujoco, treeimpact.mujoco_models._runner\n"
             "m = mujoco.MjModel.from_xml_string('<mujoco><option timestep=\"1\"/><worldbody>"
             "<body><joint type=\"slide\" stiffness=\"1e12\"/><geom size=\"0.1\" mass=\"1\"/>"
             "</body></worldbody></mujoco>')\n"

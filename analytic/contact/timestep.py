@@ -66,13 +66,30 @@ MAX_STEPS = 20_000_000  # the shipped runs take 2e4-6e4 steps, --preset full up 
 MAX_BYTES = 2_000_000_000  # B: the record of one run
 
 
-def check_work(t_end: float, dt: float, bytes_per_step: float) -> int:
-    """The steps of a run (t_end / dt), or a one-line ParameterError when they or their
-    record exceed the budget (:data:`MAX_STEPS`, :data:`MAX_BYTES`)."""
+def budget(name: str, default: float) -> float:
+    """A work budget from the environment variable ``name`` (a positive number, e.g. 1e8),
+    else ``default``; a one-line ParameterError naming the variable when it is not one."""
     import os
 
-    max_steps = float(os.environ.get("TREEIMPACT_MAX_STEPS", MAX_STEPS))
-    max_bytes = float(os.environ.get("TREEIMPACT_MAX_BYTES", MAX_BYTES))
+    text = os.environ.get(name)
+    if text is None:
+        return float(default)
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise ParameterError(f"{name} = {text!r}: expected a positive number (default "
+                             f"{default:.3g}), or unset it")
+    return value
+
+
+def check_work(t_end: float, dt: float, bytes_per_step: float) -> int:
+    """The steps of a run (t_end / dt), or a one-line ParameterError when they or their
+    record exceed the budget (:data:`MAX_STEPS`, :data:`MAX_BYTES`, or the environment's
+    TREEIMPACT_MAX_STEPS, TREEIMPACT_MAX_BYTES)."""
+    max_steps = budget("TREEIMPACT_MAX_STEPS", MAX_STEPS)
+    max_bytes = budget("TREEIMPACT_MAX_BYTES", MAX_BYTES)
     steps = math.ceil(t_end / dt)
     need = steps * bytes_per_step
     if steps > max_steps or need > max_bytes:

@@ -12,9 +12,13 @@ diameter ``d``, density ``rho``, Young's modulus ``E``, clamp mass ``m_c``, crow
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 from treeimpact.analytic.errors import ParameterError
+
+#: A scenario's name: it becomes part of file names (the scenario's, figures, sweeps).
+_NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9 ._-]{0,63}")
 
 STANDARD_GRAVITY = 9.81  # m/s^2, the value the paper uses (after eq 48)
 
@@ -253,6 +257,10 @@ class Scenario:
     notes: dict = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self):
+        if not (isinstance(self.name, str) and _NAME.fullmatch(self.name)):
+            raise ParameterError(f"name = {self.name!r}: allowed 1-64 letters, digits, '.', "
+                                 "'_', '-' or spaces, not starting with '.' or a space (it "
+                                 "names files: the scenario's, a report's figures)")
         if not isinstance(self.trunk, Trunk):
             raise ParameterError("trunk: expected a Trunk")
         if not isinstance(self.impactor, (Pendulum, Billet)):

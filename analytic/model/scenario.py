@@ -39,6 +39,10 @@ _CONTACT_KEYS = {"restitution", "stiffness", "duration"}
 _TOP_KEYS = {"name", "description", "t_end", "trunk", "impactor", "contact", "calibration"}
 
 
+#: The largest scenario file read (bytes): the shipped ones are about 2 kB.
+MAX_FILE_BYTES = 1_000_000
+
+
 def shipped_scenarios() -> list[str]:
     """Names of the scenarios shipped with the package."""
     folder = resources.files(__package__) / "scenarios"
@@ -131,7 +135,13 @@ def load_scenario(source: str | Path) -> Scenario:
     if isinstance(source, str) and source in shipped_scenarios():
         raw = (resources.files(__package__) / "scenarios" / f"{source}.toml").read_bytes()
         default = source
+    elif path.exists() and not path.is_file():
+        raise ParameterError(f"scenario {str(source)!r}: not a regular file (a scenario is a "
+                             "TOML file or a shipped name)")
     elif path.is_file():
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise ParameterError(f"scenario {str(source)!r}: {path.stat().st_size} bytes; a "
+                                 f"scenario file is at most {MAX_FILE_BYTES} bytes")
         try:
             raw = path.read_bytes()
         except OSError as exc:
@@ -150,6 +160,9 @@ def load_scenario(source: str | Path) -> Scenario:
                              "UTF-8") from None
     try:
         data = tomllib.loads(text)
+    except RecursionError:
+        raise ParameterError(f"scenario {str(source)!r}: nested too deeply to be a scenario "
+                             "file (tables trunk, impactor, contact of numbers)") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"scenario {str(source)!r}: malformed TOML: {exc}") from None
     return scenario_from_dict(data, default_name=default)

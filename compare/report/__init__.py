@@ -56,6 +56,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from .scenario import ScenarioSection, identification_spec
     from .studies import StudySection
 
+    studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]  # read (and refused)
+    # before any run
     cache = RunCache() if runs is None else runs
     sink = FigureFiles(Path(out_dir) / "figures") if out_dir is not None else None
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)
@@ -89,7 +91,6 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
             bar.update()
     if bar is not None:
         bar.close()
-    studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log,
             "contact": {"scans": scans, "figure": scan_figure}}

@@ -27,6 +27,31 @@ def _link(path: Path, page_dir) -> str:
     return Path(target).as_posix()
 
 
+#: The largest study file read back (bytes).
+MAX_FILE_BYTES = 50_000_000
+
+
+def _read(path: Path, reader):
+    """``reader(path)`` of a study's file, or a one-line ParameterError naming it (not a
+    regular file, too large, another encoding, not JSON, nested beyond reason)."""
+    where = f"--study {str(path.parent)!r}: {path.name}"
+    if not path.is_file():
+        raise ParameterError(f"{where}: not a regular file")
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise ParameterError(f"{where}: {path.stat().st_size} bytes, allowed up to "
+                             f"{MAX_FILE_BYTES}")
+    try:
+        return reader(path)
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"{where}: not UTF-8 text (byte at offset {exc.start})") \
+            from None
+    except RecursionError:
+        raise ParameterError(f"{where}: nested too deeply to be a study's file") from None
+    except ValueError as exc:
+        raise ParameterError(f"{where}: not JSON ({str(exc).splitlines()[0][:100]})") \
+            from None
+
+
 def _figures_of(study: dict) -> set:
     """The figure files a study's page shows (its study.json)."""
     named = [v.get("figure") for v in study.get("validity", []) + study.get("identification",
@@ -51,14 +76,11 @@ class StudySection(Section):
                        for p in sorted(d.iterdir()) if p.suffix.lower() in (".png", ".svg")]
         self.data = {}
         for p in sorted(d.glob("*.json")):
-            try:
-                self.data[p.name] = json.loads(p.read_text())
-            except json.JSONDecodeError as exc:
-                raise ParameterError(f"study {d.name}: {p.name} is not JSON: {exc}") from None
+            self.data[p.name] = _read(p, lambda q: json.loads(q.read_text(encoding="utf-8")))
         self.text = ""
         for name in ("summary.md", "README.md"):
             if (d / name).is_file():
-                self.text = (d / name).read_text()
+                self.text = _read(d / name, lambda q: q.read_text(encoding="utf-8"))
                 break
         study = self.data.get("study.json")
         self.study = study if isinstance(study, dict) and "validity" in study else None

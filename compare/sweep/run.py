@@ -20,7 +20,13 @@ from treeimpact.analytic.errors import ParameterError, one_line
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS
 from treeimpact.compare.backends import get_backend
-from treeimpact.compare.pool import check_stop, connect, dask_workers, run_chunks
+from treeimpact.compare.pool import (
+    check_stop,
+    check_workers,
+    connect,
+    dask_workers,
+    run_chunks,
+)
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind, analytic_samples
 from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, attempt
@@ -211,6 +217,30 @@ def _num(v):
 # --------------------------------------------------------------------------- the table
 
 
+def _header(path: Path):
+    with open(path, newline="", encoding="utf-8") as fh:
+        return next(csv.reader(fh), None)
+
+
+def read_file(path: Path, reader, what: str):
+    """``reader(path)`` of a file a sweep wrote and reads back (its journal, table, spec), or
+    a one-line ParameterError naming it when it is not what the sweep wrote: corrupt,
+    another encoding, nested beyond reason, a field longer than a CSV reader takes."""
+    import csv as csv_module
+
+    import pandas as pd
+
+    try:
+        return reader(path)
+    except (ValueError, UnicodeDecodeError, RecursionError, csv_module.Error,
+            pd.errors.ParserError, pd.errors.EmptyDataError, OSError) as exc:
+        detail = str(exc).strip().splitlines()[0][:120] if str(exc).strip() else \
+            type(exc).__name__
+        raise ParameterError(f"--out {str(path.parent)!r}: {path.name} is not the {what} a "
+                             f"sweep writes ({type(exc).__name__}: {detail}); move it away "
+                             "or use a new --out") from None
+
+
 class Journal:
     """The CSV table, appended one flushed line per row."""
 
@@ -220,8 +250,7 @@ class Journal:
         fresh = not self.path.exists() or self.path.stat().st_size == 0
         if not fresh:
             _drop_partial_line(self.path)
-            with open(self.path, newline="") as fh:
-                header = next(csv.reader(fh), None)
+            header = read_file(self.path, _header, "table")
             if header != columns:
                 raise ParameterError(f"--out {self.path.parent}: {self.path.name} has other "
                                      f"columns (another grid); use a new --out")
@@ -269,9 +298,9 @@ def read_table(out, *, dedupe: bool = True, grid: Grid | None = None):
     journal = out / JOURNAL
     if journal.exists():
         _drop_partial_line(journal)
-        df = pd.read_csv(journal, keep_default_na=True)
+        df = read_file(journal, lambda p: pd.read_csv(p, keep_default_na=True), "table")
     elif (out / TABLE).exists():
-        df = pd.read_parquet(out / TABLE)
+        df = read_file(out / TABLE, pd.read_parquet, "table")
     else:
         raise ParameterError(f"--out {out}: no sweep table ({JOURNAL} or {TABLE}) there")
     if dedupe and len(df):
@@ -330,7 +359,10 @@ def _check_spec(out: Path, spec: dict) -> None:
     path = out / SPEC
     if not path.exists():
         return
-    old = json.loads(path.read_text())
+    old = read_file(path, lambda p: json.loads(p.read_text(encoding="utf-8")), "spec")
+    if not isinstance(old, dict):
+        raise ParameterError(f"--out {str(out)!r}: {SPEC} is not the spec a sweep writes; "
+                             "move it away or use a new --out")
     for key in ("scenario", "axes", "identify", "analysis"):
         if json.dumps(old.get(key), sort_keys=True) != json.dumps(spec[key], sort_keys=True):
             raise ParameterError(f"--out {out}: holds a sweep with another {key} "
@@ -572,10 +604,7 @@ def run_sweeps(specs, *, workers: int | None = None, scheduler=None,
     from treeimpact.compare.runs import resolve_scenario
 
     t_start = time.perf_counter()
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 0):
-        raise ParameterError(f"--workers = {workers!r}: allowed integers >= 0 "
-                             f"(0 runs in this process)")
+    check_workers(workers)
     parts = []
     for spec in specs:  # every check before anything runs or is written
         scen = resolve_scenario(spec.scenario)
@@ -611,7 +640,8 @@ def _open(part: _Part, index: int, retry_failed: bool) -> None:
         import pandas as pd
 
         _drop_partial_line(journal_path)
-        prev = pd.read_csv(journal_path, usecols=["point", "target", "status"])
+        prev = read_file(journal_path, lambda p: pd.read_csv(
+            p, usecols=["point", "target", "status"]), "table")
         prev = prev.drop_duplicates(subset=["point", "target"], keep="last")
         if retry_failed:
             prev = prev[prev["status"] == OK]

@@ -18,7 +18,7 @@ from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
 
 from .maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
-from .run import JOURNAL, TABLE, make_out, read_table, run_sweep
+from .run import JOURNAL, TABLE, make_out, read_file, read_table, run_sweep
 
 
 @dataclass(frozen=True)
@@ -195,7 +195,8 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
     drawn = set()  # targets already mapped from an earlier (finer) sweep of the study
     for name, d in sweeps.items():
         df = read_table(d)
-        specs[name] = json.loads((Path(d) / "sweep.json").read_text())
+        specs[name] = read_file(Path(d) / "sweep.json",
+                                lambda p: json.loads(p.read_text(encoding="utf-8")), "spec")
         prefix = "" if len(sweeps) == 1 or name == "validity" else f"{name}-"
         order = [t["id"] for t in specs[name].get("targets", [])]
         validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity",
