@@ -9,6 +9,7 @@ import functools
 import math
 import os
 import sys
+import warnings
 from dataclasses import dataclass, field
 
 import mujoco
@@ -58,6 +59,17 @@ def _warning_to_stderr(message: str) -> None:
 
 mujoco.set_mju_user_warning(_warning_to_stderr)
 
+
+def compile_spec(spec: mujoco.MjSpec) -> mujoco.MjModel:
+    """``spec.compile()`` with a compiler warning (a UserWarning since MuJoCo 4.0; 3.x raised)
+    sent to stderr like the runtime ones; the shipped models compile without any (tested)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = spec.compile()
+    for w in caught:
+        _warning_to_stderr(f"compiler: {w.message}")
+    return model
+
 PLACEHOLDER_DT = 1e-5  # s: time step of the first compile (only its masses are used)
 RK4_DAMPING_LIMIT = 2.785  # h lambda: RK4's stability limit on the negative real axis (2.7853)
 RK4_RESTITUTION_TOLERANCE = 0.01  # |e - target| of the replayed RK4 free collision (RK4 gets
@@ -100,7 +112,7 @@ def _mass_matrix_at_rest(mjmodel: mujoco.MjModel) -> np.ndarray:
     data = mujoco.MjData(mjmodel)
     mujoco.mj_forward(mjmodel, data)
     M = np.zeros((mjmodel.nv, mjmodel.nv))
-    mujoco.mj_fullM(mjmodel, M, data.qM)
+    mujoco.mj_fullM(mjmodel, data, M)
     return M
 
 
@@ -175,7 +187,7 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     name = f"{scenario.name}-{trunk}-{pendulum}"
     spec, pair = _builder.build_spec(name, tspec, scenario, pendulum, PLACEHOLDER_DT,
                                      integrator=integrator)
-    m1 = spec.compile()
+    m1 = compile_spec(spec)
     A, A_hat = _builder.contact_inverse_masses(m1)
     mu = 1.0 / A
     if calibration == "pad":  # the SDOF's (k_c, c_c): the e it gives on this model's mu
@@ -199,7 +211,7 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     solref = _contact.solref_for_law(law.stiffness, law.damping, S)
     pair.solref = list(solref)
     spec.option.timestep = dt
-    mjmodel = spec.compile()
+    mjmodel = compile_spec(spec)
     if integrator == "RK4":
         _check_rk4_damping(mjmodel, dt)
     root = mujoco.mj_name2id(mjmodel, mujoco.mjtObj.mjOBJ_BODY,
@@ -301,7 +313,7 @@ def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
     tspec, _ = _trunk_spec(scenario, "chain", segments, "distributed")
     spec, _ = _builder.build_spec(f"{scenario.name}-chain-modes", tspec, scenario, "linear",
                                   PLACEHOLDER_DT)
-    m = spec.compile()
+    m = compile_spec(spec)
     M, K = engine_trunk_matrices(m)
     return chain_modes(scenario, M, np.diag(K), impact_jacobian(m), n_modes)
 

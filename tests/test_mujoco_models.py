@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -351,7 +352,7 @@ def test_damping_matrices_are_what_the_euler_step_applies(central, opts, integra
     d.qvel[:] = v0
     mujoco.mj_forward(m, d)
     M = np.zeros((m.nv, m.nv))
-    mujoco.mj_fullM(m, M, d.qM)
+    mujoco.mj_fullM(m, d, M)
     mujoco.mj_step(m, d)
     v1 = d.qvel.copy()
     D, B = _damping_matrices(m)
@@ -481,9 +482,12 @@ def test_checked_in_models_compile_without_warnings_and_are_the_runners_models()
         s = load_scenario(name)
         for trunk, pendulum in VARIANTS:
             path = MODELS_DIR / f"{name}-{trunk}-{pendulum}.xml"
-            # MjSpec.compile raises on a compiler warning too (mjs_isWarning); from_xml_path
-            # is the loader of `python -m mujoco.viewer --mjcf=...`
-            m = mujoco.MjSpec.from_file(str(path)).compile()
+            # since MuJoCo 4.0 MjSpec.compile reports a compiler warning as a UserWarning
+            # (3.x raised): an error here; from_xml_path is the loader of
+            # `python -m mujoco.viewer --mjcf=...`
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                m = mujoco.MjSpec.from_file(str(path)).compile()
             assert mujoco.MjModel.from_xml_path(str(path)).nbody == m.nbody
             ref = make_setup(s, trunk=trunk, pendulum=pendulum).mjmodel
             for field in ("body_mass", "body_inertia", "jnt_stiffness", "dof_damping",
