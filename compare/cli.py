@@ -40,7 +40,7 @@ def _count(text: str) -> int:
 
 
 #: The options of ``treeimpact modes`` (the backends' modes() take these of their OPTIONS).
-MODES_OPTIONS = ("segments", "elements")
+MODES_OPTIONS = ("segments", "elements", "trunk")
 
 
 def backend_options() -> dict:

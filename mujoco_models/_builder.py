@@ -15,7 +15,7 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Billet, Pendulum, Scenario
 from treeimpact.analytic.model.reduction import TreeSDOF
 
-from . import _contact
+from . import _contact, _flex
 
 BOB_RADIUS = 0.05  # m: radius of the pendulum's contact sphere (geometry only)
 BOB_INERTIA_FRACTION = 1e-6  # bob inertia about its centre / (m l_e^2)
@@ -37,10 +37,11 @@ def sensor_slices() -> dict:
 class TrunkSpec:
     """What the builder needs about the trunk (SI units)."""
 
-    kind: str  # "sdof" | "chain"
+    kind: str  # "sdof" | "chain" | "flex"
     sdof: TreeSDOF | None
     chain: HingedChain | None
     damping: str  # "distributed" | "joint"
+    flex: _flex.FlexTrunk | None = None
 
 
 def joint_damping(chain: HingedChain) -> np.ndarray:
@@ -117,6 +118,8 @@ def add_trunk(spec: mujoco.MjSpec, trunk: TrunkSpec, clamp_height: float, diamet
     """Add the trunk to ``spec``; returns the name of its root body."""
     r = diameter / 2.0
     wood = (0.55, 0.4, 0.25, 1.0)
+    if trunk.kind == "flex":
+        return _flex.add_flex_trunk(spec, trunk.flex)
     if trunk.kind == "sdof":
         tree = trunk.sdof
         body = spec.worldbody.add_body()

@@ -465,6 +465,31 @@ def test_batch_through_rollout_matches_serial_runs(central):
         assert r.model["dt"] == serial.model["dt"]
 
 
+def test_energy_sensors_read_the_current_state():
+    """MuJoCo >= 3.5 with the energy flag fills e_kinetic one step late; the models leave the
+    flag off, so the sensors are 1/2 v^T M v and mj_energyPos of the state itself."""
+    m = make_setup(load_scenario("central-leader"), trunk="chain").mjmodel
+    assert not m.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(0)
+    d.qpos[:] = 0.01 * rng.normal(size=m.nq)
+    d.qvel[:] = rng.normal(size=m.nv)
+    mujoco.mj_forward(m, d)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    sl = sensor_slices()
+    kinetic = 0.5 * d.qvel @ M @ d.qvel
+    assert d.sensordata[sl["kinetic"]][0] == pytest.approx(kinetic, rel=1e-12)  # round-off
+    mujoco.mj_step(m, d)  # one step on: still the new state's, not the previous one's
+    mujoco.mj_forward(m, d)
+    mujoco.mj_fullM(m, d, M)
+    assert d.sensordata[sl["kinetic"]][0] == pytest.approx(0.5 * d.qvel @ M @ d.qvel,
+                                                           rel=1e-12)  # round-off
+    potential = d.sensordata[sl["potential"]][0]
+    mujoco.mj_energyPos(m, d)
+    assert potential == pytest.approx(d.energy[0], rel=1e-12)  # round-off
+
+
 # ------------------------------------------------------------------------- MJCF files
 def test_regenerated_mjcf_equals_checked_in_files():
     """Parsed and compared at MuJoCo's written precision (6 significant digits)."""
