@@ -107,7 +107,12 @@ def build_parser() -> argparse.ArgumentParser:
     sr.add_argument("--study", action="append", dest="studies", default=[],
                     help="directory of a finished study to include (repeatable)")
 
+    from .contact_cmd import add_arguments as add_contact_arguments
     from .identify_cmd import add_arguments as add_identify_arguments
+
+    add_contact_arguments(sub.add_parser(
+        "contact", help="MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a "
+                        "target e and contact duration, checked in both engines"), _number)
     from .scenario_cmd import add_arguments as add_scenario_arguments
 
     add_identify_arguments(sub.add_parser(
@@ -318,6 +323,12 @@ def cmd_sweep(args) -> int:
     return run_sweep_command(args)
 
 
+def cmd_contact(args) -> int:
+    from .contact_cmd import run
+
+    return run(args)
+
+
 def cmd_identify(args) -> int:
     from .identify_cmd import run
 
@@ -332,7 +343,7 @@ def cmd_scenario(args) -> int:
 
 COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes,
             "report": cmd_report, "sweep": cmd_sweep, "scenario": cmd_scenario,
-            "identify": cmd_identify}
+            "identify": cmd_identify, "contact": cmd_contact}
 
 
 def main(argv=None) -> int:
