@@ -9,14 +9,8 @@ from __future__ import annotations
 import json
 import math
 
-from treeimpact.analytic.contact.law import (
-    damping_ratio_for_restitution,
-    release_time,
-    restitution_for_damping_ratio,
-)
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import check_range
-from treeimpact.analytic.results import to_jsonable
 
 #: Fewest steps of the target collision the command accepts (0.5e5 steps per collision at
 #: most keep the two simulations under a second).
@@ -61,6 +55,12 @@ def target_law(mu: float, *, restitution=None, duration=None, stiffness=None, da
     """The continuous spring-dashpot F = max(0, k delta + c delta') on the reduced mass mu
     (kg): from (e, duration) or (k, c); its e, duration (first touch to release, s),
     k (N/m), c (N s/m), zeta and the undamped time pi sqrt(mu / k) (s)."""
+    from treeimpact.analytic.contact.law import (
+        damping_ratio_for_restitution,
+        release_time,
+        restitution_for_damping_ratio,
+    )
+
     if restitution is not None or duration is not None:
         if stiffness is not None or damping is not None:
             raise ParameterError("--stiffness/--damping: give them instead of --restitution "
@@ -200,6 +200,8 @@ def run(args) -> int:
                            duration=args.duration, stiffness=args.stiffness,
                            damping=args.damping, dt=args.dt)
     if args.json:
+        from treeimpact.analytic.results import to_jsonable
+
         print(json.dumps(to_jsonable(res), indent=2))
         return 0
     _print(res)
