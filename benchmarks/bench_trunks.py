@@ -136,6 +136,35 @@ def cheapest(rows: list, model: str) -> dict | None:
             "wall_per_simulated_s": wall}
 
 
+def markdown(result: dict) -> str:
+    """The tables of docs/engines.md from a result file: per scenario, every (model, N) at
+    the runner's default step, then the cheapest run within TARGET on x_max."""
+    lines = []
+    for name, sc in result["scenarios"].items():
+        lines += [f"**{name}** (beam: x_max {1e3 * sc['beam']['x_max']:.4f} mm, energy "
+                  f"delivered {sc['beam']['energy_delivered']:.1f} J)", "",
+                  "| trunk | N | static K at a | omega_1 | omega_2 | x_max | energy delivered "
+                  "| default dt (s) | largest stable dt, trunk (s) | runner's limit (s) "
+                  "| s per simulated s |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+        for row in sc["rows"]:
+            run = row["runs"][0]
+            w1, w2 = row["omega_errors"]
+            lines.append(
+                f"| {row['model']} | {row['segments']} | {row['static_stiffness_error']:+.2%} "
+                f"| {w1:+.2%} | {w2:+.2%} | {run['x_max_error']:+.2%} "
+                f"| {run['energy_delivered_error']:+.2%} | {row['default_dt']:.2g} "
+                f"| {row['trunk_stable_dt']:.2g} | {row['runner_limit']:.2g} "
+                f"| {run['wall_per_simulated_s']:.3g} |")
+        lines += ["", f"Within {result['target']:.0%} of the continuum on x_max, cheapest:", ""]
+        for c in sc["cheapest"]:
+            lines.append(f"- `--trunk {c['model']} --segments {c['segments']} --dt "
+                         f"{c['dt']:.2g}`: x_max {c['x_max_error']:+.2%}, energy delivered "
+                         f"{c['energy_delivered_error']:+.2%}, {c['wall_per_simulated_s']:.2g} "
+                         "s per simulated s")
+        lines.append("")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenario", action="append", dest="scenarios",
@@ -143,7 +172,12 @@ def main(argv=None) -> int:
                         "realistic-crown)")
     p.add_argument("--segments", type=int, nargs="+", default=[4, 8, 16, 32])
     p.add_argument("--out", default=str(OUT))
+    p.add_argument("--table", action="store_true",
+                   help="print the markdown tables of the --out file and exit (no runs)")
     args = p.parse_args(argv)
+    if args.table:
+        print(markdown(json.loads(pathlib.Path(args.out).read_text())))
+        return 0
     names = args.scenarios or ["central-leader", "open-center", "realistic-crown"]
     out = pathlib.Path(args.out)
     result = json.loads(out.read_text()) if out.exists() else {"scenarios": {}}
