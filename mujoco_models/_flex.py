@@ -88,6 +88,7 @@ def add_flex_trunk(spec: mujoco.MjSpec, rod: FlexTrunk) -> str:
     root.explicitinertial = True
     h0 = rod.heights[1] - rod.heights[0]
     root.mass = tr.density * tr.area * h0 / 2.0  # vertex 0's share: on the hinge axis
+    root.ipos = [0.0, 0.0, 0.0]  # (set: MjSpec.to_xml writes an <inertial> only then)
     root.inertia = [rod.root_inertia] * 3
     if math.isfinite(tr.base_stiffness):
         j = root.add_joint()
@@ -104,6 +105,7 @@ def add_flex_trunk(spec: mujoco.MjSpec, rod: FlexTrunk) -> str:
         body.gravcomp = 1.0
         body.explicitinertial = True
         body.mass = rod.masses[k - 1]
+        body.ipos = [0.0, 0.0, 0.0]
         body.inertia = [rod.masses[k - 1] * r * r / 4.0] * 3  # never enters: no rotation dof
         j = body.add_joint()
         j.name = f"vertex_{k}_x"
