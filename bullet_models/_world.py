@@ -3,8 +3,10 @@ their own inertias, the world configured for a setup, and the engine's chain mat
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
+import shutil
 import tempfile
 from dataclasses import dataclass
 
@@ -78,8 +80,9 @@ def load(p, cid, text: str) -> int:
 def _urdf_file(text: str) -> str:
     files = _CLIENT["files"]
     if text not in files:
-        if _CLIENT["dir"] is None:
+        if _CLIENT["dir"] is None:  # removed when the process exits: no files left behind
             _CLIENT["dir"] = tempfile.mkdtemp(prefix="bullet_models_")
+            atexit.register(shutil.rmtree, _CLIENT["dir"], ignore_errors=True)
         path = os.path.join(_CLIENT["dir"], f"model_{len(files)}.urdf")
         with open(path, "w") as fh:
             fh.write(text)
