@@ -39,7 +39,7 @@ test: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest tests compare
 
 benchmark: $(STAMP)
-	for b in solver beam mujoco bullet sweep report identify; do \
+	for b in solver beam mujoco bullet sweep report identify trunks; do \
 		OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_$$b.py || exit 1; \
 	done
 

@@ -173,3 +173,14 @@ def scenario_urdfs(scenario) -> dict[str, str]:
         out[f"{scenario.name}-pendulum-full.urdf"] = pendulum_urdf(
             scenario.impactor, trunk.clamp_height, "full", name=f"{scenario.name}-pendulum-full")
     return {n: fixed_precision_xml(text, URDF_DIGITS) for n, text in out.items()}
+
+
+def sphere_urdf(mass: float, radius: float, name: str = "sphere") -> str:
+    """A one-link URDF: a sphere of ``mass`` (kg) and ``radius`` (m), its collision shape
+    named ``contact_sphere``, the solid-sphere inertia 2/5 m r^2 (for the two-body collision
+    of ``treeimpact contact``)."""
+    robot = ET.Element("robot", name=name)
+    link = ET.SubElement(robot, "link", name="body")
+    _inertial(link, mass, 0.0, 0.4 * mass * radius * radius)
+    _sphere(link, (0.0, 0.0, 0.0), radius)
+    return _text(robot)

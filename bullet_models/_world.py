@@ -3,15 +3,20 @@ their own inertias, the world configured for a setup, and the engine's chain mat
 
 from __future__ import annotations
 
+import atexit
+import math
 import os
+import shutil
 import tempfile
 from dataclasses import dataclass
 
 import numpy as np
 
 from treeimpact.analytic.continuum.chain import hinged_chain
+from treeimpact.analytic.errors import ParameterError
 
 from . import _urdf
+from ._contact import combine_damping, combine_stiffness
 
 RESTITUTION_THRESHOLD_FRACTION = 1e-3  # of u1: slower bounces are plastic (newton mode)
 JOINT_VELOCITY_LIMIT = 1e6  # rad/s or m/s: Bullet clamps joint speeds here (default 100)
@@ -75,8 +80,9 @@ def load(p, cid, text: str) -> int:
 def _urdf_file(text: str) -> str:
     files = _CLIENT["files"]
     if text not in files:
-        if _CLIENT["dir"] is None:
+        if _CLIENT["dir"] is None:  # removed when the process exits: no files left behind
             _CLIENT["dir"] = tempfile.mkdtemp(prefix="bullet_models_")
+            atexit.register(shutil.rmtree, _CLIENT["dir"], ignore_errors=True)
         path = os.path.join(_CLIENT["dir"], f"model_{len(files)}.urdf")
         with open(path, "w") as fh:
             fh.write(text)
@@ -152,3 +158,65 @@ def engine_matrices(chain) -> tuple[np.ndarray, np.ndarray]:
     local = (0.0, 0.0, float(chain.lengths[link]))
     lin, _ = p.calculateJacobian(body, link, local, zeros, zeros, zeros, physicsClientId=cid)
     return M, np.asarray(lin)[0]
+
+
+#: Bullet world settings for a soft contact with exact restitution (``treeimpact contact``
+#: prints them): no gravity, one fixed step, no slop, no global CFM, restitution 0.
+WORLD_FLAGS = {"numSubSteps": 0, "numSolverIterations": 50, "contactSlop": 0.0,
+               "globalCFM": 0.0, "restitutionVelocityThreshold": 0.0,
+               "enableConeFriction": 0, "deterministicOverlappingPairs": 1}
+#: Per-link settings beside contactStiffness/contactDamping: no restitution impulse, no
+#: friction, none of Bullet's default velocity damping (0.04 per link).
+LINK_FLAGS = {"restitution": 0.0, "lateralFriction": 0.0, "linearDamping": 0.0,
+              "angularDamping": 0.0}
+SPHERE_RADIUS = 0.05  # m: the two-body collision's spheres (geometry only)
+
+
+def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: float,
+                       damping: float, speed: float = 1.0, flags: bool = True,
+                       overlap: float = 1e-12) -> tuple[float, float, int]:
+    """Collide sphere a (``mass``) into sphere b (``other_mass``; fixed when infinite) at
+    ``speed`` (m/s), starting touching, each link given ``stiffness``/``damping`` (per link,
+    N/m and N s/m) and, with ``flags``, :data:`WORLD_FLAGS` and :data:`LINK_FLAGS`;
+    (restitution, duration s, steps with a normal force). The duration ends where the
+    links' combined law force k delta + c delta' first reaches zero, interpolated between
+    the steps it acts over (Bullet's implicit force is that of the step's end state)."""
+    p, cid = client()
+    p.resetSimulation(physicsClientId=cid)
+    p.setGravity(0.0, 0.0, 0.0, physicsClientId=cid)
+    p.setPhysicsEngineParameter(fixedTimeStep=dt, physicsClientId=cid,
+                                **(WORLD_FLAGS if flags else {"numSubSteps": 0}))
+    bodies = []
+    for m, x in ((mass, -SPHERE_RADIUS), (other_mass, SPHERE_RADIUS)):
+        fixed = not math.isfinite(m)
+        text = _urdf.sphere_urdf(1.0 if fixed else m, SPHERE_RADIUS)
+        body = p.loadURDF(_urdf_file(text), basePosition=[x, 0.0, 0.0], useFixedBase=fixed,
+                          flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+        p.changeDynamics(body, -1, contactStiffness=stiffness, contactDamping=damping,
+                         physicsClientId=cid, **(LINK_FLAGS if flags else {}))
+        bodies.append(body)
+    a, b = bodies
+    p.resetBaseVelocity(a, [speed, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=cid)
+    k, c = combine_stiffness(stiffness, stiffness), combine_damping(damping, damping)
+
+    def state():
+        (xa, _, _), _ = p.getBasePositionAndOrientation(a, physicsClientId=cid)
+        (xb, _, _), _ = p.getBasePositionAndOrientation(b, physicsClientId=cid)
+        va = p.getBaseVelocity(a, physicsClientId=cid)[0][0]
+        vb = p.getBaseVelocity(b, physicsClientId=cid)[0][0]
+        return k * (2.0 * SPHERE_RADIUS - (xb - xa)) + c * (va - vb), vb - va
+
+    law_prev, _ = state()
+    pushing, t_release = 0, None
+    for n in range(1, 1_000_001):
+        p.stepSimulation(physicsClientId=cid)
+        if sum(cp[9] for cp in p.getContactPoints(a, b, physicsClientId=cid)) > 0.0:
+            pushing += 1
+        law, sep = state()
+        if t_release is None and law <= 0.0:
+            # the force of state n acted over step n (implicit): it stands at (n - 1) dt
+            t_release = (n - 2 + law_prev / (law_prev - law)) * dt
+        if t_release is not None and sep > 0.0:
+            return sep / speed, t_release, pushing
+        law_prev = law
+    raise ParameterError("--dt: the collision did not end within 1e6 steps")

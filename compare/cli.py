@@ -40,7 +40,7 @@ def _count(text: str) -> int:
 
 
 #: The options of ``treeimpact modes`` (the backends' modes() take these of their OPTIONS).
-MODES_OPTIONS = ("segments", "elements", "beam_theory")
+MODES_OPTIONS = ("segments", "elements", "beam_theory", "trunk")
 
 
 def backend_options() -> dict:
@@ -108,7 +108,12 @@ def build_parser() -> argparse.ArgumentParser:
     sr.add_argument("--study", action="append", dest="studies", default=[],
                     help="directory of a finished study to include (repeatable)")
 
+    from .contact_cmd import add_arguments as add_contact_arguments
     from .identify_cmd import add_arguments as add_identify_arguments
+
+    add_contact_arguments(sub.add_parser(
+        "contact", help="MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a "
+                        "target e and contact duration, checked in both engines"), _number)
     from .scenario_cmd import add_arguments as add_scenario_arguments
 
     add_identify_arguments(sub.add_parser(
@@ -349,6 +354,12 @@ def cmd_sweep(args) -> int:
     return run_sweep_command(args)
 
 
+def cmd_contact(args) -> int:
+    from .contact_cmd import run
+
+    return run(args)
+
+
 def cmd_identify(args) -> int:
     from .identify_cmd import run
 
@@ -363,7 +374,7 @@ def cmd_scenario(args) -> int:
 
 COMMANDS = {"paper": cmd_paper, "simulate": cmd_simulate, "modes": cmd_modes,
             "report": cmd_report, "sweep": cmd_sweep, "scenario": cmd_scenario,
-            "identify": cmd_identify}
+            "identify": cmd_identify, "contact": cmd_contact}
 
 
 #: Exit code of an interrupted command (Ctrl-C or SIGTERM): 128 + SIGINT, as a shell says.

@@ -15,7 +15,7 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Billet, Pendulum, Scenario
 from treeimpact.analytic.model.reduction import TreeSDOF
 
-from . import _contact
+from . import _contact, _flex
 
 BOB_RADIUS = 0.05  # m: radius of the pendulum's contact sphere (geometry only)
 BOB_INERTIA_FRACTION = 1e-6  # bob inertia about its centre / (m l_e^2)
@@ -37,10 +37,11 @@ def sensor_slices() -> dict:
 class TrunkSpec:
     """What the builder needs about the trunk (SI units)."""
 
-    kind: str  # "sdof" | "chain"
+    kind: str  # "sdof" | "chain" | "flex"
     sdof: TreeSDOF | None
     chain: HingedChain | None
     damping: str  # "distributed" | "joint"
+    flex: _flex.FlexTrunk | None = None
 
 
 def joint_damping(chain: HingedChain) -> np.ndarray:
@@ -73,7 +74,9 @@ def _spec(name: str, dt: float, gravity: float, implicit_damping: bool,
     opt.integrator = INTEGRATOR_ENUMS[integrator]
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
     opt.gravity = [0.0, 0.0, -gravity]
-    opt.enableflags = int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    # no mjENBL_ENERGY: since MuJoCo 3.5 the e_kinetic sensor (position stage) reads the
+    # kinetic energy the flag computed in the previous step's velocity stage (one step late);
+    # without the flag the sensor computes it from the current state
     if not implicit_damping:
         opt.disableflags = int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP)
     return spec
@@ -115,6 +118,8 @@ def add_trunk(spec: mujoco.MjSpec, trunk: TrunkSpec, clamp_height: float, diamet
     """Add the trunk to ``spec``; returns the name of its root body."""
     r = diameter / 2.0
     wood = (0.55, 0.4, 0.25, 1.0)
+    if trunk.kind == "flex":
+        return _flex.add_flex_trunk(spec, trunk.flex)
     if trunk.kind == "sdof":
         tree = trunk.sdof
         body = spec.worldbody.add_body()
@@ -126,8 +131,8 @@ def add_trunk(spec: mujoco.MjSpec, trunk: TrunkSpec, clamp_height: float, diamet
         j.name = "trunk_x"
         j.type = mujoco.mjtJoint.mjJNT_SLIDE
         j.axis = [1.0, 0.0, 0.0]
-        j.stiffness = tree.stiffness
-        j.damping = tree.damping
+        j.stiffness[0] = tree.stiffness
+        j.damping[0] = tree.damping
         _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r], rgba=wood)
         _site(body, "impact_point", (0.0, 0.0, 0.0), 0.2 * r)
         return "trunk"
@@ -157,9 +162,9 @@ def add_trunk(spec: mujoco.MjSpec, trunk: TrunkSpec, clamp_height: float, diamet
         hinge.name = f"hinge_{j}"
         hinge.type = mujoco.mjtJoint.mjJNT_HINGE
         hinge.axis = [0.0, 1.0, 0.0]
-        hinge.stiffness = chain.hinge_stiffnesses[j]
+        hinge.stiffness[0] = chain.hinge_stiffnesses[j]
         if damp is not None:
-            hinge.damping = float(damp[j])
+            hinge.damping[0] = float(damp[j])
         _geom(body, f"segment_{j}_wood", mujoco.mjtGeom.mjGEOM_CYLINDER, [r],
               fromto=(0.0, 0.0, 0.0, 0.0, 0.0, float(h[j])), rgba=wood, group=1)
         if j == chain.clamp_segment:
@@ -172,7 +177,7 @@ def add_trunk(spec: mujoco.MjSpec, trunk: TrunkSpec, clamp_height: float, diamet
         for p, (zp, cp) in enumerate(zip(chain.damping_heights, chain.damping_coefficients)):
             ten = spec.add_tendon()
             ten.name = f"damper_{p}"
-            ten.damping = float(cp)
+            ten.damping[0] = float(cp)
             for j in range(chain.segments):
                 if z[j] < zp:
                     ten.wrap_joint(f"hinge_{j}", float(zp - z[j]))
@@ -194,7 +199,7 @@ def add_pendulum(spec: mujoco.MjSpec, impactor, kind: str, clamp_height: float,
         j.name = "pendulum_x"
         j.type = mujoco.mjtJoint.mjJNT_SLIDE
         j.axis = [1.0, 0.0, 0.0]
-        j.stiffness = impactor.stiffness
+        j.stiffness[0] = impactor.stiffness
         bob_z = 0.0
     else:
         le = impactor.equivalent_length
@@ -272,19 +277,10 @@ class _BilletAsSpring:
     stiffness: float = 0.0
 
 
-#: MuJoCo 3.3.7's XML writer names the energy sensors <kinetic>/<potential>
-#: (xml_native_writer.cc, case mjSENS_E_KINETIC) while its reader only knows <e_kinetic>/
-#: <e_potential> (xml_native_reader.cc): the written file would not load without this fix.
-_WRITER_FIXES = (("<kinetic ", "<e_kinetic "), ("<potential ", "<e_potential "))
-
-
 def mjcf_text(spec: mujoco.MjSpec) -> str:
-    """``spec.to_xml()`` with the energy-sensor names the reader accepts (numbers: MuJoCo's
-    writer keeps 6 significant digits)."""
-    text = spec.to_xml()
-    for old, new in _WRITER_FIXES:
-        text = text.replace(old, new)
-    return text
+    """``spec.to_xml()`` (numbers: MuJoCo's writer keeps 6 significant digits; since MuJoCo
+    4.0 it names the energy sensors <e_kinetic>/<e_potential>, as its reader does)."""
+    return spec.to_xml()
 
 
 def contact_inverse_masses(model: mujoco.MjModel) -> tuple[float, float]:

@@ -181,3 +181,121 @@ def engine_law(k: float, e: float, mu: float, h: float, integrator: str = "Euler
 def law_restitution(k: float, c: float, mu: float) -> float:
     """e of the continuous law (k, c) for reduced mass mu (analytic.contact.soft)."""
     return restitution_for_damping_ratio(c / (2.0 * math.sqrt(k * mu)))
+
+
+def time_constant_solref(k: float, c: float, denominator: float) -> tuple[float, float]:
+    """The positive ``solref = (timeconst, dampratio)`` equal to the direct one of
+    :func:`solref_for_law`: with a constant impedance MuJoCo takes k' = 1 / (timeconst^2
+    dampratio^2) and b' = 2 / timeconst, so timeconst = 2 / (c S) (s) and dampratio =
+    c S / (2 sqrt(k S)). MuJoCo raises a timeconst below 2 dt to 2 dt unless the ``refsafe``
+    flag is disabled."""
+    ks, cs = k * denominator, c * denominator
+    if not (ks > 0 and cs > 0):
+        raise ParameterError(f"contact (k, c) = ({k:.4g}, {c:.4g}): the time-constant solref "
+                             "needs k > 0 and c > 0")
+    return 2.0 / cs, cs / (2.0 * math.sqrt(ks))
+
+
+MINVAL = 1e-15  # MuJoCo's mjMINVAL: it computes K = 1 / max(MINVAL, d^2 timeconst^2 dampratio^2)
+
+
+def time_constant_impedance(k: float, denominator: float) -> float:
+    """The constant impedance d for a time-constant solref of stiffness k (N/m): MuJoCo
+    caps k' = 1 / (timeconst dampratio)^2 at d^2 / MINVAL (measured: 1e7 at d = 1e-4), so d
+    is :data:`IMPEDANCE` or, for a stiffer law, sqrt(10 k S MINVAL) (a tenth of the cap)."""
+    return max(IMPEDANCE, math.sqrt(10.0 * k * denominator * MINVAL))
+
+
+#: Radius (m) of the spheres of :func:`two_body_mjcf` (geometry only).
+SPHERE_RADIUS = 0.05
+
+
+def two_body_mjcf(mass: float, other_mass: float, dt: float, solref, solimp,
+                  refsafe: bool = True) -> str:
+    """A plain MJCF: sphere ``a`` (``mass``, free joint) touching sphere ``b`` (``other_mass``,
+    free joint; fixed in the world when infinite) along x, no gravity, Euler at ``dt``; the
+    only contact is the pair ``impact`` (condim 1, margin 0) with ``solref``/``solimp``."""
+    import mujoco
+
+    spec = mujoco.MjSpec()
+    spec.modelname = "two-body-collision"
+    spec.option.timestep = dt
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    if not refsafe:
+        spec.option.disableflags = int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
+    for name, m, x in (("a", mass, -SPHERE_RADIUS), ("b", other_mass, SPHERE_RADIUS)):
+        parent = spec.worldbody
+        if math.isfinite(m):
+            parent = spec.worldbody.add_body()
+            parent.name = name
+            parent.pos = [x, 0.0, 0.0]
+            parent.explicitinertial = True
+            parent.mass = m
+            parent.inertia = [0.4 * m * SPHERE_RADIUS ** 2] * 3
+            parent.add_freejoint()
+        g = parent.add_geom()
+        g.name = name
+        g.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        g.size = [SPHERE_RADIUS, 0.0, 0.0]
+        g.contype = 0
+        g.conaffinity = 0
+        if not math.isfinite(m):
+            g.pos = [x, 0.0, 0.0]
+    pair = spec.add_pair()
+    pair.name = "impact"
+    pair.geomname1 = "a"
+    pair.geomname2 = "b"
+    pair.condim = 1
+    pair.margin = 0.0
+    pair.solref = list(solref)
+    pair.solimp = list(solimp)
+    return spec.to_xml()
+
+
+def two_body_collision(xml: str, speed: float = 1.0, overlap: float = 1e-12
+                       ) -> tuple[float, float, int]:
+    """Collide body ``a`` of a :func:`two_body_mjcf`-like model into ``b`` at ``speed``
+    (m/s), starting touching (``overlap`` m, as the replay of :func:`discrete_collision`);
+    (restitution, duration s, steps with a pushing force). The duration ends where the
+    pair's law force (k' delta + b' delta') / S, evaluated on the engine's states (delta
+    from the spheres' centres), first reaches zero, interpolated between the steps it acts
+    over (Euler: the force of state n acts over step n, from n dt)."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    a = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "a")
+    b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "b")
+    d.qpos[m.jnt_qposadr[m.body_jntadr[a]]] += overlap
+    d.qvel[m.jnt_dofadr[m.body_jntadr[a]]] = speed
+    b_moves = b >= 0 and m.body_jntadr[b] >= 0  # else b is a geom of the world
+    ga, gb = (mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in ("a", "b"))
+    reach = m.geom_size[ga, 0] + m.geom_size[gb, 0]
+    pair = 0
+    kd, cd = -m.pair_solref[pair, 0], -m.pair_solref[pair, 1]  # k' and b' (direct solref)
+    if m.pair_solref[pair, 0] > 0:  # time-constant solref: k' = 1 / (tc dr)^2, b' = 2 / tc
+        tc, dr = m.pair_solref[pair]
+        kd, cd = 1.0 / (tc * dr) ** 2, 2.0 / tc
+
+    def state():
+        mujoco.mj_kinematics(m, d)
+        va = d.qvel[m.jnt_dofadr[m.body_jntadr[a]]]
+        vb = d.qvel[m.jnt_dofadr[m.body_jntadr[b]]] if b_moves else 0.0
+        delta = reach - (d.geom_xpos[gb, 0] - d.geom_xpos[ga, 0])
+        return kd * delta + cd * (va - vb), vb - va
+
+    law_prev, _ = state()
+    pushing, steps, t_release = 0, 0, None
+    while steps < MAX_COLLISION_STEPS:
+        mujoco.mj_step(m, d)
+        steps += 1
+        if d.ncon and float(np.sum(d.efc_force[:d.nefc])) > 0.0:
+            pushing += 1
+        law, sep = state()
+        if t_release is None and law <= 0.0:
+            t_release = (steps - 1 + law_prev / (law_prev - law)) * m.opt.timestep
+        if t_release is not None and sep > 0.0:
+            return sep / speed, t_release, pushing
+        law_prev = law
+    raise ParameterError("--dt: the collision did not end within "
+                         f"{MAX_COLLISION_STEPS} steps")

@@ -20,7 +20,7 @@ from treeimpact.analytic.engine.interface import (
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.results import ImpactRecord, SimulationResult
 
-from . import _builder, _contact
+from . import _builder, _contact, _flex
 
 
 def _damping_matrices(m: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
@@ -84,11 +84,12 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
     y = sensors[:, sl["y_pos"]][:, 0] + (tr.diameter / 2.0 + _builder.BOB_RADIUS)
     vy = sensors[:, sl["y_vel"]][:, 0]
     kinetic = sensors[:, sl["kinetic"]][:, 0]
-    root = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY,
-                             "trunk" if setup.trunk == "sdof" else "segment_0")
+    root = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, setup.trunk_root)
     g = -m.opt.gravity[2]
     trunk_grav = m.body_subtreemass[root] * g * sensors[:, sl["trunk_com"]][:, 2]
     potential = sensors[:, sl["potential"]][:, 0] - trunk_grav - setup.rest_potential
+    if setup.flex is not None:  # MuJoCo's e_potential leaves the flex's elastic energy out
+        potential = potential + _flex_energy(setup, np.vstack([state0, states[:-1]]))
     model = setup.model
     mm = model.impactor_mass
     if setup.pendulum == "full":
@@ -163,6 +164,23 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
     return record, e0, i1
 
 
+def _flex_energy(setup, states: np.ndarray) -> np.ndarray:
+    """The rod's bending energy (J) at the states whose sensors are recorded (state n's
+    sensors are those of the state before step n)."""
+    root, verts = _flex.flex_dofs(setup.mjmodel)
+    theta = states[:, 1 + root] if root is not None else np.zeros(len(states))
+    return _flex.bending_energy(setup.flex, theta, states[:, [1 + v for v in verts]])
+
+
+def _with_flex_crown(setup, record: ImpactRecord, states: np.ndarray) -> ImpactRecord:
+    """``record`` with the rod top's x (m) and x' (m/s) over its last states."""
+    m = setup.mjmodel
+    _, verts = _flex.flex_dofs(m)
+    n = record.t.size
+    top = verts[-1]
+    return with_crown(record, states[-n:, 1 + top], states[-n:, 1 + m.nq + top])
+
+
 def _with_crown(setup, record: ImpactRecord, states: np.ndarray) -> ImpactRecord:
     """``record`` with the chain top's x (m) and x' (m/s) over its last states."""
     m = setup.mjmodel
@@ -179,6 +197,8 @@ def _result(setup, state0, states, sensors) -> SimulationResult:
     record, e0, _ = _record(setup, state0, states, sensors)
     if setup.trunk == "chain":  # the chain's top, from the hinge angles of the recorded states
         record = _with_crown(setup, record, states)
+    elif setup.trunk == "flex":  # the rod's top vertex
+        record = _with_flex_crown(setup, record, states)
     law = setup.law
     return engine_result(
         "mujoco", record, scenario=setup.scenario, model=setup.model, t_end=setup.t_end,

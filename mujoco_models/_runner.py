@@ -9,6 +9,7 @@ import functools
 import math
 import os
 import sys
+import warnings
 from dataclasses import dataclass, field
 
 import mujoco
@@ -27,6 +28,8 @@ from treeimpact.analytic.contact.timestep import (
     choose_time_step,
     sdof_rate,
 )
+from treeimpact.analytic.continuum.chain import default_segments
+from treeimpact.analytic.continuum.modes import beam_reference
 from treeimpact.analytic.engine.interface import (
     EngineSetup,
     chain_modes,
@@ -39,10 +42,10 @@ from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.results import SimulationResult
 
-from . import _builder, _contact
+from . import _builder, _contact, _flex
 from ._record import _damping_matrices, _rest_potential, _result
 from ._rollout import _initial_qpos_qvel, _plan, _run_group, _signature, _state
-from .options import INTEGRATORS, OPTIONS  # noqa: F401 - OPTIONS: public here too
+from .options import INTEGRATORS, OPTIONS, TRUNKS  # noqa: F401 - OPTIONS: public here too
 
 _WARNED: set = set()
 
@@ -57,6 +60,17 @@ def _warning_to_stderr(message: str) -> None:
 
 
 mujoco.set_mju_user_warning(_warning_to_stderr)
+
+
+def compile_spec(spec: mujoco.MjSpec) -> mujoco.MjModel:
+    """``spec.compile()`` with a compiler warning (a UserWarning since MuJoCo 4.0; 3.x raised)
+    sent to stderr like the runtime ones; the shipped models compile without any (tested)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = spec.compile()
+    for w in caught:
+        _warning_to_stderr(f"compiler: {w.message}")
+    return model
 
 PLACEHOLDER_DT = 1e-5  # s: time step of the first compile (only its masses are used)
 RK4_DAMPING_LIMIT = 2.785  # h lambda: RK4's stability limit on the negative real axis (2.7853)
@@ -82,13 +96,35 @@ class Setup(EngineSetup):
     # computed once per setup (a run does not rebuild MjData for them):
     initial_state: np.ndarray = field(repr=False, compare=False)  # mjSTATE_FULLPHYSICS, t = 0
     rest_potential: float = field(repr=False, compare=False)  # J: springs + pendulum gravity
+    flex: _flex.FlexTrunk | None = field(default=None, repr=False, compare=False)
 
     @property
     def effective_mass(self) -> float:
         return 1.0 / self.inverse_mass
 
+    @property
+    def trunk_root(self) -> str:
+        return ROOT_BODIES[self.trunk]
+
+
+#: The trunk's root body per trunk model (its subtree's gravity is compensated).
+ROOT_BODIES = {"sdof": "trunk", "chain": "segment_0", "flex": "trunk_root"}
+
+
+def cable_refusal() -> ParameterError:
+    """``--trunk cable``: the installed MuJoCo has no cable plugin (removed in 4.0)."""
+    return ParameterError(
+        f"--trunk = 'cable': the installed MuJoCo {mujoco.__version__} has no cable elasticity "
+        "plugin (removed in MuJoCo 4.0, superseded by the 1-D flex): use --trunk flex")
+
 
 def _trunk_spec(scenario: Scenario, trunk: str, segments, damping) -> tuple:
+    if trunk == "cable":
+        raise cable_refusal()
+    if trunk == "flex":
+        n = default_segments(scenario.trunk) if segments is None else segments
+        rod = _flex.flex_trunk(scenario.trunk, n)
+        return _builder.TrunkSpec("flex", None, None, damping, rod), rod.segments
     chain = trunk_chain(scenario, trunk, segments)
     if chain is not None:
         return _builder.TrunkSpec("chain", None, chain, damping), chain.segments
@@ -100,7 +136,7 @@ def _mass_matrix_at_rest(mjmodel: mujoco.MjModel) -> np.ndarray:
     data = mujoco.MjData(mjmodel)
     mujoco.mj_forward(mjmodel, data)
     M = np.zeros((mjmodel.nv, mjmodel.nv))
-    mujoco.mj_fullM(mjmodel, M, data.qM)
+    mujoco.mj_fullM(mjmodel, data, M)
     return M
 
 
@@ -116,6 +152,16 @@ def engine_trunk_matrices(mjmodel: mujoco.MjModel) -> tuple[np.ndarray, np.ndarr
     dofs = [int(mjmodel.jnt_dofadr[j]) for j in hinges]
     M = _mass_matrix_at_rest(mjmodel)
     return M[np.ix_(dofs, dofs)], np.diag(mjmodel.jnt_stiffness[hinges])
+
+
+def flex_trunk_matrices(mjmodel: mujoco.MjModel, rod: _flex.FlexTrunk
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """(M, K) of the flex trunk's dofs (root hinge if any, vertex slides): ``mj_fullM`` at
+    rest and the rod's bending Hessian (:func:`mujoco_models._flex.stiffness_matrix`)."""
+    root, verts = _flex.flex_dofs(mjmodel)
+    dofs = ([root] if root is not None else []) + verts  # slides and hinges: qpos = dof adr
+    M = _mass_matrix_at_rest(mjmodel)
+    return M[np.ix_(dofs, dofs)], _flex.stiffness_matrix(rod, root is not None)
 
 
 def highest_frequency(M: np.ndarray, K: np.ndarray) -> float:
@@ -165,7 +211,9 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     check_choice("integrator", integrator, INTEGRATORS)
     model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum, damping=damping,
                                 calibration=calibration, restitution=restitution,
-                                t_end=t_end)
+                                t_end=t_end, trunks=TRUNKS)
+    if trunk == "flex":
+        _flex.check_flex_options(integrator, damping)
     e = model.restitution
     if not e > 0.0:
         raise ParameterError("--restitution = 0: a soft contact needs e in (0, 1] (e = 0 "
@@ -175,14 +223,15 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     name = f"{scenario.name}-{trunk}-{pendulum}"
     spec, pair = _builder.build_spec(name, tspec, scenario, pendulum, PLACEHOLDER_DT,
                                      integrator=integrator)
-    m1 = spec.compile()
+    m1 = compile_spec(spec)
     A, A_hat = _builder.contact_inverse_masses(m1)
     mu = 1.0 / A
     if calibration == "pad":  # the SDOF's (k_c, c_c): the e it gives on this model's mu
         e = pad_restitution(k, c_pad, mu)
     zeta = damping_ratio_for_restitution(e)
     t_c = release_time(zeta) / math.sqrt(k / mu)
-    omega_max = highest_frequency(*engine_trunk_matrices(m1)) if trunk == "chain" else None
+    omega_max = highest_frequency(*engine_trunk_matrices(m1)) if trunk == "chain" else \
+        highest_frequency(*flex_trunk_matrices(m1, tspec.flex)) if trunk == "flex" else None
     fastest = omega_max if omega_max is not None else sdof_rate(model)
     if dt is None:
         dt = choose_time_step(t_c, fastest)
@@ -199,11 +248,10 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
     solref = _contact.solref_for_law(law.stiffness, law.damping, S)
     pair.solref = list(solref)
     spec.option.timestep = dt
-    mjmodel = spec.compile()
+    mjmodel = compile_spec(spec)
     if integrator == "RK4":
         _check_rk4_damping(mjmodel, dt)
-    root = mujoco.mj_name2id(mjmodel, mujoco.mjtObj.mjOBJ_BODY,
-                             "trunk" if trunk == "sdof" else "segment_0")
+    root = mujoco.mj_name2id(mjmodel, mujoco.mjtObj.mjOBJ_BODY, ROOT_BODIES[trunk])
     state0 = _state(mjmodel, *_initial_qpos_qvel(mjmodel, pendulum, model, scenario))
     state0.flags.writeable = False
     return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
@@ -213,7 +261,8 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
                  omega_max=omega_max, inverse_mass=A, calibration=calibration,
                  inverse_mass_approx=A_hat, solref=tuple(solref), integrator=integrator,
                  mjmodel=mjmodel, spec=spec,
-                 initial_state=state0, rest_potential=_rest_potential(mjmodel, root))
+                 initial_state=state0, rest_potential=_rest_potential(mjmodel, root),
+                 flex=tspec.flex)
 
 
 def _check_rk4_damping(mjmodel: mujoco.MjModel, dt: float) -> None:
@@ -291,19 +340,39 @@ def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
     return run_setups(setups, max_workers=max_workers)
 
 
-def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
-    """Static stiffness at a (N/m) and natural frequencies (rad/s) of MuJoCo's chain from
-    the engine: ``mj_fullM`` at rest, the compiled hinge stiffnesses and the impact point's
-    ``mj_jacSite`` (:func:`analytic.engine.interface.chain_modes`); ``beam``: the continuous
-    beam."""
+def modes(scenario: Scenario, *, trunk="chain", segments=None, n_modes: int = 3) -> dict:
+    """Static stiffness at a (N/m) and natural frequencies (rad/s) of MuJoCo's trunk from
+    the engine: ``mj_fullM`` at rest with the compiled hinge stiffnesses and the impact
+    point's ``mj_jacSite`` (chain, :func:`analytic.engine.interface.chain_modes`) or the
+    rod's bending Hessian (flex, :func:`flex_modes`); ``beam``: the continuous beam."""
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")
-    tspec, _ = _trunk_spec(scenario, "chain", segments, "distributed")
-    spec, _ = _builder.build_spec(f"{scenario.name}-chain-modes", tspec, scenario, "linear",
+    check_choice("trunk", trunk, ("chain", "flex", "cable"))
+    tspec, _ = _trunk_spec(scenario, trunk, segments, "distributed")
+    spec, _ = _builder.build_spec(f"{scenario.name}-{trunk}-modes", tspec, scenario, "linear",
                                   PLACEHOLDER_DT)
-    m = spec.compile()
+    m = compile_spec(spec)
+    if trunk == "flex":
+        return flex_modes(scenario, m, tspec.flex, n_modes)
     M, K = engine_trunk_matrices(m)
     return chain_modes(scenario, M, np.diag(K), impact_jacobian(m), n_modes)
+
+
+def flex_modes(scenario: Scenario, m: mujoco.MjModel, rod: _flex.FlexTrunk, n_modes) -> dict:
+    """The flex trunk's static stiffness at a, 1 / (K^-1)_aa (N/m), and its lowest
+    frequencies, eig(K, M) (rad/s), beside the beam's."""
+    import scipy.linalg
+
+    M, K = flex_trunk_matrices(m, rod)
+    n = len(K)
+    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or not 1 <= n_modes <= n:
+        raise ParameterError(f"n_modes = {n_modes!r} is out of range: allowed [1, {n}]")
+    a = n - rod.segments + rod.clamp_vertex - 1  # the clamp vertex's slide among the dofs
+    static = float(1.0 / np.linalg.solve(K, np.eye(n)[a])[a])
+    w2 = scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=[0, n_modes - 1])
+    return {"model": {"static_stiffness": static, "omegas": [float(v) for v in np.sqrt(w2)],
+                      "segments": rod.segments},
+            "beam": beam_reference(scenario, n_modes)}
 
 
 def impact_jacobian(m: mujoco.MjModel) -> np.ndarray:

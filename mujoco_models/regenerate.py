@@ -2,7 +2,8 @@
 mujoco_models/models/.
 
 One file per scenario, trunk (``sdof``, ``chain`` with
-:func:`analytic.continuum.chain.default_segments`) and pendulum (``linear``, ``full``):
+:func:`analytic.continuum.chain.default_segments`; ``flex``, MuJoCo's rod, with the linear
+pendulum only) and pendulum (``linear``, ``full``):
 ``<scenario>-<trunk>-<pendulum>.xml``, exactly the model the runner steps with its default options
 (contact law and time step included), written by
 ``MjSpec.to_xml`` (6 significant digits; see :func:`mujoco_models._builder.mjcf_text`).
@@ -23,7 +24,8 @@ from ._builder import mjcf_text
 from ._runner import make_setup
 
 MODELS_DIR = pathlib.Path(__file__).resolve().parent / "models"
-VARIANTS = (("sdof", "linear"), ("sdof", "full"), ("chain", "linear"), ("chain", "full"))
+VARIANTS = (("sdof", "linear"), ("sdof", "full"), ("chain", "linear"), ("chain", "full"),
+            ("flex", "linear"))
 
 
 def scenario_mjcf(scenario) -> dict[str, str]:

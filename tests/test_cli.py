@@ -206,7 +206,7 @@ def test_the_command_line_starts_without_scipy():
 
 
 @pytest.mark.parametrize("command", ["", "paper", "simulate", "modes", "sweep", "report",
-                                     "identify", "scenario"])
+                                     "identify", "scenario", "contact"])
 def test_every_help_page_prints(command):
     """`treeimpact [COMMAND] --help` exits 0 with its usage (a bare % in a help string makes
     argparse fail while formatting it)."""

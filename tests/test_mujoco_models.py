@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -351,7 +352,7 @@ def test_damping_matrices_are_what_the_euler_step_applies(central, opts, integra
     d.qvel[:] = v0
     mujoco.mj_forward(m, d)
     M = np.zeros((m.nv, m.nv))
-    mujoco.mj_fullM(m, M, d.qM)
+    mujoco.mj_fullM(m, d, M)
     mujoco.mj_step(m, d)
     v1 = d.qvel.copy()
     D, B = _damping_matrices(m)
@@ -464,6 +465,31 @@ def test_batch_through_rollout_matches_serial_runs(central):
         assert r.model["dt"] == serial.model["dt"]
 
 
+def test_energy_sensors_read_the_current_state():
+    """MuJoCo >= 3.5 with the energy flag fills e_kinetic one step late; the models leave the
+    flag off, so the sensors are 1/2 v^T M v and mj_energyPos of the state itself."""
+    m = make_setup(load_scenario("central-leader"), trunk="chain").mjmodel
+    assert not m.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(0)
+    d.qpos[:] = 0.01 * rng.normal(size=m.nq)
+    d.qvel[:] = rng.normal(size=m.nv)
+    mujoco.mj_forward(m, d)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    sl = sensor_slices()
+    kinetic = 0.5 * d.qvel @ M @ d.qvel
+    assert d.sensordata[sl["kinetic"]][0] == pytest.approx(kinetic, rel=1e-12)  # round-off
+    mujoco.mj_step(m, d)  # one step on: still the new state's, not the previous one's
+    mujoco.mj_forward(m, d)
+    mujoco.mj_fullM(m, d, M)
+    assert d.sensordata[sl["kinetic"]][0] == pytest.approx(0.5 * d.qvel @ M @ d.qvel,
+                                                           rel=1e-12)  # round-off
+    potential = d.sensordata[sl["potential"]][0]
+    mujoco.mj_energyPos(m, d)
+    assert potential == pytest.approx(d.energy[0], rel=1e-12)  # round-off
+
+
 # ------------------------------------------------------------------------- MJCF files
 def test_regenerated_mjcf_equals_checked_in_files():
     """Parsed and compared at MuJoCo's written precision (6 significant digits)."""
@@ -481,9 +507,12 @@ def test_checked_in_models_compile_without_warnings_and_are_the_runners_models()
         s = load_scenario(name)
         for trunk, pendulum in VARIANTS:
             path = MODELS_DIR / f"{name}-{trunk}-{pendulum}.xml"
-            # MjSpec.compile raises on a compiler warning too (mjs_isWarning); from_xml_path
-            # is the loader of `python -m mujoco.viewer --mjcf=...`
-            m = mujoco.MjSpec.from_file(str(path)).compile()
+            # since MuJoCo 4.0 MjSpec.compile reports a compiler warning as a UserWarning
+            # (3.x raised): an error here; from_xml_path is the loader of
+            # `python -m mujoco.viewer --mjcf=...`
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                m = mujoco.MjSpec.from_file(str(path)).compile()
             assert mujoco.MjModel.from_xml_path(str(path)).nbody == m.nbody
             ref = make_setup(s, trunk=trunk, pendulum=pendulum).mjmodel
             for field in ("body_mass", "body_inertia", "jnt_stiffness", "dof_damping",

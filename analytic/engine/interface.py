@@ -93,15 +93,17 @@ def check_choice(name: str, value, allowed):
 
 
 def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, damping: str,
-                 calibration: str, restitution, t_end) -> tuple[TwoBodyModel, float]:
+                 calibration: str, restitution, t_end, trunks: tuple = TRUNKS
+                 ) -> tuple[TwoBodyModel, float]:
     """The options every engine shares, checked (one-line errors), and the scenario's
     two-body model (eqs 7-13, 48) with the end time (s) of an engine run.
 
     ``restitution`` overrides the scenario's e (validated as ``contact.restitution``);
     ``pendulum = "full"`` needs a pendulum impactor; ``t_end`` (default the scenario's)
-    must be a finite positive number.
+    must be a finite positive number; ``trunks``: the engine's trunk models (default the
+    shared ones).
     """
-    check_choice("trunk", trunk, TRUNKS)
+    check_choice("trunk", trunk, trunks)
     check_choice("pendulum", pendulum, PENDULUMS)
     check_choice("damping", damping, DAMPINGS)
     check_choice("calibration", calibration, CALIBRATIONS)
