@@ -15,6 +15,10 @@ $(STAMP): pyproject.toml requirements.lock
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet "$$(grep '^pip==' requirements.lock)"
 	$(BIN)/python -m pip install --quiet -r requirements.lock
+	@# A venv upgraded from the one-package mujoco 3.x loses mujoco-core's files to the old
+	@# package's uninstall (one shared folder): reinstall the three when the import fails.
+	$(BIN)/python -c "import mujoco" 2>/dev/null || $(BIN)/python -m pip install --quiet \
+		--force-reinstall --no-deps $$(grep -E '^mujoco(-core|-studio)?==' requirements.lock)
 	PYTHONWARNINGS="ignore:Editable installation" $(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
 	touch $(STAMP)
 
