@@ -198,7 +198,30 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
         problem = _energy_problem(m, model, ledger) or _time_problem(m, scen.get("t_end"))
     if problem is not None:
         raise SimulationDiverged(f"{result.backend}: {problem}")
+    short = _truncation_problem(m, scen.get("t_end"))
+    if short is not None:
+        raise ParameterError(f"--t-end = {scen['t_end']:.4g} s is too short for this run "
+                             f"({result.backend}): {short}: a longer --t-end")
     return result
+
+
+#: A peak this close to the run's end (fraction of t_end) is the run's end, not a peak.
+AT_THE_END = 1e-3
+
+
+def _truncation_problem(m: dict, t_end) -> str | None:
+    """What a run cut short by t_end cannot report, or None: x_max still rising at the end
+    (its peak lies beyond), or the bodies still in contact (the energies need the last
+    separation)."""
+    if not finite_number(t_end):
+        return None
+    t_xmax = m.get("t_xmax")
+    if finite_number(t_xmax) and t_xmax >= t_end * (1.0 - AT_THE_END):
+        return f"the trunk is still moving out at the end (t_xmax = {t_xmax:.4g} s)"
+    if "energy_delivered" in m and not finite_number(m.get("energy_delivered")):
+        return "the bodies are still in contact at the end (energy_delivered needs the last " \
+               "separation)"
+    return None
 
 
 def _energy_problem(m: dict, model: dict, ledger: float) -> str | None:

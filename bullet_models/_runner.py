@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from treeimpact.analytic.budget import StepCost, check_work, progress
 from treeimpact.analytic.contact.law import (
     collision_duration,
     contact_law,
@@ -18,12 +19,7 @@ from treeimpact.analytic.contact.law import (
     effective_damping,
     pad_fields,
 )
-from treeimpact.analytic.contact.timestep import (
-    check_time_step,
-    check_work,
-    choose_time_step,
-    sdof_rate,
-)
+from treeimpact.analytic.contact.timestep import check_time_step, choose_time_step, sdof_rate
 from treeimpact.analytic.continuum.chain import (
     chain_matrices,
     chain_natural_frequencies,
@@ -55,7 +51,7 @@ from ._world import (
     engine_matrices,
     load,
 )
-from .options import CONTACTS, OPTIONS  # noqa: F401 - OPTIONS: public here too
+from .options import CONTACTS, ENGINE_NAME, MAX_SEGMENTS, OPTIONS  # noqa: F401 - OPTIONS: public
 
 __all__ = ["OPTIONS", "build_world", "client", "engine_matrices", "load", "make_setup",
            "modes", "run", "simulate", "simulate_batch"]
@@ -86,9 +82,16 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
     model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum, damping=damping,
                                 calibration=calibration, restitution=restitution,
                                 t_end=t_end)
+    if contact == "soft" and not model.restitution < 1.0:  # before the chain is built
+        raise ParameterError(
+            f"e = {model.restitution:g} (--restitution, contact.restitution): Bullet's soft "
+            "contact steps "
+            "implicitly and always dissipates: allowed (0, 1) with --contact soft (e = 1: "
+            "--contact newton)")
     tr = scenario.trunk
     matrices = None
-    chain = trunk_chain(scenario, trunk, segments)
+    chain = trunk_chain(scenario, trunk, segments, engine=ENGINE_NAME,
+                        max_segments=MAX_SEGMENTS)
     if chain is not None:
         n = chain.segments
         M, K, D = chain_matrices(chain)
@@ -110,11 +113,6 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
     mu = apparent * m / (apparent + m)
     k_c = c_c = bullet = None
     if contact == "soft":
-        if not model.restitution < 1.0:
-            raise ParameterError(
-                f"contact.restitution = {model.restitution:g}: Bullet's soft contact steps "
-                "implicitly and always dissipates: allowed (0, 1) with --contact soft (e = 1: "
-                "--contact newton)")
         k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
         if calibration == "effective":  # e on the trunk's effective mass, not the pad's c_c
             c_c = effective_damping(k_c, model.restitution, mu)
@@ -145,14 +143,20 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
             dt = choose_time_step(DEFAULT_CONTACT_DURATION, omega_max)
         check_time_step(dt, math.pi / w, w)
         col = dt
-    # the loop keeps Python floats of every step: 2 per joint and the contact force, ~32 B each
-    check_work(t_end, dt, 32.0 * (2 * (segments or 1) + 3))
+    check_work(t_end, dt, step_cost(segments or 1))
     return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
                  contact=contact, damping=damping, segments=segments, dt=float(dt),
                  t_end=float(t_end), trunk_urdf=trunk_urdf, pendulum_urdf=pend_urdf,
                  contact_stiffness=k_c, contact_damping=c_c, bullet=bullet,
                  collision_duration=col, omega_max=omega_max, apparent_mass=apparent,
                  matrices=matrices, calibration=calibration)
+
+
+def step_cost(joints: int) -> StepCost:
+    """One step of the Python loop (:mod:`._loops`) over ``joints`` trunk hinges: wall time
+    and the bytes its record keeps, measured (benchmarks/bench_cost.py; docs/budgets.md):
+    4 us + 2.05 us x joints (the joint-state reads and torques) and 250 B + 64 B x joints."""
+    return StepCost(4e-6 + 2.05e-6 * joints, 250.0 + 64.0 * joints, f"{joints} trunk joints")
 
 
 # ------------------------------------------------------------------------------------- run
@@ -175,11 +179,10 @@ def run(setup: Setup) -> SimulationResult:
         p.resetJointState(pb, 0, 0.0, model.impact_speed, physicsClientId=cid)
         t_shift, e0 = 0.0, model.initial_energy
     n_steps = int(math.ceil(setup.t_end / dt))
-    chain = setup.trunk == "chain"
-    if chain:
-        rec = _loop_chain(world, setup, n_steps, full, le, g, m)
-    else:
-        rec = _loop_sdof(world, setup, n_steps, full, le, g, m)
+    loop = _loop_chain if setup.trunk == "chain" else _loop_sdof
+    estimate = n_steps * step_cost(setup.segments or 1).seconds
+    with progress("bullet", n_steps, estimate) as tick:
+        rec = loop(world, setup, n_steps, full, le, g, m, tick)
     return _result(setup, rec, t_shift, e0, inertia)
 
 
@@ -310,6 +313,7 @@ def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
     ``beam``: the continuous beam."""
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")
-    chain = trunk_chain(scenario, "chain", segments)
+    chain = trunk_chain(scenario, "chain", segments, engine=ENGINE_NAME,
+                        max_segments=MAX_SEGMENTS)
     M, J = engine_matrices(chain)
     return chain_modes(scenario, M, chain.hinge_stiffnesses, J, n_modes)

@@ -72,6 +72,15 @@ def _add_option_flags(parser, names=None) -> None:
                             help=f"{option.help}{unit} ({', '.join(takers)})".replace("%", "%%"))
 
 
+def _add_budget_flag(parser) -> None:
+    from treeimpact.analytic.budget import MAX_SECONDS, VARIABLES
+
+    parser.add_argument(
+        "--max-seconds", type=_number, dest="max_seconds",
+        help=f"refuse any single run estimated longer than this, s (default {MAX_SECONDS:g}, "
+             f"or {VARIABLES['seconds']}); the estimate is printed with the refusal")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .backends import BACKENDS
 
@@ -92,6 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
     ss.add_argument("--backend", default="analytic", choices=tuple(BACKENDS),
                     help="the model to run (default: analytic, the paper's)")
     _add_option_flags(ss)
+    _add_budget_flag(ss)
     ss.add_argument("--json", action="store_true", help="machine-readable output")
 
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
@@ -107,6 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="shipped scenario name or TOML path (repeatable; default: all shipped)")
     sr.add_argument("--study", action="append", dest="studies", default=[],
                     help="directory of a finished study to include (repeatable)")
+    _add_budget_flag(sr)
 
     from .contact_cmd import add_arguments as add_contact_arguments
     from .identify_cmd import add_arguments as add_identify_arguments
@@ -131,6 +142,7 @@ def build_parser() -> argparse.ArgumentParser:
     if add_sweep_arguments is not None:
         sw = sub.add_parser("sweep", help="run a parameter sweep: validity maps and studies")
         add_sweep_arguments(sw)
+        _add_budget_flag(sw)
     return p
 
 
@@ -388,8 +400,10 @@ def main(argv=None) -> int:
 
     STOP.clear()
     previous = signal.signal(signal.SIGTERM, on_stop_signal)
+    restore = {}
     try:
         args = build_parser().parse_args(argv)
+        restore = _install_budget(getattr(args, "max_seconds", None))
         code = COMMANDS[args.command](args)
         if STOP.is_set() and code != EXIT_INTERRUPTED:  # asked after the last look
             raise KeyboardInterrupt
@@ -421,6 +435,58 @@ def main(argv=None) -> int:
         return EXIT_BAD_INPUT
     finally:
         signal.signal(signal.SIGTERM, previous)
+        _restore_budget(restore)
+
+
+def _install_budget(max_seconds) -> dict:
+    """For this command: ``--max-seconds`` as TREEIMPACT_MAX_SECONDS (its workers inherit it)
+    and long runs' progress on stderr; what to restore afterwards (main() may be called from
+    Python)."""
+    import os
+
+    from treeimpact.analytic import budget
+
+    from .progress import Progress
+
+    import warnings
+
+    name = budget.VARIABLES["seconds"]
+    restore = {"environment": (name, os.environ.get(name)), "reporter": budget._REPORTER,
+               "showwarning": warnings.showwarning}
+    warnings.showwarning = _one_line_warning
+    if max_seconds is not None:
+        if not (math.isfinite(max_seconds) and max_seconds > 0):
+            raise ParameterError(f"--max-seconds = {max_seconds!r} s is out of range: allowed "
+                                 "(0, inf) s")
+        os.environ[name] = repr(float(max_seconds))
+    budget.set_progress_reporter(lambda desc, total: Progress(total, desc, unit="step"))
+    return restore
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A Python warning (numpy's, an engine's) as one stderr line, not a source excerpt."""
+    text = " ".join(str(message).split())
+    where = f"{Path(filename).name}:{lineno}"
+    print(f"treeimpact: warning: {text} ({category.__name__}, {where})",
+          file=file if file is not None else sys.stderr)
+
+
+def _restore_budget(restore: dict) -> None:
+    import os
+
+    from treeimpact.analytic import budget
+
+    if not restore:
+        return
+    import warnings
+
+    warnings.showwarning = restore["showwarning"]
+    name, value = restore["environment"]
+    if value is None:
+        os.environ.pop(name, None)
+    else:
+        os.environ[name] = value
+    budget.set_progress_reporter(restore["reporter"])
 
 
 if __name__ == "__main__":  # pragma: no cover

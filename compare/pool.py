@@ -68,15 +68,31 @@ def on_stop_signal(signum, frame) -> None:
         raise KeyboardInterrupt
 
 
-def ignore_sigint() -> None:
+def ignore_sigint(environment: dict | None = None) -> None:
     """Worker initializer: Ctrl-C is the parent's to handle (it ends the workers itself), so a
     terminal's SIGINT to the whole process group prints no worker tracebacks; SIGTERM takes
     its default action (a forked worker would inherit the parent's handler, which turns it
-    into a KeyboardInterrupt and a traceback when the parent ends the worker)."""
+    into a KeyboardInterrupt and a traceback when the parent ends the worker). The parent's
+    run budgets (``environment``: analytic.budget.VARIABLES as set when the pool started) hold
+    in the worker too: a forkserver started earlier has the environment of its own start."""
+    import os
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    for name, value in (environment or {}).items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = value
+
+
+def _budget_environment() -> dict:
+    import os
+
+    from treeimpact.analytic.budget import VARIABLES
+
+    return {name: os.environ.get(name) for name in VARIABLES.values()}
 
 
 def _end_workers(pool) -> None:
@@ -92,7 +108,8 @@ def _executor(workers: int, start_method: str | None):
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context(start_method) if start_method else None
-    return ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint, mp_context=ctx)
+    return ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint,
+                               initargs=(_budget_environment(),), mp_context=ctx)
 
 
 def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=None,

@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
+from treeimpact.analytic.budget import StepCost, progress
 from treeimpact.analytic.engine.interface import swing_time
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.two_body import TwoBodyModel
@@ -29,13 +30,58 @@ def _state(mjmodel: mujoco.MjModel, qpos, qvel) -> np.ndarray:
     return out
 
 
-def _rollout(models, states, nsteps, nthread):
-    """One multi-threaded rollout of models (same size signature) for max(nsteps) steps."""
-    nstep = int(max(nsteps))
-    datas = [mujoco.MjData(models[0]) for _ in range(max(1, min(nthread, len(models))))]
-    state, sensordata = mj_rollout.rollout(list(models), datas, np.asarray(states),
-                                           nstep=nstep)
-    return state, sensordata
+def step_cost(m: mujoco.MjModel) -> StepCost:
+    """One Euler step's wall time and the bytes the rollout and its record keep, measured
+    (benchmarks/bench_cost.py; docs/budgets.md): 1.5 us + 0.3 us x nv + 5e-9 s x nv^2.6 (the
+    chain's dense mass matrix: 6 us at nv = 10, 1.6 ms at 130 on the 2-core reference
+    machine) and 300 B + 75 B x nv."""
+    nv = int(m.nv)
+    return StepCost(1.5e-6 + 0.3e-6 * nv + 5e-9 * nv ** 2.6, 300.0 + 75.0 * nv,
+                    f"{nv} degrees of freedom")
+
+
+
+#: Estimated seconds of one rollout call: between two calls a signal is answered and the
+#: progress told (the solver's warm start is carried over: the chunks step as one call).
+CHUNK_SECONDS = 0.5
+
+
+def _rollout(models, states, nsteps, nthread, tick=lambda n: None):
+    """Roll each model (one size signature) from its state for its steps; per model the
+    states and sensor values of every step. Each model runs in chunks of about
+    :data:`CHUNK_SECONDS` with its own MjData, the solver's warm start carried from chunk to
+    chunk (bitwise the steps of one call), on up to ``nthread`` threads (MuJoCo's rollout
+    releases the GIL); ``tick(n)`` after every n steps."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+
+    chunk = max(1000, int(CHUNK_SECONDS / step_cost(models[0]).seconds))
+    stop = threading.Event()
+    lock = threading.Lock()
+
+    def one(i):
+        m, data = models[i], mujoco.MjData(models[i])
+        state, warm, left = np.asarray(states[i])[None], None, int(nsteps[i])
+        st_parts, sd_parts = [], []
+        while left > 0 and not stop.is_set():
+            n = min(chunk, left)
+            st, sd = mj_rollout.rollout(m, data, state, nstep=n, initial_warmstart=warm)
+            st_parts.append(st[0])
+            sd_parts.append(sd[0])
+            state, warm, left = st[:, -1], data.qacc_warmstart.copy()[None], left - n
+            with lock:
+                tick(n)
+        return np.concatenate(st_parts), np.concatenate(sd_parts)
+
+    if len(models) == 1 or nthread <= 1:  # in this thread: a signal ends it between chunks
+        return [one(i) for i in range(len(models))]
+    pool = ThreadPoolExecutor(max_workers=min(nthread, len(models)))
+    try:
+        return list(pool.map(one, range(len(models))))
+    finally:
+        stop.set()  # an interrupt in this thread ends the others at their next chunk
+        pool.shutdown(wait=True)
 
 
 def _signature(m: mujoco.MjModel) -> tuple:
@@ -90,16 +136,22 @@ def _swing_models(plans):
 
 
 def _run_group(plans: list[_Plan], nthread: int) -> list:
-    """Roll out a group of plans with one size signature; returns per plan (states, sensors)."""
+    """Roll out a group of plans with one size signature; returns per plan (states, sensors).
+    A run estimated longer than analytic.budget.PROGRESS_AFTER_S reports its progress."""
+
     swing = [p for p in plans if p.swing_steps > 0]
     if swing:
         models = _swing_models(swing)
-        st, _ = _rollout(models, [p.state0 for p in swing], [p.swing_steps for p in swing],
-                         nthread)
-        for i, p in enumerate(swing):
-            s = st[i, p.swing_steps - 1].copy()
+        out = _rollout(models, [p.state0 for p in swing], [p.swing_steps for p in swing],
+                       nthread)
+        for (st, _), p in zip(out, swing):
+            s = st[p.swing_steps - 1].copy()
             s[0] = 0.0  # time restarts: the recorded phase is timed by its own steps
             p.state0 = s
-    st, sd = _rollout([p.setup.mjmodel for p in plans], [p.state0 for p in plans],
-                      [p.nstep for p in plans], nthread)
-    return [(p.state0, st[i, :p.nstep], sd[i, :p.nstep]) for i, p in enumerate(plans)]
+    total = sum(p.nstep for p in plans)
+    estimate = total * step_cost(plans[0].setup.mjmodel).seconds / max(1, min(nthread,
+                                                                                 len(plans)))
+    with progress("mujoco", total, estimate) as tick:
+        out = _rollout([p.setup.mjmodel for p in plans], [p.state0 for p in plans],
+                       [p.nstep for p in plans], nthread, tick)
+    return [(p.state0, st, sd) for p, (st, sd) in zip(plans, out)]

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from treeimpact.analytic.budget import check_work
 from treeimpact.analytic.contact.law import (
     contact_law,
     damping_ratio_for_restitution,
@@ -22,12 +23,7 @@ from treeimpact.analytic.contact.law import (
     pad_restitution,
     release_time,
 )
-from treeimpact.analytic.contact.timestep import (
-    check_time_step,
-    check_work,
-    choose_time_step,
-    sdof_rate,
-)
+from treeimpact.analytic.contact.timestep import check_time_step, choose_time_step, sdof_rate
 from treeimpact.analytic.continuum.chain import default_segments
 from treeimpact.analytic.continuum.modes import beam_reference
 from treeimpact.analytic.engine.interface import (
@@ -44,7 +40,7 @@ from treeimpact.analytic.results import SimulationResult
 
 from . import _builder, _contact, _flex
 from ._record import _damping_matrices, _rest_potential, _result
-from ._rollout import _initial_qpos_qvel, _plan, _run_group, _signature, _state
+from ._rollout import _initial_qpos_qvel, _plan, _run_group, _signature, _state, step_cost
 from .options import INTEGRATORS, OPTIONS, TRUNKS  # noqa: F401 - OPTIONS: public here too
 
 _WARNED: set = set()
@@ -193,9 +189,8 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
 
 
 def _check_work(m: mujoco.MjModel, t_end: float, dt: float) -> None:
-    """The rollout keeps the full state and the sensors of every step (8 B each)."""
-    check_work(t_end, dt, 8.0 * (mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-                                 + m.nsensordata))
+    """The run's budget (:func:`analytic.budget.check_work`) at :func:`step_cost`."""
+    check_work(t_end, dt, step_cost(m))
 
 
 SETUP_CACHE_SIZE = 64

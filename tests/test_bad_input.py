@@ -4,6 +4,7 @@ with exactly one line on stderr naming what the user typed; never a traceback or
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import re
@@ -100,7 +101,43 @@ def test_rk4_with_a_step_too_coarse_for_the_contact_is_refused(capsys):
 def test_work_budget_is_checked_before_a_run(capsys, monkeypatch):
     monkeypatch.setenv("TREEIMPACT_MAX_STEPS", "1000")
     one_line(capsys, ["simulate", "open-center", "--backend", "mujoco", "--trunk", "sdof"], 2,
-             "--t-end / --dt", "allowed up to 1e+03 steps", "TREEIMPACT_MAX_STEPS")
+             "beyond its budget", "steps > 1e+03 (TREEIMPACT_MAX_STEPS)")
+
+
+@pytest.mark.parametrize("argv, words", [
+    # the 30 m trunk needs a 334-segment chain: 2e5 steps of ~37 ms, ~8000 s (ran past 300 s)
+    (["simulate", "{long}", "--backend", "mujoco"], ["beyond its budget", "e+03 s > 120 s",
+                                                     "GB > 2 GB (TREEIMPACT_MAX_BYTES)"]),
+    (["simulate", "realistic-crown", "--backend", "mujoco", "--segments", "64"],
+     ["beyond its budget", "s > 120 s (--max-seconds", "65 degrees of freedom"]),
+    (["simulate", "realistic-crown", "--backend", "bullet", "--segments", "100", "--max-seconds",
+      "5"], ["beyond its budget", "s > 5 s (--max-seconds", "100 trunk joints"]),
+    (["simulate", "{long}", "--backend", "bullet"], ["needs 334 segments", "at most 127"]),
+    (["simulate", "central-leader", "--backend", "soft", "--contact-duration", "1e-6"],
+     ["beyond its budget", "GB > 2 GB"]),
+])
+def test_a_run_beyond_its_budget_is_refused_up_front_with_its_estimate(argv, words, capsys,
+                                                                         tmp_path):
+    long = tmp_path / "long.toml"  # central-leader's trunk 30 m long
+    long.write_text(re.sub(r"^length = .*$", "length = 30.0", (
+        ROOT / "analytic" / "model" / "scenarios" / "central-leader.toml").read_text(), flags=re.M))
+    start = time.monotonic()
+    one_line(capsys, [a.format(long=long) for a in argv], 2, *words)
+    assert time.monotonic() - start < 60  # seconds of set-up (the chain's search), not hours
+
+
+def test_max_seconds_admits_a_run_and_long_runs_tell_their_progress(capsys, monkeypatch):
+    from treeimpact.analytic import budget
+
+    monkeypatch.setattr(budget, "PROGRESS_AFTER_S", 0.0)  # every run is "long"
+    monkeypatch.setattr("treeimpact.compare.progress.LINE_EVERY_S", 0.0)
+    code = main(["simulate", "central-leader", "--backend", "mujoco", "--segments", "4",
+                 "--t-end", "0.02", "--max-seconds", "1000", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0 and json.loads(out)["backend"] == "mujoco"
+    assert "mujoco (estimated" in err and "steps" in err
+    assert os.environ.get("TREEIMPACT_MAX_SECONDS") is None  # restored after the command
+    assert budget._REPORTER is None
 
 
 @pytest.mark.parametrize("argv, code, words", [
@@ -253,3 +290,23 @@ def test_a_scheduler_lost_during_the_sweep_is_one_line_and_keeps_the_rows(tmp_pa
         with pytest.raises(ParameterError, match=r"lost the scheduler \(CommClosedError: "):
             run.run_sweep("central-leader", ["restitution=0.3"], tmp_path / "s", scheduler=client,
                           identify=False, progress=False)
+
+
+def test_a_library_warning_during_a_command_is_one_stderr_line(capsys):
+    import warnings
+
+    from treeimpact.compare import cli
+
+    before = warnings.showwarning
+    restore = cli._install_budget(None)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("always")
+            warnings.warn_explicit("overflow encountered\n  in multiply", RuntimeWarning,
+                                   "/x/chain.py", 205)
+    finally:
+        cli._restore_budget(restore)
+    err = capsys.readouterr().err
+    assert err == ("treeimpact: warning: overflow encountered in multiply (RuntimeWarning, "
+                   "chain.py:205)\n")
+    assert warnings.showwarning is before

@@ -243,7 +243,7 @@ def test_bad_option_is_a_one_line_parameter_error(central):
     assert "\n" not in str(exc.value)
     with pytest.raises(ParameterError, match="too large"):
         simulate(central, trunk="sdof", dt=1e-3)
-    with pytest.raises(ParameterError, match=r"restitution = 1: .*allowed \(0, 1\)") as exc:
+    with pytest.raises(ParameterError, match=r"e = 1 \(--restitution, contact.restitution\): .*allowed \(0, 1\)") as exc:
         simulate(central, trunk="sdof", restitution=1.0)  # implicit contact step: e < 1
     assert "\n" not in str(exc.value)
 

@@ -237,3 +237,31 @@ def test_default_segments_is_smallest_within_tolerance(name):
 
     assert worst(n) <= 0.005
     assert all(worst(m) > 0.005 for m in range(2, n))
+
+
+@pytest.mark.parametrize(("length", "crown_mass", "tolerance"), [
+    (1.0, 0.0, 0.005), (2.5, 0.0, 0.005), (1.0, 40.0, 0.002), (4.0, 10.0, 0.01),
+    (0.6, 5.0, 0.001)], ids=["bare", "long-bare", "heavy-crown", "long-light-crown",
+                             "short-tight"])
+def test_default_segments_bisection_finds_what_the_upward_search_finds(length, crown_mass,
+                                                                        tolerance):
+    """Doubling and bisecting assume the errors fall with N; an upward search checks it."""
+    from treeimpact.analytic.continuum.chain import chain_errors
+
+    t = dataclasses.replace(SHIPPED["central-leader"], length=length, crown_mass=crown_mass)
+    n = default_segments(t, tolerance)
+    upward = next(m for m in range(2, 1001)
+                  if all(abs(v) <= tolerance for v in chain_errors(t, m).values()))
+    assert n == upward
+
+
+def test_a_trunk_needing_hundreds_of_segments_is_searched_in_a_few_solves():
+    from unittest import mock
+
+    from treeimpact.analytic.continuum import chain
+
+    t = dataclasses.replace(SHIPPED["central-leader"], length=30.0)
+    with mock.patch.object(chain, "chain_errors", wraps=chain.chain_errors) as spy:
+        n = chain._default_segments.__wrapped__(t, 0.005)
+    assert 200 < n < 1000  # a 30 m trunk clamped at 0.3 m: the clamp's short segments
+    assert spy.call_count <= 2 * math.ceil(math.log2(n)) + 1

@@ -18,8 +18,8 @@ FOLDERS = {"treeimpact": "treeimpact", "analytic": "treeimpact.analytic",
            "mujoco_models": "treeimpact.mujoco_models",
            "bullet_models": "treeimpact.bullet_models", "compare": "treeimpact.compare"}
 #: analytic's floors, bottom first: a module imports only its own floor or lower ones.
-ANALYTIC_FLOORS = ("errors", "results", "model", "records", "impact", "contact", "continuum",
-                   "identify", "engine", "paper")
+ANALYTIC_FLOORS = ("errors", "budget", "results", "model", "records", "impact", "contact",
+                   "continuum", "identify", "engine", "paper")
 
 
 def _modules() -> dict[str, Path]:

@@ -10,6 +10,7 @@ from functools import partial
 
 import numpy as np
 
+from treeimpact.analytic.budget import StepCost, check_work
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.options import (
     CONTACT_DURATION,
@@ -26,7 +27,6 @@ from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajecto
 
 from .law import collision_duration, contact_law, pad_fields
 from .linear_impact import LinearImpactModel, sampled_record, solve
-from .timestep import check_work
 
 #: How :func:`simulate_soft` solves the two-body model: ``exact`` by the exact linear
 #: solver between contact switches (:mod:`.linear_impact`, the trunk a 1 x 1 mesh; the
@@ -34,6 +34,9 @@ from .timestep import check_work
 #: original implementation, the tests' reference: the same metrics to 1e-8; a billet's
 #: free flight always goes this way).
 METHODS = ("exact", "ode")
+#: One sample of the exact solution: wall time and the bytes of the samples and the metrics'
+#: work arrays, measured (benchmarks/bench_cost.py; docs/budgets.md).
+SAMPLE_COST = StepCost(0.45e-6, 190.0, "samples of the exact two-body solution")
 #: The options of :func:`simulate_soft` (the ``soft`` backend).
 OPTIONS = {"restitution": RESTITUTION, "contact_stiffness": CONTACT_STIFFNESS,
            "contact_duration": CONTACT_DURATION, "t_end": T_END,
@@ -74,13 +77,13 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
                            duration=contact_duration)
     t_col = collision_duration(model, k_c, c_c)
     dt = t_col / samples_per_collision
+    check_work(t_end, dt, SAMPLE_COST)
     if method == "ode" or model.impactor_stiffness == 0.0:  # a billet: no pendulum's mode
         # (its free flight, y'' = 0, is a Jordan block the exact solver does not take)
         rec = with_static_shape_crown(soft_record(model, k_c, c_c, t_end, dt_sample=dt),
                                       scenario.trunk)
         samples, trajectory = rec, rec.trajectory()
     else:
-        check_work(t_end, dt, 8.0 * 8)
         linear = sdof_impact_model(model, scenario.trunk, k_c, c_c)
         samples, _ = solve(linear, t_end, dt)
         rec = ImpactRecord.deferred(partial(sampled_record, linear, t_end, dt))

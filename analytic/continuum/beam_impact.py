@@ -14,6 +14,7 @@ from functools import partial
 
 import numpy as np
 
+from treeimpact.analytic.budget import StepCost, check_work
 from treeimpact.analytic.contact.law import (
     CALIBRATION,
     CALIBRATIONS,
@@ -29,7 +30,6 @@ from treeimpact.analytic.contact.linear_impact import (
     solve,
 )
 from treeimpact.analytic.contact.linear_impact import record as full_record
-from treeimpact.analytic.contact.timestep import check_work
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.options import (
     CONTACT_DURATION,
@@ -72,6 +72,9 @@ OPTIONS = {"elements": Option(int, "elements of the beam trunk's mesh", low=1,
                                                 "and shear_coefficient)"),
            "method": Option(METHODS, "how the exact solution is evaluated (the same "
                                      "solution)", cli=False)}
+#: One sample of the exact solution: wall time and the bytes of the samples and the metrics'
+#: work arrays, measured (benchmarks/bench_cost.py; docs/budgets.md).
+SAMPLE_COST = StepCost(0.4e-6, 200.0, "samples of the beam's modal solution")
 
 
 def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
@@ -133,7 +136,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     t_col = collision_duration(sdof, model.contact_stiffness, model.contact_damping)
 
     dt = t_col / SAMPLES_PER_COLLISION
-    check_work(t_end, dt, 8.0 * 16)
+    check_work(t_end, dt, SAMPLE_COST)
     t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
     if method == "exact-full":
         record, crown, switches = full_record(model, t_end, dt)

@@ -13,7 +13,12 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from treeimpact.analytic.contact.law import CALIBRATION, CALIBRATIONS
-from treeimpact.analytic.continuum.chain import SEGMENTS, default_segments, hinged_chain
+from treeimpact.analytic.continuum.chain import (
+    MAX_SEGMENTS,
+    SEGMENTS,
+    default_segments,
+    hinged_chain,
+)
 from treeimpact.analytic.continuum.modes import beam_reference
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.options import CONTACT_STIFFNESS, RESTITUTION, T_END, Option
@@ -121,12 +126,22 @@ def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, damping: str,
     return model, float(t_end)
 
 
-def trunk_chain(scenario: Scenario, trunk: str, segments):
+def trunk_chain(scenario: Scenario, trunk: str, segments, *, engine: str = "the engine",
+                max_segments: int = MAX_SEGMENTS):
     """The hinged chain of a ``chain`` trunk (default segment count when ``segments`` is
-    None), None for ``sdof`` (which takes no --segments)."""
+    None), None for ``sdof`` (which takes no --segments); a one-line error when the chain
+    needs more segments than the engine takes (``max_segments``)."""
     if trunk == "chain":
-        return hinged_chain(scenario.trunk, default_segments(scenario.trunk)
-                            if segments is None else segments)
+        n = default_segments(scenario.trunk) if segments is None else segments
+        if isinstance(n, int) and n > max_segments:
+            if segments is not None:
+                raise ParameterError(f"--segments = {n}: {engine} takes at most "
+                                     f"{max_segments}")
+            raise ParameterError(
+                f"--trunk chain: this trunk needs {n} segments to be within 0.5 % of the beam, "
+                f"and {engine} takes at most {max_segments}: --segments {max_segments} (a "
+                "coarser chain), or another backend")
+        return hinged_chain(scenario.trunk, n)
     if segments is not None:
         raise ParameterError("--segments: only for --trunk chain")
     return None
