@@ -14,8 +14,9 @@ from treeimpact.analytic.model.two_body import TwoBodyModel
 from .procedure import PendulumTest
 
 #: The parameters p: ln M_T, ln K_T, xi, e, t0 (s), x_offset (m), y_offset (m; the pendulum
-#: sensor's, fitted when the record has y).
-NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset")
+#: sensor's, fitted when the record has y), x_drift (m/s: the trunk sensor's slow drift,
+#: x_offset + x_drift (t - t0) added to the motion; optional, 0 when p has 7 entries).
+NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset", "x_drift")
 
 
 def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
@@ -35,11 +36,13 @@ def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
 
 def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False) -> tuple:
     """(x, v) (m, m/s) of the exact model at the sorted times t: :func:`model_x` and the
-    trunk's velocity, which is -dx/dt0 (the fit's exact Jacobian column for t0); with
-    ``pendulum`` also the pendulum's (y, v_y) in the same frame (y = x at contact, y = 0 at
-    the first one): before it, the free swing at u_1 (eq 13) run back from the contact."""
+    trunk's velocity, which is -dx/dt0 less the drift (the fit's exact Jacobian column for
+    t0); with ``pendulum`` also the pendulum's (y, v_y) in the same frame (y = x at contact,
+    y = 0 at the first one): before it, the free swing at u_1 (eq 13) run back from the
+    contact."""
     t0 = float(p[4])
-    x, v = np.full(t.shape, float(p[5])), np.zeros(t.shape)
+    drift = float(p[7]) if len(p) > 7 else 0.0
+    x, v = float(p[5]) + drift * (t - t0), np.zeros(t.shape)
     first = int(np.searchsorted(t, t0, side="right"))  # the first sample after the contact
     sol = None
     if first < t.size:
