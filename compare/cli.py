@@ -73,6 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
     ss.add_argument("--integrator", choices=("Euler", "implicit", "implicitfast", "RK4"),
                     help="MuJoCo integrator (default Euler)")
     ss.add_argument("--json", action="store_true", help="machine-readable output")
+    from .identify_cmd import add_record_arguments
+
+    add_record_arguments(ss, _number, _count)
 
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
     sm.add_argument("scenario", help="shipped scenario name or TOML path")
@@ -257,6 +260,11 @@ def cmd_simulate(args) -> int:
                            "contact_stiffness", "dt", "damping", "integrator", "elements",
                            "calibration"))
     result = backend.simulate(scenario, **opts)
+    written = None
+    if args.record:
+        from .identify_cmd import write_record
+
+        written = write_record(args, scenario, result)
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
         return 0
@@ -265,6 +273,8 @@ def cmd_simulate(args) -> int:
         opts = _options(args, ("restitution", "t_end"))
         reference = get_backend("analytic").simulate(scenario, **opts)
     _print_simulation(scenario, result, reference)
+    if written:
+        print(written)
     return 0
 
 
