@@ -112,9 +112,13 @@ def dominant_frequency(r: np.ndarray, dt: float) -> tuple[float, float]:
 
 
 #: What a pendulum test can record, a generous window around orchards' numbers: a peak
-#: displacement at the clamp, the contact-to-peak time, the sample interval (s) and the
-#: trunk's velocity after the contact over the pendulum's u_1 (at most 2 by eq 21).
-PLAUSIBLE = {"peak": (1e-5, 0.5), "rise": (5e-5, 2.0), "dt": (1e-7, 0.05), "speed": (1e-4, 20.0)}
+#: displacement at the clamp (m), the contact-to-peak time (s), the sample interval (s) and
+#: the trunk's velocity after the contact over the pendulum's u_1 (at most 2 by eq 21, the
+#: slope read off the record a little more with noise).
+PLAUSIBLE = {"peak": (1e-5, 0.5), "rise": (5e-5, 2.0), "dt": (1e-7, 0.05), "speed": (1e-4, 2.5)}
+#: Typical values, to choose between units that would all be plausible (a 5 mm peak, 20 ms
+#: to it, half the pendulum's speed).
+TYPICAL = {"peak": 5e-3, "rise": 0.02, "speed": 0.5}
 LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6}
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 
@@ -124,46 +128,43 @@ def _plausible(peak: float, rise: float, dt: float, speed: float) -> dict:
     return {k: PLAUSIBLE[k][0] <= v <= PLAUSIBLE[k][1] for k, v in values.items()}
 
 
+def _distance(**values) -> float:
+    return sum(abs(math.log(v / TYPICAL[k])) for k, v in values.items())
+
+
 def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
                     length_unit: str = "m") -> list[str]:
-    """One line per column whose numbers look like another unit than declared: the peak
-    displacement, the time from the contact to the peak, the sample interval and the trunk's
-    velocity after the contact (against the pendulum's u_1) implausible, and plausible
-    once the column is read in another unit (a factor 1e2-1e6). ``time_unit`` and
-    ``length_unit``: what the record was declared in (its numbers already converted to SI)."""
+    """One line per record whose numbers look like another unit than declared: the peak
+    displacement, the time from the contact to the peak, the sample interval or the trunk's
+    velocity after the contact (against the pendulum's u_1) implausible (:data:`PLAUSIBLE`),
+    and plausible once a column is read in another unit (a factor 1e2-1e6; the likeliest
+    when several would do). ``time_unit`` and ``length_unit``: what the record was declared
+    in (its numbers already converted to SI)."""
     peak, rise = feat.span, max(feat.t_peak - feat.t_contact, feat.dt)
     speed = feat.velocity / u1
     ok = _plausible(peak, rise, feat.dt, speed)
     if all(ok.values()):
         return []
-    out = []
-    length_bad = not (ok["peak"] and ok["speed"])
-    time_bad = not (ok["rise"] and ok["dt"] and ok["speed"])
     declared_l, declared_t = LENGTH_UNITS[length_unit], TIME_UNITS[time_unit]
-    if length_bad:
-        for unit, f in LENGTH_UNITS.items():
-            g = f / declared_l  # numbers read in `unit` instead: lengths x g
-            if unit != length_unit and all(_plausible(peak * g, rise, feat.dt, speed * g)
-                                           .values()):
-                out.append(f"x looks like {unit}, not {length_unit}: a peak of {peak:.3g} m "
-                           f"and a trunk velocity of {feat.velocity:.3g} m/s after a pendulum "
-                           f"at u_1 = {u1:.3g} m/s are implausible, in {unit} they are not "
-                           f"(declare it: a header 'x ({unit})' or --length-unit {unit})")
-                break
-    if time_bad and not out:
-        for unit, f in TIME_UNITS.items():
-            g = f / declared_t
-            if unit != time_unit and all(_plausible(peak, rise * g, feat.dt * g, speed / g)
-                                         .values()):
-                out.append(f"t looks like {unit}, not {time_unit}: {rise:.3g} s from the "
-                           f"contact to the peak, samples {feat.dt:.3g} s apart and a trunk "
-                           f"velocity of {feat.velocity:.3g} m/s for u_1 = {u1:.3g} m/s are "
-                           f"implausible, in {unit} they are not (declare it: a header "
-                           f"'t ({unit})' or --time-unit {unit})")
-                break
-    if not out:
+    options = []
+    for unit, f in LENGTH_UNITS.items():
+        g = f / declared_l  # the numbers read in `unit` instead: lengths x g
+        if unit != length_unit and all(_plausible(peak * g, rise, feat.dt, speed * g).values()):
+            options.append((_distance(peak=peak * g, speed=speed * g), "x", unit))
+    for unit, f in TIME_UNITS.items():
+        g = f / declared_t
+        if unit != time_unit and all(_plausible(peak, rise * g, feat.dt * g, speed / g)
+                                     .values()):
+            options.append((_distance(rise=rise * g, speed=speed / g), "t", unit))
+    facts = (f"a peak of {peak:.3g} m, {rise:.3g} s from the contact to it, samples "
+             f"{feat.dt:.3g} s apart and a trunk velocity of {feat.velocity:.3g} m/s after a "
+             f"pendulum at u_1 = {u1:.3g} m/s")
+    if not options:
         bad = ", ".join(k for k, v in ok.items() if not v)
-        out.append(f"the record is implausible for a pendulum test ({bad}: peak {peak:.3g} m, "
-                   f"contact to peak {rise:.3g} s, samples {feat.dt:.3g} s apart, trunk "
-                   f"velocity {feat.velocity:.3g} m/s for u_1 = {u1:.3g} m/s) in any unit")
-    return out
+        return [f"the record is implausible for a pendulum test in any unit ({bad}: {facts}); "
+                "check the pendulum's flags and the columns' units"]
+    _, column, unit = min(options)
+    declared = length_unit if column == "x" else time_unit
+    flag = "--length-unit" if column == "x" else "--time-unit"
+    return [f"{column} looks like {unit}, not {declared}: {facts} are implausible, in {unit} "
+            f"they are not (declare it: a header '{column} ({unit})' or {flag} {unit})"]

@@ -17,6 +17,10 @@ from .procedure import PendulumTest
 #: sensor's, fitted when the record has y), x_drift (m/s: the trunk sensor's slow drift,
 #: x_offset + x_drift (t - t0) added to the motion; optional, 0 when p has 7 entries).
 NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset", "x_drift")
+#: Events one model run may take (impacts, flights, moving together): a tree's record takes
+#: tens; a model far from any tree (a 0.01 kg trunk bouncing off the pendulum all record
+#: long) is refused (SimulationDiverged) instead of taking seconds.
+MAX_EVENTS = 20_000
 
 
 def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
@@ -47,7 +51,7 @@ def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False
     sol = None
     if first < t.size:
         t_rel = t[first:] - t0
-        sol = solve_impacts(two_body_at(p, test), float(t_rel[-1]))
+        sol = solve_impacts(two_body_at(p, test), float(t_rel[-1]), max_events=MAX_EVENTS)
         rows = sol.sorted_state(np.minimum(t_rel, sol.t_end), pendulum=pendulum)
         x[first:] += rows[0]
         v[first:] = rows[1]

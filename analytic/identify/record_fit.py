@@ -58,6 +58,8 @@ PROFILE_NFEV_FRESH = 15  # ... of a fit from a first guess
 PROFILE_NFEV = 6  # ... from a neighbour's optimum: a few steps
 PROFILE_ZOOM = 3  # halvings of the grid's spacing around its lowest point
 REFINE_NFEV = 100  # evaluations of the fit with e free
+REFINE_SAMPLES = 20_000  # ... on every k-th sample, at most this many
+POLISH_NFEV = 4  # then evaluations on all the samples (a Gauss-Newton step or two)
 #: A sample this many noise deviations off the robust fit is an outlier: a normal sample
 #: gets there once in 5e8, so a record of 1e5 samples flags none by chance.
 OUTLIER_Z = 6.0
@@ -176,6 +178,7 @@ class _Problem:
         try:
             self._last[p.tobytes()] = m = self._motion(p)
         except (ParameterError, SimulationDiverged, ValueError, ArithmeticError):
+            # (SimulationDiverged: also a model over the solver's event budget)
             return np.full(self.data.shape, 1e3)  # a model the solver refuses: far off
         model = np.concatenate([m[0], m[2]]) if self.pendulum else m[0]
         return (model - self.data) * self.weight
@@ -222,6 +225,13 @@ class _Problem:
         s_c^2 = max(RSS_c / n_c x n / (n - k), floor^2) (one channel: s^2 (J^T J)^-1);
         with ``given_e`` the covariance of the others at this e (e's row and column of
         J^T W J left out: the profile's point of view)."""
+        return self.covariances(p, floor)[1 if given_e else 0]
+
+    def covariances(self, p, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(:meth:`covariance`, the same given e) from one Jacobian."""
+        key = (p.tobytes(), floor)
+        if getattr(self, "_cov_key", None) == key:
+            return self._cov
         q = p[self.free]
         r = self.residual(q) / self.weight  # metres
         J = self.jacobian(q) / self.weight[:, None]
@@ -230,14 +240,18 @@ class _Problem:
         s2 = np.maximum(np.mean(channels ** 2, axis=1) * n / max(n - k, 1), floor ** 2)
         w = np.repeat(1.0 / s2, self.t.size)
         info = J.T @ (J * w[:, None])
-        use = [i for i, j in enumerate(self.free) if not (given_e and j == 3)]
-        cov = np.zeros((p.size, p.size))
-        block = np.ix_([self.free[i] for i in use], [self.free[i] for i in use])
-        try:
-            cov[block] = np.linalg.inv(info[np.ix_(use, use)])
-        except np.linalg.LinAlgError:
-            cov[block] = np.nan
-        return cov
+        out = []
+        for given_e in (False, True):
+            use = [i for i, j in enumerate(self.free) if not (given_e and j == 3)]
+            cov = np.zeros((p.size, p.size))
+            block = np.ix_([self.free[i] for i in use], [self.free[i] for i in use])
+            try:
+                cov[block] = np.linalg.inv(info[np.ix_(use, use)])
+            except np.linalg.LinAlgError:
+                cov[block] = np.nan
+            out.append(cov)
+        self._cov_key, self._cov = key, tuple(out)
+        return self._cov
 
 
 @dataclass
@@ -268,6 +282,13 @@ class _Fitter:
         self.scale = [max(float(np.max(np.abs(x - rest))), 1e-300)]
         if y is not None:
             self.scale.append(max(float(np.max(np.abs(y - np.median(y)))), 1e-300))
+
+    def refine(self, p0, keep) -> _Fit:
+        """The fit with all free from p0 on the kept samples: on every k-th of them (at
+        most REFINE_SAMPLES), then a few steps on all of them if that left some out."""
+        stride = max(1, int(math.ceil(np.count_nonzero(keep) / REFINE_SAMPLES)))
+        f = self.fit(p0, keep=keep, stride=stride)
+        return f if stride == 1 else self.fit(f.p, keep=keep, max_nfev=POLISH_NFEV)
 
     def fit(self, p0, *, keep=None, stride: int = 1, free=None, loss="linear",
             f_scale=1.0, max_nfev=REFINE_NFEV) -> _Fit:
@@ -318,6 +339,9 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     units = diagnose.unit_suspicions(feat, test.impact_speed,
                                      getattr(record, "time_unit", "s"),
                                      getattr(record, "length_unit", "m"))
+    if units:  # no tree's values to find: said so at once (a fit of a record 1000 x too
+        # long or too large is slow and meaningless)
+        return _unit_result(record, feat, units, warnings + units, test)
     fitter = _Fitter(t, x, y, test, restitution)
     sigma_rest, n_rest = diagnose.rest_noise(t, x, feat.t_contact)
     floor = RESOLUTION * max(feat.span, 1e-300)
@@ -326,16 +350,18 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     f_scale = 3.0 * max(sigma_rest if np.isfinite(sigma_rest) else 0.0,
                         1e-3 * feat.span) / fitter.scale[0]
 
-    # 1: outliers: samples far off a robust fit (the first start), left out from here on
+    # 1: outliers: samples far off a robust fit (the first start, on every k-th sample),
+    # left out from here on
     if start is not None:
         p0 = _as8(start, float(t_orig[0]))
         if restitution is not None:
             p0[3] = restitution
     else:
         p0 = first_guess(feat, test, 0.0 if restitution is None else restitution, y, t)
+    stride = max(1, int(math.ceil(t.size / PROFILE_SAMPLES)))
     first = fitter.fit(p0, loss="soft_l1", f_scale=f_scale, max_nfev=PROFILE_NFEV_FIRST,
-                       free=fitter.free if restitution is not None or start is not None
-                       else [j for j in fitter.free if j != 3])
+                       stride=stride, free=fitter.free if restitution is not None or
+                       start is not None else [j for j in fitter.free if j != 3])
     keep = np.ones(t.size, bool)
     flagged = _outliers(model_motion(first.p, test, t)[0] - x, floor, keep)
     keep[flagged] = False
@@ -351,14 +377,14 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     else:
         profile = _Profile(fitter, feat, test, keep, first)
         starts = [profile.best.p]
-    polished = sorted((fitter.fit(q, keep=keep) for q in starts), key=lambda f: f.cost)
+    polished = sorted((fitter.refine(q, keep) for q in starts), key=lambda f: f.cost)
 
     # 3: outliers the fit now shows, and least squares once more without them
     new = _outliers(model_motion(polished[0].p, test, t)[0] - x, floor, keep)
     if new.size:
         flagged = np.union1d(flagged, new).astype(int)
         keep[flagged] = False
-        polished = [fitter.fit(polished[0].p, keep=keep)]
+        polished = [fitter.refine(polished[0].p, keep)]
     best = polished[0]
     p = best.p
     tk, xk, yk = t[keep], x[keep], None if y is None else y[keep]
@@ -419,8 +445,6 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
 
     # 5: diagnoses
     diagnoses = []
-    if units:
-        diagnoses.append({"kind": "units", "message": units[0]})
     at_bound = [n for n, j, lim in (("M_T", 0, M_RANGE), ("K_T", 1, K_RANGE))
                 if min(abs(p[j] - math.log(lim[0])), abs(p[j] - math.log(lim[1]))) < 1e-3]
     if p[2] > XI_RANGE[1] - 1e-3:
@@ -483,6 +507,22 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
                      diagnoses=tuple(diagnoses), noise=noise, noise_source=source,
                      misfit_ratio=ratio, flagged=flagged, warnings=tuple(warnings + units),
                      starts=fitter.fits)
+
+
+def _unit_result(record: Record, feat, units: list, warnings: list, test) -> FitResult:
+    """The result for a record whose numbers look like another unit: no values (NaN),
+    not explained, the suspicion as its diagnosis."""
+    names = ("M_T", "K_T", "C_T", "xi", "e", "E", "omega_1", "V_1", "t0", "x_offset",
+             "x_drift") + (("y_offset",) if record.y is not None else ())
+    nan = math.nan
+    message = units[0]
+    return FitResult(
+        values=dict.fromkeys(names, nan), intervals=dict.fromkeys(names, (nan, nan)),
+        residual_rms=nan, peak=feat.span, explained=False,
+        model_x=np.full(record.t.size, nan), determined=dict.fromkeys(names, False),
+        point=np.full(8, nan), note="", model_y=None if record.y is None else np.full(
+            record.t.size, nan), verdict="NOT explained (units): no fit; " + message,
+        diagnoses=({"kind": "units", "message": message},), warnings=tuple(warnings))
 
 
 def _outliers(r: np.ndarray, floor: float, keep: np.ndarray) -> np.ndarray:
