@@ -84,7 +84,7 @@ def run(args) -> int:
     record = read_record(args.record, time_unit=args.time_unit, length_unit=args.length_unit)
     fit = fit_record(record, test, restitution=args.restitution)
     paper = _paper(record, test)
-    if args.plot:
+    if args.plot and math.isfinite(fit.residual_rms):
         _plot(args.plot, record, fit, paper, test)
     if args.json:
         print(json.dumps(to_jsonable({
@@ -100,6 +100,11 @@ def run(args) -> int:
         print(f"treeimpact: warning: {line}", file=sys.stderr)
     print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
           f"(read in {record.time_unit} and {record.length_unit})")
+    if not math.isfinite(fit.residual_rms):  # no fit (units): the verdict says why
+        print(f"verdict: {fit.verdict}")
+        for d in fit.diagnoses:
+            print(f"  {d['kind']}: {d['message']}")
+        return 0
     if not fit.explained:
         print("  the 1-DOF model does NOT explain this record: the numbers below are the "
               "model's best fit, NOT the tree's properties")

@@ -56,7 +56,8 @@ PROFILE_FRESH = (0.0, 0.3, 0.6, 0.9)  # restitutions fitted from a first guess t
 PROFILE_NFEV_FIRST = 20  # evaluations of the robust fit from the first guess at e = 0
 PROFILE_NFEV_FRESH = 15  # ... of a fit from a first guess
 PROFILE_NFEV = 6  # ... from a neighbour's optimum: a few steps
-PROFILE_ZOOM = 3  # halvings of the grid's spacing around its lowest point
+PROFILE_ZOOM = 3  # halvings of the grid's spacing around its lowest local minima ...
+PROFILE_BASINS = 2  # ... this many of them
 REFINE_NFEV = 100  # evaluations of the fit with e free
 REFINE_SAMPLES = 20_000  # ... on every k-th sample, at most this many
 POLISH_NFEV = 4  # then evaluations on all the samples (a Gauss-Newton step or two)
@@ -521,7 +522,7 @@ def _unit_result(record: Record, feat, units: list, warnings: list, test) -> Fit
         residual_rms=nan, peak=feat.span, explained=False,
         model_x=np.full(record.t.size, nan), determined=dict.fromkeys(names, False),
         point=np.full(8, nan), note="", model_y=None if record.y is None else np.full(
-            record.t.size, nan), verdict="NOT explained (units): no fit; " + message,
+            record.t.size, nan), verdict="NOT explained (units): not fitted; declare the units",
         diagnoses=({"kind": "units", "message": message},), warnings=tuple(warnings))
 
 
@@ -581,9 +582,9 @@ class _Profile:
     first guess at each of :data:`PROFILE_FRESH` (the branches: chattering into moving
     together, or the pendulum leaving); a sweep up the grid, each point from its
     neighbour's optimum or the fresh fit there, whichever is better; a sweep down, each
-    point kept if it improves; then around the lowest point at half, a quarter and an
-    eighth of the grid's spacing (e's cost has a kink wherever an impact appears, and
-    narrow dips between). Its lowest point starts the fit with e free; the points within
+    point kept if it improves; then around its two lowest local minima at half, a quarter
+    and an eighth of the grid's spacing (e's cost has a kink wherever an impact appears,
+    and narrow dips between). Its lowest point starts the fit with e free; the points within
     the likelihood-ratio threshold of the optimum are the restitutions the record cannot
     rule out (a profile likelihood)."""
 
@@ -608,13 +609,17 @@ class _Profile:
             if f.cost < points[i].cost:
                 points[i] = f
         self.points = points
+        # the lowest local minima of the grid (a point no higher than its neighbours)
+        minima = [f for i, f in enumerate(points)
+                  if all(points[j].cost >= f.cost for j in (i - 1, i + 1) if 0 <= j < len(grid))]
+        centres = sorted(minima, key=lambda f: f.cost)[:PROFILE_BASINS]
         h = grid[1] - grid[0]
         for _ in range(PROFILE_ZOOM):
             h *= 0.5
-            b = min(self.points, key=lambda f: f.cost)
-            for e in (b.p[3] - h, b.p[3] + h):
-                if 0.0 <= e <= E_MAX:
-                    self.points.append(self._at(b.p, e))
+            for k, c in enumerate(centres):
+                new = [self._at(c.p, e) for e in (c.p[3] - h, c.p[3] + h) if 0.0 <= e <= E_MAX]
+                self.points.extend(new)
+                centres[k] = min([c, *new], key=lambda f: f.cost)
         self.points.sort(key=lambda f: f.p[3])
         self.best = min(self.points, key=lambda f: f.cost)
         self._floor = None
