@@ -110,7 +110,8 @@ class FitResult:
     misfit_ratio: float = math.nan  # residual RMS / noise (about 1 when explained)
     flagged: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # outlier rows
     warnings: tuple = ()  # one line each: units, ...
-    starts: int = 0  # fits run (global starts + refinements + polish)
+    starts: int = 0  # least-squares fits run (the profile's points, refinements)
+    runs: int = 0  # runs of the model (the exact solver sampled at the record's times)
 
     def to_json(self) -> dict:
         return {k: {"value": v, "low": self.intervals[k][0], "high": self.intervals[k][1],
@@ -507,7 +508,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
                      model_y=motion[2] if y is not None else None, verdict=verdict,
                      diagnoses=tuple(diagnoses), noise=noise, noise_source=source,
                      misfit_ratio=ratio, flagged=flagged, warnings=tuple(warnings + units),
-                     starts=fitter.fits)
+                     starts=fitter.fits, runs=fitter.runs)
 
 
 def _unit_result(record: Record, feat, units: list, warnings: list, test) -> FitResult:
