@@ -12,7 +12,7 @@ from treeimpact.analytic.errors import ParameterError
 
 UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "xi": "-", "e": "-", "E": "Pa",
          "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s",
-         "y_offset": "m"}
+         "x_drift2": "m/s^2", "y_offset": "m"}
 
 
 def add_arguments(sp: argparse.ArgumentParser, number) -> None:
@@ -229,7 +229,7 @@ def _plot(path, record, fit, paper, test) -> None:
     if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading["xi"]:
         p = [math.log(reading["M_T"]), math.log(reading["K_T"]), reading["xi"],
              fit.point[3], fit.values["t0"], fit.values["x_offset"], 0.0,
-             fit.values["x_drift"]]
+             fit.values["x_drift"], fit.values["x_drift2"]]
         xp = model_x(p, test, record.t)
         ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
                 label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "

@@ -38,21 +38,25 @@ from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.parameters import check_range
 
 from . import diagnose
-from .fit_model import model_motion, model_x  # noqa: F401 - model_x: public here too
+from .fit_model import NAMES, drift_at, model_motion, model_x  # noqa: F401 - model_x: public
 from .one_impact import RIDGE, on_ridge, one_impact
 from .pendulum_record import Record, read_record  # noqa: F401 - read_record: public here
 from .procedure import PendulumTest
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 CHI2_95 = Z95 * Z95  # 3.84: the likelihood-ratio threshold of one parameter at 95 %
+CHI2_999 = 10.827566170662733  # ... at 99.9 %: a term added to the model only past it
 DIFF_STEP = 1e-6  # relative forward-difference step of the fit's Jacobian
 #: The global stage: the cost with e held at each of these (the others fitted), since e
 #: has a local minimum per number of impacts before the bodies move together or part
 #: (docs/identification.md); its lowest point starts the fit with e free, and the points
 #: within the 95 % likelihood-ratio threshold widen the intervals (a profile likelihood).
-PROFILE_RESTITUTIONS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
+#: Finer below 0.2, where a pad's e usually is and a chattering branch per impact lies.
+PROFILE_RESTITUTIONS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
 PROFILE_SAMPLES = 2000  # the profile fits every k-th sample, at most this many
-PROFILE_FRESH = (0.0, 0.3, 0.6, 0.9)  # restitutions fitted from a first guess too
+#: (e, xi) fitted from a first guess too (the first at e = 0 is the robust fit's): each
+#: branch, and a lightly damped start (a short record has a basin per damping too)
+PROFILE_FRESH = ((0.0, 0.1), (0.3, 0.1), (0.3, 0.02), (0.6, 0.1), (0.9, 0.1))
 PROFILE_NFEV_FIRST = 20  # evaluations of the robust fit from the first guess at e = 0
 PROFILE_NFEV_FRESH = 15  # ... of a fit from a first guess
 PROFILE_NFEV = 6  # ... from a neighbour's optimum: a few steps
@@ -91,7 +95,8 @@ class FitResult:
     """The fitted model (SI) with 95 % intervals, and how well it explains the record."""
 
     values: dict  # M_T kg, K_T N/m, C_T N s/m, xi 1, e 1, E Pa, omega_1 rad/s, V_1 m/s,
-    #               t0 s, x_offset m, x_drift m/s (and y_offset m with a pendulum record)
+    #               t0 s, x_offset m, x_drift m/s, x_drift2 m/s^2 (and y_offset m with a
+    #               pendulum record)
     intervals: dict  # name -> (low, high)
     residual_rms: float  # m, over the samples fitted (flagged outliers left out)
     peak: float  # m, largest |x - offset| of the record
@@ -123,7 +128,8 @@ class FitResult:
 
 # -- starts -----------------------------------------------------------------------------
 
-def first_guess(feat: diagnose.Features, test: PendulumTest, e: float, y=None, t=None) -> np.ndarray:
+def first_guess(feat: diagnose.Features, test: PendulumTest, e: float, y=None, t=None, *,
+                xi: float = 0.1) -> np.ndarray:
     """A start on e's own branch from the record's shape: the contact extrapolated back from
     the 10 % and 40 % crossings, M_T from the slope V there by momentum (one impact,
     V = m (1 + e) u_1 / (M_T + m), when that M_T e exceeds m: the pendulum rebounds; else
@@ -139,7 +145,7 @@ def first_guess(feat: diagnose.Features, test: PendulumTest, e: float, y=None, t
     omega = 0.5 * math.pi / max(feat.t_peak - feat.t_contact, 2.0 * feat.dt)
     K = omega ** 2 * M if one else omega ** 2 * (M + m) - k
     K = min(max(K, 2.0 * K_RANGE[0]), 0.5 * K_RANGE[1])
-    p = np.array([math.log(M), math.log(K), 0.1, e, feat.t_contact, feat.rest, 0.0, 0.0])
+    p = np.array([math.log(M), math.log(K), xi, e, feat.t_contact, feat.rest, 0.0, 0.0, 0.0])
     if y is not None:
         before = t < p[4]
         if before.any():
@@ -202,12 +208,12 @@ class _Problem:
         r0 = (model - self.data) * self.weight
         for col, j in enumerate(self.free):
             if j == 4:
-                vx = m[1] + p[7]
+                vx = m[1] + p[7] + 2.0 * p[8] * (self.t - p[4])
                 jac[:, col] = -(np.concatenate([vx, m[3]]) if self.pendulum else vx)
             elif j in (5, 6):
                 jac[(j - 5) * n:(j - 4) * n, col] = 1.0
-            elif j == 7:
-                jac[:n, col] = self.t - p[4]
+            elif j in (7, 8):
+                jac[:n, col] = (self.t - p[4]) ** (j - 6)
             else:
                 h = DIFF_STEP * max(1.0, abs(p[j])) * (1.0 if p[j] >= 0 else -1.0)
                 if p[j] + h > self.upper[j]:
@@ -272,10 +278,11 @@ class _Fitter:
         dt = float(np.median(np.diff(t)))
         self.dt = dt
         self.lower = np.array([math.log(M_RANGE[0]), math.log(K_RANGE[0]), XI_RANGE[0], 0.0,
-                               t[0] - 10 * dt, -np.inf, -np.inf, -np.inf])
+                               t[0] - 10 * dt, -np.inf, -np.inf, -np.inf, -np.inf])
         self.upper = np.array([math.log(M_RANGE[1]), math.log(K_RANGE[1]), XI_RANGE[1], E_MAX,
-                               t[-1] - 10 * dt, np.inf, np.inf, np.inf])
-        self.free = [j for j in range(8) if not (j == 3 and restitution is not None)
+                               t[-1] - 10 * dt, np.inf, np.inf, np.inf, np.inf])
+        # x_drift2 only when the record calls for it (fit_record: a likelihood-ratio test)
+        self.free = [j for j in range(len(NAMES) - 1) if not (j == 3 and restitution is not None)
                      and not (j == 6 and y is None)]
         self.runs = 0
         self.fits = 0
@@ -285,12 +292,12 @@ class _Fitter:
         if y is not None:
             self.scale.append(max(float(np.max(np.abs(y - np.median(y)))), 1e-300))
 
-    def refine(self, p0, keep) -> _Fit:
+    def refine(self, p0, keep, free=None) -> _Fit:
         """The fit with all free from p0 on the kept samples: on every k-th of them (at
         most REFINE_SAMPLES), then a few steps on all of them if that left some out."""
         stride = max(1, int(math.ceil(np.count_nonzero(keep) / REFINE_SAMPLES)))
-        f = self.fit(p0, keep=keep, stride=stride)
-        return f if stride == 1 else self.fit(f.p, keep=keep, max_nfev=POLISH_NFEV)
+        f = self.fit(p0, keep=keep, stride=stride, free=free)
+        return f if stride == 1 else self.fit(f.p, keep=keep, max_nfev=POLISH_NFEV, free=free)
 
     def fit(self, p0, *, keep=None, stride: int = 1, free=None, loss="linear",
             f_scale=1.0, max_nfev=REFINE_NFEV) -> _Fit:
@@ -306,8 +313,8 @@ class _Fitter:
         span = float(self.t[-1] - self.t[0])
         prob = _Problem(self.t[idx], self.x[idx], None if self.y is None else self.y[idx],
                         self.test, scale, self.upper, p0, free)
-        x_scale = np.array([1, 1, 0.1, 0.1, self.dt, 1e-2 * scale[0],
-                            1e-2 * scale[-1], 1e-2 * scale[0] / span])[free]
+        x_scale = np.array([1, 1, 0.1, 0.1, self.dt, 1e-2 * scale[0], 1e-2 * scale[-1],
+                            1e-2 * scale[0] / span, 1e-2 * scale[0] / span ** 2])[free]
         lo, hi = self.lower[free], self.upper[free]
         q0 = np.clip(np.asarray(p0, float)[free], lo + 1e-9, hi - 1e-9)
         res = least_squares(prob.residual, q0, jac=prob.jacobian, bounds=(lo, hi),
@@ -355,7 +362,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     # 1: outliers: samples far off a robust fit (the first start, on every k-th sample),
     # left out from here on
     if start is not None:
-        p0 = _as8(start, float(t_orig[0]))
+        p0 = _full(start, float(t_orig[0]))
         if restitution is not None:
             p0[3] = restitution
     else:
@@ -373,12 +380,12 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     if start is not None or restitution is not None:
         starts = [first.p]
         if start is None and free_fit is not None:
-            moved = on_ridge(_as8(free_fit.point, t_orig[0]), restitution, test)
+            moved = on_ridge(_full(free_fit.point, t_orig[0]), restitution, test)
             if np.all(np.isfinite(moved)):
                 starts.append(moved)
     else:
         profile = _Profile(fitter, feat, test, keep, first)
-        starts = [profile.best.p]
+        starts = profile.starts()
     polished = sorted((fitter.refine(q, keep) for q in starts), key=lambda f: f.cost)
 
     # 3: outliers the fit now shows, and least squares once more without them
@@ -388,13 +395,20 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         keep[flagged] = False
         polished = [fitter.refine(polished[0].p, keep)]
     best = polished[0]
+    # a drift bent like t^2 (an integrated accelerometer's, a warming sensor's) if the
+    # record needs it: the cost falls by more than chi-square 10.83 (99.9 %) of the noise
+    curved = fitter.refine(best.p, keep, free=fitter.free + [8])
+    s2 = (max(math.sqrt(2.0 * best.cost / np.count_nonzero(keep)) * fitter.scale[0], floor)
+          / fitter.scale[0]) ** 2
+    if best.cost - curved.cost > 0.5 * CHI2_999 * s2:
+        best = curved
     p = best.p
     tk, xk, yk = t[keep], x[keep], None if y is None else y[keep]
     motion = model_motion(p, test, t, pendulum=y is not None)
     fitted = motion[0]
     resid = (fitted - x)[keep]
     rms = math.sqrt(float(np.mean(resid ** 2)))
-    peak = float(np.max(np.abs(xk - p[5] - p[7] * (tk - p[4]))))
+    peak = float(np.max(np.abs(xk - p[5] - drift_at(p, tk - p[4]))))
     rms_y = None
     if y is not None:
         rms_y = math.sqrt(float(np.mean(((motion[2] - y)[keep]) ** 2)))
@@ -413,6 +427,13 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     # each), a false alarm on noise once in 3e4 records
     allowance = 4.0 * math.sqrt(0.5 / max(n_noise - 2, 1) + 0.5 / resid.size)
     noise_limited = ratio <= 1.0 + allowance or rms <= floor
+    y_limited, ratio_y = True, math.nan
+    if y is not None:  # the pendulum's channel against its own white floor (the spectrum's
+        # estimate has a relative variance of 1 / n, the RMS 1 / (2 n): 4 of their errors)
+        resid_y = (motion[2] - y)[keep]
+        floor_y = RESOLUTION * fitter.scale[1]
+        ratio_y = rms_y / max(diagnose.spectrum_floor(resid_y, fitter.dt), floor_y)
+        y_limited = ratio_y <= 1.0 + 4.0 * math.sqrt(1.5 / resid_y.size) or rms_y <= floor_y
 
     # 4: what the record fixes: e's profile against the best fit (likelihood ratio)
     s2 = max((max(rms, floor) / fitter.scale[0]) ** 2,
@@ -465,7 +486,12 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
             f"trunk's first swing back ({t_back - p[4]:.3g} s): too little ring-down to fix "
             f"the damping (xi between {xi_lo:.3g} and {xi_hi:.3g})")})
     peak_w, strength = diagnose.dominant_frequency((fitted - x)[keep][after], fitter.dt)
-    if not noise_limited:
+    if noise_limited and not y_limited:
+        diagnoses.append({"kind": "misfit", "message": (
+            f"the pendulum's record is not explained: its residual is {ratio_y:.3g} x its "
+            f"noise")})
+        noise_limited = False
+    elif not noise_limited:
         own = [math.sqrt(math.exp(p[1] - p[0])),
                math.sqrt((math.exp(p[1]) + test.impactor_stiffness)
                          / (math.exp(p[0]) + test.impactor_mass))]
@@ -487,13 +513,18 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
             + {"rest": "of the samples before the contact", "spectrum": "the residual "
                "spectrum's white floor", "resolution": f"the resolution floor, {RESOLUTION:g}"
                " of the peak: the record has no noise above it"}[source] + ")")})
-    drift_sd = math.sqrt(max(float(cov[7, 7]), 0.0))
-    drift_total = abs(p[7]) * float(t[-1] - t[0])
-    if drift_total > max(noise, 4.0 * drift_sd * float(t[-1] - t[0])):
+    # the drift over the record (from its value at the contact) at its largest, and the
+    # standard error there
+    s_all = t - p[4]
+    curve = drift_at(p, s_all)
+    k = int(np.argmax(np.abs(curve)))
+    g = np.array([s_all[k], s_all[k] ** 2])
+    drift_sd = math.sqrt(max(float(g @ cov[7:9, 7:9] @ g), 0.0))
+    if abs(curve[k]) > max(noise, 4.0 * drift_sd):
         diagnoses.append({"kind": "drift", "message": (
-            f"the sensor drifts {p[7]:.3g} m/s ({drift_total:.3g} m over the record, "
-            f"{drift_total / feat.span:.1%} of the peak) from an offset of {p[5]:.3g} m: "
-            "fitted and removed")})
+            f"the sensor drifts by up to {curve[k]:.3g} m ({abs(curve[k]) / feat.span:.1%} "
+            f"of the peak, at t = {t_orig[k]:.4g} s; {p[7]:.3g} m/s and {p[8]:.3g} m/s^2 "
+            f"from the contact) from an offset of {p[5]:.3g} m: fitted and removed")})
     if flagged.size:
         rows = ", ".join(str(int(i) + 2) for i in flagged[:5])
         diagnoses.append({"kind": "outliers", "message": (
@@ -515,14 +546,14 @@ def _unit_result(record: Record, feat, units: list, warnings: list, test) -> Fit
     """The result for a record whose numbers look like another unit: no values (NaN),
     not explained, the suspicion as its diagnosis."""
     names = ("M_T", "K_T", "C_T", "xi", "e", "E", "omega_1", "V_1", "t0", "x_offset",
-             "x_drift") + (("y_offset",) if record.y is not None else ())
+             "x_drift", "x_drift2") + (("y_offset",) if record.y is not None else ())
     nan = math.nan
     message = units[0]
     return FitResult(
         values=dict.fromkeys(names, nan), intervals=dict.fromkeys(names, (nan, nan)),
         residual_rms=nan, peak=feat.span, explained=False,
         model_x=np.full(record.t.size, nan), determined=dict.fromkeys(names, False),
-        point=np.full(8, nan), note="", model_y=None if record.y is None else np.full(
+        point=np.full(len(NAMES), nan), note="", model_y=None if record.y is None else np.full(
             record.t.size, nan), verdict="NOT explained (units): not fitted; declare the units",
         diagnoses=({"kind": "units", "message": message},), warnings=tuple(warnings))
 
@@ -539,8 +570,9 @@ def _outliers(r: np.ndarray, floor: float, keep: np.ndarray) -> np.ndarray:
     return far if far.size <= max(1, OUTLIER_SHARE * r.size) else np.zeros(0, int)
 
 
-def _as8(p, t_shift: float = 0.0) -> np.ndarray:
-    out = np.zeros(8)
+def _full(p, t_shift: float = 0.0) -> np.ndarray:
+    """p padded with zeros to every parameter of NAMES, t0 moved to the fit's clock."""
+    out = np.zeros(len(NAMES))
     out[: len(p)] = np.asarray(p, float)
     out[4] -= t_shift
     return out
@@ -595,10 +627,11 @@ class _Profile:
         self._free = [j for j in fitter.free if j != 3]
         grid = PROFILE_RESTITUTIONS
         fresh = {grid[0]: self._at(first.p, grid[0])}
-        for e in PROFILE_FRESH[1:]:
-            fresh[e] = fitter.fit(first_guess(feat, test, e, fitter.y, fitter.t), keep=keep,
-                                  stride=self.stride, free=self._free,
-                                  max_nfev=PROFILE_NFEV_FRESH)
+        for e, xi in PROFILE_FRESH[1:]:
+            f = fitter.fit(first_guess(feat, test, e, fitter.y, fitter.t, xi=xi), keep=keep,
+                           stride=self.stride, free=self._free, max_nfev=PROFILE_NFEV_FRESH)
+            if e not in fresh or f.cost < fresh[e].cost:
+                fresh[e] = f
         points = []
         for e in grid:
             f = self._at(points[-1].p, e) if points else fresh[e]
@@ -610,20 +643,42 @@ class _Profile:
             if f.cost < points[i].cost:
                 points[i] = f
         self.points = points
-        # the lowest local minima of the grid (a point no higher than its neighbours)
-        minima = [f for i, f in enumerate(points)
-                  if all(points[j].cost >= f.cost for j in (i - 1, i + 1) if 0 <= j < len(grid))]
-        centres = sorted(minima, key=lambda f: f.cost)[:PROFILE_BASINS]
-        h = grid[1] - grid[0]
+        # the lowest local minima of the grid (a point no higher than its neighbours), one
+        # per valley (a flat stretch between two, the one-impact ridge, is one valley)
+        minima = sorted((i for i in range(len(grid)) if all(
+            points[j].cost >= points[i].cost for j in (i - 1, i + 1) if 0 <= j < len(grid))),
+            key=lambda i: points[i].cost)
+
+        def same_valley(i, j):
+            top = max(points[i].cost, points[j].cost) * (1.0 + 1e-4)
+            return all(points[k].cost <= top for k in range(min(i, j), max(i, j) + 1))
+
+        chosen = []
+        for i in minima:
+            if not any(same_valley(i, j) for j in chosen):
+                chosen.append(i)
+        centres = [points[i] for i in chosen[:PROFILE_BASINS]]
+        h = 0.1
         for _ in range(PROFILE_ZOOM):
             h *= 0.5
             for k, c in enumerate(centres):
-                new = [self._at(c.p, e) for e in (c.p[3] - h, c.p[3] + h) if 0.0 <= e <= E_MAX]
+                have = {round(float(f.p[3]), 9) for f in self.points}
+                new = [self._at(c.p, e) for e in (c.p[3] - h, c.p[3] + h)
+                       if 0.0 <= e <= E_MAX and round(e, 9) not in have]
                 self.points.extend(new)
                 centres[k] = min([c, *new], key=lambda f: f.cost)
         self.points.sort(key=lambda f: f.p[3])
         self.best = min(self.points, key=lambda f: f.cost)
+        self.centres = sorted(centres, key=lambda f: f.cost)
         self._floor = None
+
+    def starts(self) -> list:
+        """Where the fit with e free starts: the lowest point, and the other basin's lowest
+        when it is as low within the 95 % threshold (its noise from the cost itself)."""
+        n = self.best.problem.data.size
+        threshold = 0.5 * CHI2_95 * 2.0 * self.best.cost / max(n, 1)
+        return [c.p for c in self.centres if c.cost <= self.best.cost + threshold] or [
+            self.best.p]
 
     def _at(self, p, e: float) -> _Fit:
         p0 = np.array(p, float)
@@ -753,7 +808,7 @@ def _estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[d
 
     values = {"M_T": M, "K_T": K, "C_T": C, "xi": xi, "e": e, "E": e_mod, "omega_1": omega,
               "V_1": v1, "t0": float(p[4]), "x_offset": float(p[5]),
-              "x_drift": float(p[7]) if len(p) > 7 else 0.0}
+              "x_drift": float(p[7]), "x_drift2": float(p[8])}
     intervals = {
         "M_T": log_interval(M, z * sd(1)),
         "K_T": log_interval(K, z * sd(0, 1)),
@@ -765,7 +820,8 @@ def _estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[d
         "V_1": log_interval(v1, z * sd(-M / (M + m), 0, 0, 1.0 / (1.0 + e))),
         "t0": symmetric(4),
         "x_offset": symmetric(5),
-        "x_drift": symmetric(7) if cov.shape[0] > 7 else (0.0, 0.0),
+        "x_drift": symmetric(7),
+        "x_drift2": symmetric(8),
     }
     if pendulum:
         values["y_offset"] = float(p[6])

@@ -224,10 +224,13 @@ def beam_record(crown_ratio: float, rate: float, noise: float, seed: int, e: flo
 
 def defect(kind: str, t, x, tree: Tree, t_c: float, rng):
     """The record with one defect of a real record: ``drift1``/``drift10`` (a linear drift of
-    1 %/10 % of the peak over the record), ``truncated`` (cut 1/8 period after the first
+    1 %/10 % of the peak over the record), ``bend10`` (a drift growing as t^2 to 10 % of the
+    peak: an integrated accelerometer's), ``truncated`` (cut 1/8 period after the first
     peak), ``spike`` (one sample at twice the peak)."""
     x = np.array(x)
     peak = float(np.max(np.abs(x)))
+    if kind == "bend10":
+        return t, x + 0.1 * peak * ((t - t[0]) / (t[-1] - t[0])) ** 2
     if kind.startswith("drift"):
         frac = float(kind[5:]) / 100.0
         return t, x + frac * peak * (t - t[0]) / (t[-1] - t[0])
@@ -272,8 +275,8 @@ def case_list(seeds: int) -> list[dict]:
                     out.append({"id": f"C-{rate:g}Hz-2%-y-s{seed}", "tree": name, "rate": rate,
                                 "noise": 0.02, "seed": seed, "pendulum": True,
                                 "expect": {"explained": True, "fixed": True, "diagnoses": []}})
-        for kind, diag in (("drift1", []), ("drift10", ["drift"]), ("truncated", ["truncated"]),
-                           ("spike", ["outliers"])):
+        for kind, diag in (("drift1", []), ("drift10", ["drift"]), ("bend10", ["drift"]),
+                           ("truncated", ["truncated"]), ("spike", ["outliers"])):
             for seed in range(1, seeds + 1):
                 explained = kind != "truncated"
                 out.append({"id": f"{name}-2000Hz-1%-{kind}-s{seed}", "tree": name,
