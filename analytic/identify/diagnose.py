@@ -80,14 +80,16 @@ def rest_noise(t: np.ndarray, x: np.ndarray, t_contact: float) -> tuple[float, i
     return float(np.std(r[keep], ddof=2)) if np.count_nonzero(keep) > 2 else s, n
 
 
-def periodogram(r: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """(omega rad/s, P): |FFT|^2 / n of r less its mean, bins 1 to n/2 - 1 (for white noise
-    of variance s^2 each P is exponential with mean s^2)."""
+def periodogram(r: np.ndarray, dt: float, pad: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """(omega rad/s, P): |FFT|^2 / n of r less its mean, bins 1 to N/2 - 1 of its FFT
+    zero-padded to N = ``pad`` x n (for white noise of variance s^2 each P is exponential
+    with mean s^2; padding interpolates between the independent bins)."""
     r = np.asarray(r, float) - float(np.mean(r))
     n = r.size
-    p = np.abs(np.fft.rfft(r)) ** 2 / n
-    k = np.arange(1, max(2, (n + 1) // 2))
-    return 2.0 * math.pi * k / (n * dt), p[k]
+    size = pad * n
+    p = np.abs(np.fft.rfft(r, size)) ** 2 / n
+    k = np.arange(1, max(2, (size + 1) // 2))
+    return 2.0 * math.pi * k / (size * dt), p[k]
 
 
 def spectrum_floor(r: np.ndarray, dt: float) -> float:
@@ -100,14 +102,15 @@ def spectrum_floor(r: np.ndarray, dt: float) -> float:
 
 def dominant_frequency(r: np.ndarray, dt: float) -> tuple[float, float]:
     """(omega rad/s, strength): the frequency of the largest peak of r's periodogram
-    (smoothed over 3 bins: a decaying mode is a few bins wide) and its height over the
-    white floor (about 1 for noise, ln(n) at most by chance)."""
-    w, p = periodogram(r, dt)
-    if p.size < 3:
+    (smoothed over 3 independent bins: a decaying mode is a few bins wide; located on the
+    8 x zero-padded spectrum) and its height over the white floor (about 1 for noise,
+    ln(n) at most by chance)."""
+    w, p = periodogram(r, dt, pad=8)
+    if p.size < 24:
         return math.nan, math.nan
-    smooth = np.convolve(p, np.ones(3) / 3.0, mode="same")
+    smooth = np.convolve(p, np.ones(17) / 17.0, mode="same")  # 3 bins of the unpadded
     k = int(np.argmax(smooth))
-    floor = float(np.median(p)) / math.log(2.0)
+    floor = float(np.median(periodogram(r, dt)[1])) / math.log(2.0)
     return float(w[k]), float(smooth[k] / floor) if floor > 0 else math.inf
 
 

@@ -49,9 +49,9 @@ def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
 def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False) -> tuple:
     """(x, v) (m, m/s) of the exact model at the sorted times t: :func:`model_x` and the
     trunk's velocity (without the drift's: -dx/dt0 is v and the drift's rate, the fit's
-    exact Jacobian column for t0); with ``pendulum`` also the pendulum's (y, v_y) in the same frame (y = x at contact,
-    y = 0 at the first one): before it, the free swing at u_1 (eq 13) run back from the
-    contact."""
+    exact Jacobian column for t0); with ``pendulum`` also the pendulum's (y, v_y) in the
+    same frame (y = x at contact, y = 0 at the first one): before it, the free swing at u_1
+    (eq 13) run back from the contact."""
     t0 = float(p[4])
     s = t - t0
     x, v = float(p[5]) + drift_at(p, s), np.zeros(t.shape)

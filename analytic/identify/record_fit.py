@@ -4,27 +4,29 @@ The paper's procedure (eqs 39-48, :mod:`analytic.identify.procedure`) reads thre
 the record after the bodies move together. Here the exact model of eqs 12-35 (M_T, C_T, K_T,
 e, the pendulum of eq 13 at u_1 of eq 48) is fitted to every sample of x(t) by nonlinear
 least squares (``scipy.optimize.least_squares``), with the time of the first contact, a
-sensor offset and a linear drift as nuisance parameters, and to the pendulum's y(t) too
-when the record has it. In three stages:
+sensor offset and drift as nuisance parameters, and to the pendulum's y(t) too when the
+record has it. In three stages:
 
-1. global: from a first guess at each of :data:`GLOBAL_RESTITUTIONS` (each on its own branch:
-   one impact when M_T e > m, else chattering into moving together), a short fit on every
-   k-th sample (at most :data:`GLOBAL_SAMPLES`), robust loss;
-2. the :data:`REFINE` best of them, in distinct restitutions, refined on the whole record
-   (robust loss: a wild sample does not pull the fit); samples further than
-   :data:`OUTLIER_Z` noise deviations from it are flagged;
-3. least squares polished without the flagged samples.
+1. a robust fit (soft-l1 loss) at e = 0 from the record's shape, on every k-th sample;
+   isolated samples far off it (:data:`OUTLIER_Z` robust deviations) are left out;
+2. the global stage: e's profile (:class:`_Profile`), the cost with e held on a grid
+   (:data:`PROFILE_RESTITUTIONS`; e has a local minimum per number of impacts), swept from
+   that fit and from fresh first guesses on each branch, zoomed around its lowest valleys;
+3. the fit with e free from the profile's lowest point(s), outliers checked once more, a
+   drift bent like t^2 added if the record calls for it.
 
-What the record fixes is decided from the data: a record of x alone fixes M_T and e apart
-only if the best one-impact model (the pendulum leaving, M_T and e on a ridge of equal
-residual) is worse by more than the 95 % likelihood-ratio threshold. 95 % intervals come
+What the record fixes is decided from the data: the restitutions whose profile cost is
+within the 95 % likelihood-ratio threshold of the optimum are those it cannot rule out;
+when they reach the top of the grid with a one-impact model there (the pendulum leaving:
+M_T and e on a ridge of equal residual) M_T and e are not fixed apart. 95 % intervals come
 from the Jacobian at the optimum (cov = s^2 (J^T J)^-1, s^2 = RSS / (n - p), never below the
-record's resolution floor), in logarithms for the positive quantities, in asin(sqrt(e)) for
-e: they stay in the physical range. The residual is judged against the sensor's noise
-estimated from the record itself (:mod:`analytic.identify.diagnose`), and the fit says what
-it sees (:attr:`FitResult.diagnoses`): noise-limited, drift, outliers, a one-impact record,
-a truncated record, optimiser trouble, units, a second mode. docs/identification.md has
-the method and the measured accuracy.
+record's resolution floor), widened over the profile, in logarithms for the positive
+quantities, in asin(sqrt(e)) for e: they stay in the physical range. The residual is
+judged against the sensor's noise estimated from the record itself
+(:mod:`analytic.identify.diagnose`), and the fit says what it sees
+(:attr:`FitResult.diagnoses`): noise-limited, drift, outliers, a one-impact record, a
+truncated record, optimiser trouble, units, a second mode, a misfit.
+docs/identification.md has the method and the measured accuracy.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 CHI2_95 = Z95 * Z95  # 3.84: the likelihood-ratio threshold of one parameter at 95 %
 CHI2_999 = 10.827566170662733  # ... at 99.9 %: a term added to the model only past it
 DIFF_STEP = 1e-6  # relative forward-difference step of the fit's Jacobian
-#: The global stage: the cost with e held at each of these (the others fitted), since e
+#: The global stage, e's profile: the cost with e held at each of these (the others fitted), since e
 #: has a local minimum per number of impacts before the bodies move together or part
 #: (docs/identification.md); its lowest point starts the fit with e free, and the points
 #: within the 95 % likelihood-ratio threshold widen the intervals (a profile likelihood).
@@ -83,6 +85,8 @@ TRUNCATED_XI_SPAN = 1.5
 #: exponential ordinates, ln(5e3 / 1e-3) = 15.4) and is 25 % away from the fitted modes.
 PEAK_STRENGTH = 15.0
 PEAK_SEPARATION = 0.25
+#: A fitted drift this large (of the peak) is no sensor's: a slow motion of the tree.
+DRIFT_MAX = 0.5
 #: Allowed parameter ranges of the fit (SI): a value at a bound is no tree's.
 M_RANGE, K_RANGE, XI_RANGE, E_MAX = (1e-2, 1e5), (1.0, 1e10), (1e-3, 5.0), 0.95
 
@@ -498,21 +502,14 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         if strength > PEAK_STRENGTH and all(abs(peak_w / w - 1.0) > PEAK_SEPARATION
                                             for w in own):
             diagnoses.append({"kind": "second-mode", "message": (
-                f"a second mode in the residual at {peak_w:.4g} rad/s ({peak_w / (2 * math.pi):.4g}"
-                f" Hz; the fit's omega_1 is {own[0]:.4g} rad/s): the 1-DOF model does not "
-                f"explain the record")})
+                f"the residual has a mode of its own at {peak_w:.4g} rad/s "
+                f"({peak_w / (2 * math.pi):.4g} Hz), the fit's omega_1 is {own[0]:.4g} rad/s: "
+                f"a second mode (of the trunk, the crown, the flexible trunk's contact) the "
+                f"1-DOF model does not have")})
         else:
             diagnoses.append({"kind": "misfit", "message": (
                 f"the residual is {ratio:.3g} x the noise, not noise: the 1-DOF model does "
                 f"not explain the record (largest at {peak_w:.4g} rad/s)")})
-    explained = noise_limited and not any(
-        d["kind"] in ("units", "optimiser", "truncated") for d in diagnoses)
-    if explained:
-        diagnoses.insert(0, {"kind": "noise-limited", "message": (
-            f"residual {rms:.3g} m = {ratio:.2f} x the noise {noise:.3g} m ("
-            + {"rest": "of the samples before the contact", "spectrum": "the residual "
-               "spectrum's white floor", "resolution": f"the resolution floor, {RESOLUTION:g}"
-               " of the peak: the record has no noise above it"}[source] + ")")})
     # the drift over the record (from its value at the contact) at its largest, and the
     # standard error there
     s_all = t - p[4]
@@ -520,13 +517,26 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     k = int(np.argmax(np.abs(curve)))
     g = np.array([s_all[k], s_all[k] ** 2])
     drift_sd = math.sqrt(max(float(g @ cov[7:9, 7:9] @ g), 0.0))
-    if abs(curve[k]) > max(noise, 4.0 * drift_sd):
+    if abs(curve[k]) > DRIFT_MAX * feat.span:
+        diagnoses.append({"kind": "misfit", "message": (
+            f"the fitted drift reaches {abs(curve[k]) / feat.span:.0%} of the peak: a slow "
+            f"motion the 1-DOF model does not have (a mode below the fit's omega_1), not a "
+            f"sensor's drift")})
+    elif abs(curve[k]) > max(noise, 4.0 * drift_sd):
         diagnoses.append({"kind": "drift", "message": (
             f"the sensor drifts by up to {curve[k]:.3g} m ({abs(curve[k]) / feat.span:.1%} "
             f"of the peak, at t = {t_orig[k]:.4g} s; {p[7]:.3g} m/s and {p[8]:.3g} m/s^2 "
             f"from the contact) from an offset of {p[5]:.3g} m: fitted and removed")})
+    explained = noise_limited and not any(d["kind"] in (
+        "units", "optimiser", "truncated", "second-mode", "misfit") for d in diagnoses)
+    if explained:
+        diagnoses.insert(0, {"kind": "noise-limited", "message": (
+            f"residual {rms:.3g} m = {ratio:.2f} x the noise {noise:.3g} m ("
+            + {"rest": "of the samples before the contact", "spectrum": "the residual "
+               "spectrum's white floor", "resolution": f"the resolution floor, {RESOLUTION:g}"
+               " of the peak: the record has no noise above it"}[source] + ")")})
     if flagged.size:
-        rows = ", ".join(str(int(i) + 2) for i in flagged[:5])
+        rows = ", ".join(str(record.row(int(i))) for i in flagged[:5])
         diagnoses.append({"kind": "outliers", "message": (
             f"{flagged.size} sample(s) more than {OUTLIER_Z:g} noise deviations off the fit "
             f"left out (file rows {rows}{', ...' if flagged.size > 5 else ''})")})
