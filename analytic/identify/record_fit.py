@@ -90,6 +90,7 @@ DRIFT_MAX = 0.5
 #: Allowed parameter ranges of the fit (SI): a value at a bound is no tree's.
 M_RANGE, K_RANGE, XI_RANGE, E_MAX = (1e-2, 1e5), (1.0, 1e10), (1e-3, 5.0), 0.95
 
+#: Every kind a diagnosis may have (docs/identification.md, "Diagnoses").
 DIAGNOSES = ("noise-limited", "drift", "outliers", "one-impact", "truncated", "optimiser",
              "units", "second-mode", "misfit")
 
