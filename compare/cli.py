@@ -259,12 +259,12 @@ def cmd_simulate(args) -> int:
     opts = _options(args, ("restitution", "t_end", "trunk", "segments", "pendulum", "contact",
                            "contact_stiffness", "dt", "damping", "integrator", "elements",
                            "calibration"))
-    result = backend.simulate(scenario, **opts)
-    written = None
     if args.record:
-        from .identify_cmd import write_record
+        from .identify_cmd import check_record_arguments, write_record
 
-        written = write_record(args, scenario, result)
+        check_record_arguments(args)
+    result = backend.simulate(scenario, **opts)
+    written = write_record(args, scenario, result) if args.record else None
     if args.json:
         print(json.dumps(result.to_json(), indent=2))
         return 0

@@ -149,6 +149,16 @@ def add_record_arguments(sp: argparse.ArgumentParser, number, count) -> None:
 RECORD_RATE, RECORD_NOISE, RECORD_REST = (50.0, 1e6), (0.0, 0.5), 0.02
 
 
+def check_record_arguments(args) -> None:
+    """--rate, --noise and --seed in range (one line each), before a run is spent."""
+    from treeimpact.analytic.model.parameters import check_range
+
+    check_range("--rate", args.rate, low=RECORD_RATE[0], high=RECORD_RATE[1], unit="Hz")
+    check_range("--noise", args.noise, low=RECORD_NOISE[0], high=RECORD_NOISE[1])
+    if args.seed < 0:
+        raise ParameterError(f"--seed = {args.seed}: allowed 0 or more")
+
+
 def write_record(args, scenario, result) -> str:
     """Write ``result``'s trunk displacement as a record at ``args.rate`` from RECORD_REST s
     before the impact, with ``args.noise`` of the peak as Gaussian noise (seeded): exact
@@ -156,12 +166,7 @@ def write_record(args, scenario, result) -> str:
     Returns a one-line summary."""
     import numpy as np
 
-    from treeimpact.analytic.model.parameters import check_range
-
-    check_range("--rate", args.rate, low=RECORD_RATE[0], high=RECORD_RATE[1], unit="Hz")
-    check_range("--noise", args.noise, low=RECORD_NOISE[0], high=RECORD_NOISE[1])
-    if args.seed < 0:
-        raise ParameterError(f"--seed = {args.seed}: allowed 0 or more")
+    check_record_arguments(args)
     traj = result.trajectory
     if traj is None:
         raise ParameterError(f"--record: the {result.backend} backend gives no trajectory")

@@ -231,3 +231,46 @@ def test_log_interval_of_an_undetermined_parameter_is_zero_to_infinity_without_w
         lo, hi = log_interval(2.0, 0.1)
     assert (lo, hi) == pytest.approx((2.0 * math.exp(-0.1), 2.0 * math.exp(0.1)), rel=1e-15)
     assert all(math.isnan(v) for v in log_interval(2.0, math.nan))
+
+
+@pytest.mark.parametrize("text, flags, words", [
+    ("t [min],x\n0,0\n", [], "unit 'min'; allowed s, ms, us"),
+    ("t [s],x\n" + "".join(f"{i * 1e-3},{i * 1e-4}\n" for i in range(30)),
+     ["--time-unit", "ms"], "is in s, but --time-unit says ms"),
+    ("0,0\n" + "".join(f"{i * 1e-3},{i * 1e-4}\n" for i in range(30)), [],
+     "line 1 is numbers, not a header"),
+    ("# a comment\nt;x\n" + "".join(f"{i * 1e-3};{i * 1e-4}\n".replace(".", ",")
+                                    for i in range(10)) + "0,011;\n", [],
+     "row 13 has no value in column 'x'"),
+    ("t,x,t\n0,0,0\n", [], "has 2 column(s) t"),
+])
+def test_bad_headers_and_cells_are_one_line_and_exit_2(tmp_path, capsys, text, flags, words):
+    """Units and headers: an unknown unit, a flag that contradicts the header, no header, a
+    missing cell (its row as in the file, after a comment line), a column twice."""
+    path = tmp_path / "rec.csv"
+    path.write_text(text)
+    assert main(["identify", str(path), *ARGS, *flags]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1, err
+
+
+def test_simulate_writes_a_record_identify_reads(tmp_path, capsys):
+    """`simulate --record`: the trunk's x at the rate asked, from 20 ms before the impact,
+    with the noise asked (of the peak); --json keeps stdout JSON; a rate or noise out of
+    range is one line naming the flag and its range."""
+    from treeimpact.analytic.identify.pendulum_record import read_record
+
+    path = tmp_path / "rec.csv"
+    assert main(["simulate", "central-leader", "--record", str(path), "--rate", "2000",
+                 "--noise", "0.02", "--seed", "3", "--json"]) == 0
+    json.loads(capsys.readouterr().out)  # stdout holds only the JSON
+    rec = read_record(path)
+    assert np.allclose(np.diff(rec.t), 5e-4) and rec.x.size == 240  # 0.12 s at 2 kHz
+    before = rec.x[rec.t < 0.019]  # rest: the noise alone (2 % of the peak, 38 samples)
+    assert 0.01 < np.std(before) / np.max(np.abs(rec.x)) < 0.03
+    for flag, value, words in (("--rate", "10", "--rate = 10.0 Hz is out of range: allowed "
+                                "[50, 1e+06] Hz"), ("--noise", "2", "--noise = 2.0 is out of "
+                                                    "range: allowed [0, 0.5]")):
+        assert main(["simulate", "central-leader", "--record", str(path), flag, value]) == 2
+        err = capsys.readouterr().err
+        assert words in err and err.count("\n") == 1, err
