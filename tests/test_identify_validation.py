@@ -85,6 +85,12 @@ def test_no_confident_wrong_answer(outcomes):
     assert not [r["id"] for r in clean if r["confident_wrong"]]
 
 
+def test_every_interval_is_in_the_physical_range(outcomes):
+    """e's in [0, 1]; M_T's, K_T's, C_T's, xi's and E's above 0 (the issue saw e from -0.05
+    to 1.0035 and xi from -0.22)."""
+    assert not [k for k, r in outcomes.items() if not r["physical"]]
+
+
 def test_a_clean_record_is_recovered_to_its_accuracy(outcomes):
     """Noise-free records (no one-impact ridge): every fixed quantity within 1e-9 (the
     records agree with the fit's solver to 2e-12 of the peak; measured 2e-12 at most)."""

@@ -419,6 +419,7 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
         return {"id": case["id"], "seconds": time.perf_counter() - t0, "explained": False,
                 "fixed": False, "errors": {}, "covered": {}, "diagnoses": [],
                 "error": f"{type(exc).__name__}: {exc}", "confident_wrong": False,
+                "verdict": "error", "physical": False,
                 "as_expected": False, "clean": case.get("clean", False),
                 "noisy": case["noise"] > 0}
     seconds = time.perf_counter() - t0
@@ -427,6 +428,10 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
     errors = {k: fit.values[k] / truth[k] - 1.0 for k in keys if fit.determined.get(k, False)}
     covered = {k: bool(fit.intervals[k][0] <= truth[k] <= fit.intervals[k][1]) for k in keys}
     diagnoses = [d["kind"] for d in getattr(fit, "diagnoses", [])]
+    # every interval in the physical range (NaN: a record not fitted)
+    iv = fit.intervals
+    physical = all(not (lo < 0.0 or hi > 1.0) for lo, hi in [iv["e"]]) and all(
+        not iv[k][0] <= 0.0 for k in ("M_T", "K_T", "C_T", "xi", "E"))
     exp = case["expect"]
     extra = {}
     if from_truth and "e" in truth and "xi" in truth:
@@ -440,6 +445,7 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
             fit.noise, 1e-300) ** 2
     confident_wrong = bool(fit.explained and not all(covered.values()))
     return {"id": case["id"], "seconds": seconds, "verdict": fit.verdict,
+            "physical": physical,
             "explained": bool(fit.explained),
             "fixed": bool(fit.determined["M_T"]), "errors": errors, "covered": covered,
             "diagnoses": diagnoses, "confident_wrong": confident_wrong,
