@@ -340,10 +340,11 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     record y too when it has one; ``restitution`` (known e, e.g. of the pendulum's pad)
     holds e fixed instead of fitting it (``free_fit``: the free fit of this record, if made:
     its point moved to that e along V_1 and omega_1 is one more start). ``start``: a local
-    fit from this p alone (no global stage). A record of x alone whose best one-impact model
-    (the pendulum leaving: M_T and e on a ridge) explains it as well as its best fit fixes
-    omega_1, xi and V_1 but not M_T and e apart: then M_T, K_T, C_T, E and e are ranges
-    (:mod:`analytic.identify.one_impact`)."""
+    fit from this p alone (no global stage). A record of x alone whose e profile stays
+    within the 95 % threshold up to a one-impact model (the pendulum leaving: M_T and e on
+    a ridge) fixes omega_1, xi and V_1 but not M_T and e apart: then M_T, K_T, C_T, E and e
+    are ranges (:mod:`analytic.identify.one_impact`). A record whose numbers look like
+    another unit than ``record.time_unit``/``record.length_unit`` is not fitted."""
     if restitution is not None:
         check_range("restitution", restitution, low=0.0, high=1.0)
     t_orig, x, y = record.t, record.x, record.y
@@ -408,7 +409,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     if best.cost - curved.cost > 0.5 * CHI2_999 * s2:
         best = curved
     p = best.p
-    tk, xk, yk = t[keep], x[keep], None if y is None else y[keep]
+    tk, xk = t[keep], x[keep]
     motion = model_motion(p, test, t, pendulum=y is not None)
     fitted = motion[0]
     resid = (fitted - x)[keep]
