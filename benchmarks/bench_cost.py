@@ -4,9 +4,11 @@ Every backend's :class:`treeimpact.analytic.budget.StepCost` (seconds and bytes 
 sample) estimates a run before it starts; a run beyond the budget is refused on that
 estimate. Here each backend runs at two lengths per model size, each in a fresh process
 (its peak RSS its own), and the marginal cost of the extra steps (the difference of the two,
-so imports and set-up drop out) is set against the estimate: ratio = estimate / measured,
-median of the repeats. A ratio near 1 (0.5-2 on a noisy machine) is what the budget needs;
-below 1 the budget admits runs that cost more than it says.
+so imports and set-up drop out; in CPU time, which a shared machine's load leaves nearly
+alone and which is the wall time of these single-threaded runs on an idle machine) is set
+against the estimate: ratio = estimate / measured, median of the repeats. A ratio near 1
+(0.5-2) is what the budget needs; below 1 the budget admits runs that cost more than it
+says.
 
 Options: ``--repeats N`` (default 3), ``--quick`` (the small sizes only), ``--write`` (the
 medians to benchmarks/results/cost.json, which tests/test_budget.py holds the cost model to).
@@ -64,9 +66,9 @@ elif backend == "bullet":
     size = {"joints": setup.segments or 1}
 else:
     size = {}
-start = time.perf_counter()
+start = time.process_time()  # CPU time: a shared machine's load leaves it (nearly) alone
 result = b._load(b.simulate_ref)(scenario, **options)  # the run alone, unjudged
-wall = time.perf_counter() - start
+wall = time.process_time() - start
 if backend == "soft":
     from treeimpact.analytic.contact.soft import SAMPLE_COST as cost
     steps = options["t_end"] / (result.collision_duration / 100)

@@ -62,18 +62,21 @@ def sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = False,
                      workers=workers, progress=False)
 
 
-def read_record(path):
-    """A pendulum-test record (CSV with the header ``t,x`` or ``t,x,y``; s, m, m)."""
+def read_record(path, *, time_unit: str | None = None, length_unit: str | None = None):
+    """A pendulum-test record: a CSV file with columns t, x (and y, the pendulum's) named in
+    its header, units there ('t [ms]', 'x (mm)') or given here (default s, m); converted
+    to SI, times from the first sample (docs/identification.md, "The record")."""
     from treeimpact.analytic.identify.pendulum_record import read_record as read
 
-    return read(path)
+    return read(path, time_unit=time_unit, length_unit=length_unit)
 
 
 def identify(record, *, mass: float, equivalent_length: float, release_angle_deg: float,
              clamp_height: float, diameter: float, restitution: float | None = None):
     """Tree properties (M_T kg, K_T N/m, C_T N s/m, xi, e, E Pa, with 95 % intervals) from a
-    record (a path or :func:`read_record`'s result) by the whole-record fit of the exact
-    1-DOF model; ``restitution``: the pad's e if known, held fixed."""
+    record (a path, read in s and m unless its header says otherwise, or
+    :func:`read_record`'s result) by the whole-record fit of the exact 1-DOF model, with
+    its verdict and diagnoses; ``restitution``: the pad's e if known, held fixed."""
     import math
 
     from treeimpact.analytic.identify.procedure import PendulumTest

@@ -19,7 +19,7 @@ from treeimpact.analytic.errors import ParameterError
 
 
 @contextmanager
-def _quiet_stdout():
+def quiet_stdout():
     """Send what C extensions print on file descriptor 1 to stderr for the duration."""
     try:
         sys.stdout.flush()
@@ -65,7 +65,7 @@ class Backend:
     def _load(self, ref: str):
         module, func = ref.split(":")
         try:
-            with _quiet_stdout():  # pybullet prints its build time on import: keep JSON clean
+            with quiet_stdout():  # pybullet prints its build time on import: keep JSON clean
                 return getattr(importlib.import_module(module), func)
         except (ImportError, AttributeError) as exc:
             raise ParameterError(f"backend {self.name!r} is not available here: {exc}") from None

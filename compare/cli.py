@@ -103,6 +103,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_option_flags(ss)
     _add_budget_flag(ss)
     ss.add_argument("--json", action="store_true", help="machine-readable output")
+    from .identify_cmd import add_record_arguments
+
+    add_record_arguments(ss, _number, _count)
 
     sm = sub.add_parser("modes", help="static stiffness at a and natural frequencies")
     sm.add_argument("scenario", help="shipped scenario name or TOML path")
@@ -287,7 +290,12 @@ def cmd_simulate(args) -> int:
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
     opts = _options(args, backend_options())
+    if args.record:
+        from .identify_cmd import check_record_arguments, write_record
+
+        check_record_arguments(args)
     result = backend.simulate(scenario, **opts)
+    written = write_record(args, scenario, result) if args.record else None
     if args.json:
         from .provenance import provenance
 
@@ -299,6 +307,8 @@ def cmd_simulate(args) -> int:
         opts = _options(args, ("restitution", "t_end"))
         reference = get_backend("analytic").simulate(scenario, **opts)
     _print_simulation(scenario, result, reference)
+    if written:
+        print(written)
     return 0
 
 

@@ -184,9 +184,9 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
     law = target_law(mu, restitution=restitution, duration=duration, stiffness=stiffness,
                      damping=damping)
     dt = _check_dt(dt, law, mu)
-    from .backends import _quiet_stdout
+    from .backends import quiet_stdout
 
-    with _quiet_stdout():  # PyBullet prints on import; --json keeps stdout for JSON
+    with quiet_stdout():  # PyBullet prints on import; --json keeps stdout for JSON
         out = {"inputs": {"mass": m1, "other_mass": m2, "effective_mass": mu, "dt": dt},
                "target": law,
                "mujoco": mujoco_settings(law, mu, m1, m2, dt),

@@ -23,7 +23,8 @@ from .runs import OK, SKIPPED, Status
 IDENT_METRICS = ("M_T", "K_T", "xi", "E")
 IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
                "K_T": ("N/m", "identified stiffness (eq 46)"),
-               "xi": ("1", "identified damping ratio b / omega_n (eqs 42-43)"),
+               "xi": ("1", "pair damping ratio b / omega_n = C_T / (2 sqrt((K_T + k)(M_T + m))): "
+                      "trunk and pendulum moving together (eqs 42-43)"),
                "E": ("Pa", "identified Young's modulus (eq 47)")}
 
 

@@ -10,12 +10,17 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
-UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "xi": "-", "e": "-", "E": "Pa",
-         "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "y_offset": "m"}
+UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
+         "pair_damping_ratio": "-", "e": "-", "E": "Pa",
+         "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s",
+         "x_drift2": "m/s^2", "y_offset": "m"}
 
 
 def add_arguments(sp: argparse.ArgumentParser, number) -> None:
-    sp.add_argument("record", help="CSV with the header t,x (or t,x,y): s, m, m")
+    from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
+
+    sp.add_argument("record", help="CSV with columns t, x (and y, the pendulum's), in any "
+                                   "order, units in the header ('t [ms]', 'x (mm)') or below")
     sp.add_argument("--mass", type=number, required=True, help="pendulum mass m, kg")
     sp.add_argument("--equivalent-length", type=number, required=True,
                     help="equivalent length of the pendulum l_e, m")
@@ -26,6 +31,11 @@ def add_arguments(sp: argparse.ArgumentParser, number) -> None:
     sp.add_argument("--restitution", type=number,
                     help="the pad's restitution e in [0, 1] if known: held fixed in the fit "
                          "(a record the pendulum leaves after one impact needs it to fix M_T)")
+    sp.add_argument("--time-unit", choices=tuple(TIME_UNITS),
+                    help="unit of the time column when its header names none (default s)")
+    sp.add_argument("--length-unit", choices=tuple(LENGTH_UNITS),
+                    help="unit of the x and y columns when their headers name none "
+                         "(default m)")
     sp.add_argument("--json", action="store_true", help="machine-readable output")
     sp.add_argument("--plot", help="write a figure of the record, both fits and the residuals "
                                    "(PNG) to this file")
@@ -35,12 +45,17 @@ def _test(args):
     from treeimpact.analytic.identify.procedure import PendulumTest
     from treeimpact.analytic.model.parameters import LIMITS, Pendulum, check_range
 
-    pend = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
-                    release_angle=math.radians(args.release_angle))  # validated, one line
-    for flag, value, field in (("--clamp-height", args.clamp_height, "trunk.clamp_height"),
+    for flag, value, field in (("--mass", args.mass, "impactor.mass"),
+                               ("--equivalent-length", args.equivalent_length,
+                                "impactor.equivalent_length"),
+                               ("--release-angle", args.release_angle,
+                                "impactor.release_angle_deg"),
+                               ("--clamp-height", args.clamp_height, "trunk.clamp_height"),
                                ("--diameter", args.diameter, "trunk.diameter")):
-        low, high, unit = LIMITS[field]
+        low, high, unit = LIMITS[field][:3]  # each flag as typed, before anything is built
         check_range(flag, value, low=low, high=high, unit=unit)
+    pend = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
+                    release_angle=math.radians(args.release_angle))
     if args.restitution is not None:
         check_range("--restitution", args.restitution, low=0.0, high=1.0)
     return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
@@ -60,29 +75,81 @@ def _paper(record, test) -> dict:
         except (ParameterError, ValueError, FloatingPointError) as exc:
             out[reading] = {"error": " ".join(str(exc).split())}
             continue
-        out[reading] = {"M_T": ident.M_T, "K_T": ident.K_T, "xi": ident.xi, "E": ident.E,
-                        "C_T": 2.0 * ident.b * (ident.M_T + test.impactor_mass)}
+        c_t = 2.0 * ident.b * (ident.M_T + test.impactor_mass)
+        trunk = c_t / (2.0 * math.sqrt(ident.K_T * ident.M_T)) if (
+            ident.K_T > 0 and ident.M_T > 0) else math.nan
+        out[reading] = {"M_T": ident.M_T, "K_T": ident.K_T, "C_T": c_t, "E": ident.E,
+                        "pair_damping_ratio": ident.xi,  # b / omega_n: the paper's xi
+                        "trunk_damping_ratio": trunk}
     return out
 
 
+#: The figure formats --plot writes (by the file's suffix).
+PLOT_FORMATS = (".png", ".pdf", ".svg")
+
+
+def _check_plot_path(path: str) -> None:
+    """--plot names a file of a format it writes, not a directory (one line, before the fit)."""
+    from pathlib import Path
+
+    p = Path(path)
+    if p.is_dir():
+        raise ParameterError(f"--plot {path!r} is a directory: name a file in it, e.g. "
+                             f"{str(p / 'fit.png')!r}")
+    if p.suffix.lower() not in PLOT_FORMATS:
+        raise ParameterError(f"--plot {path!r}: allowed a file ending in "
+                             f"{', '.join(PLOT_FORMATS)}")
+
+
 def run(args) -> int:
-    from treeimpact.analytic.identify.record_fit import fit_record, read_record
+    import sys
+
+    from treeimpact.analytic.identify.record_fit import (
+        DAMPING_RATIO_FORMULAS,
+        fit_record,
+        read_record,
+    )
     from treeimpact.analytic.results import to_jsonable
 
+    import numpy as np
+
+    from .backends import quiet_stdout
+
     test = _test(args)
-    record = read_record(args.record)
-    fit = fit_record(record, test, restitution=args.restitution)
-    paper = _paper(record, test)
     if args.plot:
-        _plot(args.plot, record, fit, paper, test)
+        _check_plot_path(args.plot)
+    with quiet_stdout():  # LAPACK prints its argument errors on fd 1: stdout is data
+        record = read_record(args.record, time_unit=args.time_unit,
+                             length_unit=args.length_unit)
+        fit = fit_record(record, test, restitution=args.restitution)
+        with np.errstate(all="ignore"):  # its readings are checked, and fail in one line
+            paper = _paper(record, test)
+        if args.plot and math.isfinite(fit.residual_rms):
+            _plot(args.plot, record, fit, paper, test)
     if args.json:
-        print(json.dumps(to_jsonable({"fit": fit.to_json(), "paper": paper,
-                                 "residual_rms": fit.residual_rms,
-                                 "residual_rms_y": fit.residual_rms_y,
-                                 "explained": fit.explained, "note": fit.note}), indent=2))
+        print(json.dumps(to_jsonable({
+            "fit": fit.to_json(), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
+            "residual_rms": fit.residual_rms,
+            "residual_rms_y": fit.residual_rms_y, "explained": fit.explained,
+            "note": fit.note, "verdict": fit.verdict, "diagnoses": list(fit.diagnoses),
+            "noise": fit.noise, "noise_source": fit.noise_source,
+            "misfit_ratio": fit.misfit_ratio,
+            "flagged_rows": [record.row(int(i)) for i in fit.flagged],
+            "warnings": list(fit.warnings)}), indent=2))
         return 0
-    print(f"{args.record}: {record.t.size} samples, {record.t[0]:.4g} to {record.t[-1]:.4g} s")
-    print(f"  {'quantity':<10}{'value':>13}{'95 % low':>13}{'95 % high':>13}  {'unit':<6}"
+    for line in fit.warnings:
+        print(f"treeimpact: warning: {line}", file=sys.stderr)
+    print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
+          f"(read in {record.time_unit} and {record.length_unit})")
+    if not math.isfinite(fit.residual_rms):  # no fit (units): the verdict says why
+        print(f"verdict: {fit.verdict}")
+        for d in fit.diagnoses:
+            print(f"  {d['kind']}: {d['message']}")
+        return 0
+    if not fit.explained:
+        print("  the 1-DOF model does NOT explain this record: the numbers below are the "
+              "model's best fit, NOT the tree's properties")
+    print(f"  {'quantity':<20}{'value':>13}{'95 % low':>13}{'95 % high':>13}  {'unit':<6}"
           f"{'paper (eqs 39-48)':>19}")
     reading = paper.get("paper", {})
     given = {"e"} if args.restitution is not None else set()
@@ -92,18 +159,81 @@ def run(args) -> int:
         ptext = f"{pv:.5g}" if isinstance(pv, float) and math.isfinite(pv) else ""
         vtext = f"{v:>13.5g}" if fit.determined[k] else f"{'not fixed':>13}"
         itext = f"{'given':>13}{'':>13}" if k in given else f"{lo:>13.5g}{hi:>13.5g}"
-        print(f"  {k:<10}{vtext}{itext}  {UNITS[k]:<6}{ptext:>19}")
+        print(f"  {k:<20}{vtext}{itext}  {UNITS[k]:<6}{ptext:>19}")
+    for name, formula in DAMPING_RATIO_FORMULAS.items():
+        print(f"  {name} = {formula}")
     if fit.note:
         print(f"  not fixed: {fit.note}")
     if "error" in reading:
         print(f"  paper's procedure: {reading['error']}")
-    verdict = ("explained" if fit.explained else "NOT explained: the 1-DOF model misses it")
     y_text = ("" if fit.residual_rms_y is None else
               f", pendulum's record (y, fitted too) {fit.residual_rms_y:.3g} m")
     print(f"fit: full-record least squares of the exact model (eqs 12-35); residual RMS "
-          f"{fit.residual_rms:.3g} m = {fit.residual_rms / fit.peak:.1%} of the peak"
-          f"{y_text}: {verdict}")
+          f"{fit.residual_rms:.3g} m = {fit.misfit_ratio:.3g} x the noise {fit.noise:.3g} m "
+          f"({fit.residual_rms / fit.peak:.2%} of the peak){y_text}")
+    print(f"verdict: {fit.verdict}")
+    for d in fit.diagnoses:
+        print(f"  {d['kind']}: {d['message']}")
     return 0
+
+
+def add_record_arguments(sp: argparse.ArgumentParser, number, count) -> None:
+    """`treeimpact simulate --record FILE.csv [--rate HZ --noise FRAC --seed N]`."""
+    sp.add_argument("--record", help="also write the trunk's displacement as a pendulum-test "
+                                     "record (CSV 't [s],x [m]', what `identify` reads)")
+    sp.add_argument("--rate", type=number, default=5000.0,
+                    help="--record: sampling rate, Hz (default 5000)")
+    sp.add_argument("--noise", type=number, default=0.0,
+                    help="--record: Gaussian noise, a fraction of the peak (default 0)")
+    sp.add_argument("--seed", type=count, default=0, help="--record: the noise's seed")
+
+
+#: What a recorder does: its rate (Hz), noise (of the peak) and the rest before the impact.
+RECORD_RATE, RECORD_NOISE, RECORD_REST = (50.0, 1e6), (0.0, 0.5), 0.02
+
+
+def check_record_arguments(args) -> None:
+    """--rate, --noise and --seed in range (one line each), before a run is spent."""
+    from treeimpact.analytic.model.parameters import check_range
+
+    check_range("--rate", args.rate, low=RECORD_RATE[0], high=RECORD_RATE[1], unit="Hz")
+    check_range("--noise", args.noise, low=RECORD_NOISE[0], high=RECORD_NOISE[1])
+    if args.seed < 0:
+        raise ParameterError(f"--seed = {args.seed}: allowed 0 or more")
+
+
+def write_record(args, scenario, result) -> str:
+    """Write ``result``'s trunk displacement as a record at ``args.rate`` from RECORD_REST s
+    before the impact, with ``args.noise`` of the peak as Gaussian noise (seeded): exact
+    samples of the analytic backend's solution, else the backend's trajectory interpolated.
+    Returns a one-line summary."""
+    import numpy as np
+
+    check_record_arguments(args)
+    traj = result.trajectory
+    if traj is None:
+        raise ParameterError(f"--record: the {result.backend} backend gives no trajectory")
+    t_end = float(traj.t[-1])
+    s = np.arange(-RECORD_REST, t_end, 1.0 / args.rate)
+    sol = getattr(result, "solution", None)
+    if sol is not None:
+        x = np.where(s > 0.0, sol.state(np.clip(s, 0.0, sol.t_end))[0], 0.0)
+    else:
+        x = np.where(s > 0.0, np.interp(s, traj.t, traj.x), 0.0)
+    rng = np.random.default_rng(args.seed)
+    x = x + args.noise * float(np.max(np.abs(x))) * rng.standard_normal(s.size)
+    t = s + RECORD_REST
+    try:
+        with open(args.record, "w", encoding="utf-8") as f:
+            f.write(f"# {scenario.name} ({result.backend}), {args.rate:g} Hz, noise "
+                    f"{args.noise:g} of the peak, seed {args.seed}; impact at t = "
+                    f"{RECORD_REST:g} s\n")
+            f.write("t [s],x [m]\n")
+            f.writelines(f"{a:.9g},{b:.9g}\n" for a, b in zip(t, x))
+    except OSError as exc:
+        raise ParameterError(f"--record {args.record!r}: cannot be written "
+                             f"({exc.strerror or exc})") from None
+    return f"record: {args.record} ({t.size} samples at {args.rate:g} Hz, noise {args.noise:g})"
 
 
 def _plot(path, record, fit, paper, test) -> None:
@@ -121,6 +251,9 @@ def _plot(path, record, fit, paper, test) -> None:
     ax, axr = axes[0], axes[-1]
     ms = 1e3
     ax.plot(record.t * ms, record.x * ms, ".", ms=2, color="0.5", label="record")
+    if fit.flagged.size:
+        ax.plot(record.t[fit.flagged] * ms, record.x[fit.flagged] * ms, "x", color="C3",
+                label="outliers, left out")
     if fit.determined["M_T"]:
         label = f"M_T {fit.values['M_T']:.4g} kg, K_T {fit.values['K_T']:.4g} N/m"
     else:
@@ -141,9 +274,11 @@ def _plot(path, record, fit, paper, test) -> None:
         axr.plot(record.t * ms, (record.y - fit.model_y) * ms, "-", color="C2", lw=1,
                  label="y, full-record fit")
     reading = paper.get("paper", {})
-    if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading["xi"]:
-        p = [math.log(reading["M_T"]), math.log(reading["K_T"]), reading["xi"],
-             fit.point[3], fit.values["t0"], fit.values["x_offset"]]
+    if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading[
+            "trunk_damping_ratio"]:  # the fit's parameter is the trunk's own ratio
+        p = [math.log(reading["M_T"]), math.log(reading["K_T"]), reading["trunk_damping_ratio"],
+             fit.point[3], fit.values["t0"], fit.values["x_offset"], 0.0,
+             fit.values["x_drift"], fit.values["x_drift2"]]
         xp = model_x(p, test, record.t)
         ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
                 label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "

@@ -310,3 +310,43 @@ def test_a_library_warning_during_a_command_is_one_stderr_line(capsys):
     assert err == ("treeimpact: warning: overflow encountered in multiply (RuntimeWarning, "
                    "chain.py:205)\n")
     assert warnings.showwarning is before
+
+
+IDENTIFY = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle", "36.39",
+            "--clamp-height", "0.315", "--diameter", "0.126"]
+
+
+def _record(path, x) -> str:
+    path.write_text("t [s],x [m]\n" + "".join(f"{i / 5000},{v}\n" for i, v in enumerate(x)))
+    return str(path)
+
+
+@pytest.mark.parametrize(("flag", "words"), [
+    ("out.xyz", ["--plot 'out.xyz': allowed a file ending in .png, .pdf, .svg"]),
+    ("{dir}", ["is a directory: name a file in it"])])
+def test_identify_plot_paths_are_checked_before_the_fit(flag, words, tmp_path, capsys):
+    rec = _record(tmp_path / "r.csv", [0.0] * 100 + [0.001] * 500)
+    one_line(capsys, ["identify", rec, *IDENTIFY, "--plot", flag.format(dir=tmp_path)], 2,
+             *words)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]  # nothing written
+
+
+def test_identify_refuses_a_fifo_and_a_record_beyond_its_size(tmp_path, capsys, monkeypatch):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    one_line(capsys, ["identify", str(fifo), *IDENTIFY], 2, "not a regular file")  # no wait
+    from treeimpact.analytic.identify import pendulum_record
+
+    monkeypatch.setattr(pendulum_record, "MAX_SAMPLES", 500)
+    rec = _record(tmp_path / "r.csv", [0.0] * 600)
+    one_line(capsys, ["identify", rec, *IDENTIFY], 2, "600 samples; allowed up to 500")
+
+
+def test_identify_json_stdout_holds_only_json_when_lapack_complains(tmp_path, capfd):
+    """A record that is zero but one sample: LAPACK prints its argument errors on fd 1."""
+    rec = _record(tmp_path / "r.csv", [0.01 if i == 300 else 0.0 for i in range(600)])
+    code = main(["identify", rec, *IDENTIFY, "--json"])
+    out, _ = capfd.readouterr()
+    data = json.loads(out)  # only JSON on stdout
+    assert code == 0 and not data["explained"]
+    assert not any(v["determined"] for v in data["fit"].values())  # nothing "determined"

@@ -46,9 +46,9 @@ def test_a_run_beyond_any_budget_is_refused_with_its_estimate(cost, variable, wo
 
 
 def test_the_cost_model_is_within_a_factor_two_of_its_measurement():
-    """benchmarks/results/cost.json: bench_cost.py's medians (marginal seconds and bytes per
-    step) on the 2-core reference machine; the model in the code must stay within 2x of them
-    either way (wall times there are noisy to ~1.5x; the budget only needs the scale)."""
+    """benchmarks/results/cost.json: bench_cost.py's medians (marginal CPU seconds and bytes
+    per step) on the 2-core reference machine; the model in the code must stay within 2x of
+    them either way (a model fitted to a few sizes; the budget only needs the scale)."""
     from treeimpact.analytic.contact.soft import SAMPLE_COST as soft
     from treeimpact.analytic.continuum.beam_impact import SAMPLE_COST as beam
 

@@ -59,6 +59,22 @@ def test_the_add_your_own_tree_example_runs(tmp_path, monkeypatch, capsys):
     assert "my-tree (analytic)" in capsys.readouterr().out
 
 
+def test_the_identify_your_own_tree_example_runs_from_the_cli_alone(tmp_path, monkeypatch,
+                                                                  capsys):
+    """The README's identify example: `simulate --record` writes the record, `identify`
+    reads it back and explains it."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## Identify your own tree from a record"):]
+    commands = [c for c in _code(section[:section.index("\n## ", 3)])
+                if c.startswith("treeimpact ")]
+    assert [c.split()[1] for c in commands] == ["simulate", "identify"]
+    monkeypatch.chdir(tmp_path)
+    for command in commands:
+        assert main(shlex.split(command)[1:]) == 0, command
+    out = capsys.readouterr().out
+    assert "verdict: explained" in out and (tmp_path / "fit.png").exists()
+
+
 def test_every_make_target_shown_exists():
     targets = set(re.findall(r"^([a-z]+):", (ROOT / "Makefile").read_text(), flags=re.M))
     shown = {c.split()[1] for _, c in _commands("make ")}

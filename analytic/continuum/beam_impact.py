@@ -74,7 +74,7 @@ OPTIONS = {"elements": Option(int, "elements of the beam trunk's mesh", low=1,
                                      "solution)", cli=False)}
 #: One sample of the exact solution: wall time and the bytes of the samples and the metrics'
 #: work arrays, measured (benchmarks/bench_cost.py; docs/budgets.md).
-SAMPLE_COST = StepCost(0.4e-6, 200.0, "samples of the beam's modal solution")
+SAMPLE_COST = StepCost(1e-6, 200.0, "samples of the beam's modal solution")
 
 
 def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,

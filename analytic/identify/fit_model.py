@@ -14,8 +14,14 @@ from treeimpact.analytic.model.two_body import TwoBodyModel
 from .procedure import PendulumTest
 
 #: The parameters p: ln M_T, ln K_T, xi, e, t0 (s), x_offset (m), y_offset (m; the pendulum
-#: sensor's, fitted when the record has y).
-NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset")
+#: sensor's, fitted when the record has y), x_drift (m/s) and x_drift2 (m/s^2): the trunk
+#: sensor's slow drift, x_offset + x_drift s + x_drift2 s^2 (s = t - t0) added to the
+#: motion (each optional: 0 when p is shorter).
+NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset", "x_drift", "x_drift2")
+#: Events one model run may take (impacts, flights, moving together): a tree's record takes
+#: tens; a model far from any tree (a 0.01 kg trunk bouncing off the pendulum all record
+#: long) is refused (SimulationDiverged) instead of taking seconds.
+MAX_EVENTS = 20_000
 
 
 def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
@@ -28,6 +34,13 @@ def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
                         impact_speed=test.impact_speed, restitution=e)
 
 
+def drift_at(p, s):
+    """The sensor's drift (m) s seconds after the contact: x_drift s + x_drift2 s^2."""
+    d1 = float(p[7]) if len(p) > 7 else 0.0
+    d2 = float(p[8]) if len(p) > 8 else 0.0
+    return (d1 + d2 * s) * s
+
+
 def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
     """x(t) (m) of the exact model with parameters p (:data:`NAMES`)."""
     return model_motion(p, test, t)[0]
@@ -35,16 +48,18 @@ def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
 
 def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False) -> tuple:
     """(x, v) (m, m/s) of the exact model at the sorted times t: :func:`model_x` and the
-    trunk's velocity, which is -dx/dt0 (the fit's exact Jacobian column for t0); with
-    ``pendulum`` also the pendulum's (y, v_y) in the same frame (y = x at contact, y = 0 at
-    the first one): before it, the free swing at u_1 (eq 13) run back from the contact."""
+    trunk's velocity (without the drift's: -dx/dt0 is v and the drift's rate, the fit's
+    exact Jacobian column for t0); with ``pendulum`` also the pendulum's (y, v_y) in the
+    same frame (y = x at contact, y = 0 at the first one): before it, the free swing at u_1
+    (eq 13) run back from the contact."""
     t0 = float(p[4])
-    x, v = np.full(t.shape, float(p[5])), np.zeros(t.shape)
+    s = t - t0
+    x, v = float(p[5]) + drift_at(p, s), np.zeros(t.shape)
     first = int(np.searchsorted(t, t0, side="right"))  # the first sample after the contact
     sol = None
     if first < t.size:
         t_rel = t[first:] - t0
-        sol = solve_impacts(two_body_at(p, test), float(t_rel[-1]))
+        sol = solve_impacts(two_body_at(p, test), float(t_rel[-1]), max_events=MAX_EVENTS)
         rows = sol.sorted_state(np.minimum(t_rel, sol.t_end), pendulum=pendulum)
         x[first:] += rows[0]
         v[first:] = rows[1]

@@ -34,24 +34,3 @@ def on_ridge(p, e: float, test: PendulumTest) -> np.ndarray:
         return np.full(out.shape, np.nan)
     out[0], out[1], out[3] = math.log(M_e), p[1] + math.log(M_e) - p[0], e
     return out
-
-
-def restitution_range(p, test: PendulumTest, t: np.ndarray) -> tuple[float, float] | None:
-    """(e_min, 1): the restitutions that explain the record as well as p does, when the
-    model at p has one impact within the record (else None): e from 1 down to where the
-    pendulum would come back (bisection to 1e-4)."""
-    span = float(t[-1] - p[4])
-    if span <= 0 or not one_impact(p, test, span):
-        return None
-    m, M = test.impactor_mass, math.exp(p[0])
-    lo = max(0.0, (m + 1e-2) * (1.0 + p[3]) / (M + m) - 1.0 + 1e-9)  # M_T >= 0.01 kg
-    hi = float(p[3])
-    if one_impact(on_ridge(p, lo, test), test, span):
-        return lo, 1.0
-    while hi - lo > 1e-4:
-        mid = 0.5 * (lo + hi)
-        if one_impact(on_ridge(p, mid, test), test, span):
-            hi = mid
-        else:
-            lo = mid
-    return hi, 1.0

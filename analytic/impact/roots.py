@@ -82,7 +82,14 @@ def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max:
     while ta < t_max:
         if ta > 0.0 and local_bounds is not None:
             b2 = min(bounds[2], local_bounds(ta)[2])
-        tb = min(t_max, ta + step)
+        h = step
+        if ta > 0.0 and fa > 0.0 and b2 > 0.0:
+            # f >= fa - |f'(ta)| h - b2 h^2 / 2 is not known without f', but the certificate
+            # min(fa, fb) > b2 h^2 / 8 holds for a step up to sqrt(8 fa / b2) if fb stays
+            # near fa: a far gap (the pendulum swung away) is crossed in long steps, and a
+            # step too long is bisected by the search as before
+            h = max(step, 0.9 * math.sqrt(8.0 * fa / b2))
+        tb = min(t_max, ta + h)
         fb = f(tb)
         root = search(ta, tb, fa, fb, 0)
         if root is not None:

@@ -274,9 +274,13 @@ class ImpactSolution:
         return self.model.reduced_mass * self.model.impact_speed ** 2 / 2.0
 
 
-def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool = False
-                  ) -> ImpactSolution:
-    """Run the impact process of eqs 12-35 from the first contact to ``t_end`` (s)."""
+def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool = False,
+                  max_events: int | None = None) -> ImpactSolution:
+    """Run the impact process of eqs 12-35 from the first contact to ``t_end`` (s).
+    ``max_events``: a budget of events (impacts, flights, moving together) past which the
+    run is refused with SimulationDiverged (a record fit's model far from any tree: a
+    0.01 kg trunk bouncing off the pendulum a million times), instead of the guard's
+    RuntimeError at a million."""
     if not (t_end > 0 and math.isfinite(t_end)):
         raise ValueError(f"t_end = {t_end!r} s: must be a finite positive number")
     M, m = model.dynamic_mass, model.impactor_mass
@@ -303,7 +307,8 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
     free_order = 1
     chatter = 0  # impacts since the bodies last moved together or started
     t_last, stalled = -1.0, 0  # events in a row that did not advance time
-    for _ in range(_MAX_EVENTS):
+    budget = _MAX_EVENTS if max_events is None else min(max_events, _MAX_EVENTS)
+    for _ in range(budget):
         if t >= t_end:
             break
         stalled = stalled + 1 if t <= t_last else 0
@@ -439,7 +444,10 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             # the gap opens as -N' t^3 / (6 mu) (order 3), whatever round-off left in g2
             mode, free_order = "free", 3
             continue
-    else:  # pragma: no cover - only reached through a bug
+    else:  # the budget given ran out (a record fit's model far off), else a bug
+        if max_events is not None:
+            raise SimulationDiverged(f"exact solver: more than {budget} events before "
+                                     f"t_end = {t_end:.4g} s (the budget given)")
         raise RuntimeError(f"impact solver: more than {_MAX_EVENTS} events before t_end")
     return sol
 
