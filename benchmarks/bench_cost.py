@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import os
 import platform
+import statistics
 import subprocess
 import sys
 import time

@@ -453,12 +453,11 @@ def _install_budget(max_seconds) -> dict:
     and long runs' progress on stderr; what to restore afterwards (main() may be called from
     Python)."""
     import os
+    import warnings
 
     from treeimpact.analytic import budget
 
     from .progress import Progress
-
-    import warnings
 
     name = budget.VARIABLES["seconds"]
     restore = {"environment": (name, os.environ.get(name)), "reporter": budget._REPORTER,

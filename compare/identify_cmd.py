@@ -104,14 +104,14 @@ def _check_plot_path(path: str) -> None:
 def run(args) -> int:
     import sys
 
+    import numpy as np
+
     from treeimpact.analytic.identify.record_fit import (
         DAMPING_RATIO_FORMULAS,
         fit_record,
         read_record,
     )
     from treeimpact.analytic.results import to_jsonable
-
-    import numpy as np
 
     from .backends import quiet_stdout
 
