@@ -62,15 +62,17 @@ def main(argv=None) -> int:
         _table(f"pytest compare (exit {int(code)})", total,
                conf.SESSION_CACHE.timings() if conf is not None else {})
 
-    cache = runs.RunCache()
-    out = args.out or tempfile.mkdtemp(prefix="treeimpact-report-")
-    t0 = time.perf_counter()
-    paths = write_report(out, runs=cache)
-    total = time.perf_counter() - t0
     import json
 
-    wall = json.loads(Path(paths["json"]).read_text())["runs"]["wall_s"]
-    _table(f"treeimpact report (default, 3 shipped scenarios) -> {paths['html']}", total,
+    cache = runs.RunCache()
+    with tempfile.TemporaryDirectory(prefix="treeimpact-report-") as tmp:  # gone after; kept
+        out = args.out or tmp  # only where --out says
+        t0 = time.perf_counter()
+        paths = write_report(out, runs=cache)
+        total = time.perf_counter() - t0
+        wall = json.loads(Path(paths["json"]).read_text())["runs"]["wall_s"]
+    where = paths["html"] if args.out else "a temporary folder, removed (--out DIR keeps it)"
+    _table(f"treeimpact report (default, 3 shipped scenarios) -> {where}", total,
            cache.timings(), {k: v for k, v in wall.items() if v is not None})
     return 0
 

@@ -3,10 +3,8 @@ their own inertias, the world configured for a setup, and the engine's chain mat
 
 from __future__ import annotations
 
-import atexit
 import math
 import os
-import shutil
 import tempfile
 from dataclasses import dataclass
 
@@ -22,7 +20,7 @@ RESTITUTION_THRESHOLD_FRACTION = 1e-3  # of u1: slower bounces are plastic (newt
 JOINT_VELOCITY_LIMIT = 1e6  # rad/s or m/s: Bullet clamps joint speeds here (default 100)
 
 
-_CLIENT = {"id": None, "dir": None, "files": {}}
+_CLIENT = {"id": None}
 
 
 def _import_pybullet():
@@ -70,24 +68,22 @@ def load(p, cid, text: str) -> int:
     100 rad/s or m/s, reached by the chain's segments at impact) is raised to
     :data:`JOINT_VELOCITY_LIMIT`; a run that reaches it is reported as diverged.
     """
-    body = p.loadURDF(_urdf_file(text), useFixedBase=True,
-                      flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+    body = load_urdf(p, cid, text, useFixedBase=True)
     for j in range(p.getNumJoints(body, physicsClientId=cid)):
         p.changeDynamics(body, j, maxJointVelocity=JOINT_VELOCITY_LIMIT, physicsClientId=cid)
     return body
 
 
-def _urdf_file(text: str) -> str:
-    files = _CLIENT["files"]
-    if text not in files:
-        if _CLIENT["dir"] is None:  # removed when the process exits: no files left behind
-            _CLIENT["dir"] = tempfile.mkdtemp(prefix="bullet_models_")
-            atexit.register(shutil.rmtree, _CLIENT["dir"], ignore_errors=True)
-        path = os.path.join(_CLIENT["dir"], f"model_{len(files)}.urdf")
-        with open(path, "w") as fh:
+def load_urdf(p, cid, text: str, **options) -> int:
+    """``p.loadURDF`` of URDF ``text`` with the file's own inertias: loadURDF reads a file,
+    written to a temporary folder that is gone once loaded (in any process, a pool's worker
+    too: nothing left behind)."""
+    with tempfile.TemporaryDirectory(prefix="bullet_models_") as folder:
+        path = os.path.join(folder, "model.urdf")
+        with open(path, "w", encoding="utf-8") as fh:
             fh.write(text)
-        files[text] = path
-    return files[text]
+        return p.loadURDF(path, flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid,
+                          **options)
 
 
 @dataclass
@@ -190,8 +186,7 @@ def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: flo
     for m, x in ((mass, -SPHERE_RADIUS), (other_mass, SPHERE_RADIUS)):
         fixed = not math.isfinite(m)
         text = _urdf.sphere_urdf(1.0 if fixed else m, SPHERE_RADIUS)
-        body = p.loadURDF(_urdf_file(text), basePosition=[x, 0.0, 0.0], useFixedBase=fixed,
-                          flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+        body = load_urdf(p, cid, text, basePosition=[x, 0.0, 0.0], useFixedBase=fixed)
         p.changeDynamics(body, -1, contactStiffness=stiffness, contactDamping=damping,
                          physicsClientId=cid, **(LINK_FLAGS if flags else {}))
         bodies.append(body)

@@ -70,7 +70,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     with _sweep_dir(out_dir) as folder:  # the tables are read before a temporary one goes
         specs = [scan_sweep(s, folder / f"contact-scan-{s.name}") for s in scens] + [
             identification_spec(s, folder / f"identification-vs-e-{s.name}") for s in scens]
-        done = run_sweeps(specs, progress=progress or False)
+        done = run_sweeps(specs, progress=None if progress else False)  # a bar on a terminal only
     scans = {s.name: scan_result(r.table) for s, r in zip(scens, done)}
     e_tables = {s.name: r.table for s, r in zip(scens, done[len(scens):])}
     scan_figure = sink(contact_scan_figure(scans), "contact-scan") if sink else None
