@@ -8,6 +8,7 @@ and :meth:`to_json` (every number the page shows, machine-readable).
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import jinja2
@@ -47,6 +48,41 @@ def frac(v, digits: int = 0) -> str:
     return f"{100 * v:.{digits}f} %"
 
 
+def short(v, digits: int = 3) -> str:
+    """A number as a reader needs it: ``digits`` significant digits, powers of ten as
+    3.06e-4 (no padded exponent); ints, words and None as they are."""
+    if isinstance(v, bool) or not isinstance(v, float):
+        return "n/a" if v is None else str(v)
+    if not math.isfinite(v):
+        return "n/a"
+    if v != 0 and (abs(v) >= 1e5 or abs(v) < 1e-2):
+        mantissa, exp = f"{v:.{digits - 1}e}".split("e")
+        if "." in mantissa:
+            mantissa = mantissa.rstrip("0").rstrip(".")
+        return f"{mantissa}e{int(exp)}"
+    return f"{v:.{digits}g}"
+
+
+#: A decimal number of more digits than a reader needs, in free text (a reason, an error).
+_LONG_NUMBER = re.compile(r"(?<![\w.])[-+]?\d+\.\d{5,}(?:[eE][-+]?\d+)?(?![\w.])")
+
+
+def tidy(text) -> str:
+    """Free text (a reason, an error) with every long decimal number rounded to 4
+    significant digits: 'a1 = -1.4782888969718704 m/s' reads 'a1 = -1.478 m/s'."""
+    if text is None:
+        return ""
+    return _LONG_NUMBER.sub(lambda m: short(float(m.group(0)), 4), str(text))
+
+
+def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> str:
+    """A run's options as 'name=value unit', sorted, numbers rounded (:func:`short`)."""
+    units = units or {}
+    return sep.join(f"{k}={short(v)}" + (f" {units[k]}" if units.get(k) not in (None, "", "1")
+                                           else "")
+                    for k, v in sorted(options.items()))
+
+
 _ENV = None
 
 
@@ -60,6 +96,8 @@ def environment() -> jinja2.Environment:
         _ENV.filters["num"] = num
         _ENV.filters["pct"] = pct
         _ENV.filters["frac"] = frac
+        _ENV.filters["short"] = short
+        _ENV.filters["tidy"] = tidy
     return _ENV
 
 
