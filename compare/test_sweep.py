@@ -7,6 +7,7 @@ file stays within a few seconds on a busy 2-core machine.
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -612,3 +613,23 @@ def test_map_labels_fit_their_cells_and_ticks_read_in_the_texts_units():
         assert [lbl.get_text() for lbl in ax.get_xticklabels()][:2] == ["0.2", "0.386"]
         assert ax.get_xlabel() == "contact duration (ms)"
     assert {lbl.get_text() for lbl in cb.ax.get_yticklabels()} >= {"+100 %", "0", "-10 %"}
+
+
+def test_every_map_of_a_study_shares_one_colour_scale_and_letters_only_where_shown(tmp_path):
+    """Validity and identification maps of one study on one colour scale; the study's text
+    lists the rung letters a map prints, none when the maps show steps (no letters)."""
+    from treeimpact.compare.sweep.maps import DEFAULT_TOLERANCE, colour_scale
+    from treeimpact.compare.sweep.study import write_study
+
+    res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"],
+                    tmp_path / "s", backends=["analytic", "soft"], workers=0, progress=False)
+    scales = [m["scale"] for m in validity_maps(res.table, tmp_path / "v", value="step")
+              + validity_maps(res.table, tmp_path / "r")
+              + identification_maps(res.table, tmp_path / "i")]
+    assert len(scales) >= 3 and all(s == colour_scale(DEFAULT_TOLERANCE) for s in scales)
+    step = write_study(tmp_path / "step", {"validity": res.out}, value="step")
+    assert json.loads(step["json"].read_text())["rung_letters"] == []
+    assert "Letters on the maps" not in step["html"].read_text()
+    rel = write_study(tmp_path / "rel", {"validity": res.out}, value="rel")
+    letters = json.loads(rel["json"].read_text())["rung_letters"]
+    assert [x["letter"] for x in letters] == ["C"]  # soft vs analytic: the contact model

@@ -78,9 +78,36 @@ def tidy(text) -> str:
 def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> str:
     """A run's options as 'name=value unit', sorted, numbers rounded (:func:`short`)."""
     units = units or {}
+    if not options:
+        return "defaults"
     return sep.join(f"{k}={short(v)}" + (f" {units[k]}" if units.get(k) not in (None, "", "1")
                                            else "")
                     for k, v in sorted(options.items()))
+
+
+def input_name(key: str) -> str:
+    """An unmeasured input of the sensitivity study in words ('pad stiffness' for
+    log10_pad_duration), as its figure labels it; the key if unknown."""
+    from treeimpact.compare.sweep.maps import _INPUT_LABELS
+
+    return _INPUT_LABELS.get(key, key).replace("\n", " ")
+
+
+def output_name(key: str) -> str:
+    """An output of the sensitivity study in words ('x_max gap' for gap.x_max)."""
+    from treeimpact.compare.sweep.maps import _OUTPUT_LABELS
+
+    return _OUTPUT_LABELS.get(key, key)
+
+
+def interval(low, high, digits: int = 3) -> str:
+    """A 95 % interval 'low to high' with as many significant digits (3 to 6) as it takes
+    for its ends to differ: '109.93 to 110.05', not '110 to 110'."""
+    for d in range(digits, 7):
+        a, b = num(low, d), num(high, d)
+        if a != b:
+            break
+    return f"{a} to {b}"
 
 
 _ENV = None
@@ -98,6 +125,9 @@ def environment() -> jinja2.Environment:
         _ENV.filters["frac"] = frac
         _ENV.filters["short"] = short
         _ENV.filters["tidy"] = tidy
+        _ENV.filters["input_name"] = input_name
+        _ENV.filters["output_name"] = output_name
+        _ENV.globals["interval"] = interval
     return _ENV
 
 

@@ -223,7 +223,8 @@ def displacement_figure(ladder) -> Figure:
         kax = low.add_subplot(grid[r, c:])
         kax.set_axis_off()
         kax.legend(handles=key, loc="center left", frameon=False, fontsize=8.5,
-                   title="one scale per row group:\n1-DOF trunks, flexible trunks",
+                   title="y scales: one for the 1-DOF trunks (first row),\n"
+                         "one for the flexible trunks (the rows below)",
                    title_fontsize=8.5)
     else:
         low.legend(handles=key, loc="outside lower center", ncol=3, frameon=False,

@@ -503,13 +503,16 @@ MAPPED_IDENT_KEYS = ("M_T", "K_T", "xi")
 def _why_not_identified(sub) -> str:
     """The cells of one identification map without a value, counted by their reason (the
     last clause of the procedure's message), for the caption."""
+    import re
+
     errors = sub.loc[sub["rel"].isna(), "id_error"] if "id_error" in sub else []
     counts: dict = {}
     for text in errors:
-        if isinstance(text, str) and text:
-            key = text.rsplit(": ", 1)[-1].strip()
+        if isinstance(text, str) and text:  # the clause without its numbers: one reason
+            key = re.sub(r"\s*=\s*[-+]?[\d.]+(?:e[-+]?\d+)?(?:\s*(?:m/s|1/s|rad/s|m|s))?",
+                         "", text.rsplit(": ", 1)[-1].strip())
             counts[key] = counts.get(key, 0) + 1
-    return "; ".join(f"{n} {why!s}" for why, n in sorted(counts.items(), key=lambda kv: -kv[1]))
+    return "; ".join(f"{why} ({n})" for why, n in sorted(counts.items(), key=lambda kv: -kv[1]))
 
 
 def identification_maps(df, figdir, *, prefix: str = "identification",
@@ -583,7 +586,8 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
                                 + (f" {missing} of {len(first)} cells have no value (grey; "
                                    f"n/i: not identifiable, the record breaks the procedure's "
                                    f"premises; failed: the procedure stopped)"
-                                   + (f": {why}." if why else ".") if missing else "")),
+                                   + (f"; cells by reason: {why}." if why else ".")
+                                   if missing else "")),
                     "summary": summary, "scale": scale if b else None})
     return out
 
