@@ -337,8 +337,15 @@ def summarise_sampling(rows: list[dict]) -> list[dict]:
 def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
     """One figure per method: M_T, K_T and xi errors (%) over e x crown ratio, one row of
     panels per rung; cells print the value, grey cells say why there is none."""
-    from matplotlib.colors import SymLogNorm
     from matplotlib.figure import Figure
+
+    from treeimpact.compare.sweep.maps import (
+        DEFAULT_TOLERANCE,
+        _ink,
+        _norm,
+        _percent_colorbar,
+        colour_scale,
+    )
 
     rungs = list(dict.fromkeys(r["rung"] for r in rows))
     es = sorted({r["restitution"] for r in rows})
@@ -346,7 +353,8 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
     fig = Figure(figsize=(3.4 * len(PARAMETERS) + 1.2, 2.6 * len(rungs) + 0.6),
                  layout="constrained")
     axes = fig.subplots(len(rungs), len(PARAMETERS), squeeze=False)
-    norm = SymLogNorm(linthresh=0.01, linscale=0.5, vmin=-1.0, vmax=1.0)
+    scale = colour_scale(DEFAULT_TOLERANCE)  # the study's maps' one colour scale
+    norm = _norm(scale)
     im = None
     for i, rung in enumerate(rungs):
         for j, k in enumerate(PARAMETERS):
@@ -367,14 +375,16 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
                         r.get(f"{method}_error", r.get("error", ""))) else "failed"
             cmap = __import__("matplotlib").colormaps["RdBu_r"].with_extremes(bad="0.88")
             im = ax.pcolormesh(np.arange(len(es) + 1) - 0.5, np.arange(len(cs) + 1) - 0.5,
-                               np.ma.masked_invalid(np.clip(Z, -1, 1)), cmap=cmap, norm=norm)
+                               np.ma.masked_invalid(np.clip(Z, scale["vmin"], scale["vmax"])),
+                               cmap=cmap, norm=norm)
             for b in range(len(cs)):
                 for a in range(len(es)):
                     if np.isfinite(Z[b, a]):
                         v = Z[b, a]
                         ax.text(a, b, f"{v:+.0%}" if abs(v) >= 0.1 else f"{v:+.1%}",
                                 ha="center", va="center", fontsize=8,
-                                color="k" if abs(v) < 0.5 else "w")
+                                color=_ink(cmap, norm, np.clip(v, scale["vmin"],
+                                                               scale["vmax"])))
                     else:
                         ax.text(a, b, why.get((b, a), "n/a"), ha="center", va="center",
                                 fontsize=7, color="0.3")
@@ -387,7 +397,8 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
                 ax.set_ylabel("crown ratio m_f / m_trunk (1)", fontsize=9)
     label = "full-record fit" if method == "fit" else "paper's procedure (eqs 39-48)"
     cb = fig.colorbar(im, ax=axes, shrink=0.6, extend="both")
-    cb.set_label("(identified - true) / true (saturates at +-100 %)", fontsize=9)
+    _percent_colorbar(cb, scale, "(identified - true) / true (%)\n"
+                                 f"saturates at +-{scale['vmax']:.0%}")
     fig.suptitle(f"Identification error, {label}: {RATE / 1e3:g} kHz records with "
                  f"{100 * NOISE:g} % noise", fontsize=10)
     fig.savefig(path, dpi=100)

@@ -226,3 +226,153 @@ def test_a_one_impact_record_shows_ranges_not_numbers(tmp_path):
     lo, hi = analytic["ranges"]["M_T"]
     assert lo <= two_body_model(scen).dynamic_mass <= hi, (row, lo, hi)
     assert analytic["ranges"]["e"][0] <= 0.3 <= analytic["ranges"]["e"][1]
+
+
+def _parents_of_tables(html: str) -> list:
+    """(tag, class) of the element each <table> of ``html`` opens in."""
+    from html.parser import HTMLParser
+
+    class Tables(HTMLParser):
+        VOID = {"br", "img", "meta", "hr", "input", "link", "col", "wbr"}
+
+        def __init__(self):
+            super().__init__()
+            self.stack, self.parents = [], []
+
+        def handle_starttag(self, tag, attrs):
+            if tag == "table":
+                self.parents.append(self.stack[-1] if self.stack else None)
+            if tag not in self.VOID:
+                self.stack.append((tag, dict(attrs).get("class")))
+
+        def handle_endtag(self, tag):
+            while self.stack:
+                if self.stack.pop()[0] == tag:
+                    break
+
+    parser = Tables()
+    parser.feed(html)
+    return parser.parents
+
+
+def test_every_table_scrolls_inside_its_own_box(report):
+    """A table wider than the page (the ladder, the answer) scrolls in its box, never the
+    page: every <table> sits directly in a div.scroll whose overflow-x is auto."""
+    paths, _ = report
+    html = paths["html"].read_text()
+    parents = _parents_of_tables(html)
+    assert len(parents) >= 10
+    assert all(p == ("div", "scroll") for p in parents), parents
+    assert re.search(r"\.scroll\s*\{[^}]*overflow-x:\s*auto", html)
+
+
+def test_the_run_list_is_short_rounded_and_failures_first(report):
+    """Runs without a result first, with their reasons; every run in a collapsed list;
+    options rounded to 3 significant digits with their units, reasons to 4."""
+    from treeimpact.compare.report.runlog import run_rows
+    from treeimpact.compare.runs import OK, SKIPPED, Run
+
+    rows = run_rows([Run("tree", "soft", {"contact_duration": 0.00030583481301971617,
+                                          "restitution": 0.1}, OK, wall_s=0.1),
+                     Run("tree", "analytic", {}, OK, wall_s=0.01),
+                     Run("tree", "no-such-engine", {"segments": 12}, SKIPPED,
+                         reason="identification failed: a1 = -1.4782888969718704 m/s")])
+    assert [r["backend"] for r in rows] == ["no-such-engine", "analytic", "soft"]
+    assert rows[0]["reason"] == "identification failed: a1 = -1.478 m/s"
+    assert rows[2]["options"] == "contact_duration=3.06e-4 s, restitution=0.1"
+    assert rows[1]["options"] == "defaults"
+    paths, cache = report
+    html = paths["html"].read_text()
+    runs = html[html.index('id="runs"'):]
+    assert '<details class="runs">' in runs and "<details class=\"runs\" open" not in runs
+    failed = runs[runs.index("Runs without a result"):runs.index('<details class="runs">')]
+    assert failed.count("<tr") == 1 + sum(not r.ok for r in cache)  # header + each failure
+    listed = runs[runs.index('<details class="runs">'):]
+    first_ok = listed.index('<tr class="">')
+    assert listed.rfind('<tr class="skip">') < first_ok  # the failures first
+
+
+def test_not_compared_is_said_once_per_reason_in_plain_words(report):
+    """'Not compared' groups the tolerance file's undefined entries once per reason and
+    names each comparison in words, never by its key (convention, engines.pendulum)."""
+    from treeimpact.compare.report.scenario import not_compared_lines
+    from treeimpact.compare.rungs import RungKind
+
+    lines = not_compared_lines([
+        {"kind": "convention", "metrics": ["T0", "V"], "reason": "moving-together point"},
+        {"kind": "engines.pendulum", "metrics": ["T0", "V"], "reason": "moving-together point"},
+        {"kind": "beam", "metrics": ["theta_b"], "reason": "late re-contacts"}])
+    assert len(lines) == 2 and lines[0]["metrics"] == ["T0", "V"]
+    assert lines[0]["steps"] == ("restitution convention (c_c for e on the clamp's mass); "
+                                 "the engines against each other with the full pendulum")
+    assert lines[0]["reason"] == "Moving-together point"
+    paths, _ = report
+    html = paths["html"].read_text()
+    part = html[html.index("<h3>Not compared</h3>"):]
+    part = part[:part.index("</ul>")]
+    items = re.findall(r"<li><b>[^<]*</b>, at ([^<]*?): ([^<]*)</li>", part)
+    assert items and len(items) == part.count("<li>")
+    keys = {k.value for k in RungKind} | {f"engines.{k.value}" for k in RungKind}
+    for steps, reason in items:
+        assert not set(re.split(r"; ", steps)) & keys, steps
+        assert "engines." not in steps and "_" not in steps.replace("c_c", "")
+    assert len(set(items)) == len(items)  # each comparison list and reason said once
+
+
+def test_a_fit_value_the_record_does_not_fix_is_shown_as_such(report):
+    """open-center's soft record: the fit explains it, but its e (3e-9, at the bound) has a
+    95 % interval spanning all of [0, 1]: the page says 'not fixed by the record', not a
+    number; fixed values show their interval where it is not negligible."""
+    from treeimpact.compare.report.scenario import fit_cells
+
+    cells = fit_cells({"values": {"M_T": 87.0, "K_T": 1.2e6, "C_T": 1.2e4, "e": 3.5e-9},
+                       "errors": {"M_T": 0.001, "K_T": 0.0, "C_T": 0.0},
+                       "ranges": {},
+                       "intervals": {"M_T": (60.0, 109.0), "K_T": (1.19999e6, 1.20001e6),
+                                     "C_T": (1.1e4, 1.3e4), "e": (-2.4e5, 2.4e5)}},
+                      {"M_T": 87.0, "K_T": 1.2e6, "C_T": 1.2e4, "e": 0.1})
+    by = {c["metric"]: c for c in cells}
+    assert by["e"]["fixed"] is False and by["e"]["value"] is None
+    assert (by["e"]["low"], by["e"]["high"]) == (0.0, 1.0)
+    assert by["M_T"]["fixed"] and by["M_T"]["show_interval"]
+    assert not by["K_T"]["show_interval"]  # 2e-5 of the value: nothing to show
+    paths, _ = report
+    data = json.loads(paths["json"].read_text())
+    soft = next(f for f in data["scenarios"]["open-center"]["record_fits"]
+                if f["rung"] == "soft")
+    lo, hi = soft["intervals"]["e"]
+    assert soft["explained"] and lo <= 0.0 and hi >= 1.0
+    row = next(line for line in paths["md"].read_text().splitlines()
+               if line.startswith("| soft |") and "not fixed by the record" in line)
+    assert f"{soft['values']['e']:.2g}" not in row
+    html = paths["html"].read_text()
+    assert "not fixed by the record<span" in html and "| truth |" in paths["md"].read_text()
+
+
+def test_force_and_displacement_figures_tell_the_rungs_apart(ladder_of):
+    """The force: one panel per rung over one time span, linear axes, the Newton impulses
+    inside their axes; the displacement: one difference panel per rung, the 1-DOF trunks
+    on one y scale and the flexible trunks on another."""
+    from treeimpact.compare.report import figures
+    from treeimpact.compare.rungs import RungKind
+
+    ladder = ladder_of("central-leader")
+    ok = [r for r in ladder.rungs if r.ok]
+    fig = figures.force_figure(ladder)
+    axes = fig.axes
+    assert len(axes) == len(ok)  # the Newton impulses and one panel per soft-contact rung
+    assert {ax.get_yscale() for ax in axes} == {"linear"}
+    assert len({ax.get_xlim() for ax in axes}) == 1  # one time span
+    newton = axes[0]
+    top = newton.get_ylim()[1]
+    assert all(max(line.get_ydata(), default=0) < top for line in newton.get_lines())
+    fig = figures.displacement_figure(ladder)
+    panels = [ax for ax in fig.axes if ax.axison and ax.get_title().split(":")[0] in
+              {r.rung.id for r in ok}]
+    assert len(panels) == len([r for r in ok if r.rung.kind != RungKind.NEWTON])
+    sdof = {ax.get_ylim() for ax in panels if ax.get_title().split(":")[0] in
+            {r.rung.id for r in ok if r.rung.kind in (RungKind.CONTACT, RungKind.ENGINE)}}
+    flexible = {ax.get_ylim() for ax in panels} - sdof
+    assert len(sdof) == 1 and len(flexible) == 1
+    (s_lo, s_hi), (f_lo, f_hi) = sdof.pop(), flexible.pop()
+    assert s_hi - s_lo < 0.2 * (f_hi - f_lo)  # the 1-DOF trunks' differences stay visible

@@ -7,8 +7,10 @@ file stays within a few seconds on a busy 2-core machine.
 
 from __future__ import annotations
 
+import json
 import math
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -548,7 +550,7 @@ def test_map_cells_print_their_values_outline_the_tolerance_and_say_why_na():
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
-    from treeimpact.compare.sweep.maps import _extend, _heat
+    from treeimpact.compare.sweep.maps import _extend, _heat, _validity_caption
 
     matplotlib.use("Agg")
     cell = pd.DataFrame({"restitution": [0.1, 0.5, 0.9], "crown_ratio": [0.0, 0.0, 0.0],
@@ -557,9 +559,77 @@ def test_map_cells_print_their_values_outline_the_tolerance_and_say_why_na():
     ax = Figure().add_subplot()
     _heat(ax, cell, "restitution", "crown_ratio", "rel", 0.05, "x_max", vmax=1.0)
     texts = [t.get_text() for t in ax.texts]
-    assert texts == ["+1%", "+300%", "n/a\npaper model:\nno value"]
+    # why, in a word the cell holds; the caption spells the words out
+    assert texts == ["+1%", "+300%", "no ref"]
+    assert "no ref: the paper's model has none" in _validity_caption("x", "restitution",
+                                                                       "crown_ratio", 0.05)
     outlined = [p.get_xy() for p in ax.patches if isinstance(p, Rectangle)]
     assert outlined == [(-0.5, -0.5)]  # only the 1 % cell, on the grid's own cell
     assert _extend(cell["rel"], 1.0) == "max" and _extend(cell["rel"], 5.0) == "neither"
     assert all(t.get_fontsize() >= 7 for t in ax.texts)
     assert all(lbl.get_fontsize() >= 9 for lbl in ax.get_xticklabels())
+
+
+def test_map_labels_fit_their_cells_and_ticks_read_in_the_texts_units():
+    """An 8 x 6 map of the default study: every printed value and every 'why no value'
+    word lies inside its cell; a contact duration reads in ms, as the text gives it; the
+    colour bar reads in %, as the cells."""
+    import itertools
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from treeimpact.compare.sweep.maps import (
+        _grid_figure,
+        _heat,
+        _percent_colorbar,
+        colour_scale,
+    )
+
+    durations = np.geomspace(2e-4, 2e-2, 8)
+    crowns = np.linspace(0, 4, 6)
+    rows = []
+    for n, (d, c) in enumerate(itertools.product(durations, crowns)):
+        failed = n % 5 == 0
+        rows.append({"contact_duration": d, "crown_ratio": c,
+                     "rel": math.nan if failed else (-1) ** n * 2.345,
+                     "id_error": "not identifiable: xi = -0.8: no decay" if failed else None})
+    cell = pd.DataFrame(rows)
+    scale = colour_scale(0.05)
+    fig, axes = _grid_figure(3, 8, 6)
+    FigureCanvasAgg(fig)
+    for ax in axes:
+        im = _heat(ax, cell, "contact_duration", "crown_ratio", "rel", 0.05, "M_T",
+                   scale=scale)
+    cb = fig.colorbar(im, ax=axes)
+    _percent_colorbar(cb, scale, "(identified - true) / true (%)")
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    for ax in axes:
+        (x0, y0), (x1, y1) = ax.transData.transform([(0, 0), (1, 1)])
+        width, height = abs(x1 - x0), abs(y1 - y0)
+        for t in ax.texts:
+            box = t.get_window_extent(renderer)
+            assert box.width < width and box.height < height, (t.get_text(), box, width)
+        assert [lbl.get_text() for lbl in ax.get_xticklabels()][:2] == ["0.2", "0.386"]
+        assert ax.get_xlabel() == "contact duration (ms)"
+    assert {lbl.get_text() for lbl in cb.ax.get_yticklabels()} >= {"+100 %", "0", "-10 %"}
+
+
+def test_every_map_of_a_study_shares_one_colour_scale_and_letters_only_where_shown(tmp_path):
+    """Validity and identification maps of one study on one colour scale; the study's text
+    lists the rung letters a map prints, none when the maps show steps (no letters)."""
+    from treeimpact.compare.sweep.maps import DEFAULT_TOLERANCE, colour_scale
+    from treeimpact.compare.sweep.study import write_study
+
+    res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"],
+                    tmp_path / "s", backends=["analytic", "soft"], workers=0, progress=False)
+    scales = [m["scale"] for m in validity_maps(res.table, tmp_path / "v", value="step")
+              + validity_maps(res.table, tmp_path / "r")
+              + identification_maps(res.table, tmp_path / "i")]
+    assert len(scales) >= 3 and all(s == colour_scale(DEFAULT_TOLERANCE) for s in scales)
+    step = write_study(tmp_path / "step", {"validity": res.out}, value="step")
+    assert json.loads(step["json"].read_text())["rung_letters"] == []
+    assert "Letters on the maps" not in step["html"].read_text()
+    rel = write_study(tmp_path / "rel", {"validity": res.out}, value="rel")
+    letters = json.loads(rel["json"].read_text())["rung_letters"]
+    assert [x["letter"] for x in letters] == ["C"]  # soft vs analytic: the contact model

@@ -9,6 +9,8 @@ Sections, one module each, each a class with a jinja2 template under ``templates
 * :mod:`.studies` - one per model-validity study directory given;
 * :mod:`.runlog` - every backend run, its status (skips with their reasons) and wall time.
 
+How the page is laid out (tables in scroll boxes, the run list, the figures): docs/report.md.
+
 The runs come from a :class:`compare.runs.RunCache` (``runs``), by default the session
 cache that ``pytest compare`` fills, so ``pytest compare --report DIR`` reuses its runs.
 """

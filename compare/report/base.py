@@ -8,6 +8,7 @@ and :meth:`to_json` (every number the page shows, machine-readable).
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import jinja2
@@ -47,6 +48,68 @@ def frac(v, digits: int = 0) -> str:
     return f"{100 * v:.{digits}f} %"
 
 
+def short(v, digits: int = 3) -> str:
+    """A number as a reader needs it: ``digits`` significant digits, powers of ten as
+    3.06e-4 (no padded exponent); ints, words and None as they are."""
+    if isinstance(v, bool) or not isinstance(v, float):
+        return "n/a" if v is None else str(v)
+    if not math.isfinite(v):
+        return "n/a"
+    if v != 0 and (abs(v) >= 1e5 or abs(v) < 1e-2):
+        mantissa, exp = f"{v:.{digits - 1}e}".split("e")
+        if "." in mantissa:
+            mantissa = mantissa.rstrip("0").rstrip(".")
+        return f"{mantissa}e{int(exp)}"
+    return f"{v:.{digits}g}"
+
+
+#: A decimal number of more digits than a reader needs, in free text (a reason, an error).
+_LONG_NUMBER = re.compile(r"(?<![\w.])[-+]?\d+\.\d{5,}(?:[eE][-+]?\d+)?(?![\w.])")
+
+
+def tidy(text) -> str:
+    """Free text (a reason, an error) with every long decimal number rounded to 4
+    significant digits: 'a1 = -1.4782888969718704 m/s' reads 'a1 = -1.478 m/s'."""
+    if text is None:
+        return ""
+    return _LONG_NUMBER.sub(lambda m: short(float(m.group(0)), 4), str(text))
+
+
+def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> str:
+    """A run's options as 'name=value unit', sorted, numbers rounded (:func:`short`)."""
+    units = units or {}
+    if not options:
+        return "defaults"
+    return sep.join(f"{k}={short(v)}" + (f" {units[k]}" if units.get(k) not in (None, "", "1")
+                                           else "")
+                    for k, v in sorted(options.items()))
+
+
+def input_name(key: str) -> str:
+    """An unmeasured input of the sensitivity study in words ('pad stiffness' for
+    log10_pad_duration), as its figure labels it; the key if unknown."""
+    from treeimpact.compare.sweep.maps import _INPUT_LABELS
+
+    return _INPUT_LABELS.get(key, key).replace("\n", " ")
+
+
+def output_name(key: str) -> str:
+    """An output of the sensitivity study in words ('x_max gap' for gap.x_max)."""
+    from treeimpact.compare.sweep.maps import _OUTPUT_LABELS
+
+    return _OUTPUT_LABELS.get(key, key)
+
+
+def interval(low, high, digits: int = 3) -> str:
+    """A 95 % interval 'low to high' with as many significant digits (3 to 6) as it takes
+    for its ends to differ: '109.93 to 110.05', not '110 to 110'."""
+    for d in range(digits, 7):
+        a, b = num(low, d), num(high, d)
+        if a != b:
+            break
+    return f"{a} to {b}"
+
+
 _ENV = None
 
 
@@ -60,6 +123,11 @@ def environment() -> jinja2.Environment:
         _ENV.filters["num"] = num
         _ENV.filters["pct"] = pct
         _ENV.filters["frac"] = frac
+        _ENV.filters["short"] = short
+        _ENV.filters["tidy"] = tidy
+        _ENV.filters["input_name"] = input_name
+        _ENV.filters["output_name"] = output_name
+        _ENV.globals["interval"] = interval
     return _ENV
 
 

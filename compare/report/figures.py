@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -102,76 +103,203 @@ def _reference(ladder):
     return ref if ref.ok and ref.result.trajectory is not None else None
 
 
+def _family(rung) -> str:
+    """'sdof' for a rung whose trunk is one degree of freedom (the pad on M_T: soft, the
+    engines' slide joint), 'flexible' for the continuum and the hinged chains."""
+    return "sdof" if rung.kind in (RungKind.NEWTON, RungKind.CONTACT, RungKind.ENGINE) \
+        else "flexible"
+
+
+def _panel_grid(subfig, n: int, ncol: int, **kw) -> list:
+    """``n`` axes on a grid of ``ncol`` columns in ``subfig``, row by row; no unused axes."""
+    return _family_grid(subfig, [n], ncol, **kw)[0]
+
+
+def _family_grid(subfig, counts: list, ncol: int, **kw) -> tuple[list, list]:
+    """Axes for groups of ``counts`` panels on a grid of ``ncol`` columns, each group
+    starting a row of its own; returns (axes in order, the free cells (row, column) of the
+    grid). ``kw``: sharex/sharey=True shares the first axes'."""
+    rows = [math.ceil(n / ncol) for n in counts]
+    grid = subfig.add_gridspec(max(1, sum(rows)), ncol)
+    axes, free, row = [], [], 0
+    for n, nr in zip(counts, rows):
+        for i in range(n):
+            share = {k: axes[0] for k, v in kw.items() if v and axes}
+            axes.append(subfig.add_subplot(grid[row + i // ncol, i % ncol], **share))
+        free += [(row + nr - 1, c) for c in range(n - (nr - 1) * ncol, ncol)] if n else []
+        row += nr
+    return axes, [(grid, r, c) for r, c in free]
+
+
+def _same_ylim(axes, pad: float = 0.08, floor: float | None = None) -> None:
+    """One y range over ``axes`` (their data's), padded by ``pad`` of the span."""
+    lo = min(ax.dataLim.y0 for ax in axes)
+    hi = max(ax.dataLim.y1 for ax in axes)
+    if floor is not None:
+        lo = min(lo, floor)
+    span = (hi - lo) or max(abs(hi), 1e-9)
+    for ax in axes:
+        ax.set_ylim(lo - (0 if floor is not None and lo == floor else pad * span),
+                    hi + pad * span)
+
+
 def displacement_figure(ladder) -> Figure:
-    """x(t) of the impact point and y(t) of the pendulum for every rung (Figs 4, 5), and
-    below each the rung's difference from the paper's model (rung 1), in mm."""
-    fig, axes = plt.subplots(2, 2, figsize=(11, 6.2), sharex=True,
-                             gridspec_kw={"height_ratios": (3, 2)})
+    """x(t) of the impact point and y(t) of the pendulum for every rung (Figs 4, 5), then
+    one small panel per rung with its difference from the paper's model (rung 1), in mm:
+    x solid, y dashed; the 1-DOF trunks on one row and one scale, the flexible ones on
+    others and their own scale (the continuum's x difference in grey behind each flexible
+    rung, for comparison)."""
+    from matplotlib.lines import Line2D
+
     t_hi = _window_end(ladder)
     ref = _reference(ladder)
-    for r in _ok_rungs(ladder):
+    rungs = _ok_rungs(ladder)
+    others = [r for r in rungs if r is not ref] if ref is not None else []
+    groups = [[r for r in others if _family(r.rung) == f] for f in ("sdof", "flexible")]
+    groups = [g for g in groups if g]
+    ncol = 4
+    nrow = sum(math.ceil(len(g) / ncol) for g in groups)
+    fig = Figure(figsize=(11, 3.4 + 1.9 * nrow + (0.4 if nrow else 0)), layout="constrained")
+    if nrow:
+        top, low = fig.subfigures(2, 1, height_ratios=(3.4, 1.9 * nrow + 0.4))
+    else:
+        top, low = fig, None
+    ax_x, ax_y = top.subplots(1, 2, sharex=True)
+    for r in rungs:
+        tr = r.result.trajectory
+        sel = tr.t <= t_hi
+        st = rung_style(r.rung)
+        ax_x.plot(tr.t[sel] * 1e3, tr.x[sel] * 1e3, label=r.rung.id, **st)
+        ax_y.plot(tr.t[sel] * 1e3, tr.y[sel] * 1e3, **st)
+    ax_x.set(title="impact point of the trunk, x", ylabel="displacement x (mm)",
+             xlabel="time t (ms)")
+    ax_y.set(title="pendulum at the contact point, y", ylabel="displacement y (mm)",
+             xlabel="time t (ms)")
+    top.suptitle(f"{ladder.name}: displacement-time of every rung (the paper's Figs 4 and 5)",
+                 fontsize=11)
+    top.legend(*ax_x.get_legend_handles_labels(), loc="outside right upper", frameon=False,
+               fontsize=8.5)
+    if low is None:
+        return fig
+    rt = ref.result.trajectory
+    beam = next((r for r in rungs if r.rung.kind == RungKind.BEAM), None)
+    axes, free = _family_grid(low, [len(g) for g in groups], ncol, sharex=True)
+    panels = [r for g in groups for r in g]
+    for ax, r in zip(axes, panels):
         tr = r.result.trajectory
         sel = tr.t <= t_hi
         st = rung_style(r.rung)
         t_ms = tr.t[sel] * 1e3
-        for col, (z, zref) in enumerate(((tr.x, "x"), (tr.y, "y"))):
-            axes[0, col].plot(t_ms, z[sel] * 1e3, label=r.rung.id, **st)
-            if ref is not None and r is not ref:
-                rt = ref.result.trajectory
-                base = np.interp(tr.t[sel], rt.t, getattr(rt, zref))
-                axes[1, col].plot(t_ms, (z[sel] - base) * 1e3, **st)
-    axes[0, 0].set(title="impact point of the trunk, x", ylabel="displacement x (mm)")
-    axes[0, 1].set(title="pendulum at the contact point, y", ylabel="displacement y (mm)")
-    ref_id = ref.rung.id if ref is not None else "rung 1"
-    axes[1, 0].set(xlabel="time t (ms)", ylabel=f"x - x[{ref_id}] (mm)")
-    axes[1, 1].set(xlabel="time t (ms)", ylabel=f"y - y[{ref_id}] (mm)")
-    for ax in axes[1]:
-        ax.axhline(0.0, color="black", lw=0.8)
-    fig.suptitle(f"{ladder.name}: displacement-time of every rung (top) and its difference "
-                 f"from the paper's model (bottom)", y=1.0)
-    _legend_right(fig, *axes[0, 0].get_legend_handles_labels())
-    fig.tight_layout()
+        dx = (tr.x[sel] - np.interp(tr.t[sel], rt.t, rt.x)) * 1e3
+        dy = (tr.y[sel] - np.interp(tr.t[sel], rt.t, rt.y)) * 1e3
+        if _family(r.rung) == "flexible" and beam is not None and r is not beam:
+            bt = beam.result.trajectory
+            bs = bt.t <= t_hi
+            ax.plot(bt.t[bs] * 1e3, (bt.x[bs] - np.interp(bt.t[bs], rt.t, rt.x)) * 1e3,
+                    color="0.72", lw=3.2, zorder=1)
+        ax.axhline(0.0, color="black", lw=0.6)
+        ax.plot(t_ms, dx, color=st["color"], lw=1.4, zorder=3)
+        ax.plot(t_ms, dy, color=st["color"], lw=1.1, ls="--", zorder=3)
+        big = max(float(np.max(np.abs(dx))), float(np.max(np.abs(dy)))) if sel.any() else 0
+        ax.set_title(f"{r.rung.id}: up to {big:.2g} mm", fontsize=9)
+        ax.tick_params(labelsize=8)
+    start = 0
+    for g in groups:  # one y scale per family
+        _same_ylim(axes[start:start + len(g)])
+        start += len(g)
+    bottom = {}
+    for ax in axes:
+        ss = ax.get_subplotspec()
+        bottom[ss.colspan.start] = ax
+        if ss.colspan.start == 0:
+            ax.set_ylabel("difference (mm)", fontsize=9)
+    for ax in bottom.values():
+        ax.set_xlabel("time t (ms)", fontsize=9)
+    key = [Line2D([], [], color="0.3", lw=1.4, label=f"x - x[{ref.rung.id}], trunk"),
+           Line2D([], [], color="0.3", lw=1.1, ls="--", label=f"y - y[{ref.rung.id}], pendulum"),
+           Line2D([], [], color="0.72", lw=3.2, label="x - x[analytic] of the beam rung")]
+    if free:
+        grid, r, c = free[0]
+        kax = low.add_subplot(grid[r, c:])
+        kax.set_axis_off()
+        kax.legend(handles=key, loc="center left", frameon=False, fontsize=8.5,
+                   title="y scales: one for the 1-DOF trunks (first row),\n"
+                         "one for the flexible trunks (the rows below)",
+                   title_fontsize=8.5)
+    else:
+        low.legend(handles=key, loc="outside lower center", ncol=3, frameon=False,
+                   fontsize=8.5)
+    low.suptitle(f"Difference from the paper's model ({ref.rung.id}), one panel per rung",
+                 fontsize=10)
     return fig
 
 
 def force_figure(ladder) -> Figure:
-    """Contact force (kN, log axis) of the soft-contact rungs over the impact process; the
-    paper's model's Newton impulses (N s) in a panel of their own."""
-    fig, (ax, ax_imp) = plt.subplots(1, 2, figsize=(11, 3.8),
-                                     gridspec_kw={"width_ratios": (3, 1.2)})
+    """The impact process over one time span for every panel: the paper's model's Newton
+    impulses (N s) in the first panel, then the contact force (kN, linear: it goes to zero
+    between the contacts) of each soft-contact rung in a panel of its own, the 1-DOF
+    trunks on the first row and one scale, the flexible ones on the next rows and another;
+    each panel names its peak and its number of contacts."""
     t_hi = _impact_window(ladder)
-    peak = 0.0
-    for r in [r for r in ladder.rungs if r.ok]:
+    newton = [r for r in ladder.rungs if r.ok and r.rung.kind == RungKind.NEWTON]
+    soft = [r for r in ladder.rungs if r.ok and r.rung.kind != RungKind.NEWTON
+            and r.result.trajectory is not None and r.result.trajectory.force is not None]
+    groups = [newton + [r for r in soft if _family(r.rung) == "sdof"],
+              [r for r in soft if _family(r.rung) == "flexible"]]
+    groups = [g for g in groups if g] or [[]]
+    ncol = 4
+    nrow = sum(max(1, math.ceil(len(g) / ncol)) for g in groups)
+    fig = Figure(figsize=(11, 2.2 * nrow + 0.6), layout="constrained")
+    axes, _ = _family_grid(fig, [max(1, len(g)) for g in groups], ncol, sharex=True)
+    families: dict = {}
+    for ax, r in zip(axes, [r for g in groups for r in g]):
         st = rung_style(r.rung)
         if r.rung.kind == RungKind.NEWTON:
             sol = r.result.solution
-            imp = [(i.t, r.result.model["m"] * (i.u - i.v)) for i in (sol.impacts if sol else ())
-                   if i.t <= t_hi]
-            if imp:
-                t, j = np.array(imp).T
-                ax_imp.vlines(t * 1e3, 0, j, color=st["color"], lw=1.2)
-                ax_imp.plot(t * 1e3, j, "o", color=st["color"], ms=4,
-                            label=f"{r.rung.id}: impulses")
+            imp = [(k.t, r.result.model["m"] * (k.u - k.v)) for k in (sol.impacts if sol
+                                                                       else ())]
+            shown = [(t, j) for t, j in imp if t <= t_hi]
+            if shown:
+                t, j = np.array(shown).T
+                ax.vlines(t * 1e3, 0, j, color=st["color"], lw=1.4)
+                ax.plot(t * 1e3, j, "o", color=st["color"], ms=4)
+                ax.set_ylim(0, 1.25 * float(np.max(j)))  # every marker inside the axes
+                ax.annotate(f"{j[0]:.3g} N s", (t[0] * 1e3, j[0]), xytext=(6, -2),
+                            textcoords="offset points", fontsize=8, va="top")
+            after = len(imp) - len(shown)
+            ax.set_title(f"{r.rung.id}: Newton impulses", fontsize=9)
+            ax.text(0.97, 0.95, f"{len(imp)} impulses" + (f"\n({after} later)" if after
+                                                          else ""),
+                    transform=ax.transAxes, ha="right", va="top", fontsize=8)
+            ax.set_ylabel("impulse (N s)", fontsize=9)
             continue
         tr = r.result.trajectory
-        if tr is None or tr.force is None:
-            continue
         sel = tr.t <= t_hi
-        ax.plot(tr.t[sel] * 1e3, tr.force[sel] / 1e3, label=r.rung.id, **st)
-        peak = max(peak, float(np.nanmax(tr.force[sel] / 1e3)) if sel.any() else 0.0)
-    if peak > 0:  # the first collision peaks ~100 times the later force: log axis
-        ax.set_yscale("log")
-        ax.set_ylim(peak * 1e-5, peak * 2)
-    ax.set(title="contact force, soft-contact rungs (log axis)", xlabel="time t (ms)",
-           ylabel="contact force on the trunk (kN)")
-    ax_imp.set(title="Newton impulses, the paper's model", xlabel="time t (ms)",
-               ylabel="impulse (N s)")
-    ax_imp.set_ylim(bottom=0)
-    h1, l1 = ax.get_legend_handles_labels()
-    h2, l2 = ax_imp.get_legend_handles_labels()
-    fig.suptitle(f"{ladder.name}: the impact process", y=1.0)
-    fig.tight_layout()
-    _legend_right(fig, h1 + h2, l1 + l2)
+        f_kn = tr.force[sel] / 1e3
+        ax.fill_between(tr.t[sel] * 1e3, 0, f_kn, color=st["color"], alpha=0.25, lw=0)
+        ax.plot(tr.t[sel] * 1e3, f_kn, color=st["color"], lw=1.0)
+        peak = float(np.nanmax(f_kn)) if sel.any() else math.nan
+        episodes = r.values.get("contact_episodes", math.nan)
+        words = f"\n{episodes:.0f} contacts" if math.isfinite(episodes) else ""
+        ax.set_title(r.rung.id, fontsize=9)
+        ax.text(0.97, 0.95, f"peak {peak:.0f} kN{words}", transform=ax.transAxes,
+                ha="right", va="top", fontsize=8)
+        families.setdefault(_family(r.rung), []).append(ax)
+    for group in families.values():
+        _same_ylim(group, floor=0.0)
+    bottom = {}
+    for ax in axes:  # from a little before t = 0: the first contact off the axis line
+        ax.set_xlim(-0.03 * t_hi * 1e3, t_hi * 1e3)
+        ax.tick_params(labelsize=8)
+        bottom[ax.get_subplotspec().colspan.start] = ax
+        first = ax.get_subplotspec().colspan.start == 0
+        if not ax.get_ylabel() and (first or (newton and ax is axes[1])):
+            ax.set_ylabel("contact force (kN)", fontsize=9)
+    for ax in bottom.values():
+        ax.set_xlabel("time t (ms)", fontsize=9)
+    fig.suptitle(f"{ladder.name}: the impact process over its first {t_hi * 1e3:.3g} ms, one "
+                 "panel per rung (force on a linear axis; one scale for the 1-DOF trunks, "
+                 "one for the flexible ones)", fontsize=10)
     return fig
 
 
@@ -234,28 +362,48 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
     ax.set_ylim(top=1.12 * max(initial_energy, ax.get_ylim()[1]))  # room for the label
     ax.annotate(f"initial energy {initial_energy:.0f} J", (n - 0.5, initial_energy),
                 ha="right", va="bottom", fontsize=9)
-    ax.set_xticks(x, [f"{k}\n(at T0)" if k != "energy transferred" else "energy transferred\n(eq 58)"
-                      for k in LEDGER_TERMS])
+    ax.set_xticks(x, [f"{k}\n(at T0)" if k != "energy transferred"
+                      else "energy transferred\n(eq 58)" for k in LEDGER_TERMS])
     ax.set(title=f"{name}: energy ledger at T0", ylabel="energy (J)")
     _legend_right(ax)
     return fig
 
 
+#: The identification figure's series: parameter -> (marker style, colour).
+_IDENT_SERIES = (("M_T", "o-", "tab:blue"), ("K_T", "s-", "tab:orange"), ("xi", "^-", "tab:green"))
+
+
 def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> Figure:
-    """Identification error against e (exact solver records), with the procedure's floor."""
-    fig, ax = plt.subplots(figsize=(11, 3.6))
+    """Identification error (%) against e on exact records, each parameter with its
+    tolerance (dotted, +-, in its colour, named in the legend); an e without a value is
+    marked on the axis with why."""
+    fig, ax = plt.subplots(figsize=(9.4, 3.8))
     es = [s["restitution"] for s in sweep]
-    for key, st in (("M_T", "o-"), ("K_T", "s-"), ("xi", "^-")):
-        ax.plot(es, [100 * s["errors"].get(key, math.nan) for s in sweep], st, label=key)
+    for key, mk, colour in _IDENT_SERIES:
+        ax.plot(es, [100 * s["errors"].get(key, math.nan) for s in sweep], mk, color=colour,
+                label=f"{key}")
         tol = tolerances.get("identification", {}).get(key, {}).get("rel")
         if tol:
-            ax.axhspan(-100 * tol, 100 * tol, alpha=0.06, color=ax.lines[-1].get_color())
+            for sign in (-1, 1):
+                ax.axhline(sign * 100 * tol, color=colour, lw=1.0, ls=":",
+                           label=f"{key} tolerance +-{100 * tol:.0f} %" if sign > 0 else None)
+    missing = [s for s in sweep if not s["errors"]]
+    for i, s in enumerate(missing):  # a vertical line, not a point: no value to place
+        ax.axvline(s["restitution"], color="#b00020", lw=1.4, ls=(0, (4, 3)),
+                   label="no value at this e:\n" + "\n".join(textwrap.wrap(
+                       "; ".join(sorted({_short_reason(m.get("reason")) for m in missing})),
+                       34)) if i == 0 else None)
     ax.axhline(0, color="black", lw=0.8)
-    ax.set(title=f"{name}: identification (eqs 39-48, paper reading) on exact records vs e "
-                 "(bands: tolerances)",
+    ax.set(title=f"{name}: identification (eqs 39-48, paper reading) on exact records vs e",
            xlabel="coefficient of restitution e (1)", ylabel="error (identified - true) (%)")
     _legend_right(ax)
     return fig
+
+
+def _short_reason(reason) -> str:
+    """The last clause of a reason, for a legend: 'the fitted velocity must be > 0'."""
+    text = str(reason or "failed").strip()
+    return text.rsplit(": ", 1)[-1][:70]
 
 
 def contact_scan_figure(scans: dict) -> Figure:

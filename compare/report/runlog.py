@@ -1,10 +1,43 @@
-"""Report section: every backend run behind the page, its status, reason and wall time."""
+"""Report section: every backend run behind the page, its status, reason and wall time.
+
+The page lists the runs that did not succeed first (with their reasons), then every run in a
+collapsed list, options rounded to what a reader needs (3 significant digits, with units).
+"""
 
 from __future__ import annotations
 
+from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import to_jsonable
 
-from .base import Section
+from .base import Section, options_text, tidy
+
+
+def option_units(backend: str) -> dict:
+    """Option name -> unit of a backend's options ({} for a backend not known here)."""
+    from treeimpact.compare.backends import BACKENDS
+
+    b = BACKENDS.get(backend)
+    if b is None:
+        return {}
+    try:
+        return {k: o.unit for k, o in b.options().items()}
+    except ParameterError:  # its package is not installed here: no units to show
+        return {}
+
+
+def run_rows(runs) -> list[dict]:
+    """The page's rows of ``runs``: runs that did not succeed first, then by scenario,
+    backend and options; options and reasons rounded (:func:`.base.options_text`,
+    :func:`.base.tidy`)."""
+    units = {}
+    rows = []
+    for r in runs:
+        if r.backend not in units:
+            units[r.backend] = option_units(r.backend)
+        rows.append({"scenario": r.scenario, "backend": r.backend, "ok": r.ok,
+                     "options": options_text(r.options, units[r.backend]),
+                     "status": r.status, "wall_s": r.wall_s, "reason": tidy(r.reason)})
+    return sorted(rows, key=lambda x: (x["ok"], x["scenario"], x["backend"], x["options"]))
 
 
 class RunsSection(Section):
@@ -18,8 +51,13 @@ class RunsSection(Section):
         self.wall_s = wall_s or {}
 
     def context(self) -> dict:
-        return {"runs": self.runs, "timings": self.timings, "wall": self.wall_s}
+        rows = run_rows(self.runs)
+        counts: dict = {}
+        for r in rows:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+        return {"rows": rows, "failed": [r for r in rows if not r["ok"]], "counts": counts,
+                "timings": self.timings, "wall": self.wall_s}
 
     def to_json(self) -> dict:
         return to_jsonable({"runs": [r.to_json() for r in self.runs], "timings": self.timings,
-                       "wall_s": self.wall_s})
+                            "wall_s": self.wall_s})

@@ -19,7 +19,7 @@ from ..mechanism import matched_loss_evidence
 from ..runs import OK, SKIPPED
 from ..verdicts import Verdict
 from . import figures
-from .base import Section
+from .base import Section, tidy
 
 #: Restitution values of the identification sweep (exact solver, cheap): e = 0 is the
 #: procedure's own assumption, 0.1 the shipped default.
@@ -126,8 +126,81 @@ def record_fits(ladder) -> list[dict]:
                     "errors": {k: fit.values[k] / v - 1.0 for k, v in truth.items()},
                     "ranges": {k: fit.intervals[k] for k in (*truth, "e")
                                if not fit.determined[k]},  # a one-impact record: ranges
+                    "intervals": {k: fit.intervals[k] for k in (*truth, "e")},  # 95 %
                     "residual": fit.residual_rms / fit.peak, "explained": fit.explained})
     return out
+
+
+def fit_truth(ladder) -> dict:
+    """What the full-record fit is compared with: the scenario's M_T (kg), K_T (N/m) and C_T
+    (N s/m) of the two-body model (eqs 7-11) and its restitution e (1)."""
+    from treeimpact.analytic.model.two_body import two_body_model
+
+    model = two_body_model(ladder.scenario)
+    return {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping,
+            "e": ladder.scenario.contact.restitution}
+
+
+def fit_cells(fit: dict, truth: dict) -> list[dict]:
+    """The page's cells of one full-record fit (:func:`record_fits`), M_T, K_T, C_T and e:
+    ``value`` (None where the record does not fix it), its 95 % interval ``low``-``high``
+    (e clipped to its physical range [0, 1]), the relative ``error`` against ``truth``,
+    and ``fixed``: False where the record does not fix the quantity (a one-impact record's
+    range, or an e whose 95 % interval spans all of [0, 1])."""
+    cells = []
+    for k in ("M_T", "K_T", "C_T", "e"):
+        lo, hi = (fit.get("ranges", {}).get(k) or fit.get("intervals", {}).get(k)
+                  or (math.nan, math.nan))
+        value = fit["values"].get(k, math.nan)
+        fixed = k not in fit.get("ranges", {})
+        if k == "e":
+            lo, hi = max(0.0, lo), min(1.0, hi)
+            fixed = fixed and not (lo <= 0.0 and hi >= 1.0)
+        width = (hi - lo) / abs(value) if fixed and value and math.isfinite(value) else math.nan
+        cells.append({"metric": k, "value": value if fixed else None, "low": lo, "high": hi,
+                      "fixed": fixed, "truth": truth.get(k),
+                      "error": fit.get("errors", {}).get(k) if fixed else None,
+                      # an interval under 0.1 % of the value says nothing: not shown
+                      "show_interval": not fixed or not (width < 1e-3)})
+    return cells
+
+
+#: The engines' comparison with each other at one rung kind, in words (the tolerance file's
+#: ``engines.<kind>`` sections).
+_ENGINE_STEPS = {"engine": "the engines against each other on the engine SDOF",
+                 "chain": "the engines against each other on the hinged chain",
+                 "pendulum": "the engines against each other with the full pendulum"}
+
+
+def step_name(key: str) -> str:
+    """A comparison of the tolerance file (``beam``, ``engines.chain``) in plain words."""
+    from ..rungs import RungKind
+
+    section, _, kind = key.rpartition(".")
+    if section == "engines":
+        return _ENGINE_STEPS.get(kind, f"the engines against each other ({kind})")
+    try:
+        return RungKind(kind).step
+    except ValueError:
+        return kind.replace("_", " ")
+
+
+def not_compared_lines(entries: list[dict]) -> list[dict]:
+    """The ladder's ``not_compared()`` entries (one per comparison and reason) grouped once
+    per reason and metrics: ``{"metrics", "steps" (plain words, or "every comparison"),
+    "reason"}``, the widest group first."""
+    groups: dict = {}
+    for n in entries:
+        key = (n["reason"], tuple(n["metrics"]))
+        groups.setdefault(key, []).append(n["kind"])
+    every = {n["kind"] for n in entries}
+    out = []
+    for (reason, metrics), kinds in groups.items():
+        steps = "every comparison" if set(kinds) == every and len(every) > 1 else \
+            "; ".join(step_name(k) for k in kinds)
+        out.append({"metrics": list(metrics), "steps": steps, "count": len(kinds),
+                    "reason": reason[:1].upper() + reason[1:]})
+    return sorted(out, key=lambda g: -g["count"])
 
 
 def css(check) -> str:
@@ -222,10 +295,29 @@ class ScenarioSection(Section):
             "rungs": L.rungs, "skips": [r for r in L.rungs if not r.ok],
             "ledgers": self.ledgers, "sweep": self.sweep, "fits": self.fits,
             "fits_not_fixed": any(f.get("ranges") for f in self.fits),
+            "fit_rows": self._fit_rows(),
             "findings": findings, "mechanism": self.mechanism,
-            "problems": problems, "not_compared": L.not_compared(), "unit_of": unit_of, "meaning_of": meaning_of,
+            "problems": problems, "not_compared": not_compared_lines(L.not_compared()),
+            "unit_of": unit_of, "meaning_of": meaning_of,
             "metrics": ALL_METRICS, "OK": OK,
         }
+
+    def _fit_rows(self) -> list[dict]:
+        """The full-record fit table's rows: the truth, then each rung's cells
+        (:func:`fit_cells`), or its error."""
+        if not self.fits:
+            return []
+        truth = fit_truth(self.ladder)
+        rows = []
+        for f in self.fits:
+            if f.get("error"):
+                rows.append({"rung": f["rung"], "error": tidy(f["error"]), "e_not_fixed": False})
+                continue
+            cells = fit_cells(f, truth)
+            rows.append({"rung": f["rung"], "cells": cells, "residual": f["residual"],
+                         "explained": f["explained"], "error": None,
+                         "e_not_fixed": not cells[-1]["fixed"]})
+        return [{"rung": "truth", "truth": truth, "error": None, "e_not_fixed": False}] + rows
 
     def to_json(self) -> dict:
         out = self.ladder.to_json()

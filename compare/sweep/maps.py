@@ -142,28 +142,89 @@ def _tolerance_of(tolerance, metric: str) -> float:
     return float(DEFAULT_TOLERANCE if tolerance is None else tolerance)
 
 
+#: How a swept parameter reads on a map and in the study's text: (name, display scale, unit);
+#: a contact duration is swept in s and read in ms, as the report's text gives it.
+_AXES = {"restitution": ("e", 1.0, "1"), "segments": ("segments", 1.0, ""),
+         "trunk.crown_mass": ("m_f", 1.0, "kg"), "impactor.mass": ("m", 1.0, "kg"),
+         "dt": ("dt", 1.0, "s"), "contact_stiffness": ("k_c", 1.0, "N/m"),
+         "trunk.clamp_height": ("a", 1.0, "m"), "t_end": ("t_end", 1.0, "s"),
+         "contact_duration": ("contact duration", 1e3, "ms"), "a_over_l": ("a / l", 1.0, ""),
+         "crown_ratio": ("m_f / m_trunk", 1.0, ""), "mass_ratio": ("m / M_T", 1.0, "")}
+
+
 def _label(name: str) -> str:
-    from .grid import DERIVED_RATIOS
-
-    units = {"restitution": "e", "segments": "segments",
-             "trunk.crown_mass": "m_f (kg)", "impactor.mass": "m (kg)", "dt": "dt (s)",
-             "contact_stiffness": "k_c (N/m)", "trunk.clamp_height": "a (m)",
-             "t_end": "t_end (s)", "contact_duration": "contact duration (s)"}
-    if name in DERIVED_RATIOS:
-        return {"a_over_l": "a / l", "crown_ratio": "m_f / m_trunk",
-                "mass_ratio": "m / M_T"}[name]
-    return units.get(name, name)
+    """A swept parameter's axis label with its display unit: 'contact duration (ms)'."""
+    text, _, unit = _AXES.get(name, (name, 1.0, ""))
+    return f"{text} ({unit})" if unit else text
 
 
-def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annotate=False):
-    """One heatmap on ax: rows b, columns a (index grid, values as tick labels). Every cell
-    prints its value (in %; the colours saturate at +-vmax, the text does not) and, with
-    ``letters``, the dominant rung's letter; a cell within ``tol`` is outlined in black; a
-    cell without a value says why (``annotate`` is kept for callers: values always show)."""
-    import matplotlib
+def _shown(name: str, value) -> float:
+    """A swept parameter's value in its display unit (a contact duration in ms)."""
+    return float(value) * _AXES.get(name, (name, 1.0, ""))[1]
+
+
+def point_text(pairs) -> str:
+    """A grid point (name, value) pairs as the text reads it: 'contact duration = 0.2 ms,
+    m_f / m_trunk = 4'."""
+    out = []
+    for k, v in pairs:
+        text, _, unit = _AXES.get(k, (k, 1.0, ""))
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            shown = f"{_shown(k, v):.3g}" + (f" {unit}" if unit not in ("", "1") else "")
+        else:
+            shown = str(v)
+        out.append(f"{text} = {shown}")
+    return ", ".join(out)
+
+
+#: One colour scale for every map of a study (validity and identification): symmetric log
+#: colours from -MAP_VMAX to +MAP_VMAX (relative, 1 = 100 %), linear within LINEAR_FRACTION
+#: of the tolerance, so that a 1 % and a 100 % cell both read and two maps compare.
+MAP_VMAX = 1.0
+LINEAR_FRACTION = 0.2
+
+
+def colour_scale(tol: float) -> dict:
+    """The maps' colour scale at tolerance ``tol`` (relative): vmin, vmax, linthresh."""
+    return {"vmin": -MAP_VMAX, "vmax": MAP_VMAX, "linthresh": LINEAR_FRACTION * tol}
+
+
+def _norm(scale: dict):
     from matplotlib.colors import SymLogNorm
+
+    return SymLogNorm(linthresh=scale["linthresh"], linscale=0.5, vmin=scale["vmin"],
+                      vmax=scale["vmax"])
+
+
+def _percent_colorbar(cb, scale: dict, label: str) -> None:
+    """The colour bar's ticks in %, as the cells print their values."""
+    top = scale["vmax"]
+    ticks = [t for t in (-1.0, -0.1, -0.01, 0.0, 0.01, 0.1, 1.0)
+             if abs(t) <= top and (t == 0 or abs(t) >= 0.999 * scale["linthresh"])]
+    cb.set_ticks(ticks, labels=["0" if t == 0 else f"{100 * t:+.0f} %" for t in ticks])
+    cb.ax.tick_params(labelsize=8)
+    cb.set_label(label, fontsize=8)
+
+
+#: Why a map cell has no value, as few letters as fit in a cell; the caption spells them out.
+NO_VALUE = {"not identifiable": "n/i", "failed": "failed", "paper model: no value": "no ref",
+            "no value": "n/a", "": "n/a"}
+
+
+def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annotate=False,
+          scale=None):
+    """One heatmap on ax: rows b, columns a (index grid, values as tick labels in their
+    display unit). Every cell prints its value in % (the colours saturate at the scale's
+    ends, the text does not) and, with ``letters``, the dominant rung's letter; a cell within
+    ``tol`` is outlined in black; a cell without a value says why in a word
+    (:data:`NO_VALUE`). ``scale``: :func:`colour_scale` (default: at ``tol``, ``vmax``
+    overriding its ends); ``annotate`` is kept for callers: values always show."""
+    import matplotlib
     from matplotlib.patches import Rectangle
 
+    scale = dict(scale or colour_scale(tol))
+    if vmax is not None:
+        scale.update(vmin=-vmax, vmax=vmax)
     xs = sorted(cell[a].unique())
     ys = sorted(cell[b].unique())
     Z = np.full((len(ys), len(xs)), np.nan)
@@ -178,22 +239,19 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annota
             L[j, i] = _letter(r[letters])
         why[j, i] = _why_missing(r)
     finite = np.isfinite(Z)
-    if vmax is None:
-        vmax = _vmax(Z, tol)
-    masked = np.ma.masked_invalid(np.clip(Z, -vmax, vmax))
+    masked = np.ma.masked_invalid(np.clip(Z, scale["vmin"], scale["vmax"]))
     cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.88")
-    # symmetric log colours: linear within tol / 5, so a 1 % and a 100 % cell both read
-    norm = SymLogNorm(linthresh=tol / 5.0, linscale=0.5, vmin=-vmax, vmax=vmax)
+    norm = _norm(scale)
     im = ax.pcolormesh(np.arange(len(xs) + 1) - 0.5, np.arange(len(ys) + 1) - 0.5, masked,
                        cmap=cmap, norm=norm, shading="flat")
     small = len(xs) <= 12 and len(ys) <= 12
-    size = 9 if len(xs) <= 6 else 7
+    size = 9 if len(xs) <= 6 else 7.5
     for j in range(len(ys)):
         for i in range(len(xs)):
             if not finite[j, i]:
                 if small:
-                    ax.text(i, j, f"n/a\n{why[j, i]}", ha="center", va="center",
-                            fontsize=size - 1.5, color="0.3", linespacing=1.0)
+                    ax.text(i, j, NO_VALUE.get(why[j, i], "n/a"), ha="center", va="center",
+                            fontsize=size - 0.5, color="0.3")
                 continue
             if abs(Z[j, i]) <= tol:  # within the tolerance: outlined on the real grid
                 ax.add_patch(Rectangle((i - 0.5, j - 0.5), 1, 1, fill=False, ec="k", lw=2.0))
@@ -203,25 +261,34 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annota
                 if L[j, i]:
                     text = f"{L[j, i]} {text}"
                 ax.text(i, j, text, ha="center", va="center", fontsize=size,
-                        color="k" if abs(v) < 0.5 * vmax else "w")
-    ax.set_xticks(range(len(xs)), [f"{v:.3g}" for v in xs], fontsize=9,
-                  rotation=45 if len(xs) > 6 else 0)
-    ax.set_yticks(range(len(ys)), [f"{v:.3g}" for v in ys], fontsize=9)
+                        color=_ink(cmap, norm, np.clip(v, scale["vmin"], scale["vmax"])))
+    xt = [f"{_shown(a, v):.3g}" for v in xs]
+    ax.set_xticks(range(len(xs)), xt, fontsize=9,
+                  rotation=45 if len(xs) > 6 and max(map(len, xt)) > 5 else 0)
+    ax.set_yticks(range(len(ys)), [f"{_shown(b, v):.3g}" for v in ys], fontsize=9)
     ax.set_xlabel(_label(a), fontsize=10)
     ax.set_ylabel(_label(b), fontsize=10)
     ax.set_title(title, fontsize=10)
+    ax.grid(False)
     return im
 
 
+def _ink(cmap, norm, value) -> str:
+    """Black or white text, whichever reads on the cell's colour."""
+    r, g, b, _ = cmap(norm(value))
+    return "w" if 0.299 * r + 0.587 * g + 0.114 * b < 0.5 else "k"
+
+
 def _why_missing(row) -> str:
-    """Why a map cell has no value, in a few words (the row's own error first)."""
+    """Why a map cell has no value, in a few words (the row's own error first): a key of
+    :data:`NO_VALUE`."""
     for col in ("id_error", "error"):
         text = row.get(col)
         if isinstance(text, str) and text:
-            return "not\nidentifiable" if text.startswith("not identifiable") else "failed"
+            return "not identifiable" if text.startswith("not identifiable") else "failed"
     value, ref = row.get("value"), row.get("analytic")
     if isinstance(ref, float) and not math.isfinite(ref):
-        return "paper model:\nno value"
+        return "paper model: no value"
     if isinstance(value, float) and not math.isfinite(value):
         return "no value"
     return ""
@@ -237,7 +304,8 @@ def _extend(values, vmax) -> str:
 
 
 def _vmax(values, tol) -> float:
-    """Colour range: the largest |value|, at least twice the tolerance, at most 100 %."""
+    """Colour range of a figure of its own: the largest |value|, at least twice the
+    tolerance, at most 100 % (a study's maps share :func:`colour_scale` instead)."""
     v = np.abs(np.asarray(values, float))
     v = v[np.isfinite(v)]
     return min(1.0, max(2.0 * tol, float(v.max()) if v.size else 1.0))
@@ -245,22 +313,30 @@ def _vmax(values, tol) -> float:
 
 def _line(ax, sub, a, value_col, tol, title):
     sub = sub.sort_values(a)
-    ax.axhspan(-tol, tol, color="0.9", zorder=0)
-    ax.plot(sub[a], sub[value_col], "o-", ms=3)
+    ax.axhspan(-100 * tol, 100 * tol, color="0.9", zorder=0)
+    ax.plot(sub[a].map(lambda v: _shown(a, v)), 100 * sub[value_col], "o-", ms=3)
     ax.axhline(0.0, color="0.5", lw=0.5)
-    ax.set_xlabel(_label(a), fontsize=7)
-    ax.set_title(title, fontsize=8)
-    ax.tick_params(labelsize=6)
+    ax.set_xlabel(_label(a), fontsize=9)
+    ax.set_ylabel("relative (%)", fontsize=9)
+    ax.set_title(title, fontsize=9)
+    ax.tick_params(labelsize=8)
 
 
-def _grid_figure(n_panels: int, columns: int = 6):
-    """A figure of heatmap panels; each panel wide enough for ``columns`` printed cells."""
+#: The widest a study figure is drawn (in): the page (1200 px) shows it at 0.9 scale or more.
+MAX_FIGURE_WIDTH = 12.0
+
+
+def _grid_figure(n_panels: int, columns: int = 6, rows: int = 6):
+    """A figure of heatmap panels sized by their cells (about 0.5 in a printed column,
+    0.33 in a row, so a 2 x 2 map stays small and an 8 x 6 one stays legible), as many
+    panels a row as fit :data:`MAX_FIGURE_WIDTH`; no unused axes."""
     from matplotlib.figure import Figure
 
-    ncol = 2 if n_panels == 4 or columns > 6 else min(3, n_panels)
+    width = max(2.2, 0.5 * columns + 0.9)
+    height = max(1.9, 0.33 * rows + 1.1)
+    ncol = max(1, min(n_panels, int((MAX_FIGURE_WIDTH - 1.2) // width)))
     nrow = math.ceil(n_panels / ncol)
-    width = 3.3 if columns <= 6 else 0.5 * columns + 1.0
-    fig = Figure(figsize=(width * ncol + 1.0, 2.9 * nrow + 0.6), layout="constrained")
+    fig = Figure(figsize=(width * ncol + 1.2, height * nrow + 0.5), layout="constrained")
     axes = [fig.add_subplot(nrow, ncol, i + 1) for i in range(n_panels)]
     return fig, axes
 
@@ -287,10 +363,11 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
                   prefix: str = "validity", order=None, value: str = "rel",
                   skip=()) -> list[dict]:
     """Draw the validity maps of a sweep table into ``figdir``; returns one dict per figure
-    (path, target, axes, caption) plus per-metric summaries (fraction within tolerance,
-    worst |rel| and where, dominating rung counts). ``order``: target ids in the order
-    their maps are listed. ``value``: "rel" maps each target against the paper's model,
-    "step" against the rung below it (beam vs soft: the 1-DOF assumption alone)."""
+    (path, target, axes, caption, its colour ``scale``) plus per-metric summaries (fraction
+    within tolerance, worst |rel| and where, dominating rung counts). ``order``: target ids
+    in the order their maps are listed. ``value``: "rel" maps each target against the
+    paper's model, "step" against the rung below it (beam vs soft: the 1-DOF assumption
+    alone). Every map shares one colour scale (:func:`colour_scale`)."""
     if value not in ("rel", "step"):
         raise ParameterError(f"value: {value!r}, allowed 'rel' or 'step'")
     figdir = Path(figdir)
@@ -299,6 +376,7 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
     if disc.empty:
         return []
     num = numeric_axes(df)
+    scale = colour_scale(min(_tolerance_of(tolerance, m) for m in metrics))
     out = []
     for target, dt in _in_order(disc.groupby("target", sort=False), order):
         if target in skip:  # drawn from another sweep of the study
@@ -319,9 +397,8 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
         else:
             plot_pairs = []
         for a, b in plot_pairs:
-            fig, axes = _grid_figure(len(ms), dt[a].nunique())
+            fig, axes = _grid_figure(len(ms), dt[a].nunique(), dt[b].nunique() if b else 3)
             im = None
-            vmax = _vmax(dt["rel"], min(_tolerance_of(tolerance, m) for m in ms))
             for ax, m in zip(axes, ms):
                 tol = _tolerance_of(tolerance, m)
                 sub = dt[dt["metric"] == m]
@@ -330,23 +407,25 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
                 else:
                     cell = _worst(sub, "rel", a, b)
                     im = _heat(ax, cell, a, b, "rel", tol, f"{m} (tol {tol:.0%})",
-                               letters="dominant" if value == "rel" else None, vmax=vmax)
+                               letters="dominant" if value == "rel" else None, scale=scale)
             if im is not None:
-                cb = fig.colorbar(im, ax=axes, shrink=0.6, extend=_extend(dt["rel"], vmax))
-                cb.set_label(("vs analytic" if value == "rel" else "vs rung below")
-                             + f" (saturates at +-{vmax:.0%})", fontsize=9)
-            what = f"{a} x {b}" if b else a
+                cb = fig.colorbar(im, ax=axes, shrink=0.8, aspect=25,
+                                  extend=_extend(dt["rel"], scale["vmax"]))
+                _percent_colorbar(cb, scale, ("against the paper's model" if value == "rel"
+                                              else "step from the rung below")
+                                  + f" (%)\nsaturates at +-{scale['vmax']:.0%}")
+            what = f"{_label(a)} x {_label(b)}" if b else _label(a)
             versus = "the paper's model (analytic)" if value == "rel" else \
                 f"the rung below ({_previous(df, target)})"
-            fig.suptitle(f"{target} vs {versus}: {what}", fontsize=9)
+            fig.suptitle(f"{target} vs {versus}: {what}", fontsize=10)
             path = figdir / f"{prefix}-{_safe(target)}-{_safe(a)}{'-' + _safe(b) if b else ''}.png"
             fig.savefig(path, dpi=110)
             out.append({"path": path, "target": target, "axes": [a, b] if b else [a],
                         "caption": _validity_caption(target, a, b, tolerance, value),
-                        "summary": summary})
+                        "summary": summary, "scale": scale if b else None})
         if not plot_pairs:
             out.append({"path": None, "target": target, "axes": [], "caption": "",
-                        "summary": summary})
+                        "summary": summary, "scale": None})
     return out
 
 
@@ -358,17 +437,19 @@ def _previous(df, target) -> str:
 def _validity_caption(target, a, b, tolerance, value="rel") -> str:
     tol = "per-metric tolerances" if isinstance(tolerance, dict) else \
         f"|rel| = {_tolerance_of(tolerance, '')*100:.3g} %"
+    na = ("Grey: no value (no ref: the paper's model has none, as for a force; failed: the "
+          "run failed; n/a: the run gave none).")
     if value == "step":
         return (f"Relative step of {target} from the rung below it over {_label(a)}"
                 + (f" and {_label(b)}" if b else "") + f" (worst case over any other swept "
-                f"parameter). Black line: {tol}. Grey: no value (n/a).")
+                f"parameter), in %. Black outline: within {tol}. " + na)
     if b is None:
-        return (f"Relative discrepancy of {target} from the paper's model over {_label(a)}; "
-                f"grey band: {tol}.")
+        return (f"Relative discrepancy of {target} from the paper's model over {_label(a)}, "
+                f"in %; grey band: {tol}.")
     return (f"Relative discrepancy of {target} from the paper's model over {_label(a)} and "
-            f"{_label(b)} (worst case over any other swept parameter). Black line: {tol}. "
-            f"Letters: the rung whose step dominates (see the legend above). "
-            f"Grey: no value (n/a).")
+            f"{_label(b)} (worst case over any other swept parameter), in %. Black outline: "
+            f"within {tol}. Letters: the rung whose step dominates (see the legend above). "
+            + na)
 
 
 def _summaries(dt, ms, tolerance) -> list[dict]:
@@ -414,11 +495,32 @@ def identification_errors(df):
 
 _E_NAMES = ("restitution",)
 _CROWN_NAMES = ("crown_ratio", "trunk.crown_mass")
+#: The parameters the identification maps draw: E is K_T a^3 / (3 I) (eq 47) with a and I
+#: known, so its relative error is K_T's; the summary tables list it.
+MAPPED_IDENT_KEYS = ("M_T", "K_T", "xi")
+
+
+def _why_not_identified(sub) -> str:
+    """The cells of one identification map without a value, counted by their reason (the
+    last clause of the procedure's message), for the caption."""
+    import re
+
+    errors = sub.loc[sub["rel"].isna(), "id_error"] if "id_error" in sub else []
+    counts: dict = {}
+    for text in errors:
+        if isinstance(text, str) and text:  # the clause without its numbers: one reason
+            key = re.sub(r"\s*=\s*[-+]?[\d.]+(?:e[-+]?\d+)?(?:\s*(?:m/s|1/s|rad/s|m|s))?",
+                         "", text.rsplit(": ", 1)[-1].strip())
+            counts[key] = counts.get(key, 0) + 1
+    return "; ".join(f"{why} ({n})" for why, n in sorted(counts.items(), key=lambda kv: -kv[1]))
 
 
 def identification_maps(df, figdir, *, prefix: str = "identification",
                         order=None, skip=()) -> list[dict]:
-    """Draw the identification maps (see the module docstring) into ``figdir``."""
+    """Draw the identification maps (see the module docstring) into ``figdir``: one figure
+    per target, a panel per parameter of :data:`MAPPED_IDENT_KEYS` that has a value
+    somewhere (a panel without any is dropped), every map on one colour scale
+    (:func:`colour_scale`); the caption counts the cells without a value and says why."""
     figdir = Path(figdir)
     figdir.mkdir(parents=True, exist_ok=True)
     ide = identification_errors(df)
@@ -435,24 +537,16 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
         a, b = num[0], None
     else:
         return []
+    scale = colour_scale(DEFAULT_TOLERANCE)
     out = []
     for target, dt in _in_order(ide.groupby("target", sort=False), order):
         if target in skip:  # drawn from another sweep of the study
             continue
         if dt["rel"].notna().sum() == 0:
             continue
-        fig, axes = _grid_figure(len(IDENT_KEYS))
-        im = None
         summary = []
-        vmax = _vmax(dt["rel"], DEFAULT_TOLERANCE)
-        for ax, k in zip(axes, IDENT_KEYS):
+        for k in IDENT_KEYS:
             sub = dt[dt["parameter"] == k]
-            if b is None:
-                _line(ax, _worst(sub, "rel", a, a), a, "rel", DEFAULT_TOLERANCE,
-                      f"{k}: identified vs true")
-            else:
-                im = _heat(ax, _worst(sub, "rel", a, b), a, b, "rel", DEFAULT_TOLERANCE,
-                           f"{k}: (identified - true) / true", vmax=vmax, annotate=True)
             fin = sub[sub["rel"].notna()]
             if len(fin):
                 w = fin.loc[fin["rel"].abs().idxmax()]
@@ -460,19 +554,41 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
                                 "failed": int(sub["rel"].isna().sum()),
                                 "best_abs_rel": float(fin["rel"].abs().min()),
                                 "worst_rel": float(w["rel"]), "worst_point": w["point"]})
+        keys = [k for k in MAPPED_IDENT_KEYS
+                if dt[dt["parameter"] == k]["rel"].notna().any()]
+        fig, axes = _grid_figure(len(keys), dt[a].nunique(), dt[b].nunique() if b else 3)
+        im = None
+        for ax, k in zip(axes, keys):
+            sub = dt[dt["parameter"] == k]
+            if b is None:
+                _line(ax, _worst(sub, "rel", a, a), a, "rel", DEFAULT_TOLERANCE,
+                      f"{k}: identified vs true")
+            else:
+                im = _heat(ax, _worst(sub, "rel", a, b), a, b, "rel", DEFAULT_TOLERANCE,
+                           f"{k}: (identified - true) / true", scale=scale)
         if im is not None:
-            cb = fig.colorbar(im, ax=axes, shrink=0.6, extend=_extend(dt["rel"], vmax))
-            cb.set_label("(identified - true) / |true|; colours saturate at "
-                         f"+-{vmax:.0%}, the cells print their value", fontsize=9)
-        fig.suptitle(f"Identification (eqs 39-48) on the {target} record", fontsize=9)
+            cb = fig.colorbar(im, ax=axes, shrink=0.8, aspect=25,
+                              extend=_extend(dt["rel"], scale["vmax"]))
+            _percent_colorbar(cb, scale, "(identified - true) / true (%)\n"
+                                         f"saturates at +-{scale['vmax']:.0%}")
+        fig.suptitle(f"Identification (eqs 39-48) on the {target} record", fontsize=10)
         path = figdir / f"{prefix}-{_safe(target)}.png"
         fig.savefig(path, dpi=110)
+        first = dt[dt["parameter"] == keys[0]]
+        missing = int(first["rel"].isna().sum())
+        why = _why_not_identified(first)
         out.append({"path": path, "target": target, "axes": [a, b] if b else [a],
-                    "caption": (f"Relative error of the parameters the paper's identification "
-                                f"procedure recovers from the {target} record, over "
-                                f"{_label(a)}{' and ' + _label(b) if b else ''}; black line: "
-                                f"{DEFAULT_TOLERANCE:.0%}; grey: the procedure failed (n/a)."),
-                    "summary": summary})
+                    "caption": (f"Relative error (%) of the parameters the paper's "
+                                f"identification procedure recovers from the {target} record, "
+                                f"over {_label(a)}{' and ' + _label(b) if b else ''}; black "
+                                f"outline: within {DEFAULT_TOLERANCE:.0%}. E is not drawn: "
+                                f"its error is K_T's (eq 47)."
+                                + (f" {missing} of {len(first)} cells have no value (grey; "
+                                   f"n/i: not identifiable, the record breaks the procedure's "
+                                   f"premises; failed: the procedure stopped)"
+                                   + (f"; cells by reason: {why}." if why else ".")
+                                   if missing else "")),
+                    "summary": summary, "scale": scale if b else None})
     return out
 
 

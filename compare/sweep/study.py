@@ -88,22 +88,26 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     scen = scenario or p.scenario
     engines = tuple(b for b in (backends or p.engines) if b in ENGINES)
     sweeps = {}
+    done = []  # the SweepResults of the study's table: what this run computed, what it found
     if p.engine_grid:  # references on the fine grid, engines on a coarse one
         res = run_sweep(scen, list(grid or p.grid), out / "validity", backends=p.backends,
                         ladder=p.ladder, workers=workers, scheduler=scheduler,
                         progress=progress, retry_failed=retry_failed)
         sweeps["validity"] = res.out
+        done.append(res)
         if engines:
             eng = run_sweep(scen, list(p.engine_grid), out / "engines",
                             backends=(*p.backends, *engines), ladder=p.ladder,
                             workers=workers, scheduler=scheduler, progress=progress,
                             retry_failed=retry_failed)
             sweeps["engines"] = eng.out
+            done.append(eng)
     else:
         res = run_sweep(scen, list(grid or p.grid), out / "validity",
                         backends=(*p.backends, *engines), ladder=p.ladder, workers=workers,
                         scheduler=scheduler, progress=progress, retry_failed=retry_failed)
         sweeps["validity"] = res.out
+        done.append(res)
     speed = None
     if p.speed and engines:
         speed = speed_sweep(scen, out, engines=engines, dts=p.speed_dts,
@@ -126,7 +130,9 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
                        sensitivity=sensitivity,
                        title=f"Model-validity study ({p.name} preset)",
                        meta={"preset": p.name, "expected_run_time": p.expected,
-                             "wall_s": time.perf_counter() - t0})
+                             "wall_s": time.perf_counter() - t0,
+                             "rows_written": sum(r.rows_written for r in done),
+                             "rows_done_before": sum(r.rows_done_before for r in done)})
 
 
 def run_sensitivity(out, trajectories: int, *, crossings: bool = False, workers=None,
@@ -173,13 +179,32 @@ def _combined_table(out: Path, sweeps: dict, speed: dict | None):
 
 
 def _fmt_point(point) -> str:
-    """A grid point as 'name = value, ...' (the table stores it as JSON pairs)."""
+    """A grid point as 'name = value unit, ...' in the maps' display units (a contact
+    duration in ms; the table stores the point as JSON pairs in SI)."""
+    from .maps import point_text
+
     try:
         pairs = json.loads(point) if isinstance(point, str) else point
-        return ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}"
-                         for k, v in pairs)
+        return point_text(pairs)
     except (TypeError, ValueError):
         return str(point)
+
+
+def _step_words(kind: str) -> str:
+    """A rung kind's step in a few words ('1-DOF assumption'); the kind if unknown."""
+    try:
+        return RungKind(kind).step.split(" (")[0]
+    except ValueError:
+        return kind
+
+
+def _letters_shown(validity: list[dict], value: str) -> list[dict]:
+    """The rung letters the validity maps print (only maps against the paper's model print
+    the dominating step's letter), each with its step, in ladder order."""
+    if value != "rel":
+        return []
+    shown = {k for v in validity if v.get("path") for r in v["summary"] for k in r["dominant"]}
+    return [{"letter": k.letter, "step": k.step} for k in RungKind if k.value in shown]
 
 
 def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
@@ -273,12 +298,12 @@ def _presentation(summary, validity, ident, curves) -> dict:
             "contact model, beam vs soft the 1-DOF assumption alone (the same pad), an "
             "engine's chain vs beam its discretisation and numerics."),
         "tolerance_text": str(tol) if isinstance(tol, dict) else f"{100 * tol:g} %",
-        "rung_letters": [{"letter": k.letter, "step": k.step} for k in RungKind
-                         if k is not RungKind.NEWTON],
+        "rung_letters": _letters_shown(validity, summary.get("map_value", "rel")),
         "validity": [{"target": v["target"], "figure": v["path"].name if v["path"] else None,
                       "caption": v["caption"],
                       "summary": [{**r, "worst_at": _fmt_point(r["worst_point"]),
-                                   "dominant_text": ", ".join(f"{k} {n}" for k, n in
+                                   "dominant_text": ", ".join(f"{_step_words(k)} {n}"
+                                                              for k, n in
                                                               r["dominant"].items())}
                                   for r in v["summary"]]} for v in validity],
         "identification": [{"target": v["target"], "figure": v["path"].name,
