@@ -101,6 +101,24 @@ def _check_plot_path(path: str) -> None:
                              f"{', '.join(PLOT_FORMATS)}")
 
 
+def _provenance(args, record) -> dict:
+    """Where the result came from: the code and environment, the record file (name, size,
+    SHA-1 of its bytes, samples, units read) and the test's flags as given."""
+    import hashlib
+    from pathlib import Path
+
+    from .provenance import provenance
+
+    data = Path(args.record).read_bytes()
+    test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle",
+                                           "clamp_height", "diameter", "restitution")}
+    return provenance(record={"file": str(args.record), "bytes": len(data),
+                              "sha1": hashlib.sha1(data).hexdigest(),
+                              "samples": int(record.t.size), "time_unit": record.time_unit,
+                              "length_unit": record.length_unit},
+                      test=test, fit="analytic.identify.record_fit (full-record fit, eqs 12-35)")
+
+
 def run(args) -> int:
     import sys
 
@@ -135,7 +153,8 @@ def run(args) -> int:
             "noise": fit.noise, "noise_source": fit.noise_source,
             "misfit_ratio": fit.misfit_ratio,
             "flagged_rows": [record.row(int(i)) for i in fit.flagged],
-            "warnings": list(fit.warnings)}), indent=2))
+            "warnings": list(fit.warnings),
+            "provenance": _provenance(args, record)}), indent=2))
         return 0
     for line in fit.warnings:
         print(f"treeimpact: warning: {line}", file=sys.stderr)

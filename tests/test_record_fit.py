@@ -180,7 +180,13 @@ def test_identify_json_layout_and_plot(tmp_path, capsys):
     data = json.loads(capsys.readouterr().out)
     assert set(data) == {"fit", "paper", "definitions", "residual_rms", "residual_rms_y",
                          "explained", "note", "verdict", "diagnoses", "noise", "noise_source",
-                         "misfit_ratio", "flagged_rows", "warnings"}
+                         "misfit_ratio", "flagged_rows", "warnings", "provenance"}
+    import hashlib
+
+    prov = data["provenance"]  # the record by its bytes, the code, the engines' versions
+    assert prov["record"]["sha1"] == hashlib.sha1(path.read_bytes()).hexdigest()
+    assert prov["record"]["samples"] == record.t.size and prov["test"]["mass"] == 132.4
+    assert {"code", "environment"} <= set(prov)
     # the two damping ratios, by name and formula; the paper's xi (b / omega_n) is the pair's
     assert set(data["definitions"]) == {"trunk_damping_ratio", "pair_damping_ratio"}
     fit, m, k = data["fit"], 132.4, 132.4 * 9.81 / 1.51
