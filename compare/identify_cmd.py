@@ -11,7 +11,7 @@ import math
 from treeimpact.analytic.errors import ParameterError
 
 UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
-         "pair_damping_ratio": "-", "e": "-", "E": "Pa",
+         "pair_damping_ratio": "-", "restitution": "-", "E": "Pa",
          "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s",
          "x_drift2": "m/s^2", "y_offset": "m"}
 
@@ -171,7 +171,7 @@ def run(args) -> int:
     print(f"  {'quantity':<20}{'value':>13}{'95 % low':>13}{'95 % high':>13}  {'unit':<6}"
           f"{'paper (eqs 39-48)':>19}")
     reading = paper.get("paper", {})
-    given = {"e"} if args.restitution is not None else set()
+    given = {"restitution"} if args.restitution is not None else set()
     for k, v in fit.values.items():
         lo, hi = fit.intervals[k]
         pv = reading.get(k)

@@ -225,7 +225,7 @@ def test_a_one_impact_record_shows_ranges_not_numbers(tmp_path):
     analytic = next(f for f in fits if f["rung"] == "analytic")
     lo, hi = analytic["ranges"]["M_T"]
     assert lo <= two_body_model(scen).dynamic_mass <= hi, (row, lo, hi)
-    assert analytic["ranges"]["e"][0] <= 0.3 <= analytic["ranges"]["e"][1]
+    assert analytic["ranges"]["restitution"][0] <= 0.3 <= analytic["ranges"]["restitution"][1]
 
 
 def _parents_of_tables(html: str) -> list:
@@ -325,15 +325,16 @@ def test_a_fit_value_the_record_does_not_fix_is_shown_as_such(report):
     number; fixed values show their interval where it is not negligible."""
     from treeimpact.compare.report.scenario import fit_cells
 
-    cells = fit_cells({"values": {"M_T": 87.0, "K_T": 1.2e6, "C_T": 1.2e4, "e": 3.5e-9},
+    cells = fit_cells({"values": {"M_T": 87.0, "K_T": 1.2e6, "C_T": 1.2e4, "restitution": 3.5e-9},
                        "errors": {"M_T": 0.001, "K_T": 0.0, "C_T": 0.0},
                        "ranges": {},
                        "intervals": {"M_T": (60.0, 109.0), "K_T": (1.19999e6, 1.20001e6),
-                                     "C_T": (1.1e4, 1.3e4), "e": (-2.4e5, 2.4e5)}},
-                      {"M_T": 87.0, "K_T": 1.2e6, "C_T": 1.2e4, "e": 0.1})
+                                     "C_T": (1.1e4, 1.3e4),
+                                     "restitution": (-2.4e5, 2.4e5)}},
+                      {"M_T": 87.0, "K_T": 1.2e6, "C_T": 1.2e4, "restitution": 0.1})
     by = {c["metric"]: c for c in cells}
-    assert by["e"]["fixed"] is False and by["e"]["value"] is None
-    assert (by["e"]["low"], by["e"]["high"]) == (0.0, 1.0)
+    assert by["restitution"]["fixed"] is False and by["restitution"]["value"] is None
+    assert (by["restitution"]["low"], by["restitution"]["high"]) == (0.0, 1.0)
     assert by["M_T"]["fixed"] and by["M_T"]["show_interval"]
     assert not by["K_T"]["show_interval"]  # 2e-5 of the value: nothing to show
     paths, _ = report
@@ -343,7 +344,7 @@ def test_a_fit_value_the_record_does_not_fix_is_shown_as_such(report):
     assert soft["explained"]  # the pad's 0.02 % of the peak is far below the 1 % noise
     md = paths["md"].read_text()
     for f in fits:  # intervals in the physical range; an e spanning it reads "not fixed"
-        lo, hi = f["intervals"]["e"]
+        lo, hi = f["intervals"]["restitution"]
         assert 0.0 <= lo <= hi <= 1.0, f
         row = next(line for line in md.splitlines() if line.startswith(f"| {f['rung']} |"))
         assert ("not fixed by the record" in row) == (lo <= 0.0 and hi >= 1.0), row

@@ -92,17 +92,17 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     fit = fit_record(record, test)
     assert "does not return" in fit.note and "one-impact" in fit.diagnosis_kinds()
     assert fit.explained
-    assert not any(fit.determined[k] for k in ("M_T", "K_T", "C_T", "e", "E"))
-    assert all(math.isnan(fit.values[k]) for k in ("M_T", "K_T", "e"))
+    assert not any(fit.determined[k] for k in ("M_T", "K_T", "C_T", "restitution", "E"))
+    assert all(math.isnan(fit.values[k]) for k in ("M_T", "K_T", "restitution"))
     omega = math.sqrt(model.stiffness / model.dynamic_mass)
     m, u = model.impactor_mass, model.impact_speed
     v1 = m * (1.0 + model.restitution) * u / (model.dynamic_mass + m)
     for k, v in (("omega_1", omega), ("V_1", v1)):
         assert fit.determined[k] and abs(fit.values[k] / v - 1.0) < 0.01, (k, fit.values[k], v)
-    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness), ("e", 0.3)):
+    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness), ("restitution", 0.3)):
         lo, hi = fit.intervals[k]
         assert lo <= v <= hi, (k, lo, v, hi)
-    e_low, e_high = fit.intervals["e"]
+    e_low, e_high = fit.intervals["restitution"]
     # the low end: the profile's first point outside the threshold below the truth (its grid
     # spacing is 0.1; measured 0.2), where the pendulum would come back
     assert e_high == 1.0 and 0.15 < e_low < 0.3
@@ -125,7 +125,7 @@ def test_a_known_restitution_fixes_the_one_impact_record_within_2_percent(seed):
     """With e given (the pad's, --restitution) the same record fixes M_T, K_T, C_T."""
     model, record, test = synthetic(0.3, seed, **HEAVY)
     fit = fit_record(record, test, restitution=0.3)
-    assert fit.note == "" and fit.values["e"] == 0.3
+    assert fit.note == "" and fit.values["restitution"] == 0.3
     for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness),
                  ("C_T", model.damping)):
         assert abs(fit.values[k] / v - 1.0) < 0.02, (k, fit.values[k], v)
@@ -136,13 +136,13 @@ def test_the_pendulum_s_record_fixes_the_one_impact_record_within_2_percent():
     record: with V_1 it fixes M_T = m (u_1 - v) / V_1 and e apart; the fit uses it (x and y,
     each weighted by its own noise), the sensor's offset (3 mm) fitted. 10 seeds: every
     one within 2 %, 95 % intervals covering the truth in 8+ of 10 (measured 9-10)."""
-    covered, trials = {"M_T": 0, "K_T": 0, "C_T": 0, "e": 0}, 10
+    covered, trials = {"M_T": 0, "K_T": 0, "C_T": 0, "restitution": 0}, 10
     for seed in range(trials):
         model, record, test = synthetic(0.3, seed, pendulum=True, **HEAVY)
         fit = fit_record(record, test)
         assert fit.note == "" and all(fit.determined.values())
         for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness),
-                     ("C_T", model.damping), ("e", 0.3)):
+                     ("C_T", model.damping), ("restitution", 0.3)):
             assert abs(fit.values[k] / v - 1.0) < 0.02, (k, seed, fit.values[k], v)
             lo, hi = fit.intervals[k]
             covered[k] += lo <= v <= hi
@@ -198,7 +198,7 @@ def test_identify_json_layout_and_plot(tmp_path, capsys):
     assert "pair_damping_ratio" in data["paper"]["paper"] and "xi" not in data["paper"]["paper"]
     assert data["verdict"] == "explained" and data["diagnoses"][0]["kind"] == "noise-limited"
     assert data["warnings"] == [] and data["flagged_rows"] == []
-    assert {"M_T", "K_T", "C_T", "trunk_damping_ratio", "pair_damping_ratio", "e", "E",
+    assert {"M_T", "K_T", "C_T", "trunk_damping_ratio", "pair_damping_ratio", "restitution", "E",
             "omega_1", "V_1"} <= set(data["fit"])
     assert set(data["fit"]["M_T"]) == {"value", "low", "high", "determined"}
     assert data["fit"]["M_T"]["determined"] is True and data["note"] == ""

@@ -14,7 +14,7 @@ from .fit_model import two_body_at
 from .procedure import PendulumTest
 
 #: What a one-impact record leaves undetermined (it fixes omega_1, xi, V_1, t0, the offset).
-RIDGE = ("M_T", "K_T", "C_T", "e", "E")
+RIDGE = ("M_T", "K_T", "C_T", "restitution", "E")
 
 
 def one_impact(p, test: PendulumTest, span: float) -> bool:

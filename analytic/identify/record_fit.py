@@ -462,7 +462,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         # each e the record cannot rule out, with the others' uncertainty at that e
         given = best.problem.covariance(p, floor, given_e=True)
         inside = profile.inside(best, threshold)
-        local = 0.02 < p[3] < E_MAX - 0.02 and intervals["e"][1] - intervals["e"][0] < 0.2
+        local = 0.02 < p[3] < E_MAX - 0.02 and intervals["restitution"][1] - intervals["restitution"][0] < 0.2
         if not local:  # e at a bound or the cost not quadratic in it: the profile alone
             _, intervals = _estimates(p, given, test, pendulum=y is not None)
         for q in inside:
@@ -470,8 +470,9 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
             for k in RIDGE + DAMPING_RATIOS + ("omega_1", "V_1"):
                 intervals[k] = (min(intervals[k][0], iv[k][0]), max(intervals[k][1], iv[k][1]))
         lo, hi = profile.e_range(best, threshold)
-        intervals["e"] = ((min(intervals["e"][0], lo), max(intervals["e"][1], hi)) if local
-                          else (min(lo, p[3]), max(hi, p[3])))
+        intervals["restitution"] = ((min(intervals["restitution"][0], lo),
+                                     max(intervals["restitution"][1], hi)) if local
+                                    else (min(lo, p[3]), max(hi, p[3])))
         if y is None and profile.reaches_top(best, threshold):
             ridge = _ridge(fitter, profile, best, keep, test, threshold)
     if ridge is not None:
@@ -565,7 +566,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
 def _unit_result(record: Record, feat, units: list, warnings: list, test) -> FitResult:
     """The result for a record whose numbers look like another unit: no values (NaN),
     not explained, the suspicion as its diagnosis."""
-    names = ("M_T", "K_T", "C_T") + DAMPING_RATIOS + ("e", "E", "omega_1", "V_1", "t0", "x_offset",
+    names = ("M_T", "K_T", "C_T") + DAMPING_RATIOS + ("restitution", "E", "omega_1", "V_1", "t0", "x_offset",
              "x_drift", "x_drift2") + (("y_offset",) if record.y is not None else ())
     nan = math.nan
     message = units[0]
@@ -793,11 +794,11 @@ def _ridge_estimates(ridge: _Ridge, fitter: _Fitter, keep, test, floor: float, v
         for k in RIDGE:
             intervals[k] = (min(intervals[k][0], iv[k][0]), max(intervals[k][1], iv[k][1]))
     values = {k: (math.nan if k in RIDGE else v) for k, v in values.items()}
-    intervals["e"] = (min(ridge.e_low, intervals["e"][0]), 1.0)
+    intervals["restitution"] = (min(ridge.e_low, intervals["restitution"][0]), 1.0)
     note = (f"the pendulum leaves after one impact and does not return within the record: "
             f"it fixes omega_1, xi and the trunk's velocity after the impact V_1 = m (1 + e) "
             f"u_1 / (M_T + m) (eqs 21, 54), not M_T and e apart; M_T, K_T, C_T and E are "
-            f"ranges over e in [{intervals['e'][0]:.3g}, 1] (a smaller e fits the record "
+            f"ranges over e in [{intervals['restitution'][0]:.3g}, 1] (a smaller e fits the record "
             f"worse); a known e (--restitution) or a record of the pendulum (column y) "
             f"fixes them")
     return values, intervals, determined, note
@@ -829,7 +830,7 @@ def _estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[d
         return p[j] - w, p[j] + w
 
     values = {"M_T": M, "K_T": K, "C_T": C, "trunk_damping_ratio": xi,
-              "pair_damping_ratio": pair, "e": e, "E": e_mod, "omega_1": omega,
+              "pair_damping_ratio": pair, "restitution": e, "E": e_mod, "omega_1": omega,
               "V_1": v1, "t0": float(p[4]), "x_offset": float(p[5]),
               "x_drift": float(p[7]), "x_drift2": float(p[8])}
     intervals = {
@@ -839,7 +840,7 @@ def _estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[d
         "trunk_damping_ratio": log_interval(xi, z * sd(0, 0, 1.0 / xi)),
         "pair_damping_ratio": log_interval(pair, z * sd(0.5 * m / (M + m), 0.5 * k / (K + k),
                                                         1.0 / xi)),
-        "e": restitution_interval(e, z * sd(0, 0, 0, 1)),
+        "restitution": restitution_interval(e, z * sd(0, 0, 0, 1)),
         "E": log_interval(e_mod, z * sd(0, 1)),
         "omega_1": log_interval(omega, z * sd(-0.5, 0.5)),
         "V_1": log_interval(v1, z * sd(-M / (M + m), 0, 0, 1.0 / (1.0 + e))),

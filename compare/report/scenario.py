@@ -126,11 +126,12 @@ def record_fits(ladder) -> list[dict]:
         except ParameterError as exc:
             out.append({"rung": r.rung.id, "error": str(exc)})
             continue
-        out.append({"rung": r.rung.id, "values": {k: fit.values[k] for k in (*truth, "e")},
+        keys = (*truth, "restitution")
+        out.append({"rung": r.rung.id, "values": {k: fit.values[k] for k in keys},
                     "errors": {k: fit.values[k] / v - 1.0 for k, v in truth.items()},
-                    "ranges": {k: fit.intervals[k] for k in (*truth, "e")
+                    "ranges": {k: fit.intervals[k] for k in keys
                                if not fit.determined[k]},  # a one-impact record: ranges
-                    "intervals": {k: fit.intervals[k] for k in (*truth, "e")},  # 95 %
+                    "intervals": {k: fit.intervals[k] for k in keys},  # 95 %
                     "residual": fit.residual_rms / fit.peak, "explained": fit.explained})
     return out
 
@@ -142,7 +143,7 @@ def fit_truth(ladder) -> dict:
 
     model = two_body_model(ladder.scenario)
     return {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping,
-            "e": ladder.scenario.contact.restitution}
+            "restitution": ladder.scenario.contact.restitution}
 
 
 def fit_cells(fit: dict, truth: dict) -> list[dict]:
@@ -152,12 +153,12 @@ def fit_cells(fit: dict, truth: dict) -> list[dict]:
     and ``fixed``: False where the record does not fix the quantity (a one-impact record's
     range, or an e whose 95 % interval spans all of [0, 1])."""
     cells = []
-    for k in ("M_T", "K_T", "C_T", "e"):
+    for k in ("M_T", "K_T", "C_T", "restitution"):
         lo, hi = (fit.get("ranges", {}).get(k) or fit.get("intervals", {}).get(k)
                   or (math.nan, math.nan))
         value = fit["values"].get(k, math.nan)
         fixed = k not in fit.get("ranges", {})
-        if k == "e":
+        if k == "restitution":
             lo, hi = max(0.0, lo), min(1.0, hi)
             fixed = fixed and not (lo <= 0.0 and hi >= 1.0)
         width = (hi - lo) / abs(value) if fixed and value and math.isfinite(value) else math.nan

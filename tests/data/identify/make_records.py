@@ -425,7 +425,8 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
     seconds = time.perf_counter() - t0
     truth = case["truth"]
     keys = [k for k in ("M_T", "K_T", "C_T", "xi", "e") if k in truth]
-    name = {"xi": "trunk_damping_ratio"}  # the truth's xi is the trunk's own, C / 2 sqrt(K M)
+    # the truth's xi is the trunk's own, C / 2 sqrt(K M); its e the fit's restitution
+    name = {"xi": "trunk_damping_ratio", "e": "restitution"}
     errors = {k: fit.values[name.get(k, k)] / truth[k] - 1.0 for k in keys
               if fit.determined.get(name.get(k, k), False)}
     covered = {k: bool(fit.intervals[name.get(k, k)][0] <= truth[k]
@@ -433,7 +434,7 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
     diagnoses = [d["kind"] for d in getattr(fit, "diagnoses", [])]
     # every interval in the physical range (NaN: a record not fitted)
     iv = fit.intervals
-    physical = all(not (lo < 0.0 or hi > 1.0) for lo, hi in [iv["e"]]) and all(
+    physical = all(not (lo < 0.0 or hi > 1.0) for lo, hi in [iv["restitution"]]) and all(
         not iv[k][0] <= 0.0 for k in ("M_T", "K_T", "C_T", "trunk_damping_ratio",
                                       "pair_damping_ratio", "E"))
     exp = case["expect"]
