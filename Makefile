@@ -33,7 +33,8 @@ lock:
 		--quiet -o requirements.lock
 
 # The discrepancy report with the default model-validity study as one of its sections:
-# $(OUT)/report.html (self-contained), report.md, report.json; the study in $(OUT)/study.
+# $(OUT)/report.html, report.md, report.json; the study in $(OUT)/study. The pages link
+# their figures (PNG files in $(OUT)/figures and $(OUT)/study): move or copy the folder whole.
 report: $(STAMP)
 	rm -rf $(OUT)/study  # a fresh study: rows resumed from an older code version would be stale
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/treeimpact sweep --preset default --out $(OUT)/study
