@@ -208,6 +208,11 @@ def from_view(view: dict) -> dict:
                      for e in ("mujoco", "bullet") for r in [t["rungs"].get(f"{e}.{kind}")]
                      if r is not None and _finite((r["steps"] or {}).get(m))]
             _put(out, f"step_pct.engines.{kind}.{m}", _span(steps))
+            scale = DISPLAY.get(m, (1.0, ""))[0]
+            _put(out, f"value.engines.{kind}.{m}", _span([
+                scale * r["values"][m] for t in trees.values() for e in ("mujoco", "bullet")
+                for r in [t["rungs"].get(f"{e}.{kind}")]
+                if r is not None and _finite(r["values"].get(m))]))
             _put(out, f"abs.step_pct.engines.{kind}.{m}", _span([abs(s) for s in steps]))
     for name, t in trees.items():
         rungs = t["rungs"]
@@ -440,6 +445,12 @@ def shipped() -> dict:
                      ("crown_mass_kg", lambda s: s.trunk.crown_mass),
                      ("impactor_mass_kg", lambda s: s.impactor.mass)):
         _per_tree(out, f"shipped.{key}", {t: get(s) for t, s in scens.items()})
+    # how much softer the Timoshenko trunk is at the clamp (the scenario's shear modulus)
+    from treeimpact.analytic.continuum.beam import beam_static_stiffness
+
+    _per_tree(out, "timoshenko.static_softening_pct", {
+        t: 100.0 * (1.0 - beam_static_stiffness(s.trunk, "timoshenko")
+                    / beam_static_stiffness(s.trunk)) for t, s in scens.items()})
     return out
 
 
