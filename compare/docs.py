@@ -38,6 +38,7 @@ import json
 import math
 import re
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -416,6 +417,30 @@ def from_benchmarks(results: Path | None = None) -> dict:
         if isinstance(flat, dict):
             for k, v in flat.items():
                 _put(out, f"bench.{path.stem}.{k}", v)
+    if (results / "trunks.json").exists():
+        out |= from_trunks(json.loads((results / "trunks.json").read_text()))
+    return out
+
+
+def from_trunks(data: dict) -> dict:
+    """benchmarks/results/trunks.json (bench_trunks.py): per tree, trunk model and segment
+    count, its errors against the continuum (%) and cost at the default step, and each
+    step's run (``run<factor>``)."""
+    out: dict = {}
+    for tree, sc in data["scenarios"].items():
+        for row in sc["rows"]:
+            key = f"bench.trunks.{tree}.{row['model']}.{row['segments']}"
+            w1, w2 = row["omega_errors"]
+            _put(out, f"{key}.static_stiffness_pct", 100.0 * row["static_stiffness_error"])
+            _put(out, f"{key}.omega_1_pct", 100.0 * w1)
+            _put(out, f"{key}.omega_2_pct", 100.0 * w2)
+            for run in row["runs"]:
+                if "x_max_error" not in run:
+                    continue
+                rk = key if run["factor"] == 1 else f"{key}.run{run['factor']:g}"
+                _put(out, f"{rk}.x_max_pct", 100.0 * run["x_max_error"])
+                _put(out, f"{rk}.energy_delivered_pct", 100.0 * run["energy_delivered_error"])
+                _put(out, f"{rk}.s_per_s", run["wall_per_simulated_s"])
     return out
 
 
@@ -448,9 +473,20 @@ def shipped() -> dict:
     # how much softer the Timoshenko trunk is at the clamp (the scenario's shear modulus)
     from treeimpact.analytic.continuum.beam import beam_static_stiffness
 
-    _per_tree(out, "timoshenko.static_softening_pct", {
-        t: 100.0 * (1.0 - beam_static_stiffness(s.trunk, "timoshenko")
-                    / beam_static_stiffness(s.trunk)) for t, s in scens.items()})
+    def softening(trunk, e_over_g=None):
+        if e_over_g is not None:
+            trunk = replace(trunk, shear_modulus=trunk.youngs_modulus / e_over_g)
+        return 100.0 * (1.0 - beam_static_stiffness(trunk, "timoshenko")
+                        / beam_static_stiffness(trunk))
+
+    _per_tree(out, "timoshenko.static_softening_pct",
+              {t: softening(s.trunk) for t, s in scens.items()})
+    _put(out, "timoshenko.static_softening_pct.e_over_g_10_to_20",
+         _span([softening(s.trunk, r) for s in scens.values() for r in (10.0, 20.0)]))
+    # the code's own limits the pages quote
+    from treeimpact.analytic.impact.solver import MAX_CHATTER_IMPACTS
+
+    out["code.max_chatter_impacts"] = MAX_CHATTER_IMPACTS
     return out
 
 
