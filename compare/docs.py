@@ -97,6 +97,10 @@ def _per_tree(out: dict, key: str, by_tree: dict, *, spans: bool = True) -> None
     tree has it), key (the [min, max] span) and abs.key (the span of |value|)."""
     for t, v in by_tree.items():
         _put(out, f"{key}.{t}", v)
+        if spans and _finite(v) and v < 0:
+            _put(out, f"abs.{key}.{t}", abs(v))
+        elif spans:
+            _put(out, f"abs.{key}.{t}", v)
     vals = [by_tree.get(t) for t in TREES]
     if all(_finite(v) for v in vals):
         _put(out, f"{key}.trees", vals)
@@ -215,6 +219,16 @@ def from_view(view: dict) -> dict:
                 for r in [t["rungs"].get(f"{e}.{kind}")]
                 if r is not None and _finite(r["values"].get(m))]))
             _put(out, f"abs.step_pct.engines.{kind}.{m}", _span([abs(s) for s in steps]))
+    # MuJoCo against Bullet on the same rung
+    for kind in ("engine", "chain", "pendulum"):
+        for m in metrics:
+            diffs = []
+            for t in trees.values():
+                a, b = t["rungs"].get(f"mujoco.{kind}"), t["rungs"].get(f"bullet.{kind}")
+                if a and b and _finite(a["values"].get(m)) and _finite(b["values"].get(m)) \
+                        and a["values"][m]:
+                    diffs.append(abs(100.0 * (b["values"][m] / a["values"][m] - 1.0)))
+            _put(out, f"engines_agree_pct.{kind}.{m}", _span(diffs))
     for name, t in trees.items():
         rungs = t["rungs"]
         for g, r in rungs.items():
@@ -441,6 +455,19 @@ def from_trunks(data: dict) -> dict:
                 _put(out, f"{rk}.x_max_pct", 100.0 * run["x_max_error"])
                 _put(out, f"{rk}.energy_delivered_pct", 100.0 * run["energy_delivered_error"])
                 _put(out, f"{rk}.s_per_s", run["wall_per_simulated_s"])
+    # across the trees: the recommended N = 8 at 16 times the default step, what the step
+    # changes there, and the energy delivered from N = 16 on
+    rows = [(tree, row) for tree, sc in data["scenarios"].items() for row in sc["rows"]]
+    n8 = [row for _, row in rows if row["segments"] == 8]
+    at16 = [r for row in n8 for r in row["runs"] if r["factor"] == 16 and "x_max_error" in r]
+    _put(out, "bench.trunks.n8.run16.s_per_s", _span(r["wall_per_simulated_s"] for r in at16))
+    _put(out, "bench.trunks.n8.run16.dt", _span(r["dt"] for r in at16))
+    _put(out, "bench.trunks.n8.step_effect_x_max_pct", max(
+        abs(100.0 * (r["x_max_error"] - row["runs"][0]["x_max_error"]))
+        for row in n8 for r in row["runs"] if "x_max_error" in r))
+    _put(out, "bench.trunks.n16_up.abs_energy_delivered_pct", max(
+        abs(100.0 * row["runs"][0]["energy_delivered_error"]) for _, row in rows
+        if row["segments"] >= 16))
     return out
 
 
@@ -490,9 +517,44 @@ def shipped() -> dict:
     return out
 
 
+def beam_studies() -> dict:
+    """The continuum rung's convergence in elements and what Timoshenko's theory changes on
+    the shipped trees (docs/beam-impact.md; about 2 s)."""
+    from treeimpact.analytic.continuum.beam import beam_natural_frequencies
+    from treeimpact.analytic.continuum.beam_impact import simulate_beam
+    from treeimpact.analytic.model.scenario import load_scenario
+
+    out: dict = {}
+    for t in TREES:
+        scen = load_scenario(t)
+        runs = {n: simulate_beam(scen, elements=n).metrics for n in (12, 24, 40, 48)}
+        for n, m in runs.items():
+            out[f"beam.elements{n}.energy_delivered.{t}"] = _round(m["energy_delivered"])
+            out[f"beam.elements{n}.x_max_mm.{t}"] = _round(1e3 * m["x_max"])
+            if n != 48:
+                for k in ("energy_delivered", "x_max"):
+                    out[f"beam.elements{n}.vs48_pct.{k}.{t}"] = _round(
+                        100.0 * abs(m[k] / runs[48][k] - 1.0))
+        w_eb = beam_natural_frequencies(scen.trunk, 2)
+        for e_over_g in (10.0, 13.0, 20.0):
+            trunk = replace(scen.trunk, shear_modulus=scen.trunk.youngs_modulus / e_over_g)
+            m = simulate_beam(replace(scen, trunk=trunk), beam_theory="timoshenko").metrics
+            w = beam_natural_frequencies(trunk, 2, "timoshenko")
+            key = f"timoshenko.e_over_g{e_over_g:g}"
+            for k in ("x_max", "energy_delivered"):
+                out[f"{key}.{k}_pct.{t}"] = _round(100.0 * (m[k] / runs[12][k] - 1.0))
+            for i in (0, 1):
+                out[f"{key}.omega_{i + 1}_pct.{t}"] = _round(100.0 * (w[i] / w_eb[i] - 1.0))
+    for n in (12, 24, 40):
+        for k in ("energy_delivered", "x_max"):
+            _put(out, f"beam.elements{n}.vs48_pct.{k}", _span(
+                [out[f"beam.elements{n}.vs48_pct.{k}.{t}"] for t in TREES]))
+    return out
+
+
 def cheap_numbers() -> dict:
     """The part of docs/numbers.json a test reruns (a few seconds)."""
-    out = from_view(view_from_ladders(cheap_ladders())) | shipped()
+    out = from_view(view_from_ladders(cheap_ladders())) | shipped() | beam_studies()
     if CONTACT_FIT.exists():
         out |= at_fitted_contact(json.loads(CONTACT_FIT.read_text()))
     return out
@@ -509,6 +571,7 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
     cheap = cheap_numbers()
     drift = [k for k, v in cheap.items() if k in out and not _close(out[k], v, RECOMPUTE_REL)]
     out |= cheap
+    out = {k: v for k, v in out.items() if k in used_keys(out) or k.startswith(KEEP)}
     data = {"about": "The numbers README.md and docs/*.md quote (compare/docs.py): derived from "
                      "a report by `python -m treeimpact.compare.docs numbers REPORT_DIR`, its "
                      "cheap part rerun; display units as the keys say (DISPLAY in "
@@ -696,21 +759,89 @@ def contact_fit_table(n: dict) -> str:
     return "\n".join(rows) + "\n"
 
 
-def trunks_tables(n: dict) -> str:
-    """docs/engines.md: the MuJoCo trunks against the continuum (benchmarks/results/trunks.json,
-    the table ``benchmarks/bench_trunks.py --table`` prints)."""
-    import importlib.util
+def _trunks() -> dict:
+    return json.loads((BENCHMARKS / "trunks.json").read_text())
 
-    spec = importlib.util.spec_from_file_location("bench_trunks",
-                                                  ROOT / "benchmarks" / "bench_trunks.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod.markdown(json.loads((BENCHMARKS / "trunks.json").read_text())).rstrip("\n") + "\n"
+
+def trunks_cheapest_table(n: dict) -> str:
+    """docs/engines.md: the cheapest MuJoCo run within 1 % of the continuum on x_max, per
+    tree and trunk (benchmarks/results/trunks.json, bench_trunks.py)."""
+    rows = ["| tree | use | N | dt (s) | x default | x_max | energy delivered "
+            "| s per simulated s |", "|---|---|---|---|---|---|---|---|"]
+    for tree, sc in _trunks()["scenarios"].items():
+        for c in sc["cheapest"]:
+            row = next(r for r in sc["rows"]
+                       if r["model"] == c["model"] and r["segments"] == c["segments"])
+            factor = next(r["factor"] for r in row["runs"] if r["dt"] == c["dt"])
+            rows.append(f"| {tree} | `--trunk {c['model']}` | {c['segments']} | {c['dt']:.2g} "
+                        f"| {factor:g} | {c['x_max_error']:+.2%} | "
+                        f"{c['energy_delivered_error']:+.2%} | "
+                        f"{c['wall_per_simulated_s']:.2g} |")
+    return "\n".join(rows) + "\n"
+
+
+def trunks_segments_table(n: dict) -> str:
+    """docs/engines.md: central-leader's MuJoCo trunks per segment count at the default step
+    (benchmarks/results/trunks.json; ``bench_trunks.py --table`` prints every tree)."""
+    rows = ["| trunk | N | static K at a | omega_1 | omega_2 | x_max | energy delivered "
+            "| default dt (s) | largest stable dt, trunk (s) | runner's limit (s) "
+            "| s per simulated s |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for row in _trunks()["scenarios"]["central-leader"]["rows"]:
+        run = row["runs"][0]
+        w1, w2 = row["omega_errors"]
+        rows.append(
+            f"| {row['model']} | {row['segments']} | {row['static_stiffness_error']:+.2%} "
+            f"| {w1:+.2%} | {w2:+.2%} | {run['x_max_error']:+.2%} "
+            f"| {run['energy_delivered_error']:+.2%} | {row['default_dt']:.2g} "
+            f"| {row['trunk_stable_dt']:.2g} | {row['runner_limit']:.2g} "
+            f"| {run['wall_per_simulated_s']:.3g} |")
+    return "\n".join(rows) + "\n"
+
+
+def timoshenko_table(n: dict) -> str:
+    """docs/beam-impact.md: Timoshenko against Euler-Bernoulli on the shipped trees."""
+    rows = ["| tree | E / G | x_max | energy_delivered | omega_1 | omega_2 |",
+            "|---|---|---|---|---|---|"]
+    for t in TREES:
+        cells = []
+        for k, d in (("x_max", 2), ("energy_delivered", 2), ("omega_1", 2), ("omega_2", 1)):
+            vals = [n[f"timoshenko.e_over_g{r}.{k}_pct.{t}"] for r in (10, 13, 20)]
+            cells.append(" / ".join(_signed(v, d) for v in vals) + " %")
+        rows.append(f"| {t} | 10 / 13 / 20 | " + " | ".join(cells) + " |")
+    return "\n".join(rows) + "\n"
+
+
+def beam_cost_table(n: dict) -> str:
+    """docs/beam-impact.md: bench_beam's medians (benchmarks/results/beam-12.json, -48)."""
+    rows = ["| elements | `exact-full` (original) | `exact` | ratio | x_max, energy_delivered |",
+            "|---|---|---|---|---|"]
+    for e in (12, 48):
+        b = f"bench.beam-{e}"
+        full, exact, ratio = n[f"{b}.exact_full_ms"], n[f"{b}.exact_ms"], n[f"{b}.ratio"]
+        dx, de = n[f"{b}.x_max_rel_diff"][1], n[f"{b}.energy_delivered_rel_diff"][1]
+        rows.append(f"| {e} | {full[0]:.0f}-{full[1]:.0f} ms | {exact[0]:.1f}-{exact[1]:.1f} ms "
+                    f"| {ratio[0]:.1f}-{ratio[1]:.1f} | the same to {dx:.0e}, {de:.0e} |")
+    return "\n".join(rows) + "\n"
+
+
+def solver_cost_table(n: dict) -> str:
+    """docs/solver.md: bench_solver's medians (benchmarks/results/solver.json)."""
+    rows = ["| scenario | simulate | + reading the trajectory | quadrature integrals, "
+            "trajectory up front | ratio |", "|---|---|---|---|---|"]
+    for t in TREES:
+        b = "bench.solver"
+        rows.append(f"| {t} | {n[f'{b}.simulate_ms.{t}']:.3f} | "
+                    f"{n[f'{b}.with_trajectory_ms.{t}']:.3f} | "
+                    f"{n[f'{b}.quadrature_ms.{t}']:.3f} | {n[f'{b}.ratio.{t}']:.1f} |")
+    return "\n".join(rows) + "\n"
 
 
 #: The generated blocks: name -> function of the numbers giving the block's text.
 GENERATED = {"whole-event-table": whole_event_table, "mechanism-table": mechanism_table,
-             "contact-fit-table": contact_fit_table, "trunks-tables": trunks_tables}
+             "contact-fit-table": contact_fit_table, "timoshenko-table": timoshenko_table,
+             "beam-cost-table": beam_cost_table, "solver-cost-table": solver_cost_table,
+             "trunks-cheapest-table": trunks_cheapest_table,
+             "trunks-segments-table": trunks_segments_table}
 
 
 def _split(text: str) -> tuple[list[str], list[str]]:
@@ -761,6 +892,43 @@ def write_blocks(pages=PAGES, values: dict | None = None) -> list[str]:
             Path(page).write_text(new)
             changed.append(Path(page).name)
     return changed
+
+
+#: Keys kept in docs/numbers.json although no page quotes them (tests read them).
+KEEP = ("scan", "checks.")
+
+
+class _Tracking(dict):
+    """A dict that remembers which keys were read."""
+
+    def __init__(self, *args):
+        super().__init__(*args)
+        self.read: set = set()
+
+    def __getitem__(self, key):
+        self.read.add(key)
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self.read.add(key)
+        return super().get(key, default)
+
+
+def used_keys(values: dict, pages=PAGES) -> set:
+    """The keys the pages quote: their marks' and what their generated blocks read."""
+    used = {q["key"] for page in pages for q in quoted(Path(page).read_text())}
+    tracking = _Tracking(values | from_benchmarks()
+                         | (from_contact_fit(json.loads(CONTACT_FIT.read_text()))
+                            if CONTACT_FIT.exists() else {}))
+    for page in pages:
+        for m in BLOCK.finditer(Path(page).read_text()):
+            if m["name"] in GENERATED:
+                try:
+                    GENERATED[m["name"]](tracking)
+                except (KeyError, OSError):
+                    pass
+    return used | tracking.read
+
 
 
 # --------------------------------------------------------------------------- command

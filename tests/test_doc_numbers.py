@@ -42,13 +42,14 @@ def test_the_pages_mark_their_numbers():
 
 
 def test_the_cheap_part_of_the_numbers_file_is_what_the_code_computes_now():
+    """Every number the file keeps (those the pages quote) that the cheap part gives is
+    the one the code gives now (docs.RECOMPUTE_REL, with its reason)."""
     stored = json.loads(docs.NUMBERS.read_text())["numbers"]
     fresh = docs.cheap_numbers()
-    assert len(fresh) > 500
-    missing = sorted(set(fresh) - set(stored))
-    assert not missing, missing[:20]
-    drift = {k: (stored[k], v) for k, v in fresh.items()
-             if not docs._close(stored[k], v, docs.RECOMPUTE_REL)}
+    both = set(stored) & set(fresh)
+    assert len(both) >= 80, len(both)
+    drift = {k: (stored[k], fresh[k]) for k in sorted(both)
+             if not docs._close(stored[k], fresh[k], docs.RECOMPUTE_REL)}
     assert not drift, f"rerun python -m treeimpact.compare.docs numbers: {drift}"
 
 
@@ -139,7 +140,7 @@ def test_a_mark_fails_when_its_number_drifts(tmp_path):
                     "within 0.4 %<!-- check-max: c -->, about 25 s<!-- check: d ~20% -->.\n")
     good = {"a": [57.49, 212.97], "b": 8.58, "c": 0.35, "d": 29.0}
     assert docs.check_marks([page], good) == []
-    for key, bad in (("a", [57.49, 212.4]), ("b", 8.66), ("c", 0.41), ("d", 31.0)):
+    for key, bad in (("a", [57.49, 212.4]), ("b", 8.66), ("c", 0.46), ("d", 33.0)):
         problems = docs.check_marks([page], good | {key: bad})
         assert len(problems) == 1 and f" {key} = " in problems[0], (key, problems)
     assert "no number named 'a'" in docs.check_marks([page], {"b": 8.58, "c": 0.35,
