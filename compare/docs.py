@@ -263,6 +263,9 @@ def from_view(view: dict) -> dict:
         for m in next(iter(trees.values()))["answer"]["metrics"]:
             _per_tree(out, f"gap_pct.{m}", {n: out.get(f"gap_pct.{m}.{n}") for n in trees})
     _put(out, "ratio.force_and_acceleration", _span(ratios))
+    # the scenarios' own 1-DOF model (the identification's truth)
+    for k in ("M_T", "K_T", "b", "omega_n", "xi"):
+        _per_tree(out, f"truth.{k}", {n: t["truth"].get(k) for n, t in trees.items()})
     # the paper's identification procedure on the exact (Newton) record
     errs = {}
     for name, t in trees.items():
@@ -514,6 +517,14 @@ def shipped() -> dict:
     from treeimpact.analytic.impact.solver import MAX_CHATTER_IMPACTS
 
     out["code.max_chatter_impacts"] = MAX_CHATTER_IMPACTS
+    import inspect
+
+    from treeimpact.analytic.identify.record_fit import EXPLAINED_FRACTION
+    from treeimpact.analytic.records import metrics_from_record
+
+    out["code.explained_fraction_pct"] = _round(100.0 * EXPLAINED_FRACTION)
+    out["code.persist_factor"] = inspect.signature(metrics_from_record).parameters[
+        "persist_factor"].default
     return out
 
 
@@ -836,12 +847,95 @@ def solver_cost_table(n: dict) -> str:
     return "\n".join(rows) + "\n"
 
 
+def _option_values(option) -> str:
+    if option.choices:
+        return ", ".join(f"`{c}`" for c in option.choices)
+    kind = "integer" if option.kind is int else "number"
+    low = "-inf" if option.low is None else f"{option.low:g}"
+    high = "inf" if option.high is None else f"{option.high:g}"
+    unit = f" {option.unit}" if option.unit not in ("", "1") else ""
+    return f"{kind} in {'(' if option.low_open else '['}{low}, {high}]{unit}"
+
+
+def _backend_option_variants() -> dict:
+    """option name -> [(Option, [backends])]: one entry per distinct definition (Bullet's
+    --trunk takes fewer words than MuJoCo's)."""
+    from treeimpact.analytic.errors import ParameterError
+
+    from .backends import BACKENDS
+
+    out: dict = {}
+    for name, backend in BACKENDS.items():
+        try:
+            table = backend.options()
+        except ParameterError:  # a backend that is not installed
+            continue
+        for key, option in table.items():
+            variants = out.setdefault(key, [])
+            for known, takers in variants:
+                if (known.kind, known.low, known.high, known.low_open, known.unit) == (
+                        option.kind, option.low, option.high, option.low_open, option.unit):
+                    takers.append(name)
+                    break
+            else:
+                variants.append((option, [name]))
+    return out
+
+
+def options_table(names=None) -> str:
+    """The flags the backends' OPTIONS give ``simulate`` (or ``modes``: ``names``)."""
+    rows = ["| option | values | backends | what |", "|---|---|---|---|"]
+    for key, variants in sorted(_backend_option_variants().items()):
+        for option, takers in variants:
+            if not option.cli or (names is not None and key not in names):
+                continue
+            rows.append(f"| `--{key.replace('_', '-')}` | {_option_values(option)} | "
+                        f"{', '.join(takers)} | {option.help.replace('%%', '%')} |")
+    return "\n".join(rows) + "\n"
+
+
+def simulate_options(n: dict) -> str:
+    """docs/cli.md: ``treeimpact simulate``'s backend options."""
+    return options_table()
+
+
+def modes_options(n: dict) -> str:
+    """docs/cli.md: ``treeimpact modes``'s backend options."""
+    from .cli import MODES_OPTIONS
+
+    return options_table(MODES_OPTIONS)
+
+
+def sweep_grid_names(n: dict) -> str:
+    """docs/cli.md: the names a ``--grid`` axis may take besides dotted scenario fields."""
+    from .sweep.grid import ALIASES, DERIVED_RATIOS, RECORD_FIELDS
+
+    rows = ["| NAME | what |", "|---|---|"]
+    for name, target in sorted(ALIASES.items()):
+        rows.append(f"| `{name}` | the scenario's `{target}` |")
+    for name, (_, meaning) in DERIVED_RATIOS.items():
+        rows.append(f"| `{name}` | {meaning} |")
+    for key, variants in sorted(_backend_option_variants().items()):
+        for option, takers in variants:
+            if option.cli and key not in ALIASES:
+                extra = " (1: the engine's SDOF trunk)" if key == "segments" else ""
+                rows.append(f"| `{key}` | the option `--{key.replace('_', '-')}` of "
+                            f"{', '.join(takers)}: {_option_values(option)}{extra} |")
+    for name, (_, _, _, unit) in RECORD_FIELDS.items():
+        unit = f" ({unit})" if unit not in ("", "1") else ""
+        rows.append(f"| `record.{name}` | the sampling of a record{unit}: only in a sweep "
+                    "with an analysis (the identification validation) |")
+    return "\n".join(rows) + "\n"
+
+
 #: The generated blocks: name -> function of the numbers giving the block's text.
 GENERATED = {"whole-event-table": whole_event_table, "mechanism-table": mechanism_table,
              "contact-fit-table": contact_fit_table, "timoshenko-table": timoshenko_table,
              "beam-cost-table": beam_cost_table, "solver-cost-table": solver_cost_table,
              "trunks-cheapest-table": trunks_cheapest_table,
-             "trunks-segments-table": trunks_segments_table}
+             "trunks-segments-table": trunks_segments_table,
+             "simulate-options": simulate_options, "modes-options": modes_options,
+             "sweep-grid-names": sweep_grid_names}
 
 
 def _split(text: str) -> tuple[list[str], list[str]]:
