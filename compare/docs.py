@@ -563,9 +563,61 @@ def beam_studies() -> dict:
     return out
 
 
+#: The collisions of docs/contact-settings.md's table: (m1, m2 (inf: fixed), e, duration,
+#: dt), SI.
+CONTACT_CASES = ((132.4, 4.0, 0.5, 2e-3, 4e-5), (132.4, 110.0, 0.1, 5e-4, 1e-5),
+                 (1.0, math.inf, 0.8, 1e-3, 1e-5), (132.4, 4.0, 0.5, 2e-3, 2e-4),
+                 (1.0, math.inf, 0.05, 1e-3, 1e-4))
+
+
+def contact_command() -> dict:
+    """``treeimpact contact`` on :data:`CONTACT_CASES`: what each engine achieves with the
+    corrected settings and with the naive formula (about 1 s)."""
+    from .contact_cmd import contact_settings
+
+    out: dict = {}
+    errs: dict = {"mujoco": [], "bullet": []}
+    naive: dict = {"mujoco": [], "bullet": []}
+    durations: dict = {}
+    for i, (m1, m2, e, duration, dt) in enumerate(CONTACT_CASES):
+        res = contact_settings(mass=m1, other_mass=m2, restitution=e, duration=duration,
+                               dt=dt)
+        key = f"contact_cmd.{i}"
+        law = res["target"]
+        steps = round(law["duration"] / dt)
+        out[f"{key}.steps"] = steps
+        out[f"{key}.damping_ratio"] = _round(law["damping_ratio"])
+        for engine in ("mujoco", "bullet"):
+            ach = res[engine]["achieved"]
+            ach = ach if "restitution" in ach else ach["solref"]
+            out[f"{key}.{engine}.e"] = _round(ach["restitution"])
+            out[f"{key}.{engine}.duration_pct"] = _round(
+                100.0 * (ach["duration"] / law["duration"] - 1.0))
+            out[f"{key}.{engine}.naive_e"] = _round(res[engine]["naive"]["restitution"])
+            out[f"{key}.{engine}.naive_miss"] = _round(
+                res[engine]["naive"]["restitution"] - e)
+            errs[engine] += [abs(a["restitution"] - e) for a in (
+                [res[engine]["achieved"]] if "restitution" in res[engine]["achieved"]
+                else res[engine]["achieved"].values())]
+            naive[engine].append(abs(res[engine]["naive"]["restitution"] - e))
+            durations.setdefault(steps, []).append(abs(out[f"{key}.{engine}.duration_pct"]))
+        timeconst = res["mujoco"]["achieved"].get("solref_timeconst")
+        if timeconst:
+            out[f"{key}.mujoco.timeconst_e"] = _round(timeconst["restitution"])
+    for engine in errs:
+        out[f"contact_cmd.{engine}.e_error_max"] = _round(max(errs[engine]))
+        _put(out, f"contact_cmd.{engine}.naive_miss", _span(naive[engine]))
+    for steps, d in durations.items():
+        out[f"contact_cmd.duration_pct_max.steps{steps}"] = _round(max(d))
+    _put(out, "contact_cmd.steps", _span(out[f"contact_cmd.{i}.steps"]
+                                         for i in range(len(CONTACT_CASES))))
+    return out
+
+
 def cheap_numbers() -> dict:
     """The part of docs/numbers.json a test reruns (a few seconds)."""
-    out = from_view(view_from_ladders(cheap_ladders())) | shipped() | beam_studies()
+    out = (from_view(view_from_ladders(cheap_ladders())) | shipped() | beam_studies()
+           | contact_command())
     if CONTACT_FIT.exists():
         out |= at_fitted_contact(json.loads(CONTACT_FIT.read_text()))
     return out
@@ -857,6 +909,23 @@ def _option_values(option) -> str:
     return f"{kind} in {'(' if option.low_open else '['}{low}, {high}]{unit}"
 
 
+def contact_settings_table(n: dict) -> str:
+    """docs/contact-settings.md: ``treeimpact contact`` on :data:`CONTACT_CASES`."""
+    rows = ["| m1, m2 (kg) | target e, duration | dt (steps) | MuJoCo e, duration | MuJoCo "
+            "naive e | Bullet e, duration | Bullet naive e |", "|---|---|---|---|---|---|---|"]
+    for i, (m1, m2, e, duration, dt) in enumerate(CONTACT_CASES):
+        k = f"contact_cmd.{i}"
+        other = "fixed" if math.isinf(m2) else f"{m2:g}"
+        mj = (f"{n[f'{k}.mujoco.e']:.6f}, {n[f'{k}.mujoco.duration_pct']:+.2f}% (timeconst "
+              f"{n[f'{k}.mujoco.timeconst_e']:.6f})")
+        bl = f"{n[f'{k}.bullet.e']:.6f}, {n[f'{k}.bullet.duration_pct']:+.2f}%"
+        rows.append(f"| {m1:g}, {other} | {e:g}, {1e3 * duration:g} ms | {dt:g} s "
+                    f"({n[f'{k}.steps']}) | {mj} | {n[f'{k}.mujoco.naive_e']:.4f} "
+                    f"({n[f'{k}.mujoco.naive_miss']:+.4f}) | {bl} | "
+                    f"{n[f'{k}.bullet.naive_e']:.4f} ({n[f'{k}.bullet.naive_miss']:+.4f}) |")
+    return "\n".join(rows) + "\n"
+
+
 def _backend_option_variants() -> dict:
     """option name -> [(Option, [backends])]: one entry per distinct definition (Bullet's
     --trunk takes fewer words than MuJoCo's)."""
@@ -935,7 +1004,8 @@ GENERATED = {"whole-event-table": whole_event_table, "mechanism-table": mechanis
              "trunks-cheapest-table": trunks_cheapest_table,
              "trunks-segments-table": trunks_segments_table,
              "simulate-options": simulate_options, "modes-options": modes_options,
-             "sweep-grid-names": sweep_grid_names}
+             "sweep-grid-names": sweep_grid_names,
+             "contact-settings-table": contact_settings_table}
 
 
 def _split(text: str) -> tuple[list[str], list[str]]:
