@@ -356,6 +356,25 @@ def from_sensitivity(report: dict) -> dict:
     return out
 
 
+def from_study(study: dict) -> dict:
+    """The default study's validity summaries (``study.json`` of ``make report``'s study):
+    per target and metric, the share of cells within the tolerance (%) and the worst gap
+    (%); the engines' chains against the beam across both engines."""
+    out: dict = {}
+    engines: dict = {}
+    for v in study.get("validity", []):
+        for r in v["summary"]:
+            key = f"study.{v['target']}.{r['metric']}"
+            out[f"{key}.within_pct"] = _round(100.0 * r["within"])
+            out[f"{key}.cells"] = r["cells"]
+            out[f"{key}.worst_pct"] = _round(100.0 * r["worst_rel"])
+            if v["target"] in ("mujoco", "bullet"):
+                engines.setdefault(r["metric"], []).append(abs(100.0 * r["worst_rel"]))
+    for m, vals in engines.items():
+        out[f"study.engines.{m}.abs_worst_pct"] = _round(max(vals))
+    return out
+
+
 def from_contact_fit(fit: dict) -> dict:
     """The models held against the paper's measurements (``paper --fit-contact``)."""
     out: dict = {}
@@ -525,6 +544,22 @@ def shipped() -> dict:
     out["code.explained_fraction_pct"] = _round(100.0 * EXPLAINED_FRACTION)
     out["code.persist_factor"] = inspect.signature(metrics_from_record).parameters[
         "persist_factor"].default
+    # the sensitivity study's design (compare/sensitivity.py, the presets)
+    from .sensitivity import DURATIONS as PADS
+    from .sensitivity import INPUTS, LEVELS
+    from .sweep.study import PRESETS
+
+    out["code.sensitivity.levels"] = LEVELS
+    out["code.sensitivity.inputs"] = len(INPUTS)
+    out["code.sensitivity.pads"] = len(PADS)
+    out["code.sensitivity.pad_range_ms"] = _round([1e3 * PADS[0], 1e3 * PADS[-1]])
+    for name, (low, high, unit, *_) in INPUTS.items():
+        if unit == "log10 s":
+            low, high = 1e3 * 10.0 ** low, 1e3 * 10.0 ** high
+        out[f"code.sensitivity.input.{name}"] = _round([low, high])
+    for name, preset in PRESETS.items():
+        out[f"code.preset.{name}.trajectories"] = preset.sensitivity
+        out[f"code.preset.{name}.points"] = preset.sensitivity * (len(INPUTS) + 1)
     return out
 
 
@@ -631,6 +666,9 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
 
     report = json.loads((Path(report_dir) / "report.json").read_text())
     out = from_view(view_from_report(report)) | from_sensitivity(report)
+    study = Path(report_dir) / "study" / "study.json"
+    if study.exists():
+        out |= from_study(json.loads(study.read_text()))
     cheap = cheap_numbers()
     drift = [k for k, v in cheap.items() if k in out and not _close(out[k], v, RECOMPUTE_REL)]
     out |= cheap
