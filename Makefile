@@ -43,10 +43,13 @@ report: $(STAMP)
 test: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest tests compare
 
+# Each writes benchmarks/results/NAME.json (those the docs quote timings from, see
+# docs/benchmarks.md); bench_make and bench_presets run on their own (minutes).
 benchmark: $(STAMP)
 	for b in solver beam mujoco bullet sweep report identify trunks; do \
 		OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_$$b.py || exit 1; \
 	done
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_beam.py --elements 48 --repeats 5
 
 clean:
 	rm -rf $(VENV) $(LOCKVENV) build *.egg-info
