@@ -544,6 +544,24 @@ def shipped() -> dict:
     out["code.explained_fraction_pct"] = _round(100.0 * EXPLAINED_FRACTION)
     out["code.persist_factor"] = inspect.signature(metrics_from_record).parameters[
         "persist_factor"].default
+    # the engines' hinged chain against the beam, one segment below the default and at 64
+    from treeimpact.analytic.continuum.chain import chain_errors, default_segments
+
+    worst64 = []
+    for t, scen in scens.items():
+        n = default_segments(scen.trunk)
+        for k, v in chain_errors(scen.trunk, n - 1).items():
+            out[f"chain.below_default.{k}_pct.{t}"] = _round(100.0 * v)
+        worst64 += [abs(v) for v in chain_errors(scen.trunk, 64).values()]
+    out["chain.n64.worst"] = _round(max(worst64))
+    # the engines' time-step rule and work budget (analytic/contact/timestep.py)
+    from treeimpact.analytic.contact import timestep
+
+    rule = inspect.signature(timestep.choose_time_step).parameters
+    out["code.timestep.steps_per_collision"] = rule["steps_per_collision"].default
+    out["code.timestep.steps_per_period"] = rule["steps_per_period"].default
+    out["code.budget.max_steps"] = timestep.MAX_STEPS
+    out["code.budget.max_gb"] = timestep.MAX_BYTES / 1e9
     # the sensitivity study's design (compare/sensitivity.py, the presets)
     from .sensitivity import DURATIONS as PADS
     from .sensitivity import INPUTS, LEVELS
