@@ -544,6 +544,17 @@ def shipped() -> dict:
     out["code.explained_fraction_pct"] = _round(100.0 * EXPLAINED_FRACTION)
     out["code.persist_factor"] = inspect.signature(metrics_from_record).parameters[
         "persist_factor"].default
+    # where the flexibility at the clamp is: the root spring's share, and what shear adds
+    # below the clamp (E / G = 13, the default)
+    shares, shear = {}, {}
+    for t, scen in scens.items():
+        tr = scen.trunk
+        a = tr.clamp_height
+        root = a * a / tr.base_stiffness if math.isfinite(tr.base_stiffness) else 0.0
+        shares[t] = 100.0 * root * beam_static_stiffness(tr)
+        shear[t] = 100.0 * (a / tr.shear_rigidity) / (a ** 3 / (3.0 * tr.bending_stiffness))
+    _per_tree(out, "root.flexibility_share_pct", shares)
+    _per_tree(out, "timoshenko.shear_over_bending_pct", shear)
     # the engines' hinged chain against the beam, one segment below the default and at 64
     from treeimpact.analytic.continuum.chain import chain_errors, default_segments
 
@@ -600,6 +611,12 @@ def beam_studies() -> dict:
                     out[f"beam.elements{n}.vs48_pct.{k}.{t}"] = _round(
                         100.0 * abs(m[k] / runs[48][k] - 1.0))
         w_eb = beam_natural_frequencies(scen.trunk, 2)
+        if t == "central-leader":  # rotary inertia alone: the Rayleigh beam (G = inf)
+            rayleigh = beam_natural_frequencies(replace(scen.trunk, shear_modulus=math.inf),
+                                                2, "timoshenko")
+            for i in (0, 1):
+                out[f"rayleigh.omega_{i + 1}_pct.{t}"] = _round(
+                    100.0 * abs(rayleigh[i] / w_eb[i] - 1.0))
         for e_over_g in (10.0, 13.0, 20.0):
             trunk = replace(scen.trunk, shear_modulus=scen.trunk.youngs_modulus / e_over_g)
             m = simulate_beam(replace(scen, trunk=trunk), beam_theory="timoshenko").metrics
@@ -613,6 +630,9 @@ def beam_studies() -> dict:
         for k in ("energy_delivered", "x_max"):
             _put(out, f"beam.elements{n}.vs48_pct.{k}", _span(
                 [out[f"beam.elements{n}.vs48_pct.{k}.{t}"] for t in TREES]))
+    _put(out, "timoshenko.omega_2_drop_pct", _span(
+        [-out[f"timoshenko.e_over_g{r:g}.omega_2_pct.{t}"] for t in TREES
+         for r in (10.0, 13.0, 20.0)]))
     return out
 
 
