@@ -453,6 +453,10 @@ def from_benchmarks(results: Path | None = None) -> dict:
         if isinstance(flat, dict):
             for k, v in flat.items():
                 _put(out, f"bench.{path.stem}.{k}", v)
+        load = data.get("load_average") or {}
+        if load.get("start") and load.get("end"):  # the 1-minute load, start and end
+            _put(out, f"bench.{path.stem}.load_average",
+                 _span([load["start"][0], load["end"][0]]))
     if (results / "trunks.json").exists():
         out |= from_trunks(json.loads((results / "trunks.json").read_text()))
     return out
@@ -985,6 +989,21 @@ def _option_values(option) -> str:
     return f"{kind} in {'(' if option.low_open else '['}{low}, {high}]{unit}"
 
 
+def preset_slice_table(n: dict) -> str:
+    """docs/sweeps.md: a chain run's wall time per engine and segment count on the full
+    preset's slice (benchmarks/results/presets.json)."""
+    counts = (1, 2, 4, 8, 16, 32)
+    rows = ["| segments | " + " | ".join(str(c) for c in counts) + " |",
+            "|---|" + "---|" * len(counts)]
+    for engine, label in (("mujoco", "MuJoCo"), ("bullet", "Bullet")):
+        cells = []
+        for c in counts:
+            lo, hi = n[f"bench.presets.run_s.{engine}.{c}"]
+            cells.append(f"{lo:.2g}-{hi:.2g} s")
+        rows.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(rows) + "\n"
+
+
 def contact_settings_table(n: dict) -> str:
     """docs/contact-settings.md: ``treeimpact contact`` on :data:`CONTACT_CASES`."""
     rows = ["| m1, m2 (kg) | target e, duration | dt (steps) | MuJoCo e, duration | MuJoCo "
@@ -1081,7 +1100,8 @@ GENERATED = {"whole-event-table": whole_event_table, "mechanism-table": mechanis
              "trunks-segments-table": trunks_segments_table,
              "simulate-options": simulate_options, "modes-options": modes_options,
              "sweep-grid-names": sweep_grid_names,
-             "contact-settings-table": contact_settings_table}
+             "contact-settings-table": contact_settings_table,
+             "preset-slice-table": preset_slice_table}
 
 
 def _split(text: str) -> tuple[list[str], list[str]]:
