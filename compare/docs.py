@@ -5,30 +5,35 @@ Where the numbers come from:
 
 * ``docs/numbers.json``: the results of the code, derived from a report (``make report``) by
   ``python -m treeimpact.compare.docs numbers REPORT_DIR``, which also reruns the cheap
-  part (the analytic rungs of the shipped trees, the mechanism, the models at the contact
-  fitted to the paper's trees: a few seconds) and checks it against the report;
-* ``docs/results/contact-fit.json``: ``treeimpact paper --fit-contact --json`` (about 30 s);
-* ``benchmarks/results/*.json``: each benchmark's own results file (``make benchmark``),
-  with the machine it ran on; timings are quoted from there only.
+  part (:func:`cheap_numbers`: the shipped trees' analytic rungs and mechanism, the beam
+  studies, ``treeimpact contact``'s collisions, the models at the contact fitted to the
+  paper's trees, the code's constants; seconds) and says where the report disagrees with it;
+  it keeps only the keys the pages quote (and what the tests read), so a new mark needs
+  ``numbers`` rerun;
+* ``docs/results/contact-fit.json``: the output of ``treeimpact paper --fit-contact --json``;
+* ``benchmarks/results/*.json``: each benchmark's own results file (``make benchmark``,
+  ``benchmarks/_results.py``), with the machine and its load; timings are quoted from there
+  only.
 
 How a page quotes one (the markdown conventions, invisible when rendered):
 
-* ``+8.6 %<!-- check: gap.x_max.open-center -->``: the number (or list of numbers: a range
-  ``57-213``, ``-12..-14``, ``9, 21 and 33``, ``+8.5 / +17.8``) just before the comment,
-  a unit word allowed between, is the value of the key (a number, or a list of as many)
-  rounded to the digits the page prints: it may differ by at most half a unit of its last
-  digit (the page quotes a rounded value; a finer difference is the rounding itself).
-  ``check-max``: the page's number is an upper bound of the value ("within 0.4 %"),
-  ``check-min`` a lower bound; `` ~10%`` after the key allows that relative difference
-  instead (an "about" on a noisy timing).
+* ``+8.6 %<!-- check: gap_pct.x_max.open-center -->``: the number (or list of numbers: a
+  range ``57-213``, ``-12..-14``, ``9, 21 and 33``, ``+8.5 / +17.8``) just before the
+  comment, a unit word allowed between, is the value of the key (a number, or a list of as
+  many; one number may stand for a [min, max] range whose ends both round to it) rounded to
+  the digits the page prints: it may differ by at most half a unit of its last digit (the
+  page quotes a rounded value; a finer difference is the rounding itself). ``check-max``:
+  the page's number is an upper bound of the value ("within 0.4 %"), ``check-min`` a lower
+  bound; `` ~10%`` after the key allows that relative difference instead (an "about").
 * ``<!-- BEGIN generated: NAME -->`` ... ``<!-- END generated: NAME -->``: a block written by
   ``python -m treeimpact.compare.docs write`` from the sources (:data:`GENERATED`); the
   check regenerates it in memory and compares it number by number (as floats, at the
   digits printed) and word by word.
 
-``python -m treeimpact.compare.docs check`` lists every quoted number that drifted;
-``tests/test_doc_numbers.py`` fails on one. SI units in the sources; keys say their unit
-where it is not SI (``_pct``, ``_ms``) and :data:`DISPLAY` gives the rungs' values'.
+``python -m treeimpact.compare.docs check`` lists every quoted number and block that
+drifted; ``tests/test_doc_numbers.py`` fails on one. SI units in the sources; keys say their
+unit where it is not SI (``_pct``, ``_ms``, ``_kg``) and :data:`DISPLAY` gives the rungs'
+values' (``value.*``).
 """
 
 from __future__ import annotations
@@ -768,8 +773,16 @@ def _half_unit(token: str) -> float:
     return 0.5 * 10.0 ** (int(exp or 0) - decimals)
 
 
+def _blank_code(text: str) -> str:
+    """The text with its code blocks and spans blanked (a mark shown as an example is no
+    mark), lines kept."""
+    text = re.sub(r"```.*?```", lambda m: re.sub(r"[^\n]", " ", m.group()), text, flags=re.S)
+    return re.sub(r"`[^`\n]*`", lambda m: " " * len(m.group()), text)
+
+
 def quoted(page_text: str) -> list[dict]:
     """Every marked number of a page: {key, mode, rel, text, tokens, line}."""
+    page_text = _blank_code(page_text)
     out = []
     for m in MARK.finditer(page_text):
         before = page_text[max(0, m.start() - 200):m.start()]
