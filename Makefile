@@ -33,7 +33,8 @@ lock:
 		--quiet -o requirements.lock
 
 # The discrepancy report with the default model-validity study as one of its sections:
-# $(OUT)/report.html (self-contained), report.md, report.json; the study in $(OUT)/study.
+# $(OUT)/report.html, report.md, report.json; the study in $(OUT)/study. The pages link
+# their figures (PNG files in $(OUT)/figures and $(OUT)/study): move or copy the folder whole.
 report: $(STAMP)
 	rm -rf $(OUT)/study  # a fresh study: rows resumed from an older code version would be stale
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/treeimpact sweep --preset default --out $(OUT)/study
@@ -42,10 +43,13 @@ report: $(STAMP)
 test: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest tests compare
 
+# Each writes benchmarks/results/NAME.json (those the docs quote timings from, see
+# docs/benchmarks.md); bench_make and bench_presets run on their own (minutes).
 benchmark: $(STAMP)
 	for b in solver beam mujoco bullet sweep report identify trunks; do \
 		OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_$$b.py || exit 1; \
 	done
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_beam.py --elements 48 --repeats 5
 
 clean:
 	rm -rf $(VENV) $(LOCKVENV) build *.egg-info

@@ -20,10 +20,15 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import time
+from pathlib import Path
 
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results  # noqa: E402
 
 METHODS = ("exact-full", "exact")
 
@@ -32,7 +37,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--elements", type=int, default=12)
+    ap.add_argument("--out", help="results file (default benchmarks/results/beam-N.json, N "
+                                  "the elements)")
     args = ap.parse_args()
+    start_load = _results.load_average()
+    numbers: dict = {}
     print(f"beam backend, {args.elements} elements, t_end = 0.1 s, median of {args.repeats} "
           "interleaved runs")
     print(f"{'scenario':<18}{'exact-full ms':>15}{'exact ms':>11}{'ratio':>8}"
@@ -57,8 +66,20 @@ def main() -> int:
         ok &= dx <= 1e-4 and de <= 1e-3
         print(f"{name:<18}{med['exact-full'] * 1e3:>15.1f}{med['exact'] * 1e3:>11.1f}"
               f"{ratio:>8.1f}{dx:>12.1e}{de:>12.1e}")
+        numbers |= {f"exact_full_ms.{name}": round(med["exact-full"] * 1e3, 2),
+                    f"exact_ms.{name}": round(med["exact"] * 1e3, 2),
+                    f"ratio.{name}": round(ratio, 2), f"x_max_rel_diff.{name}": dx,
+                    f"energy_delivered_rel_diff.{name}": de}
     print(f"speed ratio: {min(ratios):.1f}-{max(ratios):.1f} (target >= 10); "
           f"metrics {'within' if ok else 'OUTSIDE'} x_max 1e-4, energy_delivered 1e-3")
+    names = shipped_scenarios()
+    for key in ("exact_full_ms", "exact_ms", "ratio", "x_max_rel_diff",
+                "energy_delivered_rel_diff"):
+        numbers[key] = _results.span(numbers[f"{key}.{n}"] for n in names)
+    _results.write("beam", numbers, {"elements": args.elements, "repeats": args.repeats},
+                   started_load=start_load,
+                   out=Path(args.out) if args.out else
+                   _results.RESULTS / f"beam-{args.elements}.json")
     return 0 if ok else 1
 
 

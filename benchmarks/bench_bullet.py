@@ -28,9 +28,12 @@
 
 from __future__ import annotations
 
+import argparse
 import math
 import statistics
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -39,6 +42,9 @@ from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 from treeimpact.bullet_models import _runner
 from treeimpact.bullet_models._runner import build_world, make_setup, run
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results  # noqa: E402
 
 REPEATS = 5
 
@@ -117,7 +123,12 @@ def engine_spring_rate(setup, pd_client) -> tuple[float, tuple]:
     return rate, p.getJointState(world.pendulum, 0, physicsClientId=cid)[:2]
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", help="results file (default benchmarks/results/bullet.json)")
+    args = ap.parse_args(argv)
+    start_load = _results.load_average()
+    numbers: dict = {}
     s = load_scenario("central-leader")
     p, _ = _runner.client()
     pd_client = p.connect(p.DIRECT)  # the plugin stays loaded in its client: not the runner's
@@ -135,6 +146,13 @@ def main() -> None:
               f"stepSimulation {stepping:8.0f} steps/s (in-run {runner / stepping:.1%})  "
               f"bare loop {bare:8.0f} steps/s ({runner / bare:.1%})  springs in Bullet "
               f"{in_engine:8.0f} steps/s ({runner / in_engine:.1%})")
+        numbers |= {f"{trunk}.runner_step_us": round(1e6 / runner, 2),
+                    f"{trunk}.bullet_step_us": round(1e6 / stepping, 2),
+                    f"{trunk}.runner_python_us": round(1e6 / runner - 1e6 / stepping, 2),
+                    f"{trunk}.in_run_pct": round(100 * runner / stepping, 1),
+                    f"{trunk}.vs_bare_loop_pct": round(100 * runner / bare, 1),
+                    f"{trunk}.vs_springs_in_bullet_pct": round(100 * runner / in_engine, 1),
+                    f"{trunk}.springs_in_bullet_speedup": round(in_engine / runner, 2)}
         if trunk == "sdof":  # the same model: the same trajectory, to round-off
             traj = run(setup).trajectory
             y, vy = sprung[0][1]
@@ -157,11 +175,20 @@ def main() -> None:
             ok = all(v <= 0.01 for v in errs.values())
             print(f"  {name}: dt = {dt:.3g} s ({dt / dt0:g} x default) V {errs['V']:.3%} "
                   f"x_max {errs['x_max']:.3%} {'ok' if ok else 'FAIL'}")
+            if k == 0:
+                numbers |= {f"{name}.V_error_pct": round(100 * errs["V"], 3),
+                            f"{name}.x_max_error_pct": round(100 * errs["x_max"], 4)}
             all_ok = all_ok and ok
             if all_ok:
                 best = dt
         print(f"  {name}: largest dt within 1 % (and every smaller one tried): "
               f"{'none' if best is None else f'{best:.3g} s ({best / dt0:g} x default)'}")
+        if best is not None:
+            numbers[f"{name}.largest_dt_factor"] = best / dt0
+    numbers["V_error_pct"] = _results.span(numbers[f"{n}.V_error_pct"]
+                                           for n in shipped_scenarios())
+    _results.write("bullet", numbers, started_load=start_load,
+                   out=Path(args.out) if args.out else None)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import time
+from pathlib import Path
 
 import mujoco
 from mujoco import rollout
@@ -27,6 +29,9 @@ from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.mujoco_models import simulate
 from treeimpact.mujoco_models._rollout import _plan
 from treeimpact.mujoco_models._runner import make_setup
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results  # noqa: E402
 
 
 def _median_time(fn, repeat):
@@ -89,13 +94,19 @@ def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--scenario", default="central-leader")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--out", help="results file (default benchmarks/results/mujoco.json)")
     args = ap.parse_args(argv)
+    start_load = _results.load_average()
+    numbers: dict = {}
     s = load_scenario(args.scenario)
     print(f"scenario {s.name}, medians of {args.repeat} runs")
     for trunk in ("sdof", "chain"):
         n, bare, runner, ratio = throughput(s, trunk, args.repeat)
         print(f"{trunk:5s}: {n} steps; bare rollout {bare:,.0f} steps/s; runner "
               f"{runner:,.0f} steps/s; ratio {ratio:.3f} (median of paired runs; target >= 0.9)")
+        numbers |= {f"{trunk}.runner_vs_bare_pct": round(100 * ratio, 1),
+                    f"{trunk}.runner_step_us": round(1e6 / runner, 3),
+                    f"{trunk}.bare_step_us": round(1e6 / bare, 3)}
     dt0, rows, best = largest_dt(s, args.repeat)
     print(f"SDOF + linear pendulum vs analytic soft contact (default dt {dt0:.3g} s):")
     for dt, ev, ex, wps, note in rows:
@@ -104,9 +115,19 @@ def main(argv=None):
         else:
             print(f"  dt {dt:.3g} s ({dt / dt0:.1f} x default): V {ev:+.3%}, x_max {ex:+.3%}, "
                   f"wall {wps:.3f} s per simulated s")
+    for dt, ev, ex, wps, note in rows:
+        if ev is not None and dt == dt0:
+            numbers |= {"sdof.V_error_pct": round(100 * ev, 3),
+                        "sdof.x_max_error_pct": round(100 * ex, 4)}
     if best:
-        print(f"largest dt with V and x_max within 1 % (and every smaller dt of the scan): {best[0]:.3g} s "
-              f"({best[0] / dt0:.1f} x default), {best[3]:.3f} s wall per simulated s")
+        print(f"largest dt with V and x_max within 1 % (and every smaller dt of the scan): "
+              f"{best[0]:.3g} s ({best[0] / dt0:.1f} x default), {best[3]:.3f} s wall per "
+              "simulated s")
+        numbers["sdof.largest_dt_factor"] = best[0] / dt0
+    numbers["runner_vs_bare_pct"] = _results.span(
+        numbers[f"{t}.runner_vs_bare_pct"] for t in ("sdof", "chain"))
+    _results.write("mujoco", numbers, {"scenario": s.name, "repeat": args.repeat},
+                   started_load=start_load, out=Path(args.out) if args.out else None)
 
 
 if __name__ == "__main__":

@@ -41,13 +41,18 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
+import sys
 import time
+from pathlib import Path
 
 from treeimpact.analytic.impact.ivp_reference import solve_ivp_impacts
 from treeimpact.analytic.impact.simulate import impact_metrics
 from treeimpact.analytic.impact.solver import solve_impacts
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import two_body_model
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results  # noqa: E402
 
 _DEFAULT_ATOL = (1e-15, 1e-12, 1e-15, 1e-12)  # solve_ivp_impacts' default
 _EPS = 2.220446049250313e-16
@@ -96,7 +101,7 @@ def _verdict(r_exact: float, r_ivp: float) -> str:
     return "solve_ivp"
 
 
-def _bench_simulate(names, repeats: int) -> None:
+def _bench_simulate(names, repeats: int) -> dict:
     """analytic.impact.simulate (solver, every metric, the ledger; closed forms, trajectory sampled
     on first read) against: the same plus reading the 2001-sample trajectory, and the code
     before issue 13's speed work (phase integrals by quadrature, trajectory sampled up front),
@@ -118,6 +123,7 @@ def _bench_simulate(names, repeats: int) -> None:
     def with_trajectory(scenario):
         return simulate(scenario).trajectory.x
 
+    out: dict = {}
     print(f"\nanalytic.simulate: {'scenario':16s} {'ms':>6s} {'+traj ms':>8s} "
           f"{'before ms':>9s} {'ratio':>6s} {'max metric rel diff':>19s}")
     worst = 0.0
@@ -137,18 +143,25 @@ def _bench_simulate(names, repeats: int) -> None:
         mn, mt, mb = (statistics.median(x) * 1e3 for x in (now_t, traj_t, before_t))
         worst = max(worst, mn)
         print(f"{'':19s}{name:16s} {mn:6.3f} {mt:8.3f} {mb:9.3f} {mb / mn:6.1f} {diff:19.1e}")
+        out |= {f"simulate_ms.{name}": round(mn, 4), f"with_trajectory_ms.{name}": round(mt, 4),
+                f"quadrature_ms.{name}": round(mb, 4), f"ratio.{name}": round(mb / mn, 2),
+                f"metric_rel_diff.{name}": diff}
     print(f"target (issue 13): simulate < 0.3 ms median: {'met' if worst < 0.3 else 'NOT met'}"
           f" (worst {worst:.3f} ms)")
+    return out
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=200)
     ap.add_argument("--through", choices=("separation", "t_end"), default="separation")
+    ap.add_argument("--out", help="results file (default benchmarks/results/solver.json)")
     args = ap.parse_args(argv)
+    start_load = _results.load_average()
     stop = args.through == "separation"
     names = ("open-center", "central-leader", "realistic-crown")
     rows, medians, ratios, exact_wins = [], [], [], []
+    numbers: dict = {}
     print(f"{'scenario':16s} {'exact ms':>9s} {'solve_ivp ms':>12s} {'ratio':>7s}")
     for name in names:
         scenario = load_scenario(name)
@@ -163,6 +176,8 @@ def main(argv=None) -> int:
         medians.append(me)
         ratios.append(mi / me)
         print(f"{name:16s} {me:9.3f} {mi:12.3f} {mi / me:7.1f}")
+        numbers |= {f"solver_ms.{name}": round(me, 4), f"solve_ivp_ms.{name}": round(mi, 3),
+                    f"solver_ratio.{name}": round(mi / me, 1)}
 
         exact = solve_impacts(model, t_end, stop_at_separation=stop)
         met = impact_metrics(exact)
@@ -203,7 +218,12 @@ def main(argv=None) -> int:
             exact_wins.append(verdict != "solve_ivp")
             print(f"{name:16s} {label:>14s} {d_ex:9.1e} {r_ex:6.1f} {d_ivp:9.1e} {r_ivp:7.1f} "
                   f"{u:9.1e}  {verdict}")
-    _bench_simulate(names, args.repeats)
+    numbers |= _bench_simulate(names, args.repeats)
+    numbers["metric_rel_diff"] = max(numbers[f"metric_rel_diff.{n}"] for n in names)
+    for key in ("simulate_ms", "ratio", "solver_ratio"):
+        numbers[key] = _results.span(numbers[f"{key}.{n}"] for n in names)
+    _results.write("solver", numbers, {"repeats": args.repeats, "through": args.through},
+                   started_load=start_load, out=Path(args.out) if args.out else None)
     if not stop:
         print("\n(the targets below are set for --through separation)")
     print(f"\ntargets: median < 0.2 ms {'met' if max(medians) < 0.2 else 'MISSED'} "

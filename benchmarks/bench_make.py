@@ -1,0 +1,78 @@
+"""Wall time of the README's two commands, ``make report`` and ``make test`` (a benchmark,
+not a test; nothing is asserted).
+
+Run: ``.venv/bin/python benchmarks/bench_make.py [--install] [--skip-test]``. Measured in one
+run, one after the other, from the repository:
+
+1. ``--install``: the set-up both commands start with on a fresh machine (``make``'s venv
+   from requirements.lock and the project), into a temporary folder, pip's cache off;
+2. ``make report`` with OUT in a temporary folder: its wall time, and the default study's
+   own (``study.json`` wall_s, its runs' mean wall time per backend), the rest being the
+   report;
+3. ``make test``: its wall time and the test count.
+
+Writes ``benchmarks/results/make.json`` (the README quotes it); every temporary folder is
+removed. The load average before and after is recorded: on a shared machine the times
+grow with it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _timed(cmd: list[str], env=None) -> tuple[float, str]:
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - t0
+    return wall, proc.stdout + proc.stderr
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--install", action="store_true", help="also time a fresh install")
+    p.add_argument("--skip-test", action="store_true", help="do not time make test")
+    p.add_argument("--out", help="results file (default benchmarks/results/make.json)")
+    args = p.parse_args(argv)
+    start_load = _results.load_average()
+    numbers, details = {}, {}
+    with tempfile.TemporaryDirectory(prefix="bench-make-") as tmp:
+        if args.install:
+            venv = Path(tmp) / "venv"
+            env = dict(os.environ, PIP_NO_CACHE_DIR="1")
+            wall, log = _timed(["make", f"VENV={venv}", f"{venv}/.installed"], env)
+            numbers["install_s"] = round(wall, 1)
+            details["install_tail"] = log[-500:]
+        wall, log = _timed(["make", "report", f"OUT={tmp}/report"])
+        study = json.loads((Path(tmp) / "report" / "study" / "study.json").read_text())
+        numbers["report_s"] = round(wall, 1)
+        numbers["report.study_s"] = round(study["wall_s"], 1)
+        numbers["report.rest_s"] = round(wall - study["wall_s"], 1)
+        for backend, t in study["timings"].items():
+            numbers[f"report.study_run_s.{backend}"] = float(f"{t['mean_wall_s']:.3g}")
+        details["report_tail"] = log[-300:]
+    if not args.skip_test:
+        wall, log = _timed(["make", "test"])
+        summary = re.findall(r"=+ (.*(?:passed|failed).*) in [\d.]+s", log)
+        numbers["test_s"] = round(wall, 1)
+        details["test_summary"] = summary[-1] if summary else log[-300:]
+    _results.write("make", numbers, details, started_load=start_load,
+                   out=Path(args.out) if args.out else None)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
