@@ -547,10 +547,13 @@ def shipped() -> dict:
     out["code.max_chatter_impacts"] = MAX_CHATTER_IMPACTS
     import inspect
 
-    from treeimpact.analytic.identify.record_fit import EXPLAINED_FRACTION
+    from treeimpact.analytic.identify.record_fit import RESOLUTION
     from treeimpact.analytic.records import metrics_from_record
 
-    out["code.explained_fraction_pct"] = _round(100.0 * EXPLAINED_FRACTION)
+    out["code.identify_resolution"] = RESOLUTION
+    from .report.scenario import FIT_NOISE
+
+    out["code.report_fit_noise_pct"] = _round(100.0 * FIT_NOISE)
     out["code.persist_factor"] = inspect.signature(metrics_from_record).parameters[
         "persist_factor"].default
     # where the flexibility at the clamp is: the root spring's share, and what shear adds

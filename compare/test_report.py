@@ -203,6 +203,16 @@ def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(
     assert answer["explained"] is False  # the full-record fit on the continuum's record
     html = paths["html"].read_text()
     assert html.index("The answer") < html.index("Summary")
+    # the pad's loss the answer quotes: the continuum's and the 1-DOF model's, eq 56
+    assert answer["pad_loss"]["continuum"] == section.ladder.value("beam", "contact_dissipation")
+    assert answer["pad_loss"]["one_dof"] == \
+        section.ladder.rungs[0].values["contact_dissipation"]
+    loss = fixture["pad_loss"]
+    quoted = re.search(r"pad loses far less energy than eq 56 says \(([0-9.]+)-([0-9.]+) J on "
+                       r"the continuum instead of the 1-DOF model's ([0-9.]+)-([0-9.]+) J\)", html)
+    assert quoted, "the answer quotes the pad's loss"
+    assert [float(v) for v in quoted.groups()] == pytest.approx(
+        [loss["continuum"]] * 2 + [loss["one_dof"]] * 2, rel=0.005)  # 3 digits printed
 
 
 def test_a_one_impact_record_shows_ranges_not_numbers(tmp_path):

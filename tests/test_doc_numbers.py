@@ -145,3 +145,36 @@ def test_a_mark_fails_when_its_number_drifts(tmp_path):
         assert len(problems) == 1 and f" {key} = " in problems[0], (key, problems)
     assert "no number named 'a'" in docs.check_marks([page], {"b": 8.58, "c": 0.35,
                                                               "d": 29.0})[0]
+
+
+def _results(name):
+    path = docs.ROOT / "benchmarks" / "results" / f"{name}.json"
+    return json.loads(path.read_text())["numbers"]
+
+
+def _about(text, pattern):
+    """The number before ``pattern`` in ``text`` ("about 60 s" -> 60.0)."""
+    import re
+
+    m = re.search(r"([0-9.]+)\s*" + pattern, text)
+    assert m, (pattern, text)
+    return float(m.group(1))
+
+
+def test_the_presets_quote_their_measured_cost():
+    """What `sweep --preset` and its --help promise is what the benchmarks measured (the
+    default study in `make report`, results/make.json; the full grid extrapolated from its
+    slice, results/presets.json); "about": within 25 % (the machine's noise, a factor ~2
+    under load, is in the files' load averages, not here)."""
+    from treeimpact.compare.cli import build_parser
+    from treeimpact.compare.sweep.study import PRESETS
+
+    made, full = _results("make"), _results("presets")
+    sweep = build_parser()._subparsers._group_actions[0].choices["sweep"]
+    help_text = next(a.help for a in sweep._actions if a.dest == "preset")
+    for text in (PRESETS["default"].expected, help_text):
+        assert _about(text, r"s (with 2 workers|on 2 cores)") == pytest.approx(
+            made["report.study_s"], rel=0.25)
+    for text in (PRESETS["full"].expected, help_text):
+        assert _about(text, "CPU-hours") == pytest.approx(full["full.cpu_hours"], rel=0.25)
+        assert _about(text, "min") == pytest.approx(full["full.minutes_2_workers"], rel=0.25)

@@ -209,6 +209,9 @@ def _answer(scen_sections) -> list[dict]:
                     "good_enough": {m: abs(r["rel"]) <= tolerance
                                     for m, r in rows.items()},
                     "explained": bool(explained) and all(explained),
+                    "pad_loss": {"continuum": float(np.mean(
+                        [c.values.get("contact_dissipation", math.nan) for c in chains])),
+                        "one_dof": ref.values.get("contact_dissipation", math.nan)},
                     "contact_duration": contact.duration, "restitution": contact.restitution})
     return out
 

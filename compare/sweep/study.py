@@ -53,7 +53,7 @@ PRESETS = {
         engine_grid=("contact_duration=5e-4,5e-3", "crown_ratio=0,4"),
         map_metrics=("x_max", "energy_delivered", "crown_peak_acceleration"),
         map_value="step", identification=True, sensitivity=2,
-        expected="about 25 s with 2 workers: 8 contact durations x 6 crown ratios on the "
+        expected="about 60 s with 2 workers: 8 contact durations x 6 crown ratios on the "
                  "analytic, soft and beam backends, the engines' chains on 2 x 2 of them, "
                  "and the identification validation (4 e x 4 crown ratios x 3 rungs, MuJoCo's "
                  "chain on 2 x 2, 1-20 kHz x 0.5-2 % noise on exact SDOF records)"),
@@ -63,9 +63,9 @@ PRESETS = {
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
         identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
         ident_engine_rungs=ENGINES, sensitivity=10, sensitivity_crossings=True,
-        expected="about 1.5 CPU-hours: 45 minutes with 2 workers, 6 on 16 (measured on a "
-                 "slice of the preset, 65 s of runs per (e, crown) pair; see "
-                 "compare/sweep/study.py); resumable"),
+        expected="about 6 CPU-hours: 190 minutes with 2 workers, 24 on 16 (measured on a "
+                 "slice of the preset, 280 s of runs per (e, crown) pair: "
+                 "benchmarks/bench_presets.py); resumable"),
 }
 
 
