@@ -90,7 +90,22 @@ def local_cluster(config: dict, backend: str):
                                dashboard_address=None)
     with cluster:
         warm(backend, scheduler=cluster.scheduler_address)
-        yield cluster.scheduler_address
+        try:
+            yield cluster.scheduler_address
+        finally:
+            _stop_workers(cluster)
+
+
+def _stop_workers(cluster, timeout_s: float = 10.0) -> None:
+    """The workers stopped before the scheduler: closing both at once lets a worker's
+    heartbeat meet a closed scheduler and log a CommClosedError traceback (dask/distributed
+    issue 7192)."""
+    import time
+
+    cluster.scale(0)
+    end = time.monotonic() + timeout_s
+    while cluster.scheduler_info.get("workers") and time.monotonic() < end:
+        time.sleep(0.05)
 
 
 def warm(backend: str = "soft", **kw) -> None:
