@@ -170,6 +170,11 @@ def test_each_engine_draws_its_rungs_in_its_own_three_shades():
                for k in ("engine", "chain", "pendulum")}
     assert len(set(colours.values())) == 3 * len(ENGINES)  # no two rungs share a colour
     assert all(colours[(e, "engine")] == BACKENDS[e].shades[0] for e in ENGINES)
+    # an engine's own elastic rod (MuJoCo's flex) has a fourth shade of its own
+    from treeimpact.compare.rungs import offers_rod
+
+    rods = {e: rung_style(Rung(e, "rod")) for e in ENGINES if offers_rod(e)}
+    assert rods and not {r["color"] for r in rods.values()} & set(colours.values())
 
 
 def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(report,
