@@ -15,7 +15,10 @@ through the same pad) of each scenario:
    docs/engines.md.
 
 Writes everything to ``--out`` (JSON, default benchmarks/results/trunks.json) after each
-scenario, keeping the other scenarios already in the file. N = 64 takes minutes per run
+scenario, keeping the other scenarios already in the file, with where it was measured (the
+``measured`` date, ``machine``, ``load_average`` before the runs and ``git_commit``, at the
+top for the last run and per scenario as ``record``; null where an older file lacks them).
+The report's trunk section (compare/report/trunks.py) renders the file. N = 64 takes minutes per run
 (the chain's step falls as 1/N, its cost per step grows as N^2 with the damping tendons;
 the rod's step as 1/N^2): ``--segments 4 8 16 32 64`` adds it.
 """
@@ -26,7 +29,9 @@ import argparse
 import copy
 import json
 import math
+import os
 import pathlib
+import platform
 import time
 
 import mujoco
@@ -36,12 +41,23 @@ from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.contact.timestep import stability_limit
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.compare.provenance import code_version
 from treeimpact.mujoco_models import make_setup, modes, simulate
 
 OUT = pathlib.Path(__file__).resolve().parent / "results" / "trunks.json"
 MODELS = ("chain", "flex")
 DT_FACTORS = (1, 2, 4, 8, 16)
 TARGET = 0.01  # |x_max / beam - 1| of the actionable table
+
+
+def machine_record() -> dict:
+    """Where and when the numbers are measured: the date, the machine (as cost.json names
+    it), its 1-minute load average now (other jobs on the cores inflate the costs) and the
+    code's git commit (None outside a checkout)."""
+    return {"measured": time.strftime("%Y-%m-%d"),
+            "machine": f"{platform.machine()}, {os.cpu_count()} cores, Python "
+                       f"{platform.python_version()}",
+            "load_average": os.getloadavg()[0], "git_commit": code_version()["git_commit"]}
 
 
 def free_vibration_stable(m: mujoco.MjModel, dt: float, steps: int = 4000) -> bool:
@@ -181,7 +197,8 @@ def main(argv=None) -> int:
     names = args.scenarios or ["central-leader", "open-center", "realistic-crown"]
     out = pathlib.Path(args.out)
     result = json.loads(out.read_text()) if out.exists() else {"scenarios": {}}
-    result.update(mujoco=mujoco.__version__, target=TARGET)
+    record = machine_record()
+    result.update(mujoco=mujoco.__version__, target=TARGET, **record)
     for name in names:
         s = load_scenario(name)
         beam = simulate_beam(s).metrics
@@ -190,7 +207,8 @@ def main(argv=None) -> int:
         rows = [measure(s, model, n, beam) for model in MODELS for n in args.segments]
         result["scenarios"][name] = {
             "beam": {"x_max": beam["x_max"], "energy_delivered": beam["energy_delivered"]},
-            "rows": rows, "cheapest": [c for c in (cheapest(rows, m) for m in MODELS) if c]}
+            "rows": rows, "cheapest": [c for c in (cheapest(rows, m) for m in MODELS) if c],
+            "record": {**record, "load_average_after": os.getloadavg()[0]}}
         for c in result["scenarios"][name]["cheapest"]:
             print(f"  within {TARGET:.0%} on x_max: {c['model']} N={c['segments']} dt="
                   f"{c['dt']:.3g} s ({c['x_max_error']:+.2%}), {c['wall_per_simulated_s']:.3g} s "

@@ -51,7 +51,8 @@ class Backend:
     #: (option, values) whose values make separate speed-accuracy curves of an engine
     #: (compare.sweep.speed), or None
     variants: tuple | None = None
-    #: the report's line colours of an engine's rungs (SDOF, chain, chain + full pendulum)
+    #: the report's line colours of an engine's rungs (SDOF, chain, chain + full pendulum,
+    #: its own elastic rod where it has one)
     shades: tuple = ()
     #: ``module:NAME`` of the backend's options table; None: the ``OPTIONS`` of the module
     #: its ``simulate`` lives in
@@ -74,6 +75,15 @@ class Backend:
         """The backend's options, name -> :class:`treeimpact.analytic.model.options.Option`:
         the ``OPTIONS`` of the module its ``simulate`` lives in (read without running it)."""
         return self._load(self.options_ref or self.simulate_ref.split(":")[0] + ":OPTIONS")
+
+    def offers(self, option: str, value) -> bool:
+        """Whether the backend's ``option`` takes the word ``value`` (its Option's choices);
+        False where the option table cannot be read here (the package is missing)."""
+        try:
+            choices = getattr(self.options().get(option), "choices", None)
+        except ParameterError:
+            return False
+        return bool(choices) and value in choices
 
     def simulate(self, scenario, **options):
         """The backend's result, checked before anyone reports it (a diverged run raises
@@ -121,9 +131,9 @@ BACKENDS = {
     "mujoco": Backend("mujoco", "treeimpact.mujoco_models:simulate",
                       "treeimpact.mujoco_models:modes",
                       "MuJoCo (MJCF) slide-joint or hinged-segment trunk", engine=True,
-                      run_cost=(("sdof", 0.05), ("chain", 0.5)),
+                      run_cost=(("sdof", 0.05), ("chain", 0.5), ("flex", 0.5)),
                       variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4")),
-                      shades=("#1f77b4", "#4f9fd6", "#8cc3ea")),
+                      shades=("#1f77b4", "#4f9fd6", "#8cc3ea", "#0b3d75")),
     "bullet": Backend("bullet", "treeimpact.bullet_models:simulate",
                       "treeimpact.bullet_models:modes",
                       "PyBullet prismatic or hinged-link trunk", engine=True,

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 
-from .backends import ENGINES
+from .backends import BACKENDS, ENGINES
 
 #: Sampling (s) of the exact solution for the figures and the identification: 20 us, the
 #: record spacing at which analytic.identify.procedure's tests recover b and omega_n.
@@ -32,6 +32,7 @@ class RungKind(StrEnum):
     ENGINE = "engine"
     CHAIN = "chain"
     PENDULUM = "pendulum"
+    ROD = "rod"  # the engine's own elastic trunk (MuJoCo's 1-D flex), where it has one
     MODEL = "model"  # a sweep's engine as configured, compared with the soft SDOF
 
     @property
@@ -79,6 +80,8 @@ _KINDS = {
                       "engine numerics (engine SDOF vs analytic soft contact)"),
     RungKind.CHAIN: (7, "discretisation: the engine's hinged-segment trunk against the "
                         "continuum", "D", "discretisation (engine's hinged chain vs continuum)"),
+    RungKind.ROD: (7, "discretisation: the engine's own elastic rod (MuJoCo flex) against the "
+                      "continuum", "F", "discretisation (engine's own elastic rod vs continuum)"),
     RungKind.PENDULUM: (8, "pendulum linearisation: full pendulum released from theta_r", "P",
                         "pendulum linearisation (full vs linear pendulum)"),
     RungKind.MODEL: (6, "engine as configured against the soft SDOF (numerics, trunk and "
@@ -88,6 +91,17 @@ _KINDS = {
 }
 #: The kinds each engine runs (the ladder compares the engines with each other on these).
 ENGINE_KINDS = (RungKind.ENGINE, RungKind.CHAIN, RungKind.PENDULUM)
+#: The ``trunk`` option value of an engine's own elastic rod: an engine whose ``trunk``
+#: option offers it (its OPTIONS in the backend registry) runs the ROD rung as well.
+ROD_TRUNK = "flex"
+
+
+def offers_rod(engine: str) -> bool:
+    """Whether ``engine``'s ``trunk`` option offers :data:`ROD_TRUNK`, read from the backend
+    registry's options table (no engine is imported); False for a backend not registered
+    or whose options cannot be read here."""
+    backend = BACKENDS.get(engine)
+    return backend is not None and backend.offers("trunk", ROD_TRUNK)
 
 
 @dataclass(frozen=True)
@@ -116,8 +130,10 @@ class Rung:
 
 def rung_table(engines=ENGINES, *, segments: int | None = None,
                analytic_options: tuple = ()) -> list[Rung]:
-    """The rungs in ladder order. ``segments``: the engines' chain (in its rung id and
-    options; None leaves it to the backend or a sweep axis)."""
+    """The rungs in ladder order. ``segments``: the engines' chain and rod (in their rung
+    ids and options; None leaves it to the backend or a sweep axis). An engine whose
+    ``trunk`` option offers its own elastic rod (:func:`offers_rod`) adds the ROD rung, the
+    rod with the linear pendulum and the same segments against the continuum (``beam``)."""
     chain_opts = (("segments", segments),) if segments is not None else ()
     suffix = "" if segments is None else str(segments)
     rungs = [Rung("analytic", RungKind.NEWTON, "analytic", tuple(analytic_options), None),
@@ -138,4 +154,8 @@ def rung_table(engines=ENGINES, *, segments: int | None = None,
             Rung(f"{chain}-full", RungKind.PENDULUM, eng,
                  tuple(sorted((("pendulum", "full"), ("trunk", "chain"), *chain_opts))), chain),
         ]
+        if offers_rod(eng):
+            rungs.append(Rung(f"{eng}-{ROD_TRUNK}{suffix}", RungKind.ROD, eng,
+                              tuple(sorted((("pendulum", "linear"), ("trunk", ROD_TRUNK),
+                                            *chain_opts))), "beam"))
     return rungs

@@ -36,7 +36,8 @@ TOL = load_tolerances()
 def test_each_rung_changes_exactly_one_assumption():
     rungs = {r.id: r for r in ladder_rungs("open-center", engines=("mujoco", "bullet"),
                                            segments=7)}
-    assert [r.level for r in rungs.values()] == [1, 2, 3, 4, 5, 6, 7, 8, 6, 7, 8]
+    # MuJoCo's trunk option offers its elastic rod (flex): one more rung, level 7
+    assert [r.level for r in rungs.values()] == [1, 2, 3, 4, 5, 6, 7, 8, 7, 6, 7, 8]
     assert rungs["analytic"].previous is None and rungs["soft"].previous == "analytic"
     # the trunk alone: the beam backend takes the soft SDOF's pad (k_c, c_c) by default
     assert rungs["beam"].previous == "soft" and rungs["beam"].options == ()
@@ -55,6 +56,35 @@ def test_each_rung_changes_exactly_one_assumption():
             sdof.options).get(k)} == {"trunk", "segments"}
         assert {k for k in dict(full.options) if dict(full.options)[k] != dict(
             chain.options)[k]} == {"pendulum"}
+    rod = rungs["mujoco-flex7"]  # the engine's own elastic rod: the trunk alone vs the chain
+    assert rod.kind == "rod" and rod.previous == "beam" and rod.level == 7
+    assert {k for k in dict(rod.options) if dict(rod.options)[k] != dict(
+        rungs["mujoco-chain7"].options)[k]} == {"trunk"}
+    assert dict(rod.options)["trunk"] == "flex" and "bullet-flex7" not in rungs
+
+
+def test_the_rod_rung_comes_from_the_registry_not_the_engine_name(monkeypatch):
+    """An engine runs the ROD rung when its ``trunk`` option offers "flex", whatever its
+    name: a test double offering it gets one, the same double without it gets none."""
+    import sys
+    import types
+
+    from treeimpact.compare.rungs import RungKind, rung_table
+
+    def register(name, trunks):
+        mod = types.ModuleType(f"_fake_{name}")
+        mod.OPTIONS = {"trunk": Option(trunks, "trunk")}
+        monkeypatch.setitem(sys.modules, mod.__name__, mod)
+        monkeypatch.setitem(backends.BACKENDS, name, Backend(
+            name, f"{mod.__name__}:simulate", None, "test double", engine=True))
+
+    register("elastic", ("sdof", "chain", "flex"))
+    register("stiff", ("sdof", "chain"))
+    kinds = {r.id: r.kind for r in rung_table(("elastic", "stiff", "absent"), segments=5)}
+    assert kinds["elastic-flex5"] == RungKind.ROD
+    assert [k for k in kinds if kinds[k] == RungKind.ROD] == ["elastic-flex5"]
+    letters = [k.letter for k in RungKind]
+    assert RungKind.ROD.letter == "F" and len(set(letters)) == len(letters)
 
 
 def test_default_segments_come_from_the_chain_convergence_rule():

@@ -47,7 +47,7 @@ def test_three_files_and_figures_beside_a_page_under_1_mb(report):
 def test_every_section_is_collapsible_and_tables_sort(report):
     paths, _ = report
     html = paths["html"].read_text()
-    assert html.count('<details class="section"') == 3  # paper, open-center, runs
+    assert html.count('<details class="section"') == 4  # paper, open-center, trunks, runs
     assert 'id="scenario-open-center"' in html and "querySelectorAll(\"table\")" in html
 
 
@@ -170,6 +170,11 @@ def test_each_engine_draws_its_rungs_in_its_own_three_shades():
                for k in ("engine", "chain", "pendulum")}
     assert len(set(colours.values())) == 3 * len(ENGINES)  # no two rungs share a colour
     assert all(colours[(e, "engine")] == BACKENDS[e].shades[0] for e in ENGINES)
+    # an engine's own elastic rod (MuJoCo's flex) has a fourth shade of its own
+    from treeimpact.compare.rungs import offers_rod
+
+    rods = {e: rung_style(Rung(e, "rod")) for e in ENGINES if offers_rod(e)}
+    assert rods and not {r["color"] for r in rods.values()} & set(colours.values())
 
 
 def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(report,
@@ -389,3 +394,125 @@ def test_force_and_displacement_figures_tell_the_rungs_apart(ladder_of):
     assert len(sdof) == 1 and len(flexible) == 1
     (s_lo, s_hi), (f_lo, f_hi) = sdof.pop(), flexible.pop()
     assert s_hi - s_lo < 0.2 * (f_hi - f_lo)  # the 1-DOF trunks' differences stay visible
+
+
+def _cells(row_html: str) -> list[str]:
+    """The text of each cell of one html table row (tags stripped)."""
+    return [re.sub(r"<[^>]+>", "", c).strip()
+            for c in re.findall(r"<t[dh][^>]*>(.*?)</t[dh]>", row_html, re.S)]
+
+
+def _number(text: str) -> float:
+    """A page's number as a float: '+0.61 %' -> 0.0061, '1.57e-5', '5070'; n/a -> NaN."""
+    text = text.strip().strip("`")
+    if text == "n/a":
+        return math.nan
+    if text.endswith("%"):
+        return float(text[:-1].strip()) / 100
+    return float(text)
+
+
+def _close(shown: float, value: float, *, pct: bool = False) -> bool:
+    """``shown`` is ``value`` as the page rounds it: percentages to 0.01 % (5e-5 of a
+    fraction), other numbers to 3 significant digits (or whole seconds from 100)."""
+    if pct:
+        return abs(shown - value) <= 5.01e-5
+    return abs(shown - value) <= max(5.01e-3 * abs(value), 0.501 if abs(value) >= 100 else 0)
+
+
+def _tables(text: str, fmt: str) -> list[list[list[str]]]:
+    """Every table of an html or markdown text as rows of cell texts (header row first)."""
+    if fmt == "html":
+        return [[_cells(r) for r in re.findall(r"<tr>(.*?)</tr>", t, re.S)]
+                for t in re.findall(r"<table>(.*?)</table>", text, re.S)]
+    tables, cur = [], []
+    for line in text.splitlines() + [""]:
+        if line.startswith("|"):
+            if not re.fullmatch(r"\|(\s*-+:?\s*\|)+", line.replace("---:", "---")):
+                cur.append([c.strip() for c in line.strip().strip("|").split("|")])
+        elif cur:
+            tables.append(cur)
+            cur = []
+    return tables
+
+
+@pytest.mark.parametrize("fmt", ["html", "md"])
+def test_trunk_section_shows_the_numbers_of_trunks_json(fmt):
+    """The trunk section's numbers are benchmarks/results/trunks.json's, read back from the
+    rendered page as numbers: per tree the cheapest run within the target on x_max (the
+    sentence and the table), and every (trunk, N) of one tree at the default step."""
+    from treeimpact.compare.report.trunks import TRUNKS_JSON, TrunksSection
+
+    data = json.loads(TRUNKS_JSON.read_text())
+    tree = "central-leader"
+    text = TrunksSection(tree=tree).render(fmt)
+    cheap, per_n = _tables(text, fmt)
+    # the user's table: one row per tree and model, the file's cheapest within the target
+    want = [(name, c) for name, sc in data["scenarios"].items()
+            for c in sorted(sc["cheapest"], key=lambda c: c["wall_per_simulated_s"])]
+    assert len(cheap) - 1 == len(want)
+    for cells, (name, c) in zip(cheap[1:], want):
+        rows = {(r["model"], r["segments"]): r for r in data["scenarios"][name]["rows"]}
+        assert cells[0] == name and cells[1].strip("`") == f"--trunk {c['model']}"
+        assert _number(cells[2]) == c["segments"]
+        assert _close(_number(cells[3]), c["dt"])
+        assert _close(_number(cells[4]), c["dt"] / rows[(c["model"], c["segments"])][
+            "default_dt"])
+        assert _close(_number(cells[5]), c["x_max_error"], pct=True)
+        assert abs(c["x_max_error"]) <= data["target"]
+        assert _close(_number(cells[6]), c["energy_delivered_error"], pct=True)
+        assert _close(_number(cells[7]), c["wall_per_simulated_s"])
+    # the sentences: per tree the cheapest of all, its flags and cost
+    plain = re.sub(r"<[^>]+>|`|\*\*", "", text)  # tags and markdown marks off
+    said = re.findall(r"(\S+): use --trunk (\w+) --segments (\d+) --dt (\S+) \(.*?\),\s+"
+                      r"costing (\S+) s per simulated second \(x_max ([^,]+), energy "
+                      r"delivered ([^)]+)\)", plain)
+    assert len(said) == len(data["scenarios"])
+    for (name, model, n, dt, cost, xm, ed), (want_name, sc) in zip(
+            said, data["scenarios"].items()):
+        best = min(sc["cheapest"], key=lambda c: c["wall_per_simulated_s"])
+        assert name == want_name and model == best["model"]
+        assert int(n) == best["segments"] and _close(float(dt), best["dt"])
+        assert _close(float(cost), best["wall_per_simulated_s"])
+        assert _close(_number(xm), best["x_max_error"], pct=True)
+        assert _close(_number(ed), best["energy_delivered_error"], pct=True)
+    # every (trunk, N) of the tree at the runner's default step
+    rows = data["scenarios"][tree]["rows"]
+    assert len(per_n) - 1 == len(rows)
+    for cells, r in zip(per_n[1:], rows):
+        run = r["runs"][0]
+        assert cells[0] == r["model"] and _number(cells[1]) == r["segments"]
+        for i, v in ((2, r["static_stiffness_error"]), (3, r["omega_errors"][0]),
+                     (4, r["omega_errors"][1]), (5, run["x_max_error"]),
+                     (6, run["energy_delivered_error"])):
+            assert _close(_number(cells[i]), v, pct=True), (r["model"], r["segments"], i)
+        for i, v in ((7, r["default_dt"]), (8, r["trunk_stable_dt"]), (9, r["runner_limit"]),
+                     (10, run["wall_per_simulated_s"])):
+            assert _close(_number(cells[i]), v), (r["model"], r["segments"], i)
+
+
+def test_trunk_section_says_where_its_numbers_come_from(tmp_path, report):
+    """The section names the file and the machine it was measured on, or says the machine
+    was not recorded; the full report carries it as a section and in report.json."""
+    from treeimpact.compare.report.trunks import TRUNKS_JSON, TrunksSection
+
+    data = json.loads(TRUNKS_JSON.read_text())
+    unrecorded = {**data, "machine": None, "measured": None}
+    (tmp_path / "a.json").write_text(json.dumps(unrecorded))
+    html = TrunksSection(tmp_path / "a.json").render("html")
+    assert "benchmarks/results/trunks.json" in html and "machine not recorded" in html
+    recorded = {**data, "machine": "x86_64, 2 cores, Python 3.11.7", "measured": "2026-01-02",
+                "load_average": 0.5, "git_commit": "0123456789abcdef"}
+    recorded["scenarios"] = {n: {**s, "record": {"machine": recorded["machine"]}}
+                             for n, s in data["scenarios"].items()}
+    (tmp_path / "b.json").write_text(json.dumps(recorded))
+    md = TrunksSection(tmp_path / "b.json").render("md")
+    assert "measured 2026-01-02 on x86_64, 2 cores" in md and "`0123456789`" in md
+    assert "not recorded" not in md
+    missing = TrunksSection(tmp_path / "none.json")
+    assert not missing.available and "is not in this checkout" in missing.render("html")
+    paths, _ = report
+    assert 'id="trunks"' in paths["html"].read_text()
+    shown = json.loads(paths["json"].read_text())["trunks"]
+    assert shown["source"] == "benchmarks/results/trunks.json"
+    assert [t["name"] for t in shown["trees"]] == list(data["scenarios"])

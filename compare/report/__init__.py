@@ -6,6 +6,8 @@ Sections, one module each, each a class with a jinja2 template under ``templates
 * :mod:`.paper` - Table 1 printed vs recomputed and the paper's discrepancies;
 * :mod:`.scenario` - per scenario: Figs 4-5 redrawn for every rung, contact force, impact
   sequence, energy ledger, the ladder table, identification against the truth;
+* :mod:`.trunks` - which MuJoCo trunk (hinged chain or elastic rod), how many segments,
+  which step and at what cost, from ``benchmarks/results/trunks.json``;
 * :mod:`.studies` - one per model-validity study directory given;
 * :mod:`.runlog` - every backend run, its status (skips with their reasons) and wall time.
 
@@ -57,6 +59,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from .runlog import RunsSection
     from .scenario import ScenarioSection, identification_spec
     from .studies import StudySection
+    from .trunks import TrunksSection
 
     studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]  # read (and refused)
     # before any run
@@ -93,9 +96,10 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
             bar.update()
     if bar is not None:
         bar.close()
+    trunks = TrunksSection(tree=scens[0].name if scens else None)
     log = RunsSection(cache, wall)
-    return {"paper": paper, "scenarios": scen_sections, "studies": studies, "runs": log,
-            "contact": {"scans": scans, "figure": scan_figure}}
+    return {"paper": paper, "scenarios": scen_sections, "trunks": trunks, "studies": studies,
+            "runs": log, "contact": {"scans": scans, "figure": scan_figure}}
 
 
 @contextlib.contextmanager
@@ -127,8 +131,8 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         old.unlink()
     shutil.rmtree(out / SWEEPS, ignore_errors=True)  # its sweeps: rows of older code
     sections = build_sections(scenarios, study_dirs, runs, out_dir=out, **options)
-    ordered = [sections["paper"], *sections["scenarios"], *sections["studies"],
-               sections["runs"]]
+    ordered = [sections["paper"], *sections["scenarios"], sections["trunks"],
+               *sections["studies"], sections["runs"]]
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     summary = _summary(sections["scenarios"])
     summary["answer"] = _answer(sections["scenarios"])
@@ -153,6 +157,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         "summary": summary,
         "paper": sections["paper"].to_json(),
         "scenarios": {s.ladder.name: s.to_json() for s in sections["scenarios"]},
+        "trunks": sections["trunks"].to_json(),
         "studies": [s.to_json() for s in sections["studies"]],
         "runs": sections["runs"].to_json(),
     }

@@ -75,6 +75,14 @@ def tidy(text) -> str:
     return _LONG_NUMBER.sub(lambda m: short(float(m.group(0)), 4), str(text))
 
 
+def cost(v) -> str:
+    """A cost (s per simulated second): 3 significant digits below 100, whole seconds from
+    100 on ('5070', never '5.07e+03'); n/a for None/NaN."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        return "n/a"
+    return f"{v:.0f}" if abs(v) >= 100 else f"{v:.3g}"
+
+
 def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> str:
     """A run's options as 'name=value unit', sorted, numbers rounded (:func:`short`)."""
     units = units or {}
@@ -124,6 +132,7 @@ def environment() -> jinja2.Environment:
         _ENV.filters["pct"] = pct
         _ENV.filters["frac"] = frac
         _ENV.filters["short"] = short
+        _ENV.filters["cost"] = cost
         _ENV.filters["tidy"] = tidy
         _ENV.filters["input_name"] = input_name
         _ENV.filters["output_name"] = output_name

@@ -29,7 +29,10 @@ plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10
                      "legend.fontsize": 9, "axes.grid": True, "grid.alpha": 0.3})
 
 #: shades of an engine without its own (:attr:`compare.backends.Backend.shades`)
-_DEFAULT_SHADES = ("#2ca02c", "#5fd35f", "#98df8a")
+_DEFAULT_SHADES = ("#2ca02c", "#5fd35f", "#98df8a", "#145a14")
+#: an engine's rungs in the order of its shades and line styles: the kinds every engine
+#: runs, then its own elastic rod
+_ENGINE_ORDER = (*ENGINE_KINDS, RungKind.ROD)
 #: the analytic rungs' colour and line style
 _REFERENCE_STYLES = {RungKind.NEWTON: {"color": "black", "ls": "-", "lw": 1.8},
                      RungKind.CONTACT: {"color": "#7f7f7f", "ls": "--", "lw": 1.6},
@@ -44,8 +47,10 @@ def rung_style(rung) -> dict:
         return dict(_REFERENCE_STYLES[rung.kind])
     backend = BACKENDS.get(rung.backend)
     shades = (backend.shades if backend is not None else ()) or _DEFAULT_SHADES
-    i = ENGINE_KINDS.index(rung.kind)
-    return {"color": shades[i], "ls": ("-", "-.", ":")[i], "lw": 1.4}
+    i = _ENGINE_ORDER.index(rung.kind)
+    if i >= len(shades):
+        shades = _DEFAULT_SHADES
+    return {"color": shades[i], "ls": ("-", "-.", ":", "--")[i], "lw": 1.4}
 
 
 class FigureFiles:
