@@ -516,3 +516,20 @@ def test_trunk_section_says_where_its_numbers_come_from(tmp_path, report):
     shown = json.loads(paths["json"].read_text())["trunks"]
     assert shown["source"] == "benchmarks/results/trunks.json"
     assert [t["name"] for t in shown["trees"]] == list(data["scenarios"])
+
+
+def test_the_pooled_record_fits_are_each_rungs_own(report):
+    """The report fits every rung's record in a process pool (compare.report.build_sections):
+    each fit lands on its own rung, in the ladder's order, and equals the fit made in this
+    process (the same record, noise seed and optimiser: equal to rounding of the JSON)."""
+    from treeimpact.compare.ladder import build_ladder
+    from treeimpact.compare.report.scenario import fit_one, fit_tasks
+
+    paths, cache = report
+    fits = json.loads(paths["json"].read_text())["scenarios"]["open-center"]["record_fits"]
+    tasks = fit_tasks(build_ladder("open-center", cache=cache, segments=4,
+                                   engines=("no-such-engine",)))
+    assert [f["rung"] for f in fits] == [t[0] for t in tasks]
+    here = fit_one(tasks[-1])  # one fit (0.5-1 s): the last, where an order slip shows
+    for k, v in here["values"].items():
+        assert fits[-1]["values"][k] == pytest.approx(v, rel=1e-9), k

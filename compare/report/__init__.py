@@ -57,7 +57,9 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection
-    from .scenario import ScenarioSection, identification_spec
+    from ..ladder import build_ladder
+    from ..pool import process_map
+    from .scenario import ScenarioSection, fit_one, fit_tasks, identification_spec
     from .studies import StudySection
     from .trunks import TrunksSection
 
@@ -83,6 +85,17 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     t0 = time.perf_counter()
     paper = PaperSection()
     wall["paper"] = time.perf_counter() - t0
+    t0 = time.perf_counter()  # every rung's record fitted, all scenarios in one pool
+    kw = {} if engines is None else {"engines": engines}
+    tasks = {s.name: fit_tasks(build_ladder(s, cache=cache, segments=segments, **kw))
+             for s in scens}
+    flat = [task for ts in tasks.values() for task in ts]
+    fit_bar = Progress(len(flat), "record fits", unit="fit") if progress else None
+    done_fits = iter(process_map(fit_one, flat, done=fit_bar.update if fit_bar else None))
+    if fit_bar is not None:
+        fit_bar.close()
+    fits = {name: [next(done_fits) for _ in ts] for name, ts in tasks.items()}
+    wall["record fits (process pool)"] = time.perf_counter() - t0
     scen_sections = []
     bar = Progress(len(names), "report sections", unit="scenario") if progress else None
     for s in names:
@@ -90,7 +103,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         scen = resolve_scenario(s)
         scen_sections.append(ScenarioSection.from_runs(scen, cache, e_tables[scen.name],
                                                        engines=engines, segments=segments,
-                                                       figure_sink=sink))
+                                                       figure_sink=sink,
+                                                       fits=fits[scen.name]))
         wall[f"scenario {scen.name}"] = time.perf_counter() - t0
         if bar is not None:
             bar.update()

@@ -100,12 +100,10 @@ FIT_REST = 0.02  # s of rest before the impact: the fit estimates the sensor's n
 FIT_NOISE = 0.01
 
 
-def record_fits(ladder) -> list[dict]:
-    """The exact 1-DOF model fitted to each rung's whole record (analytic.identify.record_fit): the
-    1-DOF properties that best explain it, their errors against the model's truth, and
-    whether the 1-DOF model explains the record at all."""
+def fit_tasks(ladder) -> list[tuple]:
+    """One task per rung with a record for :func:`fit_one`: (rung id, t (s), x (m) sampled
+    at FIT_RATE with FIT_NOISE, the pendulum test, the true M_T, K_T, C_T)."""
     from treeimpact.analytic.identify.procedure import pendulum_test_of
-    from treeimpact.analytic.identify.record_fit import Record, fit_record
     from treeimpact.analytic.model.two_body import two_body_model
 
     from ..ident_study import sampled_record
@@ -116,24 +114,35 @@ def record_fits(ladder) -> list[dict]:
     model = two_body_model(scen)
     truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping}
     test = pendulum_test_of(scen)
-    out = []
-    for r in ladder.rungs:
-        if not r.ok or r.result.trajectory is None:
-            continue
-        t, x = sampled_record(r.result.trajectory, FIT_RATE, noise=FIT_NOISE, rest=FIT_REST)
-        try:
-            fit = fit_record(Record(t, x), test)
-        except ParameterError as exc:
-            out.append({"rung": r.rung.id, "error": str(exc)})
-            continue
-        keys = (*truth, "restitution")
-        out.append({"rung": r.rung.id, "values": {k: fit.values[k] for k in keys},
-                    "errors": {k: fit.values[k] / v - 1.0 for k, v in truth.items()},
-                    "ranges": {k: fit.intervals[k] for k in keys
-                               if not fit.determined[k]},  # a one-impact record: ranges
-                    "intervals": {k: fit.intervals[k] for k in keys},  # 95 %
-                    "residual": fit.residual_rms / fit.peak, "explained": fit.explained})
-    return out
+    return [(r.rung.id, *sampled_record(r.result.trajectory, FIT_RATE, noise=FIT_NOISE,
+                                        rest=FIT_REST), test, truth)
+            for r in ladder.rungs if r.ok and r.result.trajectory is not None]
+
+
+def fit_one(task: tuple) -> dict:
+    """The exact 1-DOF model fitted to one rung's whole record (a :func:`fit_tasks` task): the
+    1-DOF properties that best explain it, their errors against the model's truth, and
+    whether the 1-DOF model explains the record at all (analytic.identify.record_fit)."""
+    from treeimpact.analytic.identify.record_fit import Record, fit_record
+
+    rung, t, x, test, truth = task
+    try:
+        fit = fit_record(Record(t, x), test)
+    except ParameterError as exc:
+        return {"rung": rung, "error": str(exc)}
+    keys = (*truth, "restitution")
+    return {"rung": rung, "values": {k: fit.values[k] for k in keys},
+            "errors": {k: fit.values[k] / v - 1.0 for k, v in truth.items()},
+            "ranges": {k: fit.intervals[k] for k in keys
+                       if not fit.determined[k]},  # a one-impact record: ranges
+            "intervals": {k: fit.intervals[k] for k in keys},  # 95 %
+            "residual": fit.residual_rms / fit.peak, "explained": fit.explained}
+
+
+def record_fits(ladder) -> list[dict]:
+    """:func:`fit_one` on each rung's record, in this process (the report fits every
+    scenario's records in one process pool, compare.report.build_sections)."""
+    return [fit_one(task) for task in fit_tasks(ladder)]
 
 
 def fit_truth(ladder) -> dict:
@@ -219,15 +228,16 @@ def css(check) -> str:
 class ScenarioSection(Section):
     template = "scenario"
 
-    def __init__(self, ladder, sweep: list, *, figure_sink=None):
+    def __init__(self, ladder, sweep: list, *, figure_sink=None, fits=None):
         """One scenario's section from its finished ladder and identification sweep (no
-        runs here); figures go to ``figure_sink(fig, stem) -> path``."""
+        runs here); figures go to ``figure_sink(fig, stem) -> path``; ``fits``: its
+        :func:`record_fits` when made elsewhere (None: made here)."""
         self.ladder = ladder
         self.title = f"Scenario {self.ladder.name}"
         self.anchor = f"scenario-{self.ladder.name}"
         self.ledgers = {r.rung.id: energy_ledger(r) for r in self.ladder.rungs}
         self.sweep = sweep
-        self.fits = record_fits(self.ladder)
+        self.fits = record_fits(self.ladder) if fits is None else fits
         self.mechanism = matched_loss_evidence(self.ladder)
         self.checks = self.ladder.checks()
         self.figures = {}  # name -> path of the figure file, relative to the page
@@ -236,14 +246,14 @@ class ScenarioSection(Section):
 
     @classmethod
     def from_runs(cls, scenario, cache, e_table=None, *, engines=None, segments=None,
-                  figure_sink=None):
+                  figure_sink=None, fits=None):
         """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
         lacks are made here, so prefetch them first) and its identification sweep's table
         (:func:`identification_spec`; None: the section has no identification against e)."""
         kw = {} if engines is None else {"engines": engines}
         ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
         sweep = identification_sweep(e_table) if e_table is not None else []
-        return cls(ladder, sweep, figure_sink=figure_sink)
+        return cls(ladder, sweep, figure_sink=figure_sink, fits=fits)
 
     def _draw(self, sink):
         """Draw the figures and hand each to ``sink(fig, stem) -> path``."""
