@@ -50,15 +50,14 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..contact_scan import scan_result, scan_sweep
-    from ..ladder import prefetch_ladders
+    from ..ladder import build_ladder, prefetch_ladders
+    from ..pool import process_map
     from ..progress import Progress
     from ..runs import RunCache, resolve_scenario
     from ..sweep.run import run_sweeps
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection
-    from ..ladder import build_ladder
-    from ..pool import process_map
     from .scenario import ScenarioSection, fit_one, fit_tasks, identification_spec
     from .studies import StudySection
     from .trunks import TrunksSection
