@@ -459,7 +459,7 @@ def from_benchmarks(results: Path | None = None) -> dict:
             for k, v in flat.items():
                 _put(out, f"bench.{path.stem}.{k}", v)
         load = data.get("load_average") or {}
-        if load.get("start") and load.get("end"):  # the 1-minute load, start and end
+        if isinstance(load, dict) and load.get("start") and load.get("end"):  # 1-minute
             _put(out, f"bench.{path.stem}.load_average",
                  _span([load["start"][0], load["end"][0]]))
     if (results / "trunks.json").exists():
@@ -472,6 +472,11 @@ def from_trunks(data: dict) -> dict:
     count, its errors against the continuum (%) and cost at the default step, and each
     step's run (``run<factor>``)."""
     out: dict = {}
+    loads = [v for sc in data["scenarios"].values() for v in (
+        (sc.get("record") or {}).get("load_average"),
+        (sc.get("record") or {}).get("load_average_after")) if v is not None]
+    if loads:  # the 1-minute load before and after each tree's runs
+        _put(out, "bench.trunks.load_average", _span(loads))
     for tree, sc in data["scenarios"].items():
         for row in sc["rows"]:
             key = f"bench.trunks.{tree}.{row['model']}.{row['segments']}"
