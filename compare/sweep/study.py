@@ -53,7 +53,7 @@ PRESETS = {
         engine_grid=("contact_duration=5e-4,5e-3", "crown_ratio=0,4"),
         map_metrics=("x_max", "energy_delivered", "crown_peak_acceleration"),
         map_value="step", identification=True, sensitivity=2,
-        expected="about 60 s with 2 workers: 8 contact durations x 6 crown ratios on the "
+        expected="about 30 s with 2 workers: 8 contact durations x 6 crown ratios on the "
                  "analytic, soft and beam backends, the engines' chains on 2 x 2 of them, "
                  "and the identification validation (4 e x 4 crown ratios x 3 rungs, MuJoCo's "
                  "chain on 2 x 2, 1-20 kHz x 0.5-2 % noise on exact SDOF records)"),
