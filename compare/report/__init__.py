@@ -26,6 +26,7 @@ import math
 import shutil
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +52,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
 
     from ..contact_scan import scan_result, scan_sweep
     from ..ladder import build_ladder, prefetch_ladders
-    from ..pool import process_map
+    from ..pool import check_stop, process_map
     from ..progress import Progress
     from ..runs import RunCache, resolve_scenario
     from ..sweep.run import run_sweeps
@@ -84,31 +85,37 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     t0 = time.perf_counter()
     paper = PaperSection()
     wall["paper"] = time.perf_counter() - t0
-    t0 = time.perf_counter()  # every rung's record fitted, all scenarios in one pool
+    # every rung's record fitted, all scenarios in one process pool, while this process
+    # draws the sections' figures (the fits are read only when the page is rendered)
+    t_fits = time.perf_counter()
     kw = {} if engines is None else {"engines": engines}
-    tasks = {s.name: fit_tasks(build_ladder(s, cache=cache, segments=segments, **kw))
-             for s in scens}
-    flat = [task for ts in tasks.values() for task in ts]
+    tasks = [fit_tasks(build_ladder(s, cache=cache, segments=segments, **kw)) for s in scens]
+    flat = [task for ts in tasks for task in ts]
     fit_bar = Progress(len(flat), "record fits", unit="fit") if progress else None
-    done_fits = iter(process_map(fit_one, flat, done=fit_bar.update if fit_bar else None))
+    scen_sections = []
+    with ThreadPoolExecutor(1) as fitter:
+        pending = fitter.submit(process_map, fit_one, flat,
+                                done=fit_bar.update if fit_bar else None)
+        bar = Progress(len(names), "report sections", unit="scenario") if progress else None
+        for s in names:
+            t0 = time.perf_counter()
+            scen = resolve_scenario(s)
+            scen_sections.append(ScenarioSection.from_runs(
+                scen, cache, e_tables[scen.name], engines=engines, segments=segments,
+                figure_sink=sink, fits=[]))
+            wall[f"scenario {scen.name} (figures, beside the fits)"] = \
+                time.perf_counter() - t0
+            check_stop()
+            if bar is not None:
+                bar.update()
+        if bar is not None:
+            bar.close()
+        done_fits = iter(pending.result())
     if fit_bar is not None:
         fit_bar.close()
-    fits = {name: [next(done_fits) for _ in ts] for name, ts in tasks.items()}
-    wall["record fits (process pool)"] = time.perf_counter() - t0
-    scen_sections = []
-    bar = Progress(len(names), "report sections", unit="scenario") if progress else None
-    for s in names:
-        t0 = time.perf_counter()
-        scen = resolve_scenario(s)
-        scen_sections.append(ScenarioSection.from_runs(scen, cache, e_tables[scen.name],
-                                                       engines=engines, segments=segments,
-                                                       figure_sink=sink,
-                                                       fits=fits[scen.name]))
-        wall[f"scenario {scen.name}"] = time.perf_counter() - t0
-        if bar is not None:
-            bar.update()
-    if bar is not None:
-        bar.close()
+    for section, ts in zip(scen_sections, tasks):  # names and scens in the same order
+        section.fits = [next(done_fits) for _ in ts]
+    wall["record fits (process pool)"] = time.perf_counter() - t_fits
     trunks = TrunksSection(tree=scens[0].name if scens else None)
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "trunks": trunks, "studies": studies,
