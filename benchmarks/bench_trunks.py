@@ -37,8 +37,8 @@ import time
 import mujoco
 import numpy as np
 
-from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.contact.timestep import stability_limit
+from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.provenance import code_version
