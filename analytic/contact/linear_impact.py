@@ -402,20 +402,26 @@ def _root(func, lo, hi):
     is bracketed from just after its start."""
     from scipy.optimize import brentq  # here, not at import: `treeimpact --help` is fast
 
-    f_hi = func(hi)
-    f_lo = func(lo)
+    bracket = _bracket(func, lo, hi, func(hi))
+    if bracket is None:
+        return hi
+    return brentq(func, bracket[0], hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+
+
+def _bracket(value, lo: float, hi: float, f_hi: float):
+    """(lo', value(lo')) with value(lo') of the sign opposite to ``f_hi``: lo itself, or, when
+    the bracket's low end sits on the previous switch (value 0 there, or the same sign), moved
+    in by 1e-9, 1e-8, ... of the interval until the sign differs; None when it never does."""
+    f_lo = value(lo)
     if f_lo * f_hi > 0 or f_lo == 0.0:
-        # the bracket's low end sits on the previous switch: move it in until the sign differs
         step = (hi - lo) * 1e-9
         while step < (hi - lo):
-            f_lo = func(lo + step)
+            f_lo = value(lo + step)
             if f_lo * f_hi < 0:
-                lo = lo + step
-                break
+                return lo + step, f_lo
             step *= 10.0
-        else:
-            return hi
-    return brentq(func, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        return None
+    return lo, f_lo
 
 
 #: Largest block of samples the ``exact`` method evaluates at once (32, 256, then this).
@@ -657,17 +663,10 @@ def _root_exact(fun, lo: float, hi: float, f_hi: float) -> float:
     """:func:`_root` for ``fun`` returning (value, slope), ``f_hi`` its value at hi: a phase
     that starts on its own boundary (value 0 at lo) is bracketed from just after its start;
     then Newton's steps inside the shrinking bracket (bisection otherwise), to 1e-15 s."""
-    f_lo = fun(lo)[0]
-    if f_lo * f_hi > 0 or f_lo == 0.0:
-        step = (hi - lo) * 1e-9
-        while step < (hi - lo):
-            f_lo = fun(lo + step)[0]
-            if f_lo * f_hi < 0:
-                lo = lo + step
-                break
-            step *= 10.0
-        else:
-            return hi
+    bracket = _bracket(lambda u: fun(u)[0], lo, hi, f_hi)
+    if bracket is None:
+        return hi
+    lo, f_lo = bracket
     s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
     tol = 1e-15 + 4 * _EPS * abs(hi)
     for _ in range(100):
