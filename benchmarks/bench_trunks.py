@@ -155,22 +155,13 @@ def cheapest(rows: list, model: str) -> dict | None:
 def markdown(result: dict) -> str:
     """The tables of docs/engines.md from a result file: per scenario, every (model, N) at
     the runner's default step, then the cheapest run within TARGET on x_max."""
+    from treeimpact.compare.docs import trunk_rows_table
+
     lines = []
     for name, sc in result["scenarios"].items():
         lines += [f"**{name}** (beam: x_max {1e3 * sc['beam']['x_max']:.4f} mm, energy "
                   f"delivered {sc['beam']['energy_delivered']:.1f} J)", "",
-                  "| trunk | N | static K at a | omega_1 | omega_2 | x_max | energy delivered "
-                  "| default dt (s) | largest stable dt, trunk (s) | runner's limit (s) "
-                  "| s per simulated s |", "|---|---|---|---|---|---|---|---|---|---|---|"]
-        for row in sc["rows"]:
-            run = row["runs"][0]
-            w1, w2 = row["omega_errors"]
-            lines.append(
-                f"| {row['model']} | {row['segments']} | {row['static_stiffness_error']:+.2%} "
-                f"| {w1:+.2%} | {w2:+.2%} | {run['x_max_error']:+.2%} "
-                f"| {run['energy_delivered_error']:+.2%} | {row['default_dt']:.2g} "
-                f"| {row['trunk_stable_dt']:.2g} | {row['runner_limit']:.2g} "
-                f"| {run['wall_per_simulated_s']:.3g} |")
+                  *trunk_rows_table(sc["rows"])]
         lines += ["", f"Within {result['target']:.0%} of the continuum on x_max, cheapest:", ""]
         for c in sc["cheapest"]:
             lines.append(f"- `--trunk {c['model']} --segments {c['segments']} --dt "

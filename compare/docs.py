@@ -953,10 +953,16 @@ def trunks_cheapest_table(n: dict) -> str:
 def trunks_segments_table(n: dict) -> str:
     """docs/engines.md: central-leader's MuJoCo trunks per segment count at the default step
     (benchmarks/results/trunks.json; ``bench_trunks.py --table`` prints every tree)."""
+    return "\n".join(trunk_rows_table(_trunks()["scenarios"]["central-leader"]["rows"])) + "\n"
+
+
+def trunk_rows_table(trunk_rows: list) -> list[str]:
+    """The markdown lines of one tree's rows of trunks.json (bench_trunks.py): each (model,
+    N) at the runner's default step, errors against the continuum, steps and cost."""
     rows = ["| trunk | N | static K at a | omega_1 | omega_2 | x_max | energy delivered "
             "| default dt (s) | largest stable dt, trunk (s) | runner's limit (s) "
             "| s per simulated s |", "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for row in _trunks()["scenarios"]["central-leader"]["rows"]:
+    for row in trunk_rows:
         run = row["runs"][0]
         w1, w2 = row["omega_errors"]
         rows.append(
@@ -965,7 +971,7 @@ def trunks_segments_table(n: dict) -> str:
             f"| {run['energy_delivered_error']:+.2%} | {row['default_dt']:.2g} "
             f"| {row['trunk_stable_dt']:.2g} | {row['runner_limit']:.2g} "
             f"| {run['wall_per_simulated_s']:.3g} |")
-    return "\n".join(rows) + "\n"
+    return rows
 
 
 def timoshenko_table(n: dict) -> str:
