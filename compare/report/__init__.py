@@ -59,7 +59,13 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection
-    from .scenario import ScenarioSection, fit_one, fit_tasks, identification_spec
+    from .scenario import (
+        ScenarioSection,
+        fit_one,
+        fit_tasks,
+        identification_spec,
+        identification_sweep,
+    )
     from .studies import StudySection
     from .trunks import TrunksSection
 
@@ -89,7 +95,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     # draws the sections' figures (the fits are read only when the page is rendered)
     t_fits = time.perf_counter()
     kw = {} if engines is None else {"engines": engines}
-    tasks = [fit_tasks(build_ladder(s, cache=cache, segments=segments, **kw)) for s in scens]
+    ladders = [build_ladder(s, cache=cache, segments=segments, **kw) for s in scens]
+    tasks = [fit_tasks(ladder) for ladder in ladders]
     flat = [task for ts in tasks for task in ts]
     fit_bar = Progress(len(flat), "record fits", unit="fit") if progress else None
     scen_sections = []
@@ -97,12 +104,10 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         pending = fitter.submit(process_map, fit_one, flat,
                                 done=fit_bar.update if fit_bar else None)
         bar = Progress(len(names), "report sections", unit="scenario") if progress else None
-        for s in names:
+        for scen, ladder in zip(scens, ladders):
             t0 = time.perf_counter()
-            scen = resolve_scenario(s)
-            scen_sections.append(ScenarioSection.from_runs(
-                scen, cache, e_tables[scen.name], engines=engines, segments=segments,
-                figure_sink=sink, fits=[]))
+            scen_sections.append(ScenarioSection(
+                ladder, identification_sweep(e_tables[scen.name]), figure_sink=sink, fits=[]))
             wall[f"scenario {scen.name} (figures, beside the fits)"] = \
                 time.perf_counter() - t0
             check_stop()
@@ -113,7 +118,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         done_fits = iter(pending.result())
     if fit_bar is not None:
         fit_bar.close()
-    for section, ts in zip(scen_sections, tasks):  # names and scens in the same order
+    for section, ts in zip(scen_sections, tasks):
         section.fits = [next(done_fits) for _ in ts]
     wall["record fits (process pool)"] = time.perf_counter() - t_fits
     trunks = TrunksSection(tree=scens[0].name if scens else None)
