@@ -443,11 +443,31 @@ def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_en
     analytic = [c for c in chunks if c[0].backend.name == "analytic"]
     assert all({t.backend.name for t in c} == {"analytic"} for c in analytic)
     assert len(analytic) == 20  # 40 runs // (8 calls x 2 workers) = 2 a call
+
     many, _ = plan(load_scenario("central-leader"), parse_grid(["restitution=0:0.9:400"]),
                    make_targets(["analytic"]), identify=False)
     assert max(len(c) for c in _chunks(many, 2)) == 25  # 400 // (8 calls x 2 workers)
     # the call budget bounds a call: 1 s / 5 ms (the registry's analytic run) = 200 runs
     assert max(len(c) for c in _chunks(many * 5, 1)) == 200
+
+
+def test_a_cheap_run_is_repeated_per_record_so_its_fits_spread_over_the_workers(fake_engine):
+    """Records of one run (record.* axes) share the run when it costs more than their
+    analysis (an engine, 1 s); a run cheaper than a fit (analytic, 5 ms) is made once per
+    record, so 18 fits of one record grid do not queue on one worker (the default study's
+    sampling grid did: 10 s on one core)."""
+    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.ident_study import ANALYSIS
+    from treeimpact.compare.sweep.run import ANALYSIS_COST, make_targets, plan
+
+    grid = parse_grid(["restitution=0.1", "record.rate=1e3,5e3,2e4", "record.seed=1,2"])
+    tasks, _ = plan(load_scenario("central-leader"), grid,
+                    make_targets(["analytic", fake_engine]), identify=False,
+                    analysis=ANALYSIS)
+    by = {b: [t for t in tasks if t.backend.name == b] for b in ("analytic", "fake")}
+    assert get_backend("analytic").cost({}) < ANALYSIS_COST <= get_backend("fake").cost({})
+    assert len(by["analytic"]) == 6 and all(len(t.rows) == 1 for t in by["analytic"])
+    assert len(by["fake"]) == 1 and len(by["fake"][0].rows) == 6
 
 
 def test_identification_map_matches_the_documented_floor_and_finding(tmp_path):

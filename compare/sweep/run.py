@@ -417,7 +417,13 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
             if t.backend == "analytic" and identify and "samples" in accepted[t.id] \
                     and "samples" not in opts:
                 opts["samples"] = analytic_samples(scen.t_end)
-            key = json.dumps([scenario_key(scen), t.backend, options_key(opts)], default=str)
+            key = [scenario_key(scen), t.backend, options_key(opts)]
+            if analysis is not None and record and \
+                    get_backend(t.backend).cost(opts) < ANALYSIS_COST:
+                # a run cheaper than its analysis is repeated per record: the records'
+                # analyses spread over the workers instead of queueing on one
+                key.append(record)
+            key = json.dumps(key, default=str, sort_keys=True)
             task = tasks.get(key)
             if task is None:
                 task = tasks[key] = Task(key, scen, get_backend(t.backend), opts, identify,
@@ -491,6 +497,10 @@ def _rows_of(task: Task, outcomes: list, scenario: Scenario) -> list[dict]:
     return [_row_base(scenario, point, pk, t) | outcome | {"task": tid, "finished": now}
             for (point, pk, t, _), outcome in zip(task.rows, outcomes)]
 
+
+#: Seconds one record's analysis takes (a full-record fit of compare.ident_study, median
+#: 0.5 s, docs/identification.md): a run cheaper than this is repeated per record.
+ANALYSIS_COST = 0.5
 
 #: Seconds of estimated work per worker call. A call costs scheduling: measured on the 2-core
 #: VM, 4 ms a call through a Dask LocalCluster (0.02 s calls ran at 89 % of two cores, 0.1 s
