@@ -33,12 +33,12 @@ lock:
 		--quiet -o requirements.lock
 
 # The discrepancy report with the default model-validity study as one of its sections:
-# $(OUT)/report.html, report.md, report.json; the study in $(OUT)/study. The pages link
-# their figures (PNG files in $(OUT)/figures and $(OUT)/study): move or copy the folder whole.
+# $(OUT)/report.html, report.md, report.json; the study in $(OUT)/study, run beside the
+# report's own runs (--with-study: a child process, so neither leaves a core idle). The pages
+# link their figures (PNG files in $(OUT)/figures and $(OUT)/study): move the folder whole.
 report: $(STAMP)
 	rm -rf $(OUT)/study  # a fresh study: rows resumed from an older code version would be stale
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/treeimpact sweep --preset default --out $(OUT)/study
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/treeimpact report --out $(OUT) --study $(OUT)/study
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/treeimpact report --out $(OUT) --with-study default
 
 test: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest tests compare

@@ -120,6 +120,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="shipped scenario name or TOML path (repeatable; default: all shipped)")
     sr.add_argument("--study", action="append", dest="studies", default=[],
                     help="directory of a finished study to include (repeatable)")
+    sr.add_argument("--with-study", dest="with_study", metavar="PRESET",
+                    help="also run the study PRESET (treeimpact sweep --preset PRESET) into "
+                         "OUT/study beside the report's own runs, and include it (resumes a "
+                         "study already there)")
     _add_budget_flag(sr)
 
     from .contact_cmd import add_arguments as add_contact_arguments
@@ -352,8 +356,19 @@ def cmd_report(args) -> int:
             raise ParameterError(f"--study {study!r}: not a directory (a finished study, "
                                  "treeimpact sweep --out DIR)")
     _writable_dir("--out", args.out)
-    paths = write_report(args.out, scenarios=scenarios, study_dirs=tuple(args.studies),
-                         progress=True)
+    jobs = []
+    if args.with_study:
+        from .sweep.study_job import StudyJob
+
+        jobs.append(StudyJob(args.with_study, Path(args.out) / "study"))
+    try:
+        for job in jobs:
+            job.start()
+        paths = write_report(args.out, scenarios=scenarios, study_dirs=tuple(args.studies),
+                             progress=True, study_jobs=tuple(jobs))
+    finally:
+        for job in jobs:
+            job.stop()
     for kind, path in paths.items():
         print(f"{kind}: {path}")
     return 0

@@ -556,7 +556,7 @@ def shipped() -> dict:
     from treeimpact.analytic.records import metrics_from_record
 
     out["code.identify_resolution"] = RESOLUTION
-    from .report.scenario import FIT_NOISE
+    from .ident_study import FIT_NOISE
 
     out["code.report_fit_noise_pct"] = _round(100.0 * FIT_NOISE)
     out["code.persist_factor"] = inspect.signature(metrics_from_record).parameters[

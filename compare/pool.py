@@ -103,11 +103,20 @@ def _end_workers(pool) -> None:
     pool.shutdown(wait=False, cancel_futures=True)
 
 
+#: What a forkserver imports once for all the workers it forks: the modules the pooled
+#: functions live in and the fit's (scipy.optimize), 0.3-1 s of imports a worker otherwise.
+#: Not the engines (a forkserver has no thread to fork, but pybullet prints on import).
+FORKSERVER_PRELOAD = ("treeimpact.compare.runs", "treeimpact.compare.ident_study",
+                      "treeimpact.analytic.identify.record_fit")
+
+
 def _executor(workers: int, start_method: str | None):
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context(start_method) if start_method else None
+    if start_method == "forkserver":  # read when this process's forkserver starts
+        ctx.set_forkserver_preload(list(FORKSERVER_PRELOAD))
     return ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint,
                                initargs=(_budget_environment(),), mp_context=ctx)
 

@@ -522,8 +522,8 @@ def test_the_pooled_record_fits_are_each_rungs_own(report):
     """The report fits every rung's record in a process pool (compare.report.build_sections):
     each fit lands on its own rung, in the ladder's order, and equals the fit made in this
     process (the same record, noise seed and optimiser: equal to rounding of the JSON)."""
+    from treeimpact.compare.ident_study import fit_one, fit_tasks
     from treeimpact.compare.ladder import build_ladder
-    from treeimpact.compare.report.scenario import fit_one, fit_tasks
 
     paths, cache = report
     fits = json.loads(paths["json"].read_text())["scenarios"]["open-center"]["record_fits"]

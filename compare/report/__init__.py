@@ -44,13 +44,15 @@ SWEEPS = "sweeps"
 
 
 def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, segments=None,
-                   out_dir=None, progress: bool = False) -> dict:
+                   out_dir=None, progress: bool = False, study_jobs=()) -> dict:
     """The report's sections (not yet rendered) and the wall time each took (s); figures
     are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
-    sections reported on stderr as they finish."""
+    sections reported on stderr as they finish; ``study_jobs``: studies running beside the
+    report (compare.sweep.study_job.StudyJob), each a section once it ends."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..contact_scan import scan_result, scan_sweep
+    from ..ident_study import fit_one, fit_tasks
     from ..ladder import build_ladder, prefetch_ladders
     from ..pool import check_stop, process_map
     from ..progress import Progress
@@ -59,13 +61,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection
-    from .scenario import (
-        ScenarioSection,
-        fit_one,
-        fit_tasks,
-        identification_spec,
-        identification_sweep,
-    )
+    from .scenario import ScenarioSection, identification_spec, identification_sweep
     from .studies import StudySection
     from .trunks import TrunksSection
 
@@ -122,6 +118,12 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         section.fits = [next(done_fits) for _ in ts]
     wall["record fits (process pool)"] = time.perf_counter() - t_fits
     trunks = TrunksSection(tree=scens[0].name if scens else None)
+    t0 = time.perf_counter()
+    for job in study_jobs:
+        studies.append(StudySection(job.result(), page_dir=out_dir))
+        wall[f"study {job.preset} (a child process, beside all of the above)"] = job.wall_s
+    if study_jobs:
+        wall["waiting for the studies"] = time.perf_counter() - t0
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "trunks": trunks, "studies": studies,
             "runs": log, "contact": {"scans": scans, "figure": scan_figure}}
@@ -145,7 +147,8 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     :class:`compare.runs.RunCache` to take runs from (default: a new one).
     Options ``engines`` (tuple of engine backends) and ``segments`` (hinged trunk) go to
     the ladder. Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
-    ``out_dir/figures``.
+    ``out_dir/figures``. Option ``study_jobs``: studies running beside the report
+    (compare.sweep.study_job.StudyJob), included when they end.
     """
     from .base import environment
 

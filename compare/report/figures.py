@@ -64,7 +64,9 @@ class FigureFiles:
     def __call__(self, fig, stem: str) -> str:
         name = re.sub(r"[^A-Za-z0-9._-]+", "-", stem) + ".png"
         self.directory.mkdir(parents=True, exist_ok=True)
-        fig.savefig(self.directory / name, format="png", dpi=DPI, bbox_inches="tight")
+        # every figure lays itself out (constrained layout, legends in its margins): no
+        # tight bounding box, which draws the figure twice
+        fig.savefig(self.directory / name, format="png", dpi=DPI)
         plt.close(fig)
         return f"{self.prefix}/{name}"
 
@@ -75,9 +77,8 @@ def _legend_right(target, handles=None, labels=None):
         handles, labels = target.get_legend_handles_labels()
     if not handles:
         return
-    if isinstance(target, Figure):
-        target.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5),
-                      frameon=False)
+    if isinstance(target, Figure):  # in the right margin constrained layout keeps for it
+        target.legend(handles, labels, loc="outside right center", frameon=False)
     else:
         target.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0),
                       borderaxespad=0, frameon=False)
@@ -316,7 +317,7 @@ def sequence_figure(ladder) -> Figure:
     ncol = min(4, n)
     nrow = math.ceil(n / ncol)
     fig, axes = plt.subplots(nrow, ncol, figsize=(11, 2.5 * nrow + 0.6), sharex=True,
-                             sharey=True, squeeze=False)
+                             sharey=True, squeeze=False, layout="constrained")
     t_hi = _impact_window(ladder)
     for ax, r in zip(axes.flat, rungs):
         st = rung_style(r.rung)
@@ -340,8 +341,7 @@ def sequence_figure(ladder) -> Figure:
         ax.set_xlabel("time t (ms)")
     for ax in axes[:, 0]:
         ax.set_ylabel("velocity (m/s)")
-    fig.suptitle(f"{ladder.name}: impact sequence, one panel per rung", y=1.0)
-    fig.tight_layout()
+    fig.suptitle(f"{ladder.name}: impact sequence, one panel per rung")
     _legend_right(fig, *axes.flat[0].get_legend_handles_labels())
     return fig
 
@@ -353,7 +353,7 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
     """Energy ledger bars (J) per rung: at T0, kinetic, potential, damping work and impact
     loss sum to the initial energy; the energy transferred (eq 58) is shown beside them."""
     rungs = list(ledgers)
-    fig, ax = plt.subplots(figsize=(11, 3.8))
+    fig, ax = plt.subplots(figsize=(11, 3.8), layout="constrained")
     n = len(LEDGER_TERMS)
     width = 0.8 / max(1, len(rungs))
     x = np.arange(n)
@@ -382,7 +382,7 @@ def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> Fig
     """Identification error (%) against e on exact records, each parameter with its
     tolerance (dotted, +-, in its colour, named in the legend); an e without a value is
     marked on the axis with why."""
-    fig, ax = plt.subplots(figsize=(9.4, 3.8))
+    fig, ax = plt.subplots(figsize=(9.4, 3.8), layout="constrained")
     es = [s["restitution"] for s in sweep]
     for key, mk, colour in _IDENT_SERIES:
         ax.plot(es, [100 * s["errors"].get(key, math.nan) for s in sweep], mk, color=colour,
@@ -418,7 +418,7 @@ def contact_scan_figure(scans: dict) -> Figure:
     names = list(scans)
     fig, axes = plt.subplots(2, len(names), figsize=(4.2 * len(names) + 1.6, 6.2),
                              sharey="row", sharex=True, squeeze=False,
-                             gridspec_kw={"height_ratios": [3, 2]})
+                             gridspec_kw={"height_ratios": [3, 2]}, layout="constrained")
     styles = {"x_max": ("o-", "tab:blue", "x_max"),
               "energy_delivered": ("s-", "tab:red", "energy delivered"),
               "crown_peak_acceleration": ("^-", "tab:green", "crown accel. (mean over t_c)")}
@@ -457,5 +457,4 @@ def contact_scan_figure(scans: dict) -> Figure:
     fig.suptitle(f"Where the 1-DOF model holds: grey band +-{tol:.0f} %, dotted lines the "
                  "shortest pad from which it stays inside; below, how long the first contact "
                  "really lasts", fontsize=10)
-    fig.tight_layout()
     return fig

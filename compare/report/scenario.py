@@ -9,10 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.parameters import Pendulum
 from treeimpact.analytic.results import to_jsonable
 
+from ..ident_study import fit_one, fit_tasks
 from ..identification import IDENT_METRICS
 from ..ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
 from ..mechanism import matched_loss_evidence
@@ -88,55 +87,6 @@ def identification_sweep(table) -> list[dict]:
                         "errors": {k: (values[k] - truth[k]) / truth[k] for k in values},
                         "values": values})
     return out
-
-
-#: Sampling of the records handed to the full-record fit (Hz), and the rest prepended (s) so
-#: the fit sees the trunk still before the contact, as in a measured record.
-FIT_RATE = 5000.0
-FIT_REST = 0.02  # s of rest before the impact: the fit estimates the sensor's noise there
-#: Gaussian noise added to each rung's record (fraction of its peak, seed 0), the study's: a
-#: record is "explained" when the fit's residual is at the level of its noise, and a
-#: noise-free record would call the pad's 0.02 % of the peak a misfit (issue 24's fit).
-FIT_NOISE = 0.01
-
-
-def fit_tasks(ladder) -> list[tuple]:
-    """One task per rung with a record for :func:`fit_one`: (rung id, t (s), x (m) sampled
-    at FIT_RATE with FIT_NOISE, the pendulum test, the true M_T, K_T, C_T)."""
-    from treeimpact.analytic.identify.procedure import pendulum_test_of
-    from treeimpact.analytic.model.two_body import two_body_model
-
-    from ..ident_study import sampled_record
-
-    scen = ladder.scenario
-    if not isinstance(scen.impactor, Pendulum):
-        return []
-    model = two_body_model(scen)
-    truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping}
-    test = pendulum_test_of(scen)
-    return [(r.rung.id, *sampled_record(r.result.trajectory, FIT_RATE, noise=FIT_NOISE,
-                                        rest=FIT_REST), test, truth)
-            for r in ladder.rungs if r.ok and r.result.trajectory is not None]
-
-
-def fit_one(task: tuple) -> dict:
-    """The exact 1-DOF model fitted to one rung's whole record (a :func:`fit_tasks` task): the
-    1-DOF properties that best explain it, their errors against the model's truth, and
-    whether the 1-DOF model explains the record at all (analytic.identify.record_fit)."""
-    from treeimpact.analytic.identify.record_fit import Record, fit_record
-
-    rung, t, x, test, truth = task
-    try:
-        fit = fit_record(Record(t, x), test)
-    except ParameterError as exc:
-        return {"rung": rung, "error": str(exc)}
-    keys = (*truth, "restitution")
-    return {"rung": rung, "values": {k: fit.values[k] for k in keys},
-            "errors": {k: fit.values[k] / v - 1.0 for k, v in truth.items()},
-            "ranges": {k: fit.intervals[k] for k in keys
-                       if not fit.determined[k]},  # a one-impact record: ranges
-            "intervals": {k: fit.intervals[k] for k in keys},  # 95 %
-            "residual": fit.residual_rms / fit.peak, "explained": fit.explained}
 
 
 def record_fits(ladder) -> list[dict]:

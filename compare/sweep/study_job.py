@@ -1,0 +1,81 @@
+"""A model-validity study run beside other work: ``treeimpact sweep --preset NAME --out DIR``
+in a child process with its own worker pool, so that ``treeimpact report --with-study NAME``
+makes the report's own runs, fits and figures while the study runs (on 2 cores neither
+leaves a core idle while it draws its figures alone). Design notes: docs/report.md."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+
+from ..pool import POLL_S, check_stop
+from .study import PRESETS
+
+#: Seconds a stopped study has to end its workers after SIGTERM before it is killed.
+STOP_GRACE_S = 10.0
+
+
+class StudyJob:
+    """The study of preset ``preset`` into ``out``, started by :meth:`start`; :meth:`result`
+    waits for it (its directory), :meth:`stop` ends it. Its progress lines and its summary
+    go to this process's stderr as it prints them."""
+
+    def __init__(self, preset: str, out):
+        if preset not in PRESETS:  # a one-line error before anything starts
+            raise ParameterError(f"--with-study {preset!r}: allowed {', '.join(PRESETS)}")
+        self.preset, self.out = preset, Path(out)
+        self.argv = [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--preset",
+                     preset, "--out", str(self.out)]
+        self._proc = None
+        self._relay = None
+        self._last = ""
+        self.wall_s = None  # s, from start to its end
+
+    def start(self) -> "StudyJob":
+        self._t0 = time.perf_counter()
+        self._proc = subprocess.Popen(self.argv, stdout=subprocess.PIPE,
+                                      stderr=subprocess.STDOUT, text=True, bufsize=1)
+        self._relay = threading.Thread(target=self._pass_on, daemon=True)
+        self._relay.start()
+        return self
+
+    def _pass_on(self) -> None:
+        for line in self._proc.stdout:
+            sys.stderr.write(line)
+            if line.strip():
+                self._last = line.strip()
+
+    def result(self) -> Path:
+        """Wait for the study (looking at the stop request every POLL_S s); its directory,
+        or its failure as this command's: bad input, a divergence, an interruption."""
+        while self._proc.poll() is None:
+            check_stop()
+            time.sleep(POLL_S)
+        self._relay.join()
+        self.wall_s = time.perf_counter() - self._t0
+        code = self._proc.returncode
+        if code == 0:
+            return self.out
+        what = f"the study (treeimpact sweep --preset {self.preset}) ended with exit code " \
+               f"{code}: {self._last}"
+        if code == 130:
+            raise KeyboardInterrupt
+        if code == 3:
+            raise SimulationDiverged(what)
+        raise ParameterError(f"--with-study {self.preset}: {what}")
+
+    def stop(self) -> None:
+        """End the study if it still runs: SIGTERM (it stops its workers), then a kill."""
+        if self._proc is None or self._proc.poll() is not None:
+            return
+        self._proc.terminate()
+        try:
+            self._proc.wait(STOP_GRACE_S)
+        except subprocess.TimeoutExpired:
+            self._proc.kill()
+            self._proc.wait()
