@@ -16,10 +16,28 @@ from treeimpact.analytic.errors import ParameterError, one_line
 #: Seconds to wait for a Dask scheduler (and its first worker) before it is refused.
 SCHEDULER_TIMEOUT_S = 10
 
+class _StopFlag:
+    """A flag set from a signal handler, so without a lock: a threading.Event's set() holds
+    one, and a second signal landing in it (``timeout`` signals the command and then its
+    process group) deadlocked the command in its own handler."""
+
+    def __init__(self):
+        self._set = False
+
+    def set(self) -> None:
+        self._set = True
+
+    def clear(self) -> None:
+        self._set = False
+
+    def is_set(self) -> bool:
+        return self._set
+
+
 #: Set by a stop request (:func:`request_stop`): the loops raise KeyboardInterrupt at their
 #: next look, at each result and, waiting for local workers, every POLL_S s (Dask: at each
 #: result).
-STOP = threading.Event()
+STOP = _StopFlag()
 #: Seconds between looks at STOP while waiting for local workers.
 POLL_S = 0.2
 

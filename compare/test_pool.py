@@ -51,3 +51,19 @@ def test_a_stop_request_ends_a_wait_for_workers_within_the_poll_interval():
         timer.cancel()
         pool.STOP.clear()
     assert time.perf_counter() - t0 < 3.0  # start-up + 0.5 s + POLL_S, far below 5 s
+
+
+def test_the_stop_flag_takes_no_lock_a_second_signal_could_wait_for():
+    """The SIGTERM handler sets STOP; a threading.Event's set() holds a lock, and a second
+    signal landing inside it (timeout signals the command, then its group) waited for that
+    lock in the same thread forever: a `treeimpact report` hung until killed. The flag is a
+    plain attribute: nothing in it can be acquired."""
+    from treeimpact.compare import pool
+
+    assert not any(hasattr(v, "acquire") for v in vars(pool.STOP).values())
+    pool.request_stop()
+    pool.request_stop()  # as a handler inside a handler would
+    try:
+        assert pool.STOP.is_set()
+    finally:
+        pool.STOP.clear()

@@ -56,3 +56,52 @@ def test_stopping_the_report_ends_the_study(tmp_path):
     t0 = time.perf_counter()
     job.stop()
     assert job._proc.poll() is not None and time.perf_counter() - t0 < 5
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_command_and_its_group_signalled_as_timeout_does_end_with_the_study(tmp_path):
+    """GNU timeout sends SIGTERM to the command and then to its process group: the report
+    gets two, its study and workers one each. All end, the report with 130."""
+    import os
+    import signal
+    import subprocess
+
+    proc = subprocess.Popen([sys.executable, "-m", "treeimpact.compare.cli", "report",
+                             "--out", str(tmp_path), "--with-study", "default"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "study" / "sweep.json").exists() and \
+            not list((tmp_path / "study").glob("*/sweep.json")):
+        assert time.monotonic() < deadline and proc.poll() is None, "the study never started"
+        time.sleep(0.2)
+    time.sleep(1.0)  # runs under way in both processes
+    os.kill(proc.pid, signal.SIGTERM)
+    os.killpg(proc.pid, signal.SIGTERM)
+    try:
+        code = proc.wait(30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert code == 130, proc.stderr.read()
+    deadline = time.monotonic() + 10
+    while _alive_in_group(proc.pid):  # the study and every worker end too
+        assert time.monotonic() < deadline, _alive_in_group(proc.pid)
+        time.sleep(0.2)
+
+
+def _alive_in_group(pgid: int) -> list[str]:
+    """The processes of group ``pgid`` that still run (not the zombies init has yet to
+    reap), from /proc: [(pid, command)]."""
+    from pathlib import Path
+
+    alive = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat.read_text()
+        except OSError:  # ended meanwhile
+            continue
+        fields = text.rsplit(")", 1)[1].split()
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            alive.append(f"{stat.parent.name} {text.split(' ', 2)[1]}")
+    return alive
