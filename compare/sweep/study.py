@@ -37,8 +37,8 @@ class Preset:
     map_value: str = "rel"  # "rel": against the paper's model; "step": against the rung below
     identification: bool = False  # the identification validation (compare.ident_study)
     ident_sampling_rungs: tuple = ("analytic",)  # its rate x noise grid on these rungs' records
-    ident_sampling_seeds: tuple | None = None  # ... this many seeds (None: ident_study's)
-    ident_crown_ratios: tuple | None = None  # its e x crown grid's crown ratios (None: ident_study's)
+    ident_sampling_seeds: tuple | None = None  # ... these seeds (None: ident_study's)
+    ident_crown_ratios: tuple | None = None  # its e x crown grid's crown ratios (None: its)
     ident_engine_rungs: tuple = ()  # engine chains on a corner of its e x crown grid
     sensitivity: int = 0  # Morris trajectories of the sensitivity study (0: none)
     sensitivity_crossings: bool = False  # its crossing durations too (8 pads a point)
@@ -59,8 +59,8 @@ PRESETS = {
         # the identification's cheap part, for make report's minute: no engine corner (the
         # report fits both engines' chains of every tree: its record fits), three crown
         # ratios, one sampling seed
-        expected="about 45 s with 2 workers beside make report's own runs (less alone): 8 contact durations x 6 crown ratios on the "
-                 "analytic, soft and beam backends, the engines' chains on 2 x 2 of them, "
+        expected="about 45 s with 2 workers beside make report's own runs (less alone): 8 "
+                 "contact durations x 6 crown ratios on the analytic, soft and beam backends, the engines' chains on 2 x 2 of them, "
                  "and the identification validation (4 e x 3 crown ratios x 3 rungs, "
                  "1-20 kHz x 0.5-2 % noise on exact SDOF records, one seed)"),
     "full": Preset(
