@@ -60,7 +60,8 @@ PRESETS = {
         # report fits both engines' chains of every tree: its record fits), three crown
         # ratios, one sampling seed
         expected="about 45 s with 2 workers beside make report's own runs (less alone): 8 "
-                 "contact durations x 6 crown ratios on the analytic, soft and beam backends, the engines' chains on 2 x 2 of them, "
+                 "contact durations x 6 crown ratios on the analytic, soft and beam backends, "
+                 "the engines' chains on 2 x 2 of them, "
                  "and the identification validation (4 e x 3 crown ratios x 3 rungs, "
                  "1-20 kHz x 0.5-2 % noise on exact SDOF records, one seed)"),
     "full": Preset(
