@@ -42,6 +42,24 @@ def test_a_failed_study_fails_with_its_exit_code_and_last_line(tmp_path):
         job.result()
 
 
+def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypatch):
+    """The report looks at its studies after its runs: one that already failed ends it
+    there, not after the record fits and figures."""
+    import treeimpact.compare.ident_study as ident_study
+
+    job = _quick(StudyJob("default", tmp_path / "out" / "study"), "restitution=2").start()
+    while job._proc.poll() is None:
+        time.sleep(0.1)
+
+    def no_fit(task):
+        pytest.fail("fitted records for a report whose study had failed")
+
+    monkeypatch.setattr(ident_study, "fit_one", no_fit)
+    with pytest.raises(ParameterError, match="exit code 2"):
+        write_report(tmp_path / "out", scenarios=["open-center"], runs=RunCache(),
+                     engines=(), study_jobs=(job,))
+
+
 def test_an_unknown_preset_is_refused_before_anything_runs(tmp_path, capsys):
     assert main(["report", "--out", str(tmp_path), "--with-study", "nope"]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -75,6 +75,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     t0 = time.perf_counter()
     prefetch_ladders(cache, scens, engines=engines, segments=segments, progress=progress)
     wall["runs (process pool)"] = time.perf_counter() - t0
+    for job in study_jobs:  # a study that failed meanwhile fails the report now
+        job.check()
     t0 = time.perf_counter()  # the report's own sweeps, one pool: contact scans, e sweeps
     with _sweep_dir(out_dir) as folder:  # the tables are read before a temporary one goes
         specs = [scan_sweep(s, folder / f"contact-scan-{s.name}") for s in scens] + [

@@ -69,6 +69,12 @@ class StudyJob:
             raise SimulationDiverged(what)
         raise ParameterError(f"--with-study {self.preset}: {what}")
 
+    def check(self) -> None:
+        """Raise now if the study has already failed (as :meth:`result`), so a report does
+        not finish its own work for a page it cannot write; nothing if it runs or passed."""
+        if self._proc is not None and self._proc.poll() not in (None, 0):
+            self.result()
+
     def stop(self) -> None:
         """End the study if it still runs: SIGTERM (it stops its workers), then a kill."""
         if self._proc is None or self._proc.poll() is not None:
