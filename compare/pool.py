@@ -153,6 +153,10 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
     try:
         return _run_chunks(fn, chunks, workers=workers, on_result=on_result,
                            on_died=on_died, client=client, start_method=start_method)
+    except Exception:
+        if STOP.is_set():  # the stop signal reached the group too: a forkserver or worker it
+            raise KeyboardInterrupt from None  # ended mid-start (EOFError...) is the stop
+        raise
     finally:
         ACTIVE.clear()
 

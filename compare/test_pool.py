@@ -67,3 +67,33 @@ def test_the_stop_flag_takes_no_lock_a_second_signal_could_wait_for():
         assert pool.STOP.is_set()
     finally:
         pool.STOP.clear()
+
+
+def test_a_pool_broken_by_the_stop_signal_is_the_stop_not_a_traceback(monkeypatch):
+    """A signal to the process group also ends the forkserver and the workers: a pool
+    starting then fails with EOFError (measured: a `timeout` during a report's first pool).
+    With a stop requested that is the stop (KeyboardInterrupt: one line, exit 130)."""
+    from treeimpact.compare import pool
+
+    class Dying:
+        _processes = {}
+        signalled = True
+
+        def submit(self, *args):
+            if self.signalled:
+                pool.request_stop()  # the signal lands as the forkserver dies
+            raise EOFError("unexpected EOF")
+
+        def shutdown(self, **kw):
+            pass
+
+    monkeypatch.setattr(pool, "_executor", lambda *args: Dying())
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            process_map(abs, [1, 2], workers=2)
+    finally:
+        pool.STOP.clear()
+    Dying.signalled = False
+    with pytest.raises(EOFError):  # without a stop request it is the error it is
+        process_map(abs, [1, 2], workers=2)
+    assert not pool.STOP.is_set()
