@@ -220,16 +220,9 @@ def add_pendulum(spec: mujoco.MjSpec, impactor, kind: str, clamp_height: float,
 
 
 def add_contact_and_sensors(spec: mujoco.MjSpec, solref, trunk_root: str):
-    pair = spec.add_pair()
-    pair.name = "impact"
-    pair.geomname1 = "bob"
-    pair.geomname2 = "trunk_pad"
-    pair.condim = 1
-    pair.margin = 0.0
-    pair.gap = 0.0
-    pair.solref = list(solref)
     d = _contact.IMPEDANCE
-    pair.solimp = [d, d, *_contact.SOLIMP_TAIL]
+    pair = _contact.add_impact_pair(spec, "bob", "trunk_pad", solref,
+                                    [d, d, *_contact.SOLIMP_TAIL])
     S = mujoco.mjtSensor
     O = mujoco.mjtObj
     for name, stype, otype, obj in (

@@ -241,15 +241,23 @@ def two_body_mjcf(mass: float, other_mass: float, dt: float, solref, solimp,
         g.conaffinity = 0
         if not math.isfinite(m):
             g.pos = [x, 0.0, 0.0]
+    add_impact_pair(spec, "a", "b", solref, solimp)
+    return spec.to_xml()
+
+
+def add_impact_pair(spec, geom1: str, geom2: str, solref, solimp):
+    """The only contact of every model here: the pair ``impact`` between ``geom1`` and
+    ``geom2``, frictionless (condim 1), no margin or gap, with ``solref`` and ``solimp``."""
     pair = spec.add_pair()
     pair.name = "impact"
-    pair.geomname1 = "a"
-    pair.geomname2 = "b"
+    pair.geomname1 = geom1
+    pair.geomname2 = geom2
     pair.condim = 1
     pair.margin = 0.0
+    pair.gap = 0.0
     pair.solref = list(solref)
     pair.solimp = list(solimp)
-    return spec.to_xml()
+    return pair
 
 
 def two_body_collision(xml: str, speed: float = 1.0, overlap: float = 1e-12
