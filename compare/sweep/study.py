@@ -14,6 +14,7 @@ import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
+from treeimpact.compare.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
 
@@ -37,8 +38,8 @@ class Preset:
     map_value: str = "rel"  # "rel": against the paper's model; "step": against the rung below
     identification: bool = False  # the identification validation (compare.ident_study)
     ident_sampling_rungs: tuple = ("analytic",)  # its rate x noise grid on these rungs' records
-    ident_sampling_seeds: tuple | None = None  # ... these seeds (None: ident_study's)
-    ident_crown_ratios: tuple | None = None  # its e x crown grid's crown ratios (None: its)
+    ident_sampling_seeds: tuple = SAMPLING_SEEDS  # ... with these seeds
+    ident_crown_ratios: tuple = CROWN_RATIOS  # its e x crown grid's crown ratios
     ident_engine_rungs: tuple = ()  # engine chains on a corner of its e x crown grid
     sensitivity: int = 0  # Morris trajectories of the sensitivity study (0: none)
     sensitivity_crossings: bool = False  # its crossing durations too (8 pads a point)
@@ -127,8 +128,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
         ident_study = run_identification_study(
             out, scen, workers=workers, progress=progress,
             sampling_rungs=p.ident_sampling_rungs, engine_rungs=p.ident_engine_rungs,
-            **({"sampling_seeds": p.ident_sampling_seeds} if p.ident_sampling_seeds else {}),
-            **({"crown_ratios": p.ident_crown_ratios} if p.ident_crown_ratios else {}))
+            sampling_seeds=p.ident_sampling_seeds, crown_ratios=p.ident_crown_ratios)
     sensitivity = None
     if p.sensitivity:
         sensitivity = run_sensitivity(out, p.sensitivity, crossings=p.sensitivity_crossings,
