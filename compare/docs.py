@@ -666,7 +666,7 @@ CONTACT_CASES = ((132.4, 4.0, 0.5, 2e-3, 4e-5), (132.4, 110.0, 0.1, 5e-4, 1e-5),
 def contact_command() -> dict:
     """``treeimpact contact`` on :data:`CONTACT_CASES`: what each engine achieves with the
     corrected settings and with the naive formula (about 1 s)."""
-    from .contact_cmd import contact_settings
+    from .commands.contact import contact_settings
 
     out: dict = {}
     errs: dict = {"mujoco": [], "bullet": []}

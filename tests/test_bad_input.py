@@ -295,17 +295,17 @@ def test_a_scheduler_lost_during_the_sweep_is_one_line_and_keeps_the_rows(tmp_pa
 def test_a_library_warning_during_a_command_is_one_stderr_line(capsys):
     import warnings
 
-    from treeimpact.compare import cli
+    from treeimpact.compare import process
 
     before = warnings.showwarning
-    restore = cli._install_budget(None)
+    restore = process.install_budget(None)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("always")
             warnings.warn_explicit("overflow encountered\n  in multiply", RuntimeWarning,
                                    "/x/chain.py", 205)
     finally:
-        cli._restore_budget(restore)
+        process.restore_budget(restore)
     err = capsys.readouterr().err
     assert err == ("treeimpact: warning: overflow encountered in multiply (RuntimeWarning, "
                    "chain.py:205)\n")

@@ -12,7 +12,7 @@ import pytest
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.cli import main
-from treeimpact.compare.contact_cmd import contact_settings, target_law
+from treeimpact.compare.commands.contact import contact_settings, target_law
 
 mujoco = pytest.importorskip("mujoco")
 

@@ -13,13 +13,18 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 
+from ._common import number
+
+NAME = "scenario"
+HELP = "write a scenario file for your own tree from measured M_T, K_T, b"
+
 #: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml).
 DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
             "contact_duration": 5e-4, "t_end": 0.1}
 
 
-def add_arguments(sp: argparse.ArgumentParser, number) -> None:
-    """The command's options; ``number`` parses a float with a one-line error."""
+def add_arguments(sp: argparse.ArgumentParser) -> None:
+    """The command's flags: the test (given), the tree (measured), the choices."""
     sp.add_argument("name", help="the scenario's name (also the file name with --out DIR)")
     g = sp.add_argument_group("the test (given)")
     g.add_argument("--clamp-height", type=number, required=True, help="a, m: impact height")
@@ -115,6 +120,7 @@ def build_scenario(args):
 
 
 def run(args) -> int:
+    """Write (or print) the scenario file; exit code 0."""
     from treeimpact.analytic.model.scenario_toml import scenario_toml
 
     text = scenario_toml(build_scenario(args))

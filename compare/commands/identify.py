@@ -10,13 +10,20 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
+from ._common import number
+
+NAME = "identify"
+HELP = ("tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test record, with 95 %% "
+        "intervals")
+
 UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
          "pair_damping_ratio": "-", "restitution": "-", "E": "Pa",
          "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s",
          "x_drift2": "m/s^2", "y_offset": "m"}
 
 
-def add_arguments(sp: argparse.ArgumentParser, number) -> None:
+def add_arguments(sp: argparse.ArgumentParser) -> None:
+    """The command's flags: the record, the test's pendulum and trunk, the units."""
     from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
 
     sp.add_argument("record", help="CSV with columns t, x (and y, the pendulum's), in any "
@@ -107,7 +114,7 @@ def _provenance(args, record) -> dict:
     import hashlib
     from pathlib import Path
 
-    from .provenance import provenance
+    from treeimpact.compare.provenance import provenance
 
     data = Path(args.record).read_bytes()
     test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle",
@@ -120,18 +127,17 @@ def _provenance(args, record) -> dict:
 
 
 def run(args) -> int:
+    """Fit the record and print the result (text or ``--json``); exit code 0."""
     import sys
 
     import numpy as np
-
     from treeimpact.analytic.identify.record_fit import (
         DAMPING_RATIO_FORMULAS,
         fit_record,
         read_record,
     )
     from treeimpact.analytic.results import to_jsonable
-
-    from .backends import quiet_stdout
+    from treeimpact.compare.backends import quiet_stdout
 
     test = _test(args)
     if args.plot:
@@ -196,71 +202,11 @@ def run(args) -> int:
     return 0
 
 
-def add_record_arguments(sp: argparse.ArgumentParser, number, count) -> None:
-    """`treeimpact simulate --record FILE.csv [--rate HZ --noise FRAC --seed N]`."""
-    sp.add_argument("--record", help="also write the trunk's displacement as a pendulum-test "
-                                     "record (CSV 't [s],x [m]', what `identify` reads)")
-    sp.add_argument("--rate", type=number, default=5000.0,
-                    help="--record: sampling rate, Hz (default 5000)")
-    sp.add_argument("--noise", type=number, default=0.0,
-                    help="--record: Gaussian noise, a fraction of the peak (default 0)")
-    sp.add_argument("--seed", type=count, default=0, help="--record: the noise's seed")
-
-
-#: What a recorder does: its rate (Hz), noise (of the peak) and the rest before the impact.
-RECORD_RATE, RECORD_NOISE, RECORD_REST = (50.0, 1e6), (0.0, 0.5), 0.02
-
-
-def check_record_arguments(args) -> None:
-    """--rate, --noise and --seed in range (one line each), before a run is spent."""
-    from treeimpact.analytic.model.parameters import check_range
-
-    check_range("--rate", args.rate, low=RECORD_RATE[0], high=RECORD_RATE[1], unit="Hz")
-    check_range("--noise", args.noise, low=RECORD_NOISE[0], high=RECORD_NOISE[1])
-    if args.seed < 0:
-        raise ParameterError(f"--seed = {args.seed}: allowed 0 or more")
-
-
-def write_record(args, scenario, result) -> str:
-    """Write ``result``'s trunk displacement as a record at ``args.rate`` from RECORD_REST s
-    before the impact, with ``args.noise`` of the peak as Gaussian noise (seeded): exact
-    samples of the analytic backend's solution, else the backend's trajectory interpolated.
-    Returns a one-line summary."""
-    import numpy as np
-
-    check_record_arguments(args)
-    traj = result.trajectory
-    if traj is None:
-        raise ParameterError(f"--record: the {result.backend} backend gives no trajectory")
-    t_end = float(traj.t[-1])
-    s = np.arange(-RECORD_REST, t_end, 1.0 / args.rate)
-    sol = getattr(result, "solution", None)
-    if sol is not None:
-        x = np.where(s > 0.0, sol.state(np.clip(s, 0.0, sol.t_end))[0], 0.0)
-    else:
-        x = np.where(s > 0.0, np.interp(s, traj.t, traj.x), 0.0)
-    rng = np.random.default_rng(args.seed)
-    x = x + args.noise * float(np.max(np.abs(x))) * rng.standard_normal(s.size)
-    t = s + RECORD_REST
-    try:
-        with open(args.record, "w", encoding="utf-8") as f:
-            f.write(f"# {scenario.name} ({result.backend}), {args.rate:g} Hz, noise "
-                    f"{args.noise:g} of the peak, seed {args.seed}; impact at t = "
-                    f"{RECORD_REST:g} s\n")
-            f.write("t [s],x [m]\n")
-            f.writelines(f"{a:.9g},{b:.9g}\n" for a, b in zip(t, x))
-    except OSError as exc:
-        raise ParameterError(f"--record {args.record!r}: cannot be written "
-                             f"({exc.strerror or exc})") from None
-    return f"record: {args.record} ({t.size} samples at {args.rate:g} Hz, noise {args.noise:g})"
-
-
 def _plot(path, record, fit, paper, test) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
-
     from treeimpact.analytic.identify.record_fit import model_x
 
     pendulum = record.y is not None

@@ -12,13 +12,20 @@ import math
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import check_range
 
+from ._common import number
+
+NAME = "contact"
+HELP = ("MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a target e and "
+        "contact duration, checked in both engines")
+
 #: Fewest steps of the target collision the command accepts (0.5e5 steps per collision at
 #: most keep the two simulations under a second).
 MAX_STEPS_PER_COLLISION = 50_000
 SPEED = 1.0  # m/s: approach speed of the simulated collision (the law is linear: any speed)
 
 
-def add_arguments(sp, number) -> None:
+def add_arguments(sp) -> None:
+    """The command's flags."""
     sp.add_argument("--mass", type=number, help="mass of body 1, kg")
     sp.add_argument("--other-mass", type=number, dest="other_mass",
                     help="mass of body 2, kg (default inf: body 2 fixed)")
@@ -151,7 +158,11 @@ def _mjcf_snippet(dt, solref, solimp, refsafe_off=False) -> str:
 
 def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
     from treeimpact.bullet_models import _contact as bc
-    from treeimpact.bullet_models._world import LINK_FLAGS, WORLD_FLAGS, two_body_collision
+    from treeimpact.bullet_models._world import (
+        LINK_FLAGS,
+        WORLD_FLAGS,
+        two_body_collision,
+    )
 
     k, c = law["stiffness"], law["damping"]
     limit = bc.largest_time_step(k, c, mu)
@@ -184,7 +195,7 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
     law = target_law(mu, restitution=restitution, duration=duration, stiffness=stiffness,
                      damping=damping)
     dt = _check_dt(dt, law, mu)
-    from .backends import quiet_stdout
+    from treeimpact.compare.backends import quiet_stdout
 
     with quiet_stdout():  # PyBullet prints on import; --json keeps stdout for JSON
         out = {"inputs": {"mass": m1, "other_mass": m2, "effective_mass": mu, "dt": dt},
@@ -195,6 +206,7 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
 
 
 def run(args) -> int:
+    """Print the settings and the simulated collisions (text or ``--json``); exit code 0."""
     res = contact_settings(mass=args.mass, other_mass=args.other_mass,
                            effective_mass=args.effective_mass, restitution=args.restitution,
                            duration=args.duration, stiffness=args.stiffness,
