@@ -21,15 +21,62 @@ from .process import EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED  # noqa: F4
 
 
 class _Parser(argparse.ArgumentParser):
-    """An argparse parser whose errors are one line (exit 2 by :func:`main`), not usage."""
+    """An argparse parser whose errors are one line (exit 2 by :func:`main`), not usage, and
+    that never expands an abbreviation (``--e`` is not ``--equivalent-length``)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs["allow_abbrev"] = False  # subparsers too: argparse does not pass it down
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         raise ParameterError(message)
 
 
+class _TopParser(_Parser):
+    """The ``treeimpact`` parser: a flag its command does not have is refused before
+    anything else is parsed, naming what it may have meant (compare.names)."""
+
+    def parse_known_args(self, args=None, namespace=None):
+        args = sys.argv[1:] if args is None else list(args)
+        refuse_unknown_flags(self, args)
+        return super().parse_known_args(args, namespace)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def refuse_unknown_flags(parser: argparse.ArgumentParser, argv: list) -> None:
+    """A one-line ParameterError for the first flag in ``argv`` that its command does not
+    have (a prefix, a removed spelling, a paper symbol), with what it may have meant."""
+    from .names import did_you_mean
+
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    command = next((t for t in argv if not t.startswith("-")), None)
+    if command not in sub.choices:
+        return  # argparse names the missing or unknown command
+    sp = sub.choices[command]
+    flags = {f for a in sp._actions for f in a.option_strings}
+    known = [f[2:].replace("-", "_") for f in flags if f.startswith("--") and f != "--help"]
+    for token in argv[argv.index(command) + 1:]:
+        if token == "--":
+            break
+        if not token.startswith("-") or len(token) < 2 or _is_number(token):
+            continue
+        flag = token.split("=", 1)[0]
+        if flag not in flags:
+            hint = did_you_mean(flag, known, getattr(COMMANDS[command], "RENAMED", None))
+            raise ParameterError(f"{flag}: not an option of treeimpact {command} (flags are "
+                                 f"never abbreviated){hint}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``treeimpact`` parser: one subparser per module of compare.commands."""
-    p = _Parser(prog="treeimpact", description="The fruit-tree trunk impact model of the paper "
+    p = _TopParser(prog="treeimpact", description="The fruit-tree trunk impact model of the paper "
                 "and its cross-checks against MuJoCo and PyBullet (SI units; exit codes: 0 "
                 "success, 2 bad input, 3 the simulation diverged).")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
