@@ -165,6 +165,25 @@ class SimulationResult:
                 "metrics": to_jsonable(self.metrics), "scenario": to_jsonable(self.scenario)}
 
 
+@dataclass(frozen=True)
+class FreeCollision:
+    """One free two-body collision as an engine stepped it (``treeimpact contact``): the
+    rebound ratio ``restitution`` (1; NaN if the step blew up), ``touch_duration`` (s, first
+    touch to release: the law force reaching zero), ``steps`` with a pushing force, and
+    ``peak_penetration`` (m, the largest overlap of the two bodies, at the approach speed
+    the collision was run at: linear in it)."""
+
+    restitution: float
+    touch_duration: float
+    steps: int
+    peak_penetration: float
+
+    def to_json(self) -> dict:
+        """The four fields by name (SI)."""
+        return {"restitution": self.restitution, "touch_duration": self.touch_duration,
+                "steps": self.steps, "peak_penetration": self.peak_penetration}
+
+
 #: Largest energy-ledger error (fraction of the input energy) a result may carry: every rung's
 #: own tolerance is below 2 % (compare/tolerances.toml [ledger]); beyond this it diverged.
 LEDGER_DIVERGED = 0.05

@@ -666,18 +666,18 @@ CONTACT_CASES = ((132.4, 4.0, 0.5, 2e-3, 4e-5), (132.4, 110.0, 0.1, 5e-4, 1e-5),
 def contact_command() -> dict:
     """``treeimpact contact`` on :data:`CONTACT_CASES`: what each engine achieves with the
     corrected settings and with the naive formula (about 1 s)."""
-    from .commands.contact import contact_settings
+    from .contact_settings import contact_settings
 
     out: dict = {}
     errs: dict = {"mujoco": [], "bullet": []}
     naive: dict = {"mujoco": [], "bullet": []}
     durations: dict = {}
     for i, (m1, m2, e, duration, dt) in enumerate(CONTACT_CASES):
-        res = contact_settings(mass=m1, other_mass=m2, restitution=e, duration=duration,
-                               dt=dt)
+        res = contact_settings(mass=m1, other_mass=m2, restitution=e,
+                               touch_duration=duration, dt=dt)
         key = f"contact_cmd.{i}"
         law = res["target"]
-        steps = round(law["duration"] / dt)
+        steps = round(law["touch_duration"] / dt)
         out[f"{key}.steps"] = steps
         out[f"{key}.damping_ratio"] = _round(law["damping_ratio"])
         for engine in ("mujoco", "bullet"):
@@ -685,7 +685,7 @@ def contact_command() -> dict:
             ach = ach if "restitution" in ach else ach["solref"]
             out[f"{key}.{engine}.e"] = _round(ach["restitution"])
             out[f"{key}.{engine}.duration_pct"] = _round(
-                100.0 * (ach["duration"] / law["duration"] - 1.0))
+                100.0 * (ach["touch_duration"] / law["touch_duration"] - 1.0))
             out[f"{key}.{engine}.naive_e"] = _round(res[engine]["naive"]["restitution"])
             out[f"{key}.{engine}.naive_miss"] = _round(
                 res[engine]["naive"]["restitution"] - e)
@@ -1098,7 +1098,7 @@ def simulate_options(n: dict) -> str:
 
 def modes_options(n: dict) -> str:
     """docs/cli.md: ``treeimpact modes``'s backend options."""
-    from .cli import MODES_OPTIONS
+    from .commands.modes import MODES_OPTIONS
 
     return options_table(MODES_OPTIONS)
 

@@ -1,7 +1,7 @@
 """``treeimpact contact``: MuJoCo and Bullet contact settings you can paste, for a target
-restitution and contact duration (or a stiffness and damping) at a time step, checked by
-simulating the two-body collision in each engine. SI units; design notes:
-docs/contact-settings.md.
+restitution and touch duration (or the pad's stiffness and damping) at a time step, checked
+by simulating the two-body collision in each engine (compare.contact_settings). SI units;
+design notes: docs/contact-settings.md.
 """
 
 from __future__ import annotations
@@ -10,18 +10,17 @@ import json
 import math
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.parameters import check_range
 
 from ._common import number
 
 NAME = "contact"
 HELP = ("MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a target e and "
-        "contact duration, checked in both engines")
-
-#: Fewest steps of the target collision the command accepts (0.5e5 steps per collision at
-#: most keep the two simulations under a second).
-MAX_STEPS_PER_COLLISION = 50_000
-SPEED = 1.0  # m/s: approach speed of the simulated collision (the law is linear: any speed)
+        "touch duration, checked in each engine")
+#: Removed spellings -> their names now (compare.names).
+RENAMED = {"duration": "touch_duration", "stiffness": "contact_stiffness",
+           "damping": "contact_damping"}
+#: --engine's words -> the engines they ask for.
+ENGINE_CHOICES = {"mujoco": ("mujoco",), "bullet": ("bullet",), "both": ("mujoco", "bullet")}
 
 
 def add_arguments(sp) -> None:
@@ -32,221 +31,98 @@ def add_arguments(sp) -> None:
     sp.add_argument("--effective-mass", type=number, dest="effective_mass",
                     help="the reduced mass m1 m2 / (m1 + m2), kg, instead of --mass")
     sp.add_argument("--restitution", type=number, help="target e of one collision (0, 1)")
-    sp.add_argument("--duration", type=number,
-                    help="target contact duration, s: first touch to release")
-    sp.add_argument("--stiffness", type=number, help="contact stiffness k, N/m (with "
-                    "--damping, instead of --restitution and --duration)")
-    sp.add_argument("--damping", type=number, help="contact damping c, N s/m")
-    sp.add_argument("--dt", type=number, help="the engines' time step, s")
+    sp.add_argument("--touch-duration", type=number, dest="touch_duration",
+                    help="target touch duration, s: first touch to release (not the undamped "
+                         "pi sqrt(mu / k_c), which is --contact-duration elsewhere)")
+    sp.add_argument("--contact-stiffness", type=number, dest="contact_stiffness",
+                    help="the pad's stiffness k_c, N/m (with --contact-damping, instead of "
+                         "--restitution and --touch-duration)")
+    sp.add_argument("--contact-damping", type=number, dest="contact_damping",
+                    help="the pad's damping c_c, N s/m")
+    sp.add_argument("--dt", type=number, help="the engines' time step, s (MuJoCo's default "
+                                              "is 0.002)")
+    sp.add_argument("--engine", choices=tuple(ENGINE_CHOICES), default="both",
+                    help="the engine(s) to give settings for (default both); an engine that "
+                         "cannot hold --dt is named with the step it needs")
     sp.add_argument("--json", action="store_true", help="machine-readable output")
 
 
-def _masses(mass, other_mass, effective_mass) -> tuple[float, float]:
-    """(m1, m2) in kg; m2 = inf: a fixed body. ``--effective-mass`` mu is m1 = mu, m2 fixed."""
-    if effective_mass is not None:
-        if mass is not None or other_mass is not None:
-            raise ParameterError("--effective-mass: give it instead of --mass/--other-mass")
-        return check_range("--effective-mass", effective_mass, low=0.0, low_open=True,
-                           high=1e9, unit="kg"), math.inf
-    if mass is None:
-        raise ParameterError("--mass: required (or --effective-mass), allowed (0, 1e+09] kg")
-    m1 = check_range("--mass", mass, low=0.0, low_open=True, high=1e9, unit="kg")
-    if other_mass is None or other_mass == math.inf:
-        return m1, math.inf
-    return m1, check_range("--other-mass", other_mass, low=0.0, low_open=True, high=1e9,
-                           unit="kg")
+def run(args) -> int:
+    """Print the settings and the simulated collisions (text or ``--json``); exit code 0
+    when at least one engine holds the step, else 2 with each engine's reason."""
+    from treeimpact.compare.contact_settings import contact_settings
 
+    engines = ENGINE_CHOICES[args.engine]
+    res = contact_settings(mass=args.mass, other_mass=args.other_mass,
+                           effective_mass=args.effective_mass, restitution=args.restitution,
+                           touch_duration=args.touch_duration,
+                           contact_stiffness=args.contact_stiffness,
+                           contact_damping=args.contact_damping, dt=args.dt, engines=engines)
+    if all("error" in res[e] for e in engines):
+        raise ParameterError("; ".join(res[e]["error"] for e in engines))
+    if args.json:
+        from treeimpact.analytic.results import to_jsonable
 
-def target_law(mu: float, *, restitution=None, duration=None, stiffness=None, damping=None
-               ) -> dict:
-    """The continuous spring-dashpot F = max(0, k delta + c delta') on the reduced mass mu
-    (kg): from (e, duration) or (k, c); its e, duration (first touch to release, s),
-    k (N/m), c (N s/m), zeta and the undamped time pi sqrt(mu / k) (s)."""
-    from treeimpact.analytic.contact.law import (
-        damping_ratio_for_restitution,
-        release_time,
-        restitution_for_damping_ratio,
-    )
-
-    if restitution is not None or duration is not None:
-        if stiffness is not None or damping is not None:
-            raise ParameterError("--stiffness/--damping: give them instead of --restitution "
-                                 "and --duration, not with them")
-        if restitution is None or duration is None:
-            raise ParameterError("--restitution and --duration: give both (or --stiffness "
-                                 "and --damping)")
-        # e = 1: no damping, which Bullet's implicit contact cannot give (it always damps)
-        check_range("--restitution", restitution, low=0.0, high=1.0, low_open=True,
-                    high_open=True)
-        check_range("--duration", duration, low=0.0, high=10.0, low_open=True, unit="s")
-        zeta = damping_ratio_for_restitution(restitution)
-        omega = release_time(zeta) / duration
-        k = mu * omega * omega
-        c = 2.0 * zeta * math.sqrt(k * mu)
-    else:
-        if stiffness is None or damping is None:
-            raise ParameterError("--restitution and --duration, or --stiffness and --damping: "
-                                 "required")
-        check_range("--stiffness", stiffness, low=0.0, high=1e15, low_open=True, unit="N/m")
-        check_range("--damping", damping, low=0.0, high=1e12, low_open=True, unit="N s/m")
-        k, c = float(stiffness), float(damping)
-        zeta = c / (2.0 * math.sqrt(k * mu))
-        omega = math.sqrt(k / mu)
-        restitution = restitution_for_damping_ratio(zeta)
-        duration = release_time(zeta) / omega
-    return {"restitution": float(restitution), "duration": float(duration), "stiffness": k,
-            "damping": c, "damping_ratio": zeta,
-            "undamped_duration": math.pi * math.sqrt(mu / k)}
-
-
-def _check_dt(dt, law: dict, mu: float) -> float:
-    if dt is None:
-        raise ParameterError("--dt: required, the engines' time step in s")
-    top = 2.0 / math.sqrt(law["stiffness"] / mu)  # Euler's stability: omega dt < 2
-    low = law["duration"] / MAX_STEPS_PER_COLLISION
-    if isinstance(dt, (int, float)) and dt >= top:
-        raise ParameterError(f"--dt = {dt!r} s is too large for stability: allowed "
-                             f"[{low:.3g}, {top:.3g}) s (omega dt < 2)")
-    return check_range("--dt", dt, low=low, high=top, high_open=True, unit="s")
-
-
-def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
-    from treeimpact.mujoco_models import _contact as mc
-
-    k, c, e = law["stiffness"], law["damping"], law["restitution"]
-    eng = mc.engine_law(k, e, mu, dt)
-    # two free bodies (or one against a fixed one): MuJoCo's diagApprox is the exact 1/mu
-    S = mc.effective_denominator(1.0 / mu, 1.0 / mu)
-    solimp = [mc.IMPEDANCE, mc.IMPEDANCE, *mc.SOLIMP_TAIL]
-    solref = list(mc.solref_for_law(eng.stiffness, eng.damping, S))
-    tc = list(mc.time_constant_solref(eng.stiffness, eng.damping, S))
-    d_tc = mc.time_constant_impedance(eng.stiffness, S)
-    solimp_tc = [d_tc, d_tc, *mc.SOLIMP_TAIL]
-    refsafe = tc[0] >= 2.0 * dt  # else MuJoCo raises timeconst to 2 dt unless disabled
-    naive = list(mc.solref_for_law(k, c, S))
-
-    def run(ref, safe=True, imp=solimp):
-        e_, t_, n_ = mc.two_body_collision(mc.two_body_mjcf(m1, m2, dt, ref, imp,
-                                                            refsafe=safe), SPEED)
-        return {"restitution": float(e_), "duration": float(t_), "steps": int(n_)}
-
-    return {"solref": solref, "solref_timeconst": tc, "solimp": solimp,
-            "solimp_timeconst": solimp_tc,
-            "stiffness": eng.stiffness, "damping": eng.damping,
-            "refsafe_disable_needed": not refsafe,
-            "mjcf": _mjcf_snippet(dt, solref, solimp),
-            "mjcf_timeconst": _mjcf_snippet(dt, tc, solimp_tc, refsafe_off=not refsafe),
-            "achieved": {"solref": run(solref),
-                         "solref_timeconst": run(tc, refsafe, solimp_tc)},
-            "naive": {"solref": naive, **run(naive)}}
+        print(json.dumps(to_jsonable(res), indent=2))
+        return 0
+    print_settings(res, engines)
+    return 0
 
 
 def _fmt(v: float) -> str:
     return f"{v:.10g}"
 
 
-def _mjcf_snippet(dt, solref, solimp, refsafe_off=False) -> str:
-    """The <option> and the <pair> of geoms A and B (contype = conaffinity = 0 on both, so
-    that the pair is their only contact)."""
-    opt = f'<option timestep="{_fmt(dt)}" integrator="Euler">'
-    opt += '\n  <flag refsafe="disable"/>\n</option>' if refsafe_off else ""
-    opt = opt if refsafe_off else opt[:-1] + "/>"
-    return (f"{opt}\n<contact>\n  <pair geom1=\"A\" geom2=\"B\" condim=\"1\" margin=\"0\" "
-            f"solref=\"{' '.join(_fmt(v) for v in solref)}\" "
-            f"solimp=\"{' '.join(_fmt(v) for v in solimp)}\"/>\n</contact>")
-
-
-def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
-    from treeimpact.bullet_models import _contact as bc
-    from treeimpact.bullet_models._world import (
-        LINK_FLAGS,
-        WORLD_FLAGS,
-        two_body_collision,
-    )
-
-    k, c = law["stiffness"], law["damping"]
-    limit = bc.largest_time_step(k, c, mu)
-    if dt > limit:
-        raise ParameterError(f"--dt = {dt!r} s is too large for Bullet's soft contact at e = "
-                             f"{law['restitution']:.4g}: allowed (0, {limit:.3g}] s (its "
-                             "implicit step alone would damp more than e allows)")
-    b = bc.bullet_contact(k, c, mu, dt)
-    ks, ds = b.per_body
-    nk, nd = bc.per_body(k, c)
-
-    def run(kk, dd):
-        e_, t_, n_ = two_body_collision(m1, m2, dt, kk, dd, SPEED)
-        return {"restitution": float(e_), "duration": float(t_), "steps": int(n_)}
-
-    return {"contactStiffness": ks, "contactDamping": ds,
-            "stiffness": b.stiffness, "damping": b.damping, "erp": b.erp, "cfm": b.cfm,
-            "world": {"fixedTimeStep": dt, **WORLD_FLAGS}, "link": dict(LINK_FLAGS),
-            "start": "touching (distance 0) or apart by whole steps: a contact that starts "
-                     "inside a step is off by O(dt)",
-            "achieved": run(ks, ds),
-            "naive": {"contactStiffness": nk, "contactDamping": nd, **run(nk, nd)}}
-
-
-def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitution=None,
-                     duration=None, stiffness=None, damping=None, dt=None) -> dict:
-    """Everything ``treeimpact contact`` prints (the JSON), for these flags' values."""
-    m1, m2 = _masses(mass, other_mass, effective_mass)
-    mu = m1 if math.isinf(m2) else m1 * m2 / (m1 + m2)
-    law = target_law(mu, restitution=restitution, duration=duration, stiffness=stiffness,
-                     damping=damping)
-    dt = _check_dt(dt, law, mu)
-    from treeimpact.compare.backends import quiet_stdout
-
-    with quiet_stdout():  # PyBullet prints on import; --json keeps stdout for JSON
-        out = {"inputs": {"mass": m1, "other_mass": m2, "effective_mass": mu, "dt": dt},
-               "target": law,
-               "mujoco": mujoco_settings(law, mu, m1, m2, dt),
-               "bullet": bullet_settings(law, mu, m1, m2, dt)}
-    return out
-
-
-def run(args) -> int:
-    """Print the settings and the simulated collisions (text or ``--json``); exit code 0."""
-    res = contact_settings(mass=args.mass, other_mass=args.other_mass,
-                           effective_mass=args.effective_mass, restitution=args.restitution,
-                           duration=args.duration, stiffness=args.stiffness,
-                           damping=args.damping, dt=args.dt)
-    if args.json:
-        from treeimpact.analytic.results import to_jsonable
-
-        print(json.dumps(to_jsonable(res), indent=2))
-        return 0
-    _print(res)
-    return 0
-
-
 def _row(name, achieved, law) -> str:
-    e, t = achieved["restitution"], achieved["duration"]
-    return (f"  {name:<34}e {e:.6f} ({e - law['restitution']:+.2e})   duration "
-            f"{1e3 * t:.4f} ms ({t / law['duration'] - 1:+.2%}, {achieved['steps']} steps)")
+    e, t = achieved["restitution"], achieved["touch_duration"]
+    if not math.isfinite(e):
+        return f"  {name:<32}{'diverged: the step is too large for this setting':<66}"
+    e_text = f"{e:.6f} ({e - law['restitution']:+.1e})"
+    t_text = (f"{1e3 * t:.4f} ms ({t / law['touch_duration'] - 1:+.2%}, "
+              f"{achieved['steps']} steps)")
+    return (f"  {name:<32}{e_text:<21}{t_text:<34}"
+            f"{1e3 * achieved['peak_penetration']:>8.4g} mm")
 
 
-def _print(res: dict) -> None:
-    law, inp, mj, bl = res["target"], res["inputs"], res["mujoco"], res["bullet"]
+def _moved(c: dict) -> str:
+    e, t = c["restitution"], c["touch_duration"]
+    if not math.isfinite(e):
+        return f"{'diverged':<22}"
+    if e > 1.0:
+        return f"{f'e {e:.3g} > 1: unstable':<22}"
+    return f"{f'{e:.4f}, {1e3 * t:.4g} ms':<22}"
+
+
+def _header(res: dict) -> None:
+    law, inp = res["target"], res["inputs"]
     other = "fixed" if math.isinf(inp["other_mass"]) else f"{inp['other_mass']:g} kg"
-    print(f"Contact of {inp['mass']:g} kg with {other} (reduced mass {inp['effective_mass']:.6g}"
-          f" kg) at dt = {inp['dt']:.6g} s")
-    print(f"  target: e {law['restitution']:.6g}, duration {1e3 * law['duration']:.6g} ms "
-          f"(first touch to release); the law k {law['stiffness']:.6g} N/m, c "
-          f"{law['damping']:.6g} N s/m, zeta {law['damping_ratio']:.4g}")
+    print(f"Contact of {inp['mass']:g} kg with {other} (reduced mass "
+          f"{inp['effective_mass']:.6g} kg) at dt = {inp['dt']:.6g} s")
+    print(f"  target: e {law['restitution']:.6g}, touch duration "
+          f"{1e3 * law['touch_duration']:.6g} ms (first touch to release); the pad k_c "
+          f"{law['contact_stiffness']:.6g} N/m, c_c {law['contact_damping']:.6g} N s/m, zeta "
+          f"{law['damping_ratio']:.4g} (contact duration pi sqrt(mu / k_c) "
+          f"{1e3 * law['contact_duration']:.6g} ms)")
     print()
+
+
+def _print_mujoco(mj: dict) -> None:
     print("MuJoCo (Euler; the pair's force is (k' delta + b' delta') / S, S = 1 / reduced mass)")
     print(f"  solref (direct: -k' -b')      {' '.join(_fmt(v) for v in mj['solref'])}")
     print(f"  solref (timeconst dampratio)  {' '.join(_fmt(v) for v in mj['solref_timeconst'])}"
           + ("   needs <flag refsafe=\"disable\"/>" if mj["refsafe_disable_needed"] else ""))
     print(f"  solimp                        {' '.join(_fmt(v) for v in mj['solimp'])}")
     if mj["solimp_timeconst"] != mj["solimp"]:
-        print(f"  solimp (with timeconst)       {' '.join(_fmt(v) for v in mj['solimp_timeconst'])}"
+        print(f"  solimp (with timeconst)       "
+              f"{' '.join(_fmt(v) for v in mj['solimp_timeconst'])}"
               "   (MuJoCo caps 1/(d timeconst dampratio)^2 at 1e15)")
-    print("  MJCF:")
+    print(f"  MJCF ({' and '.join(mj['geoms'])} are placeholders: your two geoms' names):")
     for line in mj["mjcf"].splitlines():
         print(f"    {line}")
     print()
+
+
+def _print_bullet(bl: dict) -> None:
     print("Bullet (each of the two links; they combine to k in series, c in sum)")
     print(f"  changeDynamics(contactStiffness={_fmt(bl['contactStiffness'])}, "
           f"contactDamping={_fmt(bl['contactDamping'])}, "
@@ -255,10 +131,46 @@ def _print(res: dict) -> None:
                                                   bl["world"].items()) + ")")
     print(f"  start the bodies {bl['start']}")
     print()
-    print("Simulated two-body collision, achieved against the target "
-          "(naive: the continuous law, no time-step correction)")
-    print(_row("MuJoCo solref (direct)", mj["achieved"]["solref"], law))
-    print(_row("MuJoCo solref (timeconst)", mj["achieved"]["solref_timeconst"], law))
-    print(_row("MuJoCo naive solref", mj["naive"], law))
-    print(_row("Bullet contactStiffness/Damping", bl["achieved"], law))
-    print(_row("Bullet naive", bl["naive"], law))
+
+
+def _collision_rows(res: dict, engines) -> list:
+    """(label, achieved at dt, at dt/2, at 2 dt) of every setting printed."""
+    rows = []
+    if "mujoco" in engines and "error" not in res["mujoco"]:
+        mj = res["mujoco"]
+        for label, key in (("MuJoCo solref (direct)", "solref"),
+                           ("MuJoCo solref (timeconst)", "solref_timeconst")):
+            rows.append((label, mj["achieved"][key], mj["at_half_dt"][key],
+                         mj["at_double_dt"][key]))
+        rows.append(("MuJoCo naive solref", mj["naive"], mj["at_half_dt"]["naive"],
+                     mj["at_double_dt"]["naive"]))
+    if "bullet" in engines and "error" not in res["bullet"]:
+        bl = res["bullet"]
+        rows.append(("Bullet contactStiffness/Damping", bl["achieved"],
+                     bl["at_half_dt"]["settings"], bl["at_double_dt"]["settings"]))
+        rows.append(("Bullet naive", bl["naive"], bl["at_half_dt"]["naive"],
+                     bl["at_double_dt"]["naive"]))
+    return rows
+
+
+def print_settings(res: dict, engines) -> None:
+    """The command's text output: the target, each engine's settings (or why it cannot hold
+    the step), then each setting's simulated collision at dt and kept at dt/2 and 2 dt."""
+    _header(res)
+    printers = {"mujoco": _print_mujoco, "bullet": _print_bullet}
+    for engine in engines:
+        if "error" in res[engine]:
+            print(f"{res[engine]['error']}\n")
+        else:
+            printers[engine](res[engine])
+    law = res["target"]
+    speed = res["inputs"]["approach_speed"]
+    print(f"Simulated two-body collision at {speed:g} m/s, achieved against the target (naive: "
+          "the continuous law, no time-step correction; penetration: the largest overlap, "
+          "linear in the approach speed); each setting kept as printed at half and twice the "
+          "step:")
+    print(f"  {'setting':<32}{'e (error)':<21}{'touch duration (error, steps)':<34}"
+          f"{'penetration':>11}  {'at dt/2: e, duration':<22}  at 2 dt: e, duration")
+    for label, at, half, double in _collision_rows(res, engines):
+        line = _row(label, at, law)
+        print(f"{line}  {_moved(half)}  {_moved(double)}".rstrip())
