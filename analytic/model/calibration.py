@@ -32,12 +32,12 @@ class MeasuredTree:
     """Measured properties of a tree at its clamp (SI units)."""
 
     dynamic_mass: float  # M_T, kg (Table 1)
-    stiffness: float  # K_T, N/m (Table 1)
+    equivalent_stiffness: float  # K_T, N/m: the tree's equivalent spring at the clamp (Table 1)
     damping_rate: float  # b, 1/s: decay rate of the moving-together motion (eq 42)
 
     def __post_init__(self):
         for name, v, unit in (("dynamic_mass", self.dynamic_mass, "kg"),
-                              ("stiffness", self.stiffness, "N/m")):
+                              ("equivalent_stiffness", self.equivalent_stiffness, "N/m")):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"{name} = {v!r} {unit}: allowed (0, inf) {unit}")
         b = self.damping_rate
@@ -83,10 +83,11 @@ def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: flo
     """
     a = chosen.clamp_height
     rigid = a ** 3 / (3.0 * chosen.bending_stiffness)  # m/N: flexibility of the rigid clamp
-    flexibility = 1.0 / measured.stiffness
+    flexibility = 1.0 / measured.equivalent_stiffness
     if flexibility < rigid * (1.0 - 1e-12):
         raise ParameterError(
-            f"stiffness = {measured.stiffness:.6g} N/m: above the rigid-clamp trunk's "
+            f"equivalent_stiffness = {measured.equivalent_stiffness:.6g} N/m: above the "
+            "rigid-clamp trunk's "
             f"3 E I / a^3 = {1.0 / rigid:.6g} N/m (eq 8); allowed (0, {1.0 / rigid:.6g}] N/m "
             "for this E, d and a (a stiffer tree needs a larger E)")
     base = math.inf if flexibility <= rigid else a ** 2 / (flexibility - rigid)
@@ -111,7 +112,8 @@ def calibration_notes(measured: MeasuredTree, *, given: str, chosen: str) -> dic
         "given": given,
         "chosen": chosen,
         "calibrated": (f"m_f from M_T = {measured.dynamic_mass:.6g} kg (eq 7), base_stiffness "
-                       f"from K_T = {measured.stiffness:.6g} N/m (eq 8 with the root spring), "
+                       f"from K_T = {measured.equivalent_stiffness:.6g} N/m (eq 8 with the root "
+                       "spring), "
                        f"C from C_T = 2 b (M_T + m), b = {measured.damping_rate:.6g} 1/s"),
     }
 
@@ -123,7 +125,7 @@ def with_clamp_mass(trunk: Trunk, clamp_mass: float, *, impactor_mass: float) ->
     before (eqs 7, 8, 10): the unmeasured clamp varied on the same measured tree.
     ``impactor_mass`` (kg) fixes b = C_T / (2 (M_T + m))."""
     tree = reduce_trunk(trunk)
-    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, stiffness=tree.stiffness,
+    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, equivalent_stiffness=tree.stiffness,
                             damping_rate=tree.damping / (2.0 * (tree.dynamic_mass
                                                                 + impactor_mass)))
     return calibrate_trunk(replace(trunk, clamp_mass=clamp_mass), measured,

@@ -80,7 +80,11 @@ def check_range(path: str, value, *, low=None, high=None, low_open=False, high_o
     """Return ``value`` as float or raise a one-line :class:`ParameterError`."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{path}: expected a number{f' in {unit}' if unit else ''}, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an integer beyond double precision
+        raise ParameterError(f"{path}: a number of {len(str(abs(value)))} digits is beyond "
+                             "double precision (about 1.8e308)") from None
     lo = "(" if low_open else "["
     hi = ")" if high_open else "]"
     rng = f"{lo}{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}{hi}"
@@ -164,7 +168,9 @@ class Trunk:
 
 @dataclass(frozen=True)
 class Pendulum:
-    """Pendulum impactor released from rest at ``release_angle`` (rad), eq 48.
+    """Pendulum impactor released from rest at ``release_angle_deg`` (degrees, as in the
+    scenario files, the command line and the JSON; :attr:`release_angle_rad` in radians),
+    eq 48.
 
     After the first impact it is linearised as mass ``m`` on a spring ``k = m g / l_e``
     (Fig 3, eq 13), natural frequency omega_2 = sqrt(g / l_e).
@@ -172,14 +178,13 @@ class Pendulum:
 
     mass: float  # m, kg
     equivalent_length: float  # l_e, m
-    release_angle: float  # theta_r, rad
+    release_angle_deg: float  # theta_r, deg
     gravity: float = STANDARD_GRAVITY  # g, m/s^2
 
     def __post_init__(self):
         check_limit("impactor.mass", self.mass)
         check_limit("impactor.equivalent_length", self.equivalent_length)
-        check_range("impactor.release_angle", self.release_angle, low=math.radians(
-            LIMITS["impactor.release_angle_deg"][0]), high=math.pi, unit="rad")
+        check_limit("impactor.release_angle_deg", self.release_angle_deg)
         check_limit("impactor.gravity", self.gravity)
 
     @property
@@ -196,11 +201,12 @@ class Pendulum:
     def impact_speed(self) -> float:
         """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48)."""
         return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
-            self.release_angle / 2.0)
+            self.release_angle_rad / 2.0)
 
     @property
-    def release_angle_deg(self) -> float:
-        return math.degrees(self.release_angle)
+    def release_angle_rad(self) -> float:
+        """theta_r in radians, rad."""
+        return math.radians(self.release_angle_deg)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,6 @@ the field and the allowed range.
 
 from __future__ import annotations
 
-import math
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -71,6 +70,13 @@ def _number(table: dict, prefix: str, key: str):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         name = f"{prefix}.{key}" if prefix else key
         raise ParameterError(f"{name}: expected a number, got {v!r}")
+    if isinstance(v, int) and not isinstance(v, bool):
+        try:
+            float(v)
+        except OverflowError:  # an integer of hundreds of digits: beyond double precision
+            name = f"{prefix}.{key}" if prefix else key
+            raise ParameterError(f"{name}: a number of {len(str(abs(v)))} digits is beyond "
+                                 "double precision (about 1.8e308)") from None
     return v
 
 
@@ -94,7 +100,7 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
                                                            "release_angle_deg"))
         kw = dict(mass=_number(imp_t, "impactor", "mass"),
                   equivalent_length=_number(imp_t, "impactor", "equivalent_length"),
-                  release_angle=math.radians(deg))
+                  release_angle_deg=deg)
         if "gravity" in imp_t:
             kw["gravity"] = _number(imp_t, "impactor", "gravity")
         impactor = Pendulum(**kw)

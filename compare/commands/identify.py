@@ -13,6 +13,8 @@ from treeimpact.analytic.errors import ParameterError
 from ._common import number
 
 NAME = "identify"
+#: Removed spellings -> their names now (compare.names).
+RENAMED = {"release_angle": "release_angle_deg"}
 HELP = ("tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test record, with 95 %% "
         "intervals")
 
@@ -31,7 +33,7 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
     sp.add_argument("--mass", type=number, required=True, help="pendulum mass m, kg")
     sp.add_argument("--equivalent-length", type=number, required=True,
                     help="equivalent length of the pendulum l_e, m")
-    sp.add_argument("--release-angle", type=number, required=True,
+    sp.add_argument("--release-angle-deg", type=number, required=True,
                     help="release angle theta_r, deg")
     sp.add_argument("--clamp-height", type=number, required=True, help="impact height a, m")
     sp.add_argument("--diameter", type=number, required=True, help="trunk diameter d, m")
@@ -55,18 +57,18 @@ def _test(args):
     for flag, value, field in (("--mass", args.mass, "impactor.mass"),
                                ("--equivalent-length", args.equivalent_length,
                                 "impactor.equivalent_length"),
-                               ("--release-angle", args.release_angle,
+                               ("--release-angle-deg", args.release_angle_deg,
                                 "impactor.release_angle_deg"),
                                ("--clamp-height", args.clamp_height, "trunk.clamp_height"),
                                ("--diameter", args.diameter, "trunk.diameter")):
         low, high, unit = LIMITS[field][:3]  # each flag as typed, before anything is built
         check_range(flag, value, low=low, high=high, unit=unit)
     pend = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
-                    release_angle=math.radians(args.release_angle))
+                    release_angle_deg=args.release_angle_deg)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, low=0.0, high=1.0)
     return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
-                        release_angle=pend.release_angle, clamp_height=args.clamp_height,
+                        release_angle=pend.release_angle_rad, clamp_height=args.clamp_height,
                         diameter=args.diameter, gravity=pend.gravity)
 
 
@@ -117,7 +119,7 @@ def _provenance(args, record) -> dict:
     from treeimpact.compare.provenance import provenance
 
     data = Path(args.record).read_bytes()
-    test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle",
+    test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle_deg",
                                            "clamp_height", "diameter", "restitution")}
     return provenance(record={"file": str(args.record), "bytes": len(data),
                               "sha1": hashlib.sha1(data).hexdigest(),
@@ -131,18 +133,20 @@ def run(args) -> int:
     import sys
 
     import numpy as np
+
     from treeimpact.analytic.identify.record_fit import (
         DAMPING_RATIO_FORMULAS,
         fit_record,
         read_record,
     )
     from treeimpact.analytic.results import to_jsonable
-    from treeimpact.compare.backends import quiet_stdout
+    from treeimpact.compare.backends import worded_c_output
 
     test = _test(args)
     if args.plot:
         _check_plot_path(args.plot)
-    with quiet_stdout():  # LAPACK prints its argument errors on fd 1: stdout is data
+    with worded_c_output("LAPACK", "numpy's linear algebra on this record; the fit checks "
+                         "its own results"):  # LAPACK prints its errors on fd 1
         record = read_record(args.record, time_unit=args.time_unit,
                              length_unit=args.length_unit)
         fit = fit_record(record, test, restitution=args.restitution)
@@ -207,6 +211,7 @@ def _plot(path, record, fit, paper, test) -> None:
 
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
+
     from treeimpact.analytic.identify.record_fit import model_x
 
     pendulum = record.y is not None
