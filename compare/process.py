@@ -66,17 +66,51 @@ def run_command(command, args) -> int:
 
 @contextmanager
 def stop_signals():
-    """SIGTERM ends the command like Ctrl-C (a stop request a pool's loop answers at its next
-    look, compare.pool.on_stop_signal); restored afterwards (main() may be called from
-    Python)."""
+    """Ctrl-C (SIGINT) and SIGTERM end the command alike: a stop request that a pool's loop
+    answers at its next look, or at once outside one (compare.pool.on_stop_signal); an
+    interrupt that lands where Python can only print it (a weakref callback, a __del__) is
+    delivered again, not lost (:func:`_unraisable`). Restored afterwards (main() may be
+    called from Python)."""
     from .pool import STOP, on_stop_signal
 
     STOP.clear()
-    previous = signal.signal(signal.SIGTERM, on_stop_signal)
+    previous = {s: signal.signal(s, on_stop_signal) for s in (signal.SIGTERM, signal.SIGINT)}
+    hook, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        sys.unraisablehook = hook
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+#: Seconds after which a lost interrupt is delivered again (the hook returns in microseconds).
+REDELIVER_AFTER_S = 0.02
+
+
+def _unraisable(info) -> None:
+    """``sys.unraisablehook`` while a command runs: a KeyboardInterrupt that Python could not
+    raise (it landed in a callback) is the stop request it was: STOP set and the interrupt
+    delivered again to the main thread, from a helper thread once this hook has returned
+    (delivered now, it would land in this hook and be lost again); anything else is one
+    warning line."""
+    import _thread
+    import threading
+    import time
+
+    from .pool import STOP
+
+    if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
+        STOP.set()
+
+        def again():
+            time.sleep(REDELIVER_AFTER_S)
+            _thread.interrupt_main(signal.SIGINT)
+
+        threading.Thread(target=again, daemon=True).start()
+        return
+    _error(f"warning: ignored {info.exc_type.__name__} ({one_line(info.exc_value)})"
+           if info.exc_value is not None else "warning: an ignored exception")
 
 
 @contextmanager

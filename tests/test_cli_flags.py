@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 
 import pytest
+
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.cli import build_parser, main
 from treeimpact.compare.commands import COMMANDS

@@ -220,10 +220,18 @@ def _table(lines: list[str], sep: str, width: int, name: str, numbers: list[int]
     if not lines:
         return [[] for _ in range(width)]
     text = "\n".join(" ".join(ln.split()) if sep == " " else ln for ln in lines)
+    import warnings
+
     try:
-        frame = pd.read_csv(io.StringIO(text), sep=sep, header=None, dtype=str,
-                            keep_default_na=False, skipinitialspace=True,
-                            names=range(width), index_col=False)
+        with warnings.catch_warnings():  # a row wider than the header: dropped data, refused
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            frame = pd.read_csv(io.StringIO(text), sep=sep, header=None, dtype=str,
+                                keep_default_na=False, skipinitialspace=True,
+                                names=range(width), index_col=False)
+    except pd.errors.ParserWarning:
+        i = next((i for i, ln in enumerate(lines) if len(_split(ln, sep)) != width), 0)
+        raise ParameterError(f"record {name!r}: every row needs {width} values at row "
+                             f"{numbers[i]}") from None
     except (pd.errors.ParserError, ValueError) as exc:
         found = re.search(r"line (\d+)", str(exc))
         where = f" at row {numbers[int(found.group(1)) - 1]}" if found and int(

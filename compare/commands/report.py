@@ -32,6 +32,13 @@ def run(args) -> int:
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.compare.report import write_report
 
+    if args.with_study is not None:
+        from treeimpact.compare.sweep.study import PRESETS
+
+        if args.with_study not in PRESETS:
+            raise ParameterError(f"--with-study = {args.with_study!r}: allowed "
+                                 f"{', '.join(PRESETS)} (a study preset, treeimpact sweep "
+                                 "--preset)")
     scenarios = [load_scenario(n) for n in args.scenarios] if args.scenarios else None
     for study in args.studies:  # checked before an hour of runs, not after
         if not Path(study).is_dir():

@@ -40,9 +40,10 @@ def add_arguments(sp) -> None:
 #: Units of the ``model`` keys every backend reports (README); others print without one.
 MODEL_UNITS = {"M_T": "kg", "C_T": "N s/m", "K_T": "N/m", "m": "kg", "k": "N/m", "restitution": "1",
                "u1": "m/s", "dt": "s", "contact_stiffness": "N/m", "contact_damping": "N s/m",
-               "law_stiffness": "N/m", "law_damping": "N s/m", "effective_mass": "kg",
+               "engine_contact_stiffness": "N/m", "engine_contact_damping": "N s/m",
+               "effective_mass": "kg",
                "contact_reduced_mass": "kg", "pad_damping_ratio": "1",
-               "collision_duration": "s", "omega_max": "rad/s"}
+               "touch_duration": "s", "contact_duration": "s", "omega_max": "rad/s"}
 
 
 #: Metrics printed without a relative difference: a count and a numerical residual.
@@ -84,8 +85,7 @@ def run(args) -> int:
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
     opts = options_of(args, backend_options())
-    if args.record:
-        check_record_arguments(args)
+    check_record_arguments(args)
     result = backend.simulate(scenario, **opts)
     written = write_record(args, scenario, result) if args.record else None
     if args.json:
@@ -107,55 +107,46 @@ def run(args) -> int:
 
 def add_record_arguments(sp) -> None:
     """`treeimpact simulate --record FILE.csv [--rate HZ --noise FRAC --seed N]`."""
+    from treeimpact.compare.recording import DEFAULTS
+
     sp.add_argument("--record", help="also write the trunk's displacement as a pendulum-test "
                                      "record (CSV 't [s],x [m]', what `identify` reads)")
-    sp.add_argument("--rate", type=number, default=5000.0,
-                    help="--record: sampling rate, Hz (default 5000)")
-    sp.add_argument("--noise", type=number, default=0.0,
-                    help="--record: Gaussian noise, a fraction of the peak (default 0)")
-    sp.add_argument("--seed", type=count, default=0, help="--record: the noise's seed")
-
-
-#: What a recorder does: its rate (Hz), noise (of the peak) and the rest before the impact.
-RECORD_RATE, RECORD_NOISE, RECORD_REST = (50.0, 1e6), (0.0, 0.5), 0.02
+    sp.add_argument("--rate", type=number,
+                    help=f"--record: sampling rate, Hz (default {DEFAULTS['rate']:g})")
+    sp.add_argument("--noise", type=number,
+                    help="--record: Gaussian noise, a fraction of the peak (default "
+                         f"{DEFAULTS['noise']:g})")
+    sp.add_argument("--seed", type=count,
+                    help=f"--record: the noise's seed (default {DEFAULTS['seed']})")
 
 
 def check_record_arguments(args) -> None:
-    """--rate, --noise and --seed in range (one line each), before a run is spent."""
-    from treeimpact.analytic.model.parameters import check_range
+    """--rate, --noise and --seed in range (one line each) and only with --record (they
+    would be ignored without it), before a run is spent; fills in their defaults."""
+    from treeimpact.compare.recording import DEFAULTS, check_sampling
 
-    check_range("--rate", args.rate, low=RECORD_RATE[0], high=RECORD_RATE[1], unit="Hz")
-    check_range("--noise", args.noise, low=RECORD_NOISE[0], high=RECORD_NOISE[1])
-    if args.seed < 0:
-        raise ParameterError(f"--seed = {args.seed}: allowed 0 or more")
+    for key, default in DEFAULTS.items():
+        if getattr(args, key) is not None and not args.record:
+            raise ParameterError(f"--{key}: only with --record FILE.csv (it sets the "
+                                 "record's sampling; without --record nothing is recorded)")
+        if getattr(args, key) is None:
+            setattr(args, key, default)
+    if args.record:
+        check_sampling(args.rate, args.noise, args.seed)
 
 
 def write_record(args, scenario, result) -> str:
-    """Write ``result``'s trunk displacement as a record at ``args.rate`` from RECORD_REST s
-    before the impact, with ``args.noise`` of the peak as Gaussian noise (seeded): exact
-    samples of the analytic backend's solution, else the backend's trajectory interpolated.
-    Returns a one-line summary."""
-    import numpy as np
+    """Write ``result``'s trunk displacement as a record (compare.recording.sample at
+    ``args.rate`` Hz, ``args.noise`` of the peak, ``args.seed``) to ``args.record``; returns
+    a one-line summary. Raises ParameterError naming --record if it cannot be written."""
+    from treeimpact.compare.recording import REST, sample
 
-    check_record_arguments(args)
-    traj = result.trajectory
-    if traj is None:
-        raise ParameterError(f"--record: the {result.backend} backend gives no trajectory")
-    t_end = float(traj.t[-1])
-    s = np.arange(-RECORD_REST, t_end, 1.0 / args.rate)
-    sol = getattr(result, "solution", None)
-    if sol is not None:
-        x = np.where(s > 0.0, sol.state(np.clip(s, 0.0, sol.t_end))[0], 0.0)
-    else:
-        x = np.where(s > 0.0, np.interp(s, traj.t, traj.x), 0.0)
-    rng = np.random.default_rng(args.seed)
-    x = x + args.noise * float(np.max(np.abs(x))) * rng.standard_normal(s.size)
-    t = s + RECORD_REST
+    t, x = sample(result, args.rate, args.noise, args.seed)
     try:
         with open(args.record, "w", encoding="utf-8") as f:
             f.write(f"# {scenario.name} ({result.backend}), {args.rate:g} Hz, noise "
                     f"{args.noise:g} of the peak, seed {args.seed}; impact at t = "
-                    f"{RECORD_REST:g} s\n")
+                    f"{REST:g} s\n")
             f.write("t [s],x [m]\n")
             f.writelines(f"{a:.9g},{b:.9g}\n" for a, b in zip(t, x))
     except OSError as exc:
