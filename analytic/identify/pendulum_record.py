@@ -30,11 +30,19 @@ COMMENT = ("#", "%", "//")  # a line starting with one of these (after blanks) i
 
 @dataclass(frozen=True)
 class Record:
-    """A displacement record (SI): time t (s), trunk displacement at the clamp x (m), and the
-    pendulum's displacement y (m) if measured, in the trunk's frame (y = x in contact).
-    ``time_unit``/``length_unit``: the units the numbers were given in (converted here);
-    ``rows``: each sample's line in its file (for messages); ``warnings``: one line each
-    (columns ignored, times made relative); ``t_start``: the first time as given (s)."""
+    """A displacement record (SI), checked on construction (ParameterError naming the row).
+
+    Attributes:
+        t: the sample times, increasing, s.
+        x: the trunk's displacement at the clamp, m.
+        y: the pendulum's displacement in the trunk's frame (y = x in contact), m, or None.
+        time_unit: the unit the times were given in (converted to s here).
+        length_unit: the unit the displacements were given in (converted to m here).
+        rows: each sample's line in its file (for messages), or None.
+        warnings: one line each (columns ignored, times made relative).
+        t_start: the first time as given, s.
+        source: where it came from (a file's name), for messages.
+    """
 
     t: np.ndarray
     x: np.ndarray

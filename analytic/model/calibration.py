@@ -29,7 +29,13 @@ from .reduction import reduce_trunk, static_mode_shape
 
 @dataclass(frozen=True)
 class MeasuredTree:
-    """Measured properties of a tree at its clamp (SI units)."""
+    """Measured properties of a tree at its clamp (Table 1), validated on construction.
+
+    Attributes:
+        dynamic_mass: M_T, kg.
+        equivalent_stiffness: K_T, the tree's equivalent spring at the clamp, N/m.
+        damping_rate: b, the decay rate of the moving-together motion (eq 42), 1/s.
+    """
 
     dynamic_mass: float  # M_T, kg (Table 1)
     equivalent_stiffness: float  # K_T, N/m: the tree's equivalent spring at the clamp (Table 1)
@@ -76,10 +82,22 @@ def stiffness_from_regression(*, a1: float, a2: float, x_max: float, tau: float,
 
 
 def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: float) -> Trunk:
-    """``chosen`` (l, a, d, rho, E, m_c) with base_stiffness, crown_mass and damping set so
-    that it reduces to the measured M_T, K_T and C_T = 2 b (M_T + m) (module docstring).
+    """A trunk that reduces exactly to a measured tree: the crown mass from M_T (eq 7), the
+    root spring from K_T (eq 8) and the distributed damping from C_T = 2 b (M_T + m)
+    (eq 10), the rest as chosen (module docstring).
 
-    ``chosen``'s own crown_mass, damping and base_stiffness are ignored.
+    Args:
+        chosen: the :class:`Trunk` whose l, a, d, rho, E and m_c are kept (its crown_mass,
+            damping and base_stiffness are ignored).
+        measured: the :class:`MeasuredTree` (M_T kg, K_T N/m, b 1/s).
+        impactor_mass: m, the pendulum's mass, kg (it enters C_T).
+
+    Returns:
+        Trunk: the calibrated trunk.
+
+    Raises:
+        ParameterError: K_T above the rigid-clamp trunk's 3 E I / a^3, or M_T below the bare
+            trunk's own (each named with its allowed range).
     """
     a = chosen.clamp_height
     rigid = a ** 3 / (3.0 * chosen.bending_stiffness)  # m/N: flexibility of the rigid clamp
