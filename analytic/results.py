@@ -55,6 +55,8 @@ class Deferred:
 
     @classmethod
     def deferred(cls, sample):
+        """An instance whose fields ``sample()`` (returning the full instance) fills on the
+        first read of any of them."""
         obj = cls.__new__(cls)
         object.__setattr__(obj, "_sample", sample)
         return obj
@@ -161,6 +163,7 @@ class SimulationResult:
     collision_duration: float = math.nan
 
     def to_json(self) -> dict:
+        """backend, model, metrics and scenario, JSON-safe (NaN and inf as None)."""
         return {"backend": self.backend, "model": to_jsonable(self.model),
                 "metrics": to_jsonable(self.metrics), "scenario": to_jsonable(self.scenario)}
 

@@ -85,6 +85,9 @@ def _tell(text: str, source: str, why: str) -> None:
 
 @dataclass(frozen=True)
 class Backend:
+    """A registered backend: its name, where its ``simulate`` (and ``modes``) live, its
+    options table and what the ladder, the pool and the report read about it."""
+
     name: str
     simulate_ref: str
     modes_ref: str | None
@@ -149,6 +152,8 @@ class Backend:
         return check_plausible(dataclasses.replace(result, scenario=as_run))
 
     def modes(self, scenario, **options):
+        """The backend's modes dict (static stiffness at a, N/m; omegas, rad/s) beside the
+        beam's; its options checked as :meth:`simulate`'s."""
         if self.modes_ref is None:
             raise ParameterError(f"backend {self.name!r} has no modes")
         func = self._load(self.modes_ref)
@@ -223,6 +228,7 @@ ENGINES = tuple(name for name, b in BACKENDS.items() if b.engine)
 
 
 def get_backend(name: str) -> Backend:
+    """The backend called ``name``, or a one-line ParameterError naming --backend."""
     try:
         return BACKENDS[name]
     except KeyError:

@@ -29,6 +29,7 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message):
+        """argparse's error as a ParameterError (one line, exit 2)."""
         raise ParameterError(message)
 
 
@@ -37,6 +38,7 @@ class _TopParser(_Parser):
     anything else is parsed, naming what it may have meant (compare.names)."""
 
     def parse_known_args(self, args=None, namespace=None):
+        """argparse's, after :func:`refuse_unknown_flags`."""
         args = sys.argv[1:] if args is None else list(args)
         refuse_unknown_flags(self, args)
         return super().parse_known_args(args, namespace)
