@@ -476,7 +476,7 @@ def test_scenario_refuses_a_given_t_end_its_tree_outlasts(tmp_path, capsys):
     (["simulate", "open-center", "--noise", "-5"], ["--noise: only with --record"]),
     (["simulate", "open-center", "--seed", "3"], ["--seed: only with --record"]),
     (["report", "--with-study", "", "--out", "/tmp/never"],
-     ["--with-study = '': allowed default, full"]),
+     ["--with-study '': allowed default, full"]),
 ])
 def test_a_flag_that_would_be_ignored_is_refused(capsys, argv, words):
     one_line(capsys, argv, 2, *words)

@@ -36,9 +36,8 @@ def run(args) -> int:
         from treeimpact.compare.sweep.study import PRESETS
 
         if args.with_study not in PRESETS:
-            raise ParameterError(f"--with-study = {args.with_study!r}: allowed "
-                                 f"{', '.join(PRESETS)} (a study preset, treeimpact sweep "
-                                 "--preset)")
+            raise ParameterError(f"--with-study {args.with_study!r}: allowed "
+                                 f"{', '.join(PRESETS)}")
     scenarios = [load_scenario(n) for n in args.scenarios] if args.scenarios else None
     for study in args.studies:  # checked before an hour of runs, not after
         if not Path(study).is_dir():
