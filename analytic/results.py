@@ -55,6 +55,8 @@ class Deferred:
 
     @classmethod
     def deferred(cls, sample):
+        """An instance whose fields ``sample()`` (returning the full instance) fills on the
+        first read of any of them."""
         obj = cls.__new__(cls)
         object.__setattr__(obj, "_sample", sample)
         return obj
@@ -161,8 +163,28 @@ class SimulationResult:
     collision_duration: float = math.nan
 
     def to_json(self) -> dict:
+        """backend, model, metrics and scenario, JSON-safe (NaN and inf as None)."""
         return {"backend": self.backend, "model": to_jsonable(self.model),
                 "metrics": to_jsonable(self.metrics), "scenario": to_jsonable(self.scenario)}
+
+
+@dataclass(frozen=True)
+class FreeCollision:
+    """One free two-body collision as an engine stepped it (``treeimpact contact``): the
+    rebound ratio ``restitution`` (1; NaN if the step blew up), ``touch_duration`` (s, first
+    touch to release: the law force reaching zero), ``steps`` with a pushing force, and
+    ``peak_penetration`` (m, the largest overlap of the two bodies, at the approach speed
+    the collision was run at: linear in it)."""
+
+    restitution: float
+    touch_duration: float
+    steps: int
+    peak_penetration: float
+
+    def to_json(self) -> dict:
+        """The four fields by name (SI)."""
+        return {"restitution": self.restitution, "touch_duration": self.touch_duration,
+                "steps": self.steps, "peak_penetration": self.peak_penetration}
 
 
 #: Largest energy-ledger error (fraction of the input energy) a result may carry: every rung's

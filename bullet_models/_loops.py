@@ -25,7 +25,7 @@ def _swing(world, setup, le: float, g: float):
     p, cid, pb = world.p, world.cid, world.pendulum
     imp = setup.scenario.impactor
     m = imp.mass
-    theta_r = imp.release_angle
+    theta_r = imp.release_angle_rad
     p.resetJointState(pb, 0, -theta_r, 0.0, physicsClientId=cid)
     h = max(SWING_STEP, setup.dt)
     p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)

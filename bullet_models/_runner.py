@@ -77,9 +77,11 @@ class Setup(EngineSetup):
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               damping="distributed", calibration="pad") -> Setup:
+               trunk_damping_model="distributed", calibration="pad") -> Setup:
     check_choice("contact", contact, CONTACTS)
-    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum, damping=damping,
+    damping = trunk_damping_model
+    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
+                                trunk_damping_model=damping,
                                 calibration=calibration, restitution=restitution,
                                 t_end=t_end)
     if contact == "soft" and not model.restitution < 1.0:  # before the chain is built
@@ -130,6 +132,7 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
             if dt > limit:
                 dt = 0.9 * limit
         check_time_step(dt, t_c, fastest)
+        check_work(t_end, dt, step_cost(segments or 1))  # before the replays of dt's steps
         bullet = _contact.bullet_contact(k_c, c_c, mu, dt)
         # Impacts are told from moving together on the scale of the SDOF model's free
         # collision, the same for every rung (the chain's local collision, t_c, is shorter).
@@ -244,14 +247,16 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
         collision_duration=setup.collision_duration,
         detection_duration=setup.collision_duration, initial_energy=e0, model_fields={
             "segments": setup.segments, "dt": dt,
-            "contact_stiffness": b.stiffness if b else None,
-            "contact_damping": b.damping if b else None,
-            "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
+            "contact_stiffness": setup.contact_stiffness,
+            "contact_damping": setup.contact_damping,
+            "engine_contact_stiffness": b.stiffness if b else None,
+            "engine_contact_damping": b.damping if b else None,
+            "trunk": setup.trunk, "pendulum": setup.pendulum,
+            "trunk_damping_model": setup.damping,
             "calibration": setup.calibration,
             **pad_fields(setup.contact_stiffness, setup.contact_damping,
                          b.reduced_mass if b else None),
-            "law_stiffness": setup.contact_stiffness, "law_damping": setup.contact_damping,
-            "collision_duration": setup.collision_duration,
+            "touch_duration": setup.collision_duration,
             "integrator": "semi-implicit Euler",  # Bullet's only one (docs/engines.md)
             "omega_max": setup.omega_max,
             "contact": setup.contact, "apparent_mass": setup.apparent_mass,
@@ -263,7 +268,7 @@ def _result(setup: Setup, rec: dict, t_shift: float, e0: float, inertia) -> Simu
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
              contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             damping="distributed", calibration="pad") -> SimulationResult:
+             trunk_damping_model="distributed", calibration="pad") -> SimulationResult:
     """Run one scenario in PyBullet (rules in the module docstring); backend "bullet".
 
     ``calibration``: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
@@ -271,7 +276,8 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
     """
     return run(make_setup(scenario, trunk=trunk, segments=segments, pendulum=pendulum,
                           contact=contact, contact_stiffness=contact_stiffness, dt=dt,
-                          restitution=restitution, t_end=t_end, damping=damping,
+                          restitution=restitution, t_end=t_end,
+                          trunk_damping_model=trunk_damping_model,
                           calibration=calibration))
 
 

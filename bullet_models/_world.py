@@ -12,6 +12,7 @@ import numpy as np
 
 from treeimpact.analytic.continuum.chain import hinged_chain
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.results import FreeCollision
 
 from . import _urdf
 from ._contact import combine_damping, combine_stiffness
@@ -170,11 +171,13 @@ SPHERE_RADIUS = 0.05  # m: the two-body collision's spheres (geometry only)
 
 def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: float,
                        damping: float, speed: float = 1.0, flags: bool = True,
-                       overlap: float = 1e-12) -> tuple[float, float, int]:
+                       overlap: float = 1e-12) -> FreeCollision:
     """Collide sphere a (``mass``) into sphere b (``other_mass``; fixed when infinite) at
     ``speed`` (m/s), starting touching, each link given ``stiffness``/``damping`` (per link,
     N/m and N s/m) and, with ``flags``, :data:`WORLD_FLAGS` and :data:`LINK_FLAGS`;
-    (restitution, duration s, steps with a normal force). The duration ends where the
+    its :class:`analytic.results.FreeCollision` (restitution, touch duration s, steps with a
+    normal force, peak penetration m; NaN where the state left the finite). The duration
+    ends where the
     links' combined law force k delta + c delta' first reaches zero, interpolated between
     the steps it acts over (Bullet's implicit force is that of the step's end state)."""
     p, cid = client()
@@ -199,19 +202,23 @@ def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: flo
         (xb, _, _), _ = p.getBasePositionAndOrientation(b, physicsClientId=cid)
         va = p.getBaseVelocity(a, physicsClientId=cid)[0][0]
         vb = p.getBaseVelocity(b, physicsClientId=cid)[0][0]
-        return k * (2.0 * SPHERE_RADIUS - (xb - xa)) + c * (va - vb), vb - va
+        overlap = 2.0 * SPHERE_RADIUS - (xb - xa)
+        return k * overlap + c * (va - vb), vb - va, overlap
 
-    law_prev, _ = state()
-    pushing, t_release = 0, None
+    law_prev, _, _ = state()
+    pushing, t_release, peak = 0, None, 0.0
     for n in range(1, 1_000_001):
         p.stepSimulation(physicsClientId=cid)
         if sum(cp[9] for cp in p.getContactPoints(a, b, physicsClientId=cid)) > 0.0:
             pushing += 1
-        law, sep = state()
+        law, sep, overlap = state()
+        if not (math.isfinite(law) and math.isfinite(sep)):
+            return FreeCollision(math.nan, math.nan, pushing, math.nan)
+        peak = max(peak, overlap)
         if t_release is None and law <= 0.0:
             # the force of state n acted over step n (implicit): it stands at (n - 1) dt
             t_release = (n - 2 + law_prev / (law_prev - law)) * dt
         if t_release is not None and sep > 0.0:
-            return sep / speed, t_release, pushing
+            return FreeCollision(sep / speed, t_release, pushing, peak)
         law_prev = law
     raise ParameterError("--dt: the collision did not end within 1e6 steps")

@@ -1,108 +1,326 @@
 """The public API re-exported by :mod:`treeimpact` (docs/api.md): one function per job, in SI
-units, each a thin call into the module that does the work.
+units (angles in degrees, named ``_deg``), each a thin call into the module that does the
+work, returning the typed results of :mod:`treeimpact.compare.api_results`. Its defaults
+are the command line's.
 
-Bad input raises :class:`treeimpact.ParameterError` (one line naming the field and its
-range); a run with no numbers to report raises :class:`treeimpact.SimulationDiverged`.
+Bad input raises :class:`treeimpact.ParameterError` in one line naming the keyword argument
+as typed (``t_end``, not the command line's ``--t-end``) and its allowed range; a run with
+no numbers to report raises :class:`treeimpact.SimulationDiverged`.
 """
 
 from __future__ import annotations
 
+import functools
+import re
 from pathlib import Path
 
-from treeimpact.analytic.model.parameters import Scenario
-from treeimpact.analytic.results import SimulationResult
+from treeimpact.analytic.errors import ParameterError
+
+from .api_results import Identification, Modes, Simulation
+from .backends import BACKENDS
+
+#: The backends a sweep runs when none are given: all of them (the command line's too).
+SWEEP_BACKENDS = tuple(BACKENDS)
+#: The scenario a sweep runs when none is given (the command line's default too).
+SWEEP_SCENARIO = "central-leader"
+#: The report's directory when none is given (the command line's default too).
+REPORT_DIR = "reports"
+
+_FLAG = re.compile(r"(?<![\w-])--([a-z][a-z0-9-]*)")
 
 
-def simulate(scenario, backend: str = "analytic", **options) -> SimulationResult:
-    """One run of ``scenario`` (a :class:`Scenario`, shipped name or TOML path) on
-    ``backend`` (``analytic``, ``soft``, ``beam``, ``mujoco``, ``bullet``; :func:`backends`),
-    with the backend's own options (e.g. ``restitution``, ``t_end`` s, ``trunk="chain"``,
-    ``segments``); the result is checked for plausibility before it is returned."""
+def _keywords(text: str) -> str:
+    """A message of the package's with its command-line flags named as this API's keyword
+    arguments (``--t-end`` -> ``t_end``); the run budget's flag named by its variable."""
+    text = text.replace("--max-seconds, ", "").replace("--max-seconds", "TREEIMPACT_MAX_SECONDS")
+    return _FLAG.sub(lambda m: m.group(1).replace("-", "_"), text)
+
+
+def _api(func):
+    """An API function whose ParameterError names keyword arguments, not flags."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        try:
+            return func(*args, **kwargs)
+        except ParameterError as exc:
+            raise ParameterError(_keywords(str(exc))) from None
+    return wrapper
+
+
+@_api
+def simulate(scenario, backend: str = "analytic", **options) -> Simulation:
+    """Run one scenario on one backend.
+
+    Args:
+        scenario: a :class:`Scenario`, a shipped scenario's name (``shipped_scenarios()``)
+            or the path of a scenario file (TOML).
+        backend: ``analytic`` (the paper's exact model, eqs 12-35; default), ``soft`` (the
+            1-DOF trunk with the spring-dashpot pad), ``beam`` (the continuum trunk),
+            ``mujoco`` or ``bullet`` (:func:`backends`).
+        **options: the backend's own options, as the ``simulate`` command's flags with
+            underscores (docs/cli.md): e.g. ``restitution`` (1), ``t_end`` (s),
+            ``contact_stiffness`` (N/m), ``contact_duration`` (s), ``trunk="chain"``,
+            ``segments``, ``elements``, ``dt`` (s), ``trunk_damping_model``.
+
+    Returns:
+        :class:`Simulation`: its ``metrics`` (:class:`Metrics`, SI), ``model``
+        (:class:`Model`), ``scenario`` as run and ``trajectory``.
+
+    Raises:
+        ParameterError: an unknown backend or option (with what it may have meant), a value
+            out of its range, or a run beyond the budget (TREEIMPACT_MAX_STEPS, ...).
+        SimulationDiverged: the run has no physical numbers to report.
+    """
+    from .api_results import simulation_of
+    from .backends import get_backend, scenario_as_run
+    from .runs import resolve_scenario
+
+    scen = resolve_scenario(scenario)
+    result = get_backend(backend).simulate(scen, **options)
+    return simulation_of(result, scenario_as_run(scen, options))
+
+
+@_api
+def modes(scenario, backend: str = "analytic", **options) -> Modes:
+    """The static stiffness and natural frequencies of a backend's trunk beside the
+    continuous beam's.
+
+    Args:
+        scenario: a :class:`Scenario`, a shipped scenario's name or a TOML path.
+        backend: ``analytic`` (the 1-DOF trunk; default), ``soft``, ``beam`` (its mesh),
+            ``mujoco`` or ``bullet`` (their hinged chains).
+        **options: the trunk options of the ``modes`` command: ``segments``, ``elements``,
+            ``beam_theory``, ``trunk``.
+
+    Returns:
+        :class:`Modes`: ``model`` and ``beam``, each a :class:`TrunkModes` (static stiffness
+        at the clamp height in N/m, natural frequencies in rad/s).
+
+    Raises:
+        ParameterError: an unknown backend or option, or a value out of its range.
+    """
+    from .api_results import modes_of
     from .backends import get_backend
     from .runs import resolve_scenario
 
-    return get_backend(backend).simulate(resolve_scenario(scenario), **options)
-
-
-def modes(scenario, backend: str = "analytic", **options) -> dict:
-    """Static stiffness at the clamp (N/m) and natural frequencies (rad/s) of the
-    backend's trunk beside the continuous beam's (``{"model": ..., "beam": ...}``)."""
-    from .backends import get_backend
-    from .runs import resolve_scenario
-
-    return get_backend(backend).modes(resolve_scenario(scenario), **options)
+    return modes_of(get_backend(backend).modes(resolve_scenario(scenario), **options))
 
 
 def backends() -> dict[str, str]:
-    """The backends by name, with what each one is."""
+    """The backends by name.
+
+    Returns:
+        dict: backend name -> one line saying what it is (their options: docs/cli.md).
+
+    Raises:
+        Nothing.
+    """
     from .backends import BACKENDS
 
     return {name: b.description for name, b in BACKENDS.items()}
 
 
+@_api
 def ladder(scenario, *, engines=None, segments: int | None = None):
-    """The scenario run as the discrepancy ladder (one assumption per rung, judged against
-    ``compare/tolerances.toml``): a :class:`treeimpact.compare.ladder.Ladder` whose
-    ``checks()`` carry the verdicts and ``table()`` every rung's values."""
+    """The scenario run as the discrepancy ladder, one assumption per rung, each step judged
+    against ``compare/tolerances.toml`` (docs/ladder.md).
+
+    Args:
+        scenario: a :class:`Scenario`, a shipped scenario's name or a TOML path.
+        engines: the engines whose rungs run (default: MuJoCo and Bullet; ``()``: the
+            analytic rungs only).
+        segments: the engines' chain segments (default: the fewest within 0.5 % of the
+            beam).
+
+    Returns:
+        ``treeimpact.compare.ladder.Ladder``: ``checks()`` the verdicts with their reasons,
+        ``table()`` every rung's values and steps.
+
+    Raises:
+        ParameterError: an unknown engine or a bad segment count.
+    """
     from .backends import ENGINES
     from .ladder import build_ladder
+    from .runs import resolve_scenario
 
-    return build_ladder(scenario, engines=ENGINES if engines is None else tuple(engines),
+    return build_ladder(resolve_scenario(scenario),
+                        engines=ENGINES if engines is None else tuple(engines),
                         segments=segments)
 
 
-def sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = False,
-          options: dict | None = None, workers: int | None = None):
-    """A parameter sweep (``grid``: specs such as ``["restitution=0.05:0.5:10"]``) into the
-    directory ``out``, resumable; returns the :class:`treeimpact.compare.sweep.SweepResult`
-    (its ``table`` a pandas DataFrame, one row per grid point and backend)."""
+@_api
+def sweep(grid, out, *, scenario=SWEEP_SCENARIO, backends=SWEEP_BACKENDS,
+          ladder: bool = False, options: dict | None = None, workers: int | None = None):
+    """A resumable parameter sweep into a directory (docs/sweeps.md), as ``treeimpact sweep``.
+
+    Args:
+        grid: the swept parameters, e.g. ``["restitution=0.05:0.5:10"]`` (the ``--grid``
+            specs: NAME=START:STOP:COUNT or NAME=V1,V2,...).
+        out: the output directory (rerunning with the same one resumes).
+        scenario: the scenario (default central-leader, as the command's).
+        backends: the backends run at each point (default all five, as the command's;
+            analytic always runs as the reference).
+        ladder: run each engine as the ladder's rungs.
+        options: backend options held fixed, ``{backend: {name: value}}``.
+        workers: local worker processes (default one per CPU; 0 runs here).
+
+    Returns:
+        ``treeimpact.compare.sweep.SweepResult``: its ``table`` a pandas DataFrame, one row
+        per grid point and backend.
+
+    Raises:
+        ParameterError: a malformed grid spec, an unknown backend or option.
+    """
     from .sweep.run import run_sweep
 
-    return run_sweep(scenario, grid, out, backends=backends, ladder=ladder, options=options,
-                     workers=workers, progress=False)
+    return run_sweep(scenario, grid, out, backends=tuple(backends),
+                     ladder=ladder, options=options, workers=workers, progress=False)
 
 
+@_api
 def read_record(path, *, time_unit: str | None = None, length_unit: str | None = None):
-    """A pendulum-test record: a CSV file with columns t, x (and y, the pendulum's) named in
-    its header, units there ('t [ms]', 'x (mm)') or given here (default s, m); converted
-    to SI, times from the first sample (docs/identification.md, "The record")."""
+    """A pendulum-test record read from a CSV file (docs/identification.md, "The record").
+
+    Args:
+        path: the file: a header naming the columns t, x and optionally y (the pendulum's),
+            any order, units in the header ('t [ms]', 'x (mm)').
+        time_unit: the unit of a time column whose header names none: s (default), ms, us.
+        length_unit: that of x and y: m (default), cm, mm, um.
+
+    Returns:
+        :class:`Record`: times (s, from the first sample) and displacements (m).
+
+    Raises:
+        ParameterError: an unreadable file, a malformed header or row (named by its line).
+    """
     from treeimpact.analytic.identify.pendulum_record import read_record as read
 
     return read(path, time_unit=time_unit, length_unit=length_unit)
 
 
-def identify(record, *, mass: float, equivalent_length: float, release_angle_deg: float,
-             clamp_height: float, diameter: float, restitution: float | None = None):
-    """Tree properties (M_T kg, K_T N/m, C_T N s/m, xi, e, E Pa, with 95 % intervals) from a
-    record (a path, read in s and m unless its header says otherwise, or
-    :func:`read_record`'s result) by the whole-record fit of the exact 1-DOF model, with
-    its verdict and diagnoses; ``restitution``: the pad's e if known, held fixed."""
-    import math
+@_api
+def record_from_simulation(simulation: Simulation, *, rate_hz: float = 5000.0,
+                           noise: float = 0.0, seed: int = 0):
+    """A run as a field test records it (what ``treeimpact simulate --record`` writes).
 
+    Args:
+        simulation: a :func:`simulate` result.
+        rate_hz: the sampling rate, Hz, in [50, 1e6] (default 5000, as the command's).
+        noise: Gaussian noise as a fraction of the peak, in [0, 0.5] (default 0).
+        seed: the noise's seed, an integer >= 0 (default 0).
+
+    Returns:
+        :class:`Record`: the trunk's displacement x (m) from 20 ms before the impact, times
+        t (s) from the first sample.
+
+    Raises:
+        ParameterError: a rate, noise or seed out of range, or a backend without a
+            trajectory.
+    """
+    from treeimpact.analytic.identify.pendulum_record import Record
+
+    from .recording import check_sampling, sample
+
+    check_sampling(rate_hz, noise, seed, names=("rate_hz", "noise", "seed"))
+    t, x = sample(simulation.result, rate_hz, noise, seed)
+    return Record(t=t, x=x, source=f"{simulation.scenario.name} ({simulation.backend})")
+
+
+def _pendulum_test(test, clamp_height, diameter):
+    """The identification's PendulumTest of a Scenario, or of a Pendulum and the trunk's
+    clamp height and diameter (m)."""
     from treeimpact.analytic.identify.procedure import PendulumTest
-    from treeimpact.analytic.identify.record_fit import fit_record
-    from treeimpact.analytic.model.parameters import Pendulum
+    from treeimpact.analytic.model.parameters import LIMITS, Pendulum, Scenario, check_range
 
+    if isinstance(test, Scenario):
+        if clamp_height is not None or diameter is not None:
+            raise ParameterError("clamp_height, diameter: the scenario's trunk gives them; "
+                                 "pass them only with a Pendulum")
+        pend, clamp_height, diameter = (test.impactor, test.trunk.clamp_height,
+                                        test.trunk.diameter)
+    else:
+        pend = test
+    if not isinstance(pend, Pendulum):
+        raise ParameterError(f"test: expected a Scenario or a Pendulum, got "
+                             f"{type(pend).__name__} (the identification needs a pendulum)")
+    for name, value in (("clamp_height", clamp_height), ("diameter", diameter)):
+        if value is None:
+            raise ParameterError(f"{name}: required with a Pendulum (m)")
+        low, high, unit = LIMITS[f"trunk.{name}"]
+        check_range(name, value, low=low, high=high, unit=unit)
+    return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
+                        release_angle=pend.release_angle_rad, clamp_height=clamp_height,
+                        diameter=diameter, gravity=pend.gravity)
+
+
+@_api
+def identify(record, test, *, clamp_height: float | None = None,
+             diameter: float | None = None, restitution: float | None = None
+             ) -> Identification:
+    """Tree properties from a pendulum-test record: the exact 1-DOF model fitted to every
+    sample (docs/identification.md), as ``treeimpact identify``.
+
+    Args:
+        record: a :class:`Record` (:func:`read_record`, :func:`record_from_simulation`) or
+            the path of a record file (read in s and m unless its header says otherwise).
+        test: the test's :class:`Scenario` (its pendulum, clamp height and diameter) or its
+            :class:`Pendulum`.
+        clamp_height: the impact height a, m (with a Pendulum only).
+        diameter: the trunk's diameter d, m (with a Pendulum only).
+        restitution: the pad's e in [0, 1] if known, held fixed (default: fitted).
+
+    Returns:
+        :class:`Identification`: M_T (kg), K_T (N/m), C_T (N s/m), the damping ratios, e,
+        E (Pa), each an :class:`Estimate` with its 95 % interval, and the verdict.
+
+    Raises:
+        ParameterError: an unreadable record, a test that is not a pendulum's, a value out
+            of its range.
+    """
+    from treeimpact.analytic.identify.pendulum_record import Record
+    from treeimpact.analytic.identify.record_fit import fit_record
+    from treeimpact.analytic.model.parameters import check_range
+
+    from .api_results import identification_of
+
+    pendulum_test = _pendulum_test(test, clamp_height, diameter)
     if isinstance(record, (str, Path)):
         record = read_record(record)
-    pend = Pendulum(mass=mass, equivalent_length=equivalent_length,
-                    release_angle=math.radians(release_angle_deg))
-    test = PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
-                        release_angle=pend.release_angle, clamp_height=clamp_height,
-                        diameter=diameter, gravity=pend.gravity)
-    return fit_record(record, test, restitution=restitution)
+    if not isinstance(record, Record):
+        raise ParameterError(f"record: expected a Record or a path, got "
+                             f"{type(record).__name__}")
+    if restitution is not None:
+        check_range("restitution", restitution, low=0.0, high=1.0)
+    return identification_of(fit_record(record, pendulum_test, restitution=restitution),
+                             record)
 
 
-def report(out, scenarios=None, *, studies=()) -> dict:
-    """Write the discrepancy report (report.html, report.md, report.json) into ``out`` for
-    ``scenarios`` (default: the shipped ones) and finished ``studies`` (sweep directories);
-    returns the written paths by kind."""
+@_api
+def report(out=REPORT_DIR, scenarios=None, *, studies=()) -> dict:
+    """The discrepancy report (report.html, report.md, report.json), as ``treeimpact report``.
+
+    Args:
+        out: the output directory (default ``reports``, as the command's).
+        scenarios: the scenarios (Scenario, shipped name or TOML path each; default: the
+            shipped ones).
+        studies: directories of finished studies (sweeps) to include.
+
+    Returns:
+        dict: kind ("html", "md", "json") -> the written file's path.
+
+    Raises:
+        ParameterError: an unknown scenario, a study that is not a directory.
+    """
     from .report import write_report
     from .runs import resolve_scenario
 
+    for study in studies:
+        if not Path(study).is_dir():
+            raise ParameterError(f"studies: {str(study)!r} is not a directory (a finished "
+                                 "study, treeimpact sweep --out DIR)")
     scens = None if scenarios is None else [resolve_scenario(s) for s in scenarios]
     return write_report(out, scenarios=scens, study_dirs=tuple(studies))
 
 
-__all__ = ["Scenario", "SimulationResult", "backends", "identify", "ladder", "modes",
-           "read_record", "report", "simulate", "sweep"]
+__all__ = ["backends", "identify", "ladder", "modes", "read_record", "record_from_simulation",
+           "report", "simulate", "sweep"]

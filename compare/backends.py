@@ -36,8 +36,58 @@ def quiet_stdout():
         os.close(saved)
 
 
+@contextmanager
+def worded_c_output(source: str, why: str = ""):
+    """Run the block with file descriptors 1 and 2 sent to a temporary file, so that what a
+    C library writes there (LAPACK's argument errors, an engine's notes) never reaches the
+    terminal as it is; afterwards each distinct line is told on stderr as treeimpact's own
+    warning, ``treeimpact: warning: SOURCE: line (WHY)``, with its count when repeated (a
+    line already starting with ``treeimpact:`` passes as it is)."""
+    import tempfile
+
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = os.dup(1), os.dup(2)
+    except (OSError, ValueError):  # no real file descriptors (captured): nothing to word
+        yield
+        return
+    with tempfile.TemporaryFile() as tmp:
+        try:
+            os.dup2(tmp.fileno(), 1)
+            os.dup2(tmp.fileno(), 2)
+            yield
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            tmp.seek(0)
+            _tell(tmp.read().decode("utf-8", errors="replace"), source, why)
+
+
+def _tell(text: str, source: str, why: str) -> None:
+    counts: dict = {}
+    for line in text.splitlines():
+        line = " ".join(line.replace("**", " ").split())
+        if line:
+            counts[line] = counts.get(line, 0) + 1
+    for line, n in counts.items():
+        if line.startswith("treeimpact:"):
+            print(line, file=sys.stderr)
+            continue
+        times = f", {n} times" if n > 1 else ""
+        because = f" ({why}{times})" if why else f" ({n} times)" if n > 1 else ""
+        print(f"treeimpact: warning: {source}: {line}{because}", file=sys.stderr)
+
+
 @dataclass(frozen=True)
 class Backend:
+    """A registered backend: its name, where its ``simulate`` (and ``modes``) live, its
+    options table and what the ladder, the pool and the report read about it."""
+
     name: str
     simulate_ref: str
     modes_ref: str | None
@@ -87,14 +137,23 @@ class Backend:
 
     def simulate(self, scenario, **options):
         """The backend's result, checked before anyone reports it (a diverged run raises
-        :class:`analytic.errors.SimulationDiverged`: never numbers)."""
+        :class:`analytic.errors.SimulationDiverged`: never numbers), its ``scenario`` the
+        scenario as run (:func:`scenario_as_run`)."""
+        import dataclasses
+
         from treeimpact.analytic.results import check_plausible
 
         func = self._load(self.simulate_ref)
         table = self.options()
-        return check_plausible(func(scenario, **self._checked(options, table, set(table))))
+        options = self._checked(options, table, set(table))
+        result = func(scenario, **options)
+        as_run = scenario_as_run(scenario, options).to_dict()
+        as_run["t_end"] = result.scenario.get("t_end", as_run["t_end"])  # an engine's own
+        return check_plausible(dataclasses.replace(result, scenario=as_run))
 
     def modes(self, scenario, **options):
+        """The backend's modes dict (static stiffness at a, N/m; omegas, rad/s) beside the
+        beam's; its options checked as :meth:`simulate`'s."""
         if self.modes_ref is None:
             raise ParameterError(f"backend {self.name!r} has no modes")
         func = self._load(self.modes_ref)
@@ -105,16 +164,38 @@ class Backend:
     def _checked(self, options: dict, table: dict, accepted: set) -> dict:
         """``options`` with each value checked by its Option (one line naming the flag);
         an option ``accepted`` does not hold is refused, naming what the backend takes."""
+        from .names import did_you_mean
+
         out = {}
         for key, value in options.items():
             if key not in accepted:
-                shown = ", ".join("--" + k.replace("_", "-") for k in sorted(accepted)
-                                  if k not in table or table[k].cli)
+                known = [k for k in sorted(accepted) if k not in table or table[k].cli]
+                shown = ", ".join("--" + k.replace("_", "-") for k in known)
                 raise ParameterError(f"--{key.replace('_', '-')}: not an option of backend "
-                                     f"{self.name!r} (its options: {shown or 'none'})")
+                                     f"{self.name!r} (its options: {shown or 'none'})"
+                                     f"{did_you_mean(key, known)}")
             out[key] = table[key].check(key, value) if key in table and value is not None \
                 else value
         return out
+
+def scenario_as_run(scenario, options: dict):
+    """``scenario`` with the run options that override its fields applied: restitution
+    (contact.restitution), t_end, contact_stiffness (contact.stiffness, the duration then
+    unset) and contact_duration (contact.duration, the stiffness then unset)."""
+    import dataclasses
+
+    contact = scenario.contact
+    if options.get("restitution") is not None:
+        contact = dataclasses.replace(contact, restitution=options["restitution"])
+    if options.get("contact_stiffness") is not None:
+        contact = dataclasses.replace(contact, stiffness=options["contact_stiffness"],
+                                      duration=None)
+    if options.get("contact_duration") is not None:
+        contact = dataclasses.replace(contact, duration=options["contact_duration"],
+                                      stiffness=None)
+    t_end = scenario.t_end if options.get("t_end") is None else options["t_end"]
+    return dataclasses.replace(scenario, contact=contact, t_end=t_end)
+
 
 BACKENDS = {
     "analytic": Backend("analytic", "treeimpact.analytic.impact.simulate:simulate",
@@ -147,6 +228,7 @@ ENGINES = tuple(name for name, b in BACKENDS.items() if b.engine)
 
 
 def get_backend(name: str) -> Backend:
+    """The backend called ``name``, or a one-line ParameterError naming --backend."""
     try:
         return BACKENDS[name]
     except KeyError:

@@ -666,18 +666,18 @@ CONTACT_CASES = ((132.4, 4.0, 0.5, 2e-3, 4e-5), (132.4, 110.0, 0.1, 5e-4, 1e-5),
 def contact_command() -> dict:
     """``treeimpact contact`` on :data:`CONTACT_CASES`: what each engine achieves with the
     corrected settings and with the naive formula (about 1 s)."""
-    from .contact_cmd import contact_settings
+    from .contact_settings import contact_settings
 
     out: dict = {}
     errs: dict = {"mujoco": [], "bullet": []}
     naive: dict = {"mujoco": [], "bullet": []}
     durations: dict = {}
     for i, (m1, m2, e, duration, dt) in enumerate(CONTACT_CASES):
-        res = contact_settings(mass=m1, other_mass=m2, restitution=e, duration=duration,
-                               dt=dt)
+        res = contact_settings(mass=m1, other_mass=m2, restitution=e,
+                               touch_duration=duration, dt=dt)
         key = f"contact_cmd.{i}"
         law = res["target"]
-        steps = round(law["duration"] / dt)
+        steps = round(law["touch_duration"] / dt)
         out[f"{key}.steps"] = steps
         out[f"{key}.damping_ratio"] = _round(law["damping_ratio"])
         for engine in ("mujoco", "bullet"):
@@ -685,7 +685,7 @@ def contact_command() -> dict:
             ach = ach if "restitution" in ach else ach["solref"]
             out[f"{key}.{engine}.e"] = _round(ach["restitution"])
             out[f"{key}.{engine}.duration_pct"] = _round(
-                100.0 * (ach["duration"] / law["duration"] - 1.0))
+                100.0 * (ach["touch_duration"] / law["touch_duration"] - 1.0))
             out[f"{key}.{engine}.naive_e"] = _round(res[engine]["naive"]["restitution"])
             out[f"{key}.{engine}.naive_miss"] = _round(
                 res[engine]["naive"]["restitution"] - e)
@@ -707,10 +707,78 @@ def contact_command() -> dict:
     return out
 
 
+#: docs/contact-settings.md's example at MuJoCo's default step: (m1, m2, e, touch duration,
+#: dt), SI; the step Bullet cannot hold for it.
+DEFAULT_STEP_CASE = (1.0, 1.0, 0.75, 5e-3, 2e-3)
+BULLET_REFUSED_DT = 1e-3
+
+
+def contact_default_step() -> dict:
+    """``treeimpact contact`` at MuJoCo's default 2 ms step (:data:`DEFAULT_STEP_CASE`): the
+    touch's steps, the duration's error, e of the same setting at dt/2 and 2 dt, and the
+    largest step Bullet takes for it (about 0.1 s)."""
+    from .contact_settings import contact_settings
+
+    m1, m2, e, touch, dt = DEFAULT_STEP_CASE
+    res = contact_settings(mass=m1, other_mass=m2, restitution=e, touch_duration=touch, dt=dt,
+                           engines=("mujoco",))
+    mj = res["mujoco"]
+    bl = contact_settings(mass=m1, other_mass=m2, restitution=e, touch_duration=touch,
+                          dt=BULLET_REFUSED_DT, engines=("bullet",))["bullet"]
+    key = "contact_cmd.default_step"
+    return {f"{key}.steps_per_touch": touch / dt,
+            f"{key}.e": _round(mj["achieved"]["solref"]["restitution"]),
+            f"{key}.duration_pct": _round(100.0 * (
+                mj["achieved"]["solref"]["touch_duration"] / touch - 1.0)),
+            f"{key}.half_dt_e": _round(mj["at_half_dt"]["solref"]["restitution"]),
+            f"{key}.double_dt_e": _round(mj["at_double_dt"]["solref"]["restitution"]),
+            "contact_cmd.bullet_largest_dt": _round(bl["largest_dt"])}
+
+
+#: Seeds of :func:`procedure_on_noisy_records` (issue 34: the README quoted a median from
+#: one kind of record that the README's own commands do not give).
+PROCEDURE_SEEDS = 100
+
+
+def procedure_on_noisy_records() -> dict:
+    """The paper's procedure (eqs 39-48, its ``paper`` reading) on seeded records of the
+    central-leader model at 5 kHz with 1 % noise (compare.recording, as `treeimpact simulate
+    --record` writes them), with 20 ms of rest before the impact (the README's commands)
+    and with 10 ms (the cut docs/identification.md's table uses): the median and the range
+    over :data:`PROCEDURE_SEEDS` seeds of its M_T error, % (a few seconds)."""
+    import numpy as np
+
+    from treeimpact.analytic.identify.procedure import PendulumTest, identify_from_record
+    from treeimpact.analytic.model.scenario import load_scenario
+
+    from .backends import get_backend
+    from .recording import REST, sample
+
+    tree = load_scenario("central-leader")
+    result = get_backend("analytic").simulate(tree)
+    pend, trunk = tree.impactor, tree.trunk
+    test = PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
+                        release_angle=pend.release_angle_rad, clamp_height=trunk.clamp_height,
+                        diameter=trunk.diameter, gravity=pend.gravity)
+    out = {}
+    for rest in (0.02, 0.01):
+        errors = []
+        for seed in range(PROCEDURE_SEEDS):
+            t, x = sample(result, 5000.0, 0.01, seed)
+            keep = t >= REST - rest - 1e-12
+            with np.errstate(all="ignore"):
+                ident, _ = identify_from_record(t[keep] - t[keep][0], x[keep], test)
+            errors.append(100.0 * (ident.M_T / result.model["M_T"] - 1.0))
+        key = f"ident.procedure.rest{round(1e3 * rest)}ms.M_T_pct"
+        out[f"{key}.median"] = _round(float(np.median(errors)))
+        _put(out, f"{key}.range", _round(_span(errors)))
+    return out
+
+
 def cheap_numbers() -> dict:
     """The part of docs/numbers.json a test reruns (a few seconds)."""
     out = (from_view(view_from_ladders(cheap_ladders())) | shipped() | beam_studies()
-           | contact_command())
+           | contact_command() | contact_default_step() | procedure_on_noisy_records())
     if CONTACT_FIT.exists():
         out |= at_fitted_contact(json.loads(CONTACT_FIT.read_text()))
     return out
@@ -738,9 +806,32 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
             "report": {"generated": report.get("generated"),
                        "provenance": report.get("provenance", {}).get("code")},
             "code": code_version(), "environment": environment(),
+            "figures": copy_figures(Path(report_dir), report),
             "numbers": dict(sorted(out.items()))}
     path.write_text(json.dumps(data, indent=1) + "\n")
     return drift
+
+
+#: The report's figures the pages show, copied with the numbers: page path -> report path.
+FIGURES = {"docs/img/contact-scan.png": "figures/contact-scan.png"}
+
+
+def copy_figures(report_dir: Path, report: dict) -> dict:
+    """Copy :data:`FIGURES` from the report directory into docs/ (the README shows the
+    contact scan); what was copied, with each copy's SHA-1 and the report it came from
+    (tests/test_doc_numbers.py checks the copies are these)."""
+    import hashlib
+    import shutil
+
+    out = {}
+    for page_path, report_path in FIGURES.items():
+        source = Path(report_dir) / report_path
+        if not source.exists():
+            continue
+        shutil.copyfile(source, ROOT / page_path)
+        out[page_path] = {"from": report_path, "report_generated": report.get("generated"),
+                          "sha1": hashlib.sha1((ROOT / page_path).read_bytes()).hexdigest()}
+    return out
 
 
 def _close(a, b, rel: float) -> bool:
@@ -1098,7 +1189,7 @@ def simulate_options(n: dict) -> str:
 
 def modes_options(n: dict) -> str:
     """docs/cli.md: ``treeimpact modes``'s backend options."""
-    from .cli import MODES_OPTIONS
+    from .commands.modes import MODES_OPTIONS
 
     return options_table(MODES_OPTIONS)
 

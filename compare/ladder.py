@@ -94,7 +94,14 @@ class RungResult:
 
 @dataclass
 class Ladder:
-    """One scenario's ladder: every rung's values, steps and checks."""
+    """One scenario's ladder: every rung's values, steps and checks (docs/ladder.md).
+
+    Attributes:
+        scenario: the :class:`Scenario` it ran.
+        rungs: each rung's result, in ladder order (``ladder["soft"]`` finds one by id).
+        truth: the scenario's own 1-DOF model's M_T (kg), K_T (N/m), xi (1), E (Pa).
+        tolerances: the tolerances it was judged against (compare/tolerances.toml).
+    """
 
     scenario: Scenario
     rungs: list  # RungResult, ladder order

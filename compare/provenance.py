@@ -19,8 +19,9 @@ from pathlib import Path
 PACKAGES = ("treeimpact", "numpy", "scipy", "mujoco", "pybullet", "pandas")
 #: The model-dict keys that are numerical settings of a run (docs/cli.md lists them).
 SETTINGS = ("dt", "integrator", "solref", "solimp", "contact", "calibration", "elements",
-            "segments", "trunk", "pendulum", "damping", "contact_stiffness",
-            "contact_damping", "collision_duration", "samples")
+            "segments", "trunk", "pendulum", "trunk_damping_model", "contact_stiffness",
+            "contact_damping", "engine_contact_stiffness", "engine_contact_damping",
+            "touch_duration", "samples")
 
 
 def _version(name: str) -> str | None:

@@ -67,7 +67,7 @@ def vary(scenario, p: dict):
     trunk = scenario.trunk
     tree = reduce_trunk(trunk)
     m = scenario.impactor.mass
-    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, stiffness=tree.stiffness,
+    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, equivalent_stiffness=tree.stiffness,
                             damping_rate=tree.damping / (2.0 * (tree.dynamic_mass + m)))
     a = trunk.clamp_height
     e_mod = a ** 3 * tree.stiffness / (3.0 * trunk.second_moment * (1.0 - p["root_share"]))

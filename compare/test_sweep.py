@@ -83,7 +83,7 @@ def test_dotted_names_and_aliases_rebuild_the_scenario():
                                  "dt": 1e-5, "impactor.release_angle_deg": 20.0})
     assert scen.contact.restitution == 0.4
     assert scen.trunk.crown_mass == 7.5
-    assert scen.impactor.release_angle == pytest.approx(math.pi / 9, rel=1e-15)
+    assert scen.impactor.release_angle_rad == pytest.approx(math.pi / 9, rel=1e-15)
     assert opts == {"segments": 8, "dt": 1e-5}
     assert s.contact.restitution == 0.1  # the base scenario is untouched (frozen)
 
@@ -598,12 +598,7 @@ def test_map_labels_fit_their_cells_and_ticks_read_in_the_texts_units():
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from treeimpact.compare.sweep.maps import (
-        _grid_figure,
-        _heat,
-        _percent_colorbar,
-        colour_scale,
-    )
+    from treeimpact.compare.sweep.maps import _grid_figure, _heat, _percent_colorbar, colour_scale
 
     durations = np.geomspace(2e-4, 2e-2, 8)
     crowns = np.linspace(0, 4, 6)

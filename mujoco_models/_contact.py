@@ -18,6 +18,7 @@ from treeimpact.analytic.contact.law import (
     restitution_for_damping_ratio,
 )
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.results import FreeCollision
 
 from .options import INTEGRATORS
 
@@ -261,13 +262,14 @@ def add_impact_pair(spec, geom1: str, geom2: str, solref, solimp):
 
 
 def two_body_collision(xml: str, speed: float = 1.0, overlap: float = 1e-12
-                       ) -> tuple[float, float, int]:
+                       ) -> FreeCollision:
     """Collide body ``a`` of a :func:`two_body_mjcf`-like model into ``b`` at ``speed``
-    (m/s), starting touching (``overlap`` m, as the replay of :func:`discrete_collision`);
-    (restitution, duration s, steps with a pushing force). The duration ends where the
-    pair's law force (k' delta + b' delta') / S, evaluated on the engine's states (delta
-    from the spheres' centres), first reaches zero, interpolated between the steps it acts
-    over (Euler: the force of state n acts over step n, from n dt)."""
+    (m/s), starting touching (``overlap`` m, as the replay of :func:`discrete_collision`):
+    its :class:`analytic.results.FreeCollision` (restitution NaN where the state left the
+    finite: a step too large for the law). The duration ends where the pair's law force
+    (k' delta + b' delta') / S, evaluated on the engine's states (delta from the spheres'
+    centres), first reaches zero, interpolated between the steps it acts over (Euler: the
+    force of state n acts over step n, from n dt)."""
     import mujoco
 
     m = mujoco.MjModel.from_xml_string(xml)
@@ -293,17 +295,21 @@ def two_body_collision(xml: str, speed: float = 1.0, overlap: float = 1e-12
         return kd * delta + cd * (va - vb), vb - va
 
     law_prev, _ = state()
-    pushing, steps, t_release = 0, 0, None
+    pushing, steps, t_release, peak = 0, 0, None, 0.0
     while steps < MAX_COLLISION_STEPS:
         mujoco.mj_step(m, d)
         steps += 1
         if d.ncon and float(np.sum(d.efc_force[:d.nefc])) > 0.0:
             pushing += 1
         law, sep = state()
+        if not (math.isfinite(law) and math.isfinite(sep)) or d.time < steps * m.opt.timestep \
+                * (1 - 1e-9):  # blew up (MuJoCo resets a non-finite state and warns)
+            return FreeCollision(math.nan, math.nan, pushing, math.nan)
+        peak = max(peak, reach - (d.geom_xpos[gb, 0] - d.geom_xpos[ga, 0]))
         if t_release is None and law <= 0.0:
             t_release = (steps - 1 + law_prev / (law_prev - law)) * m.opt.timestep
         if t_release is not None and sep > 0.0:
-            return sep / speed, t_release, pushing
+            return FreeCollision(sep / speed, t_release, pushing, peak)
         law_prev = law
     raise ParameterError("--dt: the collision did not end within "
                          f"{MAX_COLLISION_STEPS} steps")

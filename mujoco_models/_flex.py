@@ -218,5 +218,5 @@ def check_flex_options(integrator: str, damping: str) -> None:
                              f"{', '.join(FLEX_INTEGRATORS)} (MuJoCo 4.0 no longer integrates "
                              "flex elasticity under implicit/implicitfast)")
     if damping != "distributed":
-        raise ParameterError(f"--damping = {damping!r} with --trunk flex: allowed distributed "
+        raise ParameterError(f"--trunk-damping-model = {damping!r} with --trunk flex: allowed distributed "
                              "(the rod's C lumped on its vertices)")

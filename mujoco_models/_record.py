@@ -100,7 +100,7 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
         om = v_all[:-1, -1]
         pend = 0.5 * inertia * om * om + mm * imp.gravity * imp.equivalent_length * (
             1.0 - np.cos(th))
-        e0 = mm * imp.gravity * imp.equivalent_length * (1.0 - math.cos(imp.release_angle))
+        e0 = mm * imp.gravity * imp.equivalent_length * (1.0 - math.cos(imp.release_angle_rad))
     else:
         pend = model.pendulum_energy(y, vy)
         e0 = float(kinetic[0] + potential[0])
@@ -205,12 +205,13 @@ def _result(setup, state0, states, sensors) -> SimulationResult:
         collision_duration=setup.collision_duration,
         detection_duration=setup.detection_duration, initial_energy=e0, model_fields={
             "segments": setup.segments, "dt": setup.dt,
-            "contact_stiffness": law.stiffness, "contact_damping": law.damping,
-            "trunk": setup.trunk, "pendulum": setup.pendulum, "damping": setup.damping,
+            "contact_stiffness": law.law_stiffness, "contact_damping": law.law_damping,
+            "engine_contact_stiffness": law.stiffness, "engine_contact_damping": law.damping,
+            "trunk": setup.trunk, "pendulum": setup.pendulum,
+            "trunk_damping_model": setup.damping,
             "integrator": setup.integrator, "calibration": setup.calibration,
             **pad_fields(law.law_stiffness, law.law_damping, setup.effective_mass),
-            "law_stiffness": law.law_stiffness, "law_damping": law.law_damping,
             "solref": list(setup.solref),
             "solimp": [_contact.IMPEDANCE, _contact.IMPEDANCE, *_contact.SOLIMP_TAIL],
-            "collision_duration": setup.collision_duration, "omega_max": setup.omega_max},
+            "touch_duration": setup.collision_duration, "omega_max": setup.omega_max},
         extra={"impact_speed_measured": float(record.vy[0] - record.vx[0])})

@@ -35,7 +35,11 @@ def step_cost(m: mujoco.MjModel) -> StepCost:
     (benchmarks/bench_cost.py; docs/budgets.md): 1.5 us + 0.3 us x nv + 5e-9 s x nv^2.6 (the
     chain's dense mass matrix: 6 us at nv = 10, 1.6 ms at 130 on the 2-core reference
     machine) and 300 B + 75 B x nv."""
-    nv = int(m.nv)
+    return step_cost_of(int(m.nv))
+
+
+def step_cost_of(nv: int) -> StepCost:
+    """:func:`step_cost` of a model with ``nv`` degrees of freedom (before it is built)."""
     return StepCost(1.5e-6 + 0.3e-6 * nv + 5e-9 * nv ** 2.6, 300.0 + 75.0 * nv,
                     f"{nv} degrees of freedom")
 
@@ -105,7 +109,7 @@ def _initial_qpos_qvel(m: mujoco.MjModel, pendulum: str, model: TwoBodyModel,
         qpos[-1] = INITIAL_OVERLAP
         qvel[-1] = model.impact_speed
     else:
-        qpos[-1] = -scenario.impactor.release_angle
+        qpos[-1] = -scenario.impactor.release_angle_rad
     return qpos, qvel
 
 

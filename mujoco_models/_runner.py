@@ -44,15 +44,23 @@ from ._rollout import _initial_qpos_qvel, _plan, _run_group, _signature, _state,
 from .options import INTEGRATORS, OPTIONS, TRUNKS  # noqa: F401 - OPTIONS: public here too
 
 _WARNED: set = set()
+#: While :func:`run_setups` steps: the MuJoCo warnings of its rollouts (a diverged run's
+#: message carries the first; a run that ends well has them told on stderr afterwards).
+_COLLECTED: list | None = None
 
 
 def _warning_to_stderr(message: str) -> None:
-    """MuJoCo's warnings on stderr, each kind once per process: never on stdout (JSON) and
-    never in a MUJOCO_LOG.TXT in the user's working directory (MuJoCo's default handler)."""
-    kind = message.split(" Time =")[0]
+    """MuJoCo's warnings on stderr as treeimpact's own one-line warnings, each kind once per
+    process: never on stdout (JSON) and never in a MUJOCO_LOG.TXT in the user's working
+    directory (MuJoCo's default handler); during a rollout, collected (:data:`_COLLECTED`)."""
+    text = " ".join(message.split())
+    if _COLLECTED is not None:
+        _COLLECTED.append(text)
+        return
+    kind = text.split(" Time =")[0]
     if kind not in _WARNED:
         _WARNED.add(kind)
-        print(f"mujoco: {message.strip()}", file=sys.stderr, flush=True)
+        print(f"treeimpact: warning: mujoco: {text}", file=sys.stderr, flush=True)
 
 
 mujoco.set_mju_user_warning(_warning_to_stderr)
@@ -170,7 +178,8 @@ def highest_frequency(M: np.ndarray, K: np.ndarray) -> float:
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               damping="distributed", integrator="Euler", calibration="pad") -> Setup:
+               trunk_damping_model="distributed", integrator="Euler", calibration="pad"
+               ) -> Setup:
     """Validate the options and compile the model (rules in the module docstring).
 
     Setups are cached per (scenario, options) (the last :data:`SETUP_CACHE_SIZE`): a repeated
@@ -180,10 +189,12 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
         raise ParameterError("scenario: expected an analytic.Scenario")
     try:
         setup = _cached_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
-                              restitution, t_end, damping, integrator, calibration)
+                              restitution, t_end, trunk_damping_model, integrator,
+                              calibration)
     except TypeError:  # an unhashable option value: validate and build without the cache
         return _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
-                           restitution, t_end, damping, integrator, calibration)
+                           restitution, t_end, trunk_damping_model, integrator,
+                           calibration)
     _check_work(setup.mjmodel, setup.t_end, setup.dt)  # the budget may have changed since
     return setup
 
@@ -191,6 +202,33 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
 def _check_work(m: mujoco.MjModel, t_end: float, dt: float) -> None:
     """The run's budget (:func:`analytic.budget.check_work`) at :func:`step_cost`."""
     check_work(t_end, dt, step_cost(m))
+
+
+def _check_work_before_building(model, scenario, chain, k: float, c: float, t_end: float,
+                                dt, calibration: str) -> None:
+    """The chain's budget from its analytic twin (analytic.continuum.chain: the same masses,
+    hinges and clamp), before its MuJoCo model is built and compiled (9 s for 1000
+    segments): the pad's touch on the chain's effective mass at the clamp and its highest
+    mode set the step as :func:`_make_setup` does, one degree of freedom per segment and
+    the pendulum's the cost."""
+    import scipy.linalg
+
+    from treeimpact.analytic.continuum.chain import chain_matrices, lateral_jacobian
+
+    from ._rollout import step_cost_of
+
+    M, K, _ = chain_matrices(chain)
+    ja = lateral_jacobian(chain, scenario.trunk.clamp_height)[0]
+    apparent = float(1.0 / (ja @ np.linalg.solve(M, ja)))
+    m = model.impactor_mass
+    mu = apparent * m / (apparent + m)
+    e = pad_restitution(k, c, mu) if calibration == "pad" else model.restitution
+    t_c = release_time(damping_ratio_for_restitution(e)) / math.sqrt(k / mu)
+    if dt is None:
+        n = chain.segments  # the highest mode only (all of them: 16 s at 1000 segments)
+        w2 = scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=[n - 1, n - 1])
+        dt = choose_time_step(t_c, float(math.sqrt(w2[0])))
+    check_work(t_end, dt, step_cost_of(chain.segments + 1))
 
 
 SETUP_CACHE_SIZE = 64
@@ -204,7 +242,8 @@ def _cached_setup(*args) -> Setup:
 def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, restitution,
                 t_end, damping, integrator, calibration) -> Setup:
     check_choice("integrator", integrator, INTEGRATORS)
-    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum, damping=damping,
+    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
+                                trunk_damping_model=damping,
                                 calibration=calibration, restitution=restitution,
                                 t_end=t_end, trunks=TRUNKS)
     if trunk == "flex":
@@ -215,6 +254,9 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
                              "needs infinite damping)")
     k, c_pad = contact_law(model, scenario.contact, stiffness=contact_stiffness)
     tspec, n = _trunk_spec(scenario, trunk, segments, damping)
+    if tspec.chain is not None:  # a chain's budget before seconds of building it
+        _check_work_before_building(model, scenario, tspec.chain, k, c_pad, t_end, dt,
+                                    calibration)
     name = f"{scenario.name}-{trunk}-{pendulum}"
     spec, pair = _builder.build_spec(name, tspec, scenario, pendulum, PLACEHOLDER_DT,
                                      integrator=integrator)
@@ -281,7 +323,7 @@ def build_model(scenario: Scenario, **options) -> mujoco.MjModel:
 # ------------------------------------------------------------------------------------ API
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
              contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             damping="distributed", integrator="Euler", calibration="pad"
+             trunk_damping_model="distributed", integrator="Euler", calibration="pad"
              ) -> SimulationResult:
     """Run one scenario in MuJoCo (rules in the module docstring); backend "mujoco".
 
@@ -291,7 +333,8 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
     """
     out = simulate_batch([scenario], trunk=trunk, segments=segments, pendulum=pendulum,
                          contact_stiffness=contact_stiffness, dt=dt, restitution=restitution,
-                         t_end=t_end, damping=damping, integrator=integrator,
+                         t_end=t_end, trunk_damping_model=trunk_damping_model,
+                         integrator=integrator,
                          calibration=calibration, max_workers=1)[0]
     if isinstance(out, SimulationDiverged):
         raise out
@@ -314,12 +357,31 @@ def run_setups(setups: list[Setup], *, max_workers=None) -> list:
     for i, p in enumerate(plans):
         groups.setdefault(_signature(p.setup.mjmodel), []).append(i)
     out = [None] * len(plans)
-    for idx in groups.values():
-        for i, (s0, st, sd) in zip(idx, _run_group([plans[i] for i in idx], nthread)):
-            try:
-                out[i] = _result(setups[i], s0, st, sd)
-            except SimulationDiverged as exc:
-                out[i] = exc
+    global _COLLECTED
+    _COLLECTED = seen = []
+    try:
+        for idx in groups.values():
+            for i, (s0, st, sd) in zip(idx, _run_group([plans[i] for i in idx], nthread)):
+                try:
+                    out[i] = _result(setups[i], s0, st, sd)
+                except SimulationDiverged as exc:
+                    out[i] = exc
+    finally:
+        _COLLECTED = None
+    return _with_warnings(out, seen)
+
+
+def _with_warnings(out: list, seen: list) -> list:
+    """``out`` with MuJoCo's first warning in each diverged run's message (one line, not a
+    line of its own before it); told on stderr when a run ended well."""
+    if not seen:
+        return out
+    diverged = [isinstance(r, SimulationDiverged) for r in out]
+    out = [SimulationDiverged(f"{r} (MuJoCo warned: {seen[0]})") if bad else r
+           for r, bad in zip(out, diverged)]
+    if not all(diverged):
+        for text in seen:
+            _warning_to_stderr(text)
     return out
 
 

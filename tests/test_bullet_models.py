@@ -292,8 +292,8 @@ def test_joint_damping_alternative_matches_mujoco(central):
     (MuJoCo integrates joint damping implicitly, as the runner does): integrator differences
     only, 1 % as engines.trunk in compare/tolerances.toml (0.11 %, 0.27 % measured)."""
     mujoco_models = pytest.importorskip("treeimpact.mujoco_models")
-    got = simulate(central, trunk="chain", damping="joint", t_end=0.02)
-    ref = mujoco_models.simulate(central, trunk="chain", damping="joint", t_end=0.02)
+    got = simulate(central, trunk="chain", trunk_damping_model="joint", t_end=0.02)
+    ref = mujoco_models.simulate(central, trunk="chain", trunk_damping_model="joint", t_end=0.02)
     for key in ("x_max", "t_xmax"):
         assert got.metrics[key] == pytest.approx(ref.metrics[key], rel=0.01), key
     assert got.metrics["ledger_residual"] < 0.01
@@ -309,8 +309,8 @@ def test_json_model_keys_include_the_mujoco_backends(central):
         assert set(got[part]) == set(ref[part]), part
     assert set(ref["model"]) - {"solref", "solimp"} <= set(got["model"])
     b = make_setup(central, trunk="sdof").bullet
-    assert got["model"]["contact_stiffness"] == b.stiffness  # what Bullet integrates
-    assert got["model"]["law_stiffness"] == b.law_stiffness
+    assert got["model"]["engine_contact_stiffness"] == b.stiffness  # what Bullet integrates
+    assert got["model"]["contact_stiffness"] == b.law_stiffness
 
 
 def test_batch_over_a_process_pool_matches_serial_runs(central):

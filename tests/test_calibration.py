@@ -38,7 +38,7 @@ def test_shipped_trees_are_the_calibration_of_table_1(name):
 
 def test_calibrated_trunk_reduces_to_the_measured_properties():
     chosen = load_scenario("central-leader").trunk
-    measured = MeasuredTree(dynamic_mass=150.0, stiffness=9e5, damping_rate=25.0)
+    measured = MeasuredTree(dynamic_mass=150.0, equivalent_stiffness=9e5, damping_rate=25.0)
     trunk = calibrate_trunk(chosen, measured, impactor_mass=100.0)
     sdof = reduce_trunk(trunk)  # the forward reduction, eqs 7, 8, 10
     assert sdof.dynamic_mass == pytest.approx(150.0, rel=1e-12)
@@ -55,13 +55,15 @@ def test_stiffness_at_the_rigid_clamp_needs_no_root_spring():
 
 def test_impossible_measurements_are_one_line_errors_naming_the_quantity():
     chosen = load_scenario("central-leader").trunk
-    with pytest.raises(ParameterError, match=r"^stiffness = .* above the rigid-clamp"):
+    with pytest.raises(ParameterError, match=r"^equivalent_stiffness = .* above the rigid-clamp"):
         calibrate_trunk(chosen, MeasuredTree(110.0, 1e9, 30.0), impactor_mass=132.4)
     with pytest.raises(ParameterError, match=r"^dynamic_mass = 1 kg: below the bare trunk"):
         calibrate_trunk(chosen, MeasuredTree(1.0, 1e6, 30.0), impactor_mass=132.4)
-    for bad in (dict(dynamic_mass=-1.0), dict(stiffness=math.nan), dict(damping_rate=-2.0)):
+    for bad in (dict(dynamic_mass=-1.0), dict(equivalent_stiffness=math.nan),
+                dict(damping_rate=-2.0)):
         with pytest.raises(ParameterError, match=f"^{next(iter(bad))} = "):
-            MeasuredTree(**{**dict(dynamic_mass=1.0, stiffness=1.0, damping_rate=1.0), **bad})
+            MeasuredTree(**{**dict(dynamic_mass=1.0, equivalent_stiffness=1.0,
+                                   damping_rate=1.0), **bad})
 
 
 @pytest.mark.parametrize("name", ["open-center", "central-leader"])
@@ -90,12 +92,12 @@ def test_scenario_file_round_trips(name):
 
 
 TEST = ["--clamp-height", "0.315", "--diameter", "0.126", "--mass", "132.4",
-        "--equivalent-length", "1.51", "--release-angle", "36.39", "--youngs-modulus", "12.6e9",
+        "--equivalent-length", "1.51", "--release-angle-deg", "36.39", "--youngs-modulus", "12.6e9",
         "--dynamic-mass", "110"]
 
 
 def test_scenario_command_writes_a_file_that_simulates_like_the_shipped_tree(tmp_path, capsys):
-    code = main(["scenario", "my-tree", *TEST, "--stiffness", "1.5e6", "--a1", "1.167",
+    code = main(["scenario", "my-tree", *TEST, "--equivalent-stiffness", "1.5e6", "--a1", "1.167",
                  "--a2", "-34.817", "--out", str(tmp_path)])
     assert code == 0
     written = load_scenario(tmp_path / "my-tree.toml")
@@ -109,10 +111,10 @@ def test_scenario_command_writes_a_file_that_simulates_like_the_shipped_tree(tmp
 
 @pytest.mark.parametrize("extra, words", [
     ([], "--damping-rate: missing"),
-    (["--damping-rate", "30"], "--stiffness: missing"),
-    (["--damping-rate", "30", "--a1", "1.2", "--stiffness", "1e6"], "not both"),
-    (["--damping-rate", "30", "--stiffness", "1e9"], "above the rigid-clamp"),
-    (["--damping-rate", "x", "--stiffness", "1e6"], "--damping-rate: expected a number"),
+    (["--damping-rate", "30"], "--equivalent-stiffness: missing"),
+    (["--damping-rate", "30", "--a1", "1.2", "--equivalent-stiffness", "1e6"], "not both"),
+    (["--damping-rate", "30", "--equivalent-stiffness", "1e9"], "above the rigid-clamp"),
+    (["--damping-rate", "x", "--equivalent-stiffness", "1e6"], "--damping-rate: expected a number"),
 ])
 def test_scenario_command_bad_input_is_one_line_and_exit_2(extra, words, capsys):
     assert main(["scenario", "t", *TEST, *extra]) == 2

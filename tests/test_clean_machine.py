@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PENDULUM = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle", "36.39"]
+PENDULUM = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg", "36.39"]
 
 #: (id, argv, what it may leave in the working directory)
 COMMANDS = [
@@ -29,11 +29,11 @@ COMMANDS = [
     ("modes-mujoco", ["modes", "central-leader", "--backend", "mujoco", "--segments", "8"],
      set()),
     ("contact", ["contact", "--mass", "132.4", "--other-mass", "4", "--restitution", "0.5",
-                 "--duration", "0.002", "--dt", "4e-5"], set()),
+                 "--touch-duration", "0.002", "--dt", "4e-5"], set()),
     ("paper", ["paper", "--json"], set()),
     ("record-and-identify", ["simulate", "central-leader", "--record", "rec.csv"], {"rec.csv"}),
     ("scenario", ["scenario", "mytree", "--out", ".", "--clamp-height", "0.3", "--diameter",
-                  "0.1", *PENDULUM, "--dynamic-mass", "100", "--stiffness", "1e6",
+                  "0.1", *PENDULUM, "--dynamic-mass", "100", "--equivalent-stiffness", "1e6",
                   "--damping-rate", "30", "--youngs-modulus", "1e10"], {"mytree.toml"}),
     ("sweep", ["sweep", "--grid", "restitution=0.1,0.3", "--backend", "analytic,bullet",
                "--option", "bullet.trunk=sdof", "--out", "sw"], {"sw"}),

@@ -110,3 +110,70 @@ def test_every_verdict_is_named_where_the_verdicts_are_explained(page, start):
     place = text[text.index(start):][:2500]
     missing = [v.value for v in Verdict if f"`{v.value}`" not in place]
     assert not missing, f"docs/{page}: verdicts not explained: {missing}"
+
+
+# ------------------------------------------------------------- the commands the pages show
+
+#: Pages whose commands are run here, in their order (a page's later command may read what
+#: an earlier one wrote: `scenario ... --out .` then `simulate my-tree.toml`).
+RUN_PAGES = ("README.md", "docs/cli.md", "docs/contact-settings.md")
+#: Commands shown that run for minutes, and what runs and checks them instead.
+COVERED = {
+    "treeimpact report --out reports --with-study default":
+        "make report; its numbers are docs/numbers.json, checked by tests/test_doc_numbers.py",
+    "treeimpact sweep --preset default --out reports/study":
+        "make report runs it (--with-study default)",
+    "treeimpact paper --fit-contact":
+        "30 s; docs/results/contact-fit.json is rerun at its fitted parameters by "
+        "tests/test_doc_numbers.py",
+}
+
+
+def _shown() -> list[tuple[str, str]]:
+    """(page, command) of every concrete `treeimpact ...` command of RUN_PAGES, in order."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_docs import _code
+
+    out = []
+    for page in RUN_PAGES:
+        for code in _code((ROOT / page).read_text()):
+            code = code.split("#")[0].strip()
+            if code.startswith("treeimpact ") and not re.search(r"[A-Z]{2,}|\[|\.\.\.|\|",
+                                                                 code):
+                out.append((page, " ".join(code.split())))
+    return out
+
+
+def test_every_command_shown_runs_and_prints_what_its_page_says(tmp_path, monkeypatch,
+                                                              capsys):
+    """Every command of the README, docs/cli.md and docs/contact-settings.md, run as shown
+    (issue 34 item 5): exit 0; the contact example at MuJoCo's default step prints the
+    numbers docs/contact-settings.md quotes (docs/numbers.json holds them)."""
+    import json
+    import shlex
+
+    from treeimpact.compare.cli import main
+
+    shown = _shown()
+    assert {c for _, c in shown} >= set(COVERED), "a covered command is no longer shown"
+    numbers = json.loads((ROOT / "docs" / "numbers.json").read_text())["numbers"]
+    monkeypatch.chdir(tmp_path)
+    ran = []
+    for page, command in shown:
+        if command in COVERED:
+            continue
+        code = main(shlex.split(command)[1:])
+        out = capsys.readouterr()
+        assert code == 0, (page, command, out.err[-300:])
+        ran.append(command)
+        if "--dt 2e-3 --engine mujoco" in command:  # the example at MuJoCo's default step
+            row = next(ln for ln in out.out.splitlines() if "MuJoCo solref (direct)" in ln)
+            pct = float(re.search(r"ms \(([-+\d.]+)%", row).group(1))
+            assert pct == pytest.approx(numbers["contact_cmd.default_step.duration_pct"],
+                                        abs=0.005)  # printed to 0.01 %
+            half = float(re.search(r"mm\s+([\d.]+), ", row).group(1))  # at dt/2: e, ms
+            assert half == pytest.approx(numbers["contact_cmd.default_step.half_dt_e"],
+                                         abs=5e-5)  # printed to 4 decimals
+    assert len(ran) >= 8, ran

@@ -178,3 +178,17 @@ def test_the_presets_quote_their_measured_cost():
     for text in (PRESETS["full"].expected, help_text):
         assert _about(text, "CPU-hours") == pytest.approx(full["full.cpu_hours"], rel=0.25)
         assert _about(text, "min") == pytest.approx(full["full.minutes_2_workers"], rel=0.25)
+
+
+def test_the_figures_the_pages_show_are_the_copies_recorded_with_the_numbers():
+    """The README's picture "is a copy" of the report's contact scan (issue 34: it was an
+    older drawing): the file is the one `python -m treeimpact.compare.docs numbers` copied
+    from a report, by its SHA-1."""
+    import hashlib
+
+    figures = json.loads(docs.NUMBERS.read_text()).get("figures", {})
+    assert set(figures) == set(docs.FIGURES)
+    for page_path, entry in figures.items():
+        data = (docs.ROOT / page_path).read_bytes()
+        assert hashlib.sha1(data).hexdigest() == entry["sha1"], page_path
+        assert entry["from"] == docs.FIGURES[page_path] and entry["report_generated"]

@@ -64,7 +64,7 @@ def test_swing_time_is_the_small_angle_quarter_period_in_the_limit():
     from dataclasses import replace
 
     pend = load_scenario("open-center").impactor
-    small = replace(pend, release_angle=2e-4)  # K = pi/2 (1 + 2.5e-9)
+    small = replace(pend, release_angle_deg=math.degrees(2e-4))  # K = pi/2 (1 + 2.5e-9)
     quarter = 0.5 * math.pi * math.sqrt(pend.equivalent_length / pend.gravity)
     assert swing_time(small) == pytest.approx(quarter, rel=1e-8)
     assert swing_time(pend) > quarter  # a finite swing is slower (elliptic integral)

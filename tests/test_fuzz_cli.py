@@ -90,3 +90,53 @@ def test_fuzzed_scenarios_and_flags_never_traceback_hang_or_print_garbage(chunk,
 
     # the memory bound (2 GB, analytic.contact.timestep.MAX_BYTES) held for the whole process so far
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 < 2e9
+
+
+def _number(rng: random.Random, typical: float) -> str:
+    """A hostile number near ``typical`` or far from it, or a non-number."""
+    kind = rng.random()
+    if kind < 0.5:
+        return repr(typical * 10 ** rng.uniform(-1, 1))
+    if kind < 0.8:
+        return repr(typical * 10 ** rng.uniform(-300, 300))
+    return rng.choice(["0", "-1", "nan", "inf", "-inf", "1e308", "5e-324", "x"])
+
+
+#: (flag, typical value) of the commands that take numbers without a scenario file.
+CONTACT_FLAGS = (("--mass", 1.0), ("--other-mass", 1.0), ("--restitution", 0.5),
+                 ("--touch-duration", 1e-3), ("--dt", 2e-5))
+SCENARIO_FLAGS = (("--clamp-height", 0.315), ("--diameter", 0.126), ("--mass", 132.4),
+                  ("--equivalent-length", 1.51), ("--release-angle-deg", 36.39),
+                  ("--youngs-modulus", 9e9), ("--dynamic-mass", 110.0),
+                  ("--equivalent-stiffness", 1.5e6), ("--damping-rate", 30.0))
+
+
+@pytest.mark.parametrize("command, flags", [("contact", CONTACT_FLAGS),
+                                            ("scenario", SCENARIO_FLAGS)])
+def test_fuzzed_numbers_are_a_result_or_one_line_of_bad_input(command, flags, capsys):
+    """Issue 35: extreme numbers gave exit 3 with an exception's name (ZeroDivisionError,
+    OverflowError). Every case here ends in exit 0 or exit 2 with one line."""
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    codes = {0: 0, 2: 0}
+    try:
+        for seed in range(40):
+            rng = random.Random(seed)
+            argv = [command] + (["t"] if command == "scenario" else [])
+            for flag, typical in flags:
+                value = _number(rng, typical) if rng.random() < 0.4 else repr(typical)
+                argv += [flag, value]
+            if command == "contact":
+                argv += ["--engine", rng.choice(["mujoco", "bullet", "both"])]
+            signal.alarm(SECONDS_PER_CASE)
+            try:
+                rc = main(argv)
+            finally:
+                signal.alarm(0)
+            out = capsys.readouterr()
+            assert rc in codes, (argv, out.err)
+            codes[rc] += 1
+            if rc == 2:
+                assert out.err.count("\n") == 1 and "Traceback" not in out.err, (argv, out.err)
+    finally:
+        signal.signal(signal.SIGALRM, previous)
+    assert codes[0] > 0 and codes[2] > 0, codes

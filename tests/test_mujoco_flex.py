@@ -141,7 +141,8 @@ def test_trunk_cable_is_refused_because_mujoco_has_no_cable_plugin():
 
 @pytest.mark.parametrize("options, match", [
     ({"integrator": "implicit"}, "--integrator = 'implicit' with --trunk flex: allowed Euler, RK4"),
-    ({"damping": "joint"}, "--damping = 'joint' with --trunk flex: allowed distributed"),
+    ({"trunk_damping_model": "joint"},
+     "--trunk-damping-model = 'joint' with --trunk flex: allowed distributed"),
 ])
 def test_flex_refuses_what_it_cannot_step(options, match):
     with pytest.raises(ParameterError, match=match):

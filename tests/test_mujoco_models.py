@@ -232,7 +232,7 @@ def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
 
 @pytest.mark.parametrize("opts", [dict(trunk="sdof"), dict(trunk="sdof", pendulum="full"),
                                   dict(trunk="chain", t_end=0.02),
-                                  dict(trunk="chain", damping="joint", t_end=0.02)])
+                                  dict(trunk="chain", trunk_damping_model="joint", t_end=0.02)])
 def test_energy_ledger_closes_within_one_percent(central, opts):
     res = simulate(central, **opts)
     assert res.metrics["ledger_residual"] < 0.01  # issue: below 1 % (measured <= 3e-4)
@@ -241,12 +241,12 @@ def test_energy_ledger_closes_within_one_percent(central, opts):
 
 
 def test_joint_damping_alternative_keeps_the_first_modes_damping(central):
-    """damping="joint" (beta k_j at the hinges) has mode 1's modal damping of the distributed
+    """trunk_damping_model="joint" (beta k_j at the hinges) has mode 1's modal damping of the distributed
     damping (tendons), read back from both compiled models; mode 2 gets more."""
     import scipy.linalg
 
     a = make_setup(central, trunk="chain").mjmodel
-    b = make_setup(central, trunk="chain", damping="joint").mjmodel
+    b = make_setup(central, trunk="chain", trunk_damping_model="joint").mjmodel
     M, K = engine_trunk_matrices(a)
     n = M.shape[0]
     D = _damping_matrices(a)[0][:n, :n]
@@ -337,7 +337,7 @@ def test_energy_created_while_damped_is_reported_as_diverged(central, integrator
 
 @pytest.mark.parametrize("integrator", ["Euler", "implicit", "implicitfast"])
 @pytest.mark.parametrize("opts", [dict(trunk="sdof"), dict(trunk="chain"),
-                                  dict(trunk="chain", damping="joint")])
+                                  dict(trunk="chain", trunk_damping_model="joint")])
 def test_damping_matrices_are_what_the_euler_step_applies(central, opts, integrator):
     """One engine step with springs and contact off: M (v1 - v0) / h = -D v0 - B v1 with the
     (explicit D, implicit B) the ledger uses; the other split misses it. Euler: per the
@@ -441,10 +441,10 @@ def test_rk4_refuses_a_step_its_explicit_dampers_cannot_take(central):
     """The chain's joint damping beta k_j is stiff (Euler and the implicit integrators treat
     it implicitly): RK4 applies it explicitly, h lambda = 168 at the default step."""
     with pytest.raises(ParameterError, match="RK4") as exc:
-        make_setup(central, trunk="chain", damping="joint", integrator="RK4")
+        make_setup(central, trunk="chain", trunk_damping_model="joint", integrator="RK4")
     assert "\n" not in str(exc.value) and "too large for stability" in str(exc.value)
     make_setup(central, trunk="chain", integrator="RK4")  # tendon dampers: h lambda = 5.5e-4
-    make_setup(central, trunk="chain", damping="joint", integrator="implicitfast")
+    make_setup(central, trunk="chain", trunk_damping_model="joint", integrator="implicitfast")
 
 
 def test_speed_study_runs_one_curve_per_mujoco_integrator():

@@ -167,7 +167,7 @@ def test_identify_says_what_a_one_impact_record_does_not_fix(tmp_path, capsys):
     assert "--restitution = 1.5" in err and "[0, 1]" in err and err.count("\n") == 1
 
 
-ARGS = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle", "36.39",
+ARGS = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg", "36.39",
         "--clamp-height", "0.315", "--diameter", "0.126"]
 
 

@@ -5,8 +5,10 @@ The public API (SI units; docs/api.md)::
 
     import treeimpact as ti
     scenario = ti.load_scenario("open-center")        # or a TOML path, or ti.Scenario(...)
-    result = ti.simulate(scenario, backend="beam")     # analytic, soft, beam, mujoco, bullet
-    result.metrics["x_max"]                            # m, largest trunk displacement
+    run = ti.simulate(scenario, backend="beam")        # analytic, soft, beam, mujoco, bullet
+    run.metrics.x_max                                  # m, largest trunk displacement
+    record = ti.record_from_simulation(run, noise=0.01)  # as a field test records it
+    fit = ti.identify(record, scenario)                # M_T, K_T, C_T, e, E with intervals
     ladder = ti.ladder(scenario)                       # one assumption per rung, judged
     ti.report("reports")                               # report.html, .md, .json
 
@@ -36,10 +38,19 @@ _EXPORTS = {
     "ladder": "treeimpact.compare.api",
     "sweep": "treeimpact.compare.api",
     "read_record": "treeimpact.compare.api",
+    "record_from_simulation": "treeimpact.compare.api",
     "identify": "treeimpact.compare.api",
     "report": "treeimpact.compare.api",
-    # results and errors
-    "SimulationResult": "treeimpact.analytic.results",
+    # results (typed, SI) and errors
+    "Simulation": "treeimpact.compare.api_results",
+    "Metrics": "treeimpact.compare.api_results",
+    "Model": "treeimpact.compare.api_results",
+    "Modes": "treeimpact.compare.api_results",
+    "TrunkModes": "treeimpact.compare.api_results",
+    "Identification": "treeimpact.compare.api_results",
+    "Estimate": "treeimpact.compare.api_results",
+    "Diagnosis": "treeimpact.compare.api_results",
+    "Record": "treeimpact.analytic.identify.pendulum_record",
     "METRIC_UNITS": "treeimpact.analytic.results",
     "ParameterError": "treeimpact.analytic.errors",
     "SimulationDiverged": "treeimpact.analytic.errors",

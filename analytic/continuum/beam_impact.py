@@ -61,7 +61,7 @@ SAMPLES_PER_COLLISION = 100
 #: the reference of benchmarks/bench_beam.py and of the tests).
 METHODS = ("exact", "exact-full")
 #: The options of :func:`simulate_beam` (the ``beam`` backend).
-OPTIONS = {"elements": Option(int, "elements of the beam trunk's mesh", low=1,
+OPTIONS = {"elements": Option(int, "elements of the beam trunk's mesh", low=2,
                               high=MAX_ELEMENTS),
            "calibration": CALIBRATION, "restitution": RESTITUTION,
            "contact_stiffness": CONTACT_STIFFNESS, "contact_duration": CONTACT_DURATION,

@@ -20,9 +20,10 @@ from .beam import beam_natural_frequencies, beam_static_stiffness
 
 MIN_SEGMENTS = 2
 MAX_SEGMENTS = 1000
-#: The engines' ``segments`` option: 1 is the SDOF trunk in a sweep (a chain has 2 or more).
+#: The engines' ``segments`` option: a chain has 2 or more (a sweep's ``segments=1`` is its
+#: name for the SDOF trunk, ``--trunk sdof``: compare.sweep.grid reads it so).
 SEGMENTS = Option(int, "segments of the hinged trunk (default: the fewest within 0.5 % of "
-                  "the beam's static stiffness and first two frequencies)", low=1,
+                  "the beam's static stiffness and first two frequencies)", low=MIN_SEGMENTS,
                   high=MAX_SEGMENTS)
 DEFAULT_TOLERANCE = 0.005  # relative: static stiffness at a and the first two frequencies
 GAUSS_OFFSET = 1.0 / (2.0 * math.sqrt(3.0))  # Gauss-Legendre points z_c -+ h/(2 sqrt 3)

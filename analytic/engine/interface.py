@@ -41,7 +41,9 @@ ENGINE_OPTIONS = {
     "segments": SEGMENTS,
     "pendulum": Option(PENDULUMS, "pendulum model: linearised (eq 13) or released from "
                                   "theta_r"),
-    "damping": Option(DAMPINGS, "trunk damping: the paper's distributed C, or joint damping"),
+    "trunk_damping_model": Option(DAMPINGS, "how the trunk's damping C (trunk.damping, N s/m^2) "
+                                  "acts: distributed along the trunk (the paper's, eq 9) or "
+                                  "lumped in the chain's joints"),
     "contact_stiffness": CONTACT_STIFFNESS,
     "dt": Option(float, "time step (default: from the contact and the chain's highest mode)",
                  "s", 0.0, MAX_DT, low_open=True),
@@ -97,7 +99,7 @@ def check_choice(name: str, value, allowed):
     return value
 
 
-def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, damping: str,
+def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping_model: str,
                  calibration: str, restitution, t_end, trunks: tuple = TRUNKS
                  ) -> tuple[TwoBodyModel, float]:
     """The options every engine shares, checked (one-line errors), and the scenario's
@@ -110,7 +112,7 @@ def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, damping: str,
     """
     check_choice("trunk", trunk, trunks)
     check_choice("pendulum", pendulum, PENDULUMS)
-    check_choice("damping", damping, DAMPINGS)
+    check_choice("trunk_damping_model", trunk_damping_model, DAMPINGS)
     check_choice("calibration", calibration, CALIBRATIONS)
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")
@@ -152,7 +154,7 @@ def swing_time(pendulum: Pendulum) -> float:
     K(sin(theta_r / 2)) sqrt(l_e / g)."""
     from scipy.special import ellipk
 
-    s = math.sin(pendulum.release_angle / 2.0)
+    s = math.sin(pendulum.release_angle_rad / 2.0)
     return float(ellipk(s * s) * math.sqrt(pendulum.equivalent_length / pendulum.gravity))
 
 

@@ -30,11 +30,19 @@ COMMENT = ("#", "%", "//")  # a line starting with one of these (after blanks) i
 
 @dataclass(frozen=True)
 class Record:
-    """A displacement record (SI): time t (s), trunk displacement at the clamp x (m), and the
-    pendulum's displacement y (m) if measured, in the trunk's frame (y = x in contact).
-    ``time_unit``/``length_unit``: the units the numbers were given in (converted here);
-    ``rows``: each sample's line in its file (for messages); ``warnings``: one line each
-    (columns ignored, times made relative); ``t_start``: the first time as given (s)."""
+    """A displacement record (SI), checked on construction (ParameterError naming the row).
+
+    Attributes:
+        t: the sample times, increasing, s.
+        x: the trunk's displacement at the clamp, m.
+        y: the pendulum's displacement in the trunk's frame (y = x in contact), m, or None.
+        time_unit: the unit the times were given in (converted to s here).
+        length_unit: the unit the displacements were given in (converted to m here).
+        rows: each sample's line in its file (for messages), or None.
+        warnings: one line each (columns ignored, times made relative).
+        t_start: the first time as given, s.
+        source: where it came from (a file's name), for messages.
+    """
 
     t: np.ndarray
     x: np.ndarray
@@ -220,10 +228,18 @@ def _table(lines: list[str], sep: str, width: int, name: str, numbers: list[int]
     if not lines:
         return [[] for _ in range(width)]
     text = "\n".join(" ".join(ln.split()) if sep == " " else ln for ln in lines)
+    import warnings
+
     try:
-        frame = pd.read_csv(io.StringIO(text), sep=sep, header=None, dtype=str,
-                            keep_default_na=False, skipinitialspace=True,
-                            names=range(width), index_col=False)
+        with warnings.catch_warnings():  # a row wider than the header: dropped data, refused
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            frame = pd.read_csv(io.StringIO(text), sep=sep, header=None, dtype=str,
+                                keep_default_na=False, skipinitialspace=True,
+                                names=range(width), index_col=False)
+    except pd.errors.ParserWarning:
+        i = next((i for i, ln in enumerate(lines) if len(_split(ln, sep)) != width), 0)
+        raise ParameterError(f"record {name!r}: every row needs {width} values at row "
+                             f"{numbers[i]}") from None
     except (pd.errors.ParserError, ValueError) as exc:
         found = re.search(r"line (\d+)", str(exc))
         where = f" at row {numbers[int(found.group(1)) - 1]}" if found and int(

@@ -244,7 +244,7 @@ def pendulum_test_of(scenario) -> PendulumTest:
     if not hasattr(imp, "equivalent_length"):
         raise ParameterError("impactor.type: the identification procedure needs a pendulum")
     return PendulumTest(impactor_mass=imp.mass, equivalent_length=imp.equivalent_length,
-                        release_angle=imp.release_angle, clamp_height=scenario.trunk.clamp_height,
+                        release_angle=imp.release_angle_rad, clamp_height=scenario.trunk.clamp_height,
                         diameter=scenario.trunk.diameter, gravity=imp.gravity)
 
 

@@ -29,15 +29,21 @@ from .reduction import reduce_trunk, static_mode_shape
 
 @dataclass(frozen=True)
 class MeasuredTree:
-    """Measured properties of a tree at its clamp (SI units)."""
+    """Measured properties of a tree at its clamp (Table 1), validated on construction.
+
+    Attributes:
+        dynamic_mass: M_T, kg.
+        equivalent_stiffness: K_T, the tree's equivalent spring at the clamp, N/m.
+        damping_rate: b, the decay rate of the moving-together motion (eq 42), 1/s.
+    """
 
     dynamic_mass: float  # M_T, kg (Table 1)
-    stiffness: float  # K_T, N/m (Table 1)
+    equivalent_stiffness: float  # K_T, N/m: the tree's equivalent spring at the clamp (Table 1)
     damping_rate: float  # b, 1/s: decay rate of the moving-together motion (eq 42)
 
     def __post_init__(self):
         for name, v, unit in (("dynamic_mass", self.dynamic_mass, "kg"),
-                              ("stiffness", self.stiffness, "N/m")):
+                              ("equivalent_stiffness", self.equivalent_stiffness, "N/m")):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"{name} = {v!r} {unit}: allowed (0, inf) {unit}")
         b = self.damping_rate
@@ -76,17 +82,30 @@ def stiffness_from_regression(*, a1: float, a2: float, x_max: float, tau: float,
 
 
 def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: float) -> Trunk:
-    """``chosen`` (l, a, d, rho, E, m_c) with base_stiffness, crown_mass and damping set so
-    that it reduces to the measured M_T, K_T and C_T = 2 b (M_T + m) (module docstring).
+    """A trunk that reduces exactly to a measured tree: the crown mass from M_T (eq 7), the
+    root spring from K_T (eq 8) and the distributed damping from C_T = 2 b (M_T + m)
+    (eq 10), the rest as chosen (module docstring).
 
-    ``chosen``'s own crown_mass, damping and base_stiffness are ignored.
+    Args:
+        chosen: the :class:`Trunk` whose l, a, d, rho, E and m_c are kept (its crown_mass,
+            damping and base_stiffness are ignored).
+        measured: the :class:`MeasuredTree` (M_T kg, K_T N/m, b 1/s).
+        impactor_mass: m, the pendulum's mass, kg (it enters C_T).
+
+    Returns:
+        Trunk: the calibrated trunk.
+
+    Raises:
+        ParameterError: K_T above the rigid-clamp trunk's 3 E I / a^3, or M_T below the bare
+            trunk's own (each named with its allowed range).
     """
     a = chosen.clamp_height
     rigid = a ** 3 / (3.0 * chosen.bending_stiffness)  # m/N: flexibility of the rigid clamp
-    flexibility = 1.0 / measured.stiffness
+    flexibility = 1.0 / measured.equivalent_stiffness
     if flexibility < rigid * (1.0 - 1e-12):
         raise ParameterError(
-            f"stiffness = {measured.stiffness:.6g} N/m: above the rigid-clamp trunk's "
+            f"equivalent_stiffness = {measured.equivalent_stiffness:.6g} N/m: above the "
+            "rigid-clamp trunk's "
             f"3 E I / a^3 = {1.0 / rigid:.6g} N/m (eq 8); allowed (0, {1.0 / rigid:.6g}] N/m "
             "for this E, d and a (a stiffer tree needs a larger E)")
     base = math.inf if flexibility <= rigid else a ** 2 / (flexibility - rigid)
@@ -111,7 +130,8 @@ def calibration_notes(measured: MeasuredTree, *, given: str, chosen: str) -> dic
         "given": given,
         "chosen": chosen,
         "calibrated": (f"m_f from M_T = {measured.dynamic_mass:.6g} kg (eq 7), base_stiffness "
-                       f"from K_T = {measured.stiffness:.6g} N/m (eq 8 with the root spring), "
+                       f"from K_T = {measured.equivalent_stiffness:.6g} N/m (eq 8 with the root "
+                       "spring), "
                        f"C from C_T = 2 b (M_T + m), b = {measured.damping_rate:.6g} 1/s"),
     }
 
@@ -123,7 +143,7 @@ def with_clamp_mass(trunk: Trunk, clamp_mass: float, *, impactor_mass: float) ->
     before (eqs 7, 8, 10): the unmeasured clamp varied on the same measured tree.
     ``impactor_mass`` (kg) fixes b = C_T / (2 (M_T + m))."""
     tree = reduce_trunk(trunk)
-    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, stiffness=tree.stiffness,
+    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, equivalent_stiffness=tree.stiffness,
                             damping_rate=tree.damping / (2.0 * (tree.dynamic_mass
                                                                 + impactor_mass)))
     return calibrate_trunk(replace(trunk, clamp_mass=clamp_mass), measured,

@@ -32,6 +32,7 @@ class Option:
 
     @property
     def choices(self) -> tuple | None:
+        """The allowed words of a word option, None for a number."""
         return self.kind if isinstance(self.kind, tuple) else None
 
     def check(self, name: str, value, *, label: str | None = None):

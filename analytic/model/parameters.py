@@ -80,7 +80,11 @@ def check_range(path: str, value, *, low=None, high=None, low_open=False, high_o
     """Return ``value`` as float or raise a one-line :class:`ParameterError`."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{path}: expected a number{f' in {unit}' if unit else ''}, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an integer beyond double precision
+        raise ParameterError(f"{path}: a number of {len(str(abs(value)))} digits is beyond "
+                             "double precision (about 1.8e308)") from None
     lo = "(" if low_open else "["
     hi = ")" if high_open else "]"
     rng = f"{lo}{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}{hi}"
@@ -96,10 +100,22 @@ def check_range(path: str, value, *, low=None, high=None, low_open=False, high_o
 
 @dataclass(frozen=True)
 class Trunk:
-    """Uniform cantilever trunk with clamp and crown point masses (eqs 1-11).
+    """Uniform cantilever trunk with clamp and crown point masses (eqs 1-11), validated on
+    construction against :data:`LIMITS` (ParameterError naming the field otherwise).
 
-    ``base_stiffness`` is an optional rotational spring at the ground (root/soil
-    compliance), N m/rad; ``math.inf`` is the paper's rigid clamp.
+    Attributes:
+        length: l, the height of the lumped crown above the ground, m.
+        clamp_height: a, the impact (clamp) height, at most l, m.
+        diameter: d, m.
+        density: rho, kg/m^3.
+        youngs_modulus: E, Pa.
+        clamp_mass: m_c, the harvester's clamp at a, kg.
+        crown_mass: m_f, fruit, leaves and scaffold wood at l, kg.
+        damping: C, the distributed viscous damping (eq 9), N s/m^2.
+        base_stiffness: k_theta, a rotational root spring at the ground, N m/rad (inf: the
+            paper's rigid clamp).
+        shear_modulus: G, Pa (Timoshenko beam theory only; None: E / 13).
+        shear_coefficient: kappa, 1 (Timoshenko only; None: 0.894).
     """
 
     length: float  # l, m: height of the lumped crown mass above the ground
@@ -164,22 +180,27 @@ class Trunk:
 
 @dataclass(frozen=True)
 class Pendulum:
-    """Pendulum impactor released from rest at ``release_angle`` (rad), eq 48.
+    """Pendulum impactor released from rest at ``release_angle_deg`` (eq 48); after the first
+    impact it is linearised as mass m on a spring k = m g / l_e (Fig 3, eq 13), natural
+    frequency omega_2 = sqrt(g / l_e). Validated on construction (ParameterError).
 
-    After the first impact it is linearised as mass ``m`` on a spring ``k = m g / l_e``
-    (Fig 3, eq 13), natural frequency omega_2 = sqrt(g / l_e).
+    Attributes:
+        mass: m, kg.
+        equivalent_length: l_e, m.
+        release_angle_deg: theta_r, deg (degrees here as in the scenario files, the command
+            line and the JSON; :attr:`release_angle_rad` gives radians).
+        gravity: g, m/s^2 (the paper's 9.81).
     """
 
     mass: float  # m, kg
     equivalent_length: float  # l_e, m
-    release_angle: float  # theta_r, rad
+    release_angle_deg: float  # theta_r, deg
     gravity: float = STANDARD_GRAVITY  # g, m/s^2
 
     def __post_init__(self):
         check_limit("impactor.mass", self.mass)
         check_limit("impactor.equivalent_length", self.equivalent_length)
-        check_range("impactor.release_angle", self.release_angle, low=math.radians(
-            LIMITS["impactor.release_angle_deg"][0]), high=math.pi, unit="rad")
+        check_limit("impactor.release_angle_deg", self.release_angle_deg)
         check_limit("impactor.gravity", self.gravity)
 
     @property
@@ -196,16 +217,23 @@ class Pendulum:
     def impact_speed(self) -> float:
         """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48)."""
         return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
-            self.release_angle / 2.0)
+            self.release_angle_rad / 2.0)
 
     @property
-    def release_angle_deg(self) -> float:
-        return math.degrees(self.release_angle)
+    def release_angle_rad(self) -> float:
+        """theta_r in radians, rad."""
+        return math.radians(self.release_angle_deg)
 
 
 @dataclass(frozen=True)
 class Billet:
-    """Unrestrained mass (spring-loaded billet) striking at ``impact_speed``: omega_2 = 0."""
+    """Unrestrained mass (the paper's spring-loaded billet) striking at ``impact_speed``: no
+    spring, omega_2 = 0. Validated on construction (ParameterError).
+
+    Attributes:
+        mass: m, kg.
+        impact_speed: u_1, m/s.
+    """
 
     mass: float  # m, kg
     impact_speed: float  # u_1, m/s
@@ -220,11 +248,17 @@ class Billet:
 
 @dataclass(frozen=True)
 class Contact:
-    """Contact between impactor and trunk.
+    """The contact between impactor and trunk: Newton's e (eq 21) and, for the soft
+    (spring-dashpot) models, the pad given by its stiffness or by its contact duration
+    (at most one of them; neither: the default 0.5 ms duration). Validated on construction.
 
-    ``restitution`` is Newton's e of eq 21. For the soft (spring-dashpot) models a contact
-    ``stiffness`` (N/m) or a contact ``duration`` (s, for the undamped two-body collision
-    pi / sqrt(k / mu)) sets the stiffness; give at most one of them.
+    Attributes:
+        restitution: e, 1.
+        stiffness: k_c, the pad's stiffness, N/m (``contact.stiffness``, the
+            ``contact_stiffness`` option).
+        duration: the pad's contact duration, the undamped collision time pi sqrt(mu / k_c)
+            of the 1-DOF pair, s (``contact.duration``, the ``contact_duration`` option; not
+            the touch duration, first touch to release).
     """
 
     restitution: float  # e, dimensionless
@@ -246,7 +280,19 @@ DEFAULT_CONTACT_DURATION = 5e-4  # s: half a millisecond, well inside the paper'
 
 @dataclass(frozen=True)
 class Scenario:
-    """One impact experiment: trunk, impactor and contact, simulated until ``t_end`` (s)."""
+    """One impact experiment: trunk, impactor and contact, simulated until ``t_end``.
+    Validated on construction (ParameterError naming the field).
+
+    Attributes:
+        name: names its files (1-64 letters, digits, '.', '_', '-' or spaces).
+        trunk: the :class:`Trunk`.
+        impactor: the :class:`Pendulum` or :class:`Billet`.
+        contact: the :class:`Contact`.
+        t_end: the simulated time after the first contact, s.
+        description: one line for people.
+        notes: the scenario file's ``[calibration]`` table: what was given, chosen and
+            calibrated (free text).
+    """
 
     name: str
     trunk: Trunk

@@ -18,7 +18,6 @@ the field and the allowed range.
 
 from __future__ import annotations
 
-import math
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -44,7 +43,14 @@ MAX_FILE_BYTES = 1_000_000
 
 
 def shipped_scenarios() -> list[str]:
-    """Names of the scenarios shipped with the package."""
+    """The shipped scenarios (the paper's two trees and one with a realistic crown).
+
+    Returns:
+        list[str]: their names, sorted (what :func:`load_scenario` takes).
+
+    Raises:
+        Nothing.
+    """
     folder = resources.files(__package__) / "scenarios"
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
@@ -71,6 +77,13 @@ def _number(table: dict, prefix: str, key: str):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         name = f"{prefix}.{key}" if prefix else key
         raise ParameterError(f"{name}: expected a number, got {v!r}")
+    if isinstance(v, int) and not isinstance(v, bool):
+        try:
+            float(v)
+        except OverflowError:  # an integer of hundreds of digits: beyond double precision
+            name = f"{prefix}.{key}" if prefix else key
+            raise ParameterError(f"{name}: a number of {len(str(abs(v)))} digits is beyond "
+                                 "double precision (about 1.8e308)") from None
     return v
 
 
@@ -94,7 +107,7 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
                                                            "release_angle_deg"))
         kw = dict(mass=_number(imp_t, "impactor", "mass"),
                   equivalent_length=_number(imp_t, "impactor", "equivalent_length"),
-                  release_angle=math.radians(deg))
+                  release_angle_deg=deg)
         if "gravity" in imp_t:
             kw["gravity"] = _number(imp_t, "impactor", "gravity")
         impactor = Pendulum(**kw)
@@ -129,7 +142,20 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
 
 
 def load_scenario(source: str | Path) -> Scenario:
-    """Load a shipped scenario by name (``open-center``) or a TOML file by path."""
+    """A scenario from a shipped name or a scenario file (TOML, SI units, release angle in
+    degrees; every key required but the Timoshenko theory's optional two).
+
+    Args:
+        source: a shipped scenario's name (``open-center``; :func:`shipped_scenarios`) or
+            the path of a TOML file.
+
+    Returns:
+        Scenario: validated against :data:`LIMITS`.
+
+    Raises:
+        ParameterError: an unknown name, an unreadable or malformed file, a missing or
+            unknown key, a value out of its range (each in one line naming the key).
+    """
     text: str
     path = Path(source)
     if isinstance(source, str) and source in shipped_scenarios():

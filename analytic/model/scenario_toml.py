@@ -30,7 +30,17 @@ def _line(key, v, units: bool = True) -> str:
 
 
 def scenario_toml(scenario: Scenario) -> str:
-    """The scenario file's text; loading it gives back an equal scenario (notes included)."""
+    """A scenario as a scenario file's text (SI units, each value's unit in a comment).
+
+    Args:
+        scenario: the :class:`Scenario` to write.
+
+    Returns:
+        str: the TOML text; loading it gives back an equal scenario (notes included).
+
+    Raises:
+        Nothing.
+    """
     d = scenario.to_dict()
     lines = [_line("name", d["name"])]
     if scenario.description:

@@ -70,11 +70,14 @@ class TwoBodyModel:
         return 0.5 * self.impactor_mass * vy ** 2 + 0.5 * self.impactor_stiffness * y ** 2
 
     def with_restitution(self, e: float) -> "TwoBodyModel":
+        """This model with the restitution ``e`` (1, eq 21)."""
         from dataclasses import replace
 
         return replace(self, restitution=e)
 
     def as_dict(self) -> dict:
+        """M_T (kg), C_T (N s/m), K_T (N/m), m (kg), k (N/m), restitution (1) and u1 (m/s):
+        the ``model`` keys every backend reports."""
         return {"M_T": self.dynamic_mass, "C_T": self.damping, "K_T": self.stiffness,
                 "m": self.impactor_mass, "k": self.impactor_stiffness,
                 "restitution": self.restitution, "u1": self.impact_speed}

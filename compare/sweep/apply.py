@@ -31,10 +31,9 @@ def _set(scenario: Scenario, target: str, value) -> Scenario:
     part = getattr(scenario, section)
     changes = {field: value}
     if section == "impactor" and field == "release_angle_deg":
-        if not hasattr(part, "release_angle"):
+        if not hasattr(part, "release_angle_deg"):
             raise ParameterError(f"{target}: the scenario's impactor is a "
                                  f"{type(part).__name__.lower()}, which has no release angle")
-        changes = {"release_angle": math.radians(value)}
     elif field not in {f.name for f in dataclasses.fields(part)}:
         raise ParameterError(f"{target}: the scenario's {section} is a "
                              f"{type(part).__name__.lower()}, which has no field {field!r}")

@@ -55,9 +55,11 @@ def add_sweep_arguments(parser) -> None:
                              "integrator, ...)")
     parser.add_argument("--scenario", default="central-leader",
                         help="shipped scenario name or TOML path (default: central-leader)")
-    parser.add_argument("--backend", default="analytic,soft,mujoco,bullet",
+    from treeimpact.compare.backends import BACKENDS
+
+    parser.add_argument("--backend", default=",".join(BACKENDS),
                         help="comma-separated backends (analytic is always run as the "
-                             "reference; default: all)")
+                             f"reference; default: all, {','.join(BACKENDS)})")
     parser.add_argument("--ladder", action="store_true",
                         help="run each engine as the ladder's rungs (SDOF, chain, chain + full "
                              "pendulum) so maps show which assumption dominates")

@@ -235,6 +235,10 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
     option = param.option
     if option is not None:  # its words, integers and range, from the backends' OPTIONS
         label = f"{flag} {spec!r}: {param.name}"
+        if param.name == "segments":  # a sweep's segments = 1 is the SDOF trunk (run.py)
+            from dataclasses import replace
+
+            option = replace(option, low=1)
         values = [option.check(param.name, v, label=label) for v in values]
     if param.kind == RECORD:
         kind, low, closed, unit = RECORD_FIELDS[param.target]

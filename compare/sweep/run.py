@@ -326,6 +326,17 @@ def write_parquet(out) -> Path:
 
 @dataclass
 class SweepResult:
+    """A finished (or resumed) sweep (docs/sweeps.md).
+
+    Attributes:
+        out: its directory.
+        table: one row per grid point and backend (a pandas DataFrame).
+        tasks_run: the backend calls this invocation made, a count.
+        rows_written: the rows it appended, a count.
+        rows_done_before: the rows found finished and skipped (resumed), a count.
+        wall_s: its wall time, s.
+    """
+
     out: Path
     table: object  # pandas DataFrame, deduplicated
     tasks_run: int  # backend calls made by this invocation

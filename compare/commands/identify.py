@@ -10,13 +10,22 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
+from ._common import number
+
+NAME = "identify"
+#: Removed spellings -> their names now (compare.names).
+RENAMED = {"release_angle": "release_angle_deg"}
+HELP = ("tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test record, with 95 %% "
+        "intervals")
+
 UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
          "pair_damping_ratio": "-", "restitution": "-", "E": "Pa",
          "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s",
          "x_drift2": "m/s^2", "y_offset": "m"}
 
 
-def add_arguments(sp: argparse.ArgumentParser, number) -> None:
+def add_arguments(sp: argparse.ArgumentParser) -> None:
+    """The command's flags: the record, the test's pendulum and trunk, the units."""
     from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
 
     sp.add_argument("record", help="CSV with columns t, x (and y, the pendulum's), in any "
@@ -24,7 +33,7 @@ def add_arguments(sp: argparse.ArgumentParser, number) -> None:
     sp.add_argument("--mass", type=number, required=True, help="pendulum mass m, kg")
     sp.add_argument("--equivalent-length", type=number, required=True,
                     help="equivalent length of the pendulum l_e, m")
-    sp.add_argument("--release-angle", type=number, required=True,
+    sp.add_argument("--release-angle-deg", type=number, required=True,
                     help="release angle theta_r, deg")
     sp.add_argument("--clamp-height", type=number, required=True, help="impact height a, m")
     sp.add_argument("--diameter", type=number, required=True, help="trunk diameter d, m")
@@ -48,18 +57,18 @@ def _test(args):
     for flag, value, field in (("--mass", args.mass, "impactor.mass"),
                                ("--equivalent-length", args.equivalent_length,
                                 "impactor.equivalent_length"),
-                               ("--release-angle", args.release_angle,
+                               ("--release-angle-deg", args.release_angle_deg,
                                 "impactor.release_angle_deg"),
                                ("--clamp-height", args.clamp_height, "trunk.clamp_height"),
                                ("--diameter", args.diameter, "trunk.diameter")):
         low, high, unit = LIMITS[field][:3]  # each flag as typed, before anything is built
         check_range(flag, value, low=low, high=high, unit=unit)
     pend = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
-                    release_angle=math.radians(args.release_angle))
+                    release_angle_deg=args.release_angle_deg)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, low=0.0, high=1.0)
     return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
-                        release_angle=pend.release_angle, clamp_height=args.clamp_height,
+                        release_angle=pend.release_angle_rad, clamp_height=args.clamp_height,
                         diameter=args.diameter, gravity=pend.gravity)
 
 
@@ -107,10 +116,10 @@ def _provenance(args, record) -> dict:
     import hashlib
     from pathlib import Path
 
-    from .provenance import provenance
+    from treeimpact.compare.provenance import provenance
 
     data = Path(args.record).read_bytes()
-    test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle",
+    test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle_deg",
                                            "clamp_height", "diameter", "restitution")}
     return provenance(record={"file": str(args.record), "bytes": len(data),
                               "sha1": hashlib.sha1(data).hexdigest(),
@@ -120,6 +129,7 @@ def _provenance(args, record) -> dict:
 
 
 def run(args) -> int:
+    """Fit the record and print the result (text or ``--json``); exit code 0."""
     import sys
 
     import numpy as np
@@ -130,13 +140,13 @@ def run(args) -> int:
         read_record,
     )
     from treeimpact.analytic.results import to_jsonable
-
-    from .backends import quiet_stdout
+    from treeimpact.compare.backends import worded_c_output
 
     test = _test(args)
     if args.plot:
         _check_plot_path(args.plot)
-    with quiet_stdout():  # LAPACK prints its argument errors on fd 1: stdout is data
+    with worded_c_output("LAPACK", "numpy's linear algebra on this record; the fit checks "
+                         "its own results"):  # LAPACK prints its errors on fd 1
         record = read_record(args.record, time_unit=args.time_unit,
                              length_unit=args.length_unit)
         fit = fit_record(record, test, restitution=args.restitution)
@@ -194,65 +204,6 @@ def run(args) -> int:
     for d in fit.diagnoses:
         print(f"  {d['kind']}: {d['message']}")
     return 0
-
-
-def add_record_arguments(sp: argparse.ArgumentParser, number, count) -> None:
-    """`treeimpact simulate --record FILE.csv [--rate HZ --noise FRAC --seed N]`."""
-    sp.add_argument("--record", help="also write the trunk's displacement as a pendulum-test "
-                                     "record (CSV 't [s],x [m]', what `identify` reads)")
-    sp.add_argument("--rate", type=number, default=5000.0,
-                    help="--record: sampling rate, Hz (default 5000)")
-    sp.add_argument("--noise", type=number, default=0.0,
-                    help="--record: Gaussian noise, a fraction of the peak (default 0)")
-    sp.add_argument("--seed", type=count, default=0, help="--record: the noise's seed")
-
-
-#: What a recorder does: its rate (Hz), noise (of the peak) and the rest before the impact.
-RECORD_RATE, RECORD_NOISE, RECORD_REST = (50.0, 1e6), (0.0, 0.5), 0.02
-
-
-def check_record_arguments(args) -> None:
-    """--rate, --noise and --seed in range (one line each), before a run is spent."""
-    from treeimpact.analytic.model.parameters import check_range
-
-    check_range("--rate", args.rate, low=RECORD_RATE[0], high=RECORD_RATE[1], unit="Hz")
-    check_range("--noise", args.noise, low=RECORD_NOISE[0], high=RECORD_NOISE[1])
-    if args.seed < 0:
-        raise ParameterError(f"--seed = {args.seed}: allowed 0 or more")
-
-
-def write_record(args, scenario, result) -> str:
-    """Write ``result``'s trunk displacement as a record at ``args.rate`` from RECORD_REST s
-    before the impact, with ``args.noise`` of the peak as Gaussian noise (seeded): exact
-    samples of the analytic backend's solution, else the backend's trajectory interpolated.
-    Returns a one-line summary."""
-    import numpy as np
-
-    check_record_arguments(args)
-    traj = result.trajectory
-    if traj is None:
-        raise ParameterError(f"--record: the {result.backend} backend gives no trajectory")
-    t_end = float(traj.t[-1])
-    s = np.arange(-RECORD_REST, t_end, 1.0 / args.rate)
-    sol = getattr(result, "solution", None)
-    if sol is not None:
-        x = np.where(s > 0.0, sol.state(np.clip(s, 0.0, sol.t_end))[0], 0.0)
-    else:
-        x = np.where(s > 0.0, np.interp(s, traj.t, traj.x), 0.0)
-    rng = np.random.default_rng(args.seed)
-    x = x + args.noise * float(np.max(np.abs(x))) * rng.standard_normal(s.size)
-    t = s + RECORD_REST
-    try:
-        with open(args.record, "w", encoding="utf-8") as f:
-            f.write(f"# {scenario.name} ({result.backend}), {args.rate:g} Hz, noise "
-                    f"{args.noise:g} of the peak, seed {args.seed}; impact at t = "
-                    f"{RECORD_REST:g} s\n")
-            f.write("t [s],x [m]\n")
-            f.writelines(f"{a:.9g},{b:.9g}\n" for a, b in zip(t, x))
-    except OSError as exc:
-        raise ParameterError(f"--record {args.record!r}: cannot be written "
-                             f"({exc.strerror or exc})") from None
-    return f"record: {args.record} ({t.size} samples at {args.rate:g} Hz, noise {args.noise:g})"
 
 
 def _plot(path, record, fit, paper, test) -> None:

@@ -8,18 +8,24 @@ file records which values were given, chosen and calibrated, as the shipped file
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+
+from ._common import number
+
+NAME = "scenario"
+HELP = "write a scenario file for your own tree from measured M_T, K_T, b"
+#: Removed spellings -> their names now (compare.names).
+RENAMED = {"stiffness": "equivalent_stiffness", "release_angle": "release_angle_deg"}
 
 #: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml).
 DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
             "contact_duration": 5e-4, "t_end": 0.1}
 
 
-def add_arguments(sp: argparse.ArgumentParser, number) -> None:
-    """The command's options; ``number`` parses a float with a one-line error."""
+def add_arguments(sp: argparse.ArgumentParser) -> None:
+    """The command's flags: the test (given), the tree (measured), the choices."""
     sp.add_argument("name", help="the scenario's name (also the file name with --out DIR)")
     g = sp.add_argument_group("the test (given)")
     g.add_argument("--clamp-height", type=number, required=True, help="a, m: impact height")
@@ -27,11 +33,13 @@ def add_arguments(sp: argparse.ArgumentParser, number) -> None:
     g.add_argument("--mass", type=number, required=True, help="m, kg: pendulum mass")
     g.add_argument("--equivalent-length", type=number, required=True,
                    help="l_e, m: equivalent length of the pendulum")
-    g.add_argument("--release-angle", type=number, required=True,
+    g.add_argument("--release-angle-deg", type=number, required=True,
                    help="theta_r, deg: release angle of the pendulum")
     m = sp.add_argument_group("the tree (measured)")
     m.add_argument("--dynamic-mass", type=number, required=True, help="M_T, kg")
-    m.add_argument("--stiffness", type=number, help="K_T, N/m (or --x-max and --tau)")
+    m.add_argument("--equivalent-stiffness", type=number,
+                   help="K_T, N/m: the tree's equivalent spring stiffness at the clamp (or "
+                        "--x-max and --tau)")
     m.add_argument("--damping-rate", type=number, help="b, 1/s (or --a1 and --a2)")
     m.add_argument("--a1", type=number, help="regression a1 = V, m/s (eq 40)")
     m.add_argument("--a2", type=number, help="regression a2, m/s^2 (eq 40)")
@@ -71,7 +79,7 @@ def build_scenario(args):
     from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario, Trunk
 
     pendulum = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
-                        release_angle=math.radians(args.release_angle))
+                        release_angle_deg=args.release_angle_deg)
     given = ["a", "d", "theta_r", "m", "l_e", "M_T"]
     if args.damping_rate is not None:
         if args.a1 is not None or args.a2 is not None:
@@ -83,10 +91,11 @@ def build_scenario(args):
         given.append(f"b = -a2/a1 (eq 42) from a1 = {args.a1:g} m/s, a2 = {args.a2:g} m/s^2")
     else:
         raise ParameterError("--damping-rate: missing (give b in 1/s, or --a1 and --a2)")
-    if args.stiffness is not None:
+    if args.equivalent_stiffness is not None:
         if args.x_max is not None or args.tau is not None:
-            raise ParameterError("--stiffness: give it or --x-max and --tau, not both")
-        k_t = args.stiffness
+            raise ParameterError("--equivalent-stiffness: give it or --x-max and --tau, not "
+                                 "both")
+        k_t = args.equivalent_stiffness
         given.append("K_T")
     elif None not in (args.x_max, args.tau, args.a1, args.a2):
         k_t = stiffness_from_regression(a1=args.a1, a2=args.a2, x_max=args.x_max, tau=args.tau,
@@ -94,9 +103,10 @@ def build_scenario(args):
                                         impactor_stiffness=pendulum.stiffness)
         given.append(f"K_T from x_max = {args.x_max:g} m, tau = {args.tau:g} s (eqs 43, 46)")
     else:
-        raise ParameterError("--stiffness: missing (give K_T in N/m, or --x-max, --tau, --a1 "
-                             "and --a2)")
-    measured = MeasuredTree(dynamic_mass=args.dynamic_mass, stiffness=k_t, damping_rate=b)
+        raise ParameterError("--equivalent-stiffness: missing (give K_T in N/m, or --x-max, "
+                             "--tau, --a1 and --a2)")
+    measured = MeasuredTree(dynamic_mass=args.dynamic_mass, equivalent_stiffness=k_t,
+                            damping_rate=b)
     chosen = Trunk(length=_pick(args, "length"), clamp_height=args.clamp_height,
                    diameter=args.diameter, density=_pick(args, "density"),
                    youngs_modulus=args.youngs_modulus, clamp_mass=_pick(args, "clamp_mass"))
@@ -114,10 +124,64 @@ def build_scenario(args):
                     description=f"{args.name}: calibrated by treeimpact scenario", notes=notes)
 
 
+#: The model fields the command's flags set -> the flag (an error names what was typed).
+FLAGS = {"impactor.mass": "--mass", "impactor.equivalent_length": "--equivalent-length",
+         "impactor.release_angle_deg": "--release-angle-deg",
+         "trunk.clamp_height": "--clamp-height", "trunk.diameter": "--diameter",
+         "trunk.length": "--length", "trunk.density": "--density",
+         "trunk.youngs_modulus": "--youngs-modulus", "trunk.clamp_mass": "--clamp-mass",
+         "contact.restitution": "--restitution", "contact.duration": "--contact-duration",
+         "t_end": "--t-end", "dynamic_mass": "--dynamic-mass",
+         "equivalent_stiffness": "--equivalent-stiffness", "damping_rate": "--damping-rate",
+         "a1": "--a1", "a2": "--a2", "x_max": "--x-max", "tau": "--tau"}
+
+
+def _as_flags(exc: ParameterError) -> ParameterError:
+    """``exc`` with the model field it starts with named as the flag that set it."""
+    text = str(exc)
+    for field, flag in sorted(FLAGS.items(), key=lambda kv: -len(kv[0])):
+        if text.startswith(field) and text[len(field):len(field) + 1] in (" ", ":"):
+            return ParameterError(flag + text[len(field):])
+    return exc
+
+
+def fit_t_end(scenario, given: bool):
+    """``scenario`` with a t_end (s) its run can report: the analytic model's x_max and the
+    separation inside it. A ``given`` t_end is kept or refused (naming --t-end); the default
+    is doubled until the run fits, up to the limit of t_end (10 s), else refused."""
+    import dataclasses
+
+    from treeimpact.analytic.model.parameters import LIMITS
+    from treeimpact.compare.backends import get_backend
+
+    analytic = get_backend("analytic")
+    t_end = scenario.t_end
+    while True:
+        try:
+            analytic.simulate(dataclasses.replace(scenario, t_end=t_end))
+            if t_end == scenario.t_end:
+                return scenario
+            notes = {**scenario.notes, "t_end": (
+                f"t_end = {t_end:g} s: {scenario.t_end:g} s doubled until the analytic "
+                "model's x_max and separation lie inside the run")}
+            return dataclasses.replace(scenario, t_end=t_end, notes=notes)
+        except ParameterError as exc:
+            if given or not str(exc).startswith("--t-end") or 2 * t_end > LIMITS["t_end"][1]:
+                raise ParameterError(f"{exc} (the tree written would not run: the longest "
+                                     f"allowed is {LIMITS['t_end'][1]:g} s)" if not given
+                                     else str(exc)) from None
+            t_end *= 2.0
+
+
 def run(args) -> int:
+    """Write (or print) the scenario file, one that runs (:func:`fit_t_end`); exit code 0."""
     from treeimpact.analytic.model.scenario_toml import scenario_toml
 
-    text = scenario_toml(build_scenario(args))
+    try:
+        scenario = fit_t_end(build_scenario(args), given=args.t_end is not None)
+    except ParameterError as exc:
+        raise _as_flags(exc) from None
+    text = scenario_toml(scenario)
     if args.out is None:
         print(text, end="")
         return 0

@@ -1,0 +1,176 @@
+"""``treeimpact contact``: MuJoCo and Bullet contact settings you can paste, for a target
+restitution and touch duration (or the pad's stiffness and damping) at a time step, checked
+by simulating the two-body collision in each engine (compare.contact_settings). SI units;
+design notes: docs/contact-settings.md.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+from treeimpact.analytic.errors import ParameterError
+
+from ._common import number
+
+NAME = "contact"
+HELP = ("MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a target e and "
+        "touch duration, checked in each engine")
+#: Removed spellings -> their names now (compare.names).
+RENAMED = {"duration": "touch_duration", "stiffness": "contact_stiffness",
+           "damping": "contact_damping"}
+#: --engine's words -> the engines they ask for.
+ENGINE_CHOICES = {"mujoco": ("mujoco",), "bullet": ("bullet",), "both": ("mujoco", "bullet")}
+
+
+def add_arguments(sp) -> None:
+    """The command's flags."""
+    sp.add_argument("--mass", type=number, help="mass of body 1, kg")
+    sp.add_argument("--other-mass", type=number, dest="other_mass",
+                    help="mass of body 2, kg (default inf: body 2 fixed)")
+    sp.add_argument("--effective-mass", type=number, dest="effective_mass",
+                    help="the reduced mass m1 m2 / (m1 + m2), kg, instead of --mass")
+    sp.add_argument("--restitution", type=number, help="target e of one collision (0, 1)")
+    sp.add_argument("--touch-duration", type=number, dest="touch_duration",
+                    help="target touch duration, s: first touch to release (not the undamped "
+                         "pi sqrt(mu / k_c), which is --contact-duration elsewhere)")
+    sp.add_argument("--contact-stiffness", type=number, dest="contact_stiffness",
+                    help="the pad's stiffness k_c, N/m (with --contact-damping, instead of "
+                         "--restitution and --touch-duration)")
+    sp.add_argument("--contact-damping", type=number, dest="contact_damping",
+                    help="the pad's damping c_c, N s/m")
+    sp.add_argument("--dt", type=number, help="the engines' time step, s (MuJoCo's default "
+                                              "is 0.002)")
+    sp.add_argument("--engine", choices=tuple(ENGINE_CHOICES), default="both",
+                    help="the engine(s) to give settings for (default both); an engine that "
+                         "cannot hold --dt is named with the step it needs")
+    sp.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def run(args) -> int:
+    """Print the settings and the simulated collisions (text or ``--json``); exit code 0
+    when at least one engine holds the step, else 2 with each engine's reason."""
+    from treeimpact.compare.contact_settings import contact_settings
+
+    engines = ENGINE_CHOICES[args.engine]
+    res = contact_settings(mass=args.mass, other_mass=args.other_mass,
+                           effective_mass=args.effective_mass, restitution=args.restitution,
+                           touch_duration=args.touch_duration,
+                           contact_stiffness=args.contact_stiffness,
+                           contact_damping=args.contact_damping, dt=args.dt, engines=engines)
+    if all("error" in res[e] for e in engines):
+        raise ParameterError("; ".join(res[e]["error"] for e in engines))
+    if args.json:
+        from treeimpact.analytic.results import to_jsonable
+
+        print(json.dumps(to_jsonable(res), indent=2))
+        return 0
+    print_settings(res, engines)
+    return 0
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.10g}"
+
+
+def _row(name, achieved, law) -> str:
+    e, t = achieved["restitution"], achieved["touch_duration"]
+    if not math.isfinite(e):
+        return f"  {name:<32}{'diverged: the step is too large for this setting':<66}"
+    e_text = f"{e:.6f} ({e - law['restitution']:+.1e})"
+    t_text = (f"{1e3 * t:.4f} ms ({t / law['touch_duration'] - 1:+.2%}, "
+              f"{achieved['steps']} steps)")
+    return (f"  {name:<32}{e_text:<21}{t_text:<34}"
+            f"{1e3 * achieved['peak_penetration']:>8.4g} mm")
+
+
+def _moved(c: dict) -> str:
+    e, t = c["restitution"], c["touch_duration"]
+    if not math.isfinite(e):
+        return f"{'diverged':<22}"
+    if e > 1.0:
+        return f"{f'e {e:.3g} > 1: unstable':<22}"
+    return f"{f'{e:.4f}, {1e3 * t:.4g} ms':<22}"
+
+
+def _header(res: dict) -> None:
+    law, inp = res["target"], res["inputs"]
+    other = "fixed" if math.isinf(inp["other_mass"]) else f"{inp['other_mass']:g} kg"
+    print(f"Contact of {inp['mass']:g} kg with {other} (reduced mass "
+          f"{inp['effective_mass']:.6g} kg) at dt = {inp['dt']:.6g} s")
+    print(f"  target: e {law['restitution']:.6g}, touch duration "
+          f"{1e3 * law['touch_duration']:.6g} ms (first touch to release); the pad k_c "
+          f"{law['contact_stiffness']:.6g} N/m, c_c {law['contact_damping']:.6g} N s/m, zeta "
+          f"{law['damping_ratio']:.4g} (contact duration pi sqrt(mu / k_c) "
+          f"{1e3 * law['contact_duration']:.6g} ms)")
+    print()
+
+
+def _print_mujoco(mj: dict) -> None:
+    print("MuJoCo (Euler; the pair's force is (k' delta + b' delta') / S, S = 1 / reduced mass)")
+    print(f"  solref (direct: -k' -b')      {' '.join(_fmt(v) for v in mj['solref'])}")
+    print(f"  solref (timeconst dampratio)  {' '.join(_fmt(v) for v in mj['solref_timeconst'])}"
+          + ("   needs <flag refsafe=\"disable\"/>" if mj["refsafe_disable_needed"] else ""))
+    print(f"  solimp                        {' '.join(_fmt(v) for v in mj['solimp'])}")
+    if mj["solimp_timeconst"] != mj["solimp"]:
+        print(f"  solimp (with timeconst)       "
+              f"{' '.join(_fmt(v) for v in mj['solimp_timeconst'])}"
+              "   (MuJoCo caps 1/(d timeconst dampratio)^2 at 1e15)")
+    print(f"  MJCF ({' and '.join(mj['geoms'])} are placeholders: your two geoms' names):")
+    for line in mj["mjcf"].splitlines():
+        print(f"    {line}")
+    print()
+
+
+def _print_bullet(bl: dict) -> None:
+    print("Bullet (each of the two links; they combine to k in series, c in sum)")
+    print(f"  changeDynamics(contactStiffness={_fmt(bl['contactStiffness'])}, "
+          f"contactDamping={_fmt(bl['contactDamping'])}, "
+          + ", ".join(f"{k}={v:g}" for k, v in bl["link"].items()) + ")")
+    print("  setPhysicsEngineParameter(" + ", ".join(f"{k}={v:g}" for k, v in
+                                                  bl["world"].items()) + ")")
+    print(f"  start the bodies {bl['start']}")
+    print()
+
+
+def _collision_rows(res: dict, engines) -> list:
+    """(label, achieved at dt, at dt/2, at 2 dt) of every setting printed."""
+    rows = []
+    if "mujoco" in engines and "error" not in res["mujoco"]:
+        mj = res["mujoco"]
+        for label, key in (("MuJoCo solref (direct)", "solref"),
+                           ("MuJoCo solref (timeconst)", "solref_timeconst")):
+            rows.append((label, mj["achieved"][key], mj["at_half_dt"][key],
+                         mj["at_double_dt"][key]))
+        rows.append(("MuJoCo naive solref", mj["naive"], mj["at_half_dt"]["naive"],
+                     mj["at_double_dt"]["naive"]))
+    if "bullet" in engines and "error" not in res["bullet"]:
+        bl = res["bullet"]
+        rows.append(("Bullet contactStiffness/Damping", bl["achieved"],
+                     bl["at_half_dt"]["settings"], bl["at_double_dt"]["settings"]))
+        rows.append(("Bullet naive", bl["naive"], bl["at_half_dt"]["naive"],
+                     bl["at_double_dt"]["naive"]))
+    return rows
+
+
+def print_settings(res: dict, engines) -> None:
+    """The command's text output: the target, each engine's settings (or why it cannot hold
+    the step), then each setting's simulated collision at dt and kept at dt/2 and 2 dt."""
+    _header(res)
+    printers = {"mujoco": _print_mujoco, "bullet": _print_bullet}
+    for engine in engines:
+        if "error" in res[engine]:
+            print(f"{res[engine]['error']}\n")
+        else:
+            printers[engine](res[engine])
+    law = res["target"]
+    speed = res["inputs"]["approach_speed"]
+    print(f"Simulated two-body collision at {speed:g} m/s, achieved against the target (naive: "
+          "the continuous law, no time-step correction; penetration: the largest overlap, "
+          "linear in the approach speed); each setting kept as printed at half and twice the "
+          "step:")
+    print(f"  {'setting':<32}{'e (error)':<21}{'touch duration (error, steps)':<34}"
+          f"{'penetration':>11}  {'at dt/2: e, duration':<22}  at 2 dt: e, duration")
+    for label, at, half, double in _collision_rows(res, engines):
+        line = _row(label, at, law)
+        print(f"{line}  {_moved(half)}  {_moved(double)}".rstrip())

@@ -1,0 +1,62 @@
+"""``treeimpact report``: the discrepancy report (report.html, .md, .json) of the shipped or
+given scenarios, with finished studies and optionally a study run beside it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from treeimpact.analytic.errors import ParameterError
+
+from ._common import add_budget_flag, writable_dir
+
+NAME = "report"
+HELP = "write the discrepancy report (html, md, json)"
+
+
+def add_arguments(sp) -> None:
+    """The command's flags."""
+    sp.add_argument("--out", default="reports", help="output directory (default: reports)")
+    sp.add_argument("--scenario", action="append", dest="scenarios",
+                    help="shipped scenario name or TOML path (repeatable; default: all shipped)")
+    sp.add_argument("--study", action="append", dest="studies", default=[],
+                    help="directory of a finished study to include (repeatable)")
+    sp.add_argument("--with-study", dest="with_study", metavar="PRESET",
+                    help="also run the study PRESET (treeimpact sweep --preset PRESET) into "
+                         "OUT/study beside the report's own runs, and include it (resumes a "
+                         "study already there)")
+    add_budget_flag(sp)
+
+
+def run(args) -> int:
+    """Write the report and print the written paths; exit code 0."""
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.report import write_report
+
+    if args.with_study is not None:
+        from treeimpact.compare.sweep.study import PRESETS
+
+        if args.with_study not in PRESETS:
+            raise ParameterError(f"--with-study {args.with_study!r}: allowed "
+                                 f"{', '.join(PRESETS)}")
+    scenarios = [load_scenario(n) for n in args.scenarios] if args.scenarios else None
+    for study in args.studies:  # checked before an hour of runs, not after
+        if not Path(study).is_dir():
+            raise ParameterError(f"--study {study!r}: not a directory (a finished study, "
+                                 "treeimpact sweep --out DIR)")
+    writable_dir("--out", args.out)
+    jobs = []
+    if args.with_study:
+        from treeimpact.compare.sweep.study_job import StudyJob
+
+        jobs.append(StudyJob(args.with_study, Path(args.out) / "study"))
+    try:
+        for job in jobs:
+            job.start()
+        paths = write_report(args.out, scenarios=scenarios, study_dirs=tuple(args.studies),
+                             progress=True, study_jobs=tuple(jobs))
+    finally:
+        for job in jobs:
+            job.stop()
+    for kind, path in paths.items():
+        print(f"{kind}: {path}")
+    return 0

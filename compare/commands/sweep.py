@@ -1,0 +1,24 @@
+"""``treeimpact sweep``: a model-validity study over a grid (the arguments and the run live
+in :mod:`treeimpact.compare.sweep.cli_support`)."""
+
+from __future__ import annotations
+
+from ._common import add_budget_flag
+
+NAME = "sweep"
+HELP = "run a parameter sweep: validity maps and studies"
+
+
+def add_arguments(sp) -> None:
+    """The sweep's flags (compare.sweep.cli_support) and the run budget."""
+    from treeimpact.compare.sweep.cli_support import add_sweep_arguments
+
+    add_sweep_arguments(sp)
+    add_budget_flag(sp)
+
+
+def run(args) -> int:
+    """Run the sweep; its exit code (130 when interrupted, with how to resume)."""
+    from treeimpact.compare.sweep.cli_support import run_sweep_command
+
+    return run_sweep_command(args)

@@ -1,0 +1,129 @@
+"""Each engine's contact settings for a target law (compare.contact_settings.target_law) at a
+time step, and the two-body collision each setting gives in that engine: at the step, and
+with the setting kept as printed at half and twice the step (how sensitive it is to a
+change of step). An engine that cannot hold the step answers ``{"error", "largest_dt"}``.
+SI units; docs/contact-settings.md."""
+
+from __future__ import annotations
+
+import math
+
+from treeimpact.analytic.errors import ParameterError
+
+SPEED = 1.0  # m/s: approach speed of the simulated collision (the law is linear: any speed)
+
+#: The steps each setting is also run at, as multiples of the step it was made for.
+STEP_FACTORS = {"at_half_dt": 0.5, "at_double_dt": 2.0}
+#: The MJCF snippet's geom names: placeholders for the user's two colliding geoms.
+GEOM_PLACEHOLDERS = ("GEOM_OF_BODY_1", "GEOM_OF_BODY_2")
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.10g}"
+
+
+def mjcf_snippet(dt, solref, solimp, refsafe_off=False) -> str:
+    """The <option> and the <contact><pair> to paste: the pair's geoms are placeholders
+    (:data:`GEOM_PLACEHOLDERS`) for the names of the user's two colliding geoms; give both
+    contype = conaffinity = 0 so that the pair is their only contact."""
+    opt = f'<option timestep="{_fmt(dt)}" integrator="Euler">'
+    opt += '\n  <flag refsafe="disable"/>\n</option>' if refsafe_off else ""
+    opt = opt if refsafe_off else opt[:-1] + "/>"
+    g1, g2 = GEOM_PLACEHOLDERS
+    return (f"{opt}\n<contact>\n  <!-- {g1}, {g2}: replace by the names of your two geoms "
+            "(body 1: --mass, body 2: --other-mass) -->\n"
+            f"  <pair geom1=\"{g1}\" geom2=\"{g2}\" condim=\"1\" margin=\"0\" "
+            f"solref=\"{' '.join(_fmt(v) for v in solref)}\" "
+            f"solimp=\"{' '.join(_fmt(v) for v in solimp)}\"/>\n</contact>")
+
+
+def _cannot(engine: str, dt: float, largest: float, why: str) -> dict:
+    return {"error": f"{engine} cannot hold --dt = {dt:.6g} s for this contact: it needs "
+                     f"dt <= {largest:.3g} s ({why})", "largest_dt": largest}
+
+
+def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
+    """MuJoCo's solref/solimp (direct and time-constant) for ``law`` at ``dt``, the MJCF to
+    paste, and the collision of each in MuJoCo (at dt, dt/2 and 2 dt), beside the naive
+    (uncorrected) solref's; or ``{"error", "largest_dt"}`` beyond Euler's omega dt < 2."""
+    from treeimpact.mujoco_models import _contact as mc
+    from treeimpact.mujoco_models import _runner  # noqa: F401 - MuJoCo's warnings: stderr
+
+    k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
+    top = 2.0 / math.sqrt(k / mu)
+    if dt >= top:
+        return _cannot("MuJoCo", dt, top * (1 - 1e-9), "its Euler step diverges at omega dt "
+                       f">= 2, omega = sqrt(k_c / mu) = {math.sqrt(k / mu):.4g} rad/s")
+    try:
+        eng = mc.engine_law(k, e, mu, dt)
+    except ParameterError as exc:
+        return {"error": f"MuJoCo: {exc}", "largest_dt": None}
+    S = mc.effective_denominator(1.0 / mu, 1.0 / mu)  # free bodies: diagApprox is 1 / mu
+    solimp = [mc.IMPEDANCE, mc.IMPEDANCE, *mc.SOLIMP_TAIL]
+    solref = list(mc.solref_for_law(eng.stiffness, eng.damping, S))
+    tc = list(mc.time_constant_solref(eng.stiffness, eng.damping, S))
+    d_tc = mc.time_constant_impedance(eng.stiffness, S)
+    solimp_tc = [d_tc, d_tc, *mc.SOLIMP_TAIL]
+    refsafe = tc[0] >= 2.0 * dt  # else MuJoCo raises timeconst to 2 dt unless disabled
+    naive = list(mc.solref_for_law(k, c, S))
+    rows = {"solref": (solref, solimp, True), "solref_timeconst": (tc, solimp_tc, refsafe),
+            "naive": (naive, solimp, True)}
+
+    def run(name, step):
+        ref, imp, safe = rows[name]
+        return mc.two_body_collision(mc.two_body_mjcf(m1, m2, step, ref, imp, refsafe=safe),
+                                     SPEED).to_json()
+
+    out = {"solref": solref, "solref_timeconst": tc, "solimp": solimp,
+           "solimp_timeconst": solimp_tc, "engine_contact_stiffness": eng.stiffness,
+           "engine_contact_damping": eng.damping, "refsafe_disable_needed": not refsafe,
+           "geoms": list(GEOM_PLACEHOLDERS),
+           "mjcf": mjcf_snippet(dt, solref, solimp),
+           "mjcf_timeconst": mjcf_snippet(dt, tc, solimp_tc, refsafe_off=not refsafe),
+           "achieved": {"solref": run("solref", dt),
+                        "solref_timeconst": run("solref_timeconst", dt)},
+           "naive": {"solref": naive, **run("naive", dt)}}
+    for key, f in STEP_FACTORS.items():
+        out[key] = {name: run(name, f * dt) for name in rows}
+    return out
+
+
+def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
+    """Bullet's contactStiffness/contactDamping per link for ``law`` at ``dt`` with the world
+    and link flags exact restitution needs, and the collision in Bullet (at dt, dt/2 and
+    2 dt) beside the naive settings'; or ``{"error", "largest_dt"}`` when its implicit step
+    alone damps more than e allows."""
+    from treeimpact.bullet_models import _contact as bc
+    from treeimpact.bullet_models._world import LINK_FLAGS, WORLD_FLAGS, two_body_collision
+
+    k, c = law["contact_stiffness"], law["contact_damping"]
+    limit = bc.largest_time_step(k, c, mu)
+    if dt > limit:
+        return _cannot("Bullet", dt, limit, f"its implicit step alone damps more than e = "
+                       f"{law['restitution']:.4g} allows")
+    try:
+        b = bc.bullet_contact(k, c, mu, dt)
+    except ParameterError as exc:
+        return {"error": f"Bullet: {exc}", "largest_dt": limit}
+    ks, ds = b.per_body
+    nk, nd = bc.per_body(k, c)
+    rows = {"settings": (ks, ds), "naive": (nk, nd)}
+
+    def run(name, step):
+        return two_body_collision(m1, m2, step, *rows[name], SPEED).to_json()
+
+    out = {"contactStiffness": ks, "contactDamping": ds,
+           "engine_contact_stiffness": b.stiffness, "engine_contact_damping": b.damping,
+           "erp": b.erp, "cfm": b.cfm,
+           "world": {"fixedTimeStep": dt, **WORLD_FLAGS}, "link": dict(LINK_FLAGS),
+           "start": "touching (distance 0) or apart by whole steps: a contact that starts "
+                    "inside a step is off by O(dt)",
+           "achieved": run("settings", dt),
+           "naive": {"contactStiffness": nk, "contactDamping": nd, **run("naive", dt)}}
+    for key, f in STEP_FACTORS.items():
+        out[key] = {name: run(name, f * dt) for name in rows}
+    return out
+
+
+#: engine name -> its settings function (compare.contact_settings.ENGINES).
+ENGINE_SETTINGS = {"mujoco": mujoco_settings, "bullet": bullet_settings}

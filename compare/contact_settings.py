@@ -1,0 +1,130 @@
+"""MuJoCo and Bullet contact settings for a target restitution and touch duration (or the
+pad's stiffness and damping) at a time step, each checked by simulating the two-body
+collision in its engine: what ``treeimpact contact`` prints. SI units; design notes:
+docs/contact-settings.md.
+
+Each engine is asked on its own: an engine that cannot hold the step answers with the
+largest step it can (``{"error": ..., "largest_dt": ...}``) and the other's settings stand.
+"""
+
+from __future__ import annotations
+
+import math
+
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import check_range
+
+from .contact_engines import ENGINE_SETTINGS, SPEED
+
+#: Fewest steps of the target collision the command accepts (0.5e5 steps per collision at
+#: most keep the two simulations under a second).
+MAX_STEPS_PER_COLLISION = 50_000
+#: The engines, in the order they print.
+ENGINES = ("mujoco", "bullet")
+#: Allowed ranges (SI): a milligram to a thousand tonnes, the pad's stiffness and damping,
+#: the touch duration; beyond them the arithmetic leaves double precision.
+MASS_RANGE = (1e-6, 1e9)
+STIFFNESS_RANGE = (1e-3, 1e15)
+DAMPING_RANGE = (1e-9, 1e12)
+TOUCH_DURATION_RANGE = (1e-9, 10.0)
+
+
+def masses(mass, other_mass, effective_mass) -> tuple[float, float]:
+    """(m1, m2) in kg; m2 = inf: a fixed body. ``effective_mass`` mu is m1 = mu, m2 fixed.
+    Raises ParameterError naming the flag out of :data:`MASS_RANGE`."""
+    low, high = MASS_RANGE
+    if effective_mass is not None:
+        if mass is not None or other_mass is not None:
+            raise ParameterError("--effective-mass: give it instead of --mass/--other-mass")
+        return check_range("--effective-mass", effective_mass, low=low, high=high,
+                           unit="kg"), math.inf
+    if mass is None:
+        raise ParameterError(f"--mass: required (or --effective-mass), allowed [{low:g}, "
+                             f"{high:g}] kg")
+    m1 = check_range("--mass", mass, low=low, high=high, unit="kg")
+    if other_mass is None or other_mass == math.inf:
+        return m1, math.inf
+    return m1, check_range("--other-mass", other_mass, low=low, high=high, unit="kg")
+
+
+def _law_from_stiffness(mu, stiffness, damping) -> tuple:
+    from treeimpact.analytic.contact.law import release_time, restitution_for_damping_ratio
+
+    if stiffness is None or damping is None:
+        raise ParameterError("--restitution and --touch-duration, or --contact-stiffness and "
+                             "--contact-damping: required")
+    check_range("--contact-stiffness", stiffness, low=STIFFNESS_RANGE[0],
+                high=STIFFNESS_RANGE[1], unit="N/m")
+    check_range("--contact-damping", damping, low=DAMPING_RANGE[0], high=DAMPING_RANGE[1],
+                unit="N s/m")
+    k, c = float(stiffness), float(damping)
+    zeta = c / (2.0 * math.sqrt(k * mu))
+    omega = math.sqrt(k / mu)
+    return restitution_for_damping_ratio(zeta), release_time(zeta) / omega, k, c, zeta
+
+
+def target_law(mu: float, *, restitution=None, touch_duration=None, contact_stiffness=None,
+               contact_damping=None) -> dict:
+    """The continuous spring-dashpot F = max(0, k_c delta + c_c delta') on the reduced mass
+    mu (kg), from (e, touch duration) or (k_c, c_c): its ``restitution``, ``touch_duration``
+    (s, first touch to release), ``contact_stiffness`` k_c (N/m), ``contact_damping`` c_c
+    (N s/m), ``damping_ratio`` zeta and ``contact_duration``, the undamped pi sqrt(mu / k_c)
+    (s). Raises ParameterError naming the flag that is missing or out of range."""
+    from treeimpact.analytic.contact.law import damping_ratio_for_restitution, release_time
+
+    if restitution is not None or touch_duration is not None:
+        if contact_stiffness is not None or contact_damping is not None:
+            raise ParameterError("--contact-stiffness/--contact-damping: give them instead of "
+                                 "--restitution and --touch-duration, not with them")
+        if restitution is None or touch_duration is None:
+            raise ParameterError("--restitution and --touch-duration: give both (or "
+                                 "--contact-stiffness and --contact-damping)")
+        # e = 1: no damping, which Bullet's implicit contact cannot give (it always damps)
+        check_range("--restitution", restitution, low=0.0, high=1.0, low_open=True,
+                    high_open=True)
+        check_range("--touch-duration", touch_duration, low=TOUCH_DURATION_RANGE[0],
+                    high=TOUCH_DURATION_RANGE[1], unit="s")
+        zeta = damping_ratio_for_restitution(restitution)
+        omega = release_time(zeta) / touch_duration
+        k = mu * omega * omega
+        c = 2.0 * zeta * math.sqrt(k * mu)
+    else:
+        restitution, touch_duration, k, c, zeta = _law_from_stiffness(
+            mu, contact_stiffness, contact_damping)
+    return {"restitution": float(restitution), "touch_duration": float(touch_duration),
+            "contact_stiffness": k, "contact_damping": c, "damping_ratio": zeta,
+            "contact_duration": math.pi * math.sqrt(mu / k)}
+
+
+def check_dt(dt, law: dict) -> float:
+    """``dt`` (s) within what any engine can be asked: at most
+    :data:`MAX_STEPS_PER_COLLISION` steps in the target collision, at most its duration."""
+    if dt is None:
+        raise ParameterError("--dt: required, the engines' time step in s")
+    low = law["touch_duration"] / MAX_STEPS_PER_COLLISION
+    return check_range("--dt", dt, low=low, high=law["touch_duration"], unit="s")
+
+
+def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitution=None,
+                     touch_duration=None, contact_stiffness=None, contact_damping=None,
+                     dt=None, engines=ENGINES) -> dict:
+    """Everything ``treeimpact contact`` prints (its JSON): ``inputs``, ``target``
+    (:func:`target_law`) and, for each of ``engines`` ("mujoco", "bullet"), its settings
+    and simulated collisions or ``{"error", "largest_dt"}`` when it cannot hold ``dt``.
+    Arguments are SI (kg, s, N/m, N s/m). Raises ParameterError for bad input."""
+    from treeimpact.compare.backends import quiet_stdout
+
+    m1, m2 = masses(mass, other_mass, effective_mass)
+    mu = m1 if math.isinf(m2) else m1 * m2 / (m1 + m2)
+    law = target_law(mu, restitution=restitution, touch_duration=touch_duration,
+                     contact_stiffness=contact_stiffness, contact_damping=contact_damping)
+    dt = check_dt(dt, law)
+    out = {"inputs": {"mass": m1, "other_mass": m2, "effective_mass": mu, "dt": dt,
+                      "approach_speed": SPEED},
+           "target": law}
+    with quiet_stdout():  # PyBullet prints on import; --json keeps stdout for JSON
+        for engine in engines:
+            out[engine] = ENGINE_SETTINGS[engine](law, mu, m1, m2, dt)
+    return out
+
+

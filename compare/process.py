@@ -1,0 +1,169 @@
+"""The command line's process policy, apart from the commands: how a command ends (its exit
+code and one line on stderr for every way it can end), the stop signals, the run budget it
+sets for itself and its workers, and Python warnings as one stderr line each.
+
+Exit codes: 0 success; 2 bad input; 3 a simulation diverged; 130 interrupted (Ctrl-C or
+SIGTERM).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import sys
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+
+from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
+
+EXIT_BAD_INPUT = 2
+EXIT_DIVERGED = 3
+#: Exit code of an interrupted command (Ctrl-C or SIGTERM): 128 + SIGINT, as a shell says.
+EXIT_INTERRUPTED = 130
+
+
+def _error(text: str) -> None:
+    print(f"treeimpact: {text}", file=sys.stderr)
+
+
+def run_command(command, args) -> int:
+    """``command(args)``'s exit code, with every way it can end as one line on stderr:
+    bad input (ParameterError, an unreadable path, too little memory) exit 2, a diverged
+    simulation exit 3, Ctrl-C or SIGTERM exit 130; output piped into ``head`` ends quietly."""
+    from .pool import STOP
+
+    try:
+        code = command(args)
+        if STOP.is_set() and code != EXIT_INTERRUPTED:  # asked after the last look
+            raise KeyboardInterrupt
+        return code
+    except KeyboardInterrupt:
+        _error("interrupted (Ctrl-C or SIGTERM); nothing more was written")
+        return EXIT_INTERRUPTED
+    except ParameterError as exc:
+        _error(f"error: {exc}")
+        return EXIT_BAD_INPUT
+    except SimulationDiverged as exc:
+        _error(f"simulation diverged: {exc}")
+        return EXIT_DIVERGED
+    except BrokenPipeError:  # output piped into head & co.
+        sys.stderr.close()
+        return 0
+    except MemoryError:
+        _error("error: the run needs more memory than this machine has: a shorter --t-end "
+               "or a softer contact")
+        return EXIT_BAD_INPUT
+    except ArithmeticError as exc:  # overflow or division by zero: no numbers to report
+        _error(f"simulation diverged: {type(exc).__name__} ({one_line(exc)})")
+        return EXIT_DIVERGED
+    except OSError as exc:  # a path that cannot be read or written
+        where = f" {exc.filename!r}" if exc.filename else ""
+        _error(f"error:{where} {exc.strerror or one_line(exc)}")
+        return EXIT_BAD_INPUT
+
+
+@contextmanager
+def stop_signals():
+    """Ctrl-C (SIGINT) and SIGTERM end the command alike: a stop request that a pool's loop
+    answers at its next look, or at once outside one (compare.pool.on_stop_signal); an
+    interrupt that lands where Python can only print it (a weakref callback, a __del__) is
+    delivered again, not lost (:func:`_unraisable`). Restored afterwards (main() may be
+    called from Python)."""
+    from .pool import STOP, on_stop_signal
+
+    STOP.clear()
+    previous = {s: signal.signal(s, on_stop_signal) for s in (signal.SIGTERM, signal.SIGINT)}
+    hook, sys.unraisablehook = sys.unraisablehook, _unraisable
+    try:
+        yield
+    finally:
+        sys.unraisablehook = hook
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+#: Seconds after which a lost interrupt is delivered again (the hook returns in microseconds).
+REDELIVER_AFTER_S = 0.02
+
+
+def _unraisable(info) -> None:
+    """``sys.unraisablehook`` while a command runs: a KeyboardInterrupt that Python could not
+    raise (it landed in a callback) is the stop request it was: STOP set and the interrupt
+    delivered again to the main thread, from a helper thread once this hook has returned
+    (delivered now, it would land in this hook and be lost again); anything else is one
+    warning line."""
+    import _thread
+    import threading
+    import time
+
+    from .pool import STOP
+
+    if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
+        STOP.set()
+
+        def again():
+            time.sleep(REDELIVER_AFTER_S)
+            _thread.interrupt_main(signal.SIGINT)
+
+        threading.Thread(target=again, daemon=True).start()
+        return
+    _error(f"warning: ignored {info.exc_type.__name__} ({one_line(info.exc_value)})"
+           if info.exc_value is not None else "warning: an ignored exception")
+
+
+@contextmanager
+def command_environment(max_seconds):
+    """For one command: ``--max-seconds`` (s) as TREEIMPACT_MAX_SECONDS (its workers inherit
+    it), long runs' progress on stderr and Python warnings as one line each; everything
+    restored afterwards. A ``max_seconds`` that is not a finite positive number is refused
+    (ParameterError naming --max-seconds)."""
+    restore = install_budget(max_seconds)
+    try:
+        yield
+    finally:
+        restore_budget(restore)
+
+
+def install_budget(max_seconds) -> dict:
+    """Set the command's budget, progress reporter and one-line warnings; returns what
+    :func:`restore_budget` puts back."""
+    from treeimpact.analytic import budget
+
+    from .progress import Progress
+
+    name = budget.VARIABLES["seconds"]
+    restore = {"environment": (name, os.environ.get(name)), "reporter": budget._REPORTER,
+               "showwarning": warnings.showwarning}
+    if max_seconds is not None and not (math.isfinite(max_seconds) and max_seconds > 0):
+        raise ParameterError(f"--max-seconds = {max_seconds!r} s is out of range: allowed "
+                             "(0, inf) s")
+    warnings.showwarning = one_line_warning
+    if max_seconds is not None:
+        os.environ[name] = repr(float(max_seconds))
+    budget.set_progress_reporter(lambda desc, total: Progress(total, desc, unit="step"))
+    return restore
+
+
+def restore_budget(restore: dict) -> None:
+    """Undo :func:`install_budget` (``restore``: what it returned)."""
+    from treeimpact.analytic import budget
+
+    if not restore:
+        return
+    warnings.showwarning = restore["showwarning"]
+    name, value = restore["environment"]
+    if value is None:
+        os.environ.pop(name, None)
+    else:
+        os.environ[name] = value
+    budget.set_progress_reporter(restore["reporter"])
+
+
+def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A Python warning (numpy's, an engine's) as one stderr line, not a source excerpt."""
+    text = " ".join(str(message).split())
+    where = f"{Path(filename).name}:{lineno}"
+    print(f"treeimpact: warning: {text} ({category.__name__}, {where})",
+          file=file if file is not None else sys.stderr)
