@@ -360,7 +360,8 @@ def cmd_report(args) -> int:
     if args.with_study:
         from .sweep.study_job import StudyJob
 
-        jobs.append(StudyJob(args.with_study, Path(args.out) / "study"))
+        jobs.append(StudyJob(args.with_study, Path(args.out) / "study",
+                             scenarios=args.scenarios))
     try:
         for job in jobs:
             job.start()
