@@ -109,7 +109,12 @@ def test_findings_are_flagged_in_the_page(report):
 
 
 def test_every_axis_has_a_unit(tmp_path):
-    from treeimpact.compare.report.scenario import ScenarioSection, identification_spec
+    """Every figure of a scenario's section and the answer's (the small-e curves, the
+    contact scan)."""
+    from treeimpact.compare.report.answer_figures import small_e_figure
+    from treeimpact.compare.report.figures import contact_scan_figure
+    from treeimpact.compare.report.scenario import ScenarioSection
+    from treeimpact.compare.small_e import small_e_answer, small_e_sweep
     from treeimpact.compare.sweep.run import run_sweeps
 
     figs = []
@@ -119,9 +124,14 @@ def test_every_axis_has_a_unit(tmp_path):
         return f"figures/{stem}.png"
 
     scen = load_scenario("central-leader")
-    (e_sweep,) = run_sweeps([identification_spec(scen, tmp_path)], workers=0)
+    (e_sweep,) = run_sweeps([small_e_sweep(scen, tmp_path)], workers=0)
     ScenarioSection.from_runs(scen, RunCache(), e_sweep.table, engines=(), figure_sink=keep)
-    assert len(figs) == 5
+    assert len(figs) == 4  # displacement, force, sequence, energy
+    figs.append(small_e_figure({scen.name: small_e_answer(scen, e_sweep.table)}, 0.05))
+    scan = {"durations": [5e-4, 1e-3], "gaps": {"x_max": [0.1, 0.02]}, "tolerance": 0.05,
+            "shortest": {"x_max": 1e-3}, "failed": [],
+            "contact": {"soft": {"first_contact_duration": [3e-4, 9e-4]}}}
+    figs.append(contact_scan_figure({scen.name: scan}, {scen.name: 5e-4}))
     unit = re.compile(r"\((ms|mm|kN|N s|m/s|J|%|1|s|m)\)")
     for fig in figs:
         for ax in fig.axes:
@@ -181,15 +191,15 @@ def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(
                                                                                run_cache):
     """The answer is the continuum (beam rung) against rung 1, the ladder's own numbers; it
     needs no engine (the fixture's engine does not exist); the engines' chains agree with it."""
-    from treeimpact.compare.report import _answer
+    from treeimpact.compare.report.answer import one_dof_answer
     from treeimpact.compare.report.scenario import ScenarioSection
 
     paths, _ = report
     data = json.loads(paths["json"].read_text())
-    (fixture,) = data["summary"]["answer"]
+    (fixture,) = data["answer"]["one_dof"]
     assert fixture["scenario"] == "open-center" and fixture["available"] is True
     section = ScenarioSection.from_runs(load_scenario("central-leader"), run_cache)
-    (answer,) = _answer([section])
+    (answer,) = one_dof_answer([section])
     x0 = section.ladder.rungs[0].values["x_max"]
     x_flex = section.ladder.value("beam", "x_max")
     assert answer["metrics"]["x_max"]["rel"] == pytest.approx(x_flex / x0 - 1.0, rel=1e-12)

@@ -108,6 +108,13 @@ def output_name(key: str) -> str:
     return _OUTPUT_LABELS.get(key, key)
 
 
+def deciding(output: dict, crossing: bool = False) -> str:
+    """The inputs that decide a sensitivity output, in words (compare.report.answer)."""
+    from .answer import deciding_text
+
+    return deciding_text(output, crossing)
+
+
 def interval(low, high, digits: int = 3) -> str:
     """A 95 % interval 'low to high' with as many significant digits (3 to 6) as it takes
     for its ends to differ: '109.93 to 110.05', not '110 to 110'."""
@@ -136,6 +143,7 @@ def environment() -> jinja2.Environment:
         _ENV.filters["tidy"] = tidy
         _ENV.filters["input_name"] = input_name
         _ENV.filters["output_name"] = output_name
+        _ENV.filters["deciding"] = deciding
         _ENV.globals["interval"] = interval
     return _ENV
 
