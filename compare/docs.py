@@ -348,12 +348,13 @@ def from_view(view: dict) -> dict:
 
 def from_small_e(trees: dict) -> dict:
     """The small-e answer (compare.small_e; report.json's answer.small_e): per approximation
-    and tree the largest e it holds up to (1), its error at e = 0 and at the tree's own e
-    (%), and their spans over the trees."""
+    and tree the largest e it holds up to (1, rounded down to 0.01 as the page prints it),
+    its error at e = 0 and at the tree's own e (%), and their spans over the trees."""
     out: dict = {}
     for tree, answers in trees.items():
         for name, a in answers.items():
-            out[f"small_e.{name}.holds_up_to_e.{tree}"] = _round(a["holds_up_to_e"])
+            out[f"small_e.{name}.holds_up_to_e.{tree}"] = _round(
+                math.floor(100.0 * a["holds_up_to_e"] + 1e-9) / 100.0)
             for key, v in (("error_at_zero_pct", a["error_at_zero"]),
                            ("error_at_e_pct", a["error_at_e"])):
                 if _finite(v):

@@ -170,23 +170,22 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
         first = next(iter(trees.values()))
         for name in first:
             answers = [t[name] for t in trees.values()]
-            label = first[name]["label"]
+            label = first[name]["label"].split(": ", 1)[-1]  # "1-DOF trunk: x_max" -> x_max
             zeros = [a["error_at_zero"] for a in answers]
             if all(a["bracket"] is None and a["holds_up_to_e"] == 0.0 for a in answers):
-                part = (f"{label} ({_range(zeros, _pct, '..')} % at e = 0)"
+                part = (f"{label} {_range(zeros, _pct, '..')} %"
                         if all(z is not None and math.isfinite(z) for z in zeros)
                         else f"{label} (no value at e = 0 for every tree)")
                 (trunk if first[name].get("model") == "continuum" else off).append(part)
             else:
                 ups = [math.floor(100 * a["holds_up_to_e"] + 1e-9) / 100 for a in answers]
-                held.append(f"{label} {_range(ups, lambda v: f'{v:.2f}')}")
-        text = (f"Small e: within {100 * tol:.0f} % of the exact result up to e = "
-                + ("; ".join(held) if held else "none holds at any e") + ".")
+                held.append(f"{_range(ups, lambda v: f'{v:.2f}')} for {label}")
+        text = (f"Small e: each consequence stays within {100 * tol:.0f} % of the exact result "
+                + ("up to e = " + ", ".join(held) if held else "at no e") + ".")
         if off:
-            text += (" Off already at e = 0, so not small-e effects: " + "; ".join(off)
-                     + ".")
+            text += (" Off already at e = 0, so not small-e effects: " + ", ".join(off) + ".")
         if trunk:
-            text += (" Nor is e what makes the 1-DOF trunk's gaps: " + "; ".join(trunk)
-                     + ".")
+            text += (" Nor does e make the 1-DOF trunk's gaps: " + ", ".join(trunk)
+                     + " already at e = 0.")
         out["small_e"] = text
     return out

@@ -63,16 +63,17 @@ PRESETS = {
         ladder=False, speed=False, backends=("analytic", "soft", "beam"),
         engine_grid=("contact_duration=5e-4,5e-3", "crown_ratio=0,4"),
         map_metrics=("x_max", "energy_delivered", "crown_peak_acceleration"),
-        map_value="step", identification=True, ident_crown_ratios=(0.0, 2.0, 4.0),
-        ident_sampling_seeds=(1,), sensitivity=30,
-        # the identification's cheap part, for make report's minute: no engine corner (the
-        # report fits both engines' chains of every tree: its record fits), three crown
-        # ratios, one sampling seed
+        map_value="step", identification=True, ident_crown_ratios=(0.0, 4.0),
+        ident_sampling_rungs=(), sensitivity=30,
+        # the identification's cheap part, for make report's minute and its CPU budget with
+        # the sensitivity study's 630 evaluations: no engine corner (the report fits both
+        # engines' chains of every tree: its record fits), the lightest and heaviest crown
+        # ratios, no sampling grid (the full preset's; docs/identification.md)
         expected="about 45 s with 2 workers beside make report's own runs (less alone): 8 "
                  "contact durations x 6 crown ratios on the analytic, soft and beam backends, "
-                 "the engines' chains on 2 x 2 of them, "
-                 "and the identification validation (4 e x 3 crown ratios x 3 rungs, "
-                 "1-20 kHz x 0.5-2 % noise on exact SDOF records, one seed)"),
+                 "the engines' chains on 2 x 2 of them, the identification validation "
+                 "(4 e x 2 crown ratios x 3 rungs) and the sensitivity study (30 Morris "
+                 "trajectories per tree, 210 evaluations)"),
     "full": Preset(
         "full", "central-leader", ("restitution=0:0.9:10", "segments=1,2,4,8,16,32",
                                    "crown_ratio=0:4:9"),
