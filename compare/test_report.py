@@ -543,3 +543,44 @@ def test_the_pooled_record_fits_are_each_rungs_own(report):
     here = fit_one(tasks[-1])  # one fit (0.5-1 s): the last, where an order slip shows
     for k, v in here["values"].items():
         assert fits[-1]["values"][k] == pytest.approx(v, rel=1e-9), k
+
+
+def test_the_answer_answers_both_halves_first(report):
+    """The first screen: a sentence per half, the 1-DOF table, then the small-e table and
+    figure, before the summary; report.json's answer.small_e.<tree>.<name> holds each
+    approximation's crossing, its error at the tree's e and its curve."""
+    from treeimpact.compare.small_e import APPROXIMATIONS, E_GRID
+
+    paths, _ = report
+    data = json.loads(paths["json"].read_text())
+    answer = data["answer"]
+    assert set(answer["in_short"]) == {"one_dof", "small_e"}
+    tree = answer["small_e"]["open-center"]
+    assert set(tree) == set(APPROXIMATIONS)
+    for a in tree.values():
+        assert {"holds_up_to_e", "error_at_e", "e_grid", "errors"} <= set(a)
+        assert a["e_grid"] == list(E_GRID) and len(a["errors"]) == len(E_GRID)
+        assert 0.0 <= a["holds_up_to_e"] <= E_GRID[-1]
+    assert answer["small_e_figure"] == "figures/small-e.png"
+    html = paths["html"].read_text()
+    order = [html.index(s) for s in (answer["in_short"]["small_e"][:40], 'id="answer-one-dof"',
+                                     'id="answer-small-e"', 'src="figures/small-e.png"',
+                                     'id="summary"')]
+    assert order == sorted(order)
+    md = paths["md"].read_text()
+    assert "Does \"e is small\" hold?" in md and "](figures/small-e.png)" in md
+
+
+def test_answer_cells_sort_by_their_own_number(report):
+    """Issue 34: an answer cell holds a percentage, two values and a band; the sorter reads
+    its data-sort (the gap), not every digit of its text as one number."""
+    paths, _ = report
+    html = paths["html"].read_text()
+    data = json.loads(paths["json"].read_text())
+    (row,) = data["answer"]["one_dof"]
+    cells = re.findall(r'<td class="[^"]*" data-sort="([^"]+)"><b>([^<]+)</b>', html)
+    assert len(cells) == len(row["metrics"])
+    for (sort, shown), m in zip(cells, row["metrics"].values()):
+        assert float(sort) == pytest.approx(m["rel"], rel=1e-12)
+        assert float(shown.replace("%", "")) == pytest.approx(100 * m["rel"], abs=0.5)
+    assert "td.dataset.sort" in html  # the sorter reads it

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..rungs import RungKind
 from ..verdicts import validity_tolerance
+from .base import deciding
 
 #: The quantities the answer leads with, what a harvester designer needs of the 1-DOF model:
 #: (metric, label, display scale, display unit). Whole-event metrics, robust to chattering.
@@ -76,35 +77,11 @@ def with_sensitivity(answer: list[dict], studies) -> None:
     trees = sens.get("trees", {})
     for row in answer:
         tree = trees.get(row["scenario"]) or {}
-        row["sensitivity"] = {k: {**v, "deciding_text": deciding_text(v)}
+        row["sensitivity"] = {k: {**v, "deciding_text": deciding(v)}
                               for k, v in (tree.get("outputs") or {}).items()}
         row["sensitivity_design"] = {k: tree.get(k) for k in ("trajectories", "evaluations",
                                                                "held", "conf_level")} \
             if tree else {}
-
-
-def deciding_text(output: dict, crossing: bool = False) -> str:
-    """Which inputs decide a sensitivity output, in words: one input with its mu* and
-    interval when its interval lies above every other's, else the inputs whose intervals
-    overlap its, 'not separable'. mu* of a gap in percentage points, of a crossing
-    (``crossing``) in decades of the duration."""
-    from .base import input_name
-
-    names = output.get("deciding") or []
-    if not names:
-        return "no input moves it"
-    idx = output["indices"]
-
-    def one(n):
-        if crossing:
-            return (f"{input_name(n)} (mu* {idx[n]['mu_star']:.2f} "
-                    f"+- {idx[n]['mu_star_conf']:.2f} decades)")
-        return (f"{input_name(n)} (mu* {100 * idx[n]['mu_star']:.0f} "
-                f"+- {100 * idx[n]['mu_star_conf']:.0f} points)")
-    if len(names) == 1:
-        return one(names[0])
-    return (", ".join(one(n) for n in names[:-1]) + f" or {one(names[-1])}: not separable "
-            "(their intervals overlap)")
 
 
 def small_e_rows(trees: dict) -> list[dict]:

@@ -109,10 +109,25 @@ def output_name(key: str) -> str:
 
 
 def deciding(output: dict, crossing: bool = False) -> str:
-    """The inputs that decide a sensitivity output, in words (compare.report.answer)."""
-    from .answer import deciding_text
+    """Which inputs decide a sensitivity output, in words: one input with its mu* and
+    interval when its interval lies above every other's, else the inputs whose intervals
+    overlap its, 'not separable'. mu* of a gap in percentage points, of a crossing
+    (``crossing``) in decades of the duration."""
+    names = output.get("deciding") or []
+    if not names:
+        return "no input moves it"
+    idx = output["indices"]
 
-    return deciding_text(output, crossing)
+    def one(n):
+        if crossing:
+            return (f"{input_name(n)} (mu* {idx[n]['mu_star']:.2f} "
+                    f"+- {idx[n]['mu_star_conf']:.2f} decades)")
+        return (f"{input_name(n)} (mu* {100 * idx[n]['mu_star']:.0f} "
+                f"+- {100 * idx[n]['mu_star_conf']:.0f} points)")
+    if len(names) == 1:
+        return one(names[0])
+    return (", ".join(one(n) for n in names[:-1]) + f" or {one(names[-1])}: not separable "
+            "(their intervals overlap)")
 
 
 def interval(low, high, digits: int = 3) -> str:
