@@ -7,7 +7,7 @@ Each tree runs as one sweep over :data:`E_GRID` (the exact 1-DOF solver's run at
 the analysis :func:`errors_at_run` adding the paper's procedure on its record and the
 continuum trunk with the same pad); :func:`small_e_answer` reads the table and locates each
 first crossing of the tolerance by bisection to :data:`RESOLUTION`. Design notes and what
-each curve is checked against: docs/report.md ("The small-e answer"). SI units.
+each curve is checked against: docs/report.md ("The small-e curves"). SI units.
 """
 
 from __future__ import annotations
