@@ -7,7 +7,6 @@ import math
 
 import numpy as np
 import pytest
-
 from treeimpact.analytic.impact.ivp_reference import solve_ivp_impacts
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import two_body_model

@@ -155,7 +155,8 @@ def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):
 
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.model.scenario_toml import scenario_toml
-    from treeimpact.compare.sweep.study import run_sensitivity, write_study
+    from treeimpact.compare.sweep.sensitivity_study import run_sensitivity
+    from treeimpact.compare.sweep.study import write_study
 
     tree = replace(load_scenario("open-center"), name="my-tree")
     text = scenario_toml(tree).replace(
