@@ -128,7 +128,7 @@ def _rung_group(rung_id: str, kind: str, backend: str) -> str:
 def view_from_report(report: dict) -> dict:
     """The view of a report's JSON (``report.json`` of ``treeimpact report``)."""
     trees = {}
-    answer = {a["scenario"]: a for a in report["summary"].get("answer", []) if a.get("available")}
+    answer = {a["scenario"]: a for a in report["answer"]["one_dof"] if a.get("available")}
     for name, sc in report["scenarios"].items():
         rungs = {}
         for r in sc["rungs"]:
@@ -155,11 +155,12 @@ def view_from_ladders(ladders) -> dict:
     from types import SimpleNamespace
 
     from .mechanism import matched_loss_evidence
-    from .report import _answer
+    from .report.answer import one_dof_answer
     from .verdicts import relative_step
 
-    answers = {a["scenario"]: a for a in _answer([SimpleNamespace(ladder=L, fits=[])
-                                                  for L in ladders]) if a.get("available")}
+    answers = {a["scenario"]: a for a in one_dof_answer([SimpleNamespace(ladder=L, fits=[])
+                                                         for L in ladders])
+               if a.get("available")}
     trees = {}
     for L in ladders:
         rungs = {}
@@ -345,10 +346,45 @@ def from_view(view: dict) -> dict:
     return out
 
 
+def from_small_e(trees: dict) -> dict:
+    """The small-e answer (compare.small_e; report.json's answer.small_e): per approximation
+    and tree the largest e it holds up to (1, rounded down to 0.01 as the page prints it),
+    its error at e = 0 and at the tree's own e (%), and their spans over the trees."""
+    out: dict = {}
+    for tree, answers in trees.items():
+        for name, a in answers.items():
+            out[f"small_e.{name}.holds_up_to_e.{tree}"] = _round(
+                math.floor(100.0 * a["holds_up_to_e"] + 1e-9) / 100.0)
+            for key, v in (("error_at_zero_pct", a["error_at_zero"]),
+                           ("error_at_e_pct", a["error_at_e"])):
+                if _finite(v):
+                    out[f"small_e.{name}.{key}.{tree}"] = _round(100.0 * v)
+    names = {k.split(".")[1] for k in out}
+    for name in names:
+        for key in ("holds_up_to_e", "error_at_zero_pct", "error_at_e_pct"):
+            _put(out, f"small_e.{name}.{key}",
+                 _span([out.get(f"small_e.{name}.{key}.{t}") for t in trees]))
+    return out
+
+
+def small_e_now() -> dict:
+    """:func:`from_small_e` of the shipped trees computed now (compare.small_e, in this
+    process: a few seconds)."""
+    from .small_e import small_e_answer, small_e_table
+
+    return from_small_e({t: small_e_answer(_scenario(t), small_e_table(t)) for t in TREES})
+
+
+def _scenario(name: str):
+    from treeimpact.analytic.model.scenario import load_scenario
+
+    return load_scenario(name)
+
+
 def from_sensitivity(report: dict) -> dict:
     """The answer's ranges over the unmeasured inputs (the study's Morris screening)."""
     out: dict = {}
-    for a in report["summary"].get("answer", []):
+    for a in report["answer"]["one_dof"]:
         for key, sv in (a.get("sensitivity") or {}).items():
             name = key.split(".", 1)[1]
             out[f"sensitivity_pct.{name}.{a['scenario']}"] = _round(
@@ -778,7 +814,8 @@ def procedure_on_noisy_records() -> dict:
 def cheap_numbers() -> dict:
     """The part of docs/numbers.json a test reruns (a few seconds)."""
     out = (from_view(view_from_ladders(cheap_ladders())) | shipped() | beam_studies()
-           | contact_command() | contact_default_step() | procedure_on_noisy_records())
+           | contact_command() | contact_default_step() | procedure_on_noisy_records()
+           | small_e_now())
     if CONTACT_FIT.exists():
         out |= at_fitted_contact(json.loads(CONTACT_FIT.read_text()))
     return out
@@ -791,7 +828,8 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
     from .provenance import code_version, environment
 
     report = json.loads((Path(report_dir) / "report.json").read_text())
-    out = from_view(view_from_report(report)) | from_sensitivity(report)
+    out = (from_view(view_from_report(report)) | from_sensitivity(report)
+           | from_small_e(report["answer"]["small_e"]))
     study = Path(report_dir) / "study" / "study.json"
     if study.exists():
         out |= from_study(json.loads(study.read_text()))
@@ -813,7 +851,8 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
 
 
 #: The report's figures the pages show, copied with the numbers: page path -> report path.
-FIGURES = {"docs/img/contact-scan.png": "figures/contact-scan.png"}
+FIGURES = {"docs/img/contact-scan.png": "figures/contact-scan.png",
+           "docs/img/small-e.png": "figures/small-e.png"}
 
 
 def copy_figures(report_dir: Path, report: dict) -> dict:

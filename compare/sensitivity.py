@@ -1,11 +1,12 @@
-"""The answer with error bars: a global sensitivity study (Morris elementary effects, SALib)
-of every cell of the report's answer table and of the crossing durations, over the inputs
-nobody measured. Each tree keeps its measured M_T, K_T and C_T (Table 1); what varies is
-how the continuum carries them (clamp mass, wood density, root compliance, shear) and the
-pad (its stiffness, as its 1-DOF collision time, and e). Runs on the sweep machinery: one
-sweep per tree whose points are the Morris design (``input.*`` axes), the analysis
-:func:`answer_under` running the 1-DOF models and the continuum at each point. Design notes:
-docs/sensitivity.md. SI units.
+"""The answer with error bars: a global sensitivity study (Morris elementary effects, SALib,
+with the bootstrap intervals of mu*) of every cell of the report's answer table and of the
+crossing durations, over the inputs nobody measured. Each tree keeps its measured M_T, K_T
+and C_T (Table 1); what varies is how the continuum carries them (clamp mass, wood density,
+root compliance, shear) and the pad (its stiffness, as its 1-DOF collision time, and e);
+inputs a scenario file lists as measured (``[calibration] measured``) are held at its
+values. Runs on the sweep machinery: one sweep per tree whose points are the Morris design
+(``input.*`` axes), the analysis :func:`answer_under` running the 1-DOF models and the
+continuum at each point. Design notes: docs/sensitivity.md. SI units.
 """
 
 from __future__ import annotations
@@ -19,23 +20,27 @@ import numpy as np
 
 #: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it).
 INPUTS = {
-    "clamp_mass": (1.0, 16.0, "kg", "the harvester's clamp: not weighed (the shipped 4 kg "
-                   "chosen)", "weigh the clamp and the trunk section it grips"),
-    "e_over_g": (0.0, 20.0, "1", "E / G of the trunk: 0 is the paper's Euler-Bernoulli "
-                 "beam; green hardwood 10-20 (Wood Handbook)", "a static push test at two "
-                 "heights, or the shear modulus of a core sample"),
-    "log10_pad_duration": (math.log10(2e-4), math.log10(2e-2), "log10 s", "the pad's "
-                           "stiffness as its 1-DOF collision time: a hard impactor (0.2 ms) "
-                           "to a padded one (20 ms)", "the contact force of one strike (a "
-                           "load cell at the pad)"),
+    "clamp_mass": (1.0, 16.0, "kg",
+                   "the harvester's clamp: not weighed (the shipped 4 kg chosen)",
+                   "weigh the clamp and the trunk section it grips"),
+    "e_over_g": (0.0, 20.0, "1",
+                 ("E / G of the trunk: 0 is the paper's Euler-Bernoulli beam; green hardwood "
+                  "10-20 (Wood Handbook)"),
+                 "a static push test at two heights, or the shear modulus of a core sample"),
+    "log10_pad_duration": (math.log10(2e-4), math.log10(2e-2), "log10 s",
+                           ("the pad's stiffness as its 1-DOF collision time: a hard impactor "
+                            "(0.2 ms) to a padded one (20 ms)"),
+                           "the contact force of one strike (a load cell at the pad)"),
     "restitution": (0.05, 0.5, "1", "the pad's e: not measured (the paper: small)",
                     "the pendulum's rebound off a rigid stop (a drop test of the pad)"),
-    "root_share": (0.0, 0.9, "1", "the root's share of the static flexibility at the clamp: "
-                   "0 reads Table 1's K_T by eq 47 (a rigid clamp, E 8.9e8 / 1.3e9 Pa), 0.9 "
-                   "the printed E (8.9e9 / 12.6e9 Pa) with a compliant root", "a static "
-                   "push test measuring the root's rotation"),
-    "density": (500.0, 1100.0, "kg/m^3", "green wood: the trunk's share of M_T (the crown "
-                "mass follows from the measured M_T)", "weigh a trunk section"),
+    "root_share": (0.0, 0.9, "1",
+                   ("the root's share of the static flexibility at the clamp: 0 reads Table "
+                    "1's K_T by eq 47 (a rigid clamp, E 8.9e8 / 1.3e9 Pa), 0.9 the printed E "
+                    "(8.9e9 / 12.6e9 Pa) with a compliant root"),
+                   "a static push test measuring the root's rotation"),
+    "density": (500.0, 1100.0, "kg/m^3",
+                ("green wood: the trunk's share of M_T (the crown mass follows from the "
+                 "measured M_T)"), "weigh a trunk section"),
 }
 #: The outputs: the answer table's cells (continuum vs 1-DOF, relative) and the crossing
 #: durations (s) from which the 1-DOF model stays within the validity tolerance.
@@ -45,14 +50,60 @@ OUTPUTS = tuple(f"gap.{m}" for m in ANSWER) + tuple(f"crossing.{m}" for m in CRO
 #: The Morris design: grid levels and the seed of its trajectories.
 LEVELS = 4
 SEED = 20261125
+#: The bootstrap of mu*'s confidence interval (SALib's ``mu_star_conf``): resamples and level.
+RESAMPLES = 1000
+CONF_LEVEL = 0.95
 #: The pads the crossing durations are read on (s, log-spaced over the contact scan's range).
 DURATIONS = tuple(float(d) for d in np.geomspace(2e-4, 5e-2, 8))
+#: The scenario field that fixes each input when the file says it was measured
+#: (``[calibration] measured``, analytic.model.scenario.MEASURABLE).
+FIELDS = {"clamp_mass": ("trunk.clamp_mass",), "e_over_g": ("trunk.shear_modulus",),
+          "log10_pad_duration": ("contact.duration", "contact.stiffness"),
+          "restitution": ("contact.restitution",), "root_share": ("trunk.base_stiffness",),
+          "density": ("trunk.density",)}
 
 
-def problem() -> dict:
-    """The SALib problem: names and bounds of :data:`INPUTS`."""
-    return {"num_vars": len(INPUTS), "names": list(INPUTS),
-            "bounds": [[lo, hi] for lo, hi, *_ in INPUTS.values()]}
+def measured_inputs(scenario) -> tuple[str, ...]:
+    """The inputs of :data:`INPUTS` the scenario's file says were measured (held at the
+    file's values by the study)."""
+    from treeimpact.analytic.model.scenario import measured_fields
+
+    fields = set(measured_fields(scenario))
+    return tuple(n for n, f in FIELDS.items() if fields & set(f))
+
+
+def free_inputs(scenario=None) -> tuple[str, ...]:
+    """The inputs the study varies: :data:`INPUTS` less the scenario's measured ones."""
+    held = measured_inputs(scenario) if scenario is not None else ()
+    return tuple(n for n in INPUTS if n not in held)
+
+
+def inputs_of(scenario) -> dict:
+    """The scenario's own value of every input of :data:`INPUTS` (its units): E/G from the
+    shear modulus (0 without one), the pad's 1-DOF collision time from its stiffness when
+    the file gives that, the root's share of the static flexibility at the clamp from the
+    trunk's E I and the reduced K_T (eq 8)."""
+    from treeimpact.analytic.model.reduction import reduce_trunk
+    from treeimpact.analytic.model.two_body import two_body_model
+
+    t, c = scenario.trunk, scenario.contact
+    g = t.shear_modulus
+    duration = c.duration
+    if duration is None and c.stiffness is not None:
+        mu = two_body_model(scenario).reduced_mass
+        duration = math.pi / math.sqrt(c.stiffness / mu)  # s, the undamped 1-DOF collision
+    bending = t.clamp_height ** 3 / (3.0 * t.bending_stiffness)  # m/N
+    return {"clamp_mass": t.clamp_mass, "density": t.density, "restitution": c.restitution,
+            "e_over_g": t.youngs_modulus / g if g is not None and math.isfinite(g) else 0.0,
+            "log10_pad_duration": math.log10(duration) if duration else math.nan,
+            "root_share": 1.0 - bending * reduce_trunk(t).stiffness}
+
+
+def problem(names=None) -> dict:
+    """The SALib problem: names and bounds of :data:`INPUTS` (only ``names`` when given)."""
+    names = list(INPUTS) if names is None else list(names)
+    return {"num_vars": len(names), "names": names,
+            "bounds": [list(INPUTS[n][:2]) for n in names]}
 
 
 def vary(scenario, p: dict):
@@ -103,8 +154,9 @@ def _answer(scen, theory: str) -> dict:
 
 def answer_under(result, scenario, params: dict) -> dict:
     """The sweep analysis of the cheap study: at the inputs ``params`` (``input.*`` axes;
-    the run's own result is the base tree's, unused) the answer table's gaps."""
-    return _answer(*vary(scenario, params))
+    the measured ones at the scenario's own values; the run's own result is the base
+    tree's, unused) the answer table's gaps."""
+    return _answer(*vary(scenario, inputs_of(scenario) | dict(params)))
 
 
 answer_under.columns = tuple(f"gap.{m}" for m in ANSWER)
@@ -120,7 +172,7 @@ def answer_and_crossings(result, scenario, params: dict) -> dict:
     from .contact_scan import shortest_within
     from .verdicts import validity_tolerance
 
-    scen, theory = vary(scenario, params)
+    scen, theory = vary(scenario, inputs_of(scenario) | dict(params))
     out = _answer(scen, theory)
     gaps = {m: [] for m in CROSSING}
     for d in DURATIONS:
@@ -140,43 +192,96 @@ ANALYSES = {False: "treeimpact.compare.sensitivity:answer_under",
             True: "treeimpact.compare.sensitivity:answer_and_crossings"}
 
 
-def design(trajectories: int, seed: int = SEED) -> np.ndarray:
-    """The Morris design: ``trajectories`` x (inputs + 1) points over :data:`INPUTS`."""
+def design(trajectories: int, seed: int = SEED, names=None) -> np.ndarray:
+    """The Morris design: ``trajectories`` x (inputs + 1) points over :data:`INPUTS` (only
+    ``names`` when given), trajectory after trajectory."""
     from SALib.sample import morris
 
-    return morris.sample(problem(), trajectories, num_levels=LEVELS, seed=seed)
+    return morris.sample(problem(names), trajectories, num_levels=LEVELS, seed=seed)
 
 
 def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
                       crossings: bool = False):
     """The study of one tree as a sweep (:class:`compare.sweep.run.SweepSpec`) into ``out``:
-    the Morris design as ``input.*`` axes, :func:`answer_under` (with ``crossings``,
-    :func:`answer_and_crossings`) at each point."""
+    the Morris design over its free inputs (:func:`free_inputs`) as ``input.*`` axes,
+    :func:`answer_under` (with ``crossings``, :func:`answer_and_crossings`) at each point."""
+    from .runs import resolve_scenario
     from .sweep.grid import Design
     from .sweep.run import SweepSpec
 
-    X = design(trajectories, seed)
-    return SweepSpec(scenario, Design.of([f"input.{n}" for n in INPUTS],
-                                         [tuple(float(v) for v in row) for row in X]),
+    scen = resolve_scenario(scenario)
+    names = free_inputs(scen)
+    X = design(trajectories, seed, names)
+    return SweepSpec(scen, Design.of([f"input.{n}" for n in names],
+                                     [tuple(float(v) for v in row) for row in X]),
                      Path(out), ("analytic",), identify=False, analysis=ANALYSES[crossings])
 
 
-def analyse(table, trajectories: int, seed: int = SEED) -> dict:
-    """Per output: its range over the design, the Morris mu* (mean |elementary effect|,
-    in the output's units) and sigma of each input, the dominant input and the measurement
-    that would settle it. Crossing durations enter as log10 s, 'never' as twice the longest
-    duration scanned (a censored value: the ranking holds, the mu* of a crossing that
-    leaves the range is a lower bound)."""
+def _morris(names, X, y) -> dict:
+    """SALib's Morris analysis of ``y`` on the design ``X``: per input its mu, mu_star,
+    sigma and mu_star_conf (SALib's keys; the interval's half-width at CONF_LEVEL from
+    RESAMPLES bootstrap resamples, seeded)."""
     from SALib.analyze import morris
 
-    X = design(trajectories, seed)
-    rows = {tuple(round(float(r[f"input.{n}"]), 12) for n in INPUTS): r
+    with warnings.catch_warnings():  # one trajectory: sigma is undefined (NaN), fine
+        warnings.simplefilter("ignore", RuntimeWarning)
+        res = morris.analyze(problem(names), X, y, num_levels=LEVELS,
+                             num_resamples=RESAMPLES, conf_level=CONF_LEVEL, seed=SEED)
+    return {n: {k: float(res[k][i]) for k in ("mu", "mu_star", "sigma", "mu_star_conf")}
+            for i, n in enumerate(names)}
+
+
+def deciding(indices: dict) -> tuple[list[str], bool]:
+    """(the inputs that decide an output, whether one is separated): the input of the
+    largest mu* alone when its interval (mu* -+ mu_star_conf) lies above every other's,
+    else it and every input whose interval reaches into its; [] when nothing moves it."""
+    ranked = sorted(indices, key=lambda n: -indices[n]["mu_star"])
+    top = indices[ranked[0]] if ranked else None
+    if top is None or not top["mu_star"] > 0:
+        return [], False
+    floor = top["mu_star"] - top["mu_star_conf"]
+    tied = [n for n in ranked[1:]
+            if indices[n]["mu_star"] + indices[n]["mu_star_conf"] >= floor]
+    return [ranked[0], *tied], not tied
+
+
+def _convergence(names, X, y, full: dict) -> dict | None:
+    """mu* from the design's first half of trajectories against all of them (N/2 vs N):
+    the largest change as a share of the largest mu*, and whether the deciding inputs are
+    the same; None with fewer than 4 trajectories."""
+    per = len(names) + 1
+    r = len(X) // per
+    if r < 4:
+        return None
+    half = (r // 2) * per
+    part = _morris(names, X[:half], y[:half])
+    scale = max(v["mu_star"] for v in full.values()) or 1.0
+    change = max(abs(part[n]["mu_star"] - full[n]["mu_star"]) for n in names) / scale
+    return {"trajectories": [r // 2, r], "mu_star_half": {n: part[n]["mu_star"] for n in names},
+            "max_change": change, "same_deciding": deciding(part)[0] == deciding(full)[0]}
+
+
+def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
+            held: dict | None = None) -> dict:
+    """Per output: its range over the design's evaluations (min and max over the stated
+    input ranges; not a probability interval), the Morris indices of each input with SALib's
+    keys (mu* in the output's units, its 95 % interval mu_star_conf), the inputs that decide
+    it (:func:`deciding`), the measurements that would settle them and the N/2 convergence
+    check. ``names``: the design's inputs (default all); ``held``: the measured ones, at
+    their values. Crossing durations enter as log10 s, 'never' as twice the longest
+    duration scanned (a censored value: the ranking holds, the mu* of a crossing that
+    leaves the range is a lower bound)."""
+    names = list(INPUTS) if names is None else list(names)
+    X = design(trajectories, seed, names)
+    rows = {tuple(round(float(r[f"input.{n}"]), 12) for n in names): r
             for r in table.to_dict("records")}
     ok = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
     failed = [r for r in ok if r is None or r.get("status") != "ok"]
     out = {"inputs": {n: {"low": v[0], "high": v[1], "unit": v[2], "why": v[3],
-                          "settle": v[4]} for n, v in INPUTS.items()},
-           "points": len(X), "failed": len(failed), "outputs": {}}
+                          "settle": v[4]} for n, v in INPUTS.items() if n in names},
+           "held": dict(held or {}), "trajectories": trajectories, "points": len(X),
+           "evaluations": len(X), "failed": len(failed), "conf_level": CONF_LEVEL,
+           "num_resamples": RESAMPLES, "outputs": {}}
     if failed:
         out["errors"] = sorted({str(r.get("error")) for r in failed if r is not None})[:5]
         return out
@@ -184,15 +289,13 @@ def analyse(table, trajectories: int, seed: int = SEED) -> dict:
         y = np.array([float(r[name]) for r in ok])
         if name.startswith("crossing."):
             y = np.log10(np.where(np.isfinite(y), y, 2.0 * DURATIONS[-1]))
-        with warnings.catch_warnings():  # one trajectory: sigma is undefined (NaN), fine
-            warnings.simplefilter("ignore", RuntimeWarning)
-            res = morris.analyze(problem(), X, y, num_levels=LEVELS)
-        mu = dict(zip(INPUTS, (float(v) for v in res["mu_star"])))
-        dominant = max(mu, key=mu.get)
+        indices = _morris(names, X, y)
+        decide, separated = deciding(indices)
         out["outputs"][name] = {
-            "low": float(np.min(y)), "high": float(np.max(y)),
+            "low": float(np.min(y)), "high": float(np.max(y)), "evaluations": int(y.size),
             "never": int(np.sum(y >= math.log10(2.0 * DURATIONS[-1]) - 1e-12))
             if name.startswith("crossing.") else 0,
-            "mu_star": mu, "sigma": dict(zip(INPUTS, (float(v) for v in res["sigma"]))),
-            "dominant": dominant, "settle": INPUTS[dominant][4]}
+            "indices": indices, "deciding": decide, "separated": separated,
+            "settle": [INPUTS[n][4] for n in decide],
+            "convergence": _convergence(names, X, y, indices)}
     return out

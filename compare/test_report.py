@@ -109,7 +109,12 @@ def test_findings_are_flagged_in_the_page(report):
 
 
 def test_every_axis_has_a_unit(tmp_path):
-    from treeimpact.compare.report.scenario import ScenarioSection, identification_spec
+    """Every figure of a scenario's section and the answer's (the small-e curves, the
+    contact scan)."""
+    from treeimpact.compare.report.answer_figures import small_e_figure
+    from treeimpact.compare.report.figures import contact_scan_figure
+    from treeimpact.compare.report.scenario import ScenarioSection
+    from treeimpact.compare.small_e import small_e_answer, small_e_sweep
     from treeimpact.compare.sweep.run import run_sweeps
 
     figs = []
@@ -119,9 +124,14 @@ def test_every_axis_has_a_unit(tmp_path):
         return f"figures/{stem}.png"
 
     scen = load_scenario("central-leader")
-    (e_sweep,) = run_sweeps([identification_spec(scen, tmp_path)], workers=0)
+    (e_sweep,) = run_sweeps([small_e_sweep(scen, tmp_path)], workers=0)
     ScenarioSection.from_runs(scen, RunCache(), e_sweep.table, engines=(), figure_sink=keep)
-    assert len(figs) == 5
+    assert len(figs) == 4  # displacement, force, sequence, energy
+    figs.append(small_e_figure({scen.name: small_e_answer(scen, e_sweep.table)}, 0.05))
+    scan = {"durations": [5e-4, 1e-3], "gaps": {"x_max": [0.1, 0.02]}, "tolerance": 0.05,
+            "shortest": {"x_max": 1e-3}, "failed": [],
+            "contact": {"soft": {"first_contact_duration": [3e-4, 9e-4]}}}
+    figs.append(contact_scan_figure({scen.name: scan}, {scen.name: 5e-4}))
     unit = re.compile(r"\((ms|mm|kN|N s|m/s|J|%|1|s|m)\)")
     for fig in figs:
         for ax in fig.axes:
@@ -181,15 +191,15 @@ def test_the_answer_leads_with_whole_event_metrics_and_whether_the_fit_explains(
                                                                                run_cache):
     """The answer is the continuum (beam rung) against rung 1, the ladder's own numbers; it
     needs no engine (the fixture's engine does not exist); the engines' chains agree with it."""
-    from treeimpact.compare.report import _answer
+    from treeimpact.compare.report.answer import one_dof_answer
     from treeimpact.compare.report.scenario import ScenarioSection
 
     paths, _ = report
     data = json.loads(paths["json"].read_text())
-    (fixture,) = data["summary"]["answer"]
+    (fixture,) = data["answer"]["one_dof"]
     assert fixture["scenario"] == "open-center" and fixture["available"] is True
     section = ScenarioSection.from_runs(load_scenario("central-leader"), run_cache)
-    (answer,) = _answer([section])
+    (answer,) = one_dof_answer([section])
     x0 = section.ladder.rungs[0].values["x_max"]
     x_flex = section.ladder.value("beam", "x_max")
     assert answer["metrics"]["x_max"]["rel"] == pytest.approx(x_flex / x0 - 1.0, rel=1e-12)
@@ -533,3 +543,44 @@ def test_the_pooled_record_fits_are_each_rungs_own(report):
     here = fit_one(tasks[-1])  # one fit (0.5-1 s): the last, where an order slip shows
     for k, v in here["values"].items():
         assert fits[-1]["values"][k] == pytest.approx(v, rel=1e-9), k
+
+
+def test_the_answer_answers_both_halves_first(report):
+    """The first screen: a sentence per half, the 1-DOF table, then the small-e table and
+    figure, before the summary; report.json's answer.small_e.<tree>.<name> holds each
+    approximation's crossing, its error at the tree's e and its curve."""
+    from treeimpact.compare.small_e import APPROXIMATIONS, E_GRID
+
+    paths, _ = report
+    data = json.loads(paths["json"].read_text())
+    answer = data["answer"]
+    assert set(answer["in_short"]) == {"one_dof", "small_e"}
+    tree = answer["small_e"]["open-center"]
+    assert set(tree) == set(APPROXIMATIONS)
+    for a in tree.values():
+        assert {"holds_up_to_e", "error_at_e", "e_grid", "errors"} <= set(a)
+        assert a["e_grid"] == list(E_GRID) and len(a["errors"]) == len(E_GRID)
+        assert 0.0 <= a["holds_up_to_e"] <= E_GRID[-1]
+    assert answer["small_e_figure"] == "figures/small-e.png"
+    html = paths["html"].read_text()
+    order = [html.index(s) for s in (answer["in_short"]["small_e"][:40], 'id="answer-one-dof"',
+                                     'id="answer-small-e"', 'src="figures/small-e.png"',
+                                     'id="summary"')]
+    assert order == sorted(order)
+    md = paths["md"].read_text()
+    assert "Does \"e is small\" hold?" in md and "](figures/small-e.png)" in md
+
+
+def test_answer_cells_sort_by_their_own_number(report):
+    """Issue 34: an answer cell holds a percentage, two values and a band; the sorter reads
+    its data-sort (the gap), not every digit of its text as one number."""
+    paths, _ = report
+    html = paths["html"].read_text()
+    data = json.loads(paths["json"].read_text())
+    (row,) = data["answer"]["one_dof"]
+    cells = re.findall(r'<td class="[^"]*" data-sort="([^"]+)"><b>([^<]+)</b>', html)
+    assert len(cells) == len(row["metrics"])
+    for (sort, shown), m in zip(cells, row["metrics"].values()):
+        assert float(sort) == pytest.approx(m["rel"], rel=1e-12)
+        assert float(shown.replace("%", "")) == pytest.approx(100 * m["rel"], abs=0.5)
+    assert "td.dataset.sort" in html  # the sorter reads it

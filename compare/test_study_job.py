@@ -123,3 +123,56 @@ def _alive_in_group(pgid: int) -> list[str]:
         if int(fields[2]) == pgid and fields[0] != "Z":
             alive.append(f"{stat.parent.name} {text.split(' ', 2)[1]}")
     return alive
+
+
+def test_the_reports_trees_are_its_studys_sensitivity_trees(tmp_path):
+    """report --scenario ... --with-study: the study's sensitivity part runs on the report's
+    trees: a shipped name as it is, a file by its absolute path, a Scenario object written
+    into the study's own folder (it loads back equal)."""
+    from dataclasses import replace
+
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.analytic.model.scenario_toml import scenario_toml
+
+    tree = replace(load_scenario("open-center"), name="my-tree")
+    path = tmp_path / "my-tree.toml"
+    path.write_text(scenario_toml(tree))
+    other = replace(tree, name="other-tree")
+    job = StudyJob("default", tmp_path / "study", scenarios=["central-leader", str(path),
+                                                             other])
+    flags = [job.argv[i + 1] for i, a in enumerate(job.argv) if a == "--sensitivity-scenario"]
+    written = tmp_path / "study" / "scenarios" / "other-tree.toml"
+    assert flags == ["central-leader", str(path.resolve()), str(written.resolve())]
+    assert load_scenario(written) == other
+    assert "--sensitivity-scenario" not in StudyJob("default", tmp_path / "s2").argv
+
+
+def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):
+    """A researcher's tree file saying which inputs were measured ([calibration] measured):
+    the study's sensitivity part holds them, and the report's answer row for that tree
+    carries its own band (one Morris trajectory here: seconds, not the preset's 30)."""
+    from dataclasses import replace
+
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.analytic.model.scenario_toml import scenario_toml
+    from treeimpact.compare.sweep.sensitivity_study import run_sensitivity
+    from treeimpact.compare.sweep.study import write_study
+
+    tree = replace(load_scenario("open-center"), name="my-tree")
+    text = scenario_toml(tree).replace(
+        "[calibration]", '[calibration]\nmeasured = ["trunk.clamp_mass", "contact.restitution"]')
+    path = tmp_path / "my-tree.toml"
+    path.write_text(text)
+    study = tmp_path / "study"
+    sens = run_sensitivity(study, 1, scenarios=[str(path)], workers=0)
+    mine = sens["trees"]["my-tree"]
+    assert mine["held"] == {"clamp_mass": 4.0, "restitution": 0.1}
+    assert mine["evaluations"] == 5  # one trajectory over the four inputs left
+    write_study(study, {}, sensitivity=sens)
+    paths = write_report(tmp_path / "out", scenarios=[str(path)], study_dirs=[study],
+                         runs=RunCache(), engines=())
+    (row,) = json.loads(paths["json"].read_text())["answer"]["one_dof"]
+    assert row["scenario"] == "my-tree"
+    band = row["sensitivity"]["gap.x_max"]
+    assert band["evaluations"] == 5 and -1.0 < band["low"] < band["high"] < 10.0
+    assert "Held at the file's measured values: clamp mass 4" in paths["html"].read_text()

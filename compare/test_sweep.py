@@ -431,6 +431,20 @@ def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tm
     assert "](study/validity-soft-restitution-crown_ratio.png)" in text  # report.md shows it too
 
 
+def test_a_study_without_speed_curves_says_where_its_engine_runs_are(tmp_path, fake_engine):
+    """A study whose engine runs are on its validity maps and which draws no speed-accuracy
+    curves says so (not 'No engine in this study' above its engine runs)."""
+    from treeimpact.compare.sweep.study import write_study
+
+    res = run_sweep("central-leader", ["restitution=0.2,0.3"], tmp_path / "s",
+                    backends=["analytic", fake_engine], workers=0, progress=False)
+    paths = write_study(tmp_path / "study", {"validity": res.out})
+    for page in (paths["html"].read_text(), paths["md"].read_text()):
+        assert "No engine" not in page
+        assert "draws no speed-accuracy curves; its 2 fake runs are on the validity maps" \
+            in page
+
+
 def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_engine):
     from treeimpact.compare.sweep.run import _chunks, make_targets, plan
 
@@ -533,6 +547,8 @@ def test_treeimpact_sweep_writes_table_maps_and_study(tmp_path, capsys):
      ["--option 'foo=bar'", "has no option 'foo'", "allowed"]),
     (["--grid", "restitution=0.1", "--backend", "analytic,mujoco", "--option", "dt=-1"],
      ["--option 'dt=-1'", "allowed (0, 0.001] s"]),
+    (["--grid", "restitution=0.1", "--sensitivity-scenario", "open-center"],
+     ["--sensitivity-scenario", "used with --preset"]),
 ])
 def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
     from treeimpact.compare.cli import main

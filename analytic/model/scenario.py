@@ -10,7 +10,9 @@ Layout of a scenario file (SI units; angles in degrees where the key says ``_deg
     [impactor]    type = "pendulum": mass, equivalent_length, release_angle_deg, gravity?
                   type = "billet":   mass, impact_speed
     [contact]     restitution, stiffness? | duration?
-    [calibration] free text: which values are calibrated and from what (not used)
+    [calibration] free text: which values are calibrated and from what; and
+                  measured = ["trunk.clamp_mass", ...]: the fields of :data:`MEASURABLE`
+                  that were measured on this tree (a sensitivity study holds them)
 
 Any error is a :class:`~analytic.errors.ParameterError` whose one-line message names
 the field and the allowed range.
@@ -36,6 +38,13 @@ _PENDULUM_KEYS = {"type", "mass", "equivalent_length", "release_angle_deg", "gra
 _BILLET_KEYS = {"type", "mass", "impact_speed"}
 _CONTACT_KEYS = {"restitution", "stiffness", "duration"}
 _TOP_KEYS = {"name", "description", "t_end", "trunk", "impactor", "contact", "calibration"}
+
+#: The fields a sensitivity study varies over their plausible ranges unless the file's
+#: ``[calibration] measured`` list says they were measured on the tree
+#: (compare/sensitivity.py holds those at the file's values).
+MEASURABLE = ("trunk.clamp_mass", "trunk.density", "trunk.shear_modulus",
+              "trunk.base_stiffness", "contact.duration", "contact.stiffness",
+              "contact.restitution")
 
 
 #: The largest scenario file read (bytes): the shipped ones are about 2 kB.
@@ -130,6 +139,8 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
     notes = data.get("calibration", {})
     if not isinstance(notes, dict):
         raise ParameterError("calibration: expected a table [calibration] of notes")
+    if "measured" in notes:
+        _check_measured(notes["measured"], {"trunk": trunk_t, "contact": con_t})
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name:
         raise ParameterError("name: expected a non-empty string")
@@ -139,6 +150,29 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
     return Scenario(name=name, trunk=trunk, impactor=impactor, contact=contact,
                     description=str(data.get("description", "")),
                     notes=dict(notes), **kw)
+
+
+def _check_measured(measured, tables: dict) -> None:
+    """``[calibration] measured``: a list of :data:`MEASURABLE` fields, each given in the
+    file (a measured value is the file's value)."""
+    allowed = f"a list of {', '.join(repr(m) for m in MEASURABLE)}"
+    if not isinstance(measured, list) or not all(isinstance(m, str) for m in measured):
+        raise ParameterError(f"calibration.measured = {measured!r}: allowed {allowed}")
+    for m in measured:
+        if m not in MEASURABLE:
+            raise ParameterError(f"calibration.measured: {m!r} is not one of the inputs a "
+                                 f"sensitivity study varies; allowed {allowed}")
+        table, key = m.split(".")
+        if key not in tables[table]:
+            raise ParameterError(f"calibration.measured: {m!r} is measured but the file does "
+                                 f"not give {table}.{key}")
+    if len(set(measured)) != len(measured):
+        raise ParameterError(f"calibration.measured = {measured!r}: a field listed twice")
+
+
+def measured_fields(scenario: Scenario) -> tuple[str, ...]:
+    """The fields of :data:`MEASURABLE` the scenario's file says were measured."""
+    return tuple(scenario.notes.get("measured", ()))
 
 
 def load_scenario(source: str | Path) -> Scenario:

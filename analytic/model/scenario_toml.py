@@ -25,6 +25,8 @@ def _value(v) -> str:
 
 
 def _line(key, v, units: bool = True) -> str:
+    if isinstance(v, (list, tuple)):  # [calibration] measured: a list of field names
+        return f"{key} = [{', '.join(_value(str(x)) for x in v)}]"
     unit = _UNITS.get(key) if units else None
     return f"{key} = {_value(v)}" + (f"  # {unit}" if unit else "")
 
@@ -56,5 +58,6 @@ def scenario_toml(scenario: Scenario) -> str:
             lines.append(f'type = "{v}"' if key == "type" else _line(key, v))
     if scenario.notes:
         lines += ["", "[calibration]"]
-        lines += [_line(k, str(v), units=False) for k, v in scenario.notes.items()]
+        lines += [_line(k, v if isinstance(v, (list, tuple)) else str(v), units=False)
+                  for k, v in scenario.notes.items()]
     return "\n".join(lines) + "\n"

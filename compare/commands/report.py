@@ -48,7 +48,8 @@ def run(args) -> int:
     if args.with_study:
         from treeimpact.compare.sweep.study_job import StudyJob
 
-        jobs.append(StudyJob(args.with_study, Path(args.out) / "study"))
+        jobs.append(StudyJob(args.with_study, Path(args.out) / "study",
+                             scenarios=args.scenarios))
     try:
         for job in jobs:
             job.start()

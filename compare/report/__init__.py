@@ -29,13 +29,18 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-import numpy as np
-
 from treeimpact.analytic.results import to_jsonable
 
 from ..provenance import provenance, scenario_digest
-from ..rungs import RungKind
+from ..small_e import E_GRID, RESOLUTION
 from ..verdicts import Verdict, validity_tolerance
+from .answer import (
+    ANSWER_METRICS,
+    in_short,
+    one_dof_answer,
+    small_e_rows,
+    with_sensitivity,
+)
 
 __all__ = ["write_report", "build_sections"]
 
@@ -57,11 +62,13 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from ..pool import check_stop, process_map
     from ..progress import Progress
     from ..runs import RunCache, resolve_scenario
+    from ..small_e import small_e_answer, small_e_sweep
     from ..sweep.run import run_sweeps
+    from .answer_figures import small_e_figure
     from .figures import FigureFiles, contact_scan_figure
     from .paper import PaperSection
     from .runlog import RunsSection
-    from .scenario import ScenarioSection, identification_spec, identification_sweep
+    from .scenario import ScenarioSection, identification_sweep
     from .studies import StudySection
     from .trunks import TrunksSection
 
@@ -80,12 +87,17 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     t0 = time.perf_counter()  # the report's own sweeps, one pool: contact scans, e sweeps
     with _sweep_dir(out_dir) as folder:  # the tables are read before a temporary one goes
         specs = [scan_sweep(s, folder / f"contact-scan-{s.name}") for s in scens] + [
-            identification_spec(s, folder / f"identification-vs-e-{s.name}") for s in scens]
+            small_e_sweep(s, folder / f"small-e-{s.name}") for s in scens]
         done = run_sweeps(specs, progress=None if progress else False)  # a bar on a terminal only
     scans = {s.name: scan_result(r.table) for s, r in zip(scens, done)}
     e_tables = {s.name: r.table for s, r in zip(scens, done[len(scens):])}
-    scan_figure = sink(contact_scan_figure(scans), "contact-scan") if sink else None
-    wall["sweeps (contact scan, identification against e)"] = time.perf_counter() - t0
+    small_e = {s.name: small_e_answer(s, e_tables[s.name]) for s in scens}
+    shipped_pads = {s.name: s.contact.duration for s in scens}
+    scan_figure = sink(contact_scan_figure(scans, shipped_pads), "contact-scan") if sink \
+        else None
+    small_e_fig = sink(small_e_figure(small_e, validity_tolerance()), "small-e") if sink \
+        else None
+    wall["sweeps (contact scan, the small-e curves)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     paper = PaperSection()
     wall["paper"] = time.perf_counter() - t0
@@ -128,7 +140,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         wall["waiting for the studies"] = time.perf_counter() - t0
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "trunks": trunks, "studies": studies,
-            "runs": log, "contact": {"scans": scans, "figure": scan_figure}}
+            "runs": log, "contact": {"scans": scans, "figure": scan_figure},
+            "small_e": {"trees": small_e, "figure": small_e_fig}}
 
 
 @contextlib.contextmanager
@@ -165,11 +178,16 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
                *sections["studies"], sections["runs"]]
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     summary = _summary(sections["scenarios"])
-    summary["answer"] = _answer(sections["scenarios"])
-    _with_sensitivity(summary["answer"], sections["studies"])
+    summary["answer"] = one_dof_answer(sections["scenarios"])
+    with_sensitivity(summary["answer"], sections["studies"])
     summary["answer_metrics"] = ANSWER_METRICS
     summary["answer_tolerance"] = validity_tolerance()
     summary["contact"] = sections["contact"]
+    small_e = sections["small_e"]
+    summary["small_e"] = {**small_e, "rows": small_e_rows(small_e["trees"]),
+                          "step": E_GRID[1] - E_GRID[0], "e_max": E_GRID[-1],
+                          "resolution": RESOLUTION}
+    summary["in_short"] = in_short(summary["answer"], small_e["trees"])
     env = environment()
     paths = {}
     for fmt, name in (("html", "report.html"), ("md", "report.md")):
@@ -184,7 +202,11 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         "provenance": provenance(scenarios={s.ladder.name: scenario_digest(s.ladder.scenario)
                                             for s in sections["scenarios"]}),
         "tolerances": "compare/tolerances.toml",
-        "summary": summary,
+        "answer": {"tolerance": summary["answer_tolerance"], "in_short": summary["in_short"],
+                   "one_dof": summary["answer"], "small_e": small_e["trees"],
+                   "small_e_figure": small_e["figure"]},
+        "summary": {k: v for k, v in summary.items()
+                    if k not in ("answer", "small_e", "in_short", "answer_tolerance")},
         "paper": sections["paper"].to_json(),
         "scenarios": {s.ladder.name: s.to_json() for s in sections["scenarios"]},
         "trunks": sections["trunks"].to_json(),
@@ -194,70 +216,6 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     paths["json"] = out / "report.json"
     paths["json"].write_text(json.dumps(to_jsonable(data), indent=1), encoding="utf-8")
     return paths
-
-
-#: The quantities the answer leads with, what a harvester designer needs of the 1-DOF model:
-#: (metric, label, display scale, display unit). Whole-event metrics, robust to chattering.
-ANSWER_METRICS = (("x_max", "x_max", 1e3, "mm"),
-                  ("energy_delivered", "energy to tree", 1.0, "J"),
-                  ("crown_peak", "crown peak", 1e3, "mm"),
-                  ("crown_peak_acceleration", "crown accel.*", 1e-3, "km/s^2"),
-                  ("peak_force", "force*", 1e-3, "kN"))
-
-
-def _answer(scen_sections) -> list[dict]:
-    """Per scenario, the answer first: how far the paper's 1-DOF model is from the continuum
-    trunk (the beam rung, same pad; the engines' chains agree with it) on the
-    :data:`ANSWER_METRICS` at the scenario's contact, and whether the 1-DOF model explains
-    the continuum's record at all (the full-record fit). The 1-DOF value is the paper's
-    (Newton) model's, or the soft SDOF's with the same pad where Newton's impulses have none
-    (force, acceleration). Within compare.ladder.validity_tolerance it is good enough."""
-    tolerance = validity_tolerance()
-    out = []
-    for s in scen_sections:
-        L = s.ladder
-        chains = [r for r in L.rungs if r.rung.kind == RungKind.BEAM and r.ok]
-        ref = L.rungs[0]
-        soft = [r for r in L.rungs if r.rung.kind == RungKind.CONTACT and r.ok]
-        if not chains or not ref.ok:
-            out.append({"scenario": L.name, "available": False})
-            continue
-        rows = {}
-        for m, label, scale, unit in ANSWER_METRICS:
-            v0, source = ref.values.get(m, math.nan), ref.rung.id
-            if not math.isfinite(v0) and soft:
-                v0, source = soft[0].values.get(m, math.nan), soft[0].rung.id
-            v = float(np.mean([c.values.get(m, math.nan) for c in chains]))
-            rows[m] = {"one_dof": v0, "flexible": v, "label": label, "scale": scale,
-                       "unit": unit, "one_dof_rung": source,
-                       "rel": (v - v0) / abs(v0) if v0 and math.isfinite(v0) else math.nan}
-        fits = {f["rung"]: f for f in getattr(s, "fits", [])}
-        explained = [fits[c.rung.id]["explained"] for c in chains
-                     if c.rung.id in fits and "explained" in fits[c.rung.id]]
-        contact = L.scenario.contact
-        pads = {"one_dof": soft[0] if soft else None, "continuum": chains[0]}
-        out.append({"scenario": L.name, "available": True, "metrics": rows,
-                    "pad": {side: {"first_contact_duration": r.result.metrics.get(
-                        "first_contact_duration") if r else None,
-                        "damping_ratio": r.result.model.get("pad_damping_ratio") if r else None}
-                        for side, r in pads.items()},
-                    "good_enough": {m: abs(r["rel"]) <= tolerance
-                                    for m, r in rows.items()},
-                    "explained": bool(explained) and all(explained),
-                    "pad_loss": {"continuum": float(np.mean(
-                        [c.values.get("contact_dissipation", math.nan) for c in chains])),
-                        "one_dof": ref.values.get("contact_dissipation", math.nan)},
-                    "contact_duration": contact.duration, "restitution": contact.restitution})
-    return out
-
-
-def _with_sensitivity(answer: list[dict], studies) -> None:
-    """Each answer row with its cells' ranges over the unmeasured inputs and the input that
-    moves each most, from a study with a sensitivity part (compare.sensitivity)."""
-    trees = next((s.study["sensitivity"]["trees"] for s in studies
-                  if s.study and s.study.get("sensitivity")), {})
-    for row in answer:
-        row["sensitivity"] = (trees.get(row["scenario"]) or {}).get("outputs") or {}
 
 
 #: How many of the largest discrepancies the summary lists, whatever their verdict.

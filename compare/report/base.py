@@ -108,6 +108,28 @@ def output_name(key: str) -> str:
     return _OUTPUT_LABELS.get(key, key)
 
 
+def deciding(output: dict, crossing: bool = False) -> str:
+    """Which inputs decide a sensitivity output, in words: one input with its mu* and
+    interval when its interval lies above every other's, else the inputs whose intervals
+    overlap its, 'not separable'. mu* of a gap in percentage points, of a crossing
+    (``crossing``) in decades of the duration."""
+    names = output.get("deciding") or []
+    if not names:
+        return "no input moves it"
+    idx = output["indices"]
+
+    def one(n):
+        if crossing:
+            return (f"{input_name(n)} (mu* {idx[n]['mu_star']:.2f} "
+                    f"+- {idx[n]['mu_star_conf']:.2f} decades)")
+        return (f"{input_name(n)} (mu* {100 * idx[n]['mu_star']:.0f} "
+                f"+- {100 * idx[n]['mu_star_conf']:.0f} points)")
+    if len(names) == 1:
+        return one(names[0])
+    return (", ".join(one(n) for n in names[:-1]) + f" or {one(names[-1])}: not separable "
+            "(their intervals overlap)")
+
+
 def interval(low, high, digits: int = 3) -> str:
     """A 95 % interval 'low to high' with as many significant digits (3 to 6) as it takes
     for its ends to differ: '109.93 to 110.05', not '110 to 110'."""
@@ -136,6 +158,7 @@ def environment() -> jinja2.Environment:
         _ENV.filters["tidy"] = tidy
         _ENV.filters["input_name"] = input_name
         _ENV.filters["output_name"] = output_name
+        _ENV.filters["deciding"] = deciding
         _ENV.globals["interval"] = interval
     return _ENV
 

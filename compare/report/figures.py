@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import re
-import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -374,47 +373,11 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
     return fig
 
 
-#: The identification figure's series: parameter -> (marker style, colour).
-_IDENT_SERIES = (("M_T", "o-", "tab:blue"), ("K_T", "s-", "tab:orange"), ("xi", "^-", "tab:green"))
-
-
-def identification_figure(sweep: list[dict], name: str, tolerances: dict) -> Figure:
-    """Identification error (%) against e on exact records, each parameter with its
-    tolerance (dotted, +-, in its colour, named in the legend); an e without a value is
-    marked on the axis with why."""
-    fig, ax = plt.subplots(figsize=(9.4, 3.8), layout="constrained")
-    es = [s["restitution"] for s in sweep]
-    for key, mk, colour in _IDENT_SERIES:
-        ax.plot(es, [100 * s["errors"].get(key, math.nan) for s in sweep], mk, color=colour,
-                label=f"{key}")
-        tol = tolerances.get("identification", {}).get(key, {}).get("rel")
-        if tol:
-            for sign in (-1, 1):
-                ax.axhline(sign * 100 * tol, color=colour, lw=1.0, ls=":",
-                           label=f"{key} tolerance +-{100 * tol:.0f} %" if sign > 0 else None)
-    missing = [s for s in sweep if not s["errors"]]
-    for i, s in enumerate(missing):  # a vertical line, not a point: no value to place
-        ax.axvline(s["restitution"], color="#b00020", lw=1.4, ls=(0, (4, 3)),
-                   label="no value at this e:\n" + "\n".join(textwrap.wrap(
-                       "; ".join(sorted({_short_reason(m.get("reason")) for m in missing})),
-                       34)) if i == 0 else None)
-    ax.axhline(0, color="black", lw=0.8)
-    ax.set(title=f"{name}: identification (eqs 39-48, paper reading) on exact records vs e",
-           xlabel="coefficient of restitution e (1)", ylabel="error (identified - true) (%)")
-    _legend_right(ax)
-    return fig
-
-
-def _short_reason(reason) -> str:
-    """The last clause of a reason, for a legend: 'the fitted velocity must be > 0'."""
-    text = str(reason or "failed").strip()
-    return text.rsplit(": ", 1)[-1][:70]
-
-
-def contact_scan_figure(scans: dict) -> Figure:
+def contact_scan_figure(scans: dict, shipped: dict | None = None) -> Figure:
     """Per scenario, the continuum's gap to the 1-DOF model (%, beam vs soft SDOF, same pad)
     against the contact duration (ms, log), with the +-tolerance band: where the 1-DOF model
-    is good enough. Symmetric-log y so that +200 % and -3 % both read."""
+    is good enough; ``shipped``: the scenario's own pad ({name: duration in s}), marked.
+    Symmetric-log y so that +200 % and -3 % both read."""
     names = list(scans)
     fig, axes = plt.subplots(2, len(names), figsize=(4.2 * len(names) + 1.6, 6.2),
                              sharey="row", sharex=True, squeeze=False,
@@ -432,6 +395,13 @@ def contact_scan_figure(scans: dict) -> Figure:
             ax.plot(d, 100 * np.asarray(gaps, float), mk, color=colour, ms=4, label=label)
             if s["shortest"].get(metric) is not None:
                 ax.axvline(1e3 * s["shortest"][metric], color=colour, lw=0.8, ls=":")
+        own = (shipped or {}).get(name)
+        if own:
+            for a in (ax, axes[1][list(names).index(name)]):
+                a.axvline(1e3 * own, color="k", lw=1.6, alpha=0.55)
+            ax.annotate(f"this tree's\npad, {1e3 * own:g} ms", (1e3 * own, 0.0),
+                        xytext=(4, 0), textcoords="offset points", fontsize=8,
+                        va="center")
         ax.set_xscale("log")
         ax.set_yscale("symlog", linthresh=10)
         ticks = [-100, -30, -10, -5, 0, 5, 10, 30, 100, 300]
@@ -455,6 +425,6 @@ def contact_scan_figure(scans: dict) -> Figure:
     _legend_right(axes[0][-1])
     _legend_right(axes[1][-1])
     fig.suptitle(f"Where the 1-DOF model holds: grey band +-{tol:.0f} %, dotted lines the "
-                 "shortest pad from which it stays inside; below, how long the first contact "
-                 "really lasts", fontsize=10)
+                 "shortest pad from which it stays inside, solid grey the tree's own pad; "
+                 "below, how long the first contact really lasts", fontsize=10)
     return fig

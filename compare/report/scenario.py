@@ -5,7 +5,6 @@ identification against the truth (including its dependence on e)."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
@@ -19,11 +18,6 @@ from ..runs import OK, SKIPPED
 from ..verdicts import Verdict
 from . import figures
 from .base import Section, tidy
-
-#: Restitution values of the identification sweep (exact solver, cheap): e = 0 is the
-#: procedure's own assumption, 0.1 the shipped default.
-E_SWEEP = (0.0, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3)
-
 
 def energy_ledger(rr) -> dict | None:
     """Energy terms at T0 (J) of one rung: kinetic, potential (springs, gravity and the
@@ -58,19 +52,9 @@ def energy_ledger(rr) -> dict | None:
     return {"t": T0, "terms": out, "initial": e0, "residual": (total - e0) / e0}
 
 
-def identification_spec(scenario, out):
-    """The identification against e as a sweep (:class:`compare.sweep.run.SweepSpec`) into
-    ``out``: the exact solver's records for each e of :data:`E_SWEEP`, the paper's procedure
-    run on each (the sweep's id.* and truth.* columns)."""
-    from ..sweep.run import SweepSpec
-
-    return SweepSpec(scenario, ["restitution=" + ",".join(repr(e) for e in E_SWEEP)],
-                     Path(out), ("analytic",), identify=True)
-
-
 def identification_sweep(table) -> list[dict]:
-    """Per e of the sweep's table: the procedure's values and relative errors against the
-    SDOF truth (M_T, K_T, xi, E), or why there are none."""
+    """Per e of the small-e sweep's table (compare.small_e): the procedure's values and
+    relative errors against the SDOF truth (M_T, K_T, xi, E), or why there are none."""
     out = []
     for r in sorted(table.to_dict("records"), key=lambda r: float(r["restitution"])):
         e = float(r["restitution"])
@@ -198,8 +182,8 @@ class ScenarioSection(Section):
     def from_runs(cls, scenario, cache, e_table=None, *, engines=None, segments=None,
                   figure_sink=None, fits=None):
         """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
-        lacks are made here, so prefetch them first) and its identification sweep's table
-        (:func:`identification_spec`; None: the section has no identification against e)."""
+        lacks are made here, so prefetch them first) and its small-e sweep's table
+        (compare.small_e.small_e_sweep; None: the section has no identification against e)."""
         kw = {} if engines is None else {"engines": engines}
         ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
         sweep = identification_sweep(e_table) if e_table is not None else []
@@ -216,9 +200,6 @@ class ScenarioSection(Section):
         if ledgers:
             e0 = next(iter(ledgers.values()))["initial"]
             drawn["energy"] = figures.energy_figure(ledgers, e0, L.name)
-        if self.sweep:
-            drawn["identification"] = figures.identification_figure(self.sweep, L.name,
-                                                                    L.tolerances)
         self.figures = {name: sink(fig, f"{L.name}-{name}") for name, fig in drawn.items()}
 
     def _verdicts(self) -> dict:

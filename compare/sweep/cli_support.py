@@ -75,6 +75,11 @@ def add_sweep_arguments(parser) -> None:
                              "takes about 45 s on 2 cores beside make report's own runs (less alone); full (restitution=0:0.9:10, "
                              "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 6 CPU-hours, "
                              "190 min with 2 workers; --grid replaces the preset's validity grid")
+    parser.add_argument("--sensitivity-scenario", action="append", default=None,
+                        dest="sensitivity_scenarios", metavar="SCENARIO",
+                        help="with --preset: a tree of its sensitivity study, shipped name or "
+                             "TOML path (repeatable; default: every shipped tree); a file's "
+                             "[calibration] measured fields are held at its values")
     parser.add_argument("--tolerance", type=_tolerance, default=None,
                         help="validity tolerance, relative (default 0.05)")
     parser.add_argument("--retry-failed", action="store_true", dest="retry_failed",
@@ -158,6 +163,9 @@ def _run(args) -> int:
     backends = _check_backends(args.backend)
     grid = parse_grid(args.grid) if args.grid else None
     options = parse_options(args.option, backends)
+    if args.sensitivity_scenarios and not args.preset:
+        raise ParameterError("--sensitivity-scenario: used with --preset (a study's "
+                             "sensitivity part)")
     if args.preset:
         if options:
             raise ParameterError("--option: not used with --preset (the preset fixes the "
@@ -165,7 +173,8 @@ def _run(args) -> int:
         paths = run_study(args.out, args.preset, scenario=args.scenario, backends=backends,
                           workers=args.workers, scheduler=args.scheduler,
                           tolerance=args.tolerance, grid=args.grid or None,
-                          retry_failed=args.retry_failed)
+                          retry_failed=args.retry_failed,
+                          sensitivity_scenarios=args.sensitivity_scenarios)
     else:
         if grid is None:
             raise ParameterError(f"--grid: give at least one ({GRID_FORM}) or --preset")

@@ -9,7 +9,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-
 from treeimpact.analytic.errors import ParameterError
 
 # the ladder's metrics and tolerance file, so a study and the report speak of the same things
@@ -604,42 +603,62 @@ _OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap"
 
 
 def sensitivity_figure(trees: dict, path: Path) -> Path | None:
-    """One panel per tree: each output's Morris mu* as a share of its row (which unmeasured
-    input moves that answer most), the dominant input outlined; one colour scale for all."""
+    """One panel per tree (a second row for the crossing durations): each output's Morris
+    mu* per unmeasured input as a bar, its 95 % interval (SALib's mu_star_conf) as a
+    whisker, the inputs that decide it outlined; a held (measured) input has no bar."""
     from matplotlib.figure import Figure
-    from matplotlib.patches import Rectangle
+    from matplotlib.patches import Patch
 
     trees = {n: t for n, t in trees.items() if t.get("outputs")}
     if not trees:
         return None
     names = list(trees)
-    outputs = list(next(iter(trees.values()))["outputs"])
+    outputs = list(dict.fromkeys(o for t in trees.values() for o in t["outputs"]))
+    groups = [g for g in ([o for o in outputs if o.startswith("gap.")],
+                          [o for o in outputs if o.startswith("crossing.")]) if g]
     inputs = list(_INPUT_LABELS)
-    fig = Figure(figsize=(3.3 * len(names) + 1.6, 0.42 * len(outputs) + 1.9),
+    colours = dict(zip(inputs, ("tab:blue", "tab:orange", "tab:green", "tab:red",
+                                "tab:purple", "tab:brown")))
+    fig = Figure(figsize=(3.4 * len(names) + 2.4, 0.85 * len(outputs) + 1.9),
                  layout="constrained")
-    axes = fig.subplots(1, len(names), squeeze=False, sharey=True)[0]
-    im = None
-    for ax, name in zip(axes, names):
-        rows = trees[name]["outputs"]
-        Z = np.array([[rows[o]["mu_star"][i] for i in inputs] for o in outputs], float)
-        Z = Z / np.maximum(Z.sum(axis=1, keepdims=True), 1e-300)
-        im = ax.imshow(Z, vmin=0.0, vmax=1.0, cmap="Blues", aspect="auto")
-        for r, o in enumerate(outputs):
-            for c, i in enumerate(inputs):
-                ax.text(c, r, f"{100 * Z[r, c]:.0f}", ha="center", va="center", fontsize=8,
-                        color="w" if Z[r, c] > 0.55 else "k")
-            c = inputs.index(rows[o]["dominant"])
-            ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, lw=1.6, ec="k"))
-        ax.set_xticks(range(len(inputs)), [_INPUT_LABELS[i] for i in inputs], fontsize=8)
-        ax.set_yticks(range(len(outputs)), [_OUTPUT_LABELS.get(o, o) for o in outputs],
-                      fontsize=9)
-        ax.set_title(name, fontsize=10)
-        ax.grid(False)
-    cb = fig.colorbar(im, ax=list(axes), shrink=0.8)
-    cb.set_label("share of the output's mu* (%)", fontsize=9)
-    cb.set_ticks([0, 0.25, 0.5, 0.75, 1.0], labels=["0", "25", "50", "75", "100"])
-    fig.suptitle("Which unmeasured input moves each answer most (Morris mu*, outlined: the "
-                 "dominant one)", fontsize=10)
+    axes = fig.subplots(len(groups), len(names), squeeze=False, sharex="row", sharey="row",
+                        gridspec_kw={"height_ratios": [len(g) for g in groups]})
+    h = 0.8 / len(inputs)
+    for col, name in enumerate(names):
+        for row, group in enumerate(groups):
+            ax = axes[row][col]
+            scale = 100.0 if group[0].startswith("gap.") else 1.0
+            for j, o in enumerate(group):
+                out = trees[name]["outputs"].get(o)
+                if out is None:
+                    continue
+                for k, i in enumerate(inputs):
+                    v = out["indices"].get(i)
+                    if v is None:
+                        continue
+                    y = j + (k - (len(inputs) - 1) / 2) * h
+                    ax.barh(y, scale * v["mu_star"], height=0.9 * h, color=colours[i],
+                            edgecolor="k" if i in out["deciding"] else "none", lw=1.2,
+                            xerr=scale * v["mu_star_conf"],
+                            error_kw={"lw": 0.8, "capsize": 1.5, "ecolor": "0.25"})
+            ax.set_yticks(range(len(group)), [_OUTPUT_LABELS.get(o, o) for o in group],
+                          fontsize=9)
+            ax.set_ylim(len(group) - 0.5, -0.5)
+            ax.grid(True, axis="x", lw=0.3)
+            ax.tick_params(axis="x", labelsize=8)
+            if row == 0:
+                ax.set_title(name, fontsize=10)
+            ax.set_xlabel("mu* (percentage points of the gap)" if scale == 100.0 else
+                          "mu* (decades of the crossing duration)", fontsize=8.5)
+    handles = [Patch(color=colours[i], label=_INPUT_LABELS[i].replace("\n", " "))
+               for i in inputs]
+    handles.append(Patch(facecolor="white", edgecolor="k", label="outlined: decides it\n"
+                         "(several: not separable)"))
+    fig.legend(handles=handles, loc="outside right center", fontsize=8.5, frameon=False)
+    first = next(iter(trees.values()))
+    fig.suptitle(f"Which unmeasured input moves each answer: Morris mu* with its "
+                 f"{100 * first.get('conf_level', 0.95):.0f} % interval (whiskers), "
+                 f"{first.get('trajectories', '?')} trajectories per tree", fontsize=10)
     path = Path(path)
     fig.savefig(path, dpi=100)
     return path

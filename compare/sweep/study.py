@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
 from treeimpact.compare.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
@@ -19,7 +18,17 @@ from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
 
 from .maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
-from .run import JOURNAL, TABLE, make_out, read_file, read_table, run_sweep
+from .run import (
+    JOURNAL,
+    TABLE,
+    SweepSpec,
+    make_out,
+    read_file,
+    read_table,
+    run_sweep,
+    run_sweeps,
+)
+from .sensitivity_study import sensitivity_result, sensitivity_specs
 
 
 @dataclass(frozen=True)
@@ -41,7 +50,7 @@ class Preset:
     ident_sampling_seeds: tuple = SAMPLING_SEEDS  # ... with these seeds
     ident_crown_ratios: tuple = CROWN_RATIOS  # its e x crown grid's crown ratios
     ident_engine_rungs: tuple = ()  # engine chains on a corner of its e x crown grid
-    sensitivity: int = 0  # Morris trajectories of the sensitivity study (0: none)
+    sensitivity: int = 0  # Morris trajectories of the sensitivity study per tree (0: none)
     sensitivity_crossings: bool = False  # its crossing durations too (8 pads a point)
     expected: str = ""
     notes: dict = field(default_factory=dict, compare=False)
@@ -55,22 +64,23 @@ PRESETS = {
         ladder=False, speed=False, backends=("analytic", "soft", "beam"),
         engine_grid=("contact_duration=5e-4,5e-3", "crown_ratio=0,4"),
         map_metrics=("x_max", "energy_delivered", "crown_peak_acceleration"),
-        map_value="step", identification=True, ident_crown_ratios=(0.0, 2.0, 4.0),
-        ident_sampling_seeds=(1,), sensitivity=2,
-        # the identification's cheap part, for make report's minute: no engine corner (the
-        # report fits both engines' chains of every tree: its record fits), three crown
-        # ratios, one sampling seed
+        map_value="step", identification=True, ident_crown_ratios=(0.0, 4.0),
+        ident_sampling_rungs=(), sensitivity=30,
+        # the identification's cheap part, for make report's minute and its CPU budget with
+        # the sensitivity study's 630 evaluations: no engine corner (the report fits both
+        # engines' chains of every tree: its record fits), the lightest and heaviest crown
+        # ratios, no sampling grid (the full preset's; docs/identification.md)
         expected="about 45 s with 2 workers beside make report's own runs (less alone): 8 "
                  "contact durations x 6 crown ratios on the analytic, soft and beam backends, "
-                 "the engines' chains on 2 x 2 of them, "
-                 "and the identification validation (4 e x 3 crown ratios x 3 rungs, "
-                 "1-20 kHz x 0.5-2 % noise on exact SDOF records, one seed)"),
+                 "the engines' chains on 2 x 2 of them, the identification validation "
+                 "(4 e x 2 crown ratios x 3 rungs) and the sensitivity study (30 Morris "
+                 "trajectories per tree, 210 evaluations)"),
     "full": Preset(
         "full", "central-leader", ("restitution=0:0.9:10", "segments=1,2,4,8,16,32",
                                    "crown_ratio=0:4:9"),
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
         identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
-        ident_engine_rungs=ENGINES, sensitivity=10, sensitivity_crossings=True,
+        ident_engine_rungs=ENGINES, sensitivity=60, sensitivity_crossings=True,
         expected="about 6 CPU-hours: 190 minutes with 2 workers, 24 on 16 (measured on a "
                  "slice of the preset, 280 s of runs per (e, crown) pair: "
                  "benchmarks/bench_presets.py); resumable"),
@@ -86,8 +96,10 @@ def get_preset(name: str) -> Preset:
 
 def run_study(out, preset: str = "default", *, scenario=None, backends=None, workers=None,
               scheduler=None, progress=None, tolerance=None, grid=None,
-              retry_failed: bool = False) -> dict:
-    """Run (or resume) a preset's sweeps into ``out`` and write the study; returns the paths."""
+              retry_failed: bool = False, sensitivity_scenarios=None) -> dict:
+    """Run (or resume) a preset's sweeps into ``out`` and write the study; returns the paths.
+    ``sensitivity_scenarios``: the trees of its sensitivity study (shipped names, TOML paths
+    or Scenarios; default: every shipped tree)."""
     from .speed import speed_curves, speed_sweep
 
     p = get_preset(preset)
@@ -97,25 +109,25 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     engines = tuple(b for b in (backends or p.engines) if b in ENGINES)
     sweeps = {}
     done = []  # the SweepResults of the study's table: what this run computed, what it found
-    if p.engine_grid:  # references on the fine grid, engines on a coarse one
-        res = run_sweep(scen, list(grid or p.grid), out / "validity", backends=p.backends,
-                        ladder=p.ladder, workers=workers, scheduler=scheduler,
-                        progress=progress, retry_failed=retry_failed)
-        sweeps["validity"] = res.out
-        done.append(res)
-        if engines:
-            eng = run_sweep(scen, list(p.engine_grid), out / "engines",
-                            backends=(*p.backends, *engines), ladder=p.ladder,
-                            workers=workers, scheduler=scheduler, progress=progress,
-                            retry_failed=retry_failed)
-            sweeps["engines"] = eng.out
-            done.append(eng)
-    else:
-        res = run_sweep(scen, list(grid or p.grid), out / "validity",
-                        backends=(*p.backends, *engines), ladder=p.ladder, workers=workers,
-                        scheduler=scheduler, progress=progress, retry_failed=retry_failed)
-        sweeps["validity"] = res.out
-        done.append(res)
+    # the sensitivity study's sweeps (one per tree) share the validity sweep's pool
+    sens = sensitivity_specs(out, p.sensitivity, crossings=p.sensitivity_crossings,
+                             scenarios=sensitivity_scenarios) if p.sensitivity else None
+    with_sens = sens["specs"] if sens else []
+    validity_backends = p.backends if p.engine_grid else (*p.backends, *engines)
+    first = run_sweeps([SweepSpec(scen, list(grid or p.grid), out / "validity",
+                                  backends=validity_backends, ladder=p.ladder), *with_sens],
+                       workers=workers, scheduler=scheduler, progress=progress,
+                       retry_failed=retry_failed)
+    res, sens_done = first[0], first[1:]
+    sweeps["validity"] = res.out
+    done.append(res)
+    if p.engine_grid and engines:  # references on the fine grid, engines on a coarse one
+        eng = run_sweep(scen, list(p.engine_grid), out / "engines",
+                        backends=(*p.backends, *engines), ladder=p.ladder,
+                        workers=workers, scheduler=scheduler, progress=progress,
+                        retry_failed=retry_failed)
+        sweeps["engines"] = eng.out
+        done.append(eng)
     speed = None
     if p.speed and engines:
         speed = speed_sweep(scen, out, engines=engines, dts=p.speed_dts,
@@ -129,11 +141,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
             out, scen, workers=workers, progress=progress,
             sampling_rungs=p.ident_sampling_rungs, engine_rungs=p.ident_engine_rungs,
             sampling_seeds=p.ident_sampling_seeds, crown_ratios=p.ident_crown_ratios)
-    sensitivity = None
-    if p.sensitivity:
-        sensitivity = run_sensitivity(out, p.sensitivity, crossings=p.sensitivity_crossings,
-                                      workers=workers, scheduler=scheduler, progress=progress,
-                                      retry_failed=retry_failed)
+    sensitivity = sensitivity_result(out, sens, sens_done) if sens else None
     return write_study(out, sweeps, speed=speed, tolerance=tolerance,
                        metrics=p.map_metrics, value=p.map_value, ident_study=ident_study,
                        sensitivity=sensitivity,
@@ -142,28 +150,6 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
                              "wall_s": time.perf_counter() - t0,
                              "rows_written": sum(r.rows_written for r in done),
                              "rows_done_before": sum(r.rows_done_before for r in done)})
-
-
-def run_sensitivity(out, trajectories: int, *, crossings: bool = False, workers=None,
-                    scheduler=None, progress=None, retry_failed: bool = False) -> dict:
-    """The sensitivity study of every shipped tree (compare.sensitivity), one sweep each in
-    ``out/sensitivity/`` on one pool; {trajectories, crossings, trees: {name: analysis},
-    figure}."""
-    from treeimpact.analytic.model.scenario import shipped_scenarios
-    from treeimpact.compare.sensitivity import analyse, sensitivity_sweep
-
-    from .maps import sensitivity_figure
-    from .run import run_sweeps
-
-    names = list(shipped_scenarios())
-    specs = [sensitivity_sweep(n, Path(out) / "sensitivity" / n, trajectories,
-                               crossings=crossings) for n in names]
-    done = run_sweeps(specs, workers=workers, scheduler=scheduler, progress=progress,
-                      retry_failed=retry_failed)
-    trees = {n: analyse(r.table, trajectories) for n, r in zip(names, done)}
-    path = sensitivity_figure(trees, Path(out) / "sensitivity.png")
-    return {"trajectories": trajectories, "crossings": crossings, "trees": trees,
-            "figure": path.name if path else None}
 
 
 def _combined_table(out: Path, sweeps: dict, speed: dict | None):

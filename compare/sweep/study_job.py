@@ -25,16 +25,37 @@ class StudyJob:
     waits for it (its directory), :meth:`stop` ends it. Its progress lines and its summary
     go to this process's stderr as it prints them."""
 
-    def __init__(self, preset: str, out):
+    def __init__(self, preset: str, out, scenarios=None):
+        """``scenarios``: the report's trees (shipped names, TOML paths or Scenarios), the
+        trees of the study's sensitivity part (default: every shipped one); a Scenario
+        object is written into ``out/scenarios/`` for the child to read."""
         if preset not in PRESETS:  # a one-line error before anything starts
             raise ParameterError(f"--with-study {preset!r}: allowed {', '.join(PRESETS)}")
         self.preset, self.out = preset, Path(out)
         self.argv = [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--preset",
                      preset, "--out", str(self.out)]
+        for s in scenarios or ():
+            self.argv += ["--sensitivity-scenario", self._source(s)]
         self._proc = None
         self._relay = None
         self._last = ""
         self.wall_s = None  # s, from start to its end
+
+    def _source(self, scenario) -> str:
+        """A scenario as the child's command line names it: a shipped name, an absolute
+        path, or a file written for it from a Scenario object."""
+        from treeimpact.analytic.model.parameters import Scenario
+        from treeimpact.analytic.model.scenario import shipped_scenarios
+        from treeimpact.analytic.model.scenario_toml import scenario_toml
+
+        if isinstance(scenario, Scenario):
+            folder = self.out / "scenarios"
+            folder.mkdir(parents=True, exist_ok=True)
+            path = folder / f"{scenario.name}.toml"
+            path.write_text(scenario_toml(scenario), encoding="utf-8")
+            return str(path.resolve())
+        text = str(scenario)
+        return text if text in shipped_scenarios() else str(Path(text).resolve())
 
     def start(self) -> "StudyJob":
         self._t0 = time.perf_counter()

@@ -1,0 +1,293 @@
+"""The small-e answer: for each consequence the paper draws from "e is small", the largest
+restitution e up to which it stays within the validity tolerance of the exact result, and
+its error at the tree's own e; beside them the 1-DOF assumption's gaps as functions of e,
+so that a reader sees whether e or the trunk decides.
+
+Each tree runs as one sweep over :data:`E_GRID` (the exact 1-DOF solver's run at each e,
+the analysis :func:`errors_at_run` adding the paper's procedure on its record and the
+continuum trunk with the same pad); :func:`small_e_answer` reads the table and locates each
+first crossing of the tolerance by bisection to :data:`RESOLUTION`. Design notes and what
+each curve is checked against: docs/report.md ("The small-e curves"). SI units.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+#: The e of the curves (1): [0, 0.9] in steps of 0.05.
+E_GRID = tuple(round(0.05 * i, 2) for i in range(19))
+#: Where an approximation has no value at e = 0 (eq 45: x0 = T0 = A_x = 0; the pad law needs
+#: e > 0), its e = 0 point is read here (1).
+E_FLOOR = 1e-3
+#: How finely the crossing of the tolerance is located (1, in e).
+RESOLUTION = 0.01
+
+
+@dataclass(frozen=True)
+class Approximation:
+    """One consequence of "e is small" (or of the 1-DOF trunk, as a function of e):
+    ``label`` for tables, ``what`` it is compared with, the ``model`` its error needs
+    ("exact": the exact 1-DOF solver; "continuum": the beam too)."""
+
+    label: str
+    what: str
+    model: str = "exact"
+
+
+#: The approximations, in the table's order. Errors: (approximation - exact) / |exact|;
+#: the 1-DOF gaps as the answer table reads them, (continuum - 1-DOF) / |1-DOF|.
+APPROXIMATIONS = {
+    "eq57_energy_loss": Approximation(
+        "eq 57 energy loss", "eq 57, the one-impact loss M_T m u1^2 / (2 (M_T + m)), against "
+        "the exact loss over every impact (eq 56, the exact solver's sum over the event)"),
+    "eq58_energy_transferred": Approximation(
+        "eq 58 energy transferred", "eq 58, the pendulum's loss (release to rebound) less eq "
+        "57's, against the energy the exact model delivers to the tree"),
+    "identification_M_T": Approximation(
+        "identified M_T (eq 44)", "the paper's procedure (eqs 39-47) on the exact 1-DOF "
+        "model's own record, against its M_T"),
+    "identification_K_T": Approximation(
+        "identified K_T (eq 46)", "the paper's procedure on the exact record, against its "
+        "K_T"),
+    "identification_xi": Approximation(
+        "identified xi (eqs 42-43)", "the paper's procedure on the exact record, against "
+        "the moving-together pair's damping ratio"),
+    "eq45_area": Approximation(
+        "eq 45 area A_x", "eq 45 as Table 1 reads it, x0 T0 / 2, against the exact A_x "
+        "(the integral of x over the impact process)"),
+    "one_dof_x_max": Approximation(
+        "1-DOF trunk: x_max", "the continuum trunk's x_max against the 1-DOF model's (the "
+        "same pad at each e)", "continuum"),
+    "one_dof_energy_delivered": Approximation(
+        "1-DOF trunk: energy delivered", "the continuum trunk's energy delivered against "
+        "the 1-DOF model's (the same pad at each e)", "continuum"),
+}
+#: The sweep table's columns: each approximation's error, and why it has none.
+COLUMNS = tuple(f"small_e.{n}" for n in APPROXIMATIONS) + tuple(
+    f"small_e_reason.{n}" for n in APPROXIMATIONS)
+
+
+def at_restitution(scenario, e: float):
+    """``scenario`` with restitution ``e`` (1)."""
+    return replace(scenario, contact=replace(scenario.contact, restitution=float(e)))
+
+
+def _rel(approx: float, exact: float) -> float:
+    ok = math.isfinite(approx) and math.isfinite(exact) and exact != 0.0
+    return (approx - exact) / abs(exact) if ok else math.nan
+
+
+def energy_errors(result) -> dict:
+    """eqs 57 and 58 against the exact run ``result`` (the analytic backend's, at its own
+    e): relative errors, NaN where the bodies have not parted for good within t_end (no
+    rebound, no final loss to compare with)."""
+    sol, m = result.solution, result.metrics
+    model = sol.model
+    eq57 = model.reduced_mass * model.impact_speed ** 2 / 2.0  # J
+    exact_loss = m["contact_dissipation"]  # J, eq 55 summed over every impact and tail
+    eq58 = model.initial_energy - m["rebound_energy"] - eq57  # J: m g l_e (cos th_b - cos th_r)
+    return {"eq57_energy_loss": _rel(eq57, exact_loss),
+            "eq58_energy_transferred": _rel(eq58, m["energy_delivered"])}
+
+
+def area_error(result) -> float:
+    """eq 45 as Table 1 reads it, x0 T0 / 2 (m s), against the exact A_x of ``result``
+    (NaN where the bodies never move together: no impact process to integrate)."""
+    m = result.metrics
+    return _rel(0.5 * m["x0"] * m["T0"], m["A_x"])
+
+
+def exact_run(scenario, e: float):
+    """(the exact 1-DOF solver's run at ``e`` with the record the paper's procedure reads,
+    the scenario at ``e``)."""
+    from treeimpact.analytic.impact.simulate import simulate
+
+    from .rungs import analytic_samples
+
+    s = at_restitution(scenario, e)
+    return simulate(s, samples=analytic_samples(s.t_end)), s
+
+
+def continuum_gaps(scenario, e: float, newton=None) -> dict:
+    """The 1-DOF assumption at ``e`` (read at :data:`E_FLOOR` below it): the continuum
+    trunk's gap to the 1-DOF model on x_max and the energy delivered, the same pad;
+    ``newton``: the exact run's metrics at ``e`` when already made."""
+    from treeimpact.analytic.continuum.beam_impact import simulate_beam
+    from treeimpact.analytic.impact.simulate import simulate
+
+    s = at_restitution(scenario, max(e, E_FLOOR))
+    if newton is None or e < E_FLOOR:
+        newton = simulate(s, samples=2).metrics
+    beam = simulate_beam(s).metrics
+    return {f"one_dof_{k}": _rel(beam[k], newton[k]) for k in ("x_max", "energy_delivered")}
+
+
+def _why_none(name: str) -> str:
+    if name == "eq45_area":
+        return "the bodies never move together (no impact process to integrate)"
+    if name.startswith("eq5"):
+        return "the bodies do not part for good within t_end"
+    return "no value"
+
+
+def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
+    """The sweep table's columns at the exact run ``result`` (at the scenario's own e, with
+    the record the procedure needs): each approximation's error (``small_e.NAME``) and why
+    it has none (``small_e_reason.NAME``); the paper's procedure's values as the
+    identification sweep's ``id.*``, ``truth.*``, ``id_error`` and ``T0`` columns (the
+    scenario section's table of the identification against e); the continuum's gaps only
+    with ``continuum``."""
+    from .identification import IDENT_METRICS, identify_rung
+
+    e = scenario.contact.restitution
+    errors = energy_errors(result)
+    floor = result if e >= E_FLOOR else exact_run(scenario, E_FLOOR)[0]
+    errors["eq45_area"] = area_error(floor)
+    ident = identify_rung(result, scenario)
+    out = {"T0": result.metrics["T0"], "id_error": None if ident.ok else ident.reason}
+    out |= {f"truth.{k}": v for k, v in ident.truth.items()}
+    out |= {f"id.{k}": ident.values.get(k, math.nan) for k in IDENT_METRICS}
+    errors |= {f"identification_{k}": ident.errors.get(k, math.nan) for k in ("M_T", "K_T",
+                                                                               "xi")}
+    if continuum:
+        errors |= continuum_gaps(scenario, e, result.metrics)
+    for name, approx in APPROXIMATIONS.items():
+        if approx.model == "continuum" and not continuum:
+            continue
+        v = errors.get(name, math.nan)
+        out[f"small_e.{name}"] = v
+        reason = None
+        if not math.isfinite(v):
+            reason = ident.reason if name.startswith("identification_") else _why_none(name)
+        out[f"small_e_reason.{name}"] = reason
+    return out
+
+
+def errors_at_run(result, scenario, record=None) -> dict:
+    """The sweep's analysis (compare.sweep.run): :func:`errors_of_run` with the continuum."""
+    return errors_of_run(result, scenario)
+
+
+errors_at_run.columns = COLUMNS + ("T0", "id_error") + tuple(
+    f"{p}.{k}" for p in ("id", "truth") for k in ("M_T", "K_T", "xi", "E"))
+
+
+def grid_of(scenario, grid=E_GRID) -> tuple:
+    """``grid`` (default :data:`E_GRID`) with the scenario's own e (1)."""
+    return tuple(sorted(set(grid) | {float(scenario.contact.restitution)}))
+
+
+def small_e_sweep(scenario, out):
+    """The small-e curves of one tree as a sweep (:class:`compare.sweep.run.SweepSpec`)
+    into ``out``: the exact solver at every e of :func:`grid_of`, :func:`errors_at_run` on
+    each."""
+    from .runs import resolve_scenario
+    from .sweep.run import SweepSpec
+
+    scen = resolve_scenario(scenario)
+    return SweepSpec(scen, ["restitution=" + ",".join(repr(e) for e in grid_of(scen))],
+                     Path(out), ("analytic",), identify=True,
+                     analysis="treeimpact.compare.small_e:errors_at_run")
+
+
+def small_e_table(scenario, grid=E_GRID):
+    """The table :func:`small_e_sweep` writes, computed in this process (no sweep
+    directory): one row per e of :func:`grid_of` ``grid`` (a pandas DataFrame)."""
+    import pandas as pd
+
+    from .runs import resolve_scenario
+
+    scen = resolve_scenario(scenario)
+    rows = []
+    for e in grid_of(scen, grid):
+        run, s = exact_run(scen, e)
+        rows.append({"restitution": e, "status": "ok", "error": None} | errors_at_run(run, s))
+    return pd.DataFrame(rows)
+
+
+def first_crossing(grid, values, evaluate, tolerance: float,
+                   resolution: float = RESOLUTION) -> tuple[float, tuple | None]:
+    """The largest e up to which an error STAYS within ``tolerance`` (|error| <= it; NaN is
+    outside): 0 when the first value is outside, the grid's end when none is; else the
+    first crossing from e = 0, bracketed by the grid and bisected with ``evaluate(e)``
+    until the bracket is at most ``resolution`` wide. Returns (the bracket's inner end, the
+    bracket or None). A later return inside the tolerance does not count; an excursion
+    narrower than the grid's step is not seen (docs/report.md: the convergence check)."""
+    def within(v):
+        return math.isfinite(v) and abs(v) <= tolerance
+
+    if not within(values[0]):
+        return 0.0, None
+    for i in range(1, len(grid)):
+        if not within(values[i]):
+            lo, hi = float(grid[i - 1]), float(grid[i])
+            while hi - lo > resolution:
+                mid = 0.5 * (lo + hi)
+                if within(evaluate(mid)):
+                    lo = mid
+                else:
+                    hi = mid
+            return lo, (lo, hi)
+    return float(grid[-1]), None
+
+
+def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
+    """The small-e answer of one tree from its sweep's ``table`` (:func:`small_e_sweep`):
+    per approximation {holds_up_to_e, bracket, error_at_e, e, e_grid, errors, reasons,
+    error_at_zero, verdict, label, what}; errors relative (NaN where none, with its
+    reason), e in 1. The crossings are bisected here (the exact solver, and the continuum
+    for the 1-DOF gaps, at a few more e)."""
+    from .verdicts import validity_tolerance
+
+    tol = validity_tolerance() if tolerance is None else tolerance
+    rows = sorted(table.to_dict("records"), key=lambda r: float(r["restitution"]))
+    grid = [float(r["restitution"]) for r in rows]
+    e0 = float(scenario.contact.restitution)
+    cache: dict = {}
+
+    def evaluate(name):
+        model = APPROXIMATIONS[name].model
+
+        def at(e):
+            key = (e, model)
+            if key not in cache:
+                run, s = exact_run(scenario, e)
+                cache[key] = errors_of_run(run, s, continuum=model == "continuum")
+            return cache[key][f"small_e.{name}"]
+        return at
+
+    out = {}
+    for name, approx in APPROXIMATIONS.items():
+        values = [_float(r.get(f"small_e.{name}")) for r in rows]
+        if any(r.get("status") != "ok" for r in rows):
+            values = [v if r.get("status") == "ok" else math.nan for v, r in zip(values, rows)]
+        holds, bracket = first_crossing(grid, values, evaluate(name), tol)
+        at_e = next((v for e, v in zip(grid, values) if abs(e - e0) < 1e-12), None)
+        reasons = {f"{e:g}": str(r.get(f"small_e_reason.{name}") or r.get("error"))
+                   for e, v, r in zip(grid, values, rows) if not math.isfinite(v)}
+        out[name] = {"label": approx.label, "what": approx.what, "model": approx.model,
+                     "e": e0,
+                     "holds_up_to_e": holds, "bracket": list(bracket) if bracket else None,
+                     "error_at_e": at_e, "error_at_zero": values[0], "e_grid": grid,
+                     "errors": values, "reasons": reasons,
+                     "verdict": _verdict(holds, bracket, values[0], grid, tol)}
+    return out
+
+
+def _verdict(holds, bracket, at_zero, grid, tol) -> str:
+    if holds == 0.0 and bracket is None:
+        if not math.isfinite(at_zero):
+            return "no value at e = 0"
+        return f"not a small-e effect: {100 * at_zero:+.0f} % at e = 0"
+    if bracket is None:
+        return f"within {100 * tol:.0f} % over the whole range (e <= {grid[-1]:g})"
+    return f"holds up to e = {math.floor(100 * holds + 1e-9) / 100:.2f}"
+
+
+def _float(v) -> float:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return math.nan
