@@ -84,8 +84,9 @@ def main(argv=None) -> int:
         worst = max(worst, (wall, label))
         if isinstance(fit, Exception):
             verdict, fits, runs = f"failed: {type(fit).__name__}", 0, 0
-        else:  # (an older FitResult has neither a verdict nor counts)
-            verdict = getattr(fit, "verdict", "explained" if fit.explained else "NOT explained")
+        else:  # (an older FitResult has a verdict, an older one neither it nor counts)
+            verdict = str(getattr(fit, "conclusion", None) or getattr(
+                fit, "verdict", "explained" if fit.explained else "NOT explained"))
             fits, runs = getattr(fit, "starts", 0), getattr(fit, "runs", 0)
         print(f"{label:<36s} {record.t.size:8d} {wall:8.3f} {cpu:7.3f} {fits:5d} "
               f"{runs:6d}  {verdict[:40]}")

@@ -10,11 +10,6 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
-UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
-         "pair_damping_ratio": "-", "restitution": "-", "E": "Pa",
-         "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s",
-         "x_drift2": "m/s^2", "y_offset": "m"}
-
 
 def add_arguments(sp: argparse.ArgumentParser, number) -> None:
     from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
@@ -124,11 +119,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from treeimpact.analytic.identify.record_fit import (
-        DAMPING_RATIO_FORMULAS,
-        fit_record,
-        read_record,
-    )
+    from treeimpact.analytic.identify.record_fit import fit_record, read_record
     from treeimpact.analytic.results import to_jsonable
 
     from .backends import quiet_stdout
@@ -145,39 +136,50 @@ def run(args) -> int:
         if args.plot and math.isfinite(fit.residual_rms):
             _plot(args.plot, record, fit, paper, test)
     if args.json:
-        print(json.dumps(to_jsonable({
-            "fit": fit.to_json(), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
-            "residual_rms": fit.residual_rms,
-            "residual_rms_y": fit.residual_rms_y, "explained": fit.explained,
-            "note": fit.note, "verdict": fit.verdict, "diagnoses": list(fit.diagnoses),
-            "noise": fit.noise, "noise_source": fit.noise_source,
-            "misfit_ratio": fit.misfit_ratio,
-            "flagged_rows": [record.row(int(i)) for i in fit.flagged],
-            "warnings": list(fit.warnings),
-            "provenance": _provenance(args, record)}), indent=2))
+        print(json.dumps(to_jsonable(_json(args, record, fit, paper)), indent=2))
         return 0
     for line in fit.warnings:
         print(f"treeimpact: warning: {line}", file=sys.stderr)
     print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
           f"(read in {record.time_unit} and {record.length_unit})")
-    if not math.isfinite(fit.residual_rms):  # no fit (units): the verdict says why
-        print(f"verdict: {fit.verdict}")
-        for d in fit.diagnoses:
-            print(f"  {d['kind']}: {d['message']}")
-        return 0
+    if math.isfinite(fit.residual_rms):  # else not fitted (units): the conclusion says why
+        _print_values(fit, paper.get("paper", {}), given=args.restitution is not None)
+    _print_conclusion(fit)
+    return 0
+
+
+def _json(args, record, fit, paper) -> dict:
+    """identify --json: the fit's values, the paper's readings, the conclusion and what it
+    rests on, the provenance (kinds and sources as their names)."""
+    from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS
+
+    return {"fit": fit.to_json(), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
+            "residual_rms": fit.residual_rms, "residual_rms_y": fit.residual_rms_y,
+            "explained": fit.explained, "note": fit.note, "verdict": str(fit.conclusion),
+            "diagnoses": [d.to_json() for d in fit.diagnoses], "noise": fit.noise,
+            "noise_source": fit.noise_source.value if fit.noise_source else "",
+            "misfit_ratio": fit.misfit_ratio,
+            "flagged_rows": [record.row(int(i)) for i in fit.flagged],
+            "warnings": list(fit.warnings), "provenance": _provenance(args, record)}
+
+
+def _print_values(fit, reading: dict, *, given: bool) -> None:
+    """The table of the fit's values and intervals beside the paper's procedure's, the
+    damping ratios' formulas, what is not fixed, the residual."""
+    from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS, UNITS
+
     if not fit.explained:
         print("  the 1-DOF model does NOT explain this record: the numbers below are the "
               "model's best fit, NOT the tree's properties")
     print(f"  {'quantity':<20}{'value':>13}{'95 % low':>13}{'95 % high':>13}  {'unit':<6}"
           f"{'paper (eqs 39-48)':>19}")
-    reading = paper.get("paper", {})
-    given = {"restitution"} if args.restitution is not None else set()
     for k, v in fit.values.items():
         lo, hi = fit.intervals[k]
         pv = reading.get(k)
         ptext = f"{pv:.5g}" if isinstance(pv, float) and math.isfinite(pv) else ""
         vtext = f"{v:>13.5g}" if fit.determined[k] else f"{'not fixed':>13}"
-        itext = f"{'given':>13}{'':>13}" if k in given else f"{lo:>13.5g}{hi:>13.5g}"
+        itext = (f"{'given':>13}{'':>13}" if given and k == "restitution"
+                 else f"{lo:>13.5g}{hi:>13.5g}")
         print(f"  {k:<20}{vtext}{itext}  {UNITS[k]:<6}{ptext:>19}")
     for name, formula in DAMPING_RATIO_FORMULAS.items():
         print(f"  {name} = {formula}")
@@ -190,10 +192,12 @@ def run(args) -> int:
     print(f"fit: full-record least squares of the exact model (eqs 12-35); residual RMS "
           f"{fit.residual_rms:.3g} m = {fit.misfit_ratio:.3g} x the noise {fit.noise:.3g} m "
           f"({fit.residual_rms / fit.peak:.2%} of the peak){y_text}")
-    print(f"verdict: {fit.verdict}")
+
+
+def _print_conclusion(fit) -> None:
+    print(f"verdict: {fit.conclusion}")
     for d in fit.diagnoses:
-        print(f"  {d['kind']}: {d['message']}")
-    return 0
+        print(f"  {d.kind}: {d.message}")
 
 
 def add_record_arguments(sp: argparse.ArgumentParser, number, count) -> None:
@@ -261,6 +265,9 @@ def _plot(path, record, fit, paper, test) -> None:
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
+    import numpy as np
+
+    from treeimpact.analytic.identify.fit_parameters import Slot
     from treeimpact.analytic.identify.record_fit import model_x
 
     pendulum = record.y is not None
@@ -295,9 +302,9 @@ def _plot(path, record, fit, paper, test) -> None:
     reading = paper.get("paper", {})
     if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading[
             "trunk_damping_ratio"]:  # the fit's parameter is the trunk's own ratio
-        p = [math.log(reading["M_T"]), math.log(reading["K_T"]), reading["trunk_damping_ratio"],
-             fit.point[3], fit.values["t0"], fit.values["x_offset"], 0.0,
-             fit.values["x_drift"], fit.values["x_drift2"]]
+        p = np.array(fit.point, float)  # the fit's contact, e and sensor terms
+        p[Slot.LN_M_T], p[Slot.LN_K_T] = math.log(reading["M_T"]), math.log(reading["K_T"])
+        p[Slot.TRUNK_DAMPING_RATIO] = reading["trunk_damping_ratio"]
         xp = model_x(p, test, record.t)
         ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
                 label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from treeimpact.analytic.identify.diagnosis import DiagnosisKind
 from treeimpact.analytic.identify.pendulum_record import read_record
 from treeimpact.analytic.identify.record_fit import fit_record
 from treeimpact.compare.cli import main
@@ -65,12 +66,11 @@ def test_every_record_gets_its_verdict(outcomes):
     """explained or not, M_T fixed or not, and the diagnoses the defect calls for (a
     drift, linear or bent, outliers, a truncated record, a second mode, a one-impact
     record), no unit suspicion on records in SI."""
-    from treeimpact.analytic.identify.record_fit import DIAGNOSES
-
     wrong = {k: (r["verdict"], r["diagnoses"]) for k, r in outcomes.items()
              if not r["as_expected"]}
     assert not wrong, wrong
-    assert {d for r in outcomes.values() for d in r["diagnoses"]} <= set(DIAGNOSES)
+    assert {d for r in outcomes.values() for d in r["diagnoses"]} <= {k.value for k in
+                                                                      DiagnosisKind}
 
 
 def test_no_confident_wrong_answer(outcomes):
@@ -135,8 +135,8 @@ def test_a_unit_mistake_is_named_with_the_unit_it_looks_like(name):
     spec = META["files"][name]
     flags = META["file_flags"]
     fit = fit_record(read_record(DATA / "files" / name), mr.pendulum_test(flags))
-    assert not fit.explained and fit.diagnosis_kinds() == ["units"]
-    assert fit.diagnoses[0]["message"].startswith(
+    assert not fit.explained and fit.diagnosis_kinds() == [DiagnosisKind.UNITS]
+    assert fit.diagnoses[0].message.startswith(
         f"{spec['column']} looks like {spec['unit']}, not ")
     assert all(math.isnan(v) for v in fit.values.values())
 

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.identify.diagnosis import DiagnosisKind
 from treeimpact.analytic.identify.procedure import pendulum_test_of
 from treeimpact.analytic.identify.record_fit import Record, fit_record
 from treeimpact.analytic.impact.solver import solve_impacts
@@ -86,11 +87,12 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     import math
 
     from treeimpact.analytic.identify.fit_model import model_x, two_body_at
+    from treeimpact.analytic.identify.fit_parameters import Slot
     from treeimpact.analytic.identify.one_impact import on_ridge
 
     model, record, test = synthetic(0.3, 0, **HEAVY)
     fit = fit_record(record, test)
-    assert "does not return" in fit.note and "one-impact" in fit.diagnosis_kinds()
+    assert "does not return" in fit.note and DiagnosisKind.ONE_IMPACT in fit.diagnosis_kinds()
     assert fit.explained
     assert not any(fit.determined[k] for k in ("M_T", "K_T", "C_T", "restitution", "E"))
     assert all(math.isnan(fit.values[k]) for k in ("M_T", "K_T", "restitution"))
@@ -109,7 +111,7 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     # the ridge is exact while the pendulum stays away: the same x from the truth's e to 1
     # (the fit's point is on the ridge)
     same = model_x(fit.point, test, record.t)
-    span = float(record.t[-1] - fit.point[4])
+    span = float(record.t[-1] - fit.point[Slot.T0])
     for e in (0.3, 0.65, 1.0):
         moved = on_ridge(fit.point, e, test)
         assert len(solve_impacts(two_body_at(moved, test), span).impacts) == 1

@@ -29,7 +29,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.parameters import STANDARD_GRAVITY
+from treeimpact.analytic.model.parameters import (
+    STANDARD_GRAVITY,
+    pendulum_impact_speed,
+    pendulum_stiffness,
+)
 from treeimpact.analytic.model.two_body import two_body_model
 
 READINGS = ("paper", "printed", "consistent")
@@ -48,17 +52,22 @@ class PendulumTest:
 
     @property
     def impact_speed(self) -> float:
-        """eq 48: u_1 = 2 sqrt(g l_e) sin(theta_r / 2)."""
-        return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
-            self.release_angle / 2.0)
+        """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48)."""
+        return pendulum_impact_speed(self.gravity, self.equivalent_length, self.release_angle)
 
     @property
     def impactor_stiffness(self) -> float:
-        return self.impactor_mass * self.gravity / self.equivalent_length
+        """k = m g / l_e, N/m (eq 13)."""
+        return pendulum_stiffness(self.impactor_mass, self.gravity, self.equivalent_length)
 
     @property
     def omega2_sq(self) -> float:
         return self.gravity / self.equivalent_length
+
+
+def youngs_modulus(stiffness: float, clamp_height: float, diameter: float) -> float:
+    """E = K_T a^3 / (3 I), Pa, I = pi d^4 / 64 (eq 47; K_T = 3 E I / a^3, eq 8)."""
+    return stiffness * clamp_height ** 3 / (3.0 * (math.pi * diameter ** 4 / 64.0))
 
 
 @dataclass(frozen=True)
@@ -116,8 +125,7 @@ def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: f
             omega_1, sign = omega_n, -1.0
         M_T = m * (u1 - V - w2 * A_y) / (V + omega_1 ** 2 * A_x + sign * 2 * xi * omega_1 * x0)
         K_T = omega_1 ** 2 * (M_T + m) - k  # eq 46
-    I = math.pi * test.diameter ** 4 / 64.0
-    E = K_T * test.clamp_height ** 3 / (3.0 * I)  # eq 47
+    E = youngs_modulus(K_T, test.clamp_height, test.diameter)  # eq 47
     return Identified(reading=reading, V=V, b=b, omega_n=omega_n, xi=xi, omega_1=omega_1,
                       u1=u1, x0=x0, T0=T0, A_x=A_x, A_y=A_y, M_T=M_T, K_T=K_T, E=E,
                       x_max=x_max, tau=tau)
@@ -255,9 +263,8 @@ def truth_of(scenario) -> dict:
                         mod.impactor_stiffness)
     wn = math.sqrt((kt + k) / (mt + m))
     b = ct / (2 * (mt + m))
-    I = math.pi * scenario.trunk.diameter ** 4 / 64.0
     return {"M_T": mt, "K_T": kt, "b": b, "omega_n": wn, "xi": b / wn,
-            "E": kt * scenario.trunk.clamp_height ** 3 / (3 * I)}
+            "E": youngs_modulus(kt, scenario.trunk.clamp_height, scenario.trunk.diameter)}
 
 
 def identification_errors(ident: Identified, truth: dict) -> dict:

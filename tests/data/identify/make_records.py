@@ -431,7 +431,7 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
               if fit.determined.get(name.get(k, k), False)}
     covered = {k: bool(fit.intervals[name.get(k, k)][0] <= truth[k]
                        <= fit.intervals[name.get(k, k)][1]) for k in keys}
-    diagnoses = [d["kind"] for d in getattr(fit, "diagnoses", [])]
+    diagnoses = [d.kind.value for d in fit.diagnoses]  # names: the rows are JSON
     # every interval in the physical range (NaN: a record not fitted)
     iv = fit.intervals
     physical = all(not (lo < 0.0 or hi > 1.0) for lo, hi in [iv["restitution"]]) and all(
@@ -449,7 +449,7 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
         extra["excess_chi2"] = n * (fit.residual_rms ** 2 - local.residual_rms ** 2) / max(
             fit.noise, 1e-300) ** 2
     confident_wrong = bool(fit.explained and not all(covered.values()))
-    return {"id": case["id"], "seconds": seconds, "verdict": fit.verdict,
+    return {"id": case["id"], "seconds": seconds, "verdict": str(fit.conclusion),
             "physical": physical,
             "explained": bool(fit.explained),
             "fixed": bool(fit.determined["M_T"]), "errors": errors, "covered": covered,

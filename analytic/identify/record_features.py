@@ -1,7 +1,6 @@
 """What a record says about itself, apart from the tree: its resting level and the rise after
-the contact (read on a median-of-3 copy, so one wild sample does not move them), the sensor's
-noise (before the contact, and the white floor of a residual's spectrum), the residual's
-dominant frequency, and numbers that look like another unit than declared.
+the contact (read on a median-of-3 copy, so one wild sample does not move them), and numbers
+that look like another unit than declared. The sensor's noise: :mod:`.noise`.
 docs/identification.md, "Diagnoses"."""
 
 from __future__ import annotations
@@ -11,9 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Samples before the contact needed to estimate the noise there (fewer: the residual's
-#: spectrum gives it).
-MIN_REST_SAMPLES = 12
 MAD_SIGMA = 1.482602218505602  # sigma / MAD of a normal distribution
 
 
@@ -61,57 +57,6 @@ def features(t: np.ndarray, x: np.ndarray) -> Features:
     t_contact = min(max(t_contact, float(t[0])), float(t[i10]))
     return Features(rest=rest, span=span, t_contact=t_contact, velocity=v,
                     t_peak=float(t[int(np.argmax(xs))]), dt=dt)
-
-
-def rest_noise(t: np.ndarray, x: np.ndarray, t_contact: float) -> tuple[float, int]:
-    """(sigma, n): the noise of the n samples recorded before the contact (two sample
-    intervals of margin), about a straight line through them (a drift is not noise), robust
-    to a wild sample; NaN when n < MIN_REST_SAMPLES."""
-    dt = float(np.median(np.diff(t)))
-    sel = t < t_contact - 2.0 * dt
-    n = int(np.count_nonzero(sel))
-    if n < MIN_REST_SAMPLES:
-        return math.nan, n
-    ts, xs = t[sel], x[sel]
-    line = np.polyval(np.polyfit(ts - ts[0], xs, 1), ts - ts[0])
-    r = xs - line
-    s = robust_sigma(r)
-    keep = np.abs(r - np.median(r)) <= 5.0 * s if s > 0 else np.ones(n, bool)
-    return float(np.std(r[keep], ddof=2)) if np.count_nonzero(keep) > 2 else s, n
-
-
-def periodogram(r: np.ndarray, dt: float, pad: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """(omega rad/s, P): |FFT|^2 / n of r less its mean, bins 1 to N/2 - 1 of its FFT
-    zero-padded to N = ``pad`` x n (for white noise of variance s^2 each P is exponential
-    with mean s^2; padding interpolates between the independent bins)."""
-    r = np.asarray(r, float) - float(np.mean(r))
-    n = r.size
-    size = pad * n
-    p = np.abs(np.fft.rfft(r, size)) ** 2 / n
-    k = np.arange(1, max(2, (size + 1) // 2))
-    return 2.0 * math.pi * k / (size * dt), p[k]
-
-
-def spectrum_floor(r: np.ndarray, dt: float) -> float:
-    """The white-noise level (standard deviation) of r from the median of its periodogram
-    (median of an exponential = ln 2 x its mean): a misfit confined to a few frequencies
-    does not raise it."""
-    _, p = periodogram(r, dt)
-    return math.sqrt(float(np.median(p)) / math.log(2.0)) if p.size else math.nan
-
-
-def dominant_frequency(r: np.ndarray, dt: float) -> tuple[float, float]:
-    """(omega rad/s, strength): the frequency of the largest peak of r's periodogram
-    (smoothed over 3 independent bins: a decaying mode is a few bins wide; located on the
-    8 x zero-padded spectrum) and its height over the white floor (about 1 for noise,
-    ln(n) at most by chance)."""
-    w, p = periodogram(r, dt, pad=8)
-    if p.size < 24:
-        return math.nan, math.nan
-    smooth = np.convolve(p, np.ones(17) / 17.0, mode="same")  # 3 bins of the unpadded
-    k = int(np.argmax(smooth))
-    floor = float(np.median(periodogram(r, dt)[1])) / math.log(2.0)
-    return float(w[k]), float(smooth[k] / floor) if floor > 0 else math.inf
 
 
 #: What a pendulum test can record, a generous window around orchards' numbers: a peak
