@@ -74,7 +74,7 @@ def _paper(record, test) -> dict:
         trunk = c_t / (2.0 * math.sqrt(ident.K_T * ident.M_T)) if (
             ident.K_T > 0 and ident.M_T > 0) else math.nan
         out[reading] = {"M_T": ident.M_T, "K_T": ident.K_T, "C_T": c_t, "E": ident.E,
-                        "pair_damping_ratio": ident.xi,  # b / omega_n: the paper's xi
+                        "pair_damping_ratio": ident.pair_damping_ratio,  # the paper's xi
                         "trunk_damping_ratio": trunk}
     return out
 

@@ -46,7 +46,7 @@ def test_the_integrator_agrees_with_the_exact_solver():
     for tree in mr.TREES.values():
         model = TwoBodyModel(dynamic_mass=tree.M_T, damping=tree.C_T, stiffness=tree.K_T,
                              impactor_mass=tree.m, impactor_stiffness=tree.k,
-                             impact_speed=tree.u1, restitution=tree.e)
+                             impact_speed=tree.u1, restitution=tree.restitution)
         s = np.linspace(0.0, tree.duration, 5001)
         exact = solve_impacts(model, tree.duration).state(s)[0]
         mine = mr.simulate(tree, tree.duration)(s)[0]

@@ -16,9 +16,10 @@ from .fitter import REFINE_NFEV
 from .noise import RESOLUTION, NoiseJudgement, NoiseSource, dominant_frequency
 from .procedure import PendulumTest
 
-#: A record that ends before the trunk's first swing back is truncated when it leaves xi
-#: this uncertain (its 95 % interval spanning more than this factor, +-20 %): a noise-free
-#: record fixes the damping before that, a noisy one cut after the peak does not.
+#: A record that ends before the trunk's first swing back is truncated when it leaves the
+#: trunk's damping ratio this uncertain (its 95 % interval spanning more than this factor,
+#: +-20 %): a noise-free record fixes the damping before that, a noisy one cut after the
+#: peak does not.
 TRUNCATED_XI_SPAN = 1.5
 #: The residual's dominant frequency counts as a mode of its own when its peak stands this
 #: far over the white floor (a false alarm once in ~1e3 records of 1e4 samples by chance:
@@ -66,14 +67,15 @@ class Diagnosis:
 
 def optimiser_trouble(p, lower_t0: float, upper_t0: float, dt: float, status: int,
                       noise_limited: bool) -> Diagnosis | None:
-    """M_T, K_T or t0 at the end of the fit's range, xi at its top, or no convergence in
+    """M_T, K_T or t0 at the end of the fit's range, the trunk's damping ratio at its top, or
+    no convergence in
     REFINE_NFEV evaluations while the residual is not the noise."""
     at_bound = [name for name, slot, lim in (("M_T", Slot.LN_M_T, M_RANGE),
                                              ("K_T", Slot.LN_K_T, K_RANGE))
                 if min(abs(p[slot] - math.log(lim[0])), abs(p[slot] - math.log(lim[1])))
                 < 1e-3]
     if p[Slot.TRUNK_DAMPING_RATIO] > XI_RANGE[1] - 1e-3:
-        at_bound.append("xi")
+        at_bound.append("trunk_damping_ratio")
     if p[Slot.T0] < lower_t0 + dt or p[Slot.T0] > upper_t0 - dt:
         at_bound.append("t0")
     if not (at_bound or status == 0 and not noise_limited):
@@ -99,18 +101,18 @@ def swing_back(p, test: PendulumTest) -> float:
     return float(s[top + rising[0]]) if rising.size else math.inf
 
 
-def truncation(p, test: PendulumTest, t_end: float, xi_interval) -> Diagnosis | None:
+def truncation(p, test: PendulumTest, t_end: float, damping_interval) -> Diagnosis | None:
     """A record ending (``t_end``, the fit's clock) before the fitted motion's first swing
-    back that leaves xi's interval wider than TRUNCATED_XI_SPAN."""
+    back that leaves the trunk's damping ratio's interval wider than TRUNCATED_XI_SPAN."""
     t_back = swing_back(p, test)
-    xi_lo, xi_hi = xi_interval
+    xi_lo, xi_hi = damping_interval
     if not (t_end < t_back and not xi_hi <= TRUNCATED_XI_SPAN * xi_lo):
         return None
     t0 = p[Slot.T0]
     return Diagnosis(DiagnosisKind.TRUNCATED, (
         f"truncated record: it ends {t_end - t0:.3g} s after the contact, before the "
         f"trunk's first swing back ({t_back - t0:.3g} s): too little ring-down to fix "
-        f"the damping (xi between {xi_lo:.3g} and {xi_hi:.3g})"))
+        f"the damping (trunk_damping_ratio between {xi_lo:.3g} and {xi_hi:.3g})"))
 
 
 def residual_diagnosis(p, test: PendulumTest, judged: NoiseJudgement, resid_after,

@@ -21,11 +21,11 @@ MAX_EVENTS = 20_000
 
 
 def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
-    """The two-body model (SI) at p: M_T = e^ln_m_t, K_T = e^ln_k_t, C_T = 2 xi sqrt(K_T M_T)
-    (xi the trunk's damping ratio)."""
+    """The two-body model (SI) at p: M_T = e^ln_m_t, K_T = e^ln_k_t, C_T = 2 zeta sqrt(K_T
+    M_T) with zeta the trunk's damping ratio."""
     M, K = math.exp(float(p[Slot.LN_M_T])), math.exp(float(p[Slot.LN_K_T]))
-    xi, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])
-    return TwoBodyModel(dynamic_mass=M, damping=2.0 * xi * math.sqrt(K * M), stiffness=K,
+    ratio, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])
+    return TwoBodyModel(dynamic_mass=M, damping=2.0 * ratio * math.sqrt(K * M), stiffness=K,
                         impactor_mass=test.impactor_mass,
                         impactor_stiffness=test.impactor_stiffness,
                         impact_speed=test.impact_speed, restitution=e)

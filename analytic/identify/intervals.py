@@ -42,9 +42,9 @@ def estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[di
     [0, pi/2] for e; the pendulum sensor's offset too if ``pendulum``. The two damping ratios
     are :data:`DAMPING_RATIOS`."""
     M, K = math.exp(p[Slot.LN_M_T]), math.exp(p[Slot.LN_K_T])
-    xi, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])
+    zeta, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])  # trunk's
     m, u1, k = test.impactor_mass, test.impact_speed, test.impactor_stiffness
-    C = 2.0 * xi * math.sqrt(K * M)
+    C = 2.0 * zeta * math.sqrt(K * M)
     pair = C / (2.0 * math.sqrt((K + k) * (M + m)))  # b / omega_n, eqs 42-43
     e_mod = youngs_modulus(K, test.clamp_height, test.diameter)  # eq 47
     omega = math.sqrt(K / M)  # eq 14: omega_1^2 = K_T / M_T
@@ -57,16 +57,17 @@ def estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[di
         return math.sqrt(max(float(g @ cov @ g), 0.0))
 
     z = Z95
-    values = {"M_T": M, "K_T": K, "C_T": C, "trunk_damping_ratio": xi,
+    values = {"M_T": M, "K_T": K, "C_T": C, "trunk_damping_ratio": zeta,
               "pair_damping_ratio": pair, "restitution": e, "E": e_mod, "omega_1": omega,
               "V_1": v1}
     intervals = {
         "M_T": log_interval(M, z * sd(LN_M_T=1)),
         "K_T": log_interval(K, z * sd(LN_K_T=1)),
-        "C_T": log_interval(C, z * sd(LN_M_T=0.5, LN_K_T=0.5, TRUNK_DAMPING_RATIO=1.0 / xi)),
-        "trunk_damping_ratio": log_interval(xi, z * sd(TRUNK_DAMPING_RATIO=1.0 / xi)),
+        "C_T": log_interval(C, z * sd(LN_M_T=0.5, LN_K_T=0.5, TRUNK_DAMPING_RATIO=1.0 / zeta)),
+        "trunk_damping_ratio": log_interval(zeta, z * sd(TRUNK_DAMPING_RATIO=1.0 / zeta)),
         "pair_damping_ratio": log_interval(pair, z * sd(
-            LN_M_T=0.5 * m / (M + m), LN_K_T=0.5 * k / (K + k), TRUNK_DAMPING_RATIO=1.0 / xi)),
+            LN_M_T=0.5 * m / (M + m), LN_K_T=0.5 * k / (K + k),
+            TRUNK_DAMPING_RATIO=1.0 / zeta)),
         "restitution": restitution_interval(e, z * sd(RESTITUTION=1)),
         "E": log_interval(e_mod, z * sd(LN_K_T=1)),
         "omega_1": log_interval(omega, z * sd(LN_M_T=-0.5, LN_K_T=0.5)),
@@ -148,7 +149,8 @@ def ridge_estimates(ridge: Ridge, fitter: Fitter, keep, test: PendulumTest, floo
     values = {k: (math.nan if k in RIDGE else v) for k, v in values.items()}
     intervals["restitution"] = (min(ridge.e_low, intervals["restitution"][0]), 1.0)
     note = (f"the pendulum leaves after one impact and does not return within the record: "
-            f"it fixes omega_1, xi and the trunk's velocity after the impact V_1 = m (1 + e) "
+            f"it fixes omega_1, the trunk's damping ratio and its velocity after the impact "
+            f"V_1 = m (1 + e) "
             f"u_1 / (M_T + m) (eqs 21, 54), not M_T and e apart; M_T, K_T, C_T and E are "
             f"ranges over e in [{intervals['restitution'][0]:.3g}, 1] (a smaller e fits the "
             f"record worse); a known e (--restitution) or a record of the pendulum (column y) "

@@ -1,6 +1,7 @@
 """What a record of x alone fixes when the pendulum leaves after one impact: x(t) =
-V_1 psi(t; omega_1, xi), V_1 = m (1 + e) u_1 / (M_T + m) (eqs 21, 54), the same for every
-(M_T, e) on a curve (the ridge). docs/identification.md, "What a record fixes"."""
+V_1 psi(t; omega_1, zeta), zeta the trunk's damping ratio, V_1 = m (1 + e) u_1 / (M_T + m)
+(eqs 21, 54), the same for every (M_T, e) on a curve (the ridge). docs/identification.md,
+"What a record fixes"."""
 
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ from .fit_model import two_body_at
 from .fit_parameters import Slot
 from .procedure import PendulumTest
 
-#: What a one-impact record leaves undetermined (it fixes omega_1, xi, V_1, t0, the offset).
+#: What a one-impact record leaves undetermined (it fixes omega_1, the trunk's damping ratio,
+#: V_1, t0, the offset).
 RIDGE = ("M_T", "K_T", "C_T", "restitution", "E")
 
 
@@ -25,9 +27,9 @@ def one_impact(p, test: PendulumTest, span: float) -> bool:
 
 
 def on_ridge(p, e: float, test: PendulumTest) -> np.ndarray:
-    """The parameters with restitution e and the same omega_1, xi and V_1 as p: the same
-    record while the pendulum does not return (M_T + m = m (1 + e) u_1 / V_1); NaN where
-    that needs M_T <= 0."""
+    """The parameters with restitution e and the same omega_1, trunk damping ratio and V_1
+    as p: the same record while the pendulum does not return (M_T + m = m (1 + e) u_1 / V_1);
+    NaN where that needs M_T <= 0."""
     M, m = math.exp(p[Slot.LN_M_T]), test.impactor_mass
     M_e = (M + m) * (1.0 + e) / (1.0 + float(p[Slot.RESTITUTION])) - m
     out = np.array(p, float)

@@ -20,7 +20,8 @@ from .procedure import PendulumTest
 #: within the 95 % likelihood-ratio threshold widen the intervals (a profile likelihood).
 PROFILE_RESTITUTIONS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
 PROFILE_SAMPLES = 2000  # the profile fits every k-th sample, at most this many
-#: (e, xi) fitted from a first guess too (the first at e = 0 is the robust fit's): each
+#: (e, the trunk's damping ratio) fitted from a first guess too (the first at e = 0 is the
+#: robust fit's): each
 #: branch, and a lightly damped start (a short record has a basin per damping too)
 PROFILE_FRESH = ((0.0, 0.1), (0.3, 0.1), (0.3, 0.02), (0.6, 0.1), (0.9, 0.1))
 PROFILE_NFEV_FIRST = 20  # evaluations of the robust fit from the first guess at e = 0
@@ -42,7 +43,8 @@ class RestitutionProfile:
     and an eighth of the grid's spacing (e's cost has a kink wherever an impact appears,
     and narrow dips between). Its lowest point starts the fit with e free; the points within
     the likelihood-ratio threshold of the optimum are the restitutions the record cannot
-    rule out (a profile likelihood). ``guess(e, xi)``: a first guess on e's branch."""
+    rule out (a profile likelihood). ``guess(e, trunk_damping_ratio)``: a first guess on
+    e's branch."""
 
     def __init__(self, fitter: Fitter, guess, keep, first: Fit):
         self.fitter, self.keep = fitter, keep
@@ -57,8 +59,8 @@ class RestitutionProfile:
     def _fresh(self, guess, first: Fit) -> dict:
         """e -> the best fit from a first guess there (at e = 0 from the robust fit)."""
         fresh = {PROFILE_RESTITUTIONS[0]: self._at(first.p, PROFILE_RESTITUTIONS[0])}
-        for e, xi in PROFILE_FRESH[1:]:
-            f = self.fitter.fit(guess(e, xi), keep=self.keep, stride=self.stride,
+        for e, ratio in PROFILE_FRESH[1:]:
+            f = self.fitter.fit(guess(e, ratio), keep=self.keep, stride=self.stride,
                                 params=self.params, max_nfev=PROFILE_NFEV_FRESH)
             if e not in fresh or f.cost < fresh[e].cost:
                 fresh[e] = f

@@ -103,9 +103,10 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     its point moved to that e along V_1 and omega_1 is one more start). ``start``: a local
     fit from this p alone (no global stage). A record of x alone whose e profile stays
     within the 95 % threshold up to a one-impact model (the pendulum leaving: M_T and e on
-    a ridge) fixes omega_1, xi and V_1 but not M_T and e apart: then M_T, K_T, C_T, E and e
-    are ranges (:mod:`analytic.identify.one_impact`). A record whose numbers look like
-    another unit than ``record.time_unit``/``record.length_unit`` is not fitted."""
+    a ridge) fixes omega_1, the trunk's damping ratio and V_1 but not M_T and e apart: then
+    M_T, K_T, C_T, E and e are ranges (:mod:`analytic.identify.one_impact`). A record whose
+    numbers look like another unit than ``record.time_unit``/``record.length_unit`` is not
+    fitted."""
     if restitution is not None:
         check_range("restitution", restitution, low=0.0, high=1.0)
     t_shift = float(record.t[0])

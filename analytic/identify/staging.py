@@ -44,12 +44,13 @@ class Staged:
 
 
 def first_guess(feat: Features, test: PendulumTest, e: float, y=None, t=None, *,
-                xi: float = 0.1) -> np.ndarray:
+                trunk_damping_ratio: float = 0.1) -> np.ndarray:
     """A start on e's own branch from the record's shape: the contact extrapolated back from
     the 10 % and 40 % crossings, M_T from the slope V there by momentum (one impact,
     V = m (1 + e) u_1 / (M_T + m), when that M_T e exceeds m: the pendulum rebounds; else
     chattering into moving together, V = m u_1 / (M_T + m)), K_T from the contact-to-peak
-    time as a quarter period of that branch's motion, xi 0.1; the pendulum sensor's offset
+    time as a quarter period of that branch's motion, the trunk's damping ratio as given
+    (0.1); the pendulum sensor's offset
     (if y is recorded) from the samples before the contact, less the free swing."""
     m, u1, k = test.impactor_mass, test.impact_speed, test.impactor_stiffness
     V = min(max(feat.velocity, 1e-3 * u1), 1.9 * u1)
@@ -62,7 +63,7 @@ def first_guess(feat: Features, test: PendulumTest, e: float, y=None, t=None, *,
     K = min(max(K, 2.0 * K_RANGE[0]), 0.5 * K_RANGE[1])
     p = np.zeros(len(Slot))
     p[Slot.LN_M_T], p[Slot.LN_K_T] = math.log(M), math.log(K)
-    p[Slot.TRUNK_DAMPING_RATIO], p[Slot.RESTITUTION] = xi, e
+    p[Slot.TRUNK_DAMPING_RATIO], p[Slot.RESTITUTION] = trunk_damping_ratio, e
     p[Slot.T0], p[Slot.X_OFFSET] = feat.t_contact, feat.rest
     if y is not None:
         before = t < p[Slot.T0]
@@ -112,8 +113,8 @@ def stage(fitter: Fitter, feat: Features, test: PendulumTest, *, floor: float,
             if np.all(np.isfinite(moved)):
                 starts.append(moved)
     else:
-        profile = RestitutionProfile(fitter, lambda e, xi: first_guess(
-            feat, test, e, fitter.y, t, xi=xi), keep, first)
+        profile = RestitutionProfile(fitter, lambda e, ratio: first_guess(
+            feat, test, e, fitter.y, t, trunk_damping_ratio=ratio), keep, first)
         starts = profile.starts()
     polished = sorted((fitter.refine(q, keep) for q in starts), key=lambda f: f.cost)
     new = outliers(model_motion(polished[0].p, test, t)[0] - x, floor, keep)

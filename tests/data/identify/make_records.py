@@ -42,8 +42,8 @@ class Tree:
     name: str
     M_T: float
     K_T: float
-    xi: float
-    e: float
+    trunk_damping_ratio: float  # C_T / (2 sqrt(K_T M_T))
+    restitution: float
     m: float
     l_e: float
     angle_deg: float
@@ -54,7 +54,7 @@ class Tree:
 
     @property
     def C_T(self) -> float:
-        return 2.0 * self.xi * math.sqrt(self.K_T * self.M_T)
+        return 2.0 * self.trunk_damping_ratio * math.sqrt(self.K_T * self.M_T)
 
     @property
     def u1(self) -> float:  # eq 48
@@ -69,9 +69,11 @@ class Tree:
         return self.K_T * self.clamp_height ** 3 / (3.0 * math.pi * self.diameter ** 4 / 64.0)
 
     def truth(self) -> dict:
-        return {"M_T": self.M_T, "K_T": self.K_T, "C_T": self.C_T, "xi": self.xi, "e": self.e,
-                "E": self.E, "omega_1": math.sqrt(self.K_T / self.M_T),
-                "V_1": self.m * (1 + self.e) * self.u1 / (self.M_T + self.m)}
+        return {"M_T": self.M_T, "K_T": self.K_T, "C_T": self.C_T,
+                "trunk_damping_ratio": self.trunk_damping_ratio,
+                "restitution": self.restitution, "E": self.E,
+                "omega_1": math.sqrt(self.K_T / self.M_T),
+                "V_1": self.m * (1 + self.restitution) * self.u1 / (self.M_T + self.m)}
 
     def test(self) -> dict:
         """What `treeimpact identify` is told (its flags)."""
@@ -117,7 +119,8 @@ class Motion:
 def simulate(tree: Tree, t_end: float, *, rtol: float = 1e-12,
              gamma_tol: float = 1e-7) -> Motion:
     """The two-body impact model of eqs 12-35 integrated numerically to ``t_end`` (s)."""
-    M, C, K, m, k, e, u1 = tree.M_T, tree.C_T, tree.K_T, tree.m, tree.k, tree.e, tree.u1
+    M, C, K, m, k, u1 = tree.M_T, tree.C_T, tree.K_T, tree.m, tree.k, tree.u1
+    e = tree.restitution
     atol = [1e-16, 1e-13, 1e-16, 1e-13]
 
     def free(_t, z):
@@ -217,7 +220,8 @@ def beam_record(crown_ratio: float, rate: float, noise: float, seed: int, e: flo
     x = x + noise * float(np.max(np.abs(x))) * rng.standard_normal(t.size)
     mod = two_body_model(scen)
     test = pendulum_test_of(scen)
-    truth = {"M_T": mod.dynamic_mass, "K_T": mod.stiffness, "C_T": mod.damping, "e": e}
+    truth = {"M_T": mod.dynamic_mass, "K_T": mod.stiffness, "C_T": mod.damping,
+             "restitution": e}
     flags = {"mass": test.impactor_mass, "equivalent_length": test.equivalent_length,
              "release_angle_deg": math.degrees(test.release_angle),
              "clamp_height": test.clamp_height, "diameter": test.diameter}
@@ -424,13 +428,10 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
                 "noisy": case["noise"] > 0}
     seconds = time.perf_counter() - t0
     truth = case["truth"]
-    keys = [k for k in ("M_T", "K_T", "C_T", "xi", "e") if k in truth]
-    # the truth's xi is the trunk's own, C / 2 sqrt(K M); its e the fit's restitution
-    name = {"xi": "trunk_damping_ratio", "e": "restitution"}
-    errors = {k: fit.values[name.get(k, k)] / truth[k] - 1.0 for k in keys
-              if fit.determined.get(name.get(k, k), False)}
-    covered = {k: bool(fit.intervals[name.get(k, k)][0] <= truth[k]
-                       <= fit.intervals[name.get(k, k)][1]) for k in keys}
+    keys = [k for k in ("M_T", "K_T", "C_T", "trunk_damping_ratio", "restitution")
+            if k in truth]
+    errors = {k: fit.values[k] / truth[k] - 1.0 for k in keys if fit.determined.get(k, False)}
+    covered = {k: bool(fit.intervals[k][0] <= truth[k] <= fit.intervals[k][1]) for k in keys}
     diagnoses = [d.kind.value for d in fit.diagnoses]  # names: the rows are JSON
     # every interval in the physical range (NaN: a record not fitted)
     iv = fit.intervals
@@ -439,8 +440,9 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
                                       "pair_damping_ratio", "E"))
     exp = case["expect"]
     extra = {}
-    if from_truth and "e" in truth and "xi" in truth:
-        p0 = [math.log(truth["M_T"]), math.log(truth["K_T"]), truth["xi"], truth["e"],
+    if from_truth and "restitution" in truth and "trunk_damping_ratio" in truth:
+        p0 = [math.log(truth["M_T"]), math.log(truth["K_T"]), truth["trunk_damping_ratio"],
+              truth["restitution"],
               case["t_contact"], 0.0, 0.0, 0.0]
         local = fit_record(Record(case["t"], case["x"], case["y"]), test, start=p0)
         n = case["x"].size - fit.flagged.size
@@ -492,7 +494,7 @@ def check() -> None:
     for tree in TREES.values():
         model = TwoBodyModel(dynamic_mass=tree.M_T, damping=tree.C_T, stiffness=tree.K_T,
                              impactor_mass=tree.m, impactor_stiffness=tree.k,
-                             impact_speed=tree.u1, restitution=tree.e)
+                             impact_speed=tree.u1, restitution=tree.restitution)
         s = np.linspace(0.0, tree.duration, 20001)
         exact = solve_impacts(model, tree.duration).state(s)
         mine = simulate(tree, tree.duration)(s)
