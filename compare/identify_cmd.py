@@ -143,7 +143,7 @@ def run(args) -> int:
     print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
           f"(read in {record.time_unit} and {record.length_unit})")
     if math.isfinite(fit.residual_rms):  # else not fitted (units): the conclusion says why
-        _print_values(fit, paper.get("paper", {}), given=args.restitution is not None)
+        _print_values(fit, paper.get("paper", {}))
     _print_conclusion(fit)
     return 0
 
@@ -155,7 +155,8 @@ def _json(args, record, fit, paper) -> dict:
 
     return {"fit": fit.to_json(), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
             "residual_rms": fit.residual_rms, "residual_rms_y": fit.residual_rms_y,
-            "explained": fit.explained, "note": fit.note, "verdict": str(fit.conclusion),
+            "explained": fit.explained, "note": fit.note, "held": fit.held,
+            "verdict": str(fit.conclusion),
             "diagnoses": [d.to_json() for d in fit.diagnoses], "noise": fit.noise,
             "noise_source": fit.noise_source.value if fit.noise_source else "",
             "misfit_ratio": fit.misfit_ratio,
@@ -163,9 +164,10 @@ def _json(args, record, fit, paper) -> dict:
             "warnings": list(fit.warnings), "provenance": _provenance(args, record)}
 
 
-def _print_values(fit, reading: dict, *, given: bool) -> None:
-    """The table of the fit's values and intervals beside the paper's procedure's, the
-    damping ratios' formulas, what is not fixed, the residual."""
+def _print_values(fit, reading: dict) -> None:
+    """The table of the fit's values and intervals beside the paper's procedure's (a value
+    the record does not determine "not fixed", its range; a held one "given" or "held at
+    0"), the damping ratios' formulas, what is not fixed, the residual."""
     from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS, UNITS
 
     if not fit.explained:
@@ -178,7 +180,7 @@ def _print_values(fit, reading: dict, *, given: bool) -> None:
         pv = reading.get(k)
         ptext = f"{pv:.5g}" if isinstance(pv, float) and math.isfinite(pv) else ""
         vtext = f"{v:>13.5g}" if fit.determined[k] else f"{'not fixed':>13}"
-        itext = (f"{'given':>13}{'':>13}" if given and k == "restitution"
+        itext = (f"{fit.held[k]:>13}{'':>13}" if k in fit.held
                  else f"{lo:>13.5g}{hi:>13.5g}")
         print(f"  {k:<20}{vtext}{itext}  {UNITS[k]:<6}{ptext:>19}")
     for name, formula in DAMPING_RATIO_FORMULAS.items():

@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 
 from treeimpact.analytic.identify.diagnosis import DiagnosisKind
+from treeimpact.analytic.identify.intervals import DETERMINED_FACTOR, TREE
 from treeimpact.analytic.identify.pendulum_record import read_record
-from treeimpact.analytic.identify.record_fit import fit_record
+from treeimpact.analytic.identify.record_fit import Record, fit_record
 from treeimpact.compare.cli import main
 
 DATA = Path(__file__).resolve().parent / "data" / "identify"
@@ -86,8 +87,9 @@ def test_no_confident_wrong_answer(outcomes):
 
 
 def test_every_interval_is_in_the_physical_range(outcomes):
-    """e's in [0, 1]; M_T's, K_T's, C_T's, xi's and E's above 0 (the issue saw e from -0.05
-    to 1.0035 and xi from -0.22)."""
+    """e's in [0, 1]; M_T's, K_T's, C_T's, the damping ratios' and E's above 0, or all of
+    (0, inf) for a quantity the record says nothing about (the issue saw e from -0.05 to
+    1.0035 and xi from -0.22)."""
     assert not [k for k, r in outcomes.items() if not r["physical"]]
 
 
@@ -159,3 +161,79 @@ def test_the_cli_warns_of_units_on_one_line_and_in_the_json(capsys):
     assert main(args + ["--length-unit", "mm"]) == 0  # declared: read right, fitted
     out = capsys.readouterr().out
     assert "verdict: explained" in out
+
+
+# -- issue 35: where the fit claimed more than the record holds ----------------------------
+
+NOISE_ONLY = [c for c in CASES if c.get("noise_only")]
+
+
+def test_noise_alone_is_never_explained():
+    """Gaussian noise and no impact (1 mm, 600 samples at 5 kHz; the fuzzer found one in four
+    "explained (noise-limited)", M_T "determined" in [0.12, 48264] kg): the fitted impact is
+    tested against a record without one, with the noise estimated apart from the fit (the
+    rest before the contact, or the record's second differences), and refused ("no-impact",
+    or not fitted when its numbers look like another unit), none of the tree's quantities
+    fixed. Every noise record of the repository (20; the full set's 100: none explained)."""
+    assert len(NOISE_ONLY) >= 12
+    for case in NOISE_ONLY:
+        fit = fit_record(Record(case["t"], case["x"]), mr.pendulum_test(case["flags"]))
+        kinds = fit.diagnosis_kinds()
+        assert not fit.explained, (case["id"], str(fit.conclusion))
+        assert {DiagnosisKind.NO_IMPACT, DiagnosisKind.UNITS} & set(kinds), case["id"]
+        assert not any(fit.determined[k] for k in TREE), case["id"]
+        assert all(math.isnan(fit.values[k]) for k in TREE), case["id"]
+
+
+def test_a_record_that_ends_at_the_impact_fixes_nothing_of_the_tree():
+    """A logger stopped one sample into the impact (trees A and D; the fuzzer's omega_1 =
+    0.031 rad/s "determined" in [0, inf]): not explained, and nothing of the tree
+    "determined": that takes a bounded interval narrower than a factor 2."""
+    cases = [c for c in CASES if c.get("defect") == "ends-at-impact"]
+    assert len(cases) == 8
+    for case in cases:
+        fit = fit_record(Record(case["t"], case["x"]), mr.pendulum_test(case["flags"]))
+        assert not fit.explained, case["id"]
+        assert not any(fit.determined[k] for k in TREE if k != "t0"), case["id"]
+        for k in TREE:  # what is called determined is bounded and narrower than the factor
+            lo, hi = fit.intervals[k]
+            assert not fit.determined[k] or (0 < hi < math.inf and (
+                k == "t0" or hi <= DETERMINED_FACTOR * lo)), (case["id"], k, lo, hi)
+
+
+def test_the_record_from_the_impact_to_the_separation_is_explained_within_2_percent():
+    """Tree D from the impact to the pendulum's separation (27 ms, shorter than a period;
+    5 kHz, 1 % noise; the independent integrator): no rest and no ring-down, so the sensor's
+    offset and drift are held at 0 and said so ("sensor-held"; fitted, they trade with the
+    motion: "NOT explained (optimiser)", M_T -19 % in the fuzzer's hands); explained, M_T
+    and K_T within 2 % in the repository's four seeds (measured 0.7-1.9 % and 0.2-0.6 %;
+    the full set's: docs/identification.md), every interval holding the truth."""
+    cases = [c for c in CASES if c.get("short")]
+    assert len(cases) == 4
+    for case in cases:
+        fit = fit_record(Record(case["t"], case["x"]), mr.pendulum_test(case["flags"]))
+        assert fit.explained, (case["id"], str(fit.conclusion))
+        assert DiagnosisKind.SENSOR_HELD in fit.diagnosis_kinds()
+        assert fit.held["x_offset"] == fit.held["x_drift"] == "held at 0"
+        assert fit.intervals["x_drift"] == (0.0, 0.0) and fit.values["x_drift"] == 0.0
+        truth = case["truth"]
+        for k in ("M_T", "K_T"):
+            assert abs(fit.values[k] / truth[k] - 1.0) < 0.02, (case["id"], k)
+        for k in ("M_T", "K_T", "C_T", "trunk_damping_ratio", "restitution"):
+            lo, hi = fit.intervals[k]
+            assert fit.determined[k] and lo <= truth[k] <= hi, (case["id"], k, lo, hi)
+
+
+def test_both_columns_in_other_units_are_named_as_such():
+    """t in ms and x in mm, declared as neither (a 10.6 mm peak 23 ms after the contact at
+    2 kHz reads as 10.5 m after 23 s): the fuzzer's "implausible in any unit"; now both
+    named, and with both declared the record is fitted and explained."""
+    spec = META["files"]["undeclared-ms-mm.csv"]
+    test = mr.pendulum_test(META["tree_flags"][spec["tree"]])
+    fit = fit_record(read_record(DATA / "files" / "undeclared-ms-mm.csv"), test)
+    assert not fit.explained and fit.diagnosis_kinds() == [DiagnosisKind.UNITS]
+    assert fit.diagnoses[0].message.startswith("t looks like ms and x like mm, not s and m: ")
+    assert "--time-unit ms --length-unit mm" in fit.diagnoses[0].message
+    declared = fit_record(read_record(DATA / "files" / "undeclared-ms-mm.csv", time_unit="ms",
+                                      length_unit="mm"), test)
+    assert declared.explained and declared.determined["M_T"]

@@ -13,14 +13,16 @@ import numpy as np
 from .fit_model import drift_at, model_motion
 from .fit_parameters import DRIFTS, K_RANGE, M_RANGE, XI_RANGE, Slot
 from .fitter import REFINE_NFEV
-from .noise import RESOLUTION, NoiseJudgement, NoiseSource, dominant_frequency
+from .intervals import DETERMINED_FACTOR
+from .noise import RESOLUTION, ImpactTest, NoiseJudgement, NoiseSource, dominant_frequency
 from .procedure import PendulumTest
 
 #: A record that ends before the trunk's first swing back is truncated when it leaves the
-#: trunk's damping ratio this uncertain (its 95 % interval spanning more than this factor,
-#: +-20 %): a noise-free record fixes the damping before that, a noisy one cut after the
-#: peak does not.
-TRUNCATED_XI_SPAN = 1.5
+#: trunk's damping ratio undetermined (its 95 % interval spanning more than the factor of
+#: intervals.DETERMINED_FACTOR): a noise-free record fixes the damping before that, a
+#: noisy one cut after the peak does not, one from the impact to the pendulum's separation
+#: at 1 % noise does (within a factor 1.4-1.8, docs/identification.md).
+TRUNCATED_XI_SPAN = DETERMINED_FACTOR
 #: The residual's dominant frequency counts as a mode of its own when its peak stands this
 #: far over the white floor (a false alarm once in ~1e3 records of 1e4 samples by chance:
 #: exponential ordinates, ln(5e3 / 1e-3) = 15.4) and is 25 % away from the fitted modes.
@@ -34,7 +36,9 @@ class DiagnosisKind(Enum):
     """What a diagnosis is about (its ``value``: the JSON's and the text output's name)."""
 
     NOISE_LIMITED = "noise-limited"  # explained: the residual is the sensor's noise
+    NO_IMPACT = "no-impact"  # no response above the noise: a record without an impact
     DRIFT = "drift"  # a sensor's drift, fitted and removed
+    SENSOR_HELD = "sensor-held"  # offset and drift held at 0: the record cannot tell them
     OUTLIERS = "outliers"  # isolated wild samples, left out
     ONE_IMPACT = "one-impact"  # the pendulum leaves: M_T and e not fixed apart
     TRUNCATED = "truncated"  # too little ring-down to fix the damping
@@ -48,8 +52,8 @@ class DiagnosisKind(Enum):
 
 
 #: The kinds that make a record NOT explained, in the order a conclusion names them.
-REFUSING = (DiagnosisKind.UNITS, DiagnosisKind.OPTIMISER, DiagnosisKind.TRUNCATED,
-            DiagnosisKind.SECOND_MODE, DiagnosisKind.MISFIT)
+REFUSING = (DiagnosisKind.UNITS, DiagnosisKind.NO_IMPACT, DiagnosisKind.OPTIMISER,
+            DiagnosisKind.TRUNCATED, DiagnosisKind.SECOND_MODE, DiagnosisKind.MISFIT)
 #: The kinds an explained record's conclusion names beside "explained".
 QUALIFYING = (DiagnosisKind.DRIFT, DiagnosisKind.OUTLIERS, DiagnosisKind.ONE_IMPACT)
 
@@ -166,6 +170,7 @@ def drift(p, cov, t: np.ndarray, t_record: np.ndarray, noise: float,
 
 
 _SOURCES = {NoiseSource.REST: "of the samples before the contact",
+            NoiseSource.DIFFERENCES: "of the record's second differences",
             NoiseSource.SPECTRUM: "the residual spectrum's white floor",
             NoiseSource.RESOLUTION: f"the resolution floor, {RESOLUTION:g} of the peak: the "
                                     f"record has no noise above it"}
@@ -176,6 +181,31 @@ def noise_limited(rms: float, judged: NoiseJudgement) -> Diagnosis:
     return Diagnosis(DiagnosisKind.NOISE_LIMITED, (
         f"residual {rms:.3g} m = {judged.ratio:.2f} x the noise {judged.noise:.3g} m ("
         f"{_SOURCES[judged.source]})"))
+
+
+def no_impact(test: ImpactTest, drift_degree: int) -> Diagnosis | None:
+    """A record whose fitted impact does not stand above its noise (``test``): the fit's
+    values are the noise's, not a tree's."""
+    if test.significant:
+        return None
+    null = ("an offset", "an offset and a drift", "an offset and a bent drift")[drift_degree]
+    return Diagnosis(DiagnosisKind.NO_IMPACT, (
+        f"no impact above the noise: {null} alone explain the record within "
+        f"{test.statistic:.3g} noise variances of the fit (an impact needs more than "
+        f"{test.threshold:.3g}; noise {test.noise:.3g} m, {_SOURCES[test.source]}): its "
+        f"motion is the sensor's noise, not a tree's response"))
+
+
+def sensor_held(t_end: float, feat_quarter: float) -> Diagnosis:
+    """No sensor offset or drift fitted: the record (ending ``t_end`` s after the contact)
+    has no rest before the contact and no ring-down past a period (about 4 x
+    ``feat_quarter`` s)."""
+    return Diagnosis(DiagnosisKind.SENSOR_HELD, (
+        f"the sensor's offset and drift held at 0 (its zero taken as the trunk's rest): the "
+        f"record has no rest before the contact and ends {t_end:.3g} s after it, within a "
+        f"period of the motion (about {4.0 * feat_quarter:.3g} s), where an offset or a "
+        f"drift cannot be told from the motion; a record from before the impact or past a "
+        f"period fits them"))
 
 
 def outliers(rows: list, count: int, z: float) -> Diagnosis:

@@ -115,13 +115,19 @@ def padded(p) -> np.ndarray:
     return out
 
 
+#: The sensor terms a record that cannot tell them from the motion holds at zero.
+SENSOR_TERMS = (Slot.X_OFFSET, *DRIFTS)
+
+
 def record_parameters(t: np.ndarray, dt: float, scale: list, *, restitution_given: bool,
-                      pendulum: bool) -> ParameterSet:
+                      pendulum: bool, separable: bool = True) -> ParameterSet:
     """The fit's parameters for a record at times t (s; median interval ``dt``) whose
     channels' peaks are ``scale`` (m: x, then y): the bounds (M_RANGE, K_RANGE, XI_RANGE,
     E_MAX; the contact within the record, up to 10 samples before it), the optimiser's
-    scales and what is held: e when given, the pendulum's offset without a y, the bend of
-    the drift until the record calls for it (fit_record). Values 0 (set from a start)."""
+    scales and what is held: e when given, the pendulum's offset without a y, the trunk
+    sensor's offset and drift (at zero) unless ``separable`` (the record can tell them from
+    the motion), the drift's bend until the record calls for it (fit_record). Values 0 (set
+    from a start)."""
     span = float(t[-1] - t[0])
     x, y = scale[0], scale[-1]
     rows = (
@@ -130,9 +136,9 @@ def record_parameters(t: np.ndarray, dt: float, scale: list, *, restitution_give
         (Slot.TRUNK_DAMPING_RATIO, XI_RANGE[0], XI_RANGE[1], 0.1, False),
         (Slot.RESTITUTION, 0.0, E_MAX, 0.1, restitution_given),
         (Slot.T0, t[0] - 10 * dt, t[-1] - 10 * dt, dt, False),
-        (Slot.X_OFFSET, -math.inf, math.inf, 1e-2 * x, False),
+        (Slot.X_OFFSET, -math.inf, math.inf, 1e-2 * x, not separable),
         (Slot.Y_OFFSET, -math.inf, math.inf, 1e-2 * y, not pendulum),
-        (Slot.X_DRIFT, -math.inf, math.inf, 1e-2 * x / span, False),
+        (Slot.X_DRIFT, -math.inf, math.inf, 1e-2 * x / span, not separable),
         (Slot.X_DRIFT2, -math.inf, math.inf, 1e-2 * x / span ** 2, True),
     )
     return ParameterSet(tuple(Parameter(slot, 0.0, float(lo), float(hi), float(sc), frozen)

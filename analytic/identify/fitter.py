@@ -15,6 +15,7 @@ from .fit_model import model_motion
 from .fit_parameters import (
     DRIFT_POWER,
     OFFSET_CHANNEL,
+    SENSOR_TERMS,
     ParameterSet,
     Slot,
     record_parameters,
@@ -159,7 +160,7 @@ class Fitter:
     """One record's fits: its parameters (bounds, scales, what is held) and channel scales,
     and a local fit from a start."""
 
-    def __init__(self, t, x, y, test, restitution_given: bool):
+    def __init__(self, t, x, y, test, restitution_given: bool, separable: bool = True):
         self.t, self.x, self.y, self.test = t, x, y, test
         self.dt = float(np.median(np.diff(t)))
         self.runs = 0
@@ -171,7 +172,10 @@ class Fitter:
             self.scale.append(max(float(np.max(np.abs(y - np.median(y)))), 1e-300))
         self.params = record_parameters(t, self.dt, self.scale,
                                         restitution_given=restitution_given,
-                                        pendulum=y is not None)
+                                        pendulum=y is not None, separable=separable)
+        #: the sensor terms held at zero (a record that cannot tell them from the motion)
+        self.held_at_zero = [s for s in SENSOR_TERMS if self.params[s].frozen
+                             and s != Slot.X_DRIFT2]
 
     def refine(self, p0, keep, params: ParameterSet | None = None) -> Fit:
         """The fit with all free from p0 on the kept samples: on every k-th of them (at
@@ -188,6 +192,8 @@ class Fitter:
         from scipy.optimize import least_squares
 
         params = self.params if params is None else params
+        p0 = np.array(p0, float)
+        p0[self.held_at_zero] = 0.0
         idx = np.arange(self.t.size)
         if keep is not None:
             idx = idx[keep]

@@ -30,6 +30,14 @@ UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
          "pair_damping_ratio": "-", "restitution": "-", "E": "Pa", "omega_1": "rad/s",
          "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s", "x_drift2": "m/s^2",
          "y_offset": "m"}
+#: The quantities that are positive by nature (intervals in their logarithm).
+POSITIVE = ("M_T", "K_T", "C_T", *DAMPING_RATIOS, "E", "omega_1", "V_1")
+#: What the tree's response fixes (not a record without an impact): all but the sensor's.
+TREE = (*POSITIVE, "restitution", "t0")
+#: A quantity is determined by a record when its 95 % interval is bounded and, for the
+#: positive ones and e, its high end at most this factor of its low end (M_T in 50-100 kg
+#: is determined, in 50-101 kg or 0-10 kg not): else "not fixed", its range the answer.
+DETERMINED_FACTOR = 2.0
 #: The nuisance quantities, each a parameter of the fit reported as fitted.
 NUISANCE = {"t0": Slot.T0, "x_offset": Slot.X_OFFSET, "x_drift": Slot.X_DRIFT,
             "x_drift2": Slot.X_DRIFT2, "y_offset": Slot.Y_OFFSET}
@@ -99,11 +107,24 @@ def restitution_interval(e: float, half_width: float) -> tuple[float, float]:
     w = float(half_width)
     if w != w:
         return math.nan, math.nan
+    if w == 0.0:  # e held (given): its interval is its value, exactly
+        return e, e
     phi = math.asin(math.sqrt(min(max(e, 0.0), 1.0)))
     slope = 0.5 / math.sqrt(e * (1.0 - e)) if 0.0 < e < 1.0 else math.inf
     half = w * slope if w > 0 else 0.0
     lo, hi = max(0.0, phi - half), min(0.5 * math.pi, phi + half)
     return math.sin(lo) ** 2, math.sin(hi) ** 2
+
+
+def determined(name: str, interval) -> bool:
+    """Whether a record determines the quantity ``name`` with this 95 % interval: bounded
+    and, for a positive quantity or e, narrower than DETERMINED_FACTOR (high / low)."""
+    lo, hi = interval
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return False
+    if name in POSITIVE or name == "restitution":
+        return lo > 0.0 and hi <= DETERMINED_FACTOR * lo
+    return True
 
 
 def widened_over_profile(best: Fit, profile: RestitutionProfile, intervals: dict,

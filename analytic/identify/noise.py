@@ -1,6 +1,8 @@
-"""The sensor's noise and whether a residual is that noise: the spread of the samples before
-the contact, the white floor of a residual's spectrum, the record's resolution floor; the
-residual's dominant frequency. docs/identification.md, "Diagnoses"."""
+"""The sensor's noise and what it allows: the spread of the samples before the contact, of
+the record's second differences, the white floor of a residual's spectrum, the record's
+resolution floor; whether a residual is that noise, whether the motion after the contact
+stands above it (a test against a record without an impact), the residual's dominant
+frequency. docs/identification.md, "Diagnoses"."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from scipy.stats import chi2
 
 from .record_features import robust_sigma
 
@@ -25,6 +28,7 @@ class NoiseSource(Enum):
     """Where the noise a residual is judged against came from."""
 
     REST = "rest"  # the samples before the contact
+    DIFFERENCES = "differences"  # the record's second differences (no rest recorded)
     SPECTRUM = "spectrum"  # the residual spectrum's white floor
     RESOLUTION = "resolution"  # RESOLUTION of the peak: the record has no noise above it
 
@@ -58,6 +62,66 @@ def rest_noise(t: np.ndarray, x: np.ndarray, t_contact: float) -> tuple[float, i
     s = robust_sigma(r)
     keep = np.abs(r - np.median(r)) <= 5.0 * s if s > 0 else np.ones(n, bool)
     return float(np.std(r[keep], ddof=2)) if np.count_nonzero(keep) > 2 else s, n
+
+
+def difference_noise(x: np.ndarray) -> float:
+    """The noise (standard deviation, m) of a record from its second differences, robustly
+    (their median absolute deviation; x_{i+1} - 2 x_i + x_{i-1} of white noise has variance
+    6 sigma^2, of a motion sampled at omega dt << 1 only (omega dt)^2 of its amplitude, and
+    an impact's kink moves a few of them): independent of any fit. An over-estimate where
+    the motion is sampled coarsely (omega dt near 1)."""
+    d2 = np.diff(np.asarray(x, float), 2)
+    return robust_sigma(d2) / math.sqrt(6.0) if d2.size else math.nan
+
+
+def independent_noise(t: np.ndarray, x: np.ndarray, t_contact: float
+                      ) -> tuple[float, NoiseSource]:
+    """The record's noise (m) estimated apart from any fit: of the samples before the
+    contact when there are MIN_REST_SAMPLES of them, else of its second differences."""
+    sigma, _ = rest_noise(t, x, t_contact)
+    if np.isfinite(sigma):
+        return sigma, NoiseSource.REST
+    return difference_noise(x), NoiseSource.DIFFERENCES
+
+
+#: The test of the impact against a record without one: its false-alarm probability on a
+#: record of noise alone, shared among the record's samples (the contact could be at any),
+#: so one record of noise in 1e4 passes it whatever its length.
+NO_IMPACT_ALPHA = 1e-4
+
+
+@dataclass(frozen=True)
+class ImpactTest:
+    """The fitted impact against a record without one (offset and drift alone): the fall of
+    the residual sum of squares over the noise's variance (``statistic``, chi-square under
+    no impact), the ``threshold`` it must pass, and the noise (m) and its ``source``."""
+
+    statistic: float
+    threshold: float
+    noise: float
+    source: NoiseSource
+
+    @property
+    def significant(self) -> bool:
+        return self.statistic > self.threshold
+
+
+def impact_test(t: np.ndarray, x: np.ndarray, resid: np.ndarray, noise: float,
+                source: NoiseSource, *, drift_degree: int, parameters: int) -> ImpactTest:
+    """Whether the fitted motion stands above the noise: the samples ``x`` (m, at times t,
+    the ones fitted) explained by a polynomial of ``drift_degree`` (the fit's offset and
+    drift, no impact) leave RSS_0; the fit leaves ``resid``. (RSS_0 - RSS) / noise^2 is
+    chi-square with ``parameters`` degrees of freedom (the impact's: M_T, K_T, the damping,
+    e, t0) on noise alone, its threshold at NO_IMPACT_ALPHA / n (the contact's time searched
+    over the n samples)."""
+    s = (t - t[0]) / max(float(t[-1] - t[0]), 1e-300)
+    basis = np.vander(s, drift_degree + 1)
+    coef, *_ = np.linalg.lstsq(basis, x, rcond=None)
+    rss0 = float(np.sum((x - basis @ coef) ** 2))
+    rss = float(np.sum(resid ** 2))
+    statistic = (rss0 - rss) / max(noise, 1e-300) ** 2
+    threshold = float(chi2.isf(NO_IMPACT_ALPHA / max(t.size, 1), parameters))
+    return ImpactTest(statistic, threshold, noise, source)
 
 
 def periodogram(r: np.ndarray, dt: float, pad: int = 1) -> tuple[np.ndarray, np.ndarray]:

@@ -70,6 +70,9 @@ class Record:
                                  "(sorted, without repeats, is required)")
         if not np.max(x) - np.min(x) > 0:
             raise ParameterError(f"{where}: x never changes: the record holds no impact")
+        if self.y is not None and not np.ptp(np.asarray(self.y, float)) > 0:
+            raise ParameterError(f"{where}: y never changes: the pendulum's column holds no "
+                                 "motion (leave it out, or record the pendulum)")
 
 #: The largest record read: its samples (a 1 s test at 1 MHz) and its file's size, so that
 #: a fit stays within seconds and ~1 GB (a fit of 1e5 samples: ~1 s, benchmarks/bench_identify.py).
@@ -189,6 +192,12 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
     x, y = (None if key not in values else np.array(
         [float(v.scaleb(power[key])) if power[key] else v for v in values[key]], float)
         for key in ("x", "y"))
+    for key, v in (("x", x), ("y", y)):  # the column as typed in the message
+        if v is not None and v.size and np.all(np.isfinite(v)) and not np.ptp(v) > 0:
+            what = ("the record holds no impact" if key == "x" else "the pendulum's column "
+                    "holds no motion (leave it out, or record the pendulum)")
+            raise ParameterError(f"record {name!r}: column {cells[keys.index(key)].strip()!r}"
+                                 f" never changes: {what}")
     return Record(t, x, y, time_unit=units["t"], length_unit=units["x"], rows=rows,
                   warnings=tuple(warnings), t_start=t_start, source=name)
 

@@ -85,25 +85,27 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
     """One line per record whose numbers look like another unit than declared: the peak
     displacement, the time from the contact to the peak, the sample interval or the trunk's
     velocity after the contact (against the pendulum's u_1) implausible (:data:`PLAUSIBLE`),
-    and plausible once a column is read in another unit (a factor 1e2-1e6; the likeliest
-    when several would do). ``time_unit`` and ``length_unit``: what the record was declared
-    in (its numbers already converted to SI)."""
+    and plausible once a column, or both, is read in another unit (a factor 1e2-1e6 each;
+    one column rather than two, the likeliest when several would do). ``time_unit`` and
+    ``length_unit``: what the record was declared in (its numbers already converted to
+    SI)."""
     peak, rise = feat.span, max(feat.t_peak - feat.t_contact, feat.dt)
     speed = feat.velocity / u1
     ok = _plausible(peak, rise, feat.dt, speed)
     if all(ok.values()):
         return []
-    declared_l, declared_t = LENGTH_UNITS[length_unit], TIME_UNITS[time_unit]
     options = []
-    for unit, f in LENGTH_UNITS.items():
-        g = f / declared_l  # the numbers read in `unit` instead: lengths x g
-        if unit != length_unit and all(_plausible(peak * g, rise, feat.dt, speed * g).values()):
-            options.append((_distance(peak=peak * g, speed=speed * g), "x", unit))
-    for unit, f in TIME_UNITS.items():
-        g = f / declared_t
-        if unit != time_unit and all(_plausible(peak, rise * g, feat.dt * g, speed / g)
-                                     .values()):
-            options.append((_distance(rise=rise * g, speed=speed / g), "t", unit))
+    for length, f in LENGTH_UNITS.items():
+        for time, h in TIME_UNITS.items():
+            g = f / LENGTH_UNITS[length_unit]  # lengths x g, times x k: read in these
+            k = h / TIME_UNITS[time_unit]
+            changed = [c for c, u, d in (("t", time, time_unit), ("x", length, length_unit))
+                       if u != d]
+            if changed and all(_plausible(peak * g, rise * k, feat.dt * k,
+                                          speed * g / k).values()):
+                options.append((len(changed), _distance(peak=peak * g, rise=rise * k,
+                                                        speed=speed * g / k),
+                                {"t": time, "x": length}, changed))
     facts = (f"a peak of {peak:.3g} m, {rise:.3g} s from the contact to it, samples "
              f"{feat.dt:.3g} s apart and a trunk velocity of {feat.velocity:.3g} m/s after a "
              f"pendulum at u_1 = {u1:.3g} m/s")
@@ -111,8 +113,20 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
         bad = ", ".join(k for k, v in ok.items() if not v)
         return [f"the record is implausible for a pendulum test in any unit ({bad}: {facts}); "
                 "check the pendulum's flags and the columns' units"]
-    _, column, unit = min(options)
-    declared = length_unit if column == "x" else time_unit
-    flag = "--length-unit" if column == "x" else "--time-unit"
-    return [f"{column} looks like {unit}, not {declared}: {facts} are implausible, in {unit} "
-            f"they are not (declare it: a header '{column} ({unit})' or {flag} {unit})"]
+    _, _, units, changed = min(options, key=lambda o: o[:2])
+    return [_unit_line(changed, units, {"t": time_unit, "x": length_unit}, facts)]
+
+
+def _unit_line(changed: list, units: dict, declared: dict, facts: str) -> str:
+    """``x looks like mm, not m: ...`` (or ``t looks like ms and x like mm, not s and m``)
+    with how to declare it."""
+    flag = {"t": "--time-unit", "x": "--length-unit"}
+    looks = " and ".join(f"{c} {'looks ' if i == 0 else ''}like {units[c]}"
+                         for i, c in enumerate(changed))
+    not_ = " and ".join(declared[c] for c in changed)
+    read = " and ".join(units[c] for c in changed)
+    headers = ", ".join(f"'{c} ({units[c]})'" for c in changed)
+    flags = " ".join(f"{flag[c]} {units[c]}" for c in changed)
+    noun = "it: a header" if len(changed) == 1 else "them: headers"
+    return (f"{looks}, not {not_}: {facts} are implausible, in {read} they are not "
+            f"(declare {noun} {headers} or {flags})")

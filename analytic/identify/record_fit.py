@@ -33,22 +33,33 @@ from . import diagnosis as dx
 from .conclusion import Conclusion, conclude, not_fitted
 from .diagnosis import Diagnosis, DiagnosisKind
 from .fit_model import drift_at, model_motion, model_x  # noqa: F401 - model_x: public
-from .fit_parameters import Slot
+from .fit_parameters import DRIFTS, MODEL_SLOTS, Slot
 from .fitter import Fitter
 from .intervals import (  # noqa: F401 - DAMPING_RATIO_FORMULAS, log_interval: public
     DAMPING_RATIO_FORMULAS,
     QUANTITIES,
+    TREE,
+    determined,
     estimates,
     log_interval,
     ridge_estimates,
     widened_over_profile,
 )
-from .noise import RESOLUTION, NoiseJudgement, NoiseSource, judge, rest_noise
+from .noise import (
+    RESOLUTION,
+    ImpactTest,
+    NoiseJudgement,
+    NoiseSource,
+    impact_test,
+    independent_noise,
+    judge,
+    rest_noise,
+)
 from .pendulum_record import Record, read_record  # noqa: F401 - read_record: public here
 from .procedure import PendulumTest
 from .profile import CHI2_95, find_ridge
 from .record_features import Features, features, unit_suspicions
-from .staging import OUTLIER_Z, Staged, on_fit_clock, stage
+from .staging import OUTLIER_Z, Staged, on_fit_clock, sensor_separable, stage
 
 
 @dataclass(frozen=True)
@@ -62,6 +73,7 @@ class FitResult:
     explained: bool  # the 1-DOF model explains the record to its noise and its values hold
     model_x: np.ndarray  # m, the fitted x at the record's times
     determined: dict  # name -> False for a quantity the record does not fix (value NaN)
+    #               (intervals.determined: a bounded interval narrower than a factor 2)
     point: np.ndarray  # the optimum p (fit_parameters.Slot order); one of many if not fixed
     note: str = ""  # why some quantities are not determined, or ""
     residual_rms_y: float | None = None  # m, of the pendulum's record if it has one
@@ -73,6 +85,8 @@ class FitResult:
     misfit_ratio: float = math.nan  # residual RMS / noise (about 1 when explained)
     flagged: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # outlier rows
     warnings: tuple = ()  # one line each: units, ...
+    held: dict = field(default_factory=dict)  # name -> "given" / "held at 0": not fitted,
+    #               its interval its value (e given, a drift the record cannot separate)
     starts: int = 0  # least-squares fits run (the profile's points, refinements)
     runs: int = 0  # runs of the model (the exact solver sampled at the record's times)
 
@@ -92,6 +106,7 @@ class _Fixed:
     intervals: dict
     determined: dict
     note: str = ""
+    held: dict = field(default_factory=dict)
 
 
 def fit_record(record: Record, test: PendulumTest, *, start=None,
@@ -118,8 +133,9 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     if units:  # no tree's values to find: said so at once (a fit of a record 1000 x too
         # long or too large is slow and meaningless)
         return _unit_result(record, feat, units, warnings + units)
-    fitter = Fitter(t, x, y, test, restitution is not None)
     rest = rest_noise(t, x, feat.t_contact)
+    fitter = Fitter(t, x, y, test, restitution is not None,
+                    separable=sensor_separable(t, feat, rest[1]))
     floor = RESOLUTION * max(feat.span, 1e-300)
     staged = stage(fitter, feat, test, floor=floor, sigma_rest=rest[0],
                    restitution=restitution,
@@ -134,8 +150,10 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
                    RESOLUTION * fitter.scale[-1] if y is not None else 0.0)
     rms = math.sqrt(float(np.mean(resid ** 2)))
     rms_y = None if y is None else math.sqrt(float(np.mean(resid_y ** 2)))
-    fixed = _what_is_fixed(staged, test, floor, rms, rms_y, t_shift)
-    explained, diagnoses = _diagnose(staged, test, judged, fixed, record, feat, t_shift, resid)
+    impact = _impact_test(staged, feat, resid, floor)
+    fixed = _what_is_fixed(staged, test, floor, rms, rms_y, t_shift, impact.significant)
+    explained, diagnoses = _diagnose(staged, test, judged, impact, fixed, record, feat,
+                                     t_shift, resid)
     peak = float(np.max(np.abs(x[keep] - p[Slot.X_OFFSET]
                                - drift_at(p, t[keep] - p[Slot.T0]))))
     point = np.array(p, float)
@@ -143,6 +161,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     return FitResult(
         values=fixed.values, intervals=fixed.intervals, residual_rms=rms, peak=peak,
         explained=explained, model_x=motion[0], determined=fixed.determined, point=point,
+        held=fixed.held,
         note=fixed.note, residual_rms_y=rms_y, model_y=motion[2] if y is not None else None,
         conclusion=conclude(explained, diagnoses), diagnoses=tuple(diagnoses),
         noise=judged.noise, noise_source=judged.source, misfit_ratio=judged.ratio,
@@ -150,11 +169,28 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         runs=fitter.runs)
 
 
+def _impact_test(staged: Staged, feat: Features, resid: np.ndarray, floor: float):
+    """The fitted impact against the record without one (:func:`noise.impact_test`), the
+    noise estimated apart from the fit (:func:`noise.independent_noise`), never below the
+    resolution ``floor``; the no-impact model has the fit's offset and drift terms."""
+    fitter, keep, params = staged.fitter, staged.keep, staged.best.problem.params
+    noise, source = independent_noise(fitter.t, fitter.x, feat.t_contact)
+    impact = [s for s in (*MODEL_SLOTS, Slot.T0) if not params[s].frozen]
+    return impact_test(fitter.t[keep], fitter.x[keep], resid, max(noise, floor), source,
+                       drift_degree=_drift_degree(params), parameters=len(impact))
+
+
+def _drift_degree(params) -> int:
+    """The degree of the fit's drift polynomial: 0 (held), 1, or 2 (bent)."""
+    return sum(not params[s].frozen for s in DRIFTS)
+
+
 def _what_is_fixed(staged: Staged, test: PendulumTest, floor: float, rms: float,
-                   rms_y: float | None, t_shift: float) -> _Fixed:
+                   rms_y: float | None, t_shift: float, impact: bool) -> _Fixed:
     """Values and 95 % intervals at the best fit, widened over e's profile (the restitutions
     within the likelihood-ratio threshold of the best fit), a one-impact record's ranges;
-    t0 on the record's clock."""
+    t0 on the record's clock; what the record does not determine (:func:`_undetermined`;
+    without an ``impact`` above the noise, none of the tree's quantities) not fixed."""
     fitter, best = staged.fitter, staged.best
     pendulum = fitter.y is not None
     s2 = max((max(rms, floor) / fitter.scale[0]) ** 2,
@@ -174,25 +210,48 @@ def _what_is_fixed(staged: Staged, test: PendulumTest, floor: float, rms: float,
                                             values, intervals))
     fixed.values["t0"] += t_shift  # back on the record's own clock
     fixed.intervals["t0"] = tuple(v + t_shift for v in fixed.intervals["t0"])
-    return fixed
+    return _undetermined(fixed, best.problem.params, impact)
 
 
-def _diagnose(staged: Staged, test: PendulumTest, judged: NoiseJudgement, fixed: _Fixed,
-              record: Record, feat: Features, t_shift: float, resid: np.ndarray):
+#: The reported quantities a fit may hold at a value, and the words for it.
+_HELD = {Slot.RESTITUTION: ("restitution", "given"), Slot.X_OFFSET: ("x_offset", "held at 0"),
+         Slot.X_DRIFT: ("x_drift", "held at 0"), Slot.X_DRIFT2: ("x_drift2", "held at 0")}
+
+
+def _undetermined(fixed: _Fixed, params, impact: bool) -> _Fixed:
+    """``fixed`` with each quantity the record does not determine (:func:`intervals.
+    determined`; any of the tree's without an ``impact``) not fixed: its value NaN, its
+    interval its range. A held parameter (``params`` frozen: e given, a drift not fitted)
+    is determined, its interval its value."""
+    held = {name: how for slot, (name, how) in _HELD.items() if params[slot].frozen}
+    values, ok = dict(fixed.values), dict(fixed.determined)
+    for name, interval in fixed.intervals.items():
+        if name in held:
+            ok[name] = True
+            continue
+        ok[name] = ok[name] and determined(name, interval) and (impact or name not in TREE)
+        if not ok[name]:
+            values[name] = math.nan
+    note = fixed.note if impact else ("no impact above the noise: the record fixes none of "
+                                      "the tree's quantities")
+    return _Fixed(values, fixed.intervals, ok, note, held)
+
+
+def _diagnose(staged: Staged, test: PendulumTest, judged: NoiseJudgement,
+              impact: ImpactTest, fixed: _Fixed, record: Record, feat: Features,
+              t_shift: float, resid: np.ndarray):
     """(explained, diagnoses): the findings of :mod:`.diagnosis` on the staged fit (its
-    residual ``resid`` on the kept samples);
-    explained when the residual is the noise on every channel and no refusing kind
-    (:data:`diagnosis.REFUSING`) applies."""
-    fitter, p, keep = staged.fitter, staged.best.p, staged.keep
-    t = fitter.t
-    lower, upper = fitter.params[Slot.T0].low, fitter.params[Slot.T0].high
-    resid_after = resid[t[keep] > p[Slot.T0]]
-    cov = staged.best.problem.covariance(p, RESOLUTION * max(feat.span, 1e-300))
-    found = [
-        dx.optimiser_trouble(p, lower, upper, fitter.dt, staged.best.status, judged.limited),
-        dx.truncation(p, test, float(t[-1]), fixed.intervals["trunk_damping_ratio"]),
-        dx.residual_diagnosis(p, test, judged, resid_after, fitter.dt),
-        dx.drift(p, cov, t, t + t_shift, judged.noise, feat.span)]
+    residual ``resid`` on the kept samples); explained when the impact stands above the
+    noise, the residual is the noise on every channel and no refusing kind
+    (:data:`diagnosis.REFUSING`) applies. A record without an impact gets no diagnosis of
+    its fit but that."""
+    fitter = staged.fitter
+    found = [dx.no_impact(impact, _drift_degree(staged.best.problem.params))]
+    if impact.significant:
+        found += _fit_findings(staged, test, judged, fixed, feat, t_shift, resid)
+    if fitter.params[Slot.X_OFFSET].frozen:
+        found.append(dx.sensor_held(float(fitter.t[-1] - feat.t_contact),
+                                   max(feat.t_peak - feat.t_contact, feat.dt)))
     diagnoses = [d for d in found if d is not None]
     explained = judged.limited and judged.y_limited and not any(
         d.kind in dx.REFUSING for d in diagnoses)
@@ -201,9 +260,24 @@ def _diagnose(staged: Staged, test: PendulumTest, judged: NoiseJudgement, fixed:
     if staged.flagged.size:
         rows = [record.row(int(i)) for i in staged.flagged[:5]]
         diagnoses.append(dx.outliers(rows, staged.flagged.size, OUTLIER_Z))
-    if fixed.note:
+    if fixed.note and impact.significant:
         diagnoses.append(Diagnosis(DiagnosisKind.ONE_IMPACT, fixed.note))
     return explained, diagnoses
+
+
+def _fit_findings(staged: Staged, test: PendulumTest, judged: NoiseJudgement, fixed: _Fixed,
+                  feat: Features, t_shift: float, resid: np.ndarray) -> list:
+    """The fit's own findings: optimiser trouble, a truncated record, a residual that is
+    not the noise (a second mode, a misfit), a drift."""
+    fitter, p, keep = staged.fitter, staged.best.p, staged.keep
+    t = fitter.t
+    lower, upper = fitter.params[Slot.T0].low, fitter.params[Slot.T0].high
+    cov = staged.best.problem.covariance(p, RESOLUTION * max(feat.span, 1e-300))
+    return [
+        dx.optimiser_trouble(p, lower, upper, fitter.dt, staged.best.status, judged.limited),
+        dx.truncation(p, test, float(t[-1]), fixed.intervals["trunk_damping_ratio"]),
+        dx.residual_diagnosis(p, test, judged, resid[t[keep] > p[Slot.T0]], fitter.dt),
+        dx.drift(p, cov, t, t + t_shift, judged.noise, feat.span)]
 
 
 def _unit_result(record: Record, feat: Features, units: list, warnings: list) -> FitResult:

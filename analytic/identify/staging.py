@@ -18,6 +18,7 @@ import numpy as np
 from .fit_model import model_motion
 from .fit_parameters import K_RANGE, M_RANGE, Slot, padded
 from .fitter import Fit, Fitter
+from .noise import MIN_REST_SAMPLES
 from .one_impact import on_ridge
 from .procedure import PendulumTest
 from .profile import PROFILE_NFEV_FIRST, PROFILE_SAMPLES, RestitutionProfile
@@ -94,6 +95,16 @@ def on_fit_clock(p, t_shift: float) -> np.ndarray:
     return out
 
 
+def sensor_separable(t: np.ndarray, feat: Features, rest_samples: int) -> bool:
+    """Whether a record can tell its sensor's offset and drift from the motion: it holds a
+    rest before the contact (``rest_samples``, at least MIN_REST_SAMPLES) or rings down past
+    a period after it (four times the contact-to-peak time, a quarter period, as
+    :func:`first_guess` reads it). Elsewhere they trade with the motion (a short record's
+    level and slope are either)."""
+    quarter = max(feat.t_peak - feat.t_contact, feat.dt)
+    return rest_samples >= MIN_REST_SAMPLES or float(t[-1]) - feat.t_contact > 4.0 * quarter
+
+
 def stage(fitter: Fitter, feat: Features, test: PendulumTest, *, floor: float,
           sigma_rest: float, restitution: float | None = None, start=None,
           free_point=None) -> Staged:
@@ -122,7 +133,9 @@ def stage(fitter: Fitter, feat: Features, test: PendulumTest, *, floor: float,
         flagged = np.union1d(flagged, new).astype(int)
         keep[flagged] = False
         polished = [fitter.refine(polished[0].p, keep)]
-    best = _with_bent_drift(fitter, polished[0], keep, floor)
+    best = polished[0]
+    if not fitter.params[Slot.X_DRIFT].frozen:  # a drift fitted: maybe a bent one
+        best = _with_bent_drift(fitter, best, keep, floor)
     return Staged(fitter, best, profile, keep, flagged)
 
 
