@@ -143,13 +143,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
                    free_point=None if free_fit is None else on_fit_clock(free_fit.point,
                                                                          t_shift))
     p, keep = staged.best.p, staged.keep
-    motion = model_motion(p, test, t, pendulum=y is not None)
-    resid = (motion[0] - x)[keep]
-    resid_y = None if y is None else (motion[2] - y)[keep]
-    judged = judge(resid, fitter.dt, rest, floor, resid_y,
-                   RESOLUTION * fitter.scale[-1] if y is not None else 0.0)
-    rms = math.sqrt(float(np.mean(resid ** 2)))
-    rms_y = None if y is None else math.sqrt(float(np.mean(resid_y ** 2)))
+    motion, resid, judged, rms, rms_y = _residuals(staged, test, rest, floor)
     impact = _impact_test(staged, feat, resid, floor)
     fixed = _what_is_fixed(staged, test, floor, rms, rms_y, t_shift, impact.significant)
     explained, diagnoses = _diagnose(staged, test, judged, impact, fixed, record, feat,
@@ -167,6 +161,21 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         noise=judged.noise, noise_source=judged.source, misfit_ratio=judged.ratio,
         flagged=staged.flagged, warnings=tuple(warnings), starts=fitter.fits,
         runs=fitter.runs)
+
+
+def _residuals(staged: Staged, test: PendulumTest, rest: tuple, floor: float):
+    """(motion, x residual on the kept samples, the noise's judgement of it, its RMS, the
+    y residual's RMS or None) of the staged fit (:func:`noise.judge`)."""
+    fitter, keep = staged.fitter, staged.keep
+    y = fitter.y
+    motion = model_motion(staged.best.p, test, fitter.t, pendulum=y is not None)
+    resid = (motion[0] - fitter.x)[keep]
+    resid_y = None if y is None else (motion[2] - y)[keep]
+    judged = judge(resid, fitter.dt, rest, floor, resid_y,
+                   RESOLUTION * fitter.scale[-1] if y is not None else 0.0)
+    rms = math.sqrt(float(np.mean(resid ** 2)))
+    rms_y = None if y is None else math.sqrt(float(np.mean(resid_y ** 2)))
+    return motion, resid, judged, rms, rms_y
 
 
 def _impact_test(staged: Staged, feat: Features, resid: np.ndarray, floor: float):
