@@ -618,6 +618,15 @@ def set_numbers(rows: list[dict]) -> dict:
     if excess:
         out["from_truth_fits"] = len(excess)
         out["from_truth_better"] = sum(q > 1.0 for q in excess)
+    shares = []  # per tree (its grid's noisy records) and quantity: intervals holding the truth
+    for tree in GRID_TREES:
+        mine = [r for r in explained if r["id"].startswith(f"{tree}-")]
+        for k in ("M_T", "K_T", "C_T", "trunk_damping_ratio", "restitution"):
+            got = [r["covered"][k] for r in mine if k in r["covered"]]
+            if got:
+                shares.append(100.0 * sum(got) / len(got))
+    if shares:
+        out["explained_covered_pct"] = [min(shares), max(shares)]
     return out
 
 
@@ -716,6 +725,9 @@ def main(argv=None) -> int:
     ap.add_argument("--numbers", type=Path,
                     help="with --evaluate (or alone: --out's evaluation.json) or --accuracy: "
                          "merge the figures into this results file")
+    ap.add_argument("--label", default="validation",
+                    help="with --numbers: the figures' key prefix (default validation; "
+                         "before.validation for an older fit's evaluation)")
     ap.add_argument("--accuracy", type=int, metavar="SEEDS",
                     help="measure the central-leader accuracy on this many seeds")
     args = ap.parse_args(argv)
@@ -734,8 +746,8 @@ def main(argv=None) -> int:
         (args.out / "evaluation.json").write_text(json.dumps(rows, indent=1))
     if args.numbers:
         rows = json.loads((args.out / "evaluation.json").read_text())
-        write_numbers(args.numbers, {f"validation.{k}": v for k, v in set_numbers(rows).items()},
-                      "validation")
+        write_numbers(args.numbers, {f"{args.label}.{k}": v
+                                     for k, v in set_numbers(rows).items()}, args.label)
         return 0
     if args.evaluate:
         return 0
