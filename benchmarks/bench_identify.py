@@ -89,7 +89,7 @@ def main(argv=None) -> int:
         wall, cpu = statistics.median(walls), statistics.median(cpus)
         medians.append(wall)
         rows.append({"record": label, "samples": int(record.t.size), "wall_s": wall,
-                     "cpu_s": cpu})
+                     "cpu_s": cpu, "runs": getattr(fit, "runs", 0)})
         worst = max(worst, (wall, label))
         if isinstance(fit, Exception):
             verdict, fits, runs = f"failed: {type(fit).__name__}", 0, 0
@@ -109,7 +109,8 @@ def main(argv=None) -> int:
         "cpu_s.median": statistics.median(small), "cpu_s.quartiles": [
             statistics.quantiles(small, n=4)[0], statistics.quantiles(small, n=4)[2]],
         "cpu_s.range": _results.span(small), "cpu_s.1e5_samples": _results.span(large),
-        "cpu_s.worst": max(r["cpu_s"] for r in fitted)},
+        "cpu_s.worst": max(r["cpu_s"] for r in fitted),
+        "runs.range": _results.span(r["runs"] for r in fitted)},
         {"repeats": args.repeats, "records": rows}, started_load=started)
     return 0
 
