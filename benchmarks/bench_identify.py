@@ -16,10 +16,16 @@ Target (issue 24): one identification under 2 s on any record up to 1e5 samples.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
 from pathlib import Path
+
+# one BLAS thread, as `make benchmark` runs it: a fit's matrices are small, and a second
+# OpenBLAS thread spinning on a shared 2-core machine doubled a fit's CPU seconds (measured)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(Path(__file__).resolve().parent))

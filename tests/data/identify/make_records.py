@@ -540,7 +540,8 @@ def evaluate(case: dict, from_truth: bool = False) -> dict:
         # of the noise (a 95 % interval allows 3.84; below 1 the two are the same optimum)
         extra["excess_chi2"] = n * (fit.residual_rms ** 2 - local.residual_rms ** 2) / max(
             fit.noise, 1e-300) ** 2
-    confident_wrong = bool(fit.explained and not all(covered.values()))
+    confident_wrong = bool(fit.explained and not (covered and all(covered.values())))
+    # (explained without a truth to cover: noise alone "explained" is wrong too)
     return {"id": case["id"], "seconds": seconds, "verdict": str(fit.conclusion),
             "physical": physical,
             "explained": bool(fit.explained),
@@ -592,9 +593,13 @@ def set_numbers(rows: list[dict]) -> dict:
     clean = [r for r in rows if r["clean"]]
     explained = [r for r in noisy if r["explained"]]
     intervals = [v for r in explained for v in r["covered"].values()]
+
+    def wrong(r):  # explained, and an interval missing the truth or no truth (no impact)
+        return bool(r["explained"] and not (r["covered"] and all(r["covered"].values())))
+
     out = {"records": len(rows), "as_expected": sum(r["as_expected"] for r in rows),
-           "noisy": len(noisy), "noisy_confident_wrong": sum(r["confident_wrong"] for r in noisy),
-           "clean": len(clean), "clean_confident_wrong": sum(r["confident_wrong"] for r in clean),
+           "noisy": len(noisy), "noisy_confident_wrong": sum(map(wrong, noisy)),
+           "clean": len(clean), "clean_confident_wrong": sum(map(wrong, clean)),
            "explained_intervals": len(intervals),
            "explained_intervals_missing": sum(not v for v in intervals)}
     out["noisy_confident_wrong_pct"] = 100.0 * out["noisy_confident_wrong"] / max(len(noisy), 1)
