@@ -1,9 +1,11 @@
-"""The validation set of `treeimpact identify` (tests/data/identify, issue 24): records of
-three trees unlike the shipped ones (M_T 40, 250, 600 kg) at 500 Hz-10 kHz with 0.5-5 %
+"""The validation set of `treeimpact identify` (tests/data/identify, issues 24 and 35):
+records of trees unlike the shipped ones (M_T 40, 250, 600 kg) at 500 Hz-10 kHz with 0.5-5 %
 noise, with the defects real records have (drift, truncation, a spike, units, file
-formats), and flexible trunks, simulated by an integrator written apart from the fit's
-solver (make_records.py); the verdict each must get and no confident wrong answer. A
-subset runs here (one seed of each cell; the full set's figures: docs/identification.md)."""
+formats), flexible trunks, and what issue 35's fuzzer found the fit claiming too much of
+(noise alone, a record ending at the impact, one from the impact to the separation, both
+columns in other units), simulated by an integrator written apart from the fit's solver
+(make_records.py); the verdict each must get and no confident wrong answer. A subset runs
+here (one seed of each cell; the full set's figures: docs/identification.md)."""
 
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ import make_records as mr  # noqa: E402 - the generator, from its folder
 
 CASES = mr.load(DATA)
 #: One seed of every cell: the clean records, each tree x rate x noise, the pendulum's
-#: record, each defect, the flexible trunks (59 of the 194 records, ~20 s).
+#: record, each defect, the flexible trunks, issue 35's classes (63 of the 226 records).
 SUBSET = [c for c in CASES if c["seed"] in (0, 1)]
 META = json.loads((DATA / "cases.json").read_text())
 
@@ -75,10 +77,11 @@ def test_every_record_gets_its_verdict(outcomes):
 
 
 def test_no_confident_wrong_answer(outcomes):
-    """The issue's goal: an interval of M_T, K_T, C_T, xi or e missing the truth while the
-    fit says "explained" in at most 5 % of the noisy records (the 95 % intervals promise
-    that much each), in none of the clean ones (measured here 2 of 50 noisy, 0 of 9
-    clean; the full set: docs/identification.md)."""
+    """The issue's goal: an interval of M_T, K_T, C_T, the trunk's damping ratio or e
+    missing the truth while the fit says "explained" (or a record of noise alone called
+    explained) in at most 5 % of the noisy records (the 95 % intervals promise that much
+    each), in none of the clean ones (measured here 2 of 54 noisy, 0 of 9 clean; the full
+    set: docs/identification.md)."""
     noisy = [r for r in outcomes.values() if r["noisy"]]
     clean = [r for r in outcomes.values() if r["clean"]]
     missed = [r["id"] for r in noisy if r["confident_wrong"]]
