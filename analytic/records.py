@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from treeimpact.analytic.model.parameters import pendulum_stiffness
 from treeimpact.analytic.model.reduction import crown_factor
 
 from .errors import ParameterError
@@ -235,7 +236,7 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
             r, intervals, initial_energy, impactor_mass=m, impact_speed=impact_speed,
             collision_duration=collision_duration,
             impactor_stiffness=0.0 if equivalent_length is None
-            else m * gravity / equivalent_length),
+            else pendulum_stiffness(m, gravity, equivalent_length)),
     }
     assert tuple(metrics) == METRIC_KEYS
     return metrics

@@ -9,6 +9,8 @@ import math
 import types
 from dataclasses import dataclass
 
+from treeimpact.analytic.identify.conclusion import Conclusion
+from treeimpact.analytic.identify.diagnosis import Diagnosis, DiagnosisKind  # noqa: F401 (public)
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS, Trajectory
 
@@ -247,20 +249,6 @@ class Estimate:
     unit: str
 
 
-@dataclass(frozen=True)
-class Diagnosis:
-    """One finding of the record fit (docs/identification.md).
-
-    Attributes:
-        kind: noise-limited, drift, outliers, one-impact, truncated, optimiser, units,
-            second-mode or misfit.
-        message: one line saying what was found.
-    """
-
-    kind: str
-    message: str
-
-
 #: The units of the record fit's quantities (SI).
 ESTIMATE_UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "1",
                   "pair_damping_ratio": "1", "restitution": "1", "E": "Pa",
@@ -290,8 +278,13 @@ class Identification:
         x_drift2: its quadratic drift, m/s^2.
         y_offset: the pendulum sensor's offset, m (None without a y column).
         explained: whether the 1-DOF model explains the record to its noise.
-        verdict: one line: explained (and how) or not (and why).
-        diagnoses: what the fit found (:class:`Diagnosis` each).
+        conclusion: explained (and how) or not (and why): a ``Conclusion``, its ``str()``
+            the one line ``identify`` prints.
+        diagnoses: what the fit found (:class:`Diagnosis` each: a ``DiagnosisKind`` and a
+            one-line message).
+        held: the quantities not fitted, name -> why ("given": e passed as
+            ``restitution``; "held at 0": a drift the record cannot tell from the motion);
+            their intervals are their values.
         note: why a quantity is not fixed ("" when all are).
         residual_rms: the residual's RMS over the samples fitted, m.
         residual_rms_y: that of the pendulum's record, m (None without one).
@@ -318,8 +311,9 @@ class Identification:
     x_drift2: Estimate
     y_offset: Estimate | None
     explained: bool
-    verdict: str
+    conclusion: Conclusion
     diagnoses: tuple
+    held: dict
     note: str
     residual_rms: float
     residual_rms_y: float | None
@@ -344,8 +338,7 @@ def identification_of(fit, record) -> Identification:
 
     return Identification(
         **{k: estimate(k) for k in ESTIMATE_UNITS}, explained=bool(fit.explained),
-        verdict=fit.verdict, diagnoses=tuple(Diagnosis(d["kind"], d["message"])
-                                             for d in fit.diagnoses),
+        conclusion=fit.conclusion, diagnoses=tuple(fit.diagnoses), held=dict(fit.held),
         note=fit.note, residual_rms=float(fit.residual_rms),
         residual_rms_y=fit.residual_rms_y, noise=float(fit.noise),
         noise_source=fit.noise_source, misfit_ratio=float(fit.misfit_ratio),

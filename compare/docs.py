@@ -11,6 +11,9 @@ Where the numbers come from:
   it keeps only the keys the pages quote (and what the tests read), so a new mark needs
   ``numbers`` rerun;
 * ``docs/results/contact-fit.json``: the output of ``treeimpact paper --fit-contact --json``;
+* ``docs/results/identify-validation.json``: the identification's validation set and accuracy
+  (``tests/data/identify/make_records.py --evaluate --numbers FILE`` and ``--accuracy N``),
+  its numbers under ``identify.``;
 * ``benchmarks/results/*.json``: each benchmark's own results file (``make benchmark``,
   ``benchmarks/_results.py``), with the machine and its load; timings are quoted from there
   only.
@@ -49,6 +52,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 NUMBERS = ROOT / "docs" / "numbers.json"
 CONTACT_FIT = ROOT / "docs" / "results" / "contact-fit.json"
+IDENTIFY_VALIDATION = ROOT / "docs" / "results" / "identify-validation.json"
 BENCHMARKS = ROOT / "benchmarks" / "results"
 #: The shipped trees, in the order the pages list them.
 TREES = ("open-center", "central-leader", "realistic-crown")
@@ -551,6 +555,9 @@ def numbers() -> dict:
     out = dict(json.loads(NUMBERS.read_text())["numbers"]) if NUMBERS.exists() else {}
     if CONTACT_FIT.exists():
         out |= from_contact_fit(json.loads(CONTACT_FIT.read_text()))
+    if IDENTIFY_VALIDATION.exists():
+        for k, v in json.loads(IDENTIFY_VALIDATION.read_text())["numbers"].items():
+            _put(out, f"identify.{k}", v)
     out |= from_benchmarks()
     return out
 

@@ -346,12 +346,13 @@ def summarise(rows: list[dict]) -> dict:
             got = [r[method] for r in rr if method in r]
             small_e = [r for r in rr if r["restitution"] <= GOAL_MAX_E
                        and not r.get(f"{method}_not_fixed")]
-            entry[method] = {
+            entry[method] = {  # a parameter the record does not fix (no error) is not
+                # within the goal, and has no worst
                 "identified": len(got), "cases": len(rr),
-                "within_goal": float(np.mean([method in r and max(
-                    abs(v) for v in r[method].values()) <= GOAL for r in small_e]))
-                if small_e else math.nan,
-                "worst": {k: max((abs(g[k]) for g in got), default=math.nan)
+                "within_goal": float(np.mean([method in r and all(
+                    abs(r[method].get(k, math.nan)) <= GOAL for k in PARAMETERS)
+                    for r in small_e])) if small_e else math.nan,
+                "worst": {k: max((abs(g[k]) for g in got if k in g), default=math.nan)
                           for k in PARAMETERS}}
         known = [r["fit_known_e"] for r in rr if "fit_known_e" in r]
         entry["fit"]["not_fixed"] = len(known)
@@ -417,11 +418,13 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
                 if r["rung"] != rung:
                     continue
                 a, b = es.index(r["restitution"]), cs.index(r["crown_ratio"])
-                if method in r:
+                if method in r and k in r[method]:
                     Z[b, a] = r[method][k]
+                elif method in r:  # the record does not fix this one (its interval wide)
+                    why[(b, a)] = "not fixed"
                 elif r.get(f"{method}_not_fixed"):
-                    why[(b, a)] = (f"one impact:\nrange;\ne given\n"
-                                   f"{r['fit_known_e'][k]:+.1%}")
+                    known = r.get("fit_known_e", {}).get(k, math.nan)
+                    why[(b, a)] = f"one impact:\nrange;\ne given\n{known:+.1%}"
                 else:
                     why[(b, a)] = "not\nidentifiable" if "not identifiable" in str(
                         r.get(f"{method}_error", r.get("error", ""))) else "failed"

@@ -19,8 +19,12 @@ from treeimpact.analytic.model.parameters import Pendulum, Scenario
 
 from .runs import OK, SKIPPED, Status
 
-#: Parameters recovered by the identification procedure, compared with the model's truth.
+#: Parameters recovered by the identification procedure, compared with the model's truth,
+#: by their names in the ladder, the sweeps and the report (``xi``: the paper's symbol).
 IDENT_METRICS = ("M_T", "K_T", "xi", "E")
+#: Their names in analytic.identify.procedure (Identified, truth_of), where the metric's
+#: differs: the ladder's xi is the pair's damping ratio b / omega_n (eqs 42-43).
+PROCEDURE_NAMES = {"M_T": "M_T", "K_T": "K_T", "xi": "pair_damping_ratio", "E": "E"}
 IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
                "K_T": ("N/m", "identified stiffness (eq 46)"),
                "xi": ("1", "pair damping ratio b / omega_n = C_T / (2 sqrt((K_T + k)(M_T + m))): "
@@ -52,12 +56,19 @@ class RungIdentification:
                 "errors": self.errors, "truth": self.truth, "regression": self.regression}
 
 
+def rung_truth(scenario: Scenario) -> dict:
+    """:func:`truth_of` with the ladder's metric names (:data:`IDENT_METRICS`)."""
+    truth = truth_of(scenario)
+    return {**{k: v for k, v in truth.items() if k not in PROCEDURE_NAMES.values()},
+            **{k: truth[name] for k, name in PROCEDURE_NAMES.items()}}
+
+
 def identify_rung(result, scenario: Scenario) -> RungIdentification:
     """The paper's procedure run on a rung's displacement record (eqs 39-48, "paper"
     reading, A_y from the pendulum record)."""
     if not isinstance(scenario.impactor, Pendulum):
         return RungIdentification(SKIPPED, "the identification procedure needs a pendulum")
-    truth = truth_of(scenario)
+    truth = rung_truth(scenario)
     shown = {k: truth[k] for k in IDENT_METRICS}
     src = result.trajectory if result.trajectory is not None else result.record
     if src is None:
@@ -69,10 +80,10 @@ def identify_rung(result, scenario: Scenario) -> RungIdentification:
         text = one_line(exc)  # "not identifiable: ..." when the premises fail
         return RungIdentification(SKIPPED, text if text.startswith("not identifiable")
                                   else f"identification failed: {text}", truth=shown)
-    errors = identification_errors(ident, truth)
+    errors = identification_errors(ident, truth_of(scenario))
     return RungIdentification(
-        OK, values={k: getattr(ident, k) for k in IDENT_METRICS},
-        errors={k: errors[k] for k in IDENT_METRICS}, truth=shown,
+        OK, values={k: getattr(ident, PROCEDURE_NAMES[k]) for k in IDENT_METRICS},
+        errors={k: errors[PROCEDURE_NAMES[k]] for k in IDENT_METRICS}, truth=shown,
         regression={"t_first": reg.t_first, "t_together": reg.t_together,
                     "x_together": reg.x_together, "t_origin": reg.t_origin,
                     "coefficients": list(reg.coefficients), "x_max": reg.x_max,

@@ -269,7 +269,7 @@ def prefetch_ladders(cache: RunCache, scenarios, *, engines=None, segments=None,
 def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
                  segments: int | None = None, tolerances: dict | None = None) -> Ladder:
     """Run (or fetch from ``cache``) every rung of one scenario and assemble the ladder."""
-    from treeimpact.analytic.identify.procedure import truth_of
+    from .identification import rung_truth
 
     scen = resolve_scenario(scenario)
     cache = RunCache() if cache is None else cache
@@ -287,7 +287,7 @@ def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
             rr.values = {m: math.nan for m in ALL_METRICS}
             rr.identification = RungIdentification(SKIPPED, f"rung not run: {run.reason}")
         out.append(rr)
-    truth = {k: v for k, v in truth_of(scen).items()} if isinstance(
+    truth = rung_truth(scen) if isinstance(
         scen.impactor, Pendulum) else {}
     return Ladder(scen, out, truth, tol)
 

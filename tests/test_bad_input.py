@@ -532,3 +532,102 @@ def test_lapack_s_own_lines_reach_the_terminal_worded(tmp_path, capfd):
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert lines and all(ln.startswith("treeimpact: warning: ") for ln in lines), err
     assert any("LAPACK: On entry to DLASCL" in ln for ln in lines), err
+# ------------------------------------------------------------------------------------------
+# issue 35 (identify says only what the record supports): one case of each class the
+# independent fuzzer found; the validation set (tests/data/identify) holds more of each.
+
+def _identify_json(capsys, path, *flags) -> dict:
+    assert main(["identify", str(path), *IDENTIFY, *flags, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_identify_refuses_a_record_of_noise_alone(seed, tmp_path, capsys):
+    """1 mm of Gaussian noise, 600 samples at 5 kHz, no impact: was "explained
+    (noise-limited)" in one seed of four, M_T "determined" in [0.12, 48264] kg; now not
+    explained, no tree quantity determined (the noise judged apart from the fit)."""
+    import numpy as np
+
+    x = 1e-3 * np.random.default_rng([seed, 35]).standard_normal(600)
+    data = _identify_json(capsys, _record(tmp_path / "noise.csv", x))
+    assert data["explained"] is False and data["verdict"].startswith("NOT explained (")
+    assert {d["kind"] for d in data["diagnoses"]} & {"no-impact", "units"}
+    assert not any(data["fit"][k]["determined"] for k in ("M_T", "K_T", "C_T", "omega_1"))
+
+
+def _make_records():
+    """The validation set's generator (tests/data/identify/make_records.py)."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests" / "data" / "identify"))
+    import make_records
+
+    return make_records
+
+
+def test_identify_fixes_nothing_from_a_record_that_ends_at_the_impact(tmp_path, capsys):
+    """A record whose last sample is one into the impact: omega_1 was "determined" at
+    0.031 rad/s in [0, null]; now nothing of the tree is determined and it is not
+    explained."""
+    mr = _make_records()
+    tree = mr.TREES["D"]
+    t, x, _, t_c = mr.sdof_record(tree, 5000.0, 0.01, 1)
+    t, x = mr.defect("ends-at-impact", t, x, tree, t_c, None)
+    data = _identify_json(capsys, _record(tmp_path / "ends.csv", x))
+    assert data["explained"] is False
+    for k in ("M_T", "K_T", "C_T", "omega_1", "V_1", "restitution"):
+        q = data["fit"][k]
+        assert not q["determined"] and q["value"] is None, (k, q)
+
+
+def test_identify_explains_the_record_from_the_impact_to_the_separation(tmp_path, capsys):
+    """Tree D, 5 kHz, 1 % noise, from the impact to the pendulum's separation (27 ms): was
+    "NOT explained (optimiser)", M_T -19 % with a drift fitted that so short a record
+    cannot tell from the motion; now the offset and drift are held at 0 and said so, and
+    M_T and K_T are within 2 %."""
+    mr = _make_records()
+    tree = mr.TREES["D"]
+    t, x, _ = mr.short_record(tree, 5000.0, 0.01, 1)
+    data = _identify_json(capsys, _record(tmp_path / "short.csv", x))
+    assert data["explained"] is True and data["verdict"] == "explained"
+    assert data["held"] == {"x_offset": "held at 0", "x_drift": "held at 0",
+                            "x_drift2": "held at 0"}
+    assert "sensor-held" in {d["kind"] for d in data["diagnoses"]}
+    for k, v in (("M_T", tree.M_T), ("K_T", tree.K_T)):
+        assert abs(data["fit"][k]["value"] / v - 1.0) < 0.02, (k, data["fit"][k])
+
+
+def test_identify_names_both_columns_of_an_undeclared_ms_mm_record(capsys):
+    """t in ms and x in mm, declared as neither: was "implausible in any unit"; now one
+    warning line naming both and how to declare them, the record not fitted."""
+    spec = ROOT / "tests" / "data" / "identify" / "files" / "undeclared-ms-mm.csv"
+    flags = ["--mass", "100", "--equivalent-length", "1.5", "--release-angle-deg", "35",
+             "--clamp-height", "0.45", "--diameter", "0.15"]  # tree B's pendulum and clamp
+    assert main(["identify", str(spec), *flags]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1
+    assert "t looks like ms and x like mm, not s and m" in captured.err
+    assert "--time-unit ms --length-unit mm" in captured.err
+    assert "NOT explained (units)" in captured.out
+
+
+def test_identify_given_restitution_is_its_own_interval(tmp_path, capsys):
+    """--restitution 0.5 printed e = 0.5 in [0.5000000000000001, 0.5000000000000001]; a held
+    parameter's interval is its value, exactly, and the text says "given"."""
+    mr = _make_records()
+    t, x, _, _ = mr.sdof_record(mr.TREES["D"], 5000.0, 0.01, 1)
+    path = _record(tmp_path / "r.csv", x)
+    data = _identify_json(capsys, path, "--restitution", "0.5")
+    e = data["fit"]["restitution"]
+    assert (e["value"], e["low"], e["high"]) == (0.5, 0.5, 0.5) and e["determined"]
+    assert data["held"]["restitution"] == "given"
+
+
+def test_identify_constant_pendulum_column_is_one_line_naming_it(tmp_path, capsys):
+    """A y column that never changes: was a traceback (ValueError: array must not contain
+    infs or NaNs); now exit 2, one line naming the column as typed."""
+    path = tmp_path / "r.csv"
+    path.write_text("t [s],x [m],pendulum (mm)\n" + "".join(
+        f"{i / 5000},{0.0 if i < 100 else 1e-5 * (i - 100)},3.5\n" for i in range(600)))
+    one_line(capsys, ["identify", str(path), *IDENTIFY], 2, "column 'pendulum (mm)' never "
+             "changes", "the pendulum's column holds no motion")

@@ -65,7 +65,7 @@ def test_identification_error_grows_with_restitution(e):
     ident, _ = identify_from_record(tr.t, tr.x, pendulum_test_of(scen), y=tr.y,
                                     reading="consistent")
     err = identification_errors(ident, truth_of(scen))
-    assert set(err) == {"M_T", "K_T", "b", "omega_n", "xi", "E"}
+    assert set(err) == {"M_T", "K_T", "b", "omega_n", "pair_damping_ratio", "E"}
     assert all(math.isfinite(v) for v in err.values())
     if e == 0.0:
         assert abs(err["M_T"]) < 0.15
@@ -109,7 +109,8 @@ def test_a_record_that_breaks_the_premises_is_not_identifiable():
     ident, _ = identify_from_record(res.trajectory.t, res.trajectory.x, pendulum_test_of(scen),
                                     y=res.trajectory.y)
     assert check_identifiable(ident) is ident  # the exact SDOF record is identifiable
-    for change, words in (({"xi": -0.89}, "xi = -0.89"), ({"xi": 1.2}, "0 < xi < 1"),
+    for change, words in (({"pair_damping_ratio": -0.89}, "pair_damping_ratio = -0.89"),
+                          ({"pair_damping_ratio": 1.2}, "0 < b / omega_n < 1"),
                           ({"V": 3.0}, "not below the impact speed"),
                           ({"M_T": -10.3}, "M_T = -10.3 kg"), ({"K_T": -860.0}, "K_T = -860")):
         with pytest.raises(ParameterError, match=f"^not identifiable: .*{words}"):

@@ -52,7 +52,7 @@ def test_youngs_modulus_is_ten_times_eq47():
 def test_central_leader_xi_needs_the_rounded_b():
     t = TABLE_1["central-leader"]
     ident = identify(a1=t.a1, a2=t.a2, x_max=t.x_max, tau=t.tau, x0=t.x0, T0=t.T0, test=t.test)
-    assert round(ident.xi, 2) == 0.35
+    assert round(ident.pair_damping_ratio, 2) == 0.35
     assert round(30.0 / ident.omega_n, 2) == 0.36
 
 

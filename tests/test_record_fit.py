@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.identify.diagnosis import DiagnosisKind
 from treeimpact.analytic.identify.procedure import pendulum_test_of
 from treeimpact.analytic.identify.record_fit import Record, fit_record
 from treeimpact.analytic.impact.solver import solve_impacts
@@ -86,11 +87,12 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     import math
 
     from treeimpact.analytic.identify.fit_model import model_x, two_body_at
+    from treeimpact.analytic.identify.fit_parameters import Slot
     from treeimpact.analytic.identify.one_impact import on_ridge
 
     model, record, test = synthetic(0.3, 0, **HEAVY)
     fit = fit_record(record, test)
-    assert "does not return" in fit.note and "one-impact" in fit.diagnosis_kinds()
+    assert "does not return" in fit.note and DiagnosisKind.ONE_IMPACT in fit.diagnosis_kinds()
     assert fit.explained
     assert not any(fit.determined[k] for k in ("M_T", "K_T", "C_T", "restitution", "E"))
     assert all(math.isnan(fit.values[k]) for k in ("M_T", "K_T", "restitution"))
@@ -109,7 +111,7 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     # the ridge is exact while the pendulum stays away: the same x from the truth's e to 1
     # (the fit's point is on the ridge)
     same = model_x(fit.point, test, record.t)
-    span = float(record.t[-1] - fit.point[4])
+    span = float(record.t[-1] - fit.point[Slot.T0])
     for e in (0.3, 0.65, 1.0):
         moved = on_ridge(fit.point, e, test)
         assert len(solve_impacts(two_body_at(moved, test), span).impacts) == 1
@@ -122,10 +124,14 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
 
 @pytest.mark.parametrize("seed", range(5))
 def test_a_known_restitution_fixes_the_one_impact_record_within_2_percent(seed):
-    """With e given (the pad's, --restitution) the same record fixes M_T, K_T, C_T."""
+    """With e given (the pad's, --restitution) the same record fixes M_T, K_T, C_T; e's
+    interval is its value, exactly (issue 35: 0.5 came out as [0.5000000000000001,
+    0.5000000000000001], which excludes it)."""
     model, record, test = synthetic(0.3, seed, **HEAVY)
     fit = fit_record(record, test, restitution=0.3)
     assert fit.note == "" and fit.values["restitution"] == 0.3
+    assert fit.intervals["restitution"] == (0.3, 0.3) and fit.held["restitution"] == "given"
+    assert fit.determined["restitution"]
     for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness),
                  ("C_T", model.damping)):
         assert abs(fit.values[k] / v - 1.0) < 0.02, (k, fit.values[k], v)
@@ -179,8 +185,10 @@ def test_identify_json_layout_and_plot(tmp_path, capsys):
     assert main(["identify", str(path), *ARGS, "--json", "--plot", str(tmp_path / "f.png")]) == 0
     data = json.loads(capsys.readouterr().out)
     assert set(data) == {"fit", "paper", "definitions", "residual_rms", "residual_rms_y",
-                         "explained", "note", "verdict", "diagnoses", "noise", "noise_source",
-                         "misfit_ratio", "flagged_rows", "warnings", "provenance"}
+                         "explained", "note", "held", "verdict", "diagnoses", "noise",
+                         "noise_source", "misfit_ratio", "flagged_rows", "warnings",
+                         "provenance"}
+    assert data["held"] == {"x_drift2": "held at 0"}  # a bend only where the record needs it
     import hashlib
 
     prov = data["provenance"]  # the record by its bytes, the code, the engines' versions
@@ -247,6 +255,25 @@ def test_log_interval_of_an_undetermined_parameter_is_zero_to_infinity_without_w
         lo, hi = log_interval(2.0, 0.1)
     assert (lo, hi) == pytest.approx((2.0 * math.exp(-0.1), 2.0 * math.exp(0.1)), rel=1e-15)
     assert all(math.isnan(v) for v in log_interval(2.0, math.nan))
+
+
+def test_a_held_restitution_is_its_own_interval_and_determined_means_narrower_than_2x():
+    """e held (given): its interval is its value exactly, at every e, not e's image through
+    asin(sqrt(e)) and back; "determined": a bounded interval whose high end is at most twice
+    its low end (intervals.DETERMINED_FACTOR), else "not fixed"."""
+    from treeimpact.analytic.identify.intervals import (
+        DETERMINED_FACTOR,
+        determined,
+        restitution_interval,
+    )
+
+    for e in (0.0, 0.1, 0.3, 0.5, 0.7, 0.95, 1.0):
+        assert restitution_interval(e, 0.0) == (e, e)
+    assert DETERMINED_FACTOR == 2.0
+    assert determined("M_T", (50.0, 100.0)) and not determined("M_T", (50.0, 100.5))
+    assert not determined("omega_1", (0.0, math.inf))  # the fuzzer's "determined" omega_1
+    assert not determined("restitution", (0.0, 0.2)) and determined("restitution", (0.2, 0.3))
+    assert determined("t0", (0.01, 0.02)) and not determined("t0", (-math.inf, 0.02))
 
 
 @pytest.mark.parametrize("text, flags, words", [

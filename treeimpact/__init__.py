@@ -50,6 +50,8 @@ _EXPORTS = {
     "Identification": "treeimpact.compare.api_results",
     "Estimate": "treeimpact.compare.api_results",
     "Diagnosis": "treeimpact.compare.api_results",
+    "DiagnosisKind": "treeimpact.compare.api_results",
+    "Conclusion": "treeimpact.compare.api_results",
     "Record": "treeimpact.analytic.identify.pendulum_record",
     "METRIC_UNITS": "treeimpact.analytic.results",
     "ParameterError": "treeimpact.analytic.errors",

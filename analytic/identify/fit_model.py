@@ -1,5 +1,5 @@
 """The model the record fit adjusts: the exact two-body model (eqs 12-35) at a parameter
-vector p (:data:`NAMES`), its motion sampled at a record's times."""
+vector p (:class:`fit_parameters.Slot` order), its motion sampled at a record's times."""
 
 from __future__ import annotations
 
@@ -11,13 +11,9 @@ from treeimpact.analytic.impact.oscillator import Oscillator
 from treeimpact.analytic.impact.solver import solve_impacts
 from treeimpact.analytic.model.two_body import TwoBodyModel
 
+from .fit_parameters import Slot, padded
 from .procedure import PendulumTest
 
-#: The parameters p: ln M_T, ln K_T, xi, e, t0 (s), x_offset (m), y_offset (m; the pendulum
-#: sensor's, fitted when the record has y), x_drift (m/s) and x_drift2 (m/s^2): the trunk
-#: sensor's slow drift, x_offset + x_drift s + x_drift2 s^2 (s = t - t0) added to the
-#: motion (each optional: 0 when p is shorter).
-NAMES = ("M_T", "K_T", "xi", "e", "t0", "x_offset", "y_offset", "x_drift", "x_drift2")
 #: Events one model run may take (impacts, flights, moving together): a tree's record takes
 #: tens; a model far from any tree (a 0.01 kg trunk bouncing off the pendulum all record
 #: long) is refused (SimulationDiverged) instead of taking seconds.
@@ -25,10 +21,11 @@ MAX_EVENTS = 20_000
 
 
 def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
-    """The two-body model (SI) at p: M_T = e^p0, K_T = e^p1, C_T = 2 xi sqrt(K_T M_T)."""
-    ln_m, ln_k, xi, e = (float(v) for v in p[:4])
-    M, K = math.exp(ln_m), math.exp(ln_k)
-    return TwoBodyModel(dynamic_mass=M, damping=2.0 * xi * math.sqrt(K * M), stiffness=K,
+    """The two-body model (SI) at p: M_T = e^ln_m_t, K_T = e^ln_k_t, C_T = 2 zeta sqrt(K_T
+    M_T) with zeta the trunk's damping ratio."""
+    M, K = math.exp(float(p[Slot.LN_M_T])), math.exp(float(p[Slot.LN_K_T]))
+    ratio, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])
+    return TwoBodyModel(dynamic_mass=M, damping=2.0 * ratio * math.sqrt(K * M), stiffness=K,
                         impactor_mass=test.impactor_mass,
                         impactor_stiffness=test.impactor_stiffness,
                         impact_speed=test.impact_speed, restitution=e)
@@ -36,13 +33,12 @@ def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
 
 def drift_at(p, s):
     """The sensor's drift (m) s seconds after the contact: x_drift s + x_drift2 s^2."""
-    d1 = float(p[7]) if len(p) > 7 else 0.0
-    d2 = float(p[8]) if len(p) > 8 else 0.0
-    return (d1 + d2 * s) * s
+    q = padded(p)
+    return (float(q[Slot.X_DRIFT]) + float(q[Slot.X_DRIFT2]) * s) * s
 
 
 def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
-    """x(t) (m) of the exact model with parameters p (:data:`NAMES`)."""
+    """x(t) (m) of the exact model with parameters p (:class:`fit_parameters.Slot` order)."""
     return model_motion(p, test, t)[0]
 
 
@@ -52,9 +48,9 @@ def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False
     exact Jacobian column for t0); with ``pendulum`` also the pendulum's (y, v_y) in the
     same frame (y = x at contact, y = 0 at the first one): before it, the free swing at u_1
     (eq 13) run back from the contact."""
-    t0 = float(p[4])
+    t0 = float(p[Slot.T0])
     s = t - t0
-    x, v = float(p[5]) + drift_at(p, s), np.zeros(t.shape)
+    x, v = float(p[Slot.X_OFFSET]) + drift_at(p, s), np.zeros(t.shape)
     first = int(np.searchsorted(t, t0, side="right"))  # the first sample after the contact
     sol = None
     if first < t.size:
@@ -65,7 +61,7 @@ def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False
         v[first:] = rows[1]
     if not pendulum:
         return x, v
-    y, vy = np.full(t.shape, float(p[6])), np.empty(t.shape)
+    y, vy = np.full(t.shape, float(p[Slot.Y_OFFSET])), np.empty(t.shape)
     swing = Oscillator.from_mck(test.impactor_mass, 0.0, test.impactor_stiffness)
     dy, vy[:first] = swing.advance(t[:first] - t0, 0.0, test.impact_speed, np)
     y[:first] += dy

@@ -78,6 +78,9 @@ class Record:
                                  "(sorted, without repeats, is required)")
         if not np.max(x) - np.min(x) > 0:
             raise ParameterError(f"{where}: x never changes: the record holds no impact")
+        if self.y is not None and not np.ptp(np.asarray(self.y, float)) > 0:
+            raise ParameterError(f"{where}: y never changes: the pendulum's column holds no "
+                                 "motion (leave it out, or record the pendulum)")
 
 #: The largest record read: its samples (a 1 s test at 1 MHz) and its file's size, so that
 #: a fit stays within seconds and ~1 GB (a fit of 1e5 samples: ~1 s, benchmarks/bench_identify.py).
@@ -113,7 +116,46 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
     lines (#, %, //) and blank lines are skipped; a UTF-8 BOM, ';', tab or space
     separators and decimal commas are recognised. Times are made relative to the first
     sample (exactly, in decimal: epoch times keep their sub-millisecond digits)."""
-    path = Path(path)
+    name = str(Path(path))
+    lines = _lines(Path(path))
+    sep, decimal = _dialect([ln for _, ln in lines[:50]])
+    cells = _split(lines[0][1], sep)
+    keys = _header(name, lines[0], cells, decimal)
+    units = _units(name, cells, time_unit, length_unit)
+    data = _table([ln for _, ln in lines[1:]], sep, len(cells), name, [i for i, _ in lines[1:]])
+    rows = np.array([i for i, _ in lines[1:]], int)
+    power = {"t": TIME_UNITS[units["t"]], "x": LENGTH_UNITS[units["x"]],
+             "y": LENGTH_UNITS[units["y"]]}
+    values = {}
+    for j, key in enumerate(keys):
+        if key in ("t", "x", "y"):  # in decimal where a unit is converted: one rounding
+            values[key] = _numbers(data[j], decimal, name, cells[j].strip(), rows,
+                                   exact=key == "t" or power[key] != 0)
+    ignored = [c.strip() for c, k in zip(cells, keys) if k not in ("t", "x", "y")]
+    warnings = [f"record {name!r}: columns ignored: {', '.join(ignored)}"] if ignored else []
+    t0 = values["t"][0] if values["t"] else Decimal(0)
+    t = np.array([float((v - t0).scaleb(power["t"])) for v in values["t"]], float)
+    t_start = float(t0.scaleb(power["t"]))
+    if abs(t_start) > 60.0:
+        warnings.append(f"record {name!r}: times made relative to the first sample (t = "
+                        f"{t0} {units['t']} there, like a clock's)")
+    x, y = (None if key not in values else np.array(
+        [float(v.scaleb(power[key])) if power[key] else v for v in values[key]], float)
+        for key in ("x", "y"))
+    for key, v in (("x", x), ("y", y)):  # the column as typed in the message
+        if v is not None and v.size and np.all(np.isfinite(v)) and not np.ptp(v) > 0:
+            what = ("the record holds no impact" if key == "x" else "the pendulum's column "
+                    "holds no motion (leave it out, or record the pendulum)")
+            raise ParameterError(f"record {name!r}: column {cells[keys.index(key)].strip()!r}"
+                                 f" never changes: {what}")
+    return Record(t, x, y, time_unit=units["t"], length_unit=units["x"], rows=rows,
+                  warnings=tuple(warnings), t_start=t_start, source=name)
+
+
+def _lines(path: Path) -> list:
+    """[(line number, text)] of the file's header and data lines (comments and blank lines
+    left out): a regular file, at most MAX_RECORD_BYTES and MAX_SAMPLES lines, UTF-8 (a BOM
+    too) or a spreadsheet's ANSI export."""
     name = str(path)
     try:
         if path.exists() and not path.is_file():  # a FIFO or a device would block or not end
@@ -139,11 +181,14 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
         raise ParameterError(f"record {name!r}: {len(lines) - 1} samples; allowed up to "
                              f"{MAX_SAMPLES} (a pendulum test needs 0.1-1 s at 1-50 kHz: "
                              "cut the record or decimate it)")
-    sep, decimal = _dialect([ln for _, ln in lines[:50]])
-    header_line, header = lines[0]
-    cells = _split(header, sep)
-    columns = [parse_column(c) for c in cells]
-    keys = [k for k, _ in columns]
+    return lines
+
+
+def _header(name: str, line: tuple, cells: list, decimal: str) -> list:
+    """The channel of each header cell ('t', 'x', 'y' or the name as given): a header of
+    names, one t and one x, at most one y."""
+    header_line, header = line
+    keys = [parse_column(c)[0] for c in cells]
     if all(_is_number(c, decimal) for c in cells):
         raise ParameterError(f"record {name!r}: line {header_line} is numbers, not a header; "
                              "the first line must name the columns (t, x and optionally y, "
@@ -157,8 +202,15 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
                 f"mm, um)")
     if keys.count("y") > 1:
         raise ParameterError(f"record {name!r}: header {header.strip()!r} has more than one y")
+    return keys
+
+
+def _units(name: str, cells: list, time_unit: str | None, length_unit: str | None) -> dict:
+    """The unit of each channel: its header's, else the flag's, else s and m; a header's
+    unit the flag contradicts, or one not allowed, is an error."""
     units = {"t": time_unit, "x": length_unit, "y": length_unit}
-    for (key, unit), cell in zip(columns, cells):
+    for cell in cells:
+        key, unit = parse_column(cell)
         if key not in units or unit is None:
             continue
         allowed = TIME_UNITS if key == "t" else LENGTH_UNITS
@@ -175,30 +227,7 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
         if units[key] not in allowed:
             raise ParameterError(f"--{'time' if key == 't' else 'length'}-unit "
                                  f"{units[key]!r}: allowed {', '.join(allowed)}")
-    data = _table([ln for _, ln in lines[1:]], sep, len(cells), name, [i for i, _ in lines[1:]])
-    rows = np.array([i for i, _ in lines[1:]], int)
-    power = {"t": TIME_UNITS[units["t"]], "x": LENGTH_UNITS[units["x"]],
-             "y": LENGTH_UNITS[units["y"]]}
-    values = {}
-    for j, key in enumerate(keys):
-        if key in ("t", "x", "y"):  # in decimal where a unit is converted: one rounding
-            values[key] = _numbers(data[j], decimal, name, cells[j].strip(), rows,
-                                   exact=key == "t" or power[key] != 0)
-    ignored = [c.strip() for c, k in zip(cells, keys) if k not in ("t", "x", "y")]
-    warnings = []
-    if ignored:
-        warnings.append(f"record {name!r}: columns ignored: {', '.join(ignored)}")
-    t0 = values["t"][0] if values["t"] else Decimal(0)
-    t = np.array([float((v - t0).scaleb(power["t"])) for v in values["t"]], float)
-    t_start = float(t0.scaleb(power["t"]))
-    if abs(t_start) > 60.0:
-        warnings.append(f"record {name!r}: times made relative to the first sample (t = "
-                        f"{t0} {units['t']} there, like a clock's)")
-    x, y = (None if key not in values else np.array(
-        [float(v.scaleb(power[key])) if power[key] else v for v in values[key]], float)
-        for key in ("x", "y"))
-    return Record(t, x, y, time_unit=units["t"], length_unit=units["x"], rows=rows,
-                  warnings=tuple(warnings), t_start=t_start, source=name)
+    return units
 
 
 def _dialect(sample: list[str]) -> tuple[str, str]:

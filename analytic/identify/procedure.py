@@ -7,14 +7,15 @@ Steps (paper, "Determination of physical properties"):
 2. extrapolate x(t) linearly from there to the time axis and take that point as origin;
 3. fit a polynomial to at most 10 ms of the record after the moving-together point;
 4. with x0 = 0 at the new origin, V = a1 and b = -a2/a1 (eq 42);
-5. omega_n = V / beta, beta = x_max e^(b tau) (eq 43, eq 38 with x0 = 0), xi = b / omega_n;
+5. omega_n = V / beta, beta = x_max e^(b tau) (eq 43, eq 38 with x0 = 0), the paper's xi
+   = b / omega_n (``pair_damping_ratio``: trunk and pendulum moving together);
 6. M_T from eq 44, K_T from eq 46, E from eq 47, u_1 from eq 48.
 
 Readings of eqs 44 and 46 (see ``analytic.paper.reproduction.DISCREPANCIES``):
 
 * ``"paper"``: the reading that reproduces Table 1: eq 44 with the + sign of its own
   derivation and, in eqs 44 and 46, omega_1 = the damped frequency omega_n sqrt(1 - xi^2)
-  of the moving-together motion, xi = b / omega_n;
+  of the moving-together motion, the paper's xi = b / omega_n (``pair_damping_ratio``);
 * ``"printed"``: eq 44 as printed (minus sign) with omega_1 = omega_n;
 * ``"consistent"``: the momentum balance of the impact process, exact for any e,
   m u_1 - (M_T + m) V = K_T A_x + C_T x_0 + k A_y, closed with K_T = omega_n^2 (M_T + m) - k
@@ -29,7 +30,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.parameters import STANDARD_GRAVITY
+from treeimpact.analytic.model.parameters import (
+    STANDARD_GRAVITY,
+    pendulum_impact_speed,
+    pendulum_stiffness,
+)
 from treeimpact.analytic.model.two_body import two_body_model
 
 READINGS = ("paper", "printed", "consistent")
@@ -48,17 +53,22 @@ class PendulumTest:
 
     @property
     def impact_speed(self) -> float:
-        """eq 48: u_1 = 2 sqrt(g l_e) sin(theta_r / 2)."""
-        return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
-            self.release_angle / 2.0)
+        """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48)."""
+        return pendulum_impact_speed(self.gravity, self.equivalent_length, self.release_angle)
 
     @property
     def impactor_stiffness(self) -> float:
-        return self.impactor_mass * self.gravity / self.equivalent_length
+        """k = m g / l_e, N/m (eq 13)."""
+        return pendulum_stiffness(self.impactor_mass, self.gravity, self.equivalent_length)
 
     @property
     def omega2_sq(self) -> float:
         return self.gravity / self.equivalent_length
+
+
+def youngs_modulus(stiffness: float, clamp_height: float, diameter: float) -> float:
+    """E = K_T a^3 / (3 I), Pa, I = pi d^4 / 64 (eq 47; K_T = 3 E I / a^3, eq 8)."""
+    return stiffness * clamp_height ** 3 / (3.0 * (math.pi * diameter ** 4 / 64.0))
 
 
 @dataclass(frozen=True)
@@ -69,7 +79,7 @@ class Identified:
     V: float
     b: float  # 1/s, eq 42
     omega_n: float  # rad/s, eq 43
-    xi: float  # b / omega_n
+    pair_damping_ratio: float  # b / omega_n, the paper's xi: trunk and pendulum together
     omega_1: float  # rad/s, the frequency used in eqs 44 and 46 under this reading
     u1: float  # m/s, eq 48
     x0: float  # m
@@ -99,7 +109,7 @@ def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: f
     b = -a2 / a1  # eq 42
     beta = x_max * math.exp(b * tau)
     omega_n = a1 / beta  # eq 43
-    xi = b / omega_n
+    pair = b / omega_n  # the paper's xi
     A_x = 0.5 * x0 * T0 if A_x is None else A_x
     A_y = 0.5 * x0 * T0 if A_y is None else A_y
     m, k, w2 = test.impactor_mass, test.impactor_stiffness, test.omega2_sq
@@ -111,14 +121,14 @@ def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: f
         K_T = omega_n ** 2 * (M_T + m) - k
     else:
         if reading == "paper":
-            omega_1, sign = omega_n * math.sqrt(max(0.0, 1.0 - xi * xi)), 1.0
+            omega_1, sign = omega_n * math.sqrt(max(0.0, 1.0 - pair * pair)), 1.0
         else:
             omega_1, sign = omega_n, -1.0
-        M_T = m * (u1 - V - w2 * A_y) / (V + omega_1 ** 2 * A_x + sign * 2 * xi * omega_1 * x0)
+        M_T = m * (u1 - V - w2 * A_y) / (V + omega_1 ** 2 * A_x + sign * 2 * pair * omega_1 * x0)
         K_T = omega_1 ** 2 * (M_T + m) - k  # eq 46
-    I = math.pi * test.diameter ** 4 / 64.0
-    E = K_T * test.clamp_height ** 3 / (3.0 * I)  # eq 47
-    return Identified(reading=reading, V=V, b=b, omega_n=omega_n, xi=xi, omega_1=omega_1,
+    E = youngs_modulus(K_T, test.clamp_height, test.diameter)  # eq 47
+    return Identified(reading=reading, V=V, b=b, omega_n=omega_n, pair_damping_ratio=pair,
+                      omega_1=omega_1,
                       u1=u1, x0=x0, T0=T0, A_x=A_x, A_y=A_y, M_T=M_T, K_T=K_T, E=E,
                       x_max=x_max, tau=tau)
 
@@ -219,14 +229,16 @@ def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "pa
 def check_identifiable(ident: Identified) -> Identified:
     """``ident`` if the procedure's premises hold on the record, else a one-line
     ParameterError starting "not identifiable": the moving-together motion decays and
-    oscillates (0 < xi < 1, eqs 35-36), the common velocity is below the impact speed
-    (V < u1: the pendulum gave the trunk momentum, eq 44), and M_T and K_T come out positive
-    (eqs 44 and 46). A number that breaks them is not a property of the tree."""
+    oscillates (pair damping ratio b / omega_n in (0, 1), eqs 35-36), the common velocity
+    is below the impact speed (V < u1: the pendulum gave the trunk momentum, eq 44), and M_T
+    and K_T come out positive (eqs 44 and 46). A number that breaks them is not a property
+    of the tree."""
     problem = None
-    if not 0.0 < ident.xi < 1.0:
-        problem = (f"xi = {ident.xi:.3g} (b = {ident.b:.3g} 1/s, omega_n = "
-                   f"{ident.omega_n:.3g} rad/s): the motion after moving together does not "
-                   "decay as a damped oscillation (eqs 35-36 need 0 < xi < 1)")
+    if not 0.0 < ident.pair_damping_ratio < 1.0:
+        problem = (f"pair_damping_ratio = {ident.pair_damping_ratio:.3g} (b = {ident.b:.3g} "
+                   f"1/s, omega_n = {ident.omega_n:.3g} rad/s): the motion after moving "
+                   "together does not decay as a damped oscillation (eqs 35-36 need "
+                   "0 < b / omega_n < 1)")
     elif not ident.V < ident.u1:
         problem = (f"V = {ident.V:.3g} m/s is not below the impact speed u1 = "
                    f"{ident.u1:.3g} m/s (eq 44)")
@@ -255,12 +267,12 @@ def truth_of(scenario) -> dict:
                         mod.impactor_stiffness)
     wn = math.sqrt((kt + k) / (mt + m))
     b = ct / (2 * (mt + m))
-    I = math.pi * scenario.trunk.diameter ** 4 / 64.0
-    return {"M_T": mt, "K_T": kt, "b": b, "omega_n": wn, "xi": b / wn,
-            "E": kt * scenario.trunk.clamp_height ** 3 / (3 * I)}
+    return {"M_T": mt, "K_T": kt, "b": b, "omega_n": wn, "pair_damping_ratio": b / wn,
+            "E": youngs_modulus(kt, scenario.trunk.clamp_height, scenario.trunk.diameter)}
 
 
 def identification_errors(ident: Identified, truth: dict) -> dict:
-    """Relative errors (identified - true) / true for M_T, K_T, xi, E, b, omega_n."""
+    """Relative errors (identified - true) / true for M_T, K_T, pair_damping_ratio, E, b,
+    omega_n."""
     vals = ident.as_dict()
     return {k: (vals[k] - v) / v for k, v in truth.items()}

@@ -98,6 +98,17 @@ def check_range(path: str, value, *, low=None, high=None, low_open=False, high_o
     return v
 
 
+def pendulum_stiffness(mass: float, gravity: float, equivalent_length: float) -> float:
+    """k = m g / l_e, N/m: the pendulum as a spring for small swings (Fig 3, eq 13)."""
+    return mass * gravity / equivalent_length
+
+
+def pendulum_impact_speed(gravity: float, equivalent_length: float,
+                          release_angle: float) -> float:
+    """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s, theta_r in rad (eq 48)."""
+    return 2.0 * math.sqrt(gravity * equivalent_length) * math.sin(release_angle / 2.0)
+
+
 @dataclass(frozen=True)
 class Trunk:
     """Uniform cantilever trunk with clamp and crown point masses (eqs 1-11), validated on
@@ -205,8 +216,8 @@ class Pendulum:
 
     @property
     def stiffness(self) -> float:
-        """Equivalent spring k = m g / l_e, N/m (Fig 3)."""
-        return self.mass * self.gravity / self.equivalent_length
+        """Equivalent spring k = m g / l_e, N/m (Fig 3, eq 13)."""
+        return pendulum_stiffness(self.mass, self.gravity, self.equivalent_length)
 
     @property
     def natural_frequency(self) -> float:
@@ -216,8 +227,8 @@ class Pendulum:
     @property
     def impact_speed(self) -> float:
         """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48)."""
-        return 2.0 * math.sqrt(self.gravity * self.equivalent_length) * math.sin(
-            self.release_angle_rad / 2.0)
+        return pendulum_impact_speed(self.gravity, self.equivalent_length,
+                                     self.release_angle_rad)
 
     @property
     def release_angle_rad(self) -> float:

@@ -133,7 +133,7 @@ def reproduce_tree(tree: TreeTable) -> dict:
         "E": (ident.E, "eq 47 with Table 1's d, a and recomputed K_T"),
         "b": (ident.b, "eq 42"),
         "omega_n": (ident.omega_n, "eq 43"),
-        "xi": (ident.xi, "b / omega_n"),
+        "xi": (ident.pair_damping_ratio, "b / omega_n"),
         "energy_loss_pct": (100.0 * loss57 / drop, "eq 57 / [m g l_e (cos theta_b - cos theta_r)]"),
     }
     out = {}

@@ -88,7 +88,7 @@ def _paper(record, test) -> dict:
         trunk = c_t / (2.0 * math.sqrt(ident.K_T * ident.M_T)) if (
             ident.K_T > 0 and ident.M_T > 0) else math.nan
         out[reading] = {"M_T": ident.M_T, "K_T": ident.K_T, "C_T": c_t, "E": ident.E,
-                        "pair_damping_ratio": ident.xi,  # b / omega_n: the paper's xi
+                        "pair_damping_ratio": ident.pair_damping_ratio,  # the paper's xi
                         "trunk_damping_ratio": trunk}
     return out
 
@@ -134,11 +134,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from treeimpact.analytic.identify.record_fit import (
-        DAMPING_RATIO_FORMULAS,
-        fit_record,
-        read_record,
-    )
+    from treeimpact.analytic.identify.record_fit import fit_record, read_record
     from treeimpact.analytic.results import to_jsonable
     from treeimpact.compare.backends import worded_c_output
 
@@ -155,39 +151,52 @@ def run(args) -> int:
         if args.plot and math.isfinite(fit.residual_rms):
             _plot(args.plot, record, fit, paper, test)
     if args.json:
-        print(json.dumps(to_jsonable({
-            "fit": fit.to_json(), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
-            "residual_rms": fit.residual_rms,
-            "residual_rms_y": fit.residual_rms_y, "explained": fit.explained,
-            "note": fit.note, "verdict": fit.verdict, "diagnoses": list(fit.diagnoses),
-            "noise": fit.noise, "noise_source": fit.noise_source,
-            "misfit_ratio": fit.misfit_ratio,
-            "flagged_rows": [record.row(int(i)) for i in fit.flagged],
-            "warnings": list(fit.warnings),
-            "provenance": _provenance(args, record)}), indent=2))
+        print(json.dumps(to_jsonable(_json(args, record, fit, paper)), indent=2))
         return 0
     for line in fit.warnings:
         print(f"treeimpact: warning: {line}", file=sys.stderr)
     print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
           f"(read in {record.time_unit} and {record.length_unit})")
-    if not math.isfinite(fit.residual_rms):  # no fit (units): the verdict says why
-        print(f"verdict: {fit.verdict}")
-        for d in fit.diagnoses:
-            print(f"  {d['kind']}: {d['message']}")
-        return 0
+    if math.isfinite(fit.residual_rms):  # else not fitted (units): the conclusion says why
+        _print_values(fit, paper.get("paper", {}))
+    _print_conclusion(fit)
+    return 0
+
+
+def _json(args, record, fit, paper) -> dict:
+    """identify --json: the fit's values, the paper's readings, the conclusion and what it
+    rests on, the provenance (kinds and sources as their names)."""
+    from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS
+
+    return {"fit": fit.to_json(), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
+            "residual_rms": fit.residual_rms, "residual_rms_y": fit.residual_rms_y,
+            "explained": fit.explained, "note": fit.note, "held": fit.held,
+            "verdict": str(fit.conclusion),
+            "diagnoses": [d.to_json() for d in fit.diagnoses], "noise": fit.noise,
+            "noise_source": fit.noise_source.value if fit.noise_source else "",
+            "misfit_ratio": fit.misfit_ratio,
+            "flagged_rows": [record.row(int(i)) for i in fit.flagged],
+            "warnings": list(fit.warnings), "provenance": _provenance(args, record)}
+
+
+def _print_values(fit, reading: dict) -> None:
+    """The table of the fit's values and intervals beside the paper's procedure's (a value
+    the record does not determine "not fixed", its range; a held one "given" or "held at
+    0"), the damping ratios' formulas, what is not fixed, the residual."""
+    from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS, UNITS
+
     if not fit.explained:
         print("  the 1-DOF model does NOT explain this record: the numbers below are the "
               "model's best fit, NOT the tree's properties")
     print(f"  {'quantity':<20}{'value':>13}{'95 % low':>13}{'95 % high':>13}  {'unit':<6}"
           f"{'paper (eqs 39-48)':>19}")
-    reading = paper.get("paper", {})
-    given = {"restitution"} if args.restitution is not None else set()
     for k, v in fit.values.items():
         lo, hi = fit.intervals[k]
         pv = reading.get(k)
         ptext = f"{pv:.5g}" if isinstance(pv, float) and math.isfinite(pv) else ""
         vtext = f"{v:>13.5g}" if fit.determined[k] else f"{'not fixed':>13}"
-        itext = f"{'given':>13}{'':>13}" if k in given else f"{lo:>13.5g}{hi:>13.5g}"
+        itext = (f"{fit.held[k]:>13}{'':>13}" if k in fit.held
+                 else f"{lo:>13.5g}{hi:>13.5g}")
         print(f"  {k:<20}{vtext}{itext}  {UNITS[k]:<6}{ptext:>19}")
     for name, formula in DAMPING_RATIO_FORMULAS.items():
         print(f"  {name} = {formula}")
@@ -200,10 +209,12 @@ def run(args) -> int:
     print(f"fit: full-record least squares of the exact model (eqs 12-35); residual RMS "
           f"{fit.residual_rms:.3g} m = {fit.misfit_ratio:.3g} x the noise {fit.noise:.3g} m "
           f"({fit.residual_rms / fit.peak:.2%} of the peak){y_text}")
-    print(f"verdict: {fit.verdict}")
+
+
+def _print_conclusion(fit) -> None:
+    print(f"verdict: {fit.conclusion}")
     for d in fit.diagnoses:
-        print(f"  {d['kind']}: {d['message']}")
-    return 0
+        print(f"  {d.kind}: {d.message}")
 
 
 def _plot(path, record, fit, paper, test) -> None:
@@ -212,6 +223,9 @@ def _plot(path, record, fit, paper, test) -> None:
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
+    import numpy as np
+
+    from treeimpact.analytic.identify.fit_parameters import Slot
     from treeimpact.analytic.identify.record_fit import model_x
 
     pendulum = record.y is not None
@@ -246,9 +260,9 @@ def _plot(path, record, fit, paper, test) -> None:
     reading = paper.get("paper", {})
     if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading[
             "trunk_damping_ratio"]:  # the fit's parameter is the trunk's own ratio
-        p = [math.log(reading["M_T"]), math.log(reading["K_T"]), reading["trunk_damping_ratio"],
-             fit.point[3], fit.values["t0"], fit.values["x_offset"], 0.0,
-             fit.values["x_drift"], fit.values["x_drift2"]]
+        p = np.array(fit.point, float)  # the fit's contact, e and sensor terms
+        p[Slot.LN_M_T], p[Slot.LN_K_T] = math.log(reading["M_T"]), math.log(reading["K_T"])
+        p[Slot.TRUNK_DAMPING_RATIO] = reading["trunk_damping_ratio"]
         xp = model_x(p, test, record.t)
         ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
                 label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "

@@ -1,7 +1,6 @@
 """What a record says about itself, apart from the tree: its resting level and the rise after
-the contact (read on a median-of-3 copy, so one wild sample does not move them), the sensor's
-noise (before the contact, and the white floor of a residual's spectrum), the residual's
-dominant frequency, and numbers that look like another unit than declared.
+the contact (read on a median-of-3 copy, so one wild sample does not move them), and numbers
+that look like another unit than declared. The sensor's noise: :mod:`.noise`.
 docs/identification.md, "Diagnoses"."""
 
 from __future__ import annotations
@@ -11,9 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Samples before the contact needed to estimate the noise there (fewer: the residual's
-#: spectrum gives it).
-MIN_REST_SAMPLES = 12
 MAD_SIGMA = 1.482602218505602  # sigma / MAD of a normal distribution
 
 
@@ -63,57 +59,6 @@ def features(t: np.ndarray, x: np.ndarray) -> Features:
                     t_peak=float(t[int(np.argmax(xs))]), dt=dt)
 
 
-def rest_noise(t: np.ndarray, x: np.ndarray, t_contact: float) -> tuple[float, int]:
-    """(sigma, n): the noise of the n samples recorded before the contact (two sample
-    intervals of margin), about a straight line through them (a drift is not noise), robust
-    to a wild sample; NaN when n < MIN_REST_SAMPLES."""
-    dt = float(np.median(np.diff(t)))
-    sel = t < t_contact - 2.0 * dt
-    n = int(np.count_nonzero(sel))
-    if n < MIN_REST_SAMPLES:
-        return math.nan, n
-    ts, xs = t[sel], x[sel]
-    line = np.polyval(np.polyfit(ts - ts[0], xs, 1), ts - ts[0])
-    r = xs - line
-    s = robust_sigma(r)
-    keep = np.abs(r - np.median(r)) <= 5.0 * s if s > 0 else np.ones(n, bool)
-    return float(np.std(r[keep], ddof=2)) if np.count_nonzero(keep) > 2 else s, n
-
-
-def periodogram(r: np.ndarray, dt: float, pad: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """(omega rad/s, P): |FFT|^2 / n of r less its mean, bins 1 to N/2 - 1 of its FFT
-    zero-padded to N = ``pad`` x n (for white noise of variance s^2 each P is exponential
-    with mean s^2; padding interpolates between the independent bins)."""
-    r = np.asarray(r, float) - float(np.mean(r))
-    n = r.size
-    size = pad * n
-    p = np.abs(np.fft.rfft(r, size)) ** 2 / n
-    k = np.arange(1, max(2, (size + 1) // 2))
-    return 2.0 * math.pi * k / (size * dt), p[k]
-
-
-def spectrum_floor(r: np.ndarray, dt: float) -> float:
-    """The white-noise level (standard deviation) of r from the median of its periodogram
-    (median of an exponential = ln 2 x its mean): a misfit confined to a few frequencies
-    does not raise it."""
-    _, p = periodogram(r, dt)
-    return math.sqrt(float(np.median(p)) / math.log(2.0)) if p.size else math.nan
-
-
-def dominant_frequency(r: np.ndarray, dt: float) -> tuple[float, float]:
-    """(omega rad/s, strength): the frequency of the largest peak of r's periodogram
-    (smoothed over 3 independent bins: a decaying mode is a few bins wide; located on the
-    8 x zero-padded spectrum) and its height over the white floor (about 1 for noise,
-    ln(n) at most by chance)."""
-    w, p = periodogram(r, dt, pad=8)
-    if p.size < 24:
-        return math.nan, math.nan
-    smooth = np.convolve(p, np.ones(17) / 17.0, mode="same")  # 3 bins of the unpadded
-    k = int(np.argmax(smooth))
-    floor = float(np.median(periodogram(r, dt)[1])) / math.log(2.0)
-    return float(w[k]), float(smooth[k] / floor) if floor > 0 else math.inf
-
-
 #: What a pendulum test can record, a generous window around orchards' numbers: a peak
 #: displacement at the clamp (m), the contact-to-peak time (s), the sample interval (s) and
 #: the trunk's velocity after the contact over the pendulum's u_1 (at most 2 by eq 21, the
@@ -140,25 +85,27 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
     """One line per record whose numbers look like another unit than declared: the peak
     displacement, the time from the contact to the peak, the sample interval or the trunk's
     velocity after the contact (against the pendulum's u_1) implausible (:data:`PLAUSIBLE`),
-    and plausible once a column is read in another unit (a factor 1e2-1e6; the likeliest
-    when several would do). ``time_unit`` and ``length_unit``: what the record was declared
-    in (its numbers already converted to SI)."""
+    and plausible once a column, or both, is read in another unit (a factor 1e2-1e6 each;
+    one column rather than two, the likeliest when several would do). ``time_unit`` and
+    ``length_unit``: what the record was declared in (its numbers already converted to
+    SI)."""
     peak, rise = feat.span, max(feat.t_peak - feat.t_contact, feat.dt)
     speed = feat.velocity / u1
     ok = _plausible(peak, rise, feat.dt, speed)
     if all(ok.values()):
         return []
-    declared_l, declared_t = LENGTH_UNITS[length_unit], TIME_UNITS[time_unit]
     options = []
-    for unit, f in LENGTH_UNITS.items():
-        g = f / declared_l  # the numbers read in `unit` instead: lengths x g
-        if unit != length_unit and all(_plausible(peak * g, rise, feat.dt, speed * g).values()):
-            options.append((_distance(peak=peak * g, speed=speed * g), "x", unit))
-    for unit, f in TIME_UNITS.items():
-        g = f / declared_t
-        if unit != time_unit and all(_plausible(peak, rise * g, feat.dt * g, speed / g)
-                                     .values()):
-            options.append((_distance(rise=rise * g, speed=speed / g), "t", unit))
+    for length, f in LENGTH_UNITS.items():
+        for time, h in TIME_UNITS.items():
+            g = f / LENGTH_UNITS[length_unit]  # lengths x g, times x k: read in these
+            k = h / TIME_UNITS[time_unit]
+            changed = [c for c, u, d in (("t", time, time_unit), ("x", length, length_unit))
+                       if u != d]
+            if changed and all(_plausible(peak * g, rise * k, feat.dt * k,
+                                          speed * g / k).values()):
+                options.append((len(changed), _distance(peak=peak * g, rise=rise * k,
+                                                        speed=speed * g / k),
+                                {"t": time, "x": length}, changed))
     facts = (f"a peak of {peak:.3g} m, {rise:.3g} s from the contact to it, samples "
              f"{feat.dt:.3g} s apart and a trunk velocity of {feat.velocity:.3g} m/s after a "
              f"pendulum at u_1 = {u1:.3g} m/s")
@@ -166,8 +113,20 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
         bad = ", ".join(k for k, v in ok.items() if not v)
         return [f"the record is implausible for a pendulum test in any unit ({bad}: {facts}); "
                 "check the pendulum's flags and the columns' units"]
-    _, column, unit = min(options)
-    declared = length_unit if column == "x" else time_unit
-    flag = "--length-unit" if column == "x" else "--time-unit"
-    return [f"{column} looks like {unit}, not {declared}: {facts} are implausible, in {unit} "
-            f"they are not (declare it: a header '{column} ({unit})' or {flag} {unit})"]
+    _, _, units, changed = min(options, key=lambda o: o[:2])
+    return [_unit_line(changed, units, {"t": time_unit, "x": length_unit}, facts)]
+
+
+def _unit_line(changed: list, units: dict, declared: dict, facts: str) -> str:
+    """``x looks like mm, not m: ...`` (or ``t looks like ms and x like mm, not s and m``)
+    with how to declare it."""
+    flag = {"t": "--time-unit", "x": "--length-unit"}
+    looks = " and ".join(f"{c} {'looks ' if i == 0 else ''}like {units[c]}"
+                         for i, c in enumerate(changed))
+    not_ = " and ".join(declared[c] for c in changed)
+    read = " and ".join(units[c] for c in changed)
+    headers = ", ".join(f"'{c} ({units[c]})'" for c in changed)
+    flags = " ".join(f"{flag[c]} {units[c]}" for c in changed)
+    noun = "it: a header" if len(changed) == 1 else "them: headers"
+    return (f"{looks}, not {not_}: {facts} are implausible, in {read} they are not "
+            f"(declare {noun} {headers} or {flags})")
