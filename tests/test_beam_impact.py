@@ -9,7 +9,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.contact.law import collision_duration, restitution_for_damping_ratio
-from treeimpact.analytic.contact.linear_impact import Modal, matrices, record, solve, system
+from treeimpact.analytic.contact.exact_record import record
+from treeimpact.analytic.contact.exact_solve import solve
+from treeimpact.analytic.contact.linear_model import matrices, system
+from treeimpact.analytic.contact.modal import Modal
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam import (
     beam_matrices,
