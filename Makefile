@@ -63,7 +63,8 @@ test: $(STAMP)
 	done; rm -rf $$logs; exit $$status
 
 # Each writes benchmarks/results/NAME.json (those the docs quote timings from, see
-# docs/benchmarks.md); bench_make and bench_presets run on their own (minutes).
+# docs/benchmarks.md); bench_make, bench_presets and bench_kernels run on their own
+# (minutes).
 benchmark: $(STAMP)
 	for b in solver beam mujoco bullet sweep report identify trunks; do \
 		OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_$$b.py || exit 1; \
