@@ -40,11 +40,31 @@ report: $(STAMP)
 	rm -rf $(OUT)/study  # a fresh study: rows resumed from an older code version would be stale
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/treeimpact report --out $(OUT) --with-study default
 
+# The whole suite on this machine's BLAS kernel, then the tests marked numerics (BLAS
+# round-off: conftest.py NUMERICS) under two other machines' OpenBLAS kernels
+# (tests/blas_kernels.py picks them), the two passes side by side (one per core); a pass's
+# full output is shown when it fails. Nothing pins a kernel outside these runs.
+THREADS := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 test: $(STAMP)
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest tests compare
+	$(THREADS) $(BIN)/python -m pytest tests compare
+	@kernels="$$($(BIN)/python tests/blas_kernels.py)"; \
+	if [ -z "$$kernels" ]; then \
+		echo "numerics under other kernels: skipped (numpy's BLAS is not OpenBLAS on x86-64)"; \
+		exit 0; fi; \
+	logs=$$(mktemp -d); \
+	for k in $$kernels; do \
+		(OPENBLAS_CORETYPE=$$k $(THREADS) $(BIN)/python -m pytest -q -m numerics \
+			-p no:cacheprovider tests compare > $$logs/$$k.log 2>&1; echo $$? > $$logs/$$k.rc) & \
+	done; wait; status=0; \
+	for k in $$kernels; do \
+		if [ "$$(cat $$logs/$$k.rc)" = 0 ]; then \
+			echo "numerics under OPENBLAS_CORETYPE=$$k: $$(tail -n 1 $$logs/$$k.log)"; \
+		else cat $$logs/$$k.log; echo "numerics under OPENBLAS_CORETYPE=$$k failed"; status=1; fi; \
+	done; rm -rf $$logs; exit $$status
 
 # Each writes benchmarks/results/NAME.json (those the docs quote timings from, see
-# docs/benchmarks.md); bench_make and bench_presets run on their own (minutes).
+# docs/benchmarks.md); bench_make, bench_presets and bench_kernels run on their own
+# (minutes).
 benchmark: $(STAMP)
 	for b in solver beam mujoco bullet sweep report identify trunks; do \
 		OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_$$b.py || exit 1; \

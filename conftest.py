@@ -6,11 +6,18 @@ only handles matrices of a few hundred rows, so one BLAS thread is the fast choi
 
 The project installs one top-level package, `treeimpact`; an import of its folders by their
 bare names (`analytic`, `compare.ladder`) fails here, so a test cannot pass on a second copy.
+
+The tests whose numbers depend on BLAS and LAPACK round-off are marked ``numerics``
+(:data:`NUMERICS`): `make test` runs them again under two other machines' OpenBLAS kernels
+(tests/blas_kernels.py; docs/reproducibility.md).
 """
 
 import importlib.abc
 import os
 import sys
+from pathlib import Path
+
+import pytest
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
@@ -34,3 +41,24 @@ class _NoBareNames(importlib.abc.MetaPathFinder):
 
 _FOLDERS = ("analytic", "compare", "mujoco_models", "bullet_models")
 sys.meta_path.insert(0, _NoBareNames())
+
+
+#: Test files marked ``numerics``: eigen-decompositions, matrix exponentials and linear
+#: solves whose round-off moves with the BLAS kernel, feeding chattering contacts or the
+#: numbers the docs print (beam and its impact, the whole event, the hinged chain, the
+#: modes and Timoshenko's beam, the exact solver and the soft contact, the reduction, the
+#: record fit, the engines' modes and generated model files, the numbers checks).
+NUMERICS = frozenset({
+    "tests/test_beam.py", "tests/test_beam_impact.py", "tests/test_whole_event.py",
+    "tests/test_chain.py", "tests/test_timoshenko.py", "tests/test_solver.py",
+    "tests/test_soft_contact.py", "tests/test_reduction.py", "tests/test_record_fit.py",
+    "tests/test_engine.py", "tests/test_generated_files.py", "tests/test_doc_numbers.py",
+})
+_ROOT = Path(__file__).resolve().parent
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        path = Path(item.path).resolve()
+        if path.is_relative_to(_ROOT) and path.relative_to(_ROOT).as_posix() in NUMERICS:
+            item.add_marker(pytest.mark.numerics)

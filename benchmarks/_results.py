@@ -14,17 +14,21 @@ import time
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
+#: The CPU flags a result file records: what picks numpy's BLAS kernels (docs/reproducibility.md).
+VECTOR_EXTENSIONS = ("sse4_2", "avx", "avx2", "fma", "avx512f")
 
 
 def machine() -> dict:
-    """The machine as far as a timing depends on it (CPU model, cores this process may use,
-    memory, the system), and its load now."""
-    model = None
+    """The machine as far as a timing or a last bit depends on it (CPU model and the vector
+    extensions that pick numpy's BLAS kernels, cores this process may use, memory, the
+    system)."""
+    model, flags = None, []
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
+            if line.startswith("model name") and model is None:
                 model = line.split(":", 1)[1].strip()
-                break
+            if line.startswith("flags") and not flags:
+                flags = line.split(":", 1)[1].split()
     except OSError:
         pass
     memory = None
@@ -33,7 +37,9 @@ def machine() -> dict:
     except (OSError, IndexError, ValueError):
         pass
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return {"cpu": model or platform.processor(), "cores": cores, "memory_bytes": memory,
+    return {"cpu": model or platform.processor(),
+            "vector_extensions": [f for f in VECTOR_EXTENSIONS if f in flags], "cores": cores,
+            "memory_bytes": memory,
             "system": f"{platform.system()} {platform.release()}",
             "python": platform.python_version()}
 

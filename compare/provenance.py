@@ -24,11 +24,18 @@ SETTINGS = ("dt", "integrator", "solref", "solimp", "contact", "calibration", "e
             "touch_duration", "samples")
 
 
+#: The distributions a package's version is read from, the first installed: MuJoCo's
+#: physics comes as mujoco-core (pyproject.toml), the mujoco package only adds a viewer.
+DISTRIBUTIONS = {"mujoco": ("mujoco-core", "mujoco")}
+
+
 def _version(name: str) -> str | None:
-    try:
-        return metadata.version(name)
-    except metadata.PackageNotFoundError:
-        return None
+    for dist in DISTRIBUTIONS.get(name, (name,)):
+        try:
+            return metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            continue
+    return None
 
 
 @functools.lru_cache(maxsize=1)

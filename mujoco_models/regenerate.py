@@ -7,7 +7,8 @@ pendulum only) and pendulum (``linear``, ``full``):
 ``<scenario>-<trunk>-<pendulum>.xml``, exactly the model the runner steps with its default options
 (contact law and time step included), written by
 ``MjSpec.to_xml`` (6 significant digits; see :func:`mujoco_models._builder.mjcf_text`).
-Open one with ``python -m mujoco.viewer --mjcf=<file>``. XML files of no shipped scenario
+Open one with ``python -m mujoco.viewer --mjcf=<file>`` (after
+``pip install "mujoco-core[rendering]"``). XML files of no shipped scenario
 are removed. ``--check`` only compares and exits 1 if a file would change
 or be removed.
 """

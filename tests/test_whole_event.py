@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from treeimpact.analytic.contact.linear_impact import record
+from treeimpact.analytic.contact.exact_record import record
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam import beam_matrices, deflection_dof
 from treeimpact.analytic.continuum.beam_impact import beam_impact_model, simulate_beam

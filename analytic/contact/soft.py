@@ -5,8 +5,8 @@ Design notes and measured figures: docs/contact-law.md.
 
 from __future__ import annotations
 
+import enum
 import math
-from functools import partial
 
 import numpy as np
 
@@ -26,14 +26,23 @@ from treeimpact.analytic.records import model_metrics, with_static_shape_crown
 from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajectory
 
 from .law import collision_duration, contact_law, pad_fields
-from .linear_impact import LinearImpactModel, sampled_record, solve
+from .exact_solve import deferred_record, solve
+from .linear_model import LinearImpactModel
+from .phases import ContactPhase, Signal
 
-#: How :func:`simulate_soft` solves the two-body model: ``exact`` by the exact linear
-#: solver between contact switches (:mod:`.linear_impact`, the trunk a 1 x 1 mesh; the
-#: record's energies when first read), ``ode`` by DOP853 with event location (the
-#: original implementation, the tests' reference: the same metrics to 1e-8; a billet's
-#: free flight always goes this way).
-METHODS = ("exact", "ode")
+class SoftMethod(enum.StrEnum):
+    """How :func:`simulate_soft` solves the two-body model (the same solution)."""
+
+    #: by the exact linear solver between contact switches (:mod:`.exact_solve`, the trunk
+    #: a 1 x 1 mesh; the record's energies when first read)
+    EXACT = "exact"
+    #: by DOP853 with event location (the original implementation, the tests' reference:
+    #: the same metrics to 1e-8; a billet's free flight always goes this way)
+    ODE = "ode"
+
+
+#: The words ``method`` takes (:class:`SoftMethod`).
+METHODS = tuple(m.value for m in SoftMethod)
 #: One sample of the exact solution: wall time and the bytes of the samples and the metrics'
 #: work arrays, measured (benchmarks/bench_cost.py; docs/budgets.md).
 SAMPLE_COST = StepCost(0.45e-6, 190.0, "samples of the exact two-body solution")
@@ -69,8 +78,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     solution. Returns a SimulationResult (backend "analytic-soft") whose metrics come from
     :func:`analytic.records.metrics_from_record`, the same rule the engines use.
     """
-    if method not in METHODS:
-        raise ParameterError(f"--method = {method!r}: allowed {', '.join(METHODS)}")
+    method = SoftMethod(OPTIONS["method"].check("method", method))
     model = two_body_model(scenario, restitution)
     t_end = scenario.t_end if t_end is None else t_end
     k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness,
@@ -78,7 +86,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     t_col = collision_duration(model, k_c, c_c)
     dt = t_col / samples_per_collision
     check_work(t_end, dt, SAMPLE_COST)
-    if method == "ode" or model.impactor_stiffness == 0.0:  # a billet: no pendulum's mode
+    if method is SoftMethod.ODE or model.impactor_stiffness == 0.0:  # a billet: no pendulum's mode
         # (its free flight, y'' = 0, is a Jordan block the exact solver does not take)
         rec = with_static_shape_crown(soft_record(model, k_c, c_c, t_end, dt_sample=dt),
                                       scenario.trunk)
@@ -86,7 +94,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     else:
         linear = sdof_impact_model(model, scenario.trunk, k_c, c_c)
         samples, _ = solve(linear, t_end, dt)
-        rec = ImpactRecord.deferred(partial(sampled_record, linear, t_end, dt))
+        rec = deferred_record(linear, t_end, dt)
         trajectory = Trajectory(t=samples.t, x=samples.x, vx=samples.vx, y=samples.y,
                                 vy=samples.vy, force=samples.force)
     metrics = model_metrics(samples, model, scenario.impactor, collision_duration=t_col)
@@ -100,84 +108,86 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
 
 
 def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sample: float):
-    """Integrate the soft-contact two-body model; return an ``ImpactRecord`` sampled every dt."""
+    """Integrate the soft-contact two-body model by DOP853, each phase of :mod:`.phases`
+    smoothly up to its terminal event; return an ``ImpactRecord`` sampled every dt (s)."""
     from scipy.integrate import solve_ivp  # here, not at import: `treeimpact --help` is fast
 
+    rhs, events = _soft_rhs(model, k_c, c_c), _pad_events(k_c, c_c)
+    n = int(math.ceil(t_end / dt_sample))
+    t_grid = np.linspace(0.0, t_end, n + 1)
+    out = np.empty((6, t_grid.size))
+    state = np.array([0.0, 0.0, 0.0, model.impact_speed, 0.0, 0.0])
+    t, phase = 0.0, ContactPhase.CONTACT
+    scale = max(model.impact_speed, 1e-12)
+    atol = [1e-14 * scale, 1e-11 * scale, 1e-14 * scale, 1e-11 * scale, 1e-12, 1e-12]
+    # released but overlapping, steps are limited to the collision time scale so that a
+    # short excursion of the law is never stepped over
+    short_step = math.pi * math.sqrt(model.reduced_mass / k_c) / 20.0
+    contact_flag = np.zeros(t_grid.size, dtype=bool)
+    stalls = 0
+    while t < t_end:
+        ends = events[phase]
+        sol = solve_ivp(rhs, (t, t_end), state, method="DOP853", args=(phase.touching,),
+                        events=[e for e, _ in ends], dense_output=True, rtol=1e-11, atol=atol,
+                        max_step=np.inf if phase is ContactPhase.FREE else short_step)
+        if sol.status == -1 or not np.all(np.isfinite(sol.y[:, -1])):
+            raise SimulationDiverged(f"soft-contact integration failed: {sol.message}")
+        hits = [(te[0], k) for k, te in enumerate(sol.t_events) if te.size]
+        t_stop, which = min(hits) if hits else (t_end, None)
+        state = sol.y_events[which][0] if hits else sol.y[:, -1]
+        sel = (t_grid >= t) & (t_grid <= t_stop)
+        if np.any(sel):
+            out[:, sel] = sol.sol(t_grid[sel])
+            contact_flag[sel] = phase.touching
+        stalls = stalls + 1 if t_stop <= t else 0
+        if stalls > 10:
+            raise SimulationDiverged(f"soft-contact integration stalled at t = {t:.6g} s")
+        t = t_stop
+        if which is not None:
+            phase = phase.after(ends[which][1], state[2] - state[0])
+            if phase is ContactPhase.FREE and state[2] >= state[0]:
+                # The overlap event leaves delta = +-1e-19 of round-off. Free flight must start
+                # with delta < 0: from delta >= 0 a step that jumps the brief negative
+                # excursion sees no rising crossing and the pendulum passes through the trunk.
+                state[2] = np.nextafter(state[0], -np.inf)
+    return _soft_impact_record(model, k_c, c_c, t_grid, out, contact_flag)
+
+
+def _soft_rhs(model: TwoBodyModel, k_c: float, c_c: float):
+    """The two bodies' equations (eqs 11 and 13) with the pad acting while ``in_contact``;
+    the last two states integrate the trunk's damping work and the pad's work (J)."""
     M, C, K = model.dynamic_mass, model.damping, model.stiffness
     m, kp = model.impactor_mass, model.impactor_stiffness
 
     def rhs(_t, s, in_contact):
         x, vx, y, vy = s[0], s[1], s[2], s[3]
         f = k_c * (y - x) + c_c * (vy - vx) if in_contact else 0.0
-        # last two states: work dissipated by the trunk damping, work absorbed by the contact
         return [vx, (-K * x - C * vx + f) / M, vy, (-kp * y - f) / m, C * vx * vx,
                 f * (vy - vx)]
 
-    # Three phases, each integrated smoothly up to its terminal event:
-    #   "contact":  F = k delta + c delta' > 0; ends when F falls through 0 (release);
-    #   "overlap":  released but still overlapping (delta > 0, F = 0); contact resumes when
-    #               k delta + c delta' rises through 0, free flight starts when delta falls
-    #               through 0; steps limited to the collision time scale so that a short
-    #               excursion of the law is never stepped over;
-    #   "free":     delta < 0; contact starts when delta rises through 0 (F = c delta' > 0).
-    def law(_t, s, _c):
-        return k_c * (s[2] - s[0]) + c_c * (s[3] - s[1])
+    return rhs
 
-    def overlap(_t, s, _c):
-        return s[2] - s[0]
 
-    def law_rises(_t, s, c):
-        return law(_t, s, c)
+def _pad_events(k_c: float, c_c: float) -> dict:
+    """Each phase's ending events as solve_ivp's terminal events, with the signal each
+    crosses: ``{ContactPhase: ((event, Signal), ...)}`` (the rule of :mod:`.phases`)."""
 
-    law.terminal, law.direction = True, -1.0
-    law_rises.terminal, law_rises.direction = True, 1.0
-    overlap.terminal, overlap.direction = True, -1.0
+    def crossing(signal: Signal, direction: float):
+        def event(_t, s, _c):
+            delta = s[2] - s[0]
+            return delta if signal is Signal.DELTA else k_c * delta + c_c * (s[3] - s[1])
 
-    def overlap_rises(_t, s, c):
-        return overlap(_t, s, c)
+        event.terminal, event.direction = True, direction
+        return event, signal
 
-    overlap_rises.terminal, overlap_rises.direction = True, 1.0
-    n = int(math.ceil(t_end / dt_sample))
-    t_grid = np.linspace(0.0, t_end, n + 1)
-    out = np.empty((6, t_grid.size))
-    state = np.array([0.0, 0.0, 0.0, model.impact_speed, 0.0, 0.0])
-    t, phase = 0.0, "contact"
-    scale = max(model.impact_speed, 1e-12)
-    short_step = math.pi * math.sqrt(model.reduced_mass / k_c) / 20.0
-    contact_flag = np.zeros(t_grid.size, dtype=bool)
-    stalls = 0
-    while t < t_end:
-        events = {"contact": [law], "overlap": [law_rises, overlap],
-                  "free": [overlap_rises]}[phase]
-        sol = solve_ivp(rhs, (t, t_end), state, method="DOP853", args=(phase == "contact",),
-                        events=events, dense_output=True, rtol=1e-11,
-                        atol=[1e-14 * scale, 1e-11 * scale, 1e-14 * scale, 1e-11 * scale,
-                              1e-12, 1e-12], max_step=np.inf if phase == "free" else short_step)
-        if sol.status == -1 or not np.all(np.isfinite(sol.y[:, -1])):
-            raise SimulationDiverged(f"soft-contact integration failed: {sol.message}")
-        hits = [(te[0], k) for k, te in enumerate(sol.t_events) if te.size]
-        if hits:
-            t_stop, which = min(hits)
-            state = sol.y_events[which][0]
-        else:
-            t_stop, which = t_end, None
-            state = sol.y[:, -1]
-        sel = (t_grid >= t) & (t_grid <= t_stop)
-        if np.any(sel):
-            out[:, sel] = sol.sol(t_grid[sel])
-            contact_flag[sel] = phase == "contact"
-        stalls = stalls + 1 if t_stop <= t else 0
-        if stalls > 10:
-            raise SimulationDiverged(f"soft-contact integration stalled at t = {t:.6g} s")
-        t = t_stop
-        if which is not None:
-            phase = {"contact": "overlap", "free": "contact"}.get(
-                phase, "contact" if which == 0 else "free")
-            if phase == "free" and state[2] >= state[0]:
-                # The overlap event leaves delta = +-1e-19 of round-off. Free flight must start
-                # with delta < 0: from delta >= 0 a step that jumps the brief negative
-                # excursion sees no rising crossing and the pendulum passes through the trunk.
-                state[2] = np.nextafter(state[0], -np.inf)
+    return {ContactPhase.CONTACT: (crossing(Signal.LAW, -1.0),),
+            ContactPhase.OVERLAP: (crossing(Signal.LAW, 1.0), crossing(Signal.DELTA, -1.0)),
+            ContactPhase.FREE: (crossing(Signal.DELTA, 1.0),)}
+
+
+def _soft_impact_record(model: TwoBodyModel, k_c: float, c_c: float, t_grid: np.ndarray,
+                        out: np.ndarray, contact_flag: np.ndarray) -> ImpactRecord:
+    """The :class:`ImpactRecord` of the integrated states on the sample grid."""
     x, vx, y, vy, w_damp, w_contact = out
     force = np.where(contact_flag, np.maximum(0.0, k_c * (y - x) + c_c * (vy - vx)), 0.0)
     overlap = np.where(contact_flag, np.maximum(y - x, 0.0), 0.0)

@@ -3,14 +3,15 @@
 The trunk of :mod:`analytic.continuum.beam` (Hermite cubics or Timoshenko elements, clamp
 and crown point masses, root spring, consistent damping of the distributed C of eq 9) and the
 linearised pendulum (eq 13) meet through the pad of :mod:`analytic.contact.law`, solved
-exactly between contact switches by :mod:`analytic.contact.linear_impact`. Design notes:
+exactly between contact switches by :mod:`analytic.contact.exact_solve` (the pad's
+phases: :mod:`analytic.contact.phases`). Design notes:
 docs/beam-impact.md.
 """
 
 from __future__ import annotations
 
+import enum
 from dataclasses import replace
-from functools import partial
 
 import numpy as np
 
@@ -24,12 +25,9 @@ from treeimpact.analytic.contact.law import (
     effective_damping,
     pad_fields,
 )
-from treeimpact.analytic.contact.linear_impact import (
-    LinearImpactModel,
-    sampled_record,
-    solve,
-)
-from treeimpact.analytic.contact.linear_impact import record as full_record
+from treeimpact.analytic.contact.exact_record import record as full_record
+from treeimpact.analytic.contact.exact_solve import deferred_record, solve
+from treeimpact.analytic.contact.linear_model import LinearImpactModel
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.options import (
     CONTACT_DURATION,
@@ -41,7 +39,7 @@ from treeimpact.analytic.model.options import (
 from treeimpact.analytic.model.parameters import Scenario, check_range
 from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.records import model_metrics
-from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajectory
+from treeimpact.analytic.results import SimulationResult, Trajectory
 
 from .beam import beam_matrices, deflection_dof
 from .modes import beam_reference
@@ -55,11 +53,20 @@ DEFAULT_ELEMENTS = 12
 MAX_ELEMENTS = 48
 #: Samples per free collision of the pad (the soft SDOF rung's record spacing).
 SAMPLES_PER_COLLISION = 100
-#: How :func:`simulate_beam` evaluates the exact solution: ``exact`` the observables on the
-#: sample grid, the energies where the metrics read them and the record when first read;
-#: ``exact-full`` every sample's state and energies as it goes (the original implementation:
-#: the reference of benchmarks/bench_beam.py and of the tests).
-METHODS = ("exact", "exact-full")
+class BeamMethod(enum.StrEnum):
+    """How :func:`simulate_beam` evaluates the exact solution (the same solution)."""
+
+    #: the observables on the sample grid, the energies where the metrics read them and the
+    #: record when first read (:mod:`analytic.contact.exact_solve`)
+    EXACT = "exact"
+    #: every sample's state and energies as it goes (the original implementation: the
+    #: reference of benchmarks/bench_beam.py and of the tests;
+    #: :mod:`analytic.contact.exact_record`)
+    EXACT_FULL = "exact-full"
+
+
+#: The words ``method`` takes (:class:`BeamMethod`).
+METHODS = tuple(m.value for m in BeamMethod)
 #: The options of :func:`simulate_beam` (the ``beam`` backend).
 OPTIONS = {"elements": Option(int, "elements of the beam trunk's mesh", low=2,
                               high=MAX_ELEMENTS),
@@ -121,14 +128,13 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
 
     Returns a SimulationResult (backend "beam") with the metrics of
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
-    ``method`` (:data:`METHODS`) changes the cost, not the solution; ``beam_theory``
+    ``method`` (:class:`BeamMethod`) changes the cost, not the solution; ``beam_theory``
     (``euler-bernoulli`` or ``timoshenko``: shear deformation and rotary inertia, the
     scenario's trunk.shear_modulus and shear_coefficient) the trunk.
     """
     t_end = scenario.t_end if t_end is None else t_end
     check_range("--t-end", t_end, low=0, low_open=True, unit="s")
-    if method not in METHODS:
-        raise ParameterError(f"--method = {method!r}: allowed {', '.join(METHODS)}")
+    method = BeamMethod(OPTIONS["method"].check("method", method))
     model, sdof = beam_impact_model(scenario, elements=elements, restitution=restitution,
                                     contact_stiffness=contact_stiffness,
                                     duration=contact_duration, calibration=calibration,
@@ -138,12 +144,12 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     dt = t_col / SAMPLES_PER_COLLISION
     check_work(t_end, dt, SAMPLE_COST)
     t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
-    if method == "exact-full":
+    if method is BeamMethod.EXACT_FULL:
         record, crown, switches = full_record(model, t_end, dt)
         samples, trajectory = record, record.trajectory()
     else:
         samples, switches = solve(model, t_end, dt)
-        record = ImpactRecord.deferred(partial(sampled_record, model, t_end, dt))
+        record = deferred_record(model, t_end, dt)
         crown = samples.crown
         trajectory = Trajectory(t=samples.t, x=samples.x, vx=samples.vx, y=samples.y,
                                 vy=samples.vy, force=samples.force)

@@ -15,6 +15,8 @@ from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.model.two_body import TwoBodyModel
 
+from .solver import Motion
+
 
 def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
                       gamma_tol: float = 1e-7, stop_at_separation: bool = False,
@@ -48,9 +50,9 @@ def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
 
     out = {"impacts": [], "together": [], "separations": []}
     t, s = 0.0, np.array([0.0, 0.0, 0.0, u1])
-    mode = "impact"
+    mode = Motion.IMPACT
     while t < t_end:
-        if mode == "impact":
+        if mode is Motion.IMPACT:
             U, u = s[1], s[3]
             v = ((m - M * e) * u + M * (1 + e) * U) / (M + m)
             V = v + e * (u - U)
@@ -60,10 +62,10 @@ def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
                 vc = (M * V + m * v) / (M + m)
                 s = np.array([s[0], vc, s[0], vc])
                 if force(t, s) > 0:
-                    mode = "together"
+                    mode = Motion.TOGETHER
                     out["together"].append((t, s[0], vc))
                     continue
-            mode = "free"
+            mode = Motion.FREE
             # Leave the contact before watching the gap again: it starts at zero, and within
             # round-off of the positions an event would fire at once. Skip a thousandth of
             # the flight 2 gamma / |a_rel| predicted under constant relative acceleration.
@@ -73,20 +75,20 @@ def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
             sol = solve_ivp(free, (t, t_skip), s, method="DOP853", rtol=rtol, atol=atol)
             t, s = t_skip, sol.y[:, -1]
             continue
-        rhs, event = (free, gap) if mode == "free" else (together, force)
+        rhs, event = (free, gap) if mode is Motion.FREE else (together, force)
         sol = solve_ivp(rhs, (t, t_end), s, method="DOP853", rtol=rtol, atol=atol,
                         events=event)
         if sol.t_events[0].size == 0:
             t, s = t_end, sol.y[:, -1]
             break
         t, s = sol.t_events[0][0], sol.y_events[0][0]
-        if mode == "free":
-            mode = "impact"
+        if mode is Motion.FREE:
+            mode = Motion.IMPACT
         else:
             out["separations"].append((t, s[0], s[1]))
             if stop_at_separation:
                 break
-            mode = "free"
+            mode = Motion.FREE
             t_skip = min(t_end, t + 1e-9)
             sol = solve_ivp(free, (t, t_skip), s, method="DOP853", rtol=rtol, atol=atol)
             t, s = t_skip, sol.y[:, -1]

@@ -15,7 +15,7 @@ from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import with_static_shape_crown
 from treeimpact.analytic.results import METRIC_KEYS, ImpactRecord, SimulationResult, Trajectory
 
-from .solver import ImpactSolution, _force_coefficients, solve_impacts
+from .solver import ImpactSolution, Motion, _force_coefficients, solve_impacts
 
 
 def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dict:
@@ -85,7 +85,7 @@ def _whole_event(sol: ImpactSolution, scenario: Scenario | None) -> dict:
            "contact_episodes": len(sol.impacts) + len(sol.together_starts),
            "first_contact_duration": nan, "crown_peak": nan, "crown_peak_acceleration": nan}
     last = sol.phases[-1] if sol.phases else None
-    if last is not None and last.kind == "free":
+    if last is not None and last.kind is Motion.FREE:
         t = last.t0  # the final free flight starts at the last separation or impact
         vy = last.vy0
         rebound = model.pendulum_energy(last.y0, vy)
@@ -155,7 +155,7 @@ def sampled_record(sol: ImpactSolution, samples: int, scenario: Scenario | None 
     cx, cv = _force_coefficients(m)
     together = np.zeros(t.size, dtype=bool)
     for ph in sol.phases:
-        if ph.kind == "together":
+        if ph.kind is Motion.TOGETHER:
             together |= (t >= ph.t0) & (t <= ph.t1)
     force = np.where(together, np.maximum(cx * x + cv * vx, 0.0), 0.0)
     events = sorted([(i.t, i.loss) for i in sol.impacts] + [(c.t_start, c.loss)

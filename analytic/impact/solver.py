@@ -6,6 +6,7 @@ moving together (eq 34) to separation. The sequence of events: docs/solver.md.
 
 from __future__ import annotations
 
+import enum
 import math
 from bisect import bisect_right
 from dataclasses import dataclass, field
@@ -26,6 +27,15 @@ _MAX_STALLED_EVENTS = 1000  # events in a row at one time: a loop that no longer
 #: growth, see the module docstring): ~1 s of work; at most 914 were needed at e = 0.99 over
 #: 1500 random models (hypothesis, the ranges of tests/test_properties.py).
 MAX_CHATTER_IMPACTS = 100_000
+
+
+class Motion(enum.Enum):
+    """What the bodies do from an instant on: a Newton impact there (eqs 20-21), a free
+    flight (eq 13) or moving together (eq 34); a :class:`Phase` is one of the last two."""
+
+    IMPACT = "impact"
+    FREE = "free"
+    TOGETHER = "together"
 
 
 @dataclass(frozen=True)
@@ -57,9 +67,9 @@ class TailClosure:
 
 @dataclass(frozen=True)
 class Phase:
-    """A stretch of closed-form motion: 'free' (eq 13) or 'together' (eq 34)."""
+    """A stretch of closed-form motion: free (eq 13) or together (eq 34)."""
 
-    kind: str
+    kind: Motion
     t0: float
     t1: float
     x0: float
@@ -100,7 +110,7 @@ class ImpactSolution:
         """(x, vx, y, vy) of phase ``ph`` at times s (s) after its start; (x, vx) only
         without ``pendulum``."""
         tree, pend, both = self._osc
-        if ph.kind == "together":
+        if ph.kind is Motion.TOGETHER:
             dx, vx = both.advance(s, ph.x0, ph.vx0, np)
             return (ph.x0 + dx, vx, ph.x0 + dx, vx) if pendulum else (ph.x0 + dx, vx)
         dx, vx = tree.advance(s, ph.x0, ph.vx0, np)
@@ -115,7 +125,7 @@ class ImpactSolution:
         ph = self.phases[k]
         s = t - ph.t0
         tree, pend, both = self._osc
-        if ph.kind == "together":
+        if ph.kind is Motion.TOGETHER:
             dx, vx = both.scalar_advance(s, ph.x0, ph.vx0)
             return ph.x0 + dx, vx, ph.x0 + dx, vx
         dx, vx = tree.scalar_advance(s, ph.x0, ph.vx0)
@@ -167,7 +177,7 @@ class ImpactSolution:
             return 0.0
         tree, pend, both = self._osc
         m = self.model
-        if ph.kind == "together":  # one body: M_T + m on K_T + k, damping C_T
+        if ph.kind is Motion.TOGETHER:  # one body: M_T + m on K_T + k, damping C_T
             osc, mass, stiff = both, m.dynamic_mass + m.impactor_mass, m.stiffness + (
                 m.impactor_stiffness)
         else:
@@ -177,7 +187,7 @@ class ImpactSolution:
         if which == "damping":
             return (0.5 * mass * (ph.vx0 ** 2 - vx1 ** 2)
                     + 0.5 * stiff * (ph.x0 ** 2 - x1 ** 2))
-        if which == "x" or ph.kind == "together":  # y = x while moving together
+        if which == "x" or ph.kind is Motion.TOGETHER:  # y = x while moving together
             return -((vx1 - ph.vx0) + 2.0 * osc.beta * (x1 - ph.x0)) / osc.omega_sq
         if pend.omega_sq > 0.0:  # undamped: y0 sin(w s) / w + 2 v0 sin^2(w s / 2) / w^2
             w = math.sqrt(pend.omega_sq)  # (no difference of nearly equal velocities)
@@ -252,7 +262,7 @@ class ImpactSolution:
         tree, _, both = self._osc
         best = (0.0, 0.0)
         for ph in self.phases:
-            osc = both if ph.kind == "together" else tree
+            osc = both if ph.kind is Motion.TOGETHER else tree
             duration = ph.t1 - ph.t0
             for s in (0.0, first_peak_time(osc, ph.x0, ph.vx0), duration):
                 if 0.0 <= s <= duration:
@@ -303,7 +313,8 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
     tail_limit = TAIL_ENERGY_FRACTION * e0
 
     t, x, vx, y, vy = 0.0, 0.0, 0.0, 0.0, model.impact_speed
-    mode = "impact"
+    IMPACT, FREE, TOGETHER = Motion.IMPACT, Motion.FREE, Motion.TOGETHER  # the hot loop's
+    mode = IMPACT
     free_order = 1
     chatter = 0  # impacts since the bodies last moved together or started
     t_last, stalled = -1.0, 0  # events in a row that did not advance time
@@ -318,7 +329,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                 f"exact solver: {stalled} events without advancing time at t = {t:.6g} s "
                 f"(x = {x:.3g} m, relative velocity {vy - vx:.3g} m/s): a grazing contact "
                 "it cannot resolve")
-        if mode == "impact":
+        if mode is IMPACT:
             U, u = vx, vy
             approach = u - U
             v_new = ((m - M * e) * u + M * (1.0 + e) * U) / (M + m)  # eq 54
@@ -336,24 +347,20 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             gamma = vx - vy
             a_rel = (-b2t * vx - w2t * x) - (-b2p * vy - w2p * y)
             tail_energy = 0.5 * mu * gamma * gamma
-            vc = (M * vx + m * vy) / (M + m)
             if gamma <= 1e-15 * u_scale:  # no relative velocity left (e = 0 or grazing)
-                if cx * x + cv * vc > 0.0:
-                    vx = vy = vc
-                    mode = "together"
-                else:
-                    mode, free_order = "free", 0
+                mode, vx, vy = _together_or_part(M, m, cx, cv, x, vx, vy)
+                free_order = 0
                 continue
             if e < 1.0 and a_rel < 0.0 and tail_energy < tail_limit:
                 t_inf = t + 2.0 * gamma / (abs(a_rel) * (1.0 - e))
                 sol.tails.append(TailClosure(len(impacts), t, t_inf, gamma, a_rel,
                                              tail_energy))
-                vx = vy = vc
-                mode = "together"
+                vx = vy = common_velocity(M, m, vx, vy)
+                mode = TOGETHER
                 continue
-            mode, free_order = "free", 1
+            mode, free_order = FREE, 1
             continue
-        if mode == "free":
+        if mode is FREE:
             x0, vx0, y0, vy0 = x, vx, y, vy
             g0 = x0 - y0
             bt = tree_bounds(x0, vx0)
@@ -400,7 +407,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             s_hit = first_zero(gap, dgap, t_end - t, bounds, rate, order=order, taylor=taylor,
                                local_bounds=local_bounds, fdf=gap_slope)
             s_stop = t_end - t if s_hit is None else s_hit
-            phases.append(Phase("free", t, t + s_stop, x0, vx0, y0, vy0))
+            phases.append(Phase(FREE, t, t + s_stop, x0, vx0, y0, vy0))
             dx, vx = tree_adv(s_stop, x0, vx0)
             dy, vy = pend_adv(s_stop, y0, vy0)
             t, x, y = t + s_stop, x0 + dx, y0 + dy
@@ -408,16 +415,12 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                 break
             y = x  # in contact: the gap is zero to round-off
             if vy - vx <= 0.0:  # grazing: touching without approach
-                vc = (M * vx + m * vy) / (M + m)
-                if cx * x + cv * vc > 0.0:
-                    vx = vy = vc
-                    mode = "together"
-                else:
-                    mode, free_order = "free", 0
+                mode, vx, vy = _together_or_part(M, m, cx, cv, x, vx, vy)
+                free_order = 0
                 continue
-            mode = "impact"
+            mode = IMPACT
             continue
-        if mode == "together":
+        if mode is TOGETHER:
             chatter = 0
             sol.together_starts.append((t, x, vx))
             x0, v0 = x, vx
@@ -431,7 +434,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
             else:  # not compressive at the start (round-off): the certified search decides
                 s_sep = _separation_search(both, cx, cv, x0, v0, f0, t_end - t)
             s_stop = t_end - t if s_sep is None else s_sep
-            phases.append(Phase("together", t, t + s_stop, x0, v0, x0, v0))
+            phases.append(Phase(TOGETHER, t, t + s_stop, x0, v0, x0, v0))
             dx, v = both_adv(s_stop, x0, v0)
             t, x, vx, y, vy = t + s_stop, x0 + dx, v, x0 + dx, v
             if s_sep is None:
@@ -442,7 +445,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                 break
             # the contact force is zero at a separation, so is the relative acceleration:
             # the gap opens as -N' t^3 / (6 mu) (order 3), whatever round-off left in g2
-            mode, free_order = "free", 3
+            mode, free_order = FREE, 3
             continue
     else:  # the budget given ran out (a record fit's model far off), else a bug
         if max_events is not None:
@@ -450,6 +453,24 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
                                      f"t_end = {t_end:.4g} s (the budget given)")
         raise RuntimeError(f"impact solver: more than {_MAX_EVENTS} events before t_end")
     return sol
+
+
+def common_velocity(M: float, m: float, vx: float, vy: float) -> float:
+    """The velocity (m/s) of trunk (dynamic mass M, velocity vx) and pendulum (m, vy)
+    moving together with their momentum (eq 20 with V = v)."""
+    return (M * vx + m * vy) / (M + m)
+
+
+def _together_or_part(M: float, m: float, cx: float, cv: float, x: float, vx: float,
+                      vy: float) -> tuple[Motion, float, float]:
+    """(motion, vx, vy) of bodies touching at x (m) without approach velocity: moving
+    together at their :func:`common_velocity` when the contact force there, N = cx x + cv v
+    (:func:`_force_coefficients`), presses them together; else parting, the velocities
+    unchanged (a free flight from a touch)."""
+    vc = common_velocity(M, m, vx, vy)
+    if cx * x + cv * vc > 0.0:
+        return Motion.TOGETHER, vc, vc
+    return Motion.FREE, vx, vy
 
 
 def _separation_search(both: Oscillator, cx: float, cv: float, x0: float, v0: float,

@@ -1,0 +1,315 @@
+"""The ``exact`` evaluation of the exact linear solution (the default): the same phases,
+switches and samples as :mod:`.exact_record`, evaluated only where the metrics read them.
+
+Within a phase the modal coordinates at the samples are exp(lambda i h) times those at a
+block's first sample (no exponential per sample), only the 8 observables are formed, and
+each switch (the rule of :mod:`.phases`) is refined by Newton's method on the exact
+solution. The energies come in closed form where the metrics read them; the energy ledger is
+checked at every switch and at t_end. Design notes: docs/beam-impact.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import partial
+
+import numpy as np
+
+from treeimpact.analytic.errors import SimulationDiverged
+from treeimpact.analytic.results import ImpactRecord
+
+from .exact_record import record
+from .linear_model import LinearImpactModel, initial_state, matrices
+from .modal import Modal, Observable, ledger_forms, observation_rows
+from .phases import ContactPhase, Signal, bracket, check_switches, switch
+
+#: Largest block of samples the ``exact`` method evaluates at once (32, 256, then this).
+_BLOCK = 1024
+_EPS = float(np.finfo(float).eps)
+
+
+class _State:
+    """One contact state of the ``exact`` method: its :class:`Modal` solution, the
+    observation rows over the kept half of the spectrum, exp(lambda i h) for the sample
+    spacing h (i = 0.._BLOCK) and the work integrals of the ledger."""
+
+    def __init__(self, model: LinearImpactModel, contact: bool, h: float):
+        M, C, K, g = matrices(model, contact)
+        self.modal = modal = Modal(M, C, K)
+        self.contact = contact
+        forms = ledger_forms(model, modal, contact, g)
+        works = [forms.damping] + ([forms.pad] if contact else [])
+        # the works' integrals: H_int stacked (damping; and the pad's, in contact)
+        self.H_int = np.stack([f.H_int for f in works])
+        self.H_lin = np.stack([f.H_lin for f in works])
+        self.secular = bool(np.any(self.H_lin))  # undamped pairs: the free pendulum's
+        k_c, c_c = model.contact_stiffness, model.contact_damping
+        kept = modal.kept
+        self.lam = modal.lam[kept]
+        rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
+        self.rows = (rows[:, kept] * modal.weight).T.copy()  # m x 8: obs = Re(U @ rows)
+        # delta and the law F = k_c delta + c_c delta', and their slopes
+        delta, rate = self.rows[:, Observable.DELTA], self.rows[:, Observable.DELTA_RATE]
+        law = np.stack([delta, k_c * delta + c_c * rate])
+        self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
+        self.steps = _powers(np.exp(self.lam * h))
+        self.gd = modal.displacement_row(g)
+        self.k_c = k_c
+
+    def works(self, w: np.ndarray, s: float, a: np.ndarray | None = None) -> np.ndarray:
+        """The works of the trunk's damping (and of the pad, in contact) over [0, s] of a
+        phase started with modal coefficients w (``a`` = exp(lambda s) w if known), J: the
+        closed form of :class:`.modal.Quadratic`."""
+        a = np.exp(self.modal.lam * s) * w if a is None else a
+        out = (self.H_int @ a) @ a - (self.H_int @ w) @ w
+        if self.secular:
+            out = out + s * ((self.H_lin @ w) @ w)
+        return out.real
+
+    def energies(self, u: np.ndarray) -> tuple[float, float, float]:
+        """(kinetic, elastic energy of the trunk's and pendulum's springs, the pad's elastic
+        energy k_c delta^2 / 2 when in contact; J) of the state u."""
+        N = self.modal.N
+        kin = 0.5 * float(u[N:] @ u[N:])
+        pot = 0.5 * float(u[:N] @ u[:N])
+        pad = 0.5 * self.k_c * float(self.gd @ u) ** 2 if self.contact else 0.0
+        return kin, pot - pad, pad
+
+
+def _powers(step: np.ndarray) -> np.ndarray:
+    """step^i, i = 0.._BLOCK, by doubling (round-off log2(_BLOCK) eps)."""
+    steps = np.ones((_BLOCK + 1, len(step)), dtype=complex)
+    steps[1] = step
+    n = 1
+    while n < _BLOCK:
+        m = min(n, _BLOCK - n)
+        steps[n + 1:n + 1 + m] = steps[1:1 + m] * steps[n]
+        n += m
+    return steps
+
+
+@dataclass(frozen=True)
+class _Phase:
+    """One phase of the solution: start (s), kind, modal coefficients at its start over the
+    full spectrum, damping and contact work so far (J)."""
+
+    t: float
+    kind: ContactPhase
+    w: np.ndarray = field(repr=False)
+    damping_work: float
+    contact_work: float
+
+
+@dataclass(frozen=True)
+class _Solution:
+    """The exact solution as its phases, and its values at any time (SI units)."""
+
+    states: dict = field(repr=False)
+    phases: tuple
+    t_end: float
+    ledger: float  # max |energy ledger| / initial energy at every switch and at t_end
+
+    def phase_at(self, t: float) -> _Phase:
+        starts = [p.t for p in self.phases]
+        return self.phases[max(0, int(np.searchsorted(starts, t, side="right")) - 1)]
+
+    def contact_loss(self, t: float) -> float:
+        """The pad's work so far less the elastic energy it holds at ``t`` (s), J."""
+        p = self.phase_at(t)
+        if not p.kind.touching:
+            return p.contact_work
+        st = self.states[True]
+        work = p.contact_work + float(st.works(p.w, t - p.t)[1])
+        u = (st.modal.Vu @ (np.exp(st.modal.lam * (t - p.t)) * p.w)).real
+        return work - st.energies(u)[2]
+
+
+@dataclass(frozen=True)
+class _ExactSamples:
+    """What :func:`analytic.records.metrics_from_record` reads, from the exact solution:
+    the motion on the sample grid (SI) and the energies in closed form where it reads them."""
+
+    t: np.ndarray
+    x: np.ndarray
+    vx: np.ndarray
+    y: np.ndarray
+    vy: np.ndarray
+    force: np.ndarray
+    pendulum_energy: np.ndarray
+    crown: np.ndarray
+    crown_velocity: np.ndarray
+    solution: _Solution = field(repr=False)
+
+    def contact_loss(self, t: float) -> float:
+        return self.solution.contact_loss(t)
+
+    def ledger_residual(self, initial_energy: float) -> float:
+        return self.solution.ledger
+
+
+@dataclass
+class _Grid:
+    """The sample grid (s) and what is written on it: the observables (n x 8) and the
+    contact flag."""
+
+    t: np.ndarray
+    obs: np.ndarray
+    in_contact: np.ndarray
+
+
+def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
+    """The ``exact`` method: the solution's phases and the observables on the sample grid
+    every ``dt_sample`` to ``t_end`` (s). Returns ``(_ExactSamples, switches)``."""
+    steps = int(math.ceil(t_end / dt_sample - 1e-9))
+    t_grid = np.linspace(0.0, t_end, steps + 1)
+    states = {c: _State(model, c, t_end / steps) for c in (False, True)}
+    to_state = {True: states[True].modal.transfer(states[False].modal),
+                False: states[False].modal.transfer(states[True].modal)}
+    grid = _Grid(t_grid, np.empty((t_grid.size, 8)), np.zeros(t_grid.size, dtype=bool))
+    u = states[True].modal.Tinv @ initial_state(model)
+    t, kind = 0.0, ContactPhase.CONTACT
+    work = np.zeros(2)  # damping, pad
+    phases, ledger = [], 0.0
+    switches = 0
+    while True:
+        st = states[kind.touching]
+        w = st.modal.Wu @ u
+        phases.append(_Phase(t, kind, w, float(work[0]), float(work[1])))
+        end = _scan(model, st, kind, grid, t, w[st.modal.kept])
+        end_s, nxt = end if end is not None else (t_end - t, None)
+        u, residual = _close(model, st, w, end_s, work, t)
+        ledger = max(ledger, residual)
+        if nxt is None:
+            break
+        t += end_s
+        if nxt.touching != kind.touching:  # to the other state's energy coordinates
+            u = to_state[nxt.touching] @ u
+        kind = nxt
+        switches += 1
+        check_switches(switches, t)
+    solution = _Solution(states=states, phases=tuple(phases), t_end=t_end, ledger=ledger)
+    return _samples(model, grid, solution), switches
+
+
+def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid, t: float,
+          wk: np.ndarray):
+    """Write the observables of the phase started at ``t`` (modal coefficients ``wk`` over
+    the kept spectrum) block by block until it ends; returns (time into the phase, next
+    phase) of the switch, or None when it lasts to the grid's end."""
+    k_c, c_c = model.contact_stiffness, model.contact_damping
+    t_grid, n_t = grid.t, grid.t.size
+    j0 = int(np.searchsorted(t_grid, t, side="left"))
+    if j0 >= n_t:
+        return None
+    j, block = j0, 32
+    base = np.exp(st.lam * (t_grid[j0] - t)) * wk
+    while j < n_t:
+        jj = min(n_t, j + block)
+        ob = (st.steps[:jj - j] @ (base[:, None] * st.rows)).real
+        d = ob[:, Observable.DELTA]
+        f = k_c * d + c_c * ob[:, Observable.DELTA_RATE]
+        ended = kind.has_ended(d, f)
+        if j == j0 and t_grid[j0] == t:
+            ended[0] = False  # the phase's own start
+        k = int(np.argmax(ended))
+        if ended[k]:
+            s_lo = max(t_grid[j + k - 1] - t, 0.0) if j + k > j0 else 0.0
+            grid.obs[j:j + k] = ob[:k]
+            grid.in_contact[j:j + k] = kind.touching
+            return _locate(kind, st, wk, s_lo, t_grid[j + k] - t, d[k], f[k])
+        grid.obs[j:jj] = ob
+        grid.in_contact[j:jj] = kind.touching
+        base = base * st.steps[jj - j]
+        j, block = jj, min(8 * block, _BLOCK)
+    return None
+
+
+def _close(model: LinearImpactModel, st: _State, w: np.ndarray, end_s: float,
+           work: np.ndarray, t: float) -> tuple[np.ndarray, float]:
+    """At the end ``end_s`` (s) of the phase started at ``t`` with modal coefficients w:
+    add its works to ``work`` (in place, J) and return the state u there and the energy
+    ledger's residual relative to the input energy."""
+    a = np.exp(st.modal.lam * end_s) * w
+    work += st.works(w, end_s, a) if st.contact else (st.works(w, end_s, a)[0], 0.0)
+    u = (st.modal.Vu @ a).real
+    kin, pot, _ = st.energies(u)
+    if not math.isfinite(kin + pot):
+        raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
+    e0 = model.initial_energy
+    return u, abs(kin + pot + work.sum() - e0) / e0
+
+
+def _samples(model: LinearImpactModel, grid: _Grid, solution: _Solution) -> _ExactSamples:
+    """The :class:`_ExactSamples` of the written grid."""
+    k_c, c_c = model.contact_stiffness, model.contact_damping
+    x, y, vx, vy, delta, ddelta, crown, crown_v = grid.obs.T
+    force = np.where(grid.in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
+    m, kp = model.impactor_mass, model.impactor_stiffness
+    return _ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=force,
+                         pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2, crown=crown,
+                         crown_velocity=crown_v, solution=solution)
+
+
+def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
+            d_hi: float, f_hi: float):
+    """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]
+    (:func:`.phases.switch`), each root by Newton's method on the exact solution's delta
+    and law with their slopes."""
+    lam, law = st.lam, st.law
+
+    def at(s):  # delta, F, delta', F'
+        return (np.exp(lam * s) * wk) @ law
+
+    def fun(i):
+        def value(s):
+            v = at(s).real
+            return float(v[i]), float(v[i + 2])
+        return value
+
+    signals = {Signal.DELTA: (fun(0), d_hi), Signal.LAW: (fun(1), f_hi)}
+
+    def root(signal):
+        value, end_value = signals[signal]
+        return _newton_root(value, s_lo, s_hi, end_value)
+
+    return switch(kind, root, lambda s: signals[Signal.DELTA][0](s)[0], d_hi, f_hi)
+
+
+def _newton_root(fun, lo: float, hi: float, f_hi: float) -> float:
+    """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi:
+    a phase that starts on its own boundary (value 0 at lo) is bracketed from just after its
+    start; then Newton's steps inside the shrinking bracket (bisection otherwise), to
+    1e-15 s."""
+    found = bracket(lambda u: fun(u)[0], lo, hi, f_hi)
+    if found is None:
+        return hi
+    lo, f_lo = found
+    s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
+    tol = 1e-15 + 4 * _EPS * abs(hi)
+    for _ in range(100):
+        f, slope = fun(s)
+        if f == 0.0:
+            return s
+        if (f > 0.0) == (f_lo > 0.0):
+            lo, f_lo = s, f
+        else:
+            hi = s
+        nxt = s - f / slope if slope != 0.0 else 0.5 * (lo + hi)
+        if not lo < nxt < hi:
+            nxt = 0.5 * (lo + hi)
+        if abs(nxt - s) <= tol or hi - lo <= tol:
+            return nxt
+        s = nxt
+    return s
+
+
+def sampled_record(model: LinearImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:
+    """The ``exact`` method's record when first read: :func:`.exact_record.record`'s
+    samples."""
+    return record(model, t_end, dt_sample)[0]
+
+
+def deferred_record(model: LinearImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:
+    """An :class:`ImpactRecord` computed by :func:`sampled_record` when first read."""
+    return ImpactRecord.deferred(partial(sampled_record, model, t_end, dt_sample))
