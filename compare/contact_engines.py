@@ -47,7 +47,6 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     paste, and the collision of each in MuJoCo (at dt, dt/2 and 2 dt), beside the naive
     (uncorrected) solref's; or ``{"error", "largest_dt"}`` beyond Euler's omega dt < 2."""
     from treeimpact.mujoco_models import _contact as mc
-    from treeimpact.mujoco_models import _runner  # noqa: F401 - MuJoCo's warnings: stderr
 
     k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
     top = 2.0 / math.sqrt(k / mu)

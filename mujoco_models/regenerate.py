@@ -22,7 +22,7 @@ from treeimpact.analytic.engine.generated_files import MJCF_DIGITS, regenerate_m
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 
 from ._builder import mjcf_text
-from ._runner import make_setup
+from ._setup import make_setup
 
 MODELS_DIR = pathlib.Path(__file__).resolve().parent / "models"
 VARIANTS = (("sdof", "linear"), ("sdof", "full"), ("chain", "linear"), ("chain", "full"),
