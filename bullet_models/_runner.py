@@ -59,10 +59,33 @@ def run(setup: Setup) -> SimulationResult:
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
              contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
              trunk_damping_model="distributed", calibration="pad") -> SimulationResult:
-    """Run one scenario in PyBullet (rules in the module docstring); backend "bullet".
+    """Run one scenario in PyBullet (rules: docs/engines.md); backend "bullet".
 
-    ``calibration``: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
-    recalibrated so that e holds on the trunk's effective mass at the clamp.
+    Args:
+        scenario: the tree, pendulum and contact.
+        trunk: "chain" (hinged rigid segments, default) or "sdof" (eq 11 on a prismatic
+            joint).
+        segments: the chain's segments (None: the fewest within 0.5 % of the beam).
+        pendulum: "linear" (eq 13, starting at the touch at u_1) or "full" (released from
+            theta_r, swinging to the trunk).
+        contact: "soft" (the pad as Bullet's ERP/CFM spring-damper) or "newton" (Bullet's
+            restitution impulses).
+        contact_stiffness: the pad's k_c, N/m, soft contact only (None: the scenario's).
+        dt: the time step, s (None: :mod:`analytic.contact.timestep`'s rule, within what
+            Bullet's implicit contact holds).
+        restitution: e (None: the scenario's contact.restitution; soft: below 1).
+        t_end: the time simulated after the touch, s (None: the scenario's).
+        trunk_damping_model: "distributed" (eq 9's C along the trunk) or "joint" (in the
+            chain's hinges).
+        calibration: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
+            recalibrated so that e holds on the trunk's effective mass at the clamp.
+
+    Returns:
+        The SimulationResult: metrics, model, record (SI).
+
+    Raises:
+        ParameterError: a bad option or a step the engine cannot take (one line).
+        SimulationDiverged: the run diverged.
     """
     return run(make_setup(scenario, trunk=trunk, segments=segments, pendulum=pendulum,
                           contact=contact, contact_stiffness=contact_stiffness, dt=dt,
@@ -80,7 +103,9 @@ def _batch_one(args):
 
 
 def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
-    """Simulate many scenarios over a process pool (one PyBullet client per process).
+    """Simulate many scenarios with the same ``options`` (:func:`simulate`'s) over a process
+    pool of ``max_workers`` processes (default: one per scenario, at most the CPUs; one
+    PyBullet client per process).
 
     Returns, in order, a SimulationResult or the SimulationDiverged of each scenario;
     bad options raise ParameterError before any process starts.
@@ -102,7 +127,8 @@ def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
 
 
 def modes(scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
-    """Static stiffness at a (N/m) and natural frequencies (rad/s) of Bullet's chain: mass
+    """Static stiffness at a (N/m) and the lowest ``n_modes`` natural frequencies (rad/s) of
+    Bullet's chain of ``segments`` segments (None: the default count) for ``scenario``: mass
     matrix (``calculateMassMatrix`` at rest) and clamp Jacobian (``calculateJacobian``) from
     the engine, the hinge springs the runner applies
     (:func:`analytic.engine.interface.chain_modes`);

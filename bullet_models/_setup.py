@@ -60,6 +60,11 @@ class Setup(EngineSetup):
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
                trunk_damping_model="distributed", calibration="pad") -> Setup:
+    """Validate the options and build everything a run of ``scenario`` needs, without the
+    engine: ``trunk``, ``segments``, ``pendulum``, ``contact``, ``contact_stiffness``
+    (N/m), ``dt`` (s), ``restitution``, ``t_end`` (s), ``trunk_damping_model`` and
+    ``calibration`` as in :func:`bullet_models._runner.simulate`; ParameterError for a bad
+    one (before any chain is built where it can)."""
     check_choice("contact", contact, CONTACTS)
     damping = trunk_damping_model
     model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,

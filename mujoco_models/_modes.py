@@ -19,7 +19,9 @@ from ._warnings import compile_spec, mujoco_warnings
 
 @mujoco_warnings
 def modes(scenario: Scenario, *, trunk="chain", segments=None, n_modes: int = 3) -> dict:
-    """Static stiffness at a (N/m) and natural frequencies (rad/s) of MuJoCo's trunk from
+    """Static stiffness at a (N/m) and the lowest ``n_modes`` natural frequencies (rad/s) of
+    MuJoCo's ``trunk`` ("chain" or "flex", of ``segments`` segments, None: the default
+    count) for ``scenario`` from
     the engine: ``mj_fullM`` at rest with the compiled hinge stiffnesses and the impact
     point's ``mj_jacSite`` (chain, :func:`analytic.engine.interface.chain_modes`) or the
     rod's bending Hessian (flex, :func:`flex_modes`); ``beam``: the continuous beam."""

@@ -33,11 +33,33 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
              contact_stiffness=None, dt=None, restitution=None, t_end=None,
              trunk_damping_model="distributed", integrator="Euler", calibration="pad"
              ) -> SimulationResult:
-    """Run one scenario in MuJoCo (rules in the module docstring); backend "mujoco".
+    """Run one scenario in MuJoCo (rules: docs/engines.md); backend "mujoco".
 
-    ``integrator``: MuJoCo's ``Euler`` (default), ``implicit``, ``implicitfast`` or ``RK4``.
-    ``calibration``: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
-    recalibrated so that e holds on the trunk's effective mass at the clamp.
+    Args:
+        scenario: the tree, pendulum and contact.
+        trunk: "chain" (hinged rigid segments, default), "sdof" (eq 11 on a slide joint),
+            "flex" (MuJoCo's 1-D elastic rod) or "cable" (refused: gone in MuJoCo 4.0).
+        segments: the chain's or the rod's segments (None: the fewest within 0.5 % of the
+            beam, :func:`analytic.continuum.chain.default_segments`).
+        pendulum: "linear" (eq 13, starting at the touch at u_1) or "full" (released from
+            theta_r, swinging to the trunk).
+        contact_stiffness: the pad's k_c, N/m (None: the scenario's contact law).
+        dt: the time step, s (None: :mod:`analytic.contact.timestep`'s rule).
+        restitution: e (None: the scenario's contact.restitution).
+        t_end: the time simulated after the touch, s (None: the scenario's).
+        trunk_damping_model: "distributed" (eq 9's C along the trunk) or "joint" (in the
+            chain's hinges).
+        integrator: MuJoCo's ``Euler`` (default), ``implicit``, ``implicitfast`` or
+            ``RK4``.
+        calibration: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
+            recalibrated so that e holds on the trunk's effective mass at the clamp.
+
+    Returns:
+        The SimulationResult: metrics, model, record (SI).
+
+    Raises:
+        ParameterError: a bad option or a step the engine cannot take (one line).
+        SimulationDiverged: the run diverged (with MuJoCo's warning, if it gave one).
     """
     out = simulate_batch([scenario], trunk=trunk, segments=segments, pendulum=pendulum,
                          contact_stiffness=contact_stiffness, dt=dt, restitution=restitution,

@@ -78,10 +78,12 @@ class Setup(EngineSetup):
 
     @property
     def effective_mass(self) -> float:
+        """mu_eff = 1 / A, kg: the pair's reduced mass as the contact sees it."""
         return 1.0 / self.inverse_mass
 
     @property
     def trunk_root(self) -> str:
+        """The trunk's root body (:data:`ROOT_BODIES`)."""
         return ROOT_BODIES[self.trunk]
 
 
@@ -110,7 +112,11 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                contact_stiffness=None, dt=None, restitution=None, t_end=None,
                trunk_damping_model="distributed", integrator="Euler", calibration="pad"
                ) -> Setup:
-    """Validate the options and compile the model (rules in the module docstring).
+    """Validate the options and compile the model of ``scenario`` (rules in the module
+    docstring): ``trunk``, ``segments``, ``pendulum``, ``contact_stiffness`` (N/m), ``dt``
+    (s), ``restitution``, ``t_end`` (s), ``trunk_damping_model``, ``integrator`` and
+    ``calibration`` as in :func:`mujoco_models._runner.simulate`; ParameterError for a bad
+    one.
 
     Setups are cached per (scenario, options) (the last :data:`SETUP_CACHE_SIZE`): a repeated
     run does not recompile. Do not modify ``setup.mjmodel`` in place; copy it.

@@ -47,6 +47,9 @@ def generated() -> dict[str, str]:
 
 
 def main(argv=None) -> int:
+    """Write (or with ``--check`` in ``argv``, compare) the shipped scenarios' MJCF models
+    in ``mujoco_models/models``; returns the exit code
+    (:func:`analytic.engine.generated_files.regenerate_main`)."""
     return regenerate_main(argv, prog="python -m treeimpact.mujoco_models.regenerate",
                            generated=generated,
                            directory=MODELS_DIR, suffix=".xml", kind="MJCF",
