@@ -11,8 +11,9 @@ restitution mapping for its Euler step, also exact for ``implicit``/``implicitfa
 gets the continuous law), :mod:`mujoco_models._setup` (integrator option, time step, the
 compiled model), :mod:`mujoco_models._runner` (the runs: :mod:`._rollout` steps,
 :mod:`._record` makes the record and its energy ledger), :mod:`mujoco_models._modes`,
-:mod:`mujoco_models._warnings` (MuJoCo's warnings on stderr while the engine works). ``python -m treeimpact.mujoco_models.regenerate`` writes the
-models of the shipped scenarios to ``mujoco_models/models``.
+:mod:`mujoco_models._warnings` (MuJoCo's warnings on stderr while the engine works).
+``python -m treeimpact.mujoco_models.regenerate`` writes the models of the shipped scenarios
+to ``mujoco_models/models``.
 """
 
 from .options import OPTIONS
