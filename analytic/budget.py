@@ -108,7 +108,7 @@ def set_progress_reporter(reporter: Callable | None) -> None:
 def progress(desc: str, total: int, estimate_s: float):
     """``update(n)`` for a run of ``total`` steps estimated at ``estimate_s`` seconds: the
     reporter's when one is installed and the run is long (:data:`PROGRESS_AFTER_S`), else a
-    no-op."""
+    no-op. ``desc`` names the run on the reporter's line (e.g. the engine)."""
     if _REPORTER is None or not estimate_s >= PROGRESS_AFTER_S:
         yield lambda n: None
         return

@@ -13,6 +13,6 @@ class SimulationDiverged(RuntimeError):
 
 
 def one_line(exc: BaseException) -> str:
-    """The first line of an exception's message (its type's name when empty)."""
+    """The first line of the message of ``exc`` (its type's name when empty)."""
     text = str(exc).strip().splitlines()
     return text[0] if text else type(exc).__name__

@@ -31,7 +31,8 @@ def with_static_shape_crown(record: "ImpactRecord", trunk) -> "ImpactRecord":
 
 
 def window_means(t: np.ndarray, cumulative: np.ndarray, window: float) -> np.ndarray:
-    """(C(t + window) - C(t)) / window at every sample with t + window inside the record: the
+    """(C(t + window) - C(t)) / window at every sample with t + window inside the record (C
+    the ``cumulative`` array at the times t, s): the
     mean over ``window`` (s) of the quantity whose running integral is C (a velocity gives
     the mean acceleration, the force's running impulse the mean force). Empty if the record
     is shorter than the window."""
@@ -57,11 +58,16 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
                         impactor_mass: float, impactor_stiffness: float,
                         impact_speed: float, collision_duration: float) -> dict:
     """The metrics over every contact of the record (robust to chattering: no moving-together
-    point needed). They need the record to end after the last contact (else NaN): energy
+    point needed; ``intervals``: its contact intervals, sample index pairs, from
+    :func:`contact_intervals`). They need the record to end after the last contact (else
+    NaN): energy delivered = ``initial_energy`` (J) - pendulum energy after the last
+    separation - contact work, the work
     delivered = initial - pendulum energy after the last separation - contact work, the work
     of the contact force on the trunk (the pendulum loses int F y', the contact absorbs
     int F (y' - x')); impulse from the pendulum's momentum, m (u1 - y') - k int y dt (eq 13),
-    which a subsampled force record would miss. Peak force and crown acceleration are the
+    which a subsampled force record would miss (``impactor_mass`` m kg,
+    ``impactor_stiffness`` k N/m, ``impact_speed`` u1 m/s). Peak force and crown
+    acceleration are the
     largest means over one ``collision_duration`` (s, :func:`window_means`): the pad's
     dashpot makes the force jump at the touch, a step that the engines sample a step late
     and that excites every mode of a continuum alike, so pointwise peaks depend on the time
@@ -95,9 +101,10 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
 
 def model_metrics(record: "ImpactRecord", model, impactor, *, collision_duration: float,
                   initial_energy: float | None = None) -> dict:
-    """:func:`metrics_from_record` with the two-body ``model``'s u1, m, M_T and initial
-    energy (J; ``initial_energy`` overrides it, e.g. an engine's own) and the
-    ``impactor``'s l_e and g (a billet has neither: theta_b is NaN)."""
+    """:func:`metrics_from_record` of ``record`` with the two-body ``model``'s u1, m, M_T
+    and initial energy (J; ``initial_energy`` overrides it, e.g. an engine's own), the
+    ``impactor``'s l_e and g (a billet has neither: theta_b is NaN) and the
+    ``collision_duration`` (s) impacts are told apart by."""
     return metrics_from_record(
         record, impact_speed=model.impact_speed,
         initial_energy=model.initial_energy if initial_energy is None else initial_energy,
@@ -157,6 +164,11 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
     vy, force, pendulum_energy, crown, crown_velocity) and its two energy reads,
     ``contact_loss(t)`` and ``ledger_residual(initial_energy)``: an exact solver gives those
     in closed form instead of from sampled energies (analytic.continuum.beam_impact).
+    ``impact_speed`` u1 (m/s), ``initial_energy`` (J), ``impactor_mass`` m (kg) and
+    ``gravity`` g (m/s^2) are the run's; contacts are where the force exceeds
+    ``force_threshold`` times its peak; the bodies move together in the first contact
+    longer than ``persist_factor`` x ``collision_duration`` (s), from where their relative
+    velocity is within ``common_velocity_tolerance`` x u1.
     """
     r = record
     nan = math.nan

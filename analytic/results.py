@@ -283,14 +283,15 @@ def _time_problem(m: dict, t_end) -> str | None:
 
 
 def finite_number(v) -> bool:
-    """True for a finite real number (Python or numpy; not a bool, None or a string)."""
+    """True when ``v`` is a finite real number (Python or numpy; not a bool, None or a
+    string)."""
     return (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
             and math.isfinite(v))
 
 
 def to_jsonable(obj):
-    """JSON-safe copy of dicts, lists and numbers: NaN and inf become None (JSON has
-    neither), numpy scalars become Python numbers."""
+    """JSON-safe copy of ``obj``'s dicts, lists and numbers: NaN and inf become None (JSON
+    has neither), numpy scalars become Python numbers."""
     if isinstance(obj, dict):
         return {k: to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):

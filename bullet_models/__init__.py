@@ -5,7 +5,9 @@ Public API (SI units)::
     from treeimpact.bullet_models import simulate, simulate_batch, modes
     result = simulate(load_scenario("open-center"), trunk="sdof", contact="soft")
 
-Rules: :mod:`bullet_models._runner` (runner, time step, Newton-contact settings),
+Rules: :mod:`bullet_models._setup` (options, time step, Newton-contact settings),
+:mod:`bullet_models._runner` (the runs; :mod:`bullet_models._record` the record and its
+energy ledger),
 :mod:`bullet_models._contact` (Bullet's ERP/CFM and the time-step correction),
 :mod:`bullet_models._urdf` (the models; ``python -m treeimpact.bullet_models.regenerate`` writes
 them to ``bullet_models/models``).

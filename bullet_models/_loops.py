@@ -152,8 +152,8 @@ def _loop_chain(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
     if Dq is not None:
         tau_d -= Q[:-1] @ Dq.T
     ddot = np.einsum("ni,ni->n", tau_d, 0.5 * (QD[:-1] + QD[1:]))
-    return {"x": x, "vx": vx, "crown": crown, "crown_velocity": crown_v, "q": q, "qd": qd, "force": force, "trunk_kinetic": kin,
-            "trunk_potential": pot, "damping_power": ddot,
+    return {"x": x, "vx": vx, "crown": crown, "crown_velocity": crown_v, "q": q, "qd": qd,
+            "force": force, "trunk_kinetic": kin, "trunk_potential": pot, "damping_power": ddot,
             "joint_speed": max(float(np.max(np.abs(QD))), float(np.max(np.abs(qd))))}
 
 

@@ -29,6 +29,9 @@ def generated() -> dict[str, str]:
 
 
 def main(argv=None) -> int:
+    """Write (or with ``--check`` in ``argv``, compare) the shipped scenarios' URDF models
+    in ``bullet_models/models``; returns the exit code
+    (:func:`analytic.engine.generated_files.regenerate_main`)."""
     return regenerate_main(argv, prog="python -m treeimpact.bullet_models.regenerate",
                            generated=generated,
                            directory=MODELS_DIR, suffix=".urdf", kind="URDF",

@@ -220,7 +220,8 @@ class Modes:
 
 
 def modes_of(res: dict) -> Modes:
-    """The :class:`Modes` of a backend's modes dict."""
+    """The :class:`Modes` of a backend's modes dict ``res`` ({"model": ..., "beam": ...}:
+    static_stiffness N/m, omegas rad/s, segments)."""
     def one(d):
         return TrunkModes(static_stiffness=float(d["static_stiffness"]),
                           omegas=tuple(float(w) for w in d["omegas"]),

@@ -41,8 +41,9 @@ def worded_c_output(source: str, why: str = ""):
     """Run the block with file descriptors 1 and 2 sent to a temporary file, so that what a
     C library writes there (LAPACK's argument errors, an engine's notes) never reaches the
     terminal as it is; afterwards each distinct line is told on stderr as treeimpact's own
-    warning, ``treeimpact: warning: SOURCE: line (WHY)``, with its count when repeated (a
-    line already starting with ``treeimpact:`` passes as it is)."""
+    warning, ``treeimpact: warning: SOURCE: line (WHY)`` (``source``: the library's name;
+    ``why``: why its lines do not matter, or ""), with its count when repeated (a line
+    already starting with ``treeimpact:`` passes as it is)."""
     import tempfile
 
     try:
@@ -136,9 +137,10 @@ class Backend:
         return bool(choices) and value in choices
 
     def simulate(self, scenario, **options):
-        """The backend's result, checked before anyone reports it (a diverged run raises
-        :class:`analytic.errors.SimulationDiverged`: never numbers), its ``scenario`` the
-        scenario as run (:func:`scenario_as_run`)."""
+        """The backend's result for ``scenario`` with ``options`` (each checked by its
+        Option; one the backend does not take is refused), checked before anyone reports it
+        (a diverged run raises :class:`analytic.errors.SimulationDiverged`: never numbers),
+        its ``scenario`` the scenario as run (:func:`scenario_as_run`)."""
         import dataclasses
 
         from treeimpact.analytic.results import check_plausible
@@ -152,8 +154,8 @@ class Backend:
         return check_plausible(dataclasses.replace(result, scenario=as_run))
 
     def modes(self, scenario, **options):
-        """The backend's modes dict (static stiffness at a, N/m; omegas, rad/s) beside the
-        beam's; its options checked as :meth:`simulate`'s."""
+        """The backend's modes dict for ``scenario`` (static stiffness at a, N/m; omegas,
+        rad/s) beside the beam's; its ``options`` checked as :meth:`simulate`'s."""
         if self.modes_ref is None:
             raise ParameterError(f"backend {self.name!r} has no modes")
         func = self._load(self.modes_ref)

@@ -53,8 +53,9 @@ def _is_number(text: str) -> bool:
 
 
 def refuse_unknown_flags(parser: argparse.ArgumentParser, argv: list) -> None:
-    """A one-line ParameterError for the first flag in ``argv`` that its command does not
-    have (a prefix, a removed spelling, a paper symbol), with what it may have meant."""
+    """A one-line ParameterError for the first flag in ``argv`` that its command (a
+    subcommand of ``parser``) does not have (a prefix, a removed spelling, a paper symbol),
+    with what it may have meant."""
     from .names import did_you_mean
 
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))

@@ -23,9 +23,11 @@ def _fmt(v: float) -> str:
 
 
 def mjcf_snippet(dt, solref, solimp, refsafe_off=False) -> str:
-    """The <option> and the <contact><pair> to paste: the pair's geoms are placeholders
-    (:data:`GEOM_PLACEHOLDERS`) for the names of the user's two colliding geoms; give both
-    contype = conaffinity = 0 so that the pair is their only contact."""
+    """The <option> and the <contact><pair> to paste, with the time step ``dt`` (s), the
+    pair's ``solref`` and ``solimp``, and ``<flag refsafe="disable"/>`` when
+    ``refsafe_off``: the pair's geoms are placeholders (:data:`GEOM_PLACEHOLDERS`) for the
+    names of the user's two colliding geoms; give both contype = conaffinity = 0 so that
+    the pair is their only contact."""
     opt = f'<option timestep="{_fmt(dt)}" integrator="Euler">'
     opt += '\n  <flag refsafe="disable"/>\n</option>' if refsafe_off else ""
     opt = opt if refsafe_off else opt[:-1] + "/>"
@@ -43,11 +45,13 @@ def _cannot(engine: str, dt: float, largest: float, why: str) -> dict:
 
 
 def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
-    """MuJoCo's solref/solimp (direct and time-constant) for ``law`` at ``dt``, the MJCF to
-    paste, and the collision of each in MuJoCo (at dt, dt/2 and 2 dt), beside the naive
-    (uncorrected) solref's; or ``{"error", "largest_dt"}`` beyond Euler's omega dt < 2."""
+    """MuJoCo's solref/solimp (direct and time-constant) for ``law`` (of
+    :func:`compare.contact_settings.target_law`)
+    on the reduced mass ``mu`` (kg) at ``dt`` (s), the MJCF to paste, and the collision of
+    each in MuJoCo between bodies of ``m1`` and ``m2`` kg (inf: fixed) (at dt, dt/2 and
+    2 dt), beside the naive (uncorrected) solref's; or ``{"error", "largest_dt"}`` beyond
+    Euler's omega dt < 2."""
     from treeimpact.mujoco_models import _contact as mc
-    from treeimpact.mujoco_models import _runner  # noqa: F401 - MuJoCo's warnings: stderr
 
     k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
     top = 2.0 / math.sqrt(k / mu)
@@ -89,9 +93,10 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
 
 
 def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
-    """Bullet's contactStiffness/contactDamping per link for ``law`` at ``dt`` with the world
-    and link flags exact restitution needs, and the collision in Bullet (at dt, dt/2 and
-    2 dt) beside the naive settings'; or ``{"error", "largest_dt"}`` when its implicit step
+    """Bullet's contactStiffness/contactDamping per link for ``law`` on the reduced mass
+    ``mu`` (kg) at ``dt`` (s) with the world and link flags exact restitution needs, and the
+    collision in Bullet between bodies of ``m1`` and ``m2`` kg (at dt, dt/2 and 2 dt)
+    beside the naive settings'; or ``{"error", "largest_dt"}`` when its implicit step
     alone damps more than e allows."""
     from treeimpact.bullet_models import _contact as bc
     from treeimpact.bullet_models._world import LINK_FLAGS, WORLD_FLAGS, two_body_collision

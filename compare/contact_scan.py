@@ -32,8 +32,9 @@ def scan_sweep(scenario, out, durations=DURATIONS):
 
 def contact_scan(scenario, out, durations=DURATIONS, metrics=HEADLINE_METRICS,
                  tolerance: float | None = None, *, workers=None, progress=False) -> dict:
-    """Run (or resume) the scan of ``scenario`` into the directory ``out`` and read it
-    (:func:`scan_result`)."""
+    """Run (or resume) the scan of ``scenario`` over the contact ``durations`` (s) into the
+    directory ``out`` on ``workers`` processes (``progress``: a bar on stderr) and read its
+    ``metrics`` against ``tolerance`` (:func:`scan_result`)."""
     from .sweep.run import run_sweeps
 
     (res,) = run_sweeps([scan_sweep(scenario, out, durations)], workers=workers,
@@ -48,8 +49,8 @@ def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
     contact: {soft|beam: {first_contact_duration: [s], pad_damping_ratio: [1]}} (what the
     pad does against each trunk's clamp: the scanned duration is the pad's collision time
     on the 1-DOF pair, not the contact the continuum sees), failed: [reasons]} from a scan's
-    sweep table. ``tolerance``: default the studies'
-    criterion (compare.verdicts.validity_tolerance)."""
+    sweep table, for the scanned ``durations`` (s) and ``metrics``. ``tolerance``: default
+    the studies' criterion (compare.verdicts.validity_tolerance)."""
     if tolerance is None:
         from .verdicts import validity_tolerance
 
@@ -80,8 +81,9 @@ def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
 
 
 def shortest_within(durations, gaps, tolerance: float) -> float | None:
-    """The shortest scanned duration from which every longer one has |gap| <= tolerance (a
-    NaN gap breaks the run); None if even the longest does not."""
+    """The shortest of the scanned ``durations`` (s) from which every longer one has
+    |gap| <= ``tolerance`` (``gaps``: the relative gap at each; a NaN gap breaks the run);
+    None if even the longest does not."""
     best = None
     for d, g in sorted(zip(durations, gaps), reverse=True):
         if not (math.isfinite(g) and abs(g) <= tolerance):

@@ -30,8 +30,9 @@ TOUCH_DURATION_RANGE = (1e-9, 10.0)
 
 
 def masses(mass, other_mass, effective_mass) -> tuple[float, float]:
-    """(m1, m2) in kg; m2 = inf: a fixed body. ``effective_mass`` mu is m1 = mu, m2 fixed.
-    Raises ParameterError naming the flag out of :data:`MASS_RANGE`."""
+    """(m1, m2) in kg from ``mass`` and ``other_mass`` (None or inf: a fixed body);
+    ``effective_mass`` mu is m1 = mu, m2 fixed. Raises ParameterError naming the flag out
+    of :data:`MASS_RANGE`."""
     low, high = MASS_RANGE
     if effective_mass is not None:
         if mass is not None or other_mass is not None:
@@ -98,7 +99,8 @@ def target_law(mu: float, *, restitution=None, touch_duration=None, contact_stif
 
 def check_dt(dt, law: dict) -> float:
     """``dt`` (s) within what any engine can be asked: at most
-    :data:`MAX_STEPS_PER_COLLISION` steps in the target collision, at most its duration."""
+    :data:`MAX_STEPS_PER_COLLISION` steps in the target collision (``law``'s
+    touch_duration), at most its duration."""
     if dt is None:
         raise ParameterError("--dt: required, the engines' time step in s")
     low = law["touch_duration"] / MAX_STEPS_PER_COLLISION
@@ -111,7 +113,10 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
     """Everything ``treeimpact contact`` prints (its JSON): ``inputs``, ``target``
     (:func:`target_law`) and, for each of ``engines`` ("mujoco", "bullet"), its settings
     and simulated collisions or ``{"error", "largest_dt"}`` when it cannot hold ``dt``.
-    Arguments are SI (kg, s, N/m, N s/m). Raises ParameterError for bad input."""
+    The masses: ``mass`` and ``other_mass`` (None: fixed) or ``effective_mass`` alone
+    (:func:`masses`); the collision: ``restitution`` with ``touch_duration``, or
+    ``contact_stiffness`` with ``contact_damping`` (:func:`target_law`). Arguments are SI
+    (kg, s, N/m, N s/m). Raises ParameterError for bad input."""
     from treeimpact.compare.backends import quiet_stdout
 
     m1, m2 = masses(mass, other_mass, effective_mass)

@@ -49,23 +49,25 @@ class RungIdentification:
 
     @property
     def ok(self) -> bool:
+        """Whether the procedure ran (status OK)."""
         return self.status == OK
 
     def to_json(self) -> dict:
+        """status, reason, values, errors, truth and regression, as a dict."""
         return {"status": self.status, "reason": self.reason, "values": self.values,
                 "errors": self.errors, "truth": self.truth, "regression": self.regression}
 
 
 def rung_truth(scenario: Scenario) -> dict:
-    """:func:`truth_of` with the ladder's metric names (:data:`IDENT_METRICS`)."""
+    """:func:`truth_of` ``scenario`` with the ladder's metric names (:data:`IDENT_METRICS`)."""
     truth = truth_of(scenario)
     return {**{k: v for k, v in truth.items() if k not in PROCEDURE_NAMES.values()},
             **{k: truth[name] for k, name in PROCEDURE_NAMES.items()}}
 
 
 def identify_rung(result, scenario: Scenario) -> RungIdentification:
-    """The paper's procedure run on a rung's displacement record (eqs 39-48, "paper"
-    reading, A_y from the pendulum record)."""
+    """The paper's procedure run on a rung's displacement record (its ``result``, a run of
+    ``scenario``; eqs 39-48, "paper" reading, A_y from the pendulum record)."""
     if not isinstance(scenario.impactor, Pendulum):
         return RungIdentification(SKIPPED, "the identification procedure needs a pendulum")
     truth = rung_truth(scenario)
@@ -92,7 +94,8 @@ def identify_rung(result, scenario: Scenario) -> RungIdentification:
 
 
 def rung_identification(run, scenario: Scenario) -> RungIdentification:
-    """:func:`identify_rung` of a finished run, computed once and kept with the run."""
+    """:func:`identify_rung` of a finished ``run`` of ``scenario``, computed once and kept
+    with the run."""
     if run.identification is None:
         run.identification = identify_rung(run.result, scenario)
     return run.identification

@@ -34,12 +34,14 @@ ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
 
 
 def unit_of(metric: str) -> str:
+    """The unit of a ladder ``metric`` (an ``id_`` one: the identified quantity's)."""
     if metric.startswith("id_"):
         return IDENT_UNITS[metric[3:]][0]
     return METRIC_UNITS[metric][0]
 
 
 def meaning_of(metric: str) -> str:
+    """What a ladder ``metric`` means, in a few words."""
     if metric.startswith("id_"):
         return IDENT_UNITS[metric[3:]][1]
     return METRIC_UNITS[metric][1]
@@ -47,7 +49,8 @@ def meaning_of(metric: str) -> str:
 
 def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
     """Segments of the hinged trunk: ``segments`` or analytic.continuum.chain.default_segments
-    (the smallest N within 0.5 % of the beam's static stiffness and first two frequencies)."""
+    of ``scenario``'s trunk (the smallest N within 0.5 % of the beam's static stiffness and
+    first two frequencies)."""
     if segments is not None:
         return int(segments)
     from treeimpact.analytic.continuum.chain import default_segments
@@ -56,8 +59,9 @@ def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
 
 
 def ladder_rungs(scenario, *, engines=ENGINES, segments: int | None = None) -> list[Rung]:
-    """The rungs of one scenario, in ladder order (:func:`compare.rungs.rung_table` with the
-    scenario's chain segments and the analytic record's sampling)."""
+    """The rungs of one scenario, in ladder order (:func:`compare.rungs.rung_table` of the
+    ``engines`` with the scenario's chain ``segments`` and the analytic record's
+    sampling)."""
     scen = resolve_scenario(scenario)
     samples = analytic_samples(scen.t_end)
     return rung_table(engines, segments=chain_segments(scen, segments),
@@ -69,6 +73,10 @@ def ladder_rungs(scenario, *, engines=ENGINES, segments: int | None = None) -> l
 
 @dataclass
 class RungResult:
+    """One rung's run: the ``rung``, its ``run``, its ladder ``values`` (metric -> SI value,
+    NaN when missing), the procedure's ``identification`` and the times (s) of x(t)'s
+    near-equal maxima (``peaks``)."""
+
     rung: Rung
     run: Run
     values: dict = field(default_factory=dict)  # metric -> value (NaN when missing)
@@ -77,18 +85,22 @@ class RungResult:
 
     @property
     def ok(self) -> bool:
+        """Whether the rung ran (its run's status OK)."""
         return self.run.ok
 
     @property
     def status(self) -> Status:
+        """The run's status."""
         return self.run.status
 
     @property
     def reason(self) -> str | None:
+        """Why the run did not finish, or None."""
         return self.run.reason
 
     @property
     def result(self):
+        """The run's SimulationResult (None when it did not finish)."""
         return self.run.result
 
 
@@ -116,12 +128,16 @@ class Ladder:
 
     @property
     def name(self) -> str:
+        """The scenario's name."""
         return self.scenario.name
 
     def value(self, rung_id: str, metric: str) -> float:
+        """The value of ``metric`` on the rung ``rung_id`` (SI; NaN when missing)."""
         return self[rung_id].values.get(metric, math.nan)
 
     def step(self, rung_id: str, metric: str) -> float:
+        """The relative change of ``metric`` from the previous rung to ``rung_id``
+        (:func:`compare.verdicts.relative_step`; NaN on the first rung)."""
         r = self[rung_id]
         if r.rung.previous is None:
             return math.nan
@@ -150,6 +166,9 @@ class Ladder:
         return [{"kind": k, "metrics": ms, "reason": why} for (k, why), ms in out.items()]
 
     def step_check(self, rung_id: str, metric: str) -> Check:
+        """The check of ``metric``'s step from the previous rung to ``rung_id`` against the
+        tolerance file's entry for the rung's kind (ambiguous where x(t) has near-equal
+        maxima on either rung)."""
         r = self[rung_id]
         prev = r.rung.previous
         ambiguous = self._ambiguous_peak(rung_id, prev, metric)
@@ -178,9 +197,10 @@ class Ladder:
                      "maximum is not a robust quantity")
 
     def identification_check(self, rung_id: str, metric: str) -> Check:
-        """The identified value against the truth, judged on the Newton record the procedure
-        was derived for. On other rungs the identification table shows the error against
-        the truth without a check (the file's ``identification_reported`` reason)."""
+        """The identified value of ``metric`` on the rung ``rung_id`` against the truth,
+        judged on the Newton record the procedure was derived for. On other rungs the
+        identification table shows the error against the truth without a check (the file's
+        ``identification_reported`` reason)."""
         r = self[rung_id]
         entry = self.tolerances.get("identification", {}).get(metric)
         return judge(self.name, rung_id, r.rung.kind, f"id_{metric}",
@@ -188,7 +208,8 @@ class Ladder:
                      entry, self.tolerances)
 
     def engines_check(self, kind: str, metric: str) -> Check | None:
-        """MuJoCo against Bullet at one rung kind (engine, chain or pendulum)."""
+        """MuJoCo against Bullet on ``metric`` at one rung ``kind`` (engine, chain or
+        pendulum); None unless the ladder has both."""
         ids = [r.rung.id for r in self.rungs if r.rung.kind == kind]
         if len(ids) != 2:
             return None
@@ -231,6 +252,8 @@ class Ladder:
         return rows
 
     def to_json(self) -> dict:
+        """The ladder as JSON: scenario, inputs, truth, each rung (its values, steps and
+        identification) and every check."""
         return to_jsonable({
             "scenario": self.name,
             "inputs": self.scenario.to_dict(),
@@ -250,6 +273,8 @@ class Ladder:
 
 
 def rung_values(result, identification: RungIdentification) -> dict:
+    """A rung's ladder values: the LADDER_METRICS of ``result`` and, as ``id_`` keys, the
+    ``identification``'s values (NaN where it did not run)."""
     vals = {m: _f(result.metrics.get(m)) for m in LADDER_METRICS}
     for k in IDENT_METRICS:
         vals[f"id_{k}"] = _f(identification.values.get(k)) if identification.ok else math.nan
@@ -258,8 +283,10 @@ def rung_values(result, identification: RungIdentification) -> dict:
 
 def prefetch_ladders(cache: RunCache, scenarios, *, engines=None, segments=None,
                      workers: int | None = None, progress: bool = False) -> None:
-    """Run every rung of the scenarios' ladders into ``cache`` on a process pool
-    (:meth:`compare.runs.RunCache.prefetch`); :func:`build_ladder` then finds them cached."""
+    """Run every rung of the ``scenarios``' ladders (with ``engines`` and ``segments`` as
+    :func:`build_ladder`) into ``cache`` on a process pool of ``workers``
+    (:meth:`compare.runs.RunCache.prefetch`; ``progress``: a bar on stderr);
+    :func:`build_ladder` then finds them cached."""
     engines = ENGINES if engines is None else engines
     cache.prefetch([(s, r.backend, dict(r.options)) for s in scenarios
                     for r in ladder_rungs(s, engines=engines, segments=segments)],
@@ -268,7 +295,9 @@ def prefetch_ladders(cache: RunCache, scenarios, *, engines=None, segments=None,
 
 def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
                  segments: int | None = None, tolerances: dict | None = None) -> Ladder:
-    """Run (or fetch from ``cache``) every rung of one scenario and assemble the ladder."""
+    """Run (or fetch from ``cache``) every rung of one scenario and assemble the ladder:
+    the rungs of ``engines``, the chain of ``segments`` (None: the default), judged against
+    ``tolerances`` (None: compare/tolerances.toml)."""
     from .identification import rung_truth
 
     scen = resolve_scenario(scenario)
@@ -304,8 +333,9 @@ def _fmt(v) -> str:
 
 
 def failure_table(ladder: Ladder, checks: list[Check]) -> str:
-    """The compact table a failing check prints: metric, each rung's value, the compared
-    pair, relative difference, tolerance and reason."""
+    """The compact table a failing check prints, one row per check of ``checks`` on
+    ``ladder``: metric, each rung's value, the compared pair, relative difference,
+    tolerance and reason."""
     rung_ids = [r.rung.id for r in ladder.rungs]
     head = ["metric", "unit", *rung_ids, "checked", "vs", "rel diff", "tolerance", "verdict",
             "reason"]

@@ -22,8 +22,8 @@ SYMBOLS = {"e": "restitution", "m": "mass", "l_e": "equivalent_length",
 
 
 def show(name: str, style: str = "flag") -> str:
-    """``name`` (keyword form) as the user would type it: ``--contact-stiffness`` or
-    ``contact_stiffness``."""
+    """``name`` (keyword form) as the user would type it: ``--contact-stiffness`` (``style``
+    "flag") or ``contact_stiffness`` (any other)."""
     return "--" + name.replace("_", "-") if style == "flag" else name
 
 
@@ -54,8 +54,9 @@ def suggestions(typed: str, known, renamed: dict | None = None) -> list[str]:
 
 
 def did_you_mean(typed: str, known, renamed: dict | None = None, style: str = "flag") -> str:
-    """The end of a refusal: ``"; did you mean --restitution?"`` (``"; renamed: ..."`` for a
-    removed spelling), or ``""`` when nothing is close."""
+    """The end of a refusal of the ``typed`` name: ``"; did you mean --restitution?"``
+    among the ``known`` names (``"; renamed: ..."`` for a removed spelling of ``renamed``),
+    or ``""`` when nothing is close; names shown in ``style`` (:func:`show`)."""
     name = keyword(typed)
     found = suggestions(typed, known, renamed)
     if not found:

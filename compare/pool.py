@@ -66,6 +66,7 @@ ACTIVE = threading.Event()
 
 
 def check_stop() -> None:
+    """Raise KeyboardInterrupt when a stop was requested (STOP set): a loop's look."""
     if STOP.is_set():
         raise KeyboardInterrupt
 
@@ -78,7 +79,8 @@ def request_stop() -> None:
 
 
 def on_stop_signal(signum, frame) -> None:
-    """SIGTERM's handler in every command: a stop request (:func:`request_stop`) that a
+    """SIGTERM's handler in every command (``signum`` and ``frame`` as Python's signal
+    module passes them, unused): a stop request (:func:`request_stop`) that a
     pool's loop answers at its next look; with no pool running, the command ends at once
     (KeyboardInterrupt, as Ctrl-C; no fork or worker is in flight then)."""
     request_stop()
@@ -148,6 +150,7 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
     broke run again on a fresh pool, and a chunk broken twice runs one item at a time in a
     one-worker pool, so only an item that kills its worker gets ``on_died(item, exc)`` as
     its outcome (on Dask: every item of a chunk that killed every worker it was given).
+    ``start_method``: the local pool's multiprocessing start method (None: the default).
     Returns the number of items run."""
     ACTIVE.set()
     try:

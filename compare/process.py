@@ -127,8 +127,10 @@ def command_environment(max_seconds):
 
 
 def install_budget(max_seconds) -> dict:
-    """Set the command's budget, progress reporter and one-line warnings; returns what
-    :func:`restore_budget` puts back."""
+    """Set the command's budget (``max_seconds``, s, as TREEIMPACT_MAX_SECONDS; None: the
+    default), progress reporter and one-line warnings; returns what
+    :func:`restore_budget` puts back. ParameterError naming --max-seconds when it is not a
+    finite positive number."""
     from treeimpact.analytic import budget
 
     from .progress import Progress
@@ -162,7 +164,9 @@ def restore_budget(restore: dict) -> None:
 
 
 def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """A Python warning (numpy's, an engine's) as one stderr line, not a source excerpt."""
+    """A Python warning (numpy's, an engine's) as one stderr line, not a source excerpt:
+    ``warnings.showwarning``'s signature; the ``message``, its ``category``'s name and
+    ``filename``:``lineno`` on ``file`` (default stderr); ``line`` is not shown."""
     text = " ".join(str(message).split())
     where = f"{Path(filename).name}:{lineno}"
     print(f"treeimpact: warning: {text} ({category.__name__}, {where})",

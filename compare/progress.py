@@ -12,7 +12,10 @@ LINE_EVERY_S = 5.0
 
 
 class Progress:
-    """Counts finished items of ``total``; ``update(n)`` after each, ``close()`` at the end."""
+    """Counts finished items of ``total``; ``update(n)`` after each, ``close()`` at the end.
+    ``desc``: the run's name on its lines; ``unit``: what an item is ("run", "step");
+    ``stream``: where it writes (default stderr); ``bar``: a tqdm bar (None: on a terminal
+    only), else a line every :data:`LINE_EVERY_S` seconds."""
 
     def __init__(self, total: int, desc: str, unit: str = "run", stream=None,
                  bar: bool | None = None):
@@ -28,6 +31,7 @@ class Progress:
             self._bar = tqdm(total=total, unit=unit, desc=desc, file=self.stream)
 
     def update(self, n: int = 1) -> None:
+        """``n`` more items finished."""
         self.done += n
         if self._bar is not None:
             self._bar.update(n)
@@ -47,6 +51,8 @@ class Progress:
               f"{now - self.start:.1f} s, {word}", file=self.stream, flush=True)
 
     def close(self) -> None:
+        """The end: the bar closed, or the final line (when the run lasted long enough to
+        print any)."""
         if self._bar is not None:
             self._bar.close()
         self._line(time.perf_counter(), final=True)

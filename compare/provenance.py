@@ -72,8 +72,9 @@ def scenario_digest(scenario) -> str:
 
 
 def provenance(scenario=None, result=None, **extra) -> dict:
-    """The provenance record: code, environment, the scenario's name and digest, the run's
-    backend and numerical settings (:data:`SETTINGS` of its model dict), and ``extra``."""
+    """The provenance record: code, environment, the ``scenario``'s name and digest, the
+    run's backend and numerical settings (:data:`SETTINGS` of its ``result``'s model dict),
+    and ``extra``; each part only when given."""
     out = {"code": code_version(), "environment": environment()}
     if scenario is not None:
         out["scenario"] = {"name": scenario.name, "sha1": scenario_digest(scenario)}

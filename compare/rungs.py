@@ -117,21 +117,26 @@ class Rung:
 
     @property
     def level(self) -> int:
+        """The rung kind's level (:attr:`RungKind.level`)."""
         return self.kind.level
 
     @property
     def assumption(self) -> str:
+        """The one assumption this rung changes (:attr:`RungKind.assumption`)."""
         return self.kind.assumption
 
     @property
     def engine(self) -> str | None:
+        """The engine backend this rung runs, or None (an analytic rung)."""
         return self.backend if self.backend in ENGINES else None
 
 
 def rung_table(engines=ENGINES, *, segments: int | None = None,
                analytic_options: tuple = ()) -> list[Rung]:
     """The rungs in ladder order. ``segments``: the engines' chain and rod (in their rung
-    ids and options; None leaves it to the backend or a sweep axis). An engine whose
+    ids and options; None leaves it to the backend or a sweep axis); ``analytic_options``:
+    the paper's model's (name, value) pairs (the ladder's record sampling); ``engines``: the
+    engine backends, in order. An engine whose
     ``trunk`` option offers its own elastic rod (:func:`offers_rod`) adds the ROD rung, the
     rod with the linear pendulum and the same segments against the continuum (``beam``)."""
     chain_opts = (("segments", segments),) if segments is not None else ()

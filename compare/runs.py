@@ -57,21 +57,25 @@ class Run:
 
     @property
     def ok(self) -> bool:
+        """Whether the run finished (status OK)."""
         return self.status == OK
 
     def describe(self) -> str:
+        """``scenario backend(name=value, ...)``, one line."""
         opts = ", ".join(f"{k}={v}" for k, v in sorted(self.options.items()))
         return f"{self.scenario} {self.backend}({opts})"
 
     def to_json(self) -> dict:
+        """scenario, backend, options, status, reason and wall time (s); not the result."""
         return {"scenario": self.scenario, "backend": self.backend,
                 "options": dict(self.options), "status": self.status,
                 "reason": self.reason, "wall_s": self.wall_s}
 
 
 def attempt(backend, scenario: Scenario, options: dict) -> Run:
-    """The :class:`Run` of one backend run (``backend``: a
-    :class:`compare.backends.Backend`); never raises for a failing run."""
+    """The :class:`Run` of one backend run of ``scenario`` with ``options`` (``backend``: a
+    :class:`compare.backends.Backend`), timed; never raises for a failing run (SKIPPED,
+    DIVERGED or FAILED with its reason)."""
     t0 = time.perf_counter()
     result, reason, status = None, None, OK
     try:
@@ -87,7 +91,7 @@ def attempt(backend, scenario: Scenario, options: dict) -> Run:
 
 
 def resolve_scenario(scenario) -> Scenario:
-    """A :class:`Scenario` from a shipped name, a TOML path or a Scenario."""
+    """A :class:`Scenario` from ``scenario``: a shipped name, a TOML path or a Scenario."""
     if isinstance(scenario, Scenario):
         return scenario
     from treeimpact.analytic.model.scenario import load_scenario
@@ -102,6 +106,7 @@ def scenario_key(scenario: Scenario) -> str:
 
 
 def options_key(options: dict) -> tuple:
+    """``options`` as a hashable key: its (name, value) items, sorted."""
     return tuple(sorted(options.items()))
 
 
@@ -112,6 +117,8 @@ class RunCache:
     runs: dict = field(default_factory=dict)
 
     def run(self, scenario, backend: str, **options) -> Run:
+        """The :class:`Run` of ``scenario`` on ``backend`` with ``options``: cached, or
+        attempted now and kept (never raises for a failing run)."""
         scen = resolve_scenario(scenario)
         key = (scenario_key(scen), backend, options_key(options))
         hit = self.runs.get(key)

@@ -163,9 +163,10 @@ answer_under.columns = tuple(f"gap.{m}" for m in ANSWER)
 
 
 def answer_and_crossings(result, scenario, params: dict) -> dict:
-    """:func:`answer_under` and the crossing durations: the shortest of :data:`DURATIONS`
-    (s) from which every longer pad keeps the continuum within the validity tolerance of the
-    soft 1-DOF model with the same pad (inf: none up to the longest)."""
+    """:func:`answer_under` (of ``result``, ``scenario`` and ``params``) and the crossing
+    durations: the shortest of :data:`DURATIONS` (s) from which every longer pad keeps the
+    continuum within the validity tolerance of the soft 1-DOF model with the same pad (inf:
+    none up to the longest)."""
     from treeimpact.analytic.contact.soft import simulate_soft
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
 
@@ -194,7 +195,7 @@ ANALYSES = {False: "treeimpact.compare.sensitivity:answer_under",
 
 def design(trajectories: int, seed: int = SEED, names=None) -> np.ndarray:
     """The Morris design: ``trajectories`` x (inputs + 1) points over :data:`INPUTS` (only
-    ``names`` when given), trajectory after trajectory."""
+    ``names`` when given), trajectory after trajectory, from the random ``seed``."""
     from SALib.sample import morris
 
     return morris.sample(problem(names), trajectories, num_levels=LEVELS, seed=seed)
@@ -202,9 +203,10 @@ def design(trajectories: int, seed: int = SEED, names=None) -> np.ndarray:
 
 def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
                       crossings: bool = False):
-    """The study of one tree as a sweep (:class:`compare.sweep.run.SweepSpec`) into ``out``:
-    the Morris design over its free inputs (:func:`free_inputs`) as ``input.*`` axes,
-    :func:`answer_under` (with ``crossings``, :func:`answer_and_crossings`) at each point."""
+    """The study of one tree (``scenario``) as a sweep (:class:`compare.sweep.run.SweepSpec`)
+    into ``out``: the Morris design (:func:`design` of ``trajectories`` and ``seed``) over
+    its free inputs (:func:`free_inputs`) as ``input.*`` axes, :func:`answer_under` (with
+    ``crossings``, :func:`answer_and_crossings`) at each point."""
     from .runs import resolve_scenario
     from .sweep.grid import Design
     from .sweep.run import SweepSpec
@@ -232,7 +234,8 @@ def _morris(names, X, y) -> dict:
 
 
 def deciding(indices: dict) -> tuple[list[str], bool]:
-    """(the inputs that decide an output, whether one is separated): the input of the
+    """(the inputs that decide an output, whether one is separated) from its Morris
+    ``indices`` (input -> {mu_star, mu_star_conf}): the input of the
     largest mu* alone when its interval (mu* -+ mu_star_conf) lies above every other's,
     else it and every input whose interval reaches into its; [] when nothing moves it."""
     ranked = sorted(indices, key=lambda n: -indices[n]["mu_star"])
@@ -263,7 +266,8 @@ def _convergence(names, X, y, full: dict) -> dict | None:
 
 def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
             held: dict | None = None) -> dict:
-    """Per output: its range over the design's evaluations (min and max over the stated
+    """Per output of the sweep's ``table`` (the design of ``trajectories`` and ``seed``):
+    its range over the design's evaluations (min and max over the stated
     input ranges; not a probability interval), the Morris indices of each input with SALib's
     keys (mu* in the output's units, its 95 % interval mu_star_conf), the inputs that decide
     it (:func:`deciding`), the measurements that would settle them and the N/2 convergence

@@ -111,8 +111,8 @@ def exact_run(scenario, e: float):
 
 
 def continuum_gaps(scenario, e: float, newton=None) -> dict:
-    """The 1-DOF assumption at ``e`` (read at :data:`E_FLOOR` below it): the continuum
-    trunk's gap to the 1-DOF model on x_max and the energy delivered, the same pad;
+    """The 1-DOF assumption of ``scenario`` at ``e`` (read at :data:`E_FLOOR` below it): the
+    continuum trunk's gap to the 1-DOF model on x_max and the energy delivered, the same pad;
     ``newton``: the exact run's metrics at ``e`` when already made."""
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
     from treeimpact.analytic.impact.simulate import simulate
@@ -166,7 +166,8 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
 
 
 def errors_at_run(result, scenario, record=None) -> dict:
-    """The sweep's analysis (compare.sweep.run): :func:`errors_of_run` with the continuum."""
+    """The sweep's analysis (compare.sweep.run): :func:`errors_of_run` of ``result`` (a run
+    of ``scenario``) with the continuum; ``record`` (the sweep's) is not read."""
     return errors_of_run(result, scenario)
 
 
@@ -180,7 +181,8 @@ def grid_of(scenario, grid=E_GRID) -> tuple:
 
 
 def small_e_sweep(scenario, out):
-    """The small-e curves of one tree as a sweep (:class:`compare.sweep.run.SweepSpec`)
+    """The small-e curves of one tree (``scenario``) as a sweep
+    (:class:`compare.sweep.run.SweepSpec`)
     into ``out``: the exact solver at every e of :func:`grid_of`, :func:`errors_at_run` on
     each."""
     from .runs import resolve_scenario
@@ -194,7 +196,8 @@ def small_e_sweep(scenario, out):
 
 def small_e_table(scenario, grid=E_GRID):
     """The table :func:`small_e_sweep` writes, computed in this process (no sweep
-    directory): one row per e of :func:`grid_of` ``grid`` (a pandas DataFrame)."""
+    directory): one row per e of :func:`grid_of` ``scenario`` and ``grid`` (a pandas
+    DataFrame)."""
     import pandas as pd
 
     from .runs import resolve_scenario
@@ -210,7 +213,8 @@ def small_e_table(scenario, grid=E_GRID):
 def first_crossing(grid, values, evaluate, tolerance: float,
                    resolution: float = RESOLUTION) -> tuple[float, tuple | None]:
     """The largest e up to which an error STAYS within ``tolerance`` (|error| <= it; NaN is
-    outside): 0 when the first value is outside, the grid's end when none is; else the
+    outside), from its ``values`` on the ``grid`` of e: 0 when the first value is outside,
+    the grid's end when none is; else the
     first crossing from e = 0, bracketed by the grid and bisected with ``evaluate(e)``
     until the bracket is at most ``resolution`` wide. Returns (the bracket's inner end, the
     bracket or None). A later return inside the tolerance does not count; an excursion
@@ -234,7 +238,9 @@ def first_crossing(grid, values, evaluate, tolerance: float,
 
 
 def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
-    """The small-e answer of one tree from its sweep's ``table`` (:func:`small_e_sweep`):
+    """The small-e answer of one tree (``scenario``) from its sweep's ``table``
+    (:func:`small_e_sweep`), judged against ``tolerance`` (None: the studies' validity
+    tolerance):
     per approximation {holds_up_to_e, bracket, error_at_e, e, e_grid, errors, reasons,
     error_at_zero, verdict, label, what}; errors relative (NaN where none, with its
     reason), e in 1. The crossings are bisected here (the exact solver, and the continuum

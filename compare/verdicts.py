@@ -55,7 +55,8 @@ def _load(path: str) -> dict:
 
 
 def load_tolerances(path: str | Path | None = None) -> dict:
-    """The tolerance file (``compare/tolerances.toml``), validated: every entry has a reason."""
+    """The tolerance file at ``path`` (default ``compare/tolerances.toml``), validated: every
+    entry has a reason."""
     return _load(str(TOLERANCES_PATH if path is None else path))
 
 
@@ -117,10 +118,13 @@ class Check:
     band: tuple | None = None
 
     def to_json(self) -> dict:
+        """Every field, JSON-safe (the band as a list)."""
         return to_jsonable(self.__dict__ | {"band": list(self.band) if self.band else None})
 
 
 def relative_step(value, reference) -> float:
+    """(value - reference) / |reference| (1); NaN when either is not a finite number or
+    the reference is 0."""
     if not (finite_number(value) and finite_number(reference)) or reference == 0:
         return math.nan
     return (value - reference) / abs(reference)
@@ -137,7 +141,23 @@ def _finding_for(tol: dict, scenario: str, kind: str, metric: str, rung_id: str)
 
 def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: str,
           reference_value, entry: dict | None, tol: dict) -> Check:
-    """The verdict of one comparison of ``value`` with ``reference_value`` (:class:`Verdict`)."""
+    """The verdict of one comparison of ``value`` with ``reference_value`` (:class:`Verdict`).
+
+    Args:
+        scenario: the scenario's name.
+        rung: the rung checked.
+        kind: the comparison's kind (a rung kind, ``engines-KIND``), where findings apply.
+        metric: the metric compared.
+        value: the rung's value (SI).
+        reference: what it is compared with (a rung id, "truth").
+        reference_value: its value (SI).
+        entry: the tolerance file's entry (rel, reason; report_only), or None.
+        tol: the whole tolerance file (its recorded findings).
+
+    Returns:
+        The :class:`Check`: the relative difference, the tolerance, the verdict and the
+        reason (a recorded finding's band and reason where one applies).
+    """
     rel = relative_step(value, reference_value)
     finding = _finding_for(tol, scenario, kind, metric, rung)
     tolerance = None if entry is None or entry.get("report_only") else float(entry["rel"])

@@ -8,9 +8,12 @@ Public API (SI units)::
 Rules: :mod:`mujoco_models._builder` (the MJCF, built with ``mujoco.MjSpec``),
 :mod:`mujoco_models._contact` (MuJoCo's solref/solimp as a spring-dashpot and the
 restitution mapping for its Euler step, also exact for ``implicit``/``implicitfast``; RK4
-gets the continuous law), :mod:`mujoco_models._runner` (integrator option, time step,
-rollout, record, energy ledger). ``python -m treeimpact.mujoco_models.regenerate`` writes the
-models of the shipped scenarios to ``mujoco_models/models``.
+gets the continuous law), :mod:`mujoco_models._setup` (integrator option, time step, the
+compiled model), :mod:`mujoco_models._runner` (the runs: :mod:`._rollout` steps,
+:mod:`._record` makes the record and its energy ledger), :mod:`mujoco_models._modes`,
+:mod:`mujoco_models._warnings` (MuJoCo's warnings on stderr while the engine works).
+``python -m treeimpact.mujoco_models.regenerate`` writes the models of the shipped scenarios
+to ``mujoco_models/models``.
 """
 
 from .options import OPTIONS

@@ -269,7 +269,16 @@ def two_body_collision(xml: str, speed: float = 1.0, overlap: float = 1e-12
     finite: a step too large for the law). The duration ends where the pair's law force
     (k' delta + b' delta') / S, evaluated on the engine's states (delta from the spheres'
     centres), first reaches zero, interpolated between the steps it acts over (Euler: the
-    force of state n acts over step n, from n dt)."""
+    force of state n acts over step n, from n dt); MuJoCo's warnings told on stderr
+    (:func:`mujoco_models._warnings.mujoco_warnings`)."""
+    from ._warnings import mujoco_warnings
+
+    with mujoco_warnings():
+        return _collide(xml, speed, overlap)
+
+
+def _collide(xml: str, speed: float, overlap: float) -> FreeCollision:
+    """:func:`two_body_collision` without its warning handler."""
     import mujoco
 
     m = mujoco.MjModel.from_xml_string(xml)

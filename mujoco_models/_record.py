@@ -64,11 +64,37 @@ def _rest_potential(m: mujoco.MjModel, trunk_root: int) -> float:
 
 
 def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]:
-    """Build the ImpactRecord (t = 0 at the touch); returns (record, initial energy, touch index)."""
+    """Build the ImpactRecord (t = 0 at the touch); returns (record, initial energy, touch
+    index). Raises SimulationDiverged on a non-finite or stopped rollout, on energy growth
+    or energy the ledger shows the engine created, and when the bodies never touched."""
+    _check_rollout(setup, state0, states, sensors)
     m = setup.mjmodel
-    sl = _builder.sensor_slices()
     nq, nv = m.nq, m.nv
     v_all = np.vstack([state0[1 + nq:1 + nq + nv], states[:, 1 + nq:1 + nq + nv]])  # n..N
+    force, x, vx, y, vy, kinetic, potential = _sensed(setup, state0, states, sensors)
+    pend, e0 = _pendulum_energy(setup, state0, states, v_all, y, vy, kinetic, potential)
+    damping_work, c_power = _damping_work(setup, v_all, force, vy - vx)
+    k_d = setup.law.stiffness
+    overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
+    c_pot = 0.5 * k_d * overlap ** 2
+    contact_work = _contact_work(setup, kinetic + potential, e0, damping_work, c_power, c_pot)
+    start, t_touch, i1 = _touch(force, x, y, setup.dt)
+    t = np.arange(len(force), dtype=float) * setup.dt - t_touch
+    s = slice(start, None)
+    base_d, base_c = damping_work[start], contact_work[start]
+    record = ImpactRecord(
+        t=t[s], x=x[s], vx=vx[s], y=y[s], vy=vy[s], force=force[s], kinetic=kinetic[s],
+        potential=potential[s], damping_work=damping_work[s] - base_d,
+        contact_work=contact_work[s] - base_c, contact_potential=c_pot[s],
+        pendulum_energy=pend[s])
+    if start:  # energy already dissipated before the record starts (none: no contact yet)
+        e0 = e0 - base_d - base_c
+    return record, e0, i1
+
+
+def _check_rollout(setup, state0, states, sensors) -> None:
+    """Raise SimulationDiverged on a non-finite state or sensor, or a rollout that stopped
+    advancing time (MuJoCo stops on a warning)."""
     if not (np.all(np.isfinite(states)) and np.all(np.isfinite(sensors))):
         raise SimulationDiverged(f"mujoco: non-finite state (dt = {setup.dt:.3g} s)")
     # a rollout stopped on a warning stops advancing time: every step must add dt (to the
@@ -77,6 +103,14 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
     if not np.all(np.abs(steps - setup.dt) <= 1e-6 * setup.dt):
         raise SimulationDiverged("mujoco: the rollout stopped on a MuJoCo warning "
                                  f"(dt = {setup.dt:.3g} s)")
+
+
+def _sensed(setup, state0, states, sensors) -> tuple:
+    """(force N, x m, vx m/s, y m, vy m/s, kinetic J, potential J) from the sensors: y moved
+    to the bob's contact point, the potential without the trunk's compensated gravity and
+    its rest value, with the flex rod's bending energy."""
+    m = setup.mjmodel
+    sl = _builder.sensor_slices()
     force = sensors[:, sl["force"]][:, 0]
     x = sensors[:, sl["x_pos"]][:, 0]
     vx = sensors[:, sl["x_vel"]][:, 0]
@@ -90,13 +124,21 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
     potential = sensors[:, sl["potential"]][:, 0] - trunk_grav - setup.rest_potential
     if setup.flex is not None:  # MuJoCo's e_potential leaves the flex's elastic energy out
         potential = potential + _flex_energy(setup, np.vstack([state0, states[:-1]]))
+    return force, x, vx, y, vy, kinetic, potential
+
+
+def _pendulum_energy(setup, state0, states, v_all, y, vy, kinetic, potential) -> tuple:
+    """(the pendulum's own energy per sample J, the run's input energy J): the full
+    pendulum's from its angle and rate (released at rest from theta_r), the linear one's
+    from (y, vy) with the input the first sample's."""
+    m = setup.mjmodel
     model = setup.model
     mm = model.impactor_mass
     if setup.pendulum == "full":
         imp = setup.scenario.impactor
         pid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "pendulum")
         inertia = m.body_inertia[pid, 1] + mm * imp.equivalent_length ** 2
-        th = np.concatenate([[state0[nq]], states[:-1, nq]])  # pendulum angle q_n
+        th = np.concatenate([[state0[m.nq]], states[:-1, m.nq]])  # pendulum angle q_n
         om = v_all[:-1, -1]
         pend = 0.5 * inertia * om * om + mm * imp.gravity * imp.equivalent_length * (
             1.0 - np.cos(th))
@@ -104,12 +146,18 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
     else:
         pend = model.pendulum_energy(y, vy)
         e0 = float(kinetic[0] + potential[0])
+    return pend, e0
+
+
+def _damping_work(setup, v_all, force, w) -> tuple:
+    """(the dampers' work so far per sample J, the contact's power per step W or None for
+    RK4): exact for Euler's step and the implicit ones (module docstring), a quadrature of
+    the sampled power for RK4."""
+    m = setup.mjmodel
     D, B = _damping_matrices(m)
-    w = vy - vx
-    dt = setup.dt
-    rk4 = m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
-    if rk4:  # the stage forces are not recorded: damping work by quadrature (docstring)
-        vs = v_all[:-1]
+    c_power = None
+    if m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:  # the stage forces are not
+        vs = v_all[:-1]  # recorded: damping work by quadrature (docstring)
         d_power = step_means(np.einsum("ni,ni->n", vs @ D, vs), force > 0.0)
     else:  # works over step n (n = 0 .. N-2), with v_n and v_{n+1}
         v0, v1 = v_all[:-2], v_all[1:-1]
@@ -120,13 +168,17 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
         elif B.any():
             d_power += np.einsum("ni,ni->n", v1 * np.diag(B), vbar)  # B diagonal (joint dampers)
         c_power = force[:-1] * 0.5 * (w[:-1] + w[1:])
-    damping_work = np.concatenate([[0.0], np.cumsum(d_power) * dt])
-    k_d = setup.law.stiffness
-    overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
-    c_pot = 0.5 * k_d * overlap ** 2
-    mech = kinetic + potential
+    return np.concatenate([[0.0], np.cumsum(d_power) * setup.dt]), c_power
+
+
+def _contact_work(setup, mech, e0: float, damping_work, c_power, c_pot) -> np.ndarray:
+    """The contact's work so far per sample (J): the sum of ``c_power``, or for RK4 (None)
+    what left the bodies other than through the dampers. Raises SimulationDiverged when the
+    mechanical energy ``mech`` grows past the input ``e0`` or the ledger shows energy the
+    engine created (for RK4: a drop of the contact's dissipated energy)."""
+    dt = setup.dt
     check_energy("mujoco", mech, e0, dt)
-    if rk4:
+    if c_power is None:
         # the contact's work is what left the bodies other than through the dampers; what it
         # dissipated (work less the elastic energy it still holds) can only grow
         contact_work = e0 - mech - damping_work
@@ -139,29 +191,22 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
         raise SimulationDiverged(
             f"mujoco: the engine created {created:.4g} J > {ENERGY_GROWTH_LIMIT:g} x the input "
             f"{e0:.4g} J (kinetic + potential + dissipated; dt = {dt:.3g} s)")
-    # t = 0 at the touch: the first sample with force, interpolated on the overlap y - x
+    return contact_work
+
+
+def _touch(force, x, y, dt: float) -> tuple[int, float, int]:
+    """(first sample kept, touch time s, first sample with force): t = 0 at the touch, the
+    first sample with force, interpolated on the overlap y - x. Raises SimulationDiverged
+    when the pendulum never touched the trunk."""
     on = np.flatnonzero(force > 0.0)
     if not on.size:
         raise SimulationDiverged("mujoco: the pendulum never touched the trunk")
     i1 = int(on[0])
-    n = np.arange(len(force), dtype=float)
     if i1 == 0:
-        start, t_touch = 0, 0.0
-    else:
-        g0, g1 = (y - x)[i1 - 1], (y - x)[i1]
-        frac = min(1.0, max(0.0, -g0 / (g1 - g0))) if g1 != g0 else 1.0
-        start, t_touch = i1 - 1, (i1 - 1 + frac) * dt
-    t = n * dt - t_touch
-    s = slice(start, None)
-    base_d, base_c = damping_work[start], contact_work[start]
-    record = ImpactRecord(
-        t=t[s], x=x[s], vx=vx[s], y=y[s], vy=vy[s], force=force[s], kinetic=kinetic[s],
-        potential=potential[s], damping_work=damping_work[s] - base_d,
-        contact_work=contact_work[s] - base_c, contact_potential=c_pot[s],
-        pendulum_energy=pend[s])
-    if start:  # energy already dissipated before the record starts (none: no contact yet)
-        e0 = e0 - base_d - base_c
-    return record, e0, i1
+        return 0, 0.0, i1
+    g0, g1 = (y - x)[i1 - 1], (y - x)[i1]
+    frac = min(1.0, max(0.0, -g0 / (g1 - g0))) if g1 != g0 else 1.0
+    return i1 - 1, (i1 - 1 + frac) * dt, i1
 
 
 def _flex_energy(setup, states: np.ndarray) -> np.ndarray:

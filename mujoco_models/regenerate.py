@@ -22,7 +22,7 @@ from treeimpact.analytic.engine.generated_files import MJCF_DIGITS, regenerate_m
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 
 from ._builder import mjcf_text
-from ._runner import make_setup
+from ._setup import make_setup
 
 MODELS_DIR = pathlib.Path(__file__).resolve().parent / "models"
 VARIANTS = (("sdof", "linear"), ("sdof", "full"), ("chain", "linear"), ("chain", "full"),
@@ -47,6 +47,9 @@ def generated() -> dict[str, str]:
 
 
 def main(argv=None) -> int:
+    """Write (or with ``--check`` in ``argv``, compare) the shipped scenarios' MJCF models
+    in ``mujoco_models/models``; returns the exit code
+    (:func:`analytic.engine.generated_files.regenerate_main`)."""
     return regenerate_main(argv, prog="python -m treeimpact.mujoco_models.regenerate",
                            generated=generated,
                            directory=MODELS_DIR, suffix=".xml", kind="MJCF",

@@ -188,12 +188,15 @@ def test_results_beyond_the_geometry_or_the_ledger_are_divergences():
 
 
 def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tmp_path):
-    code = ("import mujoco, treeimpact.mujoco_models._runner\n"
+    code = ("import mujoco\n"
+            "from treeimpact.mujoco_models._warnings import mujoco_warnings\n"
             "m = mujoco.MjModel.from_xml_string('<mujoco><option timestep=\"1\"/><worldbody>"
             "<body><joint type=\"slide\" stiffness=\"1e12\"/><geom size=\"0.1\" mass=\"1\"/>"
             "</body></worldbody></mujoco>')\n"
             "d = mujoco.MjData(m); d.qpos[0] = 1\n"
-            "for _ in range(3): mujoco.mj_step(m, d)\n")
+            "with mujoco_warnings():\n"
+            "    for _ in range(3): mujoco.mj_step(m, d)\n"
+            "assert mujoco.get_mju_user_warning() is None  # MuJoCo's own handler again\n")
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                           text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert proc.returncode == 0 and proc.stdout == ""
@@ -491,12 +494,12 @@ def test_segments_has_one_allowed_range(capsys, value):
 
 def test_a_chain_beyond_the_budget_is_refused_before_its_model_is_built(capsys, monkeypatch):
     """`--segments 1000` took 7.8 s (a 1000-segment MJCF compiled) to refuse, silent."""
-    from treeimpact.mujoco_models import _runner
+    from treeimpact.mujoco_models import _builder
 
     def never(*a, **k):
         raise AssertionError("the model was built")
 
-    monkeypatch.setattr(_runner._builder, "build_spec", never)
+    monkeypatch.setattr(_builder, "build_spec", never)
     one_line(capsys, ["simulate", "open-center", "--backend", "mujoco", "--segments", "1000"],
              2, "beyond its budget", "1001 degrees of freedom")
 
@@ -504,13 +507,13 @@ def test_a_chain_beyond_the_budget_is_refused_before_its_model_is_built(capsys, 
 def test_a_mujoco_warning_is_worded_and_a_diverged_run_carries_it_in_its_one_line(capsys):
     """MuJoCo's "Nan, Inf or huge value in QACC" line preceded the exit-3 message."""
     from treeimpact.analytic.errors import SimulationDiverged
-    from treeimpact.mujoco_models import _runner
+    from treeimpact.mujoco_models import _runner, _warnings
 
     seen = ["Nan, Inf or huge value in QACC at DOF 0. The simulation is unstable. Time = 0.01."]
     out = _runner._with_warnings([SimulationDiverged("mujoco: non-finite state")], seen)
     assert str(out[0]) == f"mujoco: non-finite state (MuJoCo warned: {seen[0]})"
     assert capsys.readouterr().err == ""  # nothing on its own line before the exit-3 one
-    _runner._WARNED.discard("Some kind of warning.")
+    _warnings._WARNED.discard("Some kind of warning.")
     _runner._with_warnings([object()], ["Some kind of warning. Time = 0.1."])
     assert capsys.readouterr().err == ("treeimpact: warning: mujoco: Some kind of warning. "
                                        "Time = 0.1.\n")

@@ -49,7 +49,8 @@ def _state_solution(model: LinearImpactModel, contact: bool) -> _StateSolution:
 
 
 def record(model: LinearImpactModel, t_end: float, dt_sample: float):
-    """Solve the impact exactly to ``t_end`` (s); an ``ImpactRecord`` every ``dt_sample``.
+    """Solve the impact of ``model`` exactly to ``t_end`` (s); an ``ImpactRecord`` every
+    ``dt_sample`` (s).
 
     The ``exact-full`` method: every sample's observables and energies as it goes. Also
     returns the crown deflection (m) at the same times and the number of contact switches.

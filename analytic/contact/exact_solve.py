@@ -159,8 +159,9 @@ class _Grid:
 
 
 def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
-    """The ``exact`` method: the solution's phases and the observables on the sample grid
-    every ``dt_sample`` to ``t_end`` (s). Returns ``(_ExactSamples, switches)``."""
+    """The ``exact`` method on ``model``: the solution's phases and the observables on the
+    sample grid every ``dt_sample`` to ``t_end`` (s). Returns ``(_ExactSamples, switches)``
+    (the number of contact switches)."""
     steps = int(math.ceil(t_end / dt_sample - 1e-9))
     t_grid = np.linspace(0.0, t_end, steps + 1)
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
@@ -306,10 +307,11 @@ def _newton_root(fun, lo: float, hi: float, f_hi: float) -> float:
 
 def sampled_record(model: LinearImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:
     """The ``exact`` method's record when first read: :func:`.exact_record.record`'s
-    samples."""
+    samples of ``model`` every ``dt_sample`` to ``t_end`` (s)."""
     return record(model, t_end, dt_sample)[0]
 
 
 def deferred_record(model: LinearImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:
-    """An :class:`ImpactRecord` computed by :func:`sampled_record` when first read."""
+    """An :class:`ImpactRecord` of ``model`` every ``dt_sample`` to ``t_end`` (s), computed
+    by :func:`sampled_record` when first read."""
     return ImpactRecord.deferred(partial(sampled_record, model, t_end, dt_sample))

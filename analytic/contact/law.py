@@ -14,7 +14,8 @@ from treeimpact.analytic.model.two_body import TwoBodyModel
 
 
 def release_time(zeta: float) -> float:
-    """Release time of one collision, in units of 1/omega (see module docstring)."""
+    """Release time of one collision at damping ratio ``zeta`` (1), in units of 1/omega (see
+    module docstring); ParameterError for zeta outside [0, inf)."""
     if zeta < 0 or not math.isfinite(zeta):
         raise ParameterError(f"zeta = {zeta!r}: allowed [0, inf)")
     if abs(zeta - 1.0) < 1e-9:
@@ -65,8 +66,8 @@ def damping_ratio_for_restitution(e: float) -> float:
 
 
 def stiffness_for_duration(reduced_mass: float, duration: float) -> float:
-    """k_c (N/m) whose undamped collision of reduced mass mu (kg) lasts ``duration`` (s):
-    mu (pi / t)^2, the inverse of t = pi sqrt(mu / k_c)."""
+    """k_c (N/m) whose undamped collision of ``reduced_mass`` mu (kg) lasts ``duration``
+    (s): mu (pi / t)^2, the inverse of t = pi sqrt(mu / k_c)."""
     return reduced_mass * (math.pi / duration) ** 2
 
 
@@ -105,7 +106,8 @@ CALIBRATION = Option(CALIBRATIONS, "the contact damping of a non-SDOF trunk: the
 
 
 def pad_restitution(stiffness: float, damping: float, reduced_mass: float) -> float:
-    """e of one free collision of reduced mass mu (kg) under the pad (k N/m, c N s/m).
+    """e of one free collision of ``reduced_mass`` mu (kg) under the pad (``stiffness`` k
+    N/m, ``damping`` c N s/m).
 
     The pad's own e on a light trunk is smaller than on M_T (the same c is more damping
     there); below :data:`MIN_SOFT_RESTITUTION` it is refused with a one-line error.
@@ -119,16 +121,18 @@ def pad_restitution(stiffness: float, damping: float, reduced_mass: float) -> fl
 
 
 def effective_damping(stiffness: float, restitution: float, reduced_mass: float) -> float:
-    """c_c (N s/m) giving e in one free collision of reduced mass mu (kg) at stiffness k."""
+    """c_c (N s/m) giving ``restitution`` e in one free collision of ``reduced_mass`` mu
+    (kg) at ``stiffness`` k (N/m): 2 zeta(e) sqrt(k mu)."""
     zeta = damping_ratio_for_restitution(restitution)
     return 2.0 * zeta * math.sqrt(stiffness * reduced_mass)
 
 
 def pad_fields(stiffness: float | None, damping: float | None,
                reduced_mass: float | None) -> dict:
-    """What the pad is against the mass it strikes (a backend's model dict): the reduced mass
-    mu (kg) of the pendulum and the trunk's instantaneous effective mass at the clamp, and
-    the pad's damping ratio c_c / (2 sqrt(k_c mu)) there (1; above 1 the pad is overdamped
+    """What the pad is against the mass it strikes (a backend's model dict): the
+    ``reduced_mass`` mu (kg) of the pendulum and the trunk's instantaneous effective mass at
+    the clamp, and the pad's damping ratio c_c / (2 sqrt(k_c mu)) there from its
+    ``stiffness`` k_c (N/m) and ``damping`` c_c (N s/m) (1; above 1 the pad is overdamped
     against the clamp and rebounds at far less than its nominal e). None where unknown."""
     if not (stiffness and reduced_mass) or damping is None:
         return {"contact_reduced_mass": reduced_mass, "pad_damping_ratio": None}
@@ -137,7 +141,8 @@ def pad_fields(stiffness: float | None, damping: float | None,
 
 
 def collision_duration(model: TwoBodyModel, stiffness: float, damping: float) -> float:
-    """Duration (s) of one free two-body collision under the law, first touch to release."""
+    """Duration (s) of one free two-body collision under the law (``stiffness`` k_c N/m,
+    ``damping`` c_c N s/m) on ``model``'s reduced mass, first touch to release."""
     mu = model.reduced_mass
     omega = math.sqrt(stiffness / mu)
     return release_time(damping / (2.0 * math.sqrt(stiffness * mu))) / omega

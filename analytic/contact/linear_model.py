@@ -31,6 +31,7 @@ class LinearImpactModel:
 
     @property
     def dofs(self) -> int:
+        """Degrees of freedom of the trunk (the size of M)."""
         return len(self.M)
 
     @property
@@ -47,8 +48,9 @@ class LinearImpactModel:
 
 
 def matrices(model: LinearImpactModel, contact: bool):
-    """``(M, C, K, g)`` of trunk and pendulum (N = dofs + 1 coordinates q = (trunk, y)) in
-    one contact state; delta = g . q. In contact the pad's k_c and c_c act along g."""
+    """``(M, C, K, g)`` of ``model``'s trunk and pendulum (N = dofs + 1 coordinates q =
+    (trunk, y)) in one contact state (``contact``: touching); delta = g . q. In contact the
+    pad's k_c and c_c act along g."""
     n, N = model.dofs, model.dofs + 1
     K = np.zeros((N, N))
     C = np.zeros((N, N))
@@ -64,8 +66,9 @@ def matrices(model: LinearImpactModel, contact: bool):
 
 
 def system(model: LinearImpactModel, contact: bool) -> tuple[np.ndarray, np.ndarray]:
-    """(A, g): the state matrix of z = (q, q'), z' = A z, of one contact state (what the
-    independent references of the tests integrate) and delta = g . q."""
+    """(A, g): the state matrix of z = (q, q'), z' = A z, of ``model`` in one contact state
+    (``contact``: touching; what the independent references of the tests integrate) and
+    delta = g . q."""
     M, C, K, g = matrices(model, contact)
     N = len(g)
     A = np.zeros((2 * N, 2 * N))
@@ -76,8 +79,8 @@ def system(model: LinearImpactModel, contact: bool) -> tuple[np.ndarray, np.ndar
 
 
 def initial_state(model: LinearImpactModel) -> np.ndarray:
-    """z(0) = (q, q'): everything at rest but the pendulum, at u_1 (the first touch,
-    delta = 0)."""
+    """z(0) = (q, q') of ``model``: everything at rest but the pendulum, at u_1 (the first
+    touch, delta = 0)."""
     N = model.dofs + 1
     z = np.zeros(2 * N)
     z[2 * N - 1] = model.impact_speed

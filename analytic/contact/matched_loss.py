@@ -18,9 +18,10 @@ _E_LOW, _E_HIGH = 0.0, 1.0 - 1e-6
 
 def matched_loss_restitution(scenario: Scenario, contact_loss: float, *,
                              xtol: float = 1e-9) -> float:
-    """e in [0, 1) for which the exact 1-DOF model's whole-event contact dissipation (J,
-    eq 56 summed over every impact) equals ``contact_loss`` (J). One-line error when the
-    loss is outside what e in [0, 1) can give: (0, the plastic loss 1/2 mu u1^2]."""
+    """e in [0, 1) for which the exact 1-DOF model of ``scenario`` loses ``contact_loss``
+    (J) in its whole-event contact dissipation (eq 56 summed over every impact), to
+    ``xtol`` in e (Brent's method). One-line error when the loss is outside what e in
+    [0, 1) can give: (0, the plastic loss 1/2 mu u1^2]."""
     check_range("contact_loss", contact_loss, low=0, low_open=True, unit="J")
 
     def excess(e):

@@ -112,12 +112,14 @@ class Modal:
         return np.exp(np.outer(s, self.lam)) * w
 
     def observe(self, rows: np.ndarray, w: np.ndarray, s: np.ndarray, U=None) -> np.ndarray:
-        """Observables ``rows @ u(s)`` for rows over u (r x len(s))."""
+        """Observables ``rows @ u(s)`` for rows over u (r x len(s)) of the solution with
+        modal coefficients ``w`` at s = 0; ``U``: :meth:`modal` of (w, s) if known."""
         U = self.modal(w, s) if U is None else U
         return (U @ (rows @ self.Vu).T).real.T
 
     def state(self, w: np.ndarray, s: float) -> np.ndarray:
-        """The raw state z = (q, q') at s."""
+        """The raw state z = (q, q') at ``s`` (s) of the solution with modal coefficients
+        ``w`` at s = 0."""
         return (self.V @ (np.exp(self.lam * s) * w)).real
 
     def quadratic(self, Q: np.ndarray) -> Quadratic:
@@ -144,7 +146,8 @@ def _undamped_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray
 class Quadratic:
     """u(s)^T Q u(s) and its integral from 0 to s, in closed form on a :class:`Modal`:
     int_0^s u^T Q u = sum_ij H_ij w_i w_j (exp((lambda_i + lambda_j) s) - 1) / (lambda_i +
-    lambda_j), H = V^T Q V; pairs with lambda_i + lambda_j = 0 (undamped) integrate to s."""
+    lambda_j), H = V^T Q V; pairs with lambda_i + lambda_j = 0 (undamped) integrate to s.
+    ``modal``: the solution; ``Q``: the form over u."""
 
     def __init__(self, modal: Modal, Q: np.ndarray):
         self.modal = modal
@@ -156,10 +159,14 @@ class Quadratic:
         self.H_lin = np.where(small, H, 0.0)  # secular part: constant integrand
 
     def value(self, w, s, U=None):
+        """u(s)^T Q u(s) at the times ``s`` of the solution with modal coefficients ``w`` at
+        s = 0 (``U``: its :meth:`Modal.modal` if known)."""
         U = self.modal.modal(w, s) if U is None else U
         return ((U @ self.H) * U).sum(axis=1).real
 
     def integral(self, w, s, U=None):
+        """int_0^s u^T Q u at the times ``s`` of the solution with modal coefficients ``w``
+        at s = 0 (``U``: its :meth:`Modal.modal` if known), in closed form."""
         U = self.modal.modal(w, s) if U is None else U
         start = w @ self.H_int @ w
         return (((U @ self.H_int) * U).sum(axis=1) - start
@@ -181,7 +188,8 @@ class LedgerForms:
 
 def ledger_forms(model: LinearImpactModel, modal: Modal, contact: bool,
                  g: np.ndarray) -> LedgerForms:
-    """The :class:`LedgerForms` of one contact state (delta = g . q). The elastic form is
+    """The :class:`LedgerForms` of ``model`` on its solution ``modal`` in one contact state
+    (``contact``: touching; delta = g . q). The elastic form is
     written in the modal coordinates exactly (0.5 |u_1|^2 less the pad's spring), not as
     Phi^T K Phi, whose round-off is eps |K| / om_1^2 of the low modes' energy."""
     N, k_c, c_c = modal.N, model.contact_stiffness, model.contact_damping
@@ -216,7 +224,8 @@ class Observable(enum.IntEnum):
 
 
 def observation_rows(model: LinearImpactModel, modal: Modal, g: np.ndarray) -> np.ndarray:
-    """Rows over u of the :class:`Observable` quantities, in their order (8 x 2N)."""
+    """Rows over u of the :class:`Observable` quantities of ``model`` on its solution
+    ``modal`` (delta = ``g`` . q), in their order (8 x 2N)."""
     N = modal.N
     e = np.eye(N)
     clamp, pend, crown = e[model.clamp], e[N - 1], model.crown_gain * e[model.crown]

@@ -84,9 +84,10 @@ def switch(phase: ContactPhase, root: Callable[[Signal], float],
 
 
 def bracket(value: Callable[[float], float], lo: float, hi: float, f_hi: float):
-    """(lo', value(lo')) with value(lo') of the sign opposite to ``f_hi``: lo itself, or, when
-    the bracket's low end sits on the previous switch (value 0 there, or the same sign), moved
-    in by 1e-9, 1e-8, ... of the interval until the sign differs; None when it never does."""
+    """(lo', value(lo')) with value(lo') of the sign opposite to ``f_hi`` (the value at
+    ``hi``): lo itself, or, when the bracket's low end sits on the previous switch (value 0
+    there, or the same sign), moved in by 1e-9, 1e-8, ... of the interval [lo, hi] until the
+    sign differs; None when it never does."""
     f_lo = value(lo)
     if f_lo * f_hi > 0 or f_lo == 0.0:
         step = (hi - lo) * 1e-9

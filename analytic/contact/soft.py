@@ -57,8 +57,9 @@ OPTIONS = {"restitution": RESTITUTION, "contact_stiffness": CONTACT_STIFFNESS,
 
 def sdof_impact_model(model: TwoBodyModel, trunk, k_c: float, c_c: float
                       ) -> LinearImpactModel:
-    """The two-body model of Fig 3 with the pad as a :class:`LinearImpactModel`: the trunk
-    a 1 x 1 mesh (M_T, C_T, K_T, eq 11) whose crown moves with the static shape, phi(l) x."""
+    """The two-body model of Fig 3 with the pad (``k_c`` N/m, ``c_c`` N s/m) as a
+    :class:`LinearImpactModel`: the trunk a 1 x 1 mesh (M_T, C_T, K_T, eq 11) whose crown
+    moves with the static shape of ``trunk``, phi(l) x."""
     return LinearImpactModel(
         M=np.array([[model.dynamic_mass]]), D=np.array([[model.damping]]),
         K=np.array([[model.stiffness]]), clamp=0, crown=0, crown_gain=crown_factor(trunk),
@@ -73,9 +74,11 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
                   method: str = "exact"):
     """The scenario's two-body model with the soft contact, solved to ``t_end`` (s).
 
-    ``contact_stiffness`` (N/m) or ``contact_duration`` (s) replace the scenario's contact
-    stiffness (:func:`contact_law`); ``method`` (:data:`METHODS`) changes the cost, not the
-    solution. Returns a SimulationResult (backend "analytic-soft") whose metrics come from
+    ``restitution`` replaces the scenario's e; ``contact_stiffness`` (N/m) or
+    ``contact_duration`` (s) replace the scenario's contact stiffness (:func:`contact_law`);
+    the record is sampled ``samples_per_collision`` times per free collision; ``method``
+    (:data:`METHODS`) changes the cost, not the solution. Returns a SimulationResult
+    (backend "analytic-soft") whose metrics come from
     :func:`analytic.records.metrics_from_record`, the same rule the engines use.
     """
     method = SoftMethod(OPTIONS["method"].check("method", method))
@@ -108,8 +111,10 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
 
 
 def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sample: float):
-    """Integrate the soft-contact two-body model by DOP853, each phase of :mod:`.phases`
-    smoothly up to its terminal event; return an ``ImpactRecord`` sampled every dt (s)."""
+    """Integrate the soft-contact two-body ``model`` with the pad (``k_c`` N/m, ``c_c``
+    N s/m) by DOP853 to ``t_end`` (s), each phase of :mod:`.phases` smoothly up to its
+    terminal event; return an ``ImpactRecord`` sampled every ``dt_sample`` (s). Raises
+    SimulationDiverged when the integration fails or stalls."""
     from scipy.integrate import solve_ivp  # here, not at import: `treeimpact --help` is fast
 
     rhs, events = _soft_rhs(model, k_c, c_c), _pad_events(k_c, c_c)

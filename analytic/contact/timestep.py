@@ -18,7 +18,9 @@ def _positive(name: str, value) -> float:
 
 
 def stability_limit(collision_duration: float, highest_frequency: float | None = None) -> float:
-    """Largest stable step (s): 2 / omega for the contact and the highest trunk mode."""
+    """Largest stable step (s): 2 / omega for the contact (omega = pi /
+    ``collision_duration``, s) and the ``highest_frequency`` of the trunk (rad/s, None: no
+    trunk mode)."""
     t_c = _positive("collision_duration", collision_duration)
     limit = 2.0 * t_c / math.pi
     if highest_frequency is not None:
@@ -28,7 +30,9 @@ def stability_limit(collision_duration: float, highest_frequency: float | None =
 
 def choose_time_step(collision_duration: float, highest_frequency: float | None = None, *,
                      steps_per_collision: int = 50, steps_per_period: int = 20) -> float:
-    """The documented default step (s), see the module docstring."""
+    """The documented default step (s), see the module docstring: ``collision_duration``
+    (s) / ``steps_per_collision``, and at most 2 pi / ``highest_frequency`` (rad/s, None:
+    no trunk mode) / ``steps_per_period``."""
     t_c = _positive("collision_duration", collision_duration)
     dt = t_c / steps_per_collision
     if highest_frequency is not None:
@@ -39,7 +43,9 @@ def choose_time_step(collision_duration: float, highest_frequency: float | None 
 
 def check_time_step(dt, collision_duration: float, highest_frequency: float | None = None
                     ) -> float:
-    """Return ``dt`` (s) if it can be stable, else raise a one-line ParameterError."""
+    """Return ``dt`` (s) if it can be stable for the ``collision_duration`` (s) and the
+    ``highest_frequency`` (rad/s, None: no trunk mode), else raise a one-line
+    ParameterError (:func:`stability_limit`)."""
     dt = _positive("dt", dt)
     limit = stability_limit(collision_duration, highest_frequency)
     if dt >= limit:
@@ -52,7 +58,8 @@ def check_time_step(dt, collision_duration: float, highest_frequency: float | No
 
 
 def sdof_rate(model) -> float:
-    """Fastest rate (1/s) of the engines' SDOF trunk and linear pendulum: the natural
+    """Fastest rate (1/s) of the engines' SDOF trunk and linear pendulum of ``model`` (a
+    :class:`analytic.model.two_body.TwoBodyModel`): the natural
     frequencies sqrt(K_T / M_T) and sqrt(k / m) and the damping rate C_T / M_T (the engines
     step the trunk's damper explicitly, stable for dt < 2 M_T / C_T, as for a frequency)."""
     return max(math.sqrt(model.stiffness / model.dynamic_mass),

@@ -37,7 +37,8 @@ def _check_modes(n_modes) -> int:
 
 
 def mesh(trunk: Trunk, elements: int = FREQUENCY_ELEMENTS) -> np.ndarray:
-    """Node heights (m), a node at ``a``, no element longer than l / ``elements``.
+    """Node heights (m) of ``trunk``'s mesh, a node at ``a``, no element longer than l /
+    ``elements``.
 
     [0, a] gets n_in = ceil(elements a / l) equal elements and [a, l] gets
     n_out = ceil(elements (l - a) / l) (none when a = l), so there are ``elements`` or
@@ -93,7 +94,8 @@ def _scatter(blocks, n: int, l: float) -> np.ndarray:
 
 
 def assemble(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOULLI):
-    """Global (K, M) on the free dofs and the index of each node's deflection dof.
+    """Global (K, M) of ``trunk`` on the mesh ``nodes`` (heights, m) in ``beam_theory``
+    (:data:`analytic.continuum.timoshenko.BEAM_THEORIES`), on the free dofs.
 
     Dofs are (w_i, l * r_i) per node, r the slope w' (Euler-Bernoulli) or the section's
     rotation psi (Timoshenko), scaled by the trunk length (which leaves the eigenvalues
@@ -122,8 +124,9 @@ def assemble(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOULLI
 
 
 def beam_static_stiffness(trunk: Trunk, beam_theory: str = EULER_BERNOULLI) -> float:
-    """Force at ``a`` per unit deflection at ``a``, N/m (eq 1 / eq 8 with the root spring;
-    Timoshenko: 1 / (a^3 / (3 E I) + a / (kappa G A) + a^2 / k_theta)).
+    """Force at ``a`` per unit deflection at ``a`` of ``trunk`` in ``beam_theory``, N/m (eq 1
+    / eq 8 with the root spring; Timoshenko: 1 / (a^3 / (3 E I) + a / (kappa G A) + a^2 /
+    k_theta)).
 
     Exact (both elements hold the static solution): solved on the mesh {0, a, l}.
     """
@@ -139,7 +142,8 @@ def beam_static_stiffness(trunk: Trunk, beam_theory: str = EULER_BERNOULLI) -> f
 
 
 def flexibility(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOULLI):
-    """Closed-form inverse of the assembled stiffness: the exact flexibility matrix.
+    """Closed-form inverse of the assembled stiffness of ``trunk`` on ``nodes`` (heights,
+    m) in ``beam_theory``: the exact flexibility matrix.
 
     Both elements are nodally exact for nodal forces and moments on a uniform beam, so
     K^-1 of :func:`assemble` equals the influence matrix of the continuous cantilever at the
@@ -235,7 +239,8 @@ def _mesh_modes(trunk: Trunk, n_modes: int, beam_theory: str, nodes: np.ndarray)
 
 def beam_natural_frequencies(trunk: Trunk, n_modes: int = 3,
                              beam_theory: str = EULER_BERNOULLI) -> np.ndarray:
-    """The first ``n_modes`` natural frequencies of the continuous trunk, rad/s, ascending.
+    """The first ``n_modes`` natural frequencies of the continuous ``trunk`` in
+    ``beam_theory``, rad/s, ascending.
 
     Relative accuracy better than 1e-8 for n_modes <= 3 (mesh rule in the module docstring;
     Timoshenko: :func:`_modes`).
@@ -279,7 +284,8 @@ def _peak(nodes: np.ndarray, full: np.ndarray) -> np.ndarray:
 
 
 def beam_mode_shapes(trunk: Trunk, n_modes: int = 3, z=None, *, normalise: str = "max"):
-    """``(omegas, z, shapes)``: frequencies (rad/s), heights (m), lateral deflections.
+    """``(omegas, z, shapes)`` of the first ``n_modes`` modes of ``trunk``: frequencies
+    (rad/s), heights (m), lateral deflections.
 
     ``shapes[i]`` is mode i at the heights ``z`` (default: the element nodes, which include
     ``a``), interpolated with the Hermite shape functions. ``normalise="max"``: the value of
@@ -311,7 +317,8 @@ def beam_mode_shapes(trunk: Trunk, n_modes: int = 3, z=None, *, normalise: str =
 
 
 def beam_matrices(trunk: Trunk, elements: int, beam_theory: str = EULER_BERNOULLI):
-    """``(M, D, K, nodes, keep)`` of the trunk on :func:`mesh` (kg, N s/m, N/m, SI dofs).
+    """``(M, D, K, nodes, keep)`` of ``trunk`` in ``beam_theory`` on :func:`mesh` of
+    ``elements`` elements (kg, N s/m, N/m, SI dofs).
 
     Dofs as in :func:`assemble` (w_i, l r_i); ``D`` is the consistent damping matrix of the
     distributed damping C (eq 9: force C w' per unit length), the lateral mass matrix's
@@ -325,6 +332,7 @@ def beam_matrices(trunk: Trunk, elements: int, beam_theory: str = EULER_BERNOULL
 
 
 def deflection_dof(nodes: np.ndarray, keep: np.ndarray, height: float) -> int:
-    """Index among the kept dofs of the deflection at the node nearest ``height`` (m)."""
+    """Index among the kept dofs ``keep`` (:func:`assemble`) of the deflection at the node
+    of ``nodes`` (heights, m) nearest ``height`` (m)."""
     i = int(np.argmin(np.abs(np.asarray(nodes) - height)))
     return int(np.nonzero(np.asarray(keep) == 2 * i)[0][0])

@@ -88,7 +88,9 @@ def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                       restitution: float | None = None, contact_stiffness: float | None = None,
                       duration: float | None = None, calibration: str = "pad",
                       beam_theory: str = "euler-bernoulli"):
-    """``(LinearImpactModel, TwoBodyModel)``: the beam problem and the SDOF model it refines.
+    """``(LinearImpactModel, TwoBodyModel)``: the beam problem of ``scenario`` on
+    ``elements`` elements and the SDOF model it refines (e: ``restitution`` if given, else
+    the scenario's).
 
     k_c comes from :func:`analytic.contact.law.contact_law` on the SDOF model (the pad's
     stiffness, from ``contact_stiffness`` N/m, ``duration`` s or the scenario); c_c per
@@ -126,6 +128,8 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                   method: str = "exact", beam_theory: str = "euler-bernoulli"):
     """The scenario with the continuum trunk and the pad, solved exactly to ``t_end`` (s).
 
+    ``elements``, ``calibration``, ``restitution``, ``contact_stiffness`` (N/m) and
+    ``contact_duration`` (s, as ``duration``) as in :func:`beam_impact_model`.
     Returns a SimulationResult (backend "beam") with the metrics of
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
     ``method`` (:class:`BeamMethod`) changes the cost, not the solution; ``beam_theory``
@@ -171,9 +175,10 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
 
 def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int = 3,
           beam_theory: str = "euler-bernoulli") -> dict:
-    """``model``: the backend's mesh (static stiffness at a, N/m; frequencies, rad/s);
-    ``beam``: the 160-element reference of :func:`analytic.continuum.modes.beam_reference`,
-    both in ``beam_theory``."""
+    """``model``: the backend's mesh of ``elements`` elements for ``scenario`` (static
+    stiffness at a, N/m; the lowest ``n_modes`` frequencies, rad/s); ``beam``: the
+    160-element reference of :func:`analytic.continuum.modes.beam_reference`, both in
+    ``beam_theory``."""
     import scipy.linalg
 
     model, _ = beam_impact_model(scenario, elements=elements, beam_theory=beam_theory)

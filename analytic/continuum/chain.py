@@ -46,18 +46,22 @@ class HingedChain:
 
     @property
     def segments(self) -> int:
+        """The number of segments N."""
         return len(self.boundaries) - 1
 
     @property
     def lower(self) -> np.ndarray:
+        """z_j of each segment's bottom, m."""
         return np.asarray(self.boundaries[:-1])
 
     @property
     def upper(self) -> np.ndarray:
+        """z_{j+1} of each segment's top, m."""
         return np.asarray(self.boundaries[1:])
 
     @property
     def lengths(self) -> np.ndarray:
+        """h_j of each segment, m."""
         return np.diff(self.boundaries)
 
     @property
@@ -67,14 +71,17 @@ class HingedChain:
 
     @property
     def clamp_height(self) -> float:
+        """a, the trunk's clamp (impact) height, m."""
         return self.trunk.clamp_height
 
     @property
     def clamp_mass(self) -> float:
+        """m_c, the clamp's point mass at a, kg."""
         return self.trunk.clamp_mass
 
     @property
     def crown_mass(self) -> float:
+        """m_f, the crown's point mass at l, kg."""
         return self.trunk.crown_mass
 
     @property
@@ -97,7 +104,8 @@ def _check_segments(segments) -> int:
 
 
 def split_segments(trunk: Trunk, segments: int) -> tuple[int, int]:
-    """(N_in, N_out): segments in [0, a] and in [a, l] (rule in the module docstring)."""
+    """(N_in, N_out): of ``segments`` in all, those of ``trunk`` in [0, a] and in [a, l]
+    (rule in the module docstring)."""
     n = _check_segments(segments)
     a, l = trunk.clamp_height, trunk.length
     if a >= l:
@@ -146,15 +154,17 @@ def _hinged_chain(trunk: Trunk, segments: int) -> HingedChain:
 
 
 def lateral_jacobian(chain: HingedChain, z) -> np.ndarray:
-    """d x(z) / d theta: rows (z - z_j) for hinges below z, else 0 (m/rad), shape (len(z), N)."""
+    """d x(z) / d theta of ``chain`` at the heights ``z`` (m): rows (z - z_j) for hinges
+    below z, else 0 (m/rad), shape (len(z), N)."""
     z = np.atleast_1d(np.asarray(z, dtype=float))
     return np.maximum(z[:, None] - chain.hinge_heights[None, :], 0.0)
 
 
 def lateral_motion(chain: HingedChain, angles, rates, segments: int):
-    """(x, x') in m, m/s of the top of segment ``segments - 1`` for hinge angles (rad, each
-    relative to the segment below) and their rates per sample, rows of shape (N,): exact
-    kinematics, x = sum_j h_j sin(phi_j) with phi the cumulative angles."""
+    """(x, x') in m, m/s of the top of ``chain``'s segment ``segments - 1`` for hinge
+    ``angles`` (rad, each relative to the segment below) and their ``rates`` (rad/s) per
+    sample, rows of shape (N,): exact kinematics, x = sum_j h_j sin(phi_j) with phi the
+    cumulative angles."""
     h = chain.lengths[:segments]
     phi = np.cumsum(angles, axis=-1)[..., :segments]
     phid = np.cumsum(rates, axis=-1)[..., :segments]
@@ -162,12 +172,13 @@ def lateral_motion(chain: HingedChain, angles, rates, segments: int):
 
 
 def rotation_jacobian(chain: HingedChain) -> np.ndarray:
-    """d(rotation of segment s) / d theta_j = 1 for j <= s: lower-triangular ones, (N, N)."""
+    """d(rotation of segment s) / d theta_j = 1 for j <= s of ``chain``: lower-triangular
+    ones, (N, N)."""
     return np.tril(np.ones((chain.segments, chain.segments)))
 
 
 def chain_matrices(chain: HingedChain) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Linearised (M, K, D) in the hinge angles: kg m^2, N m/rad, N m s/rad.
+    """Linearised (M, K, D) of ``chain`` in the hinge angles: kg m^2, N m/rad, N m s/rad.
 
     M = sum_s m_s J(c_s)^T J(c_s) + I_s R_s^T R_s + m_c J(a)^T J(a) + m_f J(l)^T J(l),
     K = diag(k_j), D = sum_p c_p J(z_p)^T J(z_p), with J the lateral Jacobian.
@@ -185,13 +196,14 @@ def chain_matrices(chain: HingedChain) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 
 def chain_static_stiffness(chain: HingedChain) -> float:
-    """Force at a per unit deflection at a, N/m: 1 / (J(a) K^-1 J(a)^T)."""
+    """Force at a per unit deflection at a of ``chain``, N/m: 1 / (J(a) K^-1 J(a)^T)."""
     ja = lateral_jacobian(chain, chain.trunk.clamp_height)[0]
     return float(1.0 / np.sum(ja ** 2 / np.asarray(chain.hinge_stiffnesses)))
 
 
 def chain_static_mode(chain: HingedChain) -> np.ndarray:
-    """Hinge angles of the static deflection under a load at a, normalised to 1 at a (rad/m)."""
+    """Hinge angles of ``chain``'s static deflection under a load at a, normalised to 1 at
+    a (rad/m)."""
     ja = lateral_jacobian(chain, chain.trunk.clamp_height)[0]
     u = ja / np.asarray(chain.hinge_stiffnesses)
     return u / float(ja @ u)
@@ -230,8 +242,8 @@ def chain_reduced_sdof(chain: HingedChain) -> TreeSDOF:
 
 
 def chain_errors(trunk: Trunk, segments: int) -> dict:
-    """Relative errors of the chain against :mod:`analytic.continuum.beam`: static stiffness at a,
-    omega_1, omega_2."""
+    """Relative errors (1) of the chain of ``segments`` segments against the beam of
+    ``trunk`` (:mod:`analytic.continuum.beam`): static stiffness at a, omega_1, omega_2."""
     chain = hinged_chain(trunk, segments)
     w_beam = beam_natural_frequencies(trunk, 2)
     w_chain = chain_natural_frequencies(chain, 2)

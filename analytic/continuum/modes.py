@@ -12,15 +12,18 @@ from .beam import beam_natural_frequencies, beam_static_stiffness
 
 def beam_reference(scenario: Scenario, n_modes: int = 3,
                    beam_theory: str = "euler-bernoulli") -> dict:
-    """The continuous trunk (analytic.continuum.beam) in ``beam_theory``, Euler-Bernoulli by
-    default: static stiffness at a (N/m) and natural frequencies (rad/s)."""
+    """The continuous trunk of ``scenario`` (analytic.continuum.beam) in ``beam_theory``,
+    Euler-Bernoulli by default: static stiffness at a (N/m) and the lowest ``n_modes``
+    natural frequencies (rad/s)."""
     trunk = scenario.trunk
     return {"static_stiffness": float(beam_static_stiffness(trunk, beam_theory)),
             "omegas": [float(w) for w in beam_natural_frequencies(trunk, n_modes, beam_theory)]}
 
 
 def modes(scenario: Scenario, *, n_modes: int = 3) -> dict:
-    """``model``: the SDOF trunk of eq 11 (K_T, omega_1 = sqrt(K_T/M_T)); ``beam``: reference."""
+    """``model``: the SDOF trunk of eq 11 of ``scenario`` (K_T N/m, omega_1 = sqrt(K_T/M_T)
+    rad/s); ``beam``: the reference's static stiffness and lowest ``n_modes`` frequencies
+    (:func:`beam_reference`)."""
     tree = reduce_trunk(scenario.trunk)
     return {"model": {"static_stiffness": tree.stiffness,
                       "omegas": [math.sqrt(tree.stiffness / tree.dynamic_mass)]},

@@ -34,12 +34,16 @@ def check_beam_theory(beam_theory) -> str:
 
 
 def shear_parameter(h: float, ei: float, shear_rigidity: float) -> float:
-    """phi = 12 E I / (kappa G A h^2) of an element of length h (m); 0 when rigid in shear."""
+    """phi = 12 E I / (kappa G A h^2) (1) of an element of length ``h`` (m), bending
+    stiffness ``ei`` = E I (N m^2) and ``shear_rigidity`` kappa G A (N); 0 when rigid in
+    shear (inf)."""
     return 0.0 if math.isinf(shear_rigidity) else 12.0 * ei / (shear_rigidity * h * h)
 
 
 def stiffness(h: float, ei: float, phi: float) -> np.ndarray:
-    """Element stiffness (N/m, N, N m), dofs (w1, psi1, w2, psi2): Friedman & Kosmatka eq 21."""
+    """Element stiffness (N/m, N, N m) of length ``h`` (m), ``ei`` = E I (N m^2) and shear
+    parameter ``phi`` (:func:`shear_parameter`), dofs (w1, psi1, w2, psi2): Friedman &
+    Kosmatka eq 21."""
     c = ei / (h ** 3 * (1.0 + phi))
     return c * np.array([[12.0, 6 * h, -12.0, 6 * h],
                          [6 * h, (4 + phi) * h * h, -6 * h, (2 - phi) * h * h],
@@ -48,9 +52,10 @@ def stiffness(h: float, ei: float, phi: float) -> np.ndarray:
 
 
 def translational_mass(h: float, rho_a: float, phi: float) -> np.ndarray:
-    """The consistent mass of the lateral inertia rho A (kg/m) with the element's shape
-    functions (Friedman & Kosmatka eq 23; 420ths of the Hermite matrix at phi = 0). With C
-    (N s/m^2) in place of rho A it is the consistent damping of eq 9's force C w'."""
+    """The consistent mass of the lateral inertia ``rho_a`` = rho A (kg/m) with the shape
+    functions of an element of length ``h`` (m) and shear parameter ``phi`` (Friedman &
+    Kosmatka eq 23; 420ths of the Hermite matrix at phi = 0). With C (N s/m^2) in place of
+    rho A it is the consistent damping of eq 9's force C w'."""
     p2 = phi * phi
     a = 13 / 35 + 7 * phi / 10 + p2 / 3
     b = (11 / 210 + 11 * phi / 120 + p2 / 24) * h
@@ -65,8 +70,9 @@ def translational_mass(h: float, rho_a: float, phi: float) -> np.ndarray:
 
 
 def rotary_mass(h: float, rho_i: float, phi: float) -> np.ndarray:
-    """The consistent mass of the rotary inertia rho I (kg m) of the sections (Friedman &
-    Kosmatka eq 24; the Rayleigh beam's matrix at phi = 0)."""
+    """The consistent mass of the rotary inertia ``rho_i`` = rho I (kg m) of the sections of
+    an element of length ``h`` (m) and shear parameter ``phi`` (Friedman & Kosmatka eq 24;
+    the Rayleigh beam's matrix at phi = 0)."""
     p2 = phi * phi
     a = 6 / 5
     b = (1 / 10 - phi / 2) * h
@@ -80,8 +86,10 @@ def rotary_mass(h: float, rho_i: float, phi: float) -> np.ndarray:
 
 def element_matrices(h: float, ei: float, rho_a: float, rho_i: float,
                      shear_rigidity: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(K, M, M_rho_A / rho_A)`` of one element of length h (m): stiffness, consistent mass
-    with rotary inertia, and the lateral mass's shape (for the damping matrix, per kg/m)."""
+    """``(K, M, M_rho_A / rho_A)`` of one element of length ``h`` (m), bending stiffness
+    ``ei`` (N m^2), lateral and rotary inertias ``rho_a`` (kg/m) and ``rho_i`` (kg m), and
+    ``shear_rigidity`` kappa G A (N; inf: Euler-Bernoulli): stiffness, consistent mass with
+    rotary inertia, and the lateral mass's shape (for the damping matrix, per kg/m)."""
     phi = shear_parameter(h, ei, shear_rigidity)
     shape = translational_mass(h, 1.0, phi)
     return stiffness(h, ei, phi), rho_a * shape + rotary_mass(h, rho_i, phi), shape

@@ -105,8 +105,9 @@ def xml_differences(expected: str, actual: str, digits: int) -> list[str]:
 
 
 def file_differences(directory: pathlib.Path, files: dict[str, str], digits: int) -> dict[str, list[str]]:
-    """File name -> differences between the checked-in file and the generated text (missing
-    files included); files that match are left out."""
+    """File name -> differences between the checked-in file in ``directory`` and the
+    generated text of ``files`` (name -> text), numbers compared to ``digits`` significant
+    digits (missing files included); files that match are left out."""
     out = {}
     for name, text in files.items():
         path = directory / name
@@ -119,7 +120,21 @@ def file_differences(directory: pathlib.Path, files: dict[str, str], digits: int
 
 def regenerate_main(argv, *, prog: str, generated: Callable[[], dict], directory: pathlib.Path,
                     suffix: str, kind: str, digits: int) -> int:
-    """Sync ``directory`` with ``generated()`` (file name -> text); see the module docstring."""
+    """Sync ``directory`` with ``generated()`` (file name -> text); see the module docstring.
+
+    Args:
+        argv: the command line's arguments (``--check``: compare only, exit 1 on a
+            difference).
+        prog: the program's name in its usage line.
+        generated: returns the files, name -> text.
+        directory: the folder of the checked-in files.
+        suffix: the files' suffix (``.xml``, ``.urdf``): others of it are stale.
+        kind: the files' kind in the summary line (``MJCF``, ``URDF``).
+        digits: significant digits at which numbers compare equal.
+
+    Returns:
+        The exit code: 0, or 1 when ``--check`` found a difference.
+    """
     ap = argparse.ArgumentParser(prog=prog)
     ap.add_argument("--check", action="store_true", help="compare only; exit 1 on a difference")
     args = ap.parse_args(argv)

@@ -79,7 +79,8 @@ class Engine(Protocol):
     OPTIONS: dict  # option name -> treeimpact.analytic.model.options.Option
 
     def make_setup(self, scenario: Scenario, **options) -> EngineSetup:
-        """Validate the options and build the engine's model: everything a run needs."""
+        """Validate the ``options`` and build the engine's model of ``scenario``: everything
+        a run needs."""
 
     def run(self, setup: EngineSetup):
         """Step one setup; a SimulationResult, or SimulationDiverged raised."""
@@ -88,8 +89,9 @@ class Engine(Protocol):
         """``run(make_setup(scenario, **options))``."""
 
     def modes(self, scenario: Scenario, *, segments=None, n_modes: int = 3) -> dict:
-        """Static stiffness at a (N/m) and natural frequencies (rad/s) of the engine's chain
-        (:func:`chain_modes`) beside the continuous beam's."""
+        """Static stiffness at a (N/m) and the lowest ``n_modes`` natural frequencies
+        (rad/s) of the engine's chain for ``scenario`` (``segments``: None, the default
+        count) (:func:`chain_modes`) beside the continuous beam's."""
 
 
 def check_choice(name: str, value, allowed):
@@ -105,10 +107,11 @@ def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping
     """The options every engine shares, checked (one-line errors), and the scenario's
     two-body model (eqs 7-13, 48) with the end time (s) of an engine run.
 
-    ``restitution`` overrides the scenario's e (validated as ``contact.restitution``);
-    ``pendulum = "full"`` needs a pendulum impactor; ``t_end`` (default the scenario's)
-    must be a finite positive number; ``trunks``: the engine's trunk models (default the
-    shared ones).
+    ``trunk``, ``pendulum``, ``trunk_damping_model`` and ``calibration`` are checked against
+    their choices; ``restitution`` overrides the scenario's e (validated as
+    ``contact.restitution``); ``pendulum = "full"`` needs a pendulum impactor; ``t_end``
+    (default the scenario's) must be a finite positive number; ``trunks``: the engine's
+    trunk models (default the shared ones).
     """
     check_choice("trunk", trunk, trunks)
     check_choice("pendulum", pendulum, PENDULUMS)
@@ -130,9 +133,10 @@ def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping
 
 def trunk_chain(scenario: Scenario, trunk: str, segments, *, engine: str = "the engine",
                 max_segments: int = MAX_SEGMENTS):
-    """The hinged chain of a ``chain`` trunk (default segment count when ``segments`` is
-    None), None for ``sdof`` (which takes no --segments); a one-line error when the chain
-    needs more segments than the engine takes (``max_segments``)."""
+    """The hinged chain of ``scenario``'s trunk for a ``chain`` trunk (default segment count
+    when ``segments`` is None), None for ``sdof`` (which takes no --segments); a one-line
+    error naming ``engine`` when the chain needs more segments than it takes
+    (``max_segments``)."""
     if trunk == "chain":
         n = default_segments(scenario.trunk) if segments is None else segments
         if isinstance(n, int) and n > max_segments:
@@ -160,8 +164,9 @@ def swing_time(pendulum: Pendulum) -> float:
 
 def check_energy(backend: str, mechanical: np.ndarray, initial_energy: float, dt: float
                  ) -> None:
-    """SimulationDiverged when the bodies' mechanical energy (J) leaves the finite or
-    exceeds (1 + ENERGY_GROWTH_LIMIT) x the input ``initial_energy`` (J)."""
+    """SimulationDiverged, its message naming ``backend`` and the step ``dt`` (s), when the
+    bodies' ``mechanical`` energy (J) leaves the finite or exceeds (1 +
+    ENERGY_GROWTH_LIMIT) x the input ``initial_energy`` (J)."""
     mech = np.asarray(mechanical)
     if not np.all(np.isfinite(mech)) or np.max(mech) > (1.0 + ENERGY_GROWTH_LIMIT) * (
             initial_energy):
@@ -173,10 +178,12 @@ def check_energy(backend: str, mechanical: np.ndarray, initial_energy: float, dt
 def engine_result(backend: str, record, *, scenario: Scenario, model: TwoBodyModel,
                   t_end: float, collision_duration: float, detection_duration: float,
                   initial_energy: float, model_fields: dict, extra: dict | None = None):
-    """The SimulationResult of an engine's ImpactRecord (t = 0 at the touch): the crown from
-    the static shape of eq 5 unless the record has the chain's own, the metrics of
-    :func:`analytic.records.model_metrics` on ``detection_duration`` (s), the model dict
-    (two-body model + ``model_fields``), the scenario as run (its e and t_end)."""
+    """The SimulationResult of ``backend`` from its ImpactRecord ``record`` (t = 0 at the
+    touch): the crown from the static shape of eq 5 unless the record has the chain's own,
+    the metrics of :func:`analytic.records.model_metrics` on ``detection_duration`` (s) and
+    the ``initial_energy`` (J), the model dict (two-body ``model`` + ``model_fields``), the
+    ``scenario`` as run (its e and ``t_end``, s); ``collision_duration`` (s) the result's
+    free-collision time and ``extra`` added to its diagnostics."""
     if record.crown is None:
         record = with_static_shape_crown(record, scenario.trunk)
     metrics = model_metrics(record, model, scenario.impactor,
@@ -192,16 +199,17 @@ def engine_result(backend: str, record, *, scenario: Scenario, model: TwoBodyMod
 
 
 def with_crown(record, crown: np.ndarray, crown_velocity: np.ndarray):
-    """``record`` with the chain top's motion (m, m/s)."""
+    """``record`` with the chain top's motion: ``crown`` (m) and ``crown_velocity`` (m/s)."""
     return replace(record, crown=crown, crown_velocity=crown_velocity)
 
 
 def chain_modes(scenario: Scenario, mass_matrix: np.ndarray, hinge_stiffness: np.ndarray,
                 impact_jacobian: np.ndarray, n_modes) -> dict:
-    """An engine chain's modes from its mass matrix M (kg m^2), hinge stiffnesses k_j
-    (N m/rad) and the impact point's Jacobian J = dx(a)/dtheta (m/rad): static stiffness
-    K_a = 1 / (J K^-1 J^T) (N/m), omega^2 = eig(K, M) (rad/s); ``beam``: the continuous
-    beam (:func:`analytic.continuum.modes.beam_reference`)."""
+    """An engine chain's modes from its ``mass_matrix`` M (kg m^2), ``hinge_stiffness`` k_j
+    (N m/rad) and the impact point's ``impact_jacobian`` J = dx(a)/dtheta (m/rad): static
+    stiffness K_a = 1 / (J K^-1 J^T) (N/m), the lowest ``n_modes`` omega^2 = eig(K, M)
+    (rad/s); ``beam``: the continuous beam of ``scenario``
+    (:func:`analytic.continuum.modes.beam_reference`)."""
     import scipy.linalg
 
     kd = np.asarray(hinge_stiffness, dtype=float)
@@ -217,8 +225,8 @@ def chain_modes(scenario: Scenario, mass_matrix: np.ndarray, hinge_stiffness: np
 
 
 def step_means(p: np.ndarray, on: np.ndarray) -> np.ndarray:
-    """Mean of a sampled power over each step n (samples n, n+1), n = 0 .. N-2, for an
-    integrator whose stage forces are not recorded (RK4's damping work).
+    """Mean of a sampled power ``p`` (W) over each step n (samples n, n+1), n = 0 .. N-2,
+    for an integrator whose stage forces are not recorded (RK4's damping work).
 
     Inside a run of samples with the same contact state ``on`` (the power is smooth there)
     the cubic through four samples of the run is integrated: (-1, 13, 13, -1) / 24 centred,

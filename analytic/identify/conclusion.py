@@ -52,5 +52,6 @@ def conclude(explained: bool, diagnoses) -> Conclusion:
 
 
 def not_fitted(diagnosis: Diagnosis) -> Conclusion:
-    """The conclusion of a record not fitted (its numbers look like another unit)."""
+    """The conclusion of a record not fitted (its numbers look like another unit), for the
+    reason its ``diagnosis`` gives."""
     return Conclusion(False, reason=diagnosis.kind, fitted=False)

@@ -71,14 +71,26 @@ class Diagnosis:
     message: str
 
     def to_json(self) -> dict:
+        """``{"kind": kind's value, "message": message}``."""
         return {"kind": self.kind.value, "message": self.message}
 
 
 def optimiser_trouble(p, lower_t0: float, upper_t0: float, dt: float, status: int,
                       noise_limited: bool) -> Diagnosis | None:
     """M_T, K_T or t0 at the end of the fit's range, the trunk's damping ratio at its top, or
-    no convergence in
-    REFINE_NFEV evaluations while the residual is not the noise."""
+    no convergence in REFINE_NFEV evaluations while the residual is not the noise.
+
+    Args:
+        p: the fitted parameters (:class:`fit_parameters.Slot` order).
+        lower_t0: the earliest contact time the fit allows, s (the fit's clock).
+        upper_t0: the latest, s.
+        dt: the record's sample interval, s (t0 within one of a bound is at it).
+        status: least_squares' status (0: the evaluations ran out).
+        noise_limited: whether the residual is the noise.
+
+    Returns:
+        The OPTIMISER diagnosis, or None.
+    """
     at_bound = [name for name, slot, lim in (("M_T", Slot.LN_M_T, M_RANGE),
                                              ("K_T", Slot.LN_K_T, K_RANGE))
                 if min(abs(p[slot] - math.log(lim[0])), abs(p[slot] - math.log(lim[1])))
@@ -95,9 +107,10 @@ def optimiser_trouble(p, lower_t0: float, upper_t0: float, dt: float, status: in
 
 
 def swing_back(p, test: PendulumTest) -> float:
-    """The time (the fit's clock) of the fitted motion's first minimum after its largest
-    displacement: the swing back a record must reach to fix the damping (inf if none
-    within four periods of the slower of the trunk's own and the joint motion)."""
+    """The time (s, the fit's clock) of the first minimum after the largest displacement of
+    the motion fitted as ``p`` (:class:`fit_parameters.Slot` order) with the pendulum of
+    ``test``: the swing back a record must reach to fix the damping (inf if none within
+    four periods of the slower of the trunk's own and the joint motion)."""
     M, K = math.exp(p[Slot.LN_M_T]), math.exp(p[Slot.LN_K_T])
     w = min(math.sqrt(K / M), math.sqrt((K + test.impactor_stiffness)
                                         / (M + test.impactor_mass)))
@@ -111,8 +124,10 @@ def swing_back(p, test: PendulumTest) -> float:
 
 
 def truncation(p, test: PendulumTest, t_end: float, damping_interval) -> Diagnosis | None:
-    """A record ending (``t_end``, the fit's clock) before the fitted motion's first swing
-    back that leaves the trunk's damping ratio's interval wider than TRUNCATED_XI_SPAN."""
+    """A record ending (``t_end``, s, the fit's clock) before the first swing back
+    (:func:`swing_back` of ``p`` and ``test``) that leaves the trunk's damping ratio's
+    ``damping_interval`` (low, high) wider than TRUNCATED_XI_SPAN: the TRUNCATED diagnosis,
+    or None."""
     t_back = swing_back(p, test)
     xi_lo, xi_hi = damping_interval
     if not (t_end < t_back and not xi_hi <= TRUNCATED_XI_SPAN * xi_lo):
@@ -128,7 +143,18 @@ def residual_diagnosis(p, test: PendulumTest, judged: NoiseJudgement, resid_afte
                        dt: float) -> Diagnosis | None:
     """Why a residual that is not the noise is not: the pendulum's channel, a mode of its
     own (:data:`PEAK_STRENGTH` over the white floor, :data:`PEAK_SEPARATION` from the fit's
-    modes) or a misfit; None when both channels are at their noise."""
+    modes) or a misfit; None when both channels are at their noise.
+
+    Args:
+        p: the fitted parameters (:class:`fit_parameters.Slot` order).
+        test: the pendulum test (its mass and spring set the joint mode).
+        judged: the residual against the noise (:class:`noise.NoiseJudgement`).
+        resid_after: the trunk channel's residual after the contact, m.
+        dt: its sample interval, s.
+
+    Returns:
+        A MISFIT or SECOND_MODE diagnosis, or None.
+    """
     if judged.limited and judged.y_limited:
         return None
     if judged.limited:
@@ -153,8 +179,9 @@ def residual_diagnosis(p, test: PendulumTest, judged: NoiseJudgement, resid_afte
 def drift(p, cov, t: np.ndarray, t_record: np.ndarray, noise: float,
           span: float) -> Diagnosis | None:
     """The fitted drift at its largest over the record (from its value at the contact; t
-    the fit's clock, ``t_record`` the record's): a misfit beyond DRIFT_MAX of the peak
-    ``span``, a sensor's drift beyond the noise and 4 of its standard errors."""
+    the fit's clock, ``t_record`` the record's, s): a misfit beyond DRIFT_MAX of the peak
+    ``span`` (m), a sensor's drift beyond the ``noise`` (m) and 4 of its standard errors
+    (from ``cov``, the fit's covariance in slot order, of the parameters ``p``)."""
     s_all = t - p[Slot.T0]
     curve = drift_at(p, s_all)
     k = int(np.argmax(np.abs(curve)))
@@ -182,15 +209,17 @@ _SOURCES = {NoiseSource.REST: "of the samples before the contact",
 
 
 def noise_limited(rms: float, judged: NoiseJudgement) -> Diagnosis:
-    """The residual of an explained record, the noise and where it came from."""
+    """The residual ``rms`` (m) of an explained record, the noise and where it came from
+    (``judged``): the NOISE_LIMITED diagnosis."""
     return Diagnosis(DiagnosisKind.NOISE_LIMITED, (
         f"residual {rms:.3g} m = {judged.ratio:.2f} x the noise {judged.noise:.3g} m ("
         f"{_SOURCES[judged.source]})"))
 
 
 def no_impact(test: ImpactTest, drift_degree: int) -> Diagnosis | None:
-    """A record whose fitted impact does not stand above its noise (``test``): the fit's
-    values are the noise's, not a tree's."""
+    """A record whose fitted impact does not stand above its noise (``test``, against the
+    null of an offset with a drift of ``drift_degree`` 0, 1 or 2): the fit's values are the
+    noise's, not a tree's; None when the impact is significant."""
     if test.significant:
         return None
     null = ("an offset", "an offset and a drift", "an offset and a bent drift")[drift_degree]

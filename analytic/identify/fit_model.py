@@ -21,8 +21,8 @@ MAX_EVENTS = 20_000
 
 
 def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
-    """The two-body model (SI) at p: M_T = e^ln_m_t, K_T = e^ln_k_t, C_T = 2 zeta sqrt(K_T
-    M_T) with zeta the trunk's damping ratio."""
+    """The two-body model (SI) at p with the pendulum of ``test``: M_T = e^ln_m_t, K_T =
+    e^ln_k_t, C_T = 2 zeta sqrt(K_T M_T) with zeta the trunk's damping ratio."""
     M, K = math.exp(float(p[Slot.LN_M_T])), math.exp(float(p[Slot.LN_K_T]))
     ratio, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])
     return TwoBodyModel(dynamic_mass=M, damping=2.0 * ratio * math.sqrt(K * M), stiffness=K,
@@ -32,18 +32,21 @@ def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
 
 
 def drift_at(p, s):
-    """The sensor's drift (m) s seconds after the contact: x_drift s + x_drift2 s^2."""
+    """The sensor's drift (m) s seconds after the contact: x_drift s + x_drift2 s^2 of the
+    parameters ``p`` (:class:`fit_parameters.Slot` order)."""
     q = padded(p)
     return (float(q[Slot.X_DRIFT]) + float(q[Slot.X_DRIFT2]) * s) * s
 
 
 def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
-    """x(t) (m) of the exact model with parameters p (:class:`fit_parameters.Slot` order)."""
+    """x(t) (m) of the exact model with parameters p (:class:`fit_parameters.Slot` order)
+    and the pendulum of ``test``."""
     return model_motion(p, test, t)[0]
 
 
 def model_motion(p, test: PendulumTest, t: np.ndarray, *, pendulum: bool = False) -> tuple:
-    """(x, v) (m, m/s) of the exact model at the sorted times t: :func:`model_x` and the
+    """(x, v) (m, m/s) of the exact model with parameters ``p`` (:class:`fit_parameters.Slot`
+    order) and the pendulum of ``test`` at the sorted times t (s): :func:`model_x` and the
     trunk's velocity (without the drift's: -dx/dt0 is v and the drift's rate, the fit's
     exact Jacobian column for t0); with ``pendulum`` also the pendulum's (y, v_y) in the
     same frame (y = x at contact, y = 0 at the first one): before it, the free swing at u_1

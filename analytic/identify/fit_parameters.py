@@ -58,6 +58,7 @@ class Parameter:
 
     @property
     def name(self) -> str:
+        """The parameter's name (its slot's label)."""
         return self.slot.label
 
 
@@ -89,12 +90,15 @@ class ParameterSet:
         return np.array([p.low for p in free]), np.array([p.high for p in free])
 
     def scales(self) -> np.ndarray:
+        """The optimiser's typical steps of the free parameters (least_squares' x_scale)."""
         return np.array([self.parameters[s].scale for s in self.free])
 
     def freeze(self, *slots: Slot) -> ParameterSet:
+        """The set with the parameters of ``slots`` held at their values."""
         return self._with(slots, frozen=True)
 
     def thaw(self, *slots: Slot) -> ParameterSet:
+        """The set with the parameters of ``slots`` free."""
         return self._with(slots, frozen=False)
 
     def at(self, p) -> ParameterSet:
@@ -124,7 +128,8 @@ def record_parameters(t: np.ndarray, dt: float, scale: list, *, restitution_give
     """The fit's parameters for a record at times t (s; median interval ``dt``) whose
     channels' peaks are ``scale`` (m: x, then y): the bounds (M_RANGE, K_RANGE, XI_RANGE,
     E_MAX; the contact within the record, up to 10 samples before it), the optimiser's
-    scales and what is held: e when given, the pendulum's offset without a y, the trunk
+    scales and what is held: e when given (``restitution_given``), the pendulum's offset
+    without a y (``pendulum`` False), the trunk
     sensor's offset and drift (at zero) unless ``separable`` (the record can tell them from
     the motion), the drift's bend until the record calls for it (fit_record). Values 0 (set
     from a start)."""

@@ -30,9 +30,10 @@ POLISH_NFEV = 4  # then evaluations on all the samples (a Gauss-Newton step or t
 
 
 class Problem:
-    """Residuals of a record, (x_model - x) / scale[0] and, if it has y, (y_model - y) /
-    scale[1], and their Jacobian in the free parameters of ``params`` (the frozen ones held
-    at their values in ``p0``)."""
+    """Residuals of a record (times ``t`` s, trunk channel ``x`` m, pendulum channel ``y``
+    m or None) of the pendulum ``test``, (x_model - x) / scale[0] and, if it has y,
+    (y_model - y) / scale[1], and their Jacobian in the free parameters of ``params`` (the
+    frozen ones held at their values in ``p0``)."""
 
     def __init__(self, t, x, y, test: PendulumTest, scale, params: ParameterSet, p0):
         self.t, self.test = t, test
@@ -48,6 +49,7 @@ class Problem:
         self.runs = 0
 
     def full(self, q) -> np.ndarray:
+        """The full parameter vector p (slot order): the free values ``q``, the rest held."""
         p = self.fixed.copy()
         p[list(self.free)] = q
         return p
@@ -60,6 +62,8 @@ class Problem:
         return np.concatenate([m[0], m[2]]) if self.pendulum else m[0]
 
     def residual(self, q) -> np.ndarray:
+        """The scaled residuals (1) at the free values ``q``; 1e3 each where the solver
+        refuses the model (far off)."""
         p = self.full(q)
         self._last.clear()
         try:
@@ -70,7 +74,9 @@ class Problem:
         return (self._channels(m) - self.data) * self.weight
 
     def jacobian(self, q) -> np.ndarray:
-        """Forward differences in the tree's parameters (relative step DIFF_STEP, turned back
+        """d residual / d q at the free values ``q``.
+
+        Forward differences in the tree's parameters (relative step DIFF_STEP, turned back
         at an upper bound); exact columns for t0 (minus the velocities and the drift: the
         record shifts with the contact), the offsets (1 on their channel) and the drift
         terms ((t - t0)^power on x)."""
@@ -121,7 +127,9 @@ class Problem:
         return self.covariances(p, floor)[1 if given_e else 0]
 
     def covariances(self, p, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """(:meth:`covariance`, the same given e) from one Jacobian."""
+        """(the covariance of the parameters ``p``, the same given e) from one Jacobian, in
+        slot order (0 for held ones), each channel's residual variance at least ``floor``
+        (m) squared."""
         key = (p.tobytes(), floor)
         if getattr(self, "_cov_key", None) == key:
             return self._cov
@@ -150,6 +158,9 @@ class Problem:
 
 @dataclass
 class Fit:
+    """One local fit: the parameters ``p`` (slot order), its cost, least_squares' ``status``
+    and the :class:`Problem` it solved."""
+
     p: np.ndarray
     cost: float  # the least-squares cost, 1/2 sum of the scaled residuals squared
     status: int
@@ -158,7 +169,9 @@ class Fit:
 
 class Fitter:
     """One record's fits: its parameters (bounds, scales, what is held) and channel scales,
-    and a local fit from a start."""
+    and a local fit from a start. The record: times ``t`` (s), the trunk channel ``x`` (m),
+    the pendulum's ``y`` (m, or None), of the pendulum ``test``; ``restitution_given``: e
+    held; ``separable``: the sensor's offset and drift fitted (:func:`record_parameters`)."""
 
     def __init__(self, t, x, y, test, restitution_given: bool, separable: bool = True):
         self.t, self.x, self.y, self.test = t, x, y, test
@@ -178,8 +191,9 @@ class Fitter:
                              and s != Slot.X_DRIFT2]
 
     def refine(self, p0, keep, params: ParameterSet | None = None) -> Fit:
-        """The fit with all free from p0 on the kept samples: on every k-th of them (at
-        most REFINE_SAMPLES), then a few steps on all of them if that left some out."""
+        """The fit with all free from p0 on the samples ``keep`` selects: on every k-th of
+        them (at most REFINE_SAMPLES), then a few steps on all of them if that left some
+        out; ``params`` as in :meth:`fit`."""
         stride = max(1, int(math.ceil(np.count_nonzero(keep) / REFINE_SAMPLES)))
         f = self.fit(p0, keep=keep, stride=stride, params=params)
         return f if stride == 1 else self.fit(f.p, keep=keep, max_nfev=POLISH_NFEV,
@@ -188,7 +202,8 @@ class Fitter:
     def fit(self, p0, *, keep=None, stride: int = 1, params: ParameterSet | None = None,
             loss="linear", f_scale=1.0, max_nfev=REFINE_NFEV) -> Fit:
         """A local least-squares fit from p0 of ``params``' free parameters (default the
-        record's) on the kept samples, every ``stride``-th."""
+        record's) on the samples ``keep`` selects (None: all), every ``stride``-th, with
+        least_squares' ``loss``, ``f_scale`` and ``max_nfev``."""
         from scipy.optimize import least_squares
 
         params = self.params if params is None else params

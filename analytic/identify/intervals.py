@@ -44,8 +44,9 @@ NUISANCE = {"t0": Slot.T0, "x_offset": Slot.X_OFFSET, "x_drift": Slot.X_DRIFT,
 
 
 def estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[dict, dict]:
-    """Values (SI) and 95 % intervals of every reported quantity at p with covariance cov,
-    by the delta method in a variable spanning the physical range: logarithms for the
+    """Values (SI) and 95 % intervals of every reported quantity at p with covariance cov
+    (slot order) for the pendulum of ``test``, by the delta method in a variable spanning
+    the physical range: logarithms for the
     positive ones (M_T, K_T, C_T, the damping ratios, E, omega_1, V_1), asin(sqrt(e)) in
     [0, pi/2] for e; the pendulum sensor's offset too if ``pendulum``. The two damping ratios
     are :data:`DAMPING_RATIOS`."""
@@ -91,7 +92,7 @@ def estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[di
 
 
 def log_interval(value: float, half_width: float) -> tuple[float, float]:
-    """(value e^-w, value e^w) for a parameter fitted in logarithm with half-width w: a w
+    """(value e^-w, value e^w) for a parameter fitted in logarithm with ``half_width`` w: a w
     beyond float range (a direction the record does not determine) gives (0, inf) as
     such, not an overflow; NaN stays NaN."""
     w = float(half_width)
@@ -101,7 +102,7 @@ def log_interval(value: float, half_width: float) -> tuple[float, float]:
 
 
 def restitution_interval(e: float, half_width: float) -> tuple[float, float]:
-    """The interval of e with half-width w (in e) mapped through phi = asin(sqrt(e)), whose
+    """The interval of e with ``half_width`` w (in e) mapped through phi = asin(sqrt(e)), whose
     range [0, pi/2] is e's [0, 1]: phi +- w dphi/de, clipped to that range, mapped back. At
     e = 0 or 1 (dphi/de infinite) it reaches the far end of the range; NaN stays NaN."""
     w = float(half_width)
@@ -131,9 +132,11 @@ def widened_over_profile(best: Fit, profile: RestitutionProfile, intervals: dict
                          test: PendulumTest, floor: float, threshold: float, *,
                          pendulum: bool) -> dict:
     """``intervals`` widened over the restitutions the record cannot rule out: each point of
-    e's profile within ``threshold``, with the others' uncertainty at that e; e's own from
-    the Jacobian where the cost is quadratic in it (e off its bounds, its interval under
-    0.2 wide), hulled with the profile's range, else the profile's range alone."""
+    e's ``profile`` within ``threshold`` of the ``best`` fit, with the others' uncertainty at
+    that e (the covariance given e, residual variance at least ``floor`` m squared, of the
+    pendulum ``test``; its sensor offset too if ``pendulum``); e's own from the Jacobian
+    where the cost is quadratic in it (e off its bounds, its interval under 0.2 wide),
+    hulled with the profile's range, else the profile's range alone."""
     p, out = best.p, dict(intervals)
     given = best.problem.covariance(p, floor, given_e=True)
     e_lo, e_hi = out["restitution"]
@@ -155,8 +158,10 @@ def ridge_estimates(ridge: Ridge, fitter: Fitter, keep, test: PendulumTest, floo
                     values: dict, intervals: dict) -> tuple[dict, dict, dict, str]:
     """Values and ranges of a one-impact record: the fixed quantities as fitted, M_T, K_T,
     C_T, E and e not fixed: ranges from the 95 % low at the profile's lowest acceptable e
-    to the 95 % high at e = 1 on the ridge (the Jacobian in the other parameters at both
-    ends), and over the profile's points between. Returns (values, intervals, determined,
+    to the 95 % high at e = 1 on the ``ridge`` (the Jacobian in the other parameters at both
+    ends, on the samples ``keep`` selects of ``fitter``'s record, residual variance at least
+    ``floor`` m squared, of the pendulum ``test``), and over the profile's points between.
+    ``values`` and ``intervals``: the fit's. Returns (values, intervals, determined,
     note)."""
     at_e: ParameterSet = fitter.params.freeze(Slot.RESTITUTION)
     tk, xk = fitter.t[keep], fitter.x[keep]

@@ -47,9 +47,10 @@ class NoiseJudgement:
 
 
 def rest_noise(t: np.ndarray, x: np.ndarray, t_contact: float) -> tuple[float, int]:
-    """(sigma, n): the noise of the n samples recorded before the contact (two sample
-    intervals of margin), about a straight line through them (a drift is not noise), robust
-    to a wild sample; NaN when n < MIN_REST_SAMPLES."""
+    """(sigma m, n): the noise of the n samples of ``x`` (m, at times ``t``, s) recorded
+    before the contact at ``t_contact`` (s; two sample intervals of margin), about a
+    straight line through them (a drift is not noise), robust to a wild sample; NaN when
+    n < MIN_REST_SAMPLES."""
     dt = float(np.median(np.diff(t)))
     sel = t < t_contact - 2.0 * dt
     n = int(np.count_nonzero(sel))
@@ -64,7 +65,8 @@ def rest_noise(t: np.ndarray, x: np.ndarray, t_contact: float) -> tuple[float, i
 
 
 def difference_noise(x: np.ndarray) -> float:
-    """The noise (standard deviation, m) of a record from its second differences, robustly
+    """The noise (standard deviation, m) of a record ``x`` (m) from its second differences,
+    robustly
     (their median absolute deviation; x_{i+1} - 2 x_i + x_{i-1} of white noise has variance
     6 sigma^2, of a motion sampled at omega dt << 1 only (omega dt)^2 of its amplitude, and
     an impact's kink moves a few of them): independent of any fit. An over-estimate where
@@ -75,8 +77,9 @@ def difference_noise(x: np.ndarray) -> float:
 
 def independent_noise(t: np.ndarray, x: np.ndarray, t_contact: float
                       ) -> tuple[float, NoiseSource]:
-    """The record's noise (m) estimated apart from any fit: of the samples before the
-    contact when there are MIN_REST_SAMPLES of them, else of its second differences."""
+    """The noise (m) of the record ``x`` (m, at times ``t``, s) estimated apart from any fit,
+    and its source: of the samples before the contact at ``t_contact`` (s) when there are
+    MIN_REST_SAMPLES of them, else of its second differences."""
     sigma, _ = rest_noise(t, x, t_contact)
     if np.isfinite(sigma):
         return sigma, NoiseSource.REST
@@ -102,6 +105,7 @@ class ImpactTest:
 
     @property
     def significant(self) -> bool:
+        """Whether the impact stands above the noise (statistic > threshold)."""
         return self.statistic > self.threshold
 
 
@@ -112,7 +116,7 @@ def impact_test(t: np.ndarray, x: np.ndarray, resid: np.ndarray, noise: float,
     drift, no impact) leave RSS_0; the fit leaves ``resid``. (RSS_0 - RSS) / noise^2 is
     chi-square with ``parameters`` degrees of freedom (the impact's: M_T, K_T, the damping,
     e, t0) on noise alone, its threshold at NO_IMPACT_ALPHA / n (the contact's time searched
-    over the n samples)."""
+    over the n samples). ``noise`` (m) and its ``source`` are carried into the result."""
     from scipy.stats import chi2  # (imported here: the module loads without scipy.stats)
 
     s = (t - t[0]) / max(float(t[-1] - t[0]), 1e-300)
@@ -126,7 +130,8 @@ def impact_test(t: np.ndarray, x: np.ndarray, resid: np.ndarray, noise: float,
 
 
 def periodogram(r: np.ndarray, dt: float, pad: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """(omega rad/s, P): |FFT|^2 / n of r less its mean, bins 1 to N/2 - 1 of its FFT
+    """(omega rad/s, P): |FFT|^2 / n of r (sampled every ``dt`` s) less its mean, bins 1 to
+    N/2 - 1 of its FFT
     zero-padded to N = ``pad`` x n (for white noise of variance s^2 each P is exponential
     with mean s^2; padding interpolates between the independent bins)."""
     r = np.asarray(r, float) - float(np.mean(r))
@@ -138,7 +143,8 @@ def periodogram(r: np.ndarray, dt: float, pad: int = 1) -> tuple[np.ndarray, np.
 
 
 def spectrum_floor(r: np.ndarray, dt: float) -> float:
-    """The white-noise level (standard deviation) of r from the median of its periodogram
+    """The white-noise level (standard deviation, r's unit) of r sampled every ``dt`` (s)
+    from the median of its periodogram
     (median of an exponential = ln 2 x its mean): a misfit confined to a few frequencies
     does not raise it."""
     _, p = periodogram(r, dt)
@@ -146,7 +152,8 @@ def spectrum_floor(r: np.ndarray, dt: float) -> float:
 
 
 def dominant_frequency(r: np.ndarray, dt: float) -> tuple[float, float]:
-    """(omega rad/s, strength): the frequency of the largest peak of r's periodogram
+    """(omega rad/s, strength): the frequency of the largest peak of the periodogram of r
+    (sampled every ``dt`` s)
     (smoothed over 3 independent bins: a decaying mode is a few bins wide; located on the
     8 x zero-padded spectrum) and its height over the white floor (about 1 for noise,
     ln(n) at most by chance)."""
@@ -162,7 +169,8 @@ def dominant_frequency(r: np.ndarray, dt: float) -> tuple[float, float]:
 
 def judge(resid: np.ndarray, dt: float, rest: tuple[float, int], floor: float,
           resid_y: np.ndarray | None = None, floor_y: float = 0.0) -> NoiseJudgement:
-    """The residual ``resid`` (m, the fitted samples) against the noise: the rest's (sigma,
+    """The residual ``resid`` (m, the fitted samples, every ``dt`` s) against the noise: the
+    rest's (sigma,
     n) (:func:`rest_noise`) when it has one, else the residual's white floor, never below
     ``floor``; the noise when its RMS is within 4 standard errors of the two estimates
     (relative: 1 / (2 n) each; a false alarm once in 3e4 records) or below ``floor``. The

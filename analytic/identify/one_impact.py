@@ -21,15 +21,16 @@ RIDGE = ("M_T", "K_T", "C_T", "restitution", "E")
 
 
 def one_impact(p, test: PendulumTest, span: float) -> bool:
-    """True when the model at p has one impact and no moving together within ``span`` s."""
+    """True when the model at p with the pendulum of ``test`` has one impact and no moving
+    together within ``span`` s."""
     sol = solve_impacts(two_body_at(p, test), span)
     return len(sol.impacts) == 1 and not sol.together_starts
 
 
 def on_ridge(p, e: float, test: PendulumTest) -> np.ndarray:
     """The parameters with restitution e and the same omega_1, trunk damping ratio and V_1
-    as p: the same record while the pendulum does not return (M_T + m = m (1 + e) u_1 / V_1);
-    NaN where that needs M_T <= 0."""
+    as p (the pendulum's m and u_1 from ``test``): the same record while the pendulum does
+    not return (M_T + m = m (1 + e) u_1 / V_1); NaN where that needs M_T <= 0."""
     M, m = math.exp(p[Slot.LN_M_T]), test.impactor_mass
     M_e = (M + m) * (1.0 + e) / (1.0 + float(p[Slot.RESTITUTION])) - m
     out = np.array(p, float)

@@ -88,8 +88,8 @@ MAX_SAMPLES = 1_000_000
 MAX_RECORD_BYTES = 64_000_000
 
 def parse_column(text: str) -> tuple[str, str | None]:
-    """('t' | 'x' | 'y' | the name as given, unit or None) of a header cell such as
-    ``t [ms]``, ``x (mm)``, ``time/s`` or ``Displacement [µm]``."""
+    """('t' | 'x' | 'y' | the name as given, unit or None) of a header cell's ``text`` such
+    as ``t [ms]``, ``x (mm)``, ``time/s`` or ``Displacement [µm]``."""
     cell = text.strip().strip('"').strip()
     m = re.fullmatch(r"(.*?)\s*(?:\[([^\]]*)\]|\(([^)]*)\)|/\s*([A-Za-zµμ]+))", cell)
     name, unit = (m.group(1), next(u for u in m.groups()[1:] if u is not None)) if m else (
@@ -108,7 +108,8 @@ def parse_column(text: str) -> tuple[str, str | None]:
 
 def read_record(path, *, time_unit: str | None = None, length_unit: str | None = None
                 ) -> Record:
-    """A :class:`Record` from a CSV file: a header naming the columns ``t`` (or ``time``),
+    """A :class:`Record` from the CSV file at ``path``: a header naming the columns ``t``
+    (or ``time``),
     ``x`` (``trunk``, ``displacement``) and optionally ``y`` (``pendulum``), in any order
     among other columns (ignored, said so), each with an optional unit in brackets (t: s,
     ms, us; x, y: m, cm, mm, um); ``time_unit``/``length_unit`` give the units of columns

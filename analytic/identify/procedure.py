@@ -63,11 +63,13 @@ class PendulumTest:
 
     @property
     def omega2_sq(self) -> float:
+        """omega_2^2 = g / l_e, 1/s^2: the pendulum's own frequency squared (eq 13)."""
         return self.gravity / self.equivalent_length
 
 
 def youngs_modulus(stiffness: float, clamp_height: float, diameter: float) -> float:
-    """E = K_T a^3 / (3 I), Pa, I = pi d^4 / 64 (eq 47; K_T = 3 E I / a^3, eq 8)."""
+    """E = K_T a^3 / (3 I), Pa, I = pi d^4 / 64 (eq 47; K_T = 3 E I / a^3, eq 8), from the
+    ``stiffness`` K_T (N/m), the ``clamp_height`` a (m) and the trunk's ``diameter`` d (m)."""
     return stiffness * clamp_height ** 3 / (3.0 * (math.pi * diameter ** 4 / 64.0))
 
 
@@ -93,6 +95,7 @@ class Identified:
     tau: float  # s, time of x_max from the extrapolated origin
 
     def as_dict(self) -> dict:
+        """Every field, name -> value (SI)."""
         return asdict(self)
 
 
@@ -100,8 +103,9 @@ def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: f
              test: PendulumTest, A_x: float | None = None, A_y: float | None = None,
              reading: str = "paper") -> Identified:
     """Steps 4-6 from the regression coefficients a1 (m/s), a2 (m/s^2) and the record's
-    x_max (m), tau (s), x0 (m), T0 (s). A_x, A_y default to eq 45 as the table uses it,
-    x0 T0 / 2 (the printed (x0 T0)^2 / 2 is dimensionally wrong)."""
+    x_max (m), tau (s), x0 (m), T0 (s), with the pendulum ``test``. A_x, A_y (m s) default
+    to eq 45 as the table uses it, x0 T0 / 2 (the printed (x0 T0)^2 / 2 is dimensionally
+    wrong). ``reading``: of eqs 44 and 46, one of :data:`READINGS` (module docstring)."""
     if reading not in READINGS:
         raise ParameterError(f"reading = {reading!r}: allowed {', '.join(READINGS)}")
     if not (a1 > 0):
@@ -165,6 +169,7 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
     An impact is a slope increase larger than ``jump_fraction`` of the largest slope; the
     bodies move together at the last one within ``search_time`` (s) of the first (or at
     ``t_together`` if given, e.g. from a contact channel as recorded by Pellerin et al.).
+    The polynomial of ``degree`` is fitted over ``window`` (s, at most 10 ms) from there.
     """
     t = np.asarray(t, float)
     x = np.asarray(x, float)
@@ -206,9 +211,10 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
 
 def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "paper",
                          **regress_kw) -> tuple[Identified, Regression]:
-    """The whole procedure on a record. A_x comes from the record (trapezoid from the first
-    impact to the moving-together point); A_y from the pendulum record ``y`` if given,
-    else eq 45 (x0 T0 / 2)."""
+    """The whole procedure on a record x(t) (``x`` m at the times ``t`` s) of the pendulum
+    ``test``, in the ``reading`` of eqs 44 and 46; ``regress_kw`` go to :func:`regress`.
+    A_x comes from the record (trapezoid from the first impact to the moving-together
+    point); A_y from the pendulum record ``y`` if given, else eq 45 (x0 T0 / 2)."""
     t = np.asarray(t, float)
     x = np.asarray(x, float)
     reg = regress(t, x, **regress_kw)
@@ -272,7 +278,7 @@ def truth_of(scenario) -> dict:
 
 
 def identification_errors(ident: Identified, truth: dict) -> dict:
-    """Relative errors (identified - true) / true for M_T, K_T, pair_damping_ratio, E, b,
-    omega_n."""
+    """Relative errors (identified - true) / true of ``ident`` against ``truth``
+    (:func:`truth_of`) for M_T, K_T, pair_damping_ratio, E, b, omega_n."""
     vals = ident.as_dict()
     return {k: (vals[k] - v) / v for k, v in truth.items()}

@@ -43,8 +43,9 @@ class RestitutionProfile:
     and an eighth of the grid's spacing (e's cost has a kink wherever an impact appears,
     and narrow dips between). Its lowest point starts the fit with e free; the points within
     the likelihood-ratio threshold of the optimum are the restitutions the record cannot
-    rule out (a profile likelihood). ``guess(e, trunk_damping_ratio)``: a first guess on
-    e's branch."""
+    rule out (a profile likelihood). ``fitter``: the record's; ``keep``: the samples fitted
+    (a boolean mask); ``guess(e, trunk_damping_ratio)``: a first guess on e's branch;
+    ``first``: the robust stage's fit, one more start."""
 
     def __init__(self, fitter: Fitter, guess, keep, first: Fit):
         self.fitter, self.keep = fitter, keep
@@ -137,20 +138,24 @@ class RestitutionProfile:
 
     def inside(self, best: Fit, threshold: float) -> list:
         """The points (p) of the restitutions the record cannot rule out: the profile's
-        within the threshold and, at each end of that range, the point where the cost
-        crosses it (the neighbours' optima interpolated linearly)."""
+        within ``threshold`` of the lower of its own and the ``best`` fit's cost and, at each
+        end of that range, the point where the cost crosses it (the neighbours' optima
+        interpolated linearly)."""
         level = self._min(best) + threshold
         out = [f.p for f in self.points if f.cost <= level]
         return out + [q for q, _ in self._ends(level) if q is not None]
 
     def reaches_top(self, best: Fit, threshold: float) -> bool:
+        """Whether the profile's top point (e at the grid's top) is within ``threshold`` of
+        the lower of its own and the ``best`` fit's cost."""
         top = self.points[-1]
         return (top.p[Slot.RESTITUTION] >= PROFILE_RESTITUTIONS[-1]
                 and top.cost <= self._min(best) + threshold)
 
     def e_range(self, best: Fit, threshold: float) -> tuple[float, float]:
-        """(low, high): the restitutions within the threshold (the profile's and the free
-        fit's own), to the first point outside it on each side (the crossing lies between:
+        """(low, high): the restitutions within ``threshold`` (the profile's and the free
+        fit's own, ``best``), to the first point outside it on each side (the crossing lies
+        between:
         a range as wide as the profile's spacing there can tell, not narrower; 0 and 1 past
         the ends of the profile)."""
         level = self._min(best) + threshold
@@ -192,8 +197,9 @@ class Ridge:
 
 def find_ridge(fitter: Fitter, profile: RestitutionProfile, best: Fit, keep,
                test: PendulumTest, threshold: float) -> Ridge | None:
-    """The ridge when the profile's top point, within the threshold, is a one-impact model
-    (the pendulum leaves and does not return within the record): M_T and e not fixed
+    """The ridge when the ``profile``'s top point, within ``threshold`` of the ``best`` fit,
+    is a one-impact model with the pendulum of ``test`` (the pendulum leaves and does not
+    return within the samples ``keep`` selects of ``fitter``'s record): M_T and e not fixed
     apart; None when it is not (a flat profile of a record that still fixes M_T)."""
     one = profile.points[-1].p
     if not one_impact(one, test, float(fitter.t[keep][-1] - one[Slot.T0])):

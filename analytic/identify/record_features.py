@@ -42,6 +42,10 @@ class Features:
 
 
 def features(t: np.ndarray, x: np.ndarray) -> Features:
+    """The :class:`Features` of the record ``x`` (m) at times ``t`` (s), read off its
+    median-of-3 copy: the rest (median of the first 2 % of samples, at least 3), the span
+    above it, the contact extrapolated back from the 10 % and 40 % crossings at their
+    slope, the peak's time and the median sample interval."""
     xs = median3(x)
     dt = float(np.median(np.diff(t)))
     rest = float(np.median(xs[: max(3, xs.size // 50)]))
@@ -82,7 +86,8 @@ def _distance(**values) -> float:
 
 def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
                     length_unit: str = "m") -> list[str]:
-    """One line per record whose numbers look like another unit than declared: the peak
+    """One line per record whose numbers look like another unit than declared (its
+    features ``feat``, against the pendulum's impact speed ``u1``, m/s): the peak
     displacement, the time from the contact to the peak, the sample interval or the trunk's
     velocity after the contact (against the pendulum's u_1) implausible (:data:`PLAUSIBLE`),
     and plausible once a column, or both, is read in another unit (a factor 1e2-1e6 each;

@@ -91,10 +91,12 @@ class FitResult:
     runs: int = 0  # runs of the model (the exact solver sampled at the record's times)
 
     def to_json(self) -> dict:
+        """Quantity name -> {value, low, high (its 95 % interval), determined}, SI."""
         return {k: {"value": v, "low": self.intervals[k][0], "high": self.intervals[k][1],
                     "determined": self.determined[k]} for k, v in self.values.items()}
 
     def diagnosis_kinds(self) -> list[DiagnosisKind]:
+        """The kinds of the fit's diagnoses, in order."""
         return [d.kind for d in self.diagnoses]
 
 
@@ -112,8 +114,9 @@ class _Fixed:
 def fit_record(record: Record, test: PendulumTest, *, start=None,
                restitution: float | None = None,
                free_fit: FitResult | None = None) -> FitResult:
-    """The fit of the exact model to the whole record (module docstring), to the pendulum's
-    record y too when it has one; ``restitution`` (known e, e.g. of the pendulum's pad)
+    """The fit of the exact model of the pendulum ``test`` to the whole ``record`` (module
+    docstring), to the pendulum's record y too when it has one; ``restitution`` (known e,
+    e.g. of the pendulum's pad)
     holds e fixed instead of fitting it (``free_fit``: the free fit of this record, if made:
     its point moved to that e along V_1 and omega_1 is one more start). ``start``: a local
     fit from this p alone (no global stage). A record of x alone whose e profile stays

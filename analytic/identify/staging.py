@@ -46,13 +46,14 @@ class Staged:
 
 def first_guess(feat: Features, test: PendulumTest, e: float, y=None, t=None, *,
                 trunk_damping_ratio: float = 0.1) -> np.ndarray:
-    """A start on e's own branch from the record's shape: the contact extrapolated back from
+    """A start on e's own branch from the record's shape (``feat``) with the pendulum of
+    ``test``: the contact extrapolated back from
     the 10 % and 40 % crossings, M_T from the slope V there by momentum (one impact,
     V = m (1 + e) u_1 / (M_T + m), when that M_T e exceeds m: the pendulum rebounds; else
     chattering into moving together, V = m u_1 / (M_T + m)), K_T from the contact-to-peak
-    time as a quarter period of that branch's motion, the trunk's damping ratio as given
-    (0.1); the pendulum sensor's offset
-    (if y is recorded) from the samples before the contact, less the free swing."""
+    time as a quarter period of that branch's motion, the ``trunk_damping_ratio`` as given
+    (0.1); the pendulum sensor's offset (if y, m, is recorded at the times ``t``, s) from
+    the samples before the contact, less the free swing."""
     m, u1, k = test.impactor_mass, test.impact_speed, test.impactor_stiffness
     V = min(max(feat.velocity, 1e-3 * u1), 1.9 * u1)
     M_one = m * ((1.0 + e) * u1 / V - 1.0)
@@ -77,8 +78,9 @@ def first_guess(feat: Features, test: PendulumTest, e: float, y=None, t=None, *,
 
 
 def outliers(r: np.ndarray, floor: float, keep: np.ndarray) -> np.ndarray:
-    """Rows of the isolated wild samples (among ``keep``): further than OUTLIER_Z robust
-    deviations both from the fit and from the median of their neighbours' residuals (a
+    """Rows of the isolated wild samples (among ``keep``) of the residual ``r`` (m): further
+    than OUTLIER_Z robust deviations (at least ``floor``, m) both from the fit and from the
+    median of their neighbours' residuals (a
     misfit is smooth: its neighbours follow it), if they are few (OUTLIER_SHARE of the
     record at most; more: a misfit)."""
     spread = max(robust_sigma(r[keep]), floor)
@@ -89,14 +91,16 @@ def outliers(r: np.ndarray, floor: float, keep: np.ndarray) -> np.ndarray:
 
 
 def on_fit_clock(p, t_shift: float) -> np.ndarray:
-    """p (on the record's clock, possibly short) with every slot, t0 on the fit's clock."""
+    """p (on the record's clock, possibly short) with every slot, t0 on the fit's clock (the
+    record's less ``t_shift``, s)."""
     out = padded(p)
     out[Slot.T0] -= t_shift
     return out
 
 
 def sensor_separable(t: np.ndarray, feat: Features, rest_samples: int) -> bool:
-    """Whether a record can tell its sensor's offset and drift from the motion: it holds a
+    """Whether a record (times ``t``, s; features ``feat``) can tell its sensor's offset and
+    drift from the motion: it holds a
     rest before the contact (``rest_samples``, at least MIN_REST_SAMPLES) or rings down past
     a period after it (four times the contact-to-peak time, a quarter period, as
     :func:`first_guess` reads it). Elsewhere they trade with the motion (a short record's
@@ -108,9 +112,12 @@ def sensor_separable(t: np.ndarray, feat: Features, rest_samples: int) -> bool:
 def stage(fitter: Fitter, feat: Features, test: PendulumTest, *, floor: float,
           sigma_rest: float, restitution: float | None = None, start=None,
           free_point=None) -> Staged:
-    """The three stages on the fitter's record (module docstring); ``start``: p to fit
-    from locally (the fit's clock); ``free_point``: the free fit's optimum of this record
-    (the fit's clock), moved along V_1 and omega_1 to the given e as one more start."""
+    """The three stages on the ``fitter``'s record (module docstring; its features
+    ``feat``, the pendulum ``test``, the residual ``floor`` m, the noise at rest
+    ``sigma_rest`` m); ``restitution``: e held at this value (None: fitted); ``start``: p
+    to fit from locally (the fit's clock); ``free_point``: the free fit's optimum of this
+    record (the fit's clock), moved along V_1 and omega_1 to the given e as one more
+    start."""
     t, x = fitter.t, fitter.x
     first = _robust_fit(fitter, feat, test, floor, sigma_rest, restitution, start)
     keep = np.ones(t.size, bool)

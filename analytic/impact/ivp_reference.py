@@ -22,10 +22,13 @@ def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
                       gamma_tol: float = 1e-7, stop_at_separation: bool = False,
                       atol: tuple[float, float, float, float] = (1e-15, 1e-12, 1e-15, 1e-12)
                       ) -> dict:
-    """Impacts [(t, U, u, V, v)], together start (t, x, V), separations [(t, x, v)].
+    """Impacts [(t, U, u, V, v)], together start (t, x, V), separations [(t, x, v)] of
+    ``model`` integrated to ``t_end`` (s) (SI: s, m, m/s).
 
     rtol, atol: DOP853 tolerances (atol per state component x, x', y, y'; the default
     1e-15 m on positions, not rtol, sets the accuracy of the impact times at rtol <~ 1e-12).
+    ``gamma_tol``: the relative velocity after an impact, in units of u_1, below which the
+    bodies move together; ``stop_at_separation``: end at the first separation.
     """
     M, C, K = model.dynamic_mass, model.damping, model.stiffness
     m, k, e = model.impactor_mass, model.impactor_stiffness, model.restitution

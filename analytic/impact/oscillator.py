@@ -40,12 +40,15 @@ class Oscillator:
 
     @classmethod
     def from_mck(cls, mass: float, damping: float, stiffness: float) -> "Oscillator":
-        """The oscillator of m x'' + c x' + k x = 0; one shared instance per (m, c, k), so
-        that its constants (regime, :attr:`scalar_advance`, ...) are computed once."""
+        """The oscillator of m x'' + c x' + k x = 0 (``mass`` m kg, ``damping`` c N s/m,
+        ``stiffness`` k N/m); one shared instance per (m, c, k), so that its constants
+        (regime, :attr:`scalar_advance`, ...) are computed once."""
         return _from_mck(cls, mass, damping, stiffness)
 
     @cached_property
     def regime(self) -> str:
+        """"under", "over" or "critical" (damped): beta^2 against omega_sq, critical within
+        a relative ``_CRITICAL_TOL`` (and for the billet, beta = omega_sq = 0)."""
         d = self.beta ** 2 - self.omega_sq
         scale = max(self.beta ** 2, self.omega_sq)
         if scale == 0.0 or abs(d) <= _CRITICAL_TOL * scale:
@@ -61,7 +64,9 @@ class Oscillator:
         return math.sqrt(self.omega_sq) if self.omega_sq > 0 else self.beta
 
     def fundamentals(self, t, xp=math):
-        """(phi - 1, psi, phi', psi') at time(s) t >= 0."""
+        """(phi - 1, psi, phi', psi') at time(s) t >= 0 (s): the free responses to a unit
+        displacement and a unit velocity; ``xp``: the math module for a scalar t, numpy for
+        an array."""
         b, w2 = self.beta, self.omega_sq
         reg = self.regime
         if reg == "under":
@@ -91,7 +96,8 @@ class Oscillator:
         return phi_m1, psi, -w2 * psi, dpsi
 
     def advance(self, t, x0, v0, xp=math):
-        """(x(t) - x0, v(t)) from the state (x0, v0) at t = 0."""
+        """(x(t) - x0, v(t)) from the state (x0, v0) at t = 0 (SI); ``xp``: the math module
+        for a scalar t (:attr:`scalar_advance`), numpy for an array."""
         if xp is math:
             return self.scalar_advance(t, x0, v0)
         phi_m1, psi, dphi, dpsi = self.fundamentals(t, xp)
@@ -148,10 +154,12 @@ class Oscillator:
         return adv
 
     def acceleration(self, x, v):
+        """x'' = -2 beta v - omega_sq x at the state (x, v) (m/s^2 for m, m/s)."""
         return -2.0 * self.beta * v - self.omega_sq * x
 
     def derivative_bounds(self, x0: float, v0: float, n_max: int = 5) -> list[float]:
-        """Bounds B_n >= |x^(n)(t)| for all t >= 0, n = 0..n_max, from the modal form.
+        """Bounds B_n >= |x^(n)(t)| for all t >= 0, n = 0 to ``n_max``, of the motion from the
+        state (``x0``, ``v0``) at t = 0 (m, m/s; B_n in m/s^n), from the modal form.
 
         Underdamped: x = R e^{-beta t} cos(w t + phase), and every derivative multiplies the
         complex amplitude by -beta + i w, of modulus Omega: B_n = R Omega^n.

@@ -19,7 +19,8 @@ from .solver import ImpactSolution, Motion, _force_coefficients, solve_impacts
 
 
 def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dict:
-    """The metrics of :data:`analytic.results.METRIC_KEYS` from an exact solution.
+    """The metrics of :data:`analytic.results.METRIC_KEYS` from an exact solution ``sol``
+    (theta_b needs the ``scenario``'s pendulum; NaN without it).
 
     T0, x0, V: start of the first moving-together phase (the accumulation point when the
     chattering tail was closed analytically). If the bodies never move together they are NaN.
@@ -106,7 +107,8 @@ OPTIONS = {"restitution": RESTITUTION, "t_end": T_END,
 
 def simulate(scenario: Scenario, *, restitution: float | None = None, t_end: float | None = None,
              samples: int = 2001) -> SimulationResult:
-    """Solve the scenario's two-body model exactly (eqs 12-35) up to ``t_end`` (s).
+    """Solve the scenario's two-body model exactly (eqs 12-35) up to ``t_end`` (s), with e
+    = ``restitution`` if given (else the scenario's).
 
     Returns a :class:`SimulationResult` (backend "analytic") with the metrics, the model
     (M_T, C_T, K_T, m, k, e, u1) and the trajectory sampled at ``samples`` times.
@@ -123,6 +125,9 @@ def simulate(scenario: Scenario, *, restitution: float | None = None, t_end: flo
 
 def result_from_solution(sol: ImpactSolution, scenario: Scenario | None = None, *,
                          samples: int = 2001, backend: str = "analytic") -> SimulationResult:
+    """The SimulationResult (named ``backend``) of the exact solution ``sol`` of
+    ``scenario`` (or None: a bare model): its metrics (:func:`impact_metrics`), and its
+    trajectory and record at ``samples`` times, computed when first read."""
     scen = scenario.to_dict() if scenario is not None else {}
     if scenario is not None:
         scen["contact"]["restitution"] = sol.model.restitution
@@ -136,14 +141,16 @@ def result_from_solution(sol: ImpactSolution, scenario: Scenario | None = None, 
 
 
 def sampled_trajectory(sol: ImpactSolution, samples: int) -> Trajectory:
-    """The exact motion at ``samples`` equally spaced times from 0 to t_end (s, m, m/s)."""
+    """The exact motion of ``sol`` at ``samples`` equally spaced times from 0 to t_end (s,
+    m, m/s)."""
     t = np.linspace(0.0, sol.t_end, samples)
     x, vx, y, vy = sol.state(t)
     return Trajectory(t=t, x=x, vx=vx, y=y, vy=vy)
 
 
 def sampled_record(sol: ImpactSolution, samples: int, scenario: Scenario | None = None):
-    """The exact solution as an :class:`analytic.results.ImpactRecord` at ``samples`` equally
+    """The exact solution ``sol`` as an :class:`analytic.results.ImpactRecord` at
+    ``samples`` equally
     spaced times (SI). Its force is the contact force while the bodies move together (eq 34,
     the solver's N = cx x + cv v); the impacts are impulses, which no sampled force holds.
     The contact's work is the impact losses so far (eq 55, the closed tails included), its
@@ -172,5 +179,6 @@ def sampled_record(sol: ImpactSolution, samples: int, scenario: Scenario | None 
 
 
 def simulate_model(model: TwoBodyModel, t_end: float, **kw) -> SimulationResult:
-    """Like :func:`simulate` for a bare :class:`TwoBodyModel` (no trunk geometry)."""
+    """Like :func:`simulate` for a bare :class:`TwoBodyModel` ``model`` (no trunk geometry)
+    to ``t_end`` (s); ``kw`` (``samples``, ``backend``) as :func:`result_from_solution`."""
     return result_from_solution(solve_impacts(model, t_end), None, **kw)

@@ -80,9 +80,11 @@ class Phase:
 
 @dataclass(frozen=True)
 class Separation:
-    t: float
-    x: float
-    v: float
+    """The bodies part after moving together (eq 34's contact force reaches zero)."""
+
+    t: float  # s
+    x: float  # m, the common displacement there
+    v: float  # m/s, the common velocity there
 
 
 @dataclass
@@ -286,7 +288,8 @@ class ImpactSolution:
 
 def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool = False,
                   max_events: int | None = None) -> ImpactSolution:
-    """Run the impact process of eqs 12-35 from the first contact to ``t_end`` (s).
+    """Run the impact process of eqs 12-35 of ``model`` from the first contact to ``t_end``
+    (s); ``stop_at_separation``: end at the first separation (t_end moved there).
     ``max_events``: a budget of events (impacts, flights, moving together) past which the
     run is refused with SimulationDiverged (a record fit's model far from any tree: a
     0.01 kg trunk bouncing off the pendulum a million times), instead of the guard's

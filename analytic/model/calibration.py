@@ -64,7 +64,24 @@ def stiffness_from_regression(*, a1: float, a2: float, x_max: float, tau: float,
                               dynamic_mass: float, impactor_mass: float,
                               impactor_stiffness: float) -> float:
     """K_T, N/m: omega_n = a1 / (x_max e^(b tau)) (eqs 38 and 43 with x0 = 0), then
-    K_T = omega_n^2 (M_T + m) - k (eq 46 with omega_1 = omega_n, the moving-together motion)."""
+    K_T = omega_n^2 (M_T + m) - k (eq 46 with omega_1 = omega_n, the moving-together motion).
+
+    Args:
+        a1: the regression's linear coefficient (eq 40), the common velocity V, m/s.
+        a2: its quadratic coefficient, m/s^2 (b = -a2 / a1, eq 42).
+        x_max: the largest displacement, m.
+        tau: the time of x_max from the regression's origin, s.
+        dynamic_mass: M_T, kg.
+        impactor_mass: m, kg.
+        impactor_stiffness: the pendulum's k = m g / l_e, N/m (eq 13).
+
+    Returns:
+        K_T, N/m.
+
+    Raises:
+        ParameterError: an input out of range, an overdamped motion (b >= omega_n) or
+            K_T <= 0.
+    """
     b = damping_rate_from_regression(a1, a2)
     for name, v, unit in (("x_max", x_max, "m"), ("tau", tau, "s")):
         if not (math.isfinite(v) and v > 0):
@@ -125,7 +142,9 @@ def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: flo
 
 
 def calibration_notes(measured: MeasuredTree, *, given: str, chosen: str) -> dict:
-    """The ``[calibration]`` table of a scenario file calibrated by :func:`calibrate_trunk`."""
+    """The ``[calibration]`` table of a scenario file calibrated by :func:`calibrate_trunk`
+    from the ``measured`` tree: what was ``given`` and ``chosen`` (free text), and what was
+    calibrated from which measured value."""
     return {
         "given": given,
         "chosen": chosen,
@@ -138,7 +157,7 @@ def calibration_notes(measured: MeasuredTree, *, given: str, chosen: str) -> dic
 
 
 def with_clamp_mass(trunk: Trunk, clamp_mass: float, *, impactor_mass: float) -> Trunk:
-    """``trunk`` with the clamp mass m_c (kg), recalibrated (crown mass, root spring,
+    """``trunk`` with the ``clamp_mass`` m_c (kg), recalibrated (crown mass, root spring,
     damping; :func:`calibrate_trunk`) so that it reduces to the same M_T, K_T and C_T as
     before (eqs 7, 8, 10): the unmeasured clamp varied on the same measured tree.
     ``impactor_mass`` (kg) fixes b = C_T / (2 (M_T + m))."""

@@ -62,7 +62,7 @@ def _span(option: Option) -> str:
 
 def scenario_option(field: str, help: str) -> Option:
     """An option that overrides the scenario field ``field`` (dotted, a key of LIMITS) for
-    one run, with that field's range and unit."""
+    one run, with that field's range and unit; ``help``: its one-line description."""
     low, high, unit = LIMITS[field]
     return Option(float, help, unit, low, None if math.isinf(high) else high)
 

@@ -67,7 +67,8 @@ DEFAULT_SHEAR_COEFFICIENT = 6.0 * (1.0 + DEFAULT_POISSON) / (7.0 + 6.0 * DEFAULT
 
 
 def check_limit(path: str, value, *, high=None) -> float:
-    """:func:`check_range` against :data:`LIMITS` (``high``: a tighter bound, e.g. a <= l)."""
+    """:func:`check_range` of ``value`` against the :data:`LIMITS` of the dotted field
+    ``path`` (``high``: a tighter bound, e.g. a <= l)."""
     low, top, unit = LIMITS[path]
     if high is not None and high < top:
         top = high
@@ -77,7 +78,24 @@ def check_limit(path: str, value, *, high=None) -> float:
 
 def check_range(path: str, value, *, low=None, high=None, low_open=False, high_open=False,
            unit: str = "", allow_inf: bool = False) -> float:
-    """Return ``value`` as float or raise a one-line :class:`ParameterError`."""
+    """Return ``value`` as float or raise a one-line :class:`ParameterError`.
+
+    Args:
+        path: the name the error gives (a field's dotted path or a flag).
+        value: the number to check (bool and non-numbers are refused).
+        low: the lower bound, or None.
+        high: the upper bound, or None.
+        low_open: the lower bound is excluded.
+        high_open: the upper bound is excluded.
+        unit: the unit the error names, or "".
+        allow_inf: an infinite value is allowed (within the bounds).
+
+    Returns:
+        ``value`` as a float.
+
+    Raises:
+        ParameterError: not a number, NaN, infinite (unless allowed) or out of range.
+    """
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{path}: expected a number{f' in {unit}' if unit else ''}, got {value!r}")
     try:
@@ -99,13 +117,15 @@ def check_range(path: str, value, *, low=None, high=None, low_open=False, high_o
 
 
 def pendulum_stiffness(mass: float, gravity: float, equivalent_length: float) -> float:
-    """k = m g / l_e, N/m: the pendulum as a spring for small swings (Fig 3, eq 13)."""
+    """k = m g / l_e, N/m from the ``mass`` m (kg), ``gravity`` g (m/s^2) and
+    ``equivalent_length`` l_e (m): the pendulum as a spring for small swings (Fig 3, eq 13)."""
     return mass * gravity / equivalent_length
 
 
 def pendulum_impact_speed(gravity: float, equivalent_length: float,
                           release_angle: float) -> float:
-    """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s, theta_r in rad (eq 48)."""
+    """u_1 = 2 sqrt(g l_e) sin(theta_r / 2), m/s (eq 48), from ``gravity`` g (m/s^2),
+    ``equivalent_length`` l_e (m) and ``release_angle`` theta_r (rad)."""
     return 2.0 * math.sqrt(gravity * equivalent_length) * math.sin(release_angle / 2.0)
 
 

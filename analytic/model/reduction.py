@@ -55,7 +55,8 @@ class StaticModeShape:
 
 
 def static_flexibility(trunk: Trunk) -> float:
-    """Deflection at a per unit load at a, m/N: a^3 / (3 E I) + a^2 / k_theta (eq 1)."""
+    """Deflection of ``trunk`` at a per unit load at a, m/N: a^3 / (3 E I) + a^2 / k_theta
+    (eq 1)."""
     a = trunk.clamp_height
     f = a ** 3 / (3.0 * trunk.bending_stiffness)
     if math.isfinite(trunk.base_stiffness):
@@ -74,7 +75,8 @@ def _shape_coefficients(trunk: Trunk) -> tuple[float, ...]:
 
 
 def static_mode_shape(trunk: Trunk) -> StaticModeShape:
-    """The static shape of eq 5 (with the base-spring rotation when k_theta is finite)."""
+    """The static shape of eq 5 of ``trunk`` (with the base-spring rotation when k_theta is
+    finite)."""
     c1, c2, c3, d0, d1 = _shape_coefficients(trunk)
     return StaticModeShape(Polynomial([0.0, c1, c2, c3]), Polynomial([d0, d1]),
                            trunk.clamp_height, trunk.length)
@@ -92,7 +94,8 @@ def _square_integral(trunk: Trunk) -> float:
 
 
 def crown_factor(trunk: Trunk) -> float:
-    """phi(l): crown displacement per unit displacement at a in the static shape of eq 5."""
+    """phi(l) of ``trunk``: crown displacement per unit displacement at a in the static shape
+    of eq 5."""
     _, _, _, d0, d1 = _shape_coefficients(trunk)
     return d0 + d1 * trunk.length
 
@@ -117,7 +120,8 @@ class TreeSDOF:
 
 
 def reduce_trunk(trunk: Trunk) -> TreeSDOF:
-    """M_T, C_T and K_T of eqs 7, 10 and 8 from the Lagrangian with the static shape.
+    """M_T, C_T and K_T of eqs 7, 10 and 8 of ``trunk`` from the Lagrangian with the static
+    shape.
 
     Follows the derivation, not the printed eq 10: the printed C_T carries an extra factor
     1/2 (see ``analytic.paper.reproduction.DISCREPANCIES``).
@@ -133,18 +137,19 @@ def reduce_trunk(trunk: Trunk) -> TreeSDOF:
 
 
 def printed_dynamic_mass(trunk: Trunk) -> float:
-    """M_T exactly as printed after eq 7 (rigid clamp)."""
+    """M_T (kg) of ``trunk`` exactly as printed after eq 7 (rigid clamp)."""
     a, l = trunk.clamp_height, trunk.length
     return (trunk.trunk_mass * ((3 * l * (l - a) + a ** 2) / (4 * a ** 2) - a / (70 * l))
             + trunk.clamp_mass + trunk.crown_mass * ((3 * l - a) / (2 * a)) ** 2)
 
 
 def printed_damping(trunk: Trunk) -> float:
-    """C_T exactly as printed after eq 10 (rigid clamp), including its factor 1/2."""
+    """C_T (N s/m) of ``trunk`` exactly as printed after eq 10 (rigid clamp), including its
+    factor 1/2."""
     a, l = trunk.clamp_height, trunk.length
     return trunk.damping * l / 2 * ((3 * l * (l - a) + a ** 2) / (4 * a ** 2) - (a / l) / 70)
 
 
 def printed_stiffness(trunk: Trunk) -> float:
-    """K_T = 3 E I / a^3 as printed after eq 8 (rigid clamp)."""
+    """K_T = 3 E I / a^3 (N/m) of ``trunk`` as printed after eq 8 (rigid clamp)."""
     return 3.0 * trunk.bending_stiffness / trunk.clamp_height ** 3

@@ -97,7 +97,8 @@ def _number(table: dict, prefix: str, key: str):
 
 
 def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
-    """Build a validated :class:`Scenario` from the parsed TOML layout."""
+    """Build a validated :class:`Scenario` from ``data``, the parsed TOML layout (its name
+    ``default_name`` when the data names none); ParameterError naming the first bad key."""
     if not isinstance(data, dict):
         raise ParameterError("scenario: expected a table")
     unknown = sorted(set(data) - _TOP_KEYS)

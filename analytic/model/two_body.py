@@ -58,7 +58,8 @@ class TwoBodyModel:
         return self.damping / (2.0 * (self.dynamic_mass + self.impactor_mass))
 
     def kinetic_energy(self, vx, vy):
-        """1/2 M_T x'^2 + 1/2 m y'^2, J (m/s in; floats or arrays)."""
+        """1/2 M_T x'^2 + 1/2 m y'^2, J, at the velocities ``vx`` = x' and ``vy`` = y' (m/s;
+        floats or arrays)."""
         return 0.5 * self.dynamic_mass * vx ** 2 + 0.5 * self.impactor_mass * vy ** 2
 
     def potential_energy(self, x, y):
@@ -66,7 +67,8 @@ class TwoBodyModel:
         return 0.5 * self.stiffness * x ** 2 + 0.5 * self.impactor_stiffness * y ** 2
 
     def pendulum_energy(self, y, vy):
-        """The pendulum's own energy 1/2 m y'^2 + 1/2 k y^2, J (linearised, eq 13)."""
+        """The pendulum's own energy 1/2 m y'^2 + 1/2 k y^2, J (linearised, eq 13), at y (m)
+        and ``vy`` = y' (m/s)."""
         return 0.5 * self.impactor_mass * vy ** 2 + 0.5 * self.impactor_stiffness * y ** 2
 
     def with_restitution(self, e: float) -> "TwoBodyModel":
@@ -84,7 +86,8 @@ class TwoBodyModel:
 
 
 def two_body_model(scenario: Scenario, restitution: float | None = None) -> TwoBodyModel:
-    """Reduce a scenario to the model of Fig 3 (eqs 7-11, 13, 48)."""
+    """Reduce a scenario to the model of Fig 3 (eqs 7-11, 13, 48), with e = ``restitution``
+    if given (else the scenario's)."""
     tree = reduce_trunk(scenario.trunk)
     imp = scenario.impactor
     e = scenario.contact.restitution if restitution is None else restitution

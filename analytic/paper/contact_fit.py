@@ -87,7 +87,8 @@ def measured_targets(tree: TreeTable) -> dict:
 
 
 def printed_resolution(tree: TreeTable) -> dict:
-    """Half the last printed digit of each measured number (SI), what the paper's own
+    """Half the last printed digit of each measured number of Table 1's ``tree`` (SI), what
+    the paper's own
     rounding leaves open: V 1.286 m/s -> 5e-4, T0 4 ms -> 0.5 ms, theta_b 4 deg -> 0.5 deg."""
     digits = {"V": 1e-3, "x0": 1e-4, "T0": 1e-3, "x_max": 1e-6,
               "tau": 1e-3 if tree.name == "open-center" else 1e-5,
@@ -96,7 +97,8 @@ def printed_resolution(tree: TreeTable) -> dict:
 
 
 def peak(t: np.ndarray, x: np.ndarray) -> float:
-    """The largest sample of x, refined by the parabola through it and its neighbours (as
+    """The largest sample of x (m, at the times ``t``, s), refined by the parabola through it
+    and its neighbours (as
     the procedure reads x_max, :func:`~treeimpact.analytic.identify.procedure.regress`)."""
     i = int(np.argmax(x))
     if 0 < i < x.size - 1:
@@ -107,7 +109,8 @@ def peak(t: np.ndarray, x: np.ndarray) -> float:
 
 
 def moving_together(result) -> float:
-    """When the bodies begin to move together (s after the first contact), as the paper's
+    """When the bodies of a model's ``result`` begin to move together (s after the first
+    contact), as the paper's
     contact channel told it (Pellerin et al. recorded whether the pendulum touched the
     tree): the model's own T0 (the exact solver's accumulation point, or the records rule's
     first persistent contact at a common velocity), else the start of its longest contact."""
@@ -123,7 +126,8 @@ def moving_together(result) -> float:
 
 
 def read_like_the_paper(result, scenario: Scenario) -> dict:
-    """The targets read off a model's record as the paper read its measurements: sampled at
+    """The targets read off a model's ``result`` for ``scenario`` as the paper read its
+    measurements: sampled at
     :data:`RECORD_RATE` from rest, the moving-together point from the contact
     (:func:`moving_together`: T0, x0), the procedure's regression over the next 10 ms for V
     and tau (from the extrapolated origin) and x_max (NaN where it cannot run); the rebound
@@ -162,9 +166,11 @@ def _scenario_at(scenario: Scenario, params: dict) -> tuple[Scenario, dict]:
 
 def fit_to_measurements(scenario: Scenario, measured: dict, *, model: str = "beam",
                         resolution: dict | None = None) -> dict:
-    """Least squares on the relative residuals of every target over the model's free
-    parameters (:data:`MODELS`; log10 of the contact duration), from the best point of a
-    coarse grid. Returns {model, parameters: {name: {value, low, high, unit, on_bound}},
+    """Least squares on the relative residuals of every ``measured`` target of ``scenario``
+    over the model's free parameters (:data:`MODELS`; log10 of the contact duration), from
+    the best point of a coarse grid; ``resolution``: each target's reading resolution (SI,
+    :func:`printed_resolution`) within which it counts as explained. Returns {model,
+    parameters: {name: {value, low, high, unit, on_bound}},
     targets: {name: {measured, model, residual, tolerance, explained}}, dof, rms,
     explains, evaluations}."""
     if model not in MODELS:
@@ -226,8 +232,9 @@ def fit_to_measurements(scenario: Scenario, measured: dict, *, model: str = "bea
 
 
 def fit_paper_trees(models=tuple(MODELS)) -> dict:
-    """Per tree of Table 1 (the shipped scenario of the same name): every model fitted to
-    every measured number; which targets some model explains and which none does."""
+    """Per tree of Table 1 (the shipped scenario of the same name): every model of
+    ``models`` (names of :data:`MODELS`) fitted to every measured number; which targets
+    some model explains and which none does."""
     out = {}
     for name, tree in TABLE_1.items():
         scen = load_scenario(name)

@@ -55,6 +55,8 @@ class TreeTable:
 
     @property
     def test(self) -> PendulumTest:
+        """The tree's pendulum test: the paper's pendulum released at its angle, its clamp
+        height and diameter."""
         return PendulumTest(impactor_mass=PENDULUM_MASS, equivalent_length=EQUIVALENT_LENGTH,
                             release_angle=math.radians(self.release_angle_deg),
                             clamp_height=self.clamp_height, diameter=self.diameter,
@@ -79,7 +81,8 @@ QUANTITIES = ("u1", "V", "x0", "T0", "A_x", "M_T", "K_T", "E", "b", "omega_n", "
 
 
 def table_model(tree: TreeTable, restitution: float) -> TwoBodyModel:
-    """The two-body model with Table 1's identified parameters (C_T = 2 b (M_T + m), eq 35)."""
+    """The two-body model with Table 1's identified parameters of ``tree`` (C_T = 2 b (M_T +
+    m), eq 35) and e = ``restitution``."""
     b = -tree.a2 / tree.a1
     k = PENDULUM_MASS * GRAVITY / EQUIVALENT_LENGTH
     return TwoBodyModel(dynamic_mass=tree.M_T, damping=2.0 * b * (tree.M_T + PENDULUM_MASS),
@@ -88,12 +91,15 @@ def table_model(tree: TreeTable, restitution: float) -> TwoBodyModel:
 
 
 def model_metrics(tree: TreeTable, restitution: float, t_end: float = 0.05) -> dict:
+    """The exact solver's metrics of :func:`table_model` (``tree``, ``restitution``) run to
+    ``t_end`` (s)."""
     return impact_metrics(solve_impacts(table_model(tree, restitution), t_end))
 
 
 def estimate_restitution(tree: TreeTable, quantity: str, e_max: float = 0.45) -> dict:
-    """e for which the exact solver with Table 1's parameters reproduces the measured V,
-    x0 or T0. V falls and x0, T0 grow monotonically with e on [0, e_max] (checked)."""
+    """e for which the exact solver with Table 1's parameters of ``tree`` reproduces the
+    measured ``quantity`` V, x0 or T0. V falls and x0, T0 grow monotonically with e on
+    [0, e_max] (checked)."""
     target = getattr(tree, quantity)
 
     def resid(e):
@@ -112,7 +118,7 @@ def _rel(printed, recomputed):
 
 
 def reproduce_tree(tree: TreeTable) -> dict:
-    """Every quantity of Table 1 and the regression, printed vs recomputed."""
+    """Every quantity of Table 1's ``tree`` and the regression, printed vs recomputed."""
     test = tree.test
     ident = identify(a1=tree.a1, a2=tree.a2, x_max=tree.x_max, tau=tree.tau, x0=tree.x0,
                      T0=tree.T0, test=test, reading="paper")
@@ -146,7 +152,8 @@ def reproduce_tree(tree: TreeTable) -> dict:
 
 
 def reproduce(with_restitution_estimates: bool = True) -> dict:
-    """The whole reproduction, in the JSON layout of ``treeimpact paper``."""
+    """The whole reproduction, in the JSON layout of ``treeimpact paper``; the e that
+    reproduces each of V, x0 and T0 too when ``with_restitution_estimates``."""
     trees = {name: reproduce_tree(tree) for name, tree in TABLE_1.items()}
     result = {"trees": trees, "discrepancies": [dict(d) for d in DISCREPANCIES]}
     if with_restitution_estimates:

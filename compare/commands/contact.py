@@ -24,7 +24,7 @@ ENGINE_CHOICES = {"mujoco": ("mujoco",), "bullet": ("bullet",), "both": ("mujoco
 
 
 def add_arguments(sp) -> None:
-    """The command's flags."""
+    """The command's flags, added to its subparser ``sp``."""
     sp.add_argument("--mass", type=number, help="mass of body 1, kg")
     sp.add_argument("--other-mass", type=number, dest="other_mass",
                     help="mass of body 2, kg (default inf: body 2 fixed)")
@@ -48,8 +48,9 @@ def add_arguments(sp) -> None:
 
 
 def run(args) -> int:
-    """Print the settings and the simulated collisions (text or ``--json``); exit code 0
-    when at least one engine holds the step, else 2 with each engine's reason."""
+    """Print the settings and the simulated collisions for the parsed command line ``args``
+    (text or ``--json``); exit code 0 when at least one engine holds the step, else
+    ParameterError (exit 2) with each engine's reason."""
     from treeimpact.compare.contact_settings import contact_settings
 
     engines = ENGINE_CHOICES[args.engine]
@@ -154,8 +155,9 @@ def _collision_rows(res: dict, engines) -> list:
 
 
 def print_settings(res: dict, engines) -> None:
-    """The command's text output: the target, each engine's settings (or why it cannot hold
-    the step), then each setting's simulated collision at dt and kept at dt/2 and 2 dt."""
+    """The command's text output of ``res`` (what :func:`contact_settings` returns) for the
+    ``engines`` named: the target, each engine's settings (or why it cannot hold the step),
+    then each setting's simulated collision at dt and kept at dt/2 and 2 dt."""
     _header(res)
     printers = {"mujoco": _print_mujoco, "bullet": _print_bullet}
     for engine in engines:

@@ -25,7 +25,8 @@ UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
 
 
 def add_arguments(sp: argparse.ArgumentParser) -> None:
-    """The command's flags: the record, the test's pendulum and trunk, the units."""
+    """The command's flags, added to its subparser ``sp``: the record, the test's pendulum
+    and trunk, the units."""
     from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
 
     sp.add_argument("record", help="CSV with columns t, x (and y, the pendulum's), in any "
@@ -129,7 +130,8 @@ def _provenance(args, record) -> dict:
 
 
 def run(args) -> int:
-    """Fit the record and print the result (text or ``--json``); exit code 0."""
+    """Fit the record of the parsed command line ``args`` and print the result (text or
+    ``--json``); exit code 0."""
     import sys
 
     import numpy as np

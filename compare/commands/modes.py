@@ -15,7 +15,8 @@ MODES_OPTIONS = ("segments", "elements", "beam_theory", "trunk")
 
 
 def add_arguments(sp) -> None:
-    """The command's flags: the backend and the trunk options its modes() take."""
+    """The command's flags, added to its subparser ``sp``: the backend and the trunk
+    options its modes() take."""
     from treeimpact.compare.backends import BACKENDS
 
     sp.add_argument("scenario", help="shipped scenario name or TOML path")
@@ -27,7 +28,8 @@ def add_arguments(sp) -> None:
 
 
 def run(args) -> int:
-    """Print the backend's modes beside the beam's (text or ``--json``); exit code 0."""
+    """Print the backend's modes beside the beam's for the parsed command line ``args``
+    (text or ``--json``); exit code 0."""
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.results import to_jsonable
     from treeimpact.compare.backends import get_backend

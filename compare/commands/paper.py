@@ -15,7 +15,7 @@ HELP = "reproduce Table 1 and list the paper's discrepancies"
 
 
 def add_arguments(sp) -> None:
-    """The command's flags."""
+    """The command's flags, added to its subparser ``sp``."""
     sp.add_argument("--json", action="store_true", help="machine-readable output")
     sp.add_argument("--fit-contact", action="store_true", dest="fit_contact",
                     help="also fit each model (the paper's, the 1-DOF soft, the continuum, the "
@@ -83,7 +83,8 @@ def _print_tables(res: dict) -> None:
 
 
 def run(args) -> int:
-    """Print the reproduction (text or ``--json``); exit code 0."""
+    """Print the reproduction for the parsed command line ``args`` (text or ``--json``;
+    with ``--fit-contact`` the models fitted to the measurements); exit code 0."""
     from treeimpact.analytic.paper.reproduction import reproduce
     from treeimpact.analytic.results import to_jsonable
 

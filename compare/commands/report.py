@@ -14,7 +14,7 @@ HELP = "write the discrepancy report (html, md, json)"
 
 
 def add_arguments(sp) -> None:
-    """The command's flags."""
+    """The command's flags, added to its subparser ``sp``."""
     sp.add_argument("--out", default="reports", help="output directory (default: reports)")
     sp.add_argument("--scenario", action="append", dest="scenarios",
                     help="shipped scenario name or TOML path (repeatable; default: all shipped)")
@@ -28,7 +28,8 @@ def add_arguments(sp) -> None:
 
 
 def run(args) -> int:
-    """Write the report and print the written paths; exit code 0."""
+    """Write the report for the parsed command line ``args`` and print the written paths;
+    exit code 0."""
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.compare.report import write_report
 

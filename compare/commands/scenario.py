@@ -25,7 +25,8 @@ DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0
 
 
 def add_arguments(sp: argparse.ArgumentParser) -> None:
-    """The command's flags: the test (given), the tree (measured), the choices."""
+    """The command's flags, added to its subparser ``sp``: the test (given), the tree
+    (measured), the choices."""
     sp.add_argument("name", help="the scenario's name (also the file name with --out DIR)")
     g = sp.add_argument_group("the test (given)")
     g.add_argument("--clamp-height", type=number, required=True, help="a, m: impact height")
@@ -68,7 +69,7 @@ def _pick(args, key):
 
 
 def build_scenario(args):
-    """The calibrated :class:`Scenario` of the command's arguments."""
+    """The calibrated :class:`Scenario` of the command's parsed arguments ``args``."""
     from treeimpact.analytic.model.calibration import (
         MeasuredTree,
         calibrate_trunk,
@@ -174,7 +175,8 @@ def fit_t_end(scenario, given: bool):
 
 
 def run(args) -> int:
-    """Write (or print) the scenario file, one that runs (:func:`fit_t_end`); exit code 0."""
+    """Write (or print) the scenario file of the parsed command line ``args``, one that
+    runs (:func:`fit_t_end`); exit code 0."""
     from treeimpact.analytic.model.scenario_toml import scenario_toml
 
     try:

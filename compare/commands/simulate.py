@@ -24,8 +24,8 @@ HELP = "simulate one scenario"
 
 
 def add_arguments(sp) -> None:
-    """The command's flags: the backend, its options (from the backends' OPTIONS), the run
-    budget, --json and the record flags."""
+    """The command's flags, added to its subparser ``sp``: the backend, its options (from
+    the backends' OPTIONS), the run budget, --json and the record flags."""
     from treeimpact.compare.backends import BACKENDS
 
     sp.add_argument("scenario", help="shipped scenario name or TOML path")
@@ -51,8 +51,9 @@ _NO_DIFFERENCE = ("n_impacts", "ledger_residual")
 
 
 def print_simulation(scenario, result, reference) -> None:
-    """One key per line, units in their own column; beside a backend's value the paper's
-    model (the analytic backend) and the relative difference, when ``reference`` is given."""
+    """The text output of ``result`` (a run of ``scenario``): one key per line, units in
+    their own column; beside a backend's value the paper's model (the analytic backend) and
+    the relative difference, when ``reference`` (its result) is given."""
     from treeimpact.analytic.results import METRIC_UNITS
 
     print(f"{scenario.name} ({result.backend})")
@@ -78,7 +79,8 @@ def print_simulation(scenario, result, reference) -> None:
 
 
 def run(args) -> int:
-    """Run the scenario on the backend and print it; exit code 0."""
+    """Run the scenario on the backend of the parsed command line ``args`` and print it
+    (text or ``--json``; with ``--record`` also write the record); exit code 0."""
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.compare.backends import get_backend
 
@@ -106,7 +108,8 @@ def run(args) -> int:
 
 
 def add_record_arguments(sp) -> None:
-    """`treeimpact simulate --record FILE.csv [--rate HZ --noise FRAC --seed N]`."""
+    """`treeimpact simulate --record FILE.csv [--rate HZ --noise FRAC --seed N]`: the flags,
+    added to the subparser ``sp``."""
     from treeimpact.compare.recording import DEFAULTS
 
     sp.add_argument("--record", help="also write the trunk's displacement as a pendulum-test "
@@ -121,8 +124,9 @@ def add_record_arguments(sp) -> None:
 
 
 def check_record_arguments(args) -> None:
-    """--rate, --noise and --seed in range (one line each) and only with --record (they
-    would be ignored without it), before a run is spent; fills in their defaults."""
+    """--rate, --noise and --seed of the parsed command line ``args`` in range (one line
+    each) and only with --record (they would be ignored without it), before a run is spent;
+    fills in their defaults."""
     from treeimpact.compare.recording import DEFAULTS, check_sampling
 
     for key, default in DEFAULTS.items():
@@ -136,7 +140,8 @@ def check_record_arguments(args) -> None:
 
 
 def write_record(args, scenario, result) -> str:
-    """Write ``result``'s trunk displacement as a record (compare.recording.sample at
+    """Write ``result``'s trunk displacement (a run of ``scenario``) as a record
+    (compare.recording.sample at
     ``args.rate`` Hz, ``args.noise`` of the peak, ``args.seed``) to ``args.record``; returns
     a one-line summary. Raises ParameterError naming --record if it cannot be written."""
     from treeimpact.compare.recording import REST, sample

@@ -10,7 +10,8 @@ HELP = "run a parameter sweep: validity maps and studies"
 
 
 def add_arguments(sp) -> None:
-    """The sweep's flags (compare.sweep.cli_support) and the run budget."""
+    """The sweep's flags (compare.sweep.cli_support) and the run budget, added to its
+    subparser ``sp``."""
     from treeimpact.compare.sweep.cli_support import add_sweep_arguments
 
     add_sweep_arguments(sp)
@@ -18,7 +19,8 @@ def add_arguments(sp) -> None:
 
 
 def run(args) -> int:
-    """Run the sweep; its exit code (130 when interrupted, with how to resume)."""
+    """Run the sweep of the parsed command line ``args``; its exit code (130 when
+    interrupted, with how to resume)."""
     from treeimpact.compare.sweep.cli_support import run_sweep_command
 
     return run_sweep_command(args)

@@ -50,7 +50,9 @@ SWEEPS = "sweeps"
 
 def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, segments=None,
                    out_dir=None, progress: bool = False, study_jobs=()) -> dict:
-    """The report's sections (not yet rendered) and the wall time each took (s); figures
+    """The report's sections (not yet rendered) and the wall time each took (s), for the
+    ``scenarios``, ``study_dirs``, ``runs``, ``engines`` and ``segments`` of
+    :func:`write_report`; figures
     are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
     sections reported on stderr as they finish; ``study_jobs``: studies running beside the
     report (compare.sweep.study_job.StudyJob), each a section once it ends."""
@@ -160,10 +162,11 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     ``scenarios``: shipped names, TOML paths or Scenario objects (default: the shipped
     scenarios); ``study_dirs``: directories of model-validity studies; ``runs``: the
     :class:`compare.runs.RunCache` to take runs from (default: a new one).
-    Options ``engines`` (tuple of engine backends) and ``segments`` (hinged trunk) go to
-    the ladder. Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
-    ``out_dir/figures``. Option ``study_jobs``: studies running beside the report
-    (compare.sweep.study_job.StudyJob), included when they end.
+    ``options`` (:func:`build_sections`'): ``engines`` (tuple of engine backends) and
+    ``segments`` (hinged trunk) go to the ladder; ``progress``; ``study_jobs``: studies
+    running beside the report (compare.sweep.study_job.StudyJob), included when they end.
+    Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
+    ``out_dir/figures``.
     """
     from .base import environment
 

@@ -23,7 +23,8 @@ ANSWER_METRICS = (("x_max", "x_max", 1e3, "mm"),
 
 
 def one_dof_answer(scen_sections) -> list[dict]:
-    """Per scenario, the answer first: how far the paper's 1-DOF model is from the continuum
+    """Per scenario (one of ``scen_sections``, the report's scenario sections), the answer
+    first: how far the paper's 1-DOF model is from the continuum
     trunk (the beam rung, same pad; the engines' chains agree with it) on the
     :data:`ANSWER_METRICS` at the scenario's contact, and whether the 1-DOF model explains
     the continuum's record at all (the full-record fit). The 1-DOF value is the paper's
@@ -69,9 +70,10 @@ def one_dof_answer(scen_sections) -> list[dict]:
 
 
 def with_sensitivity(answer: list[dict], studies) -> None:
-    """Each answer row with its cells' bands over the unmeasured inputs and the inputs that
-    decide each, from a study with a sensitivity part (compare.sensitivity); ``trajectories``
-    and ``held`` (the measured inputs) beside them."""
+    """Each ``answer`` row with its cells' bands over the unmeasured inputs and the inputs
+    that decide each, from the first of ``studies`` (the report's study sections) with a
+    sensitivity part (compare.sensitivity); ``trajectories`` and ``held`` (the measured
+    inputs) beside them. Changes the rows in place."""
     sens = next((s.study["sensitivity"] for s in studies
                  if s.study and s.study.get("sensitivity")), {})
     trees = sens.get("trees", {})
@@ -85,9 +87,10 @@ def with_sensitivity(answer: list[dict], studies) -> None:
 
 
 def small_e_rows(trees: dict) -> list[dict]:
-    """The small-e table's rows: per approximation its label, what it is compared with, and
-    per tree {holds (text), at_e (relative error at the tree's e), e, flag (beyond the
-    tolerance at the tree's e)}."""
+    """The small-e table's rows from ``trees`` (tree -> its small-e answers,
+    :func:`compare.small_e.small_e_answer`): per approximation its label, what it is
+    compared with, and per tree {holds (text), at_e (relative error at the tree's e), e,
+    flag (beyond the tolerance at the tree's e)}."""
     tol = validity_tolerance()
     names = list(next(iter(trees.values()))) if trees else []
     rows = []
@@ -128,8 +131,9 @@ def _pct(v) -> str:
 
 
 def in_short(one_dof: list[dict], trees: dict) -> dict:
-    """Both halves of the answer in a sentence each (plain text), from the answer rows and
-    the small-e answers: {"one_dof": ..., "small_e": ...}."""
+    """Both halves of the answer in a sentence each (plain text), from the answer rows
+    ``one_dof`` (:func:`one_dof_answer`) and the small-e answers per tree ``trees``:
+    {"one_dof": ..., "small_e": ...}."""
     tol = validity_tolerance()
     rows = [a for a in one_dof if a.get("available")]
     out = {}

@@ -21,7 +21,9 @@ _STYLES = {"eq57_energy_loss": ("o-", "tab:red"),
 
 
 def small_e_figure(trees: dict, tolerance: float):
-    """Per tree, every approximation's relative error (%) against e on the grid, the
+    """Per tree of ``trees`` (tree -> its small-e answers,
+    :func:`compare.small_e.small_e_answer`), every approximation's relative error (%)
+    against e on the grid, the
     +-``tolerance`` band, the tree's own e (dotted) and where each holds up to (a tick on
     the band's edge); symmetric-log y so that -3 % and +300 % both read. An e where an
     approximation has no value (the procedure refused the record, the bodies never moved

@@ -17,7 +17,7 @@ TEMPLATES = Path(__file__).with_name("templates")
 
 
 def num(v, digits: int = 4) -> str:
-    """A number with ``digits`` significant digits; n/a for None/NaN; ints as they are."""
+    """``v`` with ``digits`` significant digits; n/a for None/NaN; ints as they are."""
     if v is None:
         return "n/a"
     if isinstance(v, bool):
@@ -34,14 +34,16 @@ def num(v, digits: int = 4) -> str:
 
 
 def pct(v, digits: int = 2) -> str:
-    """A relative difference as a signed percentage."""
+    """A relative difference ``v`` as a signed percentage with ``digits`` decimals; "" for
+    None/NaN."""
     if v is None or not isinstance(v, (int, float)) or not math.isfinite(v):
         return ""
     return f"{100 * v:+.{digits}f} %"
 
 
 def frac(v, digits: int = 0) -> str:
-    """A fraction or an unsigned relative error as a percentage; n/a for None/NaN."""
+    """A fraction or an unsigned relative error ``v`` as a percentage with ``digits``
+    decimals; n/a for None/NaN."""
     if v is None or isinstance(v, bool) or not isinstance(v, (int, float)) \
             or not math.isfinite(v):
         return "n/a"
@@ -49,7 +51,7 @@ def frac(v, digits: int = 0) -> str:
 
 
 def short(v, digits: int = 3) -> str:
-    """A number as a reader needs it: ``digits`` significant digits, powers of ten as
+    """A number ``v`` as a reader needs it: ``digits`` significant digits, powers of ten as
     3.06e-4 (no padded exponent); ints, words and None as they are."""
     if isinstance(v, bool) or not isinstance(v, float):
         return "n/a" if v is None else str(v)
@@ -76,7 +78,8 @@ def tidy(text) -> str:
 
 
 def cost(v) -> str:
-    """A cost (s per simulated second): 3 significant digits below 100, whole seconds from
+    """A cost ``v`` (s per simulated second): 3 significant digits below 100, whole seconds
+    from
     100 on ('5070', never '5.07e+03'); n/a for None/NaN."""
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
         return "n/a"
@@ -84,7 +87,8 @@ def cost(v) -> str:
 
 
 def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> str:
-    """A run's options as 'name=value unit', sorted, numbers rounded (:func:`short`)."""
+    """A run's ``options`` as 'name=value unit', sorted, numbers rounded (:func:`short`),
+    units from ``units`` (name -> unit), joined by ``sep``; "defaults" when none."""
     units = units or {}
     if not options:
         return "defaults"
@@ -102,7 +106,7 @@ def input_name(key: str) -> str:
 
 
 def output_name(key: str) -> str:
-    """An output of the sensitivity study in words ('x_max gap' for gap.x_max)."""
+    """An output ``key`` of the sensitivity study in words ('x_max gap' for gap.x_max)."""
     from treeimpact.compare.sweep.maps import _OUTPUT_LABELS
 
     return _OUTPUT_LABELS.get(key, key)
@@ -144,6 +148,8 @@ _ENV = None
 
 
 def environment() -> jinja2.Environment:
+    """The report's jinja2 environment (created once): the templates folder, HTML
+    autoescaping, undefined names as errors, and the number filters of this module."""
     global _ENV
     if _ENV is None:
         _ENV = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
@@ -171,11 +177,14 @@ class Section:
     anchor = ""
 
     def context(self) -> dict:  # pragma: no cover - abstract
+        """The names the section's templates read."""
         raise NotImplementedError
 
     def to_json(self) -> dict:  # pragma: no cover - abstract
+        """The section's data for report.json."""
         raise NotImplementedError
 
     def render(self, fmt: str) -> str:
+        """The section rendered by its template in ``fmt`` ("html" or "md")."""
         tpl = environment().get_template(f"{self.template}.{fmt}.j2")
         return tpl.render(section=self, **self.context())

@@ -149,7 +149,8 @@ def _same_ylim(axes, pad: float = 0.08, floor: float | None = None) -> None:
 
 
 def displacement_figure(ladder) -> Figure:
-    """x(t) of the impact point and y(t) of the pendulum for every rung (Figs 4, 5), then
+    """x(t) of the impact point and y(t) of the pendulum for every rung of ``ladder`` (Figs
+    4, 5), then
     one small panel per rung with its difference from the paper's model (rung 1), in mm:
     x solid, y dashed; the 1-DOF trunks on one row and one scale, the flexible ones on
     others and their own scale (the continuum's x difference in grey behind each flexible
@@ -240,7 +241,8 @@ def displacement_figure(ladder) -> Figure:
 
 
 def force_figure(ladder) -> Figure:
-    """The impact process over one time span for every panel: the paper's model's Newton
+    """The impact process of ``ladder``'s rungs over one time span for every panel: the
+    paper's model's Newton
     impulses (N s) in the first panel, then the contact force (kN, linear: it goes to zero
     between the contacts) of each soft-contact rung in a panel of its own, the 1-DOF
     trunks on the first row and one scale, the flexible ones on the next rows and another;
@@ -309,7 +311,8 @@ def force_figure(ladder) -> Figure:
 
 
 def sequence_figure(ladder) -> Figure:
-    """The impact sequence, one panel per rung (shared axes): trunk velocity vx and
+    """The impact sequence, one panel per rung of ``ladder`` (shared axes): trunk velocity vx
+    and
     pendulum velocity vy over the impact process, T0 and V marked."""
     rungs = _ok_rungs(ladder)
     n = max(1, len(rungs))
@@ -349,8 +352,10 @@ LEDGER_TERMS = ("kinetic", "potential", "damping", "impact loss", "energy transf
 
 
 def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
-    """Energy ledger bars (J) per rung: at T0, kinetic, potential, damping work and impact
-    loss sum to the initial energy; the energy transferred (eq 58) is shown beside them."""
+    """Energy ledger bars (J) per rung of ``ledgers`` (rung id -> {terms, style}) of the
+    scenario ``name``: at T0, kinetic, potential, damping work and impact loss sum to the
+    ``initial_energy`` (J, a dashed line); the energy transferred (eq 58) is shown beside
+    them."""
     rungs = list(ledgers)
     fig, ax = plt.subplots(figsize=(11, 3.8), layout="constrained")
     n = len(LEDGER_TERMS)
@@ -374,7 +379,8 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
 
 
 def contact_scan_figure(scans: dict, shipped: dict | None = None) -> Figure:
-    """Per scenario, the continuum's gap to the 1-DOF model (%, beam vs soft SDOF, same pad)
+    """Per scenario of ``scans`` (name -> :func:`compare.contact_scan.scan_result`), the
+    continuum's gap to the 1-DOF model (%, beam vs soft SDOF, same pad)
     against the contact duration (ms, log), with the +-tolerance band: where the 1-DOF model
     is good enough; ``shipped``: the scenario's own pad ({name: duration in s}), marked.
     Symmetric-log y so that +200 % and -3 % both read."""

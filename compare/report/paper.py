@@ -12,6 +12,10 @@ UNITS = {"u1": "m/s", "V": "m/s", "x0": "m", "T0": "s", "A_x": "m s", "M_T": "kg
 
 
 class PaperSection(Section):
+    """The paper reproduced: Table 1 printed against recomputed, the restitutions that
+    reproduce V, x0 and T0, and the discrepancies (the reproduction,
+    :func:`analytic.paper.reproduction.reproduce`, runs when the section is made)."""
+
     template = "paper"
     title = "The paper reproduced"
     anchor = "paper"
@@ -22,6 +26,8 @@ class PaperSection(Section):
         self.data = reproduce()
 
     def context(self) -> dict:
+        """The template's names: each tree's rows with their units, the e estimates and the
+        discrepancies."""
         trees = []
         for name, rows in self.data["trees"].items():
             trees.append({"name": name, "rows": [
@@ -30,4 +36,5 @@ class PaperSection(Section):
                 "discrepancies": self.data["discrepancies"]}
 
     def to_json(self) -> dict:
+        """The reproduction and the quantities' units."""
         return to_jsonable({**self.data, "units": UNITS})

@@ -41,6 +41,9 @@ def run_rows(runs) -> list[dict]:
 
 
 class RunsSection(Section):
+    """Every run behind the page (``cache``, a compare.runs.RunCache), its status, reason
+    and wall time, with the report's stages' wall times ``wall_s`` (stage -> s)."""
+
     template = "runlog"
     title = "Runs, skips and timings"
     anchor = "runs"
@@ -51,6 +54,8 @@ class RunsSection(Section):
         self.wall_s = wall_s or {}
 
     def context(self) -> dict:
+        """The template's names: the run rows, the failed ones, counts per status, timings
+        and wall times."""
         rows = run_rows(self.runs)
         counts: dict = {}
         for r in rows:
@@ -59,5 +64,6 @@ class RunsSection(Section):
                 "timings": self.timings, "wall": self.wall_s}
 
     def to_json(self) -> dict:
+        """Every run, the timings and the stages' wall times (s)."""
         return to_jsonable({"runs": [r.to_json() for r in self.runs], "timings": self.timings,
                             "wall_s": self.wall_s})

@@ -20,7 +20,8 @@ from . import figures
 from .base import Section, tidy
 
 def energy_ledger(rr) -> dict | None:
-    """Energy terms at T0 (J) of one rung: kinetic, potential (springs, gravity and the
+    """Energy terms at T0 (J) of one rung's result ``rr``: kinetic, potential (springs,
+    gravity and the
     contact spring), damping work, impact loss, and eq 58's energy transferred. The first
     four sum to the initial energy; the residual is reported."""
     if not rr.ok:
@@ -74,14 +75,14 @@ def identification_sweep(table) -> list[dict]:
 
 
 def record_fits(ladder) -> list[dict]:
-    """:func:`fit_one` on each rung's record, in this process (the report fits every
-    scenario's records in one process pool, compare.report.build_sections)."""
+    """:func:`fit_one` on each of ``ladder``'s rungs' records, in this process (the report
+    fits every scenario's records in one process pool, compare.report.build_sections)."""
     return [fit_one(task) for task in fit_tasks(ladder)]
 
 
 def fit_truth(ladder) -> dict:
-    """What the full-record fit is compared with: the scenario's M_T (kg), K_T (N/m) and C_T
-    (N s/m) of the two-body model (eqs 7-11) and its restitution e (1)."""
+    """What the full-record fit is compared with: the ``ladder``'s scenario's M_T (kg), K_T
+    (N/m) and C_T (N s/m) of the two-body model (eqs 7-11) and its restitution e (1)."""
     from treeimpact.analytic.model.two_body import two_body_model
 
     model = two_body_model(ladder.scenario)
@@ -121,7 +122,8 @@ _ENGINE_STEPS = {"engine": "the engines against each other on the engine SDOF",
 
 
 def step_name(key: str) -> str:
-    """A comparison of the tolerance file (``beam``, ``engines.chain``) in plain words."""
+    """A comparison of the tolerance file, its ``key`` (``beam``, ``engines.chain``), in
+    plain words."""
     from ..rungs import RungKind
 
     section, _, kind = key.rpartition(".")
@@ -160,6 +162,9 @@ def css(check) -> str:
 
 
 class ScenarioSection(Section):
+    """One scenario's section: its ladder table and checks, the identification against
+    the truth and against e, the full-record fits, the energy ledgers and the figures."""
+
     template = "scenario"
 
     def __init__(self, ladder, sweep: list, *, figure_sink=None, fits=None):
@@ -183,7 +188,9 @@ class ScenarioSection(Section):
                   figure_sink=None, fits=None):
         """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
         lacks are made here, so prefetch them first) and its small-e sweep's table
-        (compare.small_e.small_e_sweep; None: the section has no identification against e)."""
+        ``e_table`` (compare.small_e.small_e_sweep; None: the section has no identification
+        against e); ``engines`` and ``segments`` as :func:`compare.ladder.build_ladder`,
+        ``figure_sink`` and ``fits`` as the constructor's."""
         kw = {} if engines is None else {"engines": engines}
         ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
         sweep = identification_sweep(e_table) if e_table is not None else []
@@ -211,6 +218,8 @@ class ScenarioSection(Section):
         return out
 
     def context(self) -> dict:
+        """The template's names: the ladder table with each cell's verdict, the
+        identification rows, ledgers, fits, findings, problems and figures."""
         L = self.ladder
         verdicts = self._verdicts()
         rows = []
@@ -266,6 +275,8 @@ class ScenarioSection(Section):
         return [{"rung": "truth", "truth": truth, "error": None, "e_not_fixed": False}] + rows
 
     def to_json(self) -> dict:
+        """The ladder's JSON with the energy ledgers, the identification against e, the
+        record fits and the mechanism."""
         out = self.ladder.to_json()
         out["energy_ledger"] = to_jsonable({k: v for k, v in self.ledgers.items()})
         out["identification_vs_e"] = to_jsonable(self.sweep)

@@ -63,6 +63,11 @@ def _figures_of(study: dict) -> set:
 
 
 class StudySection(Section):
+    """A finished study's folder as a section: a study of compare.sweep rendered from its
+    study.json, any other from its figures and summary text. ``directory``: the folder
+    (ParameterError if it is not one); ``page_dir``: the report's folder, the figures
+    linked relative to it."""
+
     template = "study"
 
     def __init__(self, directory, page_dir=None):
@@ -96,11 +101,13 @@ class StudySection(Section):
             self.images = [i for i in self.images if i["name"] not in shown]
 
     def context(self) -> dict:
+        """The template's names: the figures, the summary text, the study's data."""
         # the section is an h2 (the report's <summary>): the study's title is an h3
         return {"images": self.images, "text": self.text, "s": self.study, "level": 3,
                 "image": self.uri, "files": sorted(self.data)}
 
     def to_json(self) -> dict:
+        """The folder, its figures, its JSON files' data and its summary text."""
         return {"directory": str(self.directory),
                 "figures": sorted(p.name for p in self.directory.iterdir()
                                   if p.suffix.lower() in (".png", ".svg")),

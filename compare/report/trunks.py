@@ -84,9 +84,12 @@ class TrunksSection(Section):
 
     @property
     def available(self) -> bool:
+        """Whether the benchmark's result file holds a tree to show."""
         return self.tree is not None
 
     def context(self) -> dict:
+        """The template's names: the result file's record and target, the cheapest trunk
+        per tree, and every segment count of the shown tree."""
         d = self.data or {}
         scen = d.get("scenarios", {})
         return {"source": SOURCE, "record": _record(d), "target": d.get("target"),
@@ -98,6 +101,7 @@ class TrunksSection(Section):
                                     for r in s.get("rows", [])})}
 
     def to_json(self) -> dict:
+        """The context's data: source, record, target, tree, trees and per segment count."""
         ctx = self.context()
         return to_jsonable({k: ctx[k] for k in ("source", "record", "target", "tree",
                                                 "trees", "per_n")})

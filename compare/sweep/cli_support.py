@@ -90,8 +90,9 @@ def add_sweep_arguments(parser) -> None:
 
 
 def parse_options(specs, backends) -> dict:
-    """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine), each name
-    and value checked against the backend's OPTIONS (one line naming the spec)."""
+    """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine among
+    ``backends``, the sweep's), each name and value checked against the backend's OPTIONS
+    (one line naming the spec)."""
     from treeimpact.compare.backends import ENGINES, get_backend
 
     out: dict = {}
@@ -135,8 +136,9 @@ EXIT_INTERRUPTED = 130
 
 
 def run_sweep_command(args) -> int:
-    """Run ``treeimpact sweep``; returns the exit code (0; 130 when interrupted by Ctrl-C or
-    SIGTERM, with one line saying how to resume; bad input raises ParameterError)."""
+    """Run ``treeimpact sweep`` with the parsed command line ``args``; returns the exit
+    code (0; 130 when interrupted by Ctrl-C or SIGTERM, with one line saying how to resume;
+    bad input raises ParameterError)."""
     import sys
 
     from treeimpact.compare.pool import STOP

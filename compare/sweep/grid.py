@@ -93,8 +93,9 @@ def _fields(cls) -> set[str]:
 
 
 def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
-    """The :class:`Parameter` a grid NAME refers to, named by its one spelling (a short name
-    of :data:`ALIASES` where the field has one), or a one-line ParameterError."""
+    """The :class:`Parameter` a grid NAME (``name``) refers to, named by its one spelling (a
+    short name of :data:`ALIASES` where the field has one), or a one-line ParameterError
+    naming ``flag``."""
     if not isinstance(name, str) or not _NAME_RE.match(name):
         raise ParameterError(f"{flag} {name!r}: not a NAME; allowed: a scenario field "
                              f"(trunk.crown_mass), a short name ({', '.join(sorted(ALIASES))}), "
@@ -144,10 +145,12 @@ class Axis:
 
     @property
     def name(self) -> str:
+        """The swept parameter's name."""
         return self.parameter.name
 
     @property
     def numeric(self) -> bool:
+        """Whether every value is a number (not a word)."""
         return all(isinstance(v, (int, float)) for v in self.values)
 
     def spec(self) -> str:
@@ -273,6 +276,7 @@ class Grid:
 
     @property
     def names(self) -> tuple:
+        """The axes' names, in order."""
         return tuple(a.name for a in self.axes)
 
     def __len__(self) -> int:
@@ -287,9 +291,11 @@ class Grid:
                 for combo in itertools.product(*(a.values for a in self.axes))]
 
     def specs(self) -> list[str]:
+        """Each axis as its ``--grid`` spec."""
         return [a.spec() for a in self.axes]
 
     def axis(self, name: str) -> Axis:
+        """The axis of ``name`` (KeyError if none)."""
         for a in self.axes:
             if a.name == name:
                 return a
@@ -319,14 +325,17 @@ class Design(Grid):
         return len(self.design)
 
     def points(self) -> list[dict]:
+        """The design's points, each {name: value}."""
         return [dict(zip(self.names, p)) for p in self.design]
 
     def specs(self) -> list[str]:
+        """One line describing the design (its size and names)."""
         return [f"design of {len(self.design)} points over {', '.join(self.names)}"]
 
 
 def parse_grid(specs, flag: str = "--grid") -> Grid:
-    """A :class:`Grid` from ``--grid`` specs (a string or a list of them)."""
+    """A :class:`Grid` from ``--grid`` specs (a string or a list of them); one-line
+    ParameterErrors name ``flag``."""
     if isinstance(specs, str):
         specs = [specs]
     specs = list(specs or [])
@@ -346,6 +355,7 @@ def point_key(point: dict) -> str:
 
 
 def point_from_key(key: str) -> dict:
+    """The grid point of a :func:`point_key` ``key``."""
     return {k: v for k, v in json.loads(key)}
 
 

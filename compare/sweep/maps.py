@@ -40,7 +40,8 @@ def _rel(value, reference):
 
 
 def discrepancies(df, metrics=LADDER_METRICS):
-    """Long table: one row per (point, target, metric) with rel, step and the dominating rung.
+    """Long table of the sweep table ``df``: one row per (point, target, metric) of
+    ``metrics`` with rel, step and the dominating rung.
 
     Columns: point, target, backend, kind, metric, value, analytic, rel, step, dominant
     (kind of the largest step), plus the swept parameters of the point.
@@ -98,7 +99,8 @@ _NON_AXIS = {"scenario", "point", "target", "backend", "kind", "previous", "stat
 
 
 def axis_names(df) -> list[str]:
-    """The swept parameters of a sweep table (columns between the base and metric columns)."""
+    """The swept parameters of a sweep table ``df`` (columns between the base and metric
+    columns)."""
     from treeimpact.analytic.results import METRIC_KEYS
 
     return [c for c in df.columns if c not in _NON_AXIS and c not in METRIC_KEYS
@@ -106,6 +108,8 @@ def axis_names(df) -> list[str]:
 
 
 def numeric_axes(df) -> list[str]:
+    """The swept parameters of the sweep table ``df`` with two or more numeric values (the
+    ones a map can have as an axis)."""
     out = []
     for c in axis_names(df):
         vals = df[c].dropna().unique()
@@ -116,8 +120,9 @@ def numeric_axes(df) -> list[str]:
 
 
 def relevant_axes(df, target: str, axes: list[str]) -> list[str]:
-    """The swept parameters that change ``target``'s runs (its task differs along them with
-    the others held): ``segments`` does not change the analytic reference, for example."""
+    """The swept parameters among ``axes`` that change ``target``'s runs in the sweep table
+    ``df`` (its task differs along them with the others held): ``segments`` does not change
+    the analytic reference, for example."""
     sub = df[df["target"] == target]
     out = []
     for a in axes:
@@ -361,9 +366,12 @@ def _in_order(groups, order):
 def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=None,
                   prefix: str = "validity", order=None, value: str = "rel",
                   skip=()) -> list[dict]:
-    """Draw the validity maps of a sweep table into ``figdir``; returns one dict per figure
-    (path, target, axes, caption, its colour ``scale``) plus per-metric summaries (fraction
-    within tolerance, worst |rel| and where, dominating rung counts). ``order``: target ids
+    """Draw the validity maps of a sweep table ``df`` into ``figdir`` (files named
+    ``prefix``-TARGET); returns one dict per figure (path, target, axes, caption, its colour
+    ``scale``) plus per-metric summaries (fraction within ``tolerance``, worst |rel| and
+    where, dominating rung counts) of the ``metrics``. ``pairs``: the axis pairs to map
+    (default: every pair of the axes that change the target); ``skip``: targets not drawn
+    (mapped from another sweep). ``order``: target ids
     in the order their maps are listed. ``value``: "rel" maps each target against the
     paper's model, "step" against the rung below it (beam vs soft: the 1-DOF assumption
     alone). Every map shares one colour scale (:func:`colour_scale`)."""
@@ -468,7 +476,8 @@ def _summaries(dt, ms, tolerance) -> list[dict]:
 
 
 def identification_errors(df):
-    """Long table of identification errors: point, target, parameter, identified, truth, rel."""
+    """Long table of identification errors of the sweep table ``df``: point, target,
+    parameter, identified, truth, rel."""
     import pandas as pd
 
     ok = df[df["status"] == OK]
@@ -516,7 +525,9 @@ def _why_not_identified(sub) -> str:
 
 def identification_maps(df, figdir, *, prefix: str = "identification",
                         order=None, skip=()) -> list[dict]:
-    """Draw the identification maps (see the module docstring) into ``figdir``: one figure
+    """Draw the identification maps (see the module docstring) of the sweep table ``df``
+    into ``figdir`` (files named ``prefix``-TARGET, targets in ``order``, those of ``skip``
+    left out): one figure
     per target, a panel per parameter of :data:`MAPPED_IDENT_KEYS` that has a value
     somewhere (a panel without any is dropped), every map on one colour scale
     (:func:`colour_scale`); the caption counts the cells without a value and says why."""
@@ -603,9 +614,11 @@ _OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap"
 
 
 def sensitivity_figure(trees: dict, path: Path) -> Path | None:
-    """One panel per tree (a second row for the crossing durations): each output's Morris
+    """One panel per tree of ``trees`` (name -> :func:`compare.sensitivity.analyse`; a
+    second row for the crossing durations): each output's Morris
     mu* per unmeasured input as a bar, its 95 % interval (SALib's mu_star_conf) as a
-    whisker, the inputs that decide it outlined; a held (measured) input has no bar."""
+    whisker, the inputs that decide it outlined; a held (measured) input has no bar.
+    Written to ``path``; returns it, or None when no tree has an output."""
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 

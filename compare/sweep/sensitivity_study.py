@@ -26,7 +26,8 @@ def sensitivity_specs(out, trajectories: int, *, crossings: bool = False,
 
 def sensitivity_result(out, sens: dict, done: list) -> dict:
     """The analysis of the finished sweeps ``done`` of :func:`sensitivity_specs` ``sens``
-    and its figure: {trajectories, crossings, trees: {name: analysis}, figure}."""
+    and its figure (written into ``out``): {trajectories, crossings, trees: {name:
+    analysis}, figure}."""
     from treeimpact.compare.sensitivity import (
         analyse,
         free_inputs,
@@ -49,8 +50,10 @@ def sensitivity_result(out, sens: dict, done: list) -> dict:
 def run_sensitivity(out, trajectories: int, *, crossings: bool = False, scenarios=None,
                     workers=None, scheduler=None, progress=None,
                     retry_failed: bool = False) -> dict:
-    """The sensitivity study alone (:func:`sensitivity_specs` on one pool, then
-    :func:`sensitivity_result`)."""
+    """The sensitivity study alone into ``out`` (:func:`sensitivity_specs` of
+    ``trajectories``, ``crossings`` and ``scenarios`` on one pool, then
+    :func:`sensitivity_result`); ``workers``, ``scheduler``, ``progress`` and
+    ``retry_failed`` as :func:`compare.sweep.run.run_sweeps`."""
     sens = sensitivity_specs(out, trajectories, crossings=crossings, scenarios=scenarios)
     done = run_sweeps(sens["specs"], workers=workers, scheduler=scheduler,
                       progress=progress, retry_failed=retry_failed)

@@ -72,7 +72,10 @@ def engine_variants(engine: str) -> tuple[str | None, tuple, str | None, bool]:
 def speed_sweep(scenario, out, *, engines=ENGINES, dts=(1e-4, 3e-5, 1e-5),
                 stiffnesses=None, durations=(1e-3, 5e-4), workers: int = 1, scheduler=None,
                 progress=None) -> dict:
-    """Run the speed-accuracy sweeps (one sweep directory per engine under ``out``).
+    """Run the speed-accuracy sweeps of ``scenario`` (one sweep directory per engine of
+    ``engines`` under ``out``): every time step of ``dts`` (s) with every contact stiffness.
+    ``workers`` and ``scheduler`` are not used (each engine's sweep runs in this process,
+    on its engine's own threads); ``progress`` is passed on.
 
     ``stiffnesses`` (N/m) or, when None, ``durations`` (s) converted with
     :func:`rounded_stiffness`. Returns {"engines": {engine: sweep dir}, "skipped":
@@ -120,8 +123,9 @@ def _warm_up(engine: str, scenario, dt: float) -> None:
 
 
 def speed_points(df, engine: str, metrics=SPEED_METRICS):
-    """One row per engine run: variant, dt, k_c, cost (s per simulated s), error vs soft,
-    error vs analytic, status and error text."""
+    """One row per ``engine`` run of the sweep table ``df``: variant, dt, k_c, cost (s per
+    simulated s), error vs soft, error vs analytic (the largest over ``metrics``), status
+    and error text."""
     import pandas as pd
 
     variant_col = next((c for c in df.columns if c.startswith("option.")), None)
@@ -148,7 +152,8 @@ def speed_points(df, engine: str, metrics=SPEED_METRICS):
 
 
 def speed_figure(points, path, engine: str) -> Path | None:
-    """Error against cost, one curve per (variant, k_c); None when no run succeeded."""
+    """Error against cost of ``engine``'s runs (``points``, :func:`speed_points`), one curve
+    per (variant, k_c), written to ``path``; None when no run succeeded."""
     from matplotlib.figure import Figure
 
     ok = points[points["status"] == OK]
@@ -178,7 +183,7 @@ def speed_figure(points, path, engine: str) -> Path | None:
 
 
 def speed_curves(result: dict, figdir) -> list[dict]:
-    """Figures and tables of :func:`speed_sweep`'s result."""
+    """Figures (into ``figdir``) and tables of :func:`speed_sweep`'s ``result``."""
     figdir = Path(figdir)
     figdir.mkdir(parents=True, exist_ok=True)
     out = []

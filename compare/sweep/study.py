@@ -33,6 +33,10 @@ from .sensitivity_study import sensitivity_result, sensitivity_specs
 
 @dataclass(frozen=True)
 class Preset:
+    """A named study: its tree, the validity sweep's grid, the engines and their coarser
+    grid, the speed curves, the identification validation and the sensitivity part (each
+    field's comment says what it holds)."""
+
     name: str
     scenario: str
     grid: tuple  # --grid specs of the validity sweep
@@ -88,6 +92,7 @@ PRESETS = {
 
 
 def get_preset(name: str) -> Preset:
+    """The :class:`Preset` called ``name``; ParameterError naming --preset if none."""
     try:
         return PRESETS[name]
     except KeyError:
@@ -98,6 +103,9 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
               scheduler=None, progress=None, tolerance=None, grid=None,
               retry_failed: bool = False, sensitivity_scenarios=None) -> dict:
     """Run (or resume) a preset's sweeps into ``out`` and write the study; returns the paths.
+    ``scenario``, ``backends`` (its engines among them) and ``grid`` replace the preset's;
+    ``tolerance``: the maps' criterion (None: the default); ``workers``, ``scheduler``,
+    ``progress`` and ``retry_failed`` as :func:`compare.sweep.run.run_sweeps`.
     ``sensitivity_scenarios``: the trees of its sensitivity study (shipped names, TOML paths
     or Scenarios; default: every shipped tree)."""
     from .speed import speed_curves, speed_sweep
@@ -207,7 +215,23 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
                 meta: dict | None = None, ident_study: dict | None = None,
                 sensitivity: dict | None = None) -> dict:
     """Draw the maps of finished sweeps (``{name: sweep dir}``) and write study.md,
-    study.html, study.json and the combined results table into ``out``."""
+    study.html, study.json and the combined results table into ``out``.
+
+    Args:
+        out: the study's folder.
+        sweeps: the finished sweeps, name -> folder.
+        speed: :func:`speed_sweep`'s result with its curves, or None.
+        tolerance: the maps' criterion (None: the default).
+        metrics: the metrics mapped (None: every ladder metric).
+        value: "rel" (against the paper's model) or "step" (against the rung below).
+        title: the page's title.
+        meta: more fields for study.json (the preset, its notes).
+        ident_study: the identification validation's result, or None.
+        sensitivity: the sensitivity study's result, or None.
+
+    Returns:
+        The written paths: md, html, json, table and the figures.
+    """
     out = make_out(out)
     meta = dict(meta or {})
     table_path, table = _combined_table(out, sweeps, speed)
@@ -271,7 +295,8 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
 
 
 def render_study(summary: dict, fmt: str, *, level: int = 1, image=None) -> str:
-    """The study page (``fmt`` "md" or "html") from its data (study.json), with the report's
+    """The study page (``fmt`` "md" or "html") from its data ``summary`` (study.json), with
+    the report's
     templates; ``level``: the title's heading level; ``image(name)``: a figure's link (the
     study's own directory by default)."""
     from treeimpact.compare.report.base import environment

@@ -58,6 +58,8 @@ class StudyJob:
         return text if text in shipped_scenarios() else str(Path(text).resolve())
 
     def start(self) -> "StudyJob":
+        """Start the child process (``treeimpact sweep --preset``), its output relayed by a
+        thread; returns the job."""
         self._t0 = time.perf_counter()
         self._proc = subprocess.Popen(self.argv, stdout=subprocess.PIPE,
                                       stderr=subprocess.STDOUT, text=True, bufsize=1)

@@ -1,0 +1,186 @@
+"""The PyBullet engine's setup: validate the options, write the trunk's and pendulum's
+URDFs, fix the contact law (soft: Bullet's ERP/CFM for the pad; newton: restitution
+impulses) and the time step. Computed without the engine; nothing is stepped here.
+
+Design notes and measured figures: docs/engines.md (``bullet_models/_runner.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from treeimpact.analytic.budget import StepCost, check_work
+from treeimpact.analytic.contact.law import (
+    collision_duration,
+    contact_law,
+    detection_duration,
+    effective_damping,
+)
+from treeimpact.analytic.contact.timestep import check_time_step, choose_time_step, sdof_rate
+from treeimpact.analytic.continuum.chain import (
+    chain_matrices,
+    chain_natural_frequencies,
+    lateral_jacobian,
+)
+from treeimpact.analytic.engine.interface import (
+    EngineSetup,
+    check_choice,
+    engine_model,
+    trunk_chain,
+)
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.parameters import DEFAULT_CONTACT_DURATION, Scenario
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.two_body import TwoBodyModel
+
+from . import _contact, _urdf
+from .options import CONTACTS, ENGINE_NAME, MAX_SEGMENTS
+
+
+@dataclass(frozen=True)
+class Setup(EngineSetup):
+    """Everything a run needs, computed without the engine (SI units)."""
+
+    contact: str
+    trunk_urdf: str
+    pendulum_urdf: str
+    contact_stiffness: float | None  # k_c, N/m (soft)
+    contact_damping: float | None  # c_c, N s/m (soft, the continuous law)
+    bullet: _contact.BulletContact | None
+    collision_duration: float  # s: t_c of the soft law (soft) or dt (newton: one-step impulses)
+    omega_max: float | None
+    apparent_mass: float  # kg: trunk mass seen by the contact
+    calibration: str = "pad"  # analytic.contact.law.CALIBRATIONS
+    matrices: tuple | None = field(default=None, repr=False)  # chain (M, K, D)
+
+
+def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
+               contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
+               trunk_damping_model="distributed", calibration="pad") -> Setup:
+    """Validate the options and build everything a run of ``scenario`` needs, without the
+    engine: ``trunk``, ``segments``, ``pendulum``, ``contact``, ``contact_stiffness``
+    (N/m), ``dt`` (s), ``restitution``, ``t_end`` (s), ``trunk_damping_model`` and
+    ``calibration`` as in :func:`bullet_models._runner.simulate`; ParameterError for a bad
+    one (before any chain is built where it can)."""
+    check_choice("contact", contact, CONTACTS)
+    damping = trunk_damping_model
+    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
+                                trunk_damping_model=damping,
+                                calibration=calibration, restitution=restitution,
+                                t_end=t_end)
+    if contact == "soft" and not model.restitution < 1.0:  # before the chain is built
+        raise ParameterError(
+            f"e = {model.restitution:g} (--restitution, contact.restitution): Bullet's soft "
+            "contact steps "
+            "implicitly and always dissipates: allowed (0, 1) with --contact soft (e = 1: "
+            "--contact newton)")
+    bodies = _bodies(scenario, trunk, segments, pendulum)
+    segments = bodies.segments
+    if contact == "soft":
+        k_c, c_c, bullet, dt, col = _soft_contact(model, scenario, bodies, contact_stiffness,
+                                                  dt, t_end, calibration)
+    else:
+        k_c = c_c = bullet = None
+        dt, col = _newton_contact(model, bodies, contact_stiffness, dt)
+    check_work(t_end, dt, step_cost(segments or 1))
+    return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
+                 contact=contact, damping=damping, segments=segments, dt=float(dt),
+                 t_end=float(t_end), trunk_urdf=bodies.trunk_urdf,
+                 pendulum_urdf=bodies.pendulum_urdf, contact_stiffness=k_c,
+                 contact_damping=c_c, bullet=bullet, collision_duration=col,
+                 omega_max=bodies.omega_max, apparent_mass=bodies.apparent_mass,
+                 matrices=bodies.matrices, calibration=calibration)
+
+
+@dataclass(frozen=True)
+class _Bodies:
+    """The trunk's and pendulum's URDFs and what the contact needs of the trunk (SI)."""
+
+    trunk_urdf: str
+    pendulum_urdf: str
+    segments: int | None  # the chain's (None: the SDOF trunk)
+    apparent_mass: float  # kg: the trunk's mass seen by the contact at a
+    omega_max: float | None  # rad/s: the chain's highest mode (None: the SDOF trunk)
+    matrices: tuple | None  # the chain's (M, K, D)
+
+
+def _bodies(scenario: Scenario, trunk: str, segments, pendulum: str) -> _Bodies:
+    """The chain (``segments``, default: the fewest within 0.5 % of the beam) or the SDOF
+    trunk of eq 11, and the ``pendulum``'s model."""
+    tr = scenario.trunk
+    matrices = None
+    chain = trunk_chain(scenario, trunk, segments, engine=ENGINE_NAME,
+                        max_segments=MAX_SEGMENTS)
+    if chain is not None:
+        n = chain.segments
+        M, K, D = chain_matrices(chain)
+        ja = lateral_jacobian(chain, tr.clamp_height)[0]
+        apparent = float(1.0 / (ja @ np.linalg.solve(M, ja)))
+        omega_max = float(chain_natural_frequencies(chain, chain.segments)[-1])
+        trunk_urdf = _urdf.trunk_chain_urdf(chain, name=f"{scenario.name}-trunk-chain-{n}")
+        segments = n
+        matrices = (M, K, D)
+    else:
+        tree = reduce_trunk(tr)
+        apparent = tree.dynamic_mass
+        omega_max = None
+        trunk_urdf = _urdf.trunk_sdof_urdf(tree, tr.clamp_height,
+                                           name=f"{scenario.name}-trunk-sdof")
+    pend_urdf = _urdf.pendulum_urdf(scenario.impactor, tr.clamp_height, pendulum,
+                                    name=f"{scenario.name}-pendulum-{pendulum}")
+    return _Bodies(trunk_urdf, pend_urdf, segments, apparent, omega_max, matrices)
+
+
+def _soft_contact(model: TwoBodyModel, scenario: Scenario, bodies: _Bodies,
+                  contact_stiffness, dt, t_end: float, calibration: str) -> tuple:
+    """(k_c N/m, c_c N s/m, Bullet's contact, dt s, detection duration s) of the pad on the
+    trunk's apparent mass: the step from the collision Bullet integrates and the fastest
+    mode (given ``dt`` checked), within the step Bullet's implicit contact can hold."""
+    m = model.impactor_mass
+    mu = bodies.apparent_mass * m / (bodies.apparent_mass + m)
+    k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
+    if calibration == "effective":  # e on the trunk's effective mass, not the pad's c_c
+        c_c = effective_damping(k_c, model.restitution, mu)
+    law_model = TwoBodyModel(bodies.apparent_mass, 0.0, 1.0, m, 0.0, model.impact_speed,
+                             model.restitution)
+    # the step resolves the collision Bullet integrates: stiffness k_c with the damping
+    # that gives e on the apparent mass (as (k_b, c_b) below; the SDOF law's c_c on the
+    # chain's light apparent mass would be overdamped and its duration not Bullet's)
+    t_c = collision_duration(law_model, k_c, _contact.law_for_restitution(
+        model.restitution, k_c, mu))
+    fastest = bodies.omega_max if bodies.omega_max is not None else sdof_rate(model)
+    if dt is None:
+        dt = choose_time_step(t_c, fastest)
+        limit = _contact.largest_time_step(k_c, c_c, mu)
+        if dt > limit:
+            dt = 0.9 * limit
+    check_time_step(dt, t_c, fastest)
+    check_work(t_end, dt, step_cost(bodies.segments or 1))  # before the replays of dt's steps
+    bullet = _contact.bullet_contact(k_c, c_c, mu, dt)
+    # Impacts are told from moving together on the scale of the SDOF model's free
+    # collision, the same for every rung (the chain's local collision, t_c, is shorter).
+    return k_c, c_c, bullet, dt, detection_duration(model, scenario.contact, stiffness=k_c)
+
+
+def _newton_contact(model: TwoBodyModel, bodies: _Bodies, contact_stiffness, dt) -> tuple:
+    """(dt s, detection duration s = dt) of Bullet's restitution impulses: the step from the
+    default contact duration and the fastest mode (given ``dt`` checked)."""
+    if contact_stiffness is not None:
+        raise ParameterError("--contact-stiffness: only for --contact soft")
+    m = model.impactor_mass
+    w = bodies.omega_max if bodies.omega_max is not None else math.sqrt(
+        (model.stiffness + model.impactor_stiffness) / min(model.dynamic_mass, m))
+    if dt is None:
+        dt = choose_time_step(DEFAULT_CONTACT_DURATION, bodies.omega_max)
+    check_time_step(dt, math.pi / w, w)
+    return dt, dt
+
+
+def step_cost(joints: int) -> StepCost:
+    """One step of the Python loop (:mod:`._loops`) over ``joints`` trunk hinges: wall time
+    and the bytes its record keeps, measured (benchmarks/bench_cost.py; docs/budgets.md):
+    4 us + 2.05 us x joints (the joint-state reads and torques) and 250 B + 64 B x joints."""
+    return StepCost(4e-6 + 2.05e-6 * joints, 250.0 + 64.0 * joints, f"{joints} trunk joints")
