@@ -23,12 +23,13 @@ ANALYTIC_FLOORS = ("errors", "budget", "results", "model", "records", "impact", 
 
 
 def _modules() -> dict[str, Path]:
-    """Every module of the installed package (tests and conftests excluded) and its file."""
+    """Every module of the installed package and its file (compare's tests, in
+    ``compare/tests/``, are not part of it)."""
     out = {}
     for folder, dotted in FOLDERS.items():
         for path in (ROOT / folder).rglob("*.py"):
             parts = path.relative_to(ROOT / folder).with_suffix("").parts
-            if parts[-1].startswith("test_") or parts[-1] == "conftest":
+            if "tests" in parts[:-1]:
                 continue
             if parts[-1] == "__init__":
                 parts = parts[:-1]
