@@ -377,7 +377,7 @@ def from_small_e(trees: dict) -> dict:
 def small_e_now() -> dict:
     """:func:`from_small_e` of the shipped trees computed now (compare.small_e, in this
     process: a few seconds)."""
-    from .small_e import small_e_answer, small_e_table
+    from .studies.small_e import small_e_answer, small_e_table
 
     return from_small_e({t: small_e_answer(_scenario(t), small_e_table(t)) for t in TREES})
 
@@ -602,7 +602,7 @@ def shipped() -> dict:
     from treeimpact.analytic.records import metrics_from_record
 
     out["code.identify_resolution"] = RESOLUTION
-    from .ident_study import FIT_NOISE
+    from .studies.ident_study import FIT_NOISE
 
     out["code.report_fit_noise_pct"] = _round(100.0 * FIT_NOISE)
     out["code.persist_factor"] = inspect.signature(metrics_from_record).parameters[
@@ -640,9 +640,9 @@ def shipped() -> dict:
     out["code.budget.max_gb"] = budget.MAX_BYTES / 1e9
     out["code.budget.max_seconds"] = budget.MAX_SECONDS
     # the sensitivity study's design (compare/sensitivity.py, the presets)
-    from .sensitivity import DURATIONS as PADS
-    from .sensitivity import INPUTS, LEVELS
-    from .sweep.study import PRESETS
+    from .studies.sensitivity import DURATIONS as PADS
+    from .studies.sensitivity import INPUTS, LEVELS
+    from .validity.study import PRESETS
 
     out["code.sensitivity.levels"] = LEVELS
     out["code.sensitivity.inputs"] = len(INPUTS)

@@ -112,7 +112,7 @@ def test_the_contact_scan_s_crossings_hold_now():
     from treeimpact.analytic.contact.soft import simulate_soft
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.contact_scan import DURATIONS, HEADLINE_METRICS
+    from treeimpact.compare.studies.contact_scan import DURATIONS, HEADLINE_METRICS
     from treeimpact.compare.sweep.apply import apply_point
     from treeimpact.compare.verdicts import validity_tolerance
 
@@ -193,7 +193,7 @@ def test_the_presets_quote_their_measured_cost():
     slice, results/presets.json); "about": within 25 % (the machine's noise, a factor ~2
     under load, is in the files' load averages, not here)."""
     from treeimpact.compare.cli import build_parser
-    from treeimpact.compare.sweep.study import PRESETS
+    from treeimpact.compare.validity.study import PRESETS
 
     made, full = _results("make"), _results("presets")
     sweep = build_parser()._subparsers._group_actions[0].choices["sweep"]

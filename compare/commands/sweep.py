@@ -11,7 +11,7 @@ HELP = "run a parameter sweep: validity maps and studies"
 
 def add_arguments(sp) -> None:
     """The sweep's flags (compare.sweep.cli_support) and the run budget."""
-    from treeimpact.compare.sweep.cli_support import add_sweep_arguments
+    from treeimpact.compare.validity.cli_support import add_sweep_arguments
 
     add_sweep_arguments(sp)
     add_budget_flag(sp)
@@ -19,6 +19,6 @@ def add_arguments(sp) -> None:
 
 def run(args) -> int:
     """Run the sweep; its exit code (130 when interrupted, with how to resume)."""
-    from treeimpact.compare.sweep.cli_support import run_sweep_command
+    from treeimpact.compare.validity.cli_support import run_sweep_command
 
     return run_sweep_command(args)

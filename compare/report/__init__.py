@@ -32,7 +32,7 @@ from pathlib import Path
 from treeimpact.analytic.results import to_jsonable
 
 from ..provenance import provenance, scenario_digest
-from ..small_e import E_GRID, RESOLUTION
+from ..studies.small_e import E_GRID, RESOLUTION
 from ..verdicts import Verdict, validity_tolerance
 from .answer import (
     ANSWER_METRICS,
@@ -56,13 +56,13 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     report (compare.sweep.study_job.StudyJob), each a section once it ends."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
-    from ..contact_scan import scan_result, scan_sweep
-    from ..ident_study import fit_one, fit_tasks
+    from ..studies.contact_scan import scan_result, scan_sweep
+    from ..studies.ident_study import fit_one, fit_tasks
     from ..ladder import build_ladder, prefetch_ladders
     from ..pool import check_stop, process_map
     from ..progress import Progress
     from ..runs import RunCache, resolve_scenario
-    from ..small_e import small_e_answer, small_e_sweep
+    from ..studies.small_e import small_e_answer, small_e_sweep
     from ..sweep.run import run_sweeps
     from .answer_figures import small_e_figure
     from .figures import FigureFiles, contact_scan_figure

@@ -145,7 +145,7 @@ def record_identification(result, scenario, record: dict) -> dict:
 
 record_identification.columns = RECORD_COLUMNS
 #: The analysis's reference, as the sweeps load it in a worker.
-ANALYSIS = "treeimpact.compare.ident_study:record_identification"
+ANALYSIS = "treeimpact.compare.studies.ident_study:record_identification"
 
 
 def _flat(nested: dict) -> dict:

@@ -170,7 +170,7 @@ def answer_and_crossings(result, scenario, params: dict) -> dict:
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
 
     from .contact_scan import shortest_within
-    from .verdicts import validity_tolerance
+    from ..verdicts import validity_tolerance
 
     scen, theory = vary(scenario, inputs_of(scenario) | dict(params))
     out = _answer(scen, theory)
@@ -188,8 +188,8 @@ def answer_and_crossings(result, scenario, params: dict) -> dict:
 
 answer_and_crossings.columns = OUTPUTS
 #: The analyses' references, as the sweeps load them in a worker.
-ANALYSES = {False: "treeimpact.compare.sensitivity:answer_under",
-            True: "treeimpact.compare.sensitivity:answer_and_crossings"}
+ANALYSES = {False: "treeimpact.compare.studies.sensitivity:answer_under",
+            True: "treeimpact.compare.studies.sensitivity:answer_and_crossings"}
 
 
 def design(trajectories: int, seed: int = SEED, names=None) -> np.ndarray:
@@ -205,9 +205,9 @@ def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
     """The study of one tree as a sweep (:class:`compare.sweep.run.SweepSpec`) into ``out``:
     the Morris design over its free inputs (:func:`free_inputs`) as ``input.*`` axes,
     :func:`answer_under` (with ``crossings``, :func:`answer_and_crossings`) at each point."""
-    from .runs import resolve_scenario
-    from .sweep.grid import Design
-    from .sweep.run import SweepSpec
+    from ..runs import resolve_scenario
+    from ..sweep.grid import Design
+    from ..sweep.run import SweepSpec
 
     scen = resolve_scenario(scenario)
     names = free_inputs(scen)

@@ -104,7 +104,7 @@ def exact_run(scenario, e: float):
     the scenario at ``e``)."""
     from treeimpact.analytic.impact.simulate import simulate
 
-    from .rungs import analytic_samples
+    from ..rungs import analytic_samples
 
     s = at_restitution(scenario, e)
     return simulate(s, samples=analytic_samples(s.t_end)), s
@@ -139,7 +139,7 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     identification sweep's ``id.*``, ``truth.*``, ``id_error`` and ``T0`` columns (the
     scenario section's table of the identification against e); the continuum's gaps only
     with ``continuum``."""
-    from .identification import IDENT_METRICS, identify_rung
+    from ..identification import IDENT_METRICS, identify_rung
 
     e = scenario.contact.restitution
     errors = energy_errors(result)
@@ -183,13 +183,13 @@ def small_e_sweep(scenario, out):
     """The small-e curves of one tree as a sweep (:class:`compare.sweep.run.SweepSpec`)
     into ``out``: the exact solver at every e of :func:`grid_of`, :func:`errors_at_run` on
     each."""
-    from .runs import resolve_scenario
-    from .sweep.run import SweepSpec
+    from ..runs import resolve_scenario
+    from ..sweep.run import SweepSpec
 
     scen = resolve_scenario(scenario)
     return SweepSpec(scen, ["restitution=" + ",".join(repr(e) for e in grid_of(scen))],
                      Path(out), ("analytic",), identify=True,
-                     analysis="treeimpact.compare.small_e:errors_at_run")
+                     analysis="treeimpact.compare.studies.small_e:errors_at_run")
 
 
 def small_e_table(scenario, grid=E_GRID):
@@ -197,7 +197,7 @@ def small_e_table(scenario, grid=E_GRID):
     directory): one row per e of :func:`grid_of` ``grid`` (a pandas DataFrame)."""
     import pandas as pd
 
-    from .runs import resolve_scenario
+    from ..runs import resolve_scenario
 
     scen = resolve_scenario(scenario)
     rows = []
@@ -239,7 +239,7 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
     error_at_zero, verdict, label, what}; errors relative (NaN where none, with its
     reason), e in 1. The crossings are bisected here (the exact solver, and the continuum
     for the 1-DOF gaps, at a few more e)."""
-    from .verdicts import validity_tolerance
+    from ..verdicts import validity_tolerance
 
     tol = validity_tolerance() if tolerance is None else tolerance
     rows = sorted(table.to_dict("records"), key=lambda r: float(r["restitution"]))

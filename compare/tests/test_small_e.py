@@ -1,4 +1,4 @@
-"""The small-e answer (compare.small_e): each curve against something independent, the
+"""The small-e answer (compare.studies.small_e): each curve against something independent, the
 first crossing located to 0.01 in e, and the grid fine enough."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 from treeimpact.analytic.impact.ivp_reference import solve_ivp_impacts
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import two_body_model
-from treeimpact.compare.small_e import (
+from treeimpact.compare.studies.small_e import (
     APPROXIMATIONS,
     E_GRID,
     RESOLUTION,

@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
-from treeimpact.compare.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
+from treeimpact.compare.studies.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
 
-from .maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
-from .run import (
+from ..sweep.maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
+from ..sweep.run import (
     JOURNAL,
     TABLE,
     SweepSpec,
@@ -45,7 +45,7 @@ class Preset:
     engine_grid: tuple = ()  # --grid specs of a coarser engine check (its own sweep)
     map_metrics: tuple | None = None  # metrics drawn on the maps (None: every ladder metric)
     map_value: str = "rel"  # "rel": against the paper's model; "step": against the rung below
-    identification: bool = False  # the identification validation (compare.ident_study)
+    identification: bool = False  # the identification validation (compare.studies.ident_study)
     ident_sampling_rungs: tuple = ("analytic",)  # its rate x noise grid on these rungs' records
     ident_sampling_seeds: tuple = SAMPLING_SEEDS  # ... with these seeds
     ident_crown_ratios: tuple = CROWN_RATIOS  # its e x crown grid's crown ratios
@@ -100,7 +100,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     """Run (or resume) a preset's sweeps into ``out`` and write the study; returns the paths.
     ``sensitivity_scenarios``: the trees of its sensitivity study (shipped names, TOML paths
     or Scenarios; default: every shipped tree)."""
-    from .speed import speed_curves, speed_sweep
+    from ..studies.speed import speed_curves, speed_sweep
 
     p = get_preset(preset)
     t0 = time.perf_counter()
@@ -135,7 +135,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
         speed["curves"] = speed_curves(speed, out)
     ident_study = None
     if p.identification:
-        from treeimpact.compare.ident_study import run_identification_study
+        from treeimpact.compare.studies.ident_study import run_identification_study
 
         ident_study = run_identification_study(
             out, scen, workers=workers, progress=progress,
@@ -176,7 +176,7 @@ def _combined_table(out: Path, sweeps: dict, speed: dict | None):
 def _fmt_point(point) -> str:
     """A grid point as 'name = value unit, ...' in the maps' display units (a contact
     duration in ms; the table stores the point as JSON pairs in SI)."""
-    from .maps import point_text
+    from ..sweep.maps import point_text
 
     try:
         pairs = json.loads(point) if isinstance(point, str) else point
@@ -318,8 +318,8 @@ def _presentation(summary, validity, ident, curves) -> dict:
 
 
 def _ident_validation_text(iv) -> dict:
-    """The identification validation's texts and table rows (compare.ident_study)."""
-    from treeimpact.compare.ident_study import (
+    """The identification validation's texts and table rows (compare.studies.ident_study)."""
+    from treeimpact.compare.studies.ident_study import (
         ENGINE_CROWN_RATIOS,
         ENGINE_RESTITUTIONS,
         NOISE,
