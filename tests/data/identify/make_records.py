@@ -689,7 +689,7 @@ def accuracy_numbers(seeds: int) -> dict:
 
 def write_numbers(path: Path, numbers: dict, about: str) -> None:
     """Merge ``numbers`` into the results file ``path`` (docs/results/identify-validation.json:
-    compare/docs.py reads its ``numbers``), with when and at which commit."""
+    tests/docnumbers/ reads its ``numbers``), with when and at which commit."""
     from treeimpact.compare.provenance import code_version
 
     data = json.loads(path.read_text()) if path.exists() else {"numbers": {}, "about": {}}
