@@ -46,8 +46,7 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     """MuJoCo's solref/solimp (direct and time-constant) for ``law`` at ``dt``, the MJCF to
     paste, and the collision of each in MuJoCo (at dt, dt/2 and 2 dt), beside the naive
     (uncorrected) solref's; or ``{"error", "largest_dt"}`` beyond Euler's omega dt < 2."""
-    from treeimpact.mujoco_models import _contact as mc
-    from treeimpact.mujoco_models import _runner  # noqa: F401 - MuJoCo's warnings: stderr
+    from treeimpact import mujoco_models as mc
 
     k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
     top = 2.0 / math.sqrt(k / mu)
@@ -93,8 +92,8 @@ def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     and link flags exact restitution needs, and the collision in Bullet (at dt, dt/2 and
     2 dt) beside the naive settings'; or ``{"error", "largest_dt"}`` when its implicit step
     alone damps more than e allows."""
-    from treeimpact.bullet_models import _contact as bc
-    from treeimpact.bullet_models._world import LINK_FLAGS, WORLD_FLAGS, two_body_collision
+    from treeimpact import bullet_models as bc
+    from treeimpact.bullet_models import LINK_FLAGS, WORLD_FLAGS, two_body_collision
 
     k, c = law["contact_stiffness"], law["contact_damping"]
     limit = bc.largest_time_step(k, c, mu)
