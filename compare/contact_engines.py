@@ -92,8 +92,9 @@ def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     and link flags exact restitution needs, and the collision in Bullet (at dt, dt/2 and
     2 dt) beside the naive settings'; or ``{"error", "largest_dt"}`` when its implicit step
     alone damps more than e allows."""
-    from treeimpact import bullet_models as bc
     from treeimpact.bullet_models import LINK_FLAGS, WORLD_FLAGS, two_body_collision
+
+    from treeimpact import bullet_models as bc
 
     k, c = law["contact_stiffness"], law["contact_damping"]
     limit = bc.largest_time_step(k, c, mu)
