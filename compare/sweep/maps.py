@@ -592,10 +592,10 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
 
 
 #: Short labels of the sensitivity study's inputs and outputs on its figure.
-_INPUT_LABELS = {"clamp_mass": "clamp\nmass", "e_over_g": "E / G\n(shear)",
+INPUT_LABELS = {"clamp_mass": "clamp\nmass", "e_over_g": "E / G\n(shear)",
                  "log10_pad_duration": "pad\nstiffness", "restitution": "pad e",
                  "root_share": "root\ncompliance", "density": "wood\ndensity"}
-_OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
+OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
                   "gap.crown_peak": "crown peak gap",
                   "gap.crown_peak_acceleration": "crown accel. gap",
                   "gap.peak_force": "force gap", "crossing.x_max": "crossing, x_max",
@@ -616,7 +616,7 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
     outputs = list(dict.fromkeys(o for t in trees.values() for o in t["outputs"]))
     groups = [g for g in ([o for o in outputs if o.startswith("gap.")],
                           [o for o in outputs if o.startswith("crossing.")]) if g]
-    inputs = list(_INPUT_LABELS)
+    inputs = list(INPUT_LABELS)
     colours = dict(zip(inputs, ("tab:blue", "tab:orange", "tab:green", "tab:red",
                                 "tab:purple", "tab:brown")))
     fig = Figure(figsize=(3.4 * len(names) + 2.4, 0.85 * len(outputs) + 1.9),
@@ -641,7 +641,7 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
                             edgecolor="k" if i in out["deciding"] else "none", lw=1.2,
                             xerr=scale * v["mu_star_conf"],
                             error_kw={"lw": 0.8, "capsize": 1.5, "ecolor": "0.25"})
-            ax.set_yticks(range(len(group)), [_OUTPUT_LABELS.get(o, o) for o in group],
+            ax.set_yticks(range(len(group)), [OUTPUT_LABELS.get(o, o) for o in group],
                           fontsize=9)
             ax.set_ylim(len(group) - 0.5, -0.5)
             ax.grid(True, axis="x", lw=0.3)
@@ -650,7 +650,7 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
                 ax.set_title(name, fontsize=10)
             ax.set_xlabel("mu* (percentage points of the gap)" if scale == 100.0 else
                           "mu* (decades of the crossing duration)", fontsize=8.5)
-    handles = [Patch(color=colours[i], label=_INPUT_LABELS[i].replace("\n", " "))
+    handles = [Patch(color=colours[i], label=INPUT_LABELS[i].replace("\n", " "))
                for i in inputs]
     handles.append(Patch(facecolor="white", edgecolor="k", label="outlined: decides it\n"
                          "(several: not separable)"))
