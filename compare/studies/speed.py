@@ -29,7 +29,9 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
 
 from ..sweep.grid import Axis, Grid, Parameter, resolve_parameter
-from ..sweep.run import OK, read_table, run_sweep
+from ..runs import OK
+from ..sweep.journal import read_table
+from ..sweep.run import run_sweep
 
 #: Metrics of the error: those the contact model itself changes by at most b t_c
 #: (tolerances.toml [step.contact]), so the error against the paper can go to zero as the

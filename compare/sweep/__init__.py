@@ -4,13 +4,19 @@ model-validity study (``treeimpact sweep``) in :mod:`..validity`.
 
 * :mod:`.grid` - ``--grid`` specs (``restitution=0:0.9:10``, ``segments=1,2,4``), names and ratios;
 * :mod:`.apply` - a grid point applied to a scenario (``dataclasses.replace``, validated);
-* :mod:`.run` - the runner: process pool or Dask, resumable CSV/Parquet table;
+* :mod:`.plan` - targets, grid points applied and refused, rows grouped into tasks;
+* :mod:`.execute` - one task run: a backend call, its columns or an analysis's;
+* :mod:`.cost` - the cost model: tasks grouped into worker calls;
+* :mod:`.journal` - the journal (resumable CSV), the Parquet table and the spec;
+* :mod:`.run` - the runner: sweeps planned, run on one pool (processes or Dask), journaled;
 * :mod:`.maps` - validity maps (discrepancy vs analytic, tolerance contour, dominating rung)
   and identification maps.
 """
 
 from .grid import Axis, Grid, parse_axis, parse_grid
-from .run import SweepResult, make_targets, read_table, run_sweep
+from .journal import read_table
+from .plan import make_targets
+from .run import SweepResult, run_sweep
 
 __all__ = ["Axis", "Grid", "SweepResult", "make_targets", "parse_axis", "parse_grid",
            "read_table", "run_sweep"]

@@ -14,9 +14,10 @@ from treeimpact.analytic.errors import ParameterError
 # the ladder's metrics and tolerance file, so a study and the report speak of the same things
 from treeimpact.compare.ladder import LADDER_METRICS
 from treeimpact.compare.rungs import RungKind
+from treeimpact.compare.runs import OK
 from treeimpact.compare.verdicts import validity_tolerance
 
-from .run import IDENT_KEYS, OK
+from .execute import IDENT_KEYS
 
 #: A study's validity criterion (5 %), not a test tolerance: tolerances.toml [study] validity
 #: with its reason, the one tolerance source. Override with ``tolerance=`` / ``--tolerance``.

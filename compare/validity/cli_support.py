@@ -157,10 +157,11 @@ def _run(args) -> int:
 
     t_start = time.perf_counter()
     from ..sweep.grid import parse_grid
-    from ..sweep.run import _check_backends, run_sweep
+    from ..sweep.plan import check_backends
+    from ..sweep.run import run_sweep
     from .study import run_study, write_study
 
-    backends = _check_backends(args.backend)
+    backends = check_backends(args.backend)
     grid = parse_grid(args.grid) if args.grid else None
     options = parse_options(args.option, backends)
     if args.sensitivity_scenarios and not args.preset:

@@ -18,16 +18,8 @@ from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
 
 from ..sweep.maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
-from ..sweep.run import (
-    JOURNAL,
-    TABLE,
-    SweepSpec,
-    make_out,
-    read_file,
-    read_table,
-    run_sweep,
-    run_sweeps,
-)
+from ..sweep.journal import JOURNAL, TABLE, make_out, read_file, read_table
+from ..sweep.run import SweepSpec, run_sweep, run_sweeps
 from .sensitivity_study import sensitivity_result, sensitivity_specs
 
 
