@@ -57,7 +57,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..studies.contact_scan import scan_result, scan_sweep
-    from ..studies.ident_study import fit_one, fit_tasks
+    from ..studies.ident_fits import fit_one, fit_tasks
     from ..ladder import build_ladder, prefetch_ladders
     from ..pool import check_stop, process_map
     from ..progress import Progress

@@ -10,7 +10,7 @@ import numpy as np
 
 from treeimpact.analytic.results import to_jsonable
 
-from ..studies.ident_study import fit_one, fit_tasks
+from ..studies.ident_fits import fit_one, fit_tasks
 from ..identification import IDENT_METRICS
 from ..ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
 from ..mechanism import matched_loss_evidence

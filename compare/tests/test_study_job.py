@@ -45,7 +45,7 @@ def test_a_failed_study_fails_with_its_exit_code_and_last_line(tmp_path):
 def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypatch):
     """The report looks at its studies after its runs: one that already failed ends it
     there, not after the record fits and figures."""
-    import treeimpact.compare.studies.ident_study as ident_study
+    import treeimpact.compare.studies.ident_fits as ident_fits
 
     job = _quick(StudyJob("default", tmp_path / "out" / "study"), "restitution=2").start()
     while job._proc.poll() is None:
@@ -54,7 +54,7 @@ def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypa
     def no_fit(task):
         pytest.fail("fitted records for a report whose study had failed")
 
-    monkeypatch.setattr(ident_study, "fit_one", no_fit)
+    monkeypatch.setattr(ident_fits, "fit_one", no_fit)
     with pytest.raises(ParameterError, match="exit code 2"):
         write_report(tmp_path / "out", scenarios=["open-center"], runs=RunCache(),
                      engines=(), study_jobs=(job,))

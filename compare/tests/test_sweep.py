@@ -474,7 +474,7 @@ def test_a_cheap_run_is_repeated_per_record_so_its_fits_spread_over_the_workers(
     record, so 18 fits of one record grid do not queue on one worker (the default study's
     sampling grid did: 10 s on one core)."""
     from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.studies.ident_study import ANALYSIS
+    from treeimpact.compare.studies.ident_records import ANALYSIS
     from treeimpact.compare.sweep.cost import ANALYSIS_COST
     from treeimpact.compare.sweep.plan import make_targets, plan
 

@@ -103,7 +103,7 @@ def _code_limits(out: dict) -> None:
     from treeimpact.analytic.identify.record_fit import RESOLUTION
     from treeimpact.analytic.impact.solver import MAX_CHATTER_IMPACTS
     from treeimpact.analytic.records import metrics_from_record
-    from treeimpact.compare.studies.ident_study import FIT_NOISE
+    from treeimpact.compare.studies.ident_fits import FIT_NOISE
 
     out["code.max_chatter_impacts"] = MAX_CHATTER_IMPACTS
     out["code.identify_resolution"] = RESOLUTION

@@ -242,7 +242,7 @@ def beam_record(crown_ratio: float, rate: float, noise: float, seed: int, e: flo
     from treeimpact.analytic.identify.procedure import pendulum_test_of
     from treeimpact.analytic.model.two_body import two_body_model
     from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.studies.ident_study import Case, _scenario
+    from treeimpact.compare.studies.ident_records import Case, _scenario
 
     scen = _scenario(Case("central-leader", e, crown_ratio, "beam"))
     scen = type(scen)(**{**scen.__dict__, "t_end": t_end})
