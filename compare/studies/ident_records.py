@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..runs import FAILED, OK
+
 RATE = 5e3  # Hz: a common displacement-transducer rate
 NOISE = 0.01  # Gaussian noise, fraction of the record's peak
 REST = 0.02  # s of rest recorded before the impact (analytic.identify.record_fit needs a baseline)
@@ -156,7 +158,7 @@ def case_row(row: dict) -> dict:
            "rate": float(row.get("record.rate", RATE)),
            "noise": float(row.get("record.noise", NOISE)),
            "seed": int(row.get("record.seed", 0))}
-    if row.get("status") != "ok":
+    if row.get("status") != OK:
         out["error"] = row.get("error")
         return out
     for col in RECORD_COLUMNS:
@@ -188,6 +190,6 @@ def identify_case(case: Case) -> dict:
         scen = _scenario(case)
         result = get_backend(case.rung).simulate(scen)
     except Exception as exc:  # noqa: BLE001 - recorded per case
-        return case_row(row | {"status": "failed", "error": f"{type(exc).__name__}: {exc}"})
-    return case_row(row | {"status": "ok"} | record_identification(
+        return case_row(row | {"status": FAILED, "error": f"{type(exc).__name__}: {exc}"})
+    return case_row(row | {"status": OK} | record_identification(
         result, scen, {"rate": case.rate, "noise": case.noise, "seed": case.seed}))

@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..runs import OK
+
 #: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it).
 INPUTS = {
     "clamp_mass": (1.0, 16.0, "kg",
@@ -276,7 +278,7 @@ def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
     rows = {tuple(round(float(r[f"input.{n}"]), 12) for n in names): r
             for r in table.to_dict("records")}
     ok = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
-    failed = [r for r in ok if r is None or r.get("status") != "ok"]
+    failed = [r for r in ok if r is None or r.get("status") != OK]
     out = {"inputs": {n: {"low": v[0], "high": v[1], "unit": v[2], "why": v[3],
                           "settle": v[4]} for n, v in INPUTS.items() if n in names},
            "held": dict(held or {}), "trajectories": trajectories, "points": len(X),

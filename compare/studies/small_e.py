@@ -16,6 +16,8 @@ import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..runs import OK
+
 #: The e of the curves (1): [0, 0.9] in steps of 0.05.
 E_GRID = tuple(round(0.05 * i, 2) for i in range(19))
 #: Where an approximation has no value at e = 0 (eq 45: x0 = T0 = A_x = 0; the pad law needs
@@ -203,7 +205,7 @@ def small_e_table(scenario, grid=E_GRID):
     rows = []
     for e in grid_of(scen, grid):
         run, s = exact_run(scen, e)
-        rows.append({"restitution": e, "status": "ok", "error": None} | errors_at_run(run, s))
+        rows.append({"restitution": e, "status": OK, "error": None} | errors_at_run(run, s))
     return pd.DataFrame(rows)
 
 
@@ -261,8 +263,8 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
     out = {}
     for name, approx in APPROXIMATIONS.items():
         values = [_float(r.get(f"small_e.{name}")) for r in rows]
-        if any(r.get("status") != "ok" for r in rows):
-            values = [v if r.get("status") == "ok" else math.nan for v, r in zip(values, rows)]
+        if any(r.get("status") != OK for r in rows):
+            values = [v if r.get("status") == OK else math.nan for v, r in zip(values, rows)]
         holds, bracket = first_crossing(grid, values, evaluate(name), tol)
         at_e = next((v for e, v in zip(grid, values) if abs(e - e0) < 1e-12), None)
         reasons = {f"{e:g}": str(r.get(f"small_e_reason.{name}") or r.get("error"))

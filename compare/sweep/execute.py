@@ -71,7 +71,7 @@ def execute(task: Task) -> list[dict]:
     """Run one task: the outcome of each of its rows; never raises for a failing run (the
     error is the outcome)."""
     done = attempt(task.backend, task.scenario, task.options)
-    out = {"status": str(done.status), "error": done.reason, "t_end": task.scenario.t_end,
+    out = {"status": done.status, "error": done.reason, "t_end": task.scenario.t_end,
            "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_s": done.wall_s}
     result = done.result
     if done.status == OK:

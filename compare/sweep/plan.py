@@ -20,7 +20,7 @@ from treeimpact.compare.runs import INVALID
 from .apply import apply_point
 from .cost import ANALYSIS_COST
 from .execute import Task
-from .grid import INPUT, RECORD, Grid, point_key
+from .grid import INPUT, OPTION, RECORD, Grid, point_key
 
 REFERENCE_BACKENDS = ("analytic", "soft", "beam")
 
@@ -189,7 +189,7 @@ def check_grid(scenario: Scenario, grid: Grid, targets: list[Target]) -> list[tu
     accepted = set().union(*(_accepted(t.backend) for t in targets))
     for ax in grid.axes:
         p = ax.parameter
-        if p.kind == "option" and p.target not in accepted:
+        if p.kind == OPTION and p.target not in accepted:
             raise ParameterError(
                 f"--grid {ax.spec()!r}: no backend of this sweep "
                 f"({', '.join(dict.fromkeys(t.backend for t in targets))}) takes the option "

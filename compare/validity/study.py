@@ -16,6 +16,7 @@ from treeimpact.compare.backends import ENGINES
 from treeimpact.compare.studies.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
+from treeimpact.compare.runs import OK
 
 from ..sweep.maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
 from ..sweep.journal import JOURNAL, TABLE, make_out, read_file, read_table
@@ -221,13 +222,13 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
     status = table["status"].value_counts().to_dict() if len(table) else {}
     timings = {}
     if len(table):
-        ok = table[table["status"] == "ok"].drop_duplicates(subset=["task"])
+        ok = table[table["status"] == OK].drop_duplicates(subset=["task"])
         for b, g in ok.groupby("backend"):
             timings[b] = {"runs": int(len(g)), "mean_wall_s": float(g["wall_s"].astype(float)
                                                                     .mean())}
     problems = []
     if len(table):
-        bad = table[table["status"] != "ok"].drop_duplicates(subset=["target", "error"])
+        bad = table[table["status"] != OK].drop_duplicates(subset=["target", "error"])
         problems = [{"sweep": r["sweep"], "target": r["target"], "status": r["status"],
                      "error": r["error"]} for _, r in bad.head(40).iterrows()]
     summary = {

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 
+from treeimpact.compare.runs import OK
+
 from .base import DISPLAY, TREES, finite, per_tree, put, rounded, span
 
 #: The truth's quantities the pages quote (the scenario's own 1-DOF model).
@@ -26,7 +28,7 @@ def view_from_report(report: dict) -> dict:
     for name, sc in report["scenarios"].items():
         rungs = {}
         for r in sc["rungs"]:
-            if r["status"] != "ok":
+            if r["status"] != OK:
                 continue
             rungs[_rung_group(r["id"], r["kind"], r["backend"])] = {
                 "id": r["id"], "previous": r["previous"], "values": r["values"],
