@@ -14,7 +14,7 @@ _STYLES = {"eq57_energy_loss": ("o-", "tab:red"),
            "eq58_energy_transferred": ("s-", "tab:orange"),
            "identification_M_T": ("^-", "tab:blue"),
            "identification_K_T": ("v-", "tab:cyan"),
-           "identification_xi": ("D-", "tab:green"),
+           "identification_pair_damping_ratio": ("D-", "tab:green"),
            "eq45_area": ("P-", "tab:purple"),
            "one_dof_x_max": ("x--", "black"),
            "one_dof_energy_delivered": ("*--", "0.45")}

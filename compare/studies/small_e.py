@@ -53,7 +53,7 @@ APPROXIMATIONS = {
     "identification_K_T": Approximation(
         "identified K_T (eq 46)", "the paper's procedure on the exact record, against its "
         "K_T"),
-    "identification_xi": Approximation(
+    "identification_pair_damping_ratio": Approximation(
         "identified xi (eqs 42-43)", "the paper's procedure on the exact record, against "
         "the moving-together pair's damping ratio"),
     "eq45_area": Approximation(
@@ -151,8 +151,8 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     out = {"T0": result.metrics["T0"], "id_error": None if ident.ok else ident.reason}
     out |= {f"truth.{k}": v for k, v in ident.truth.items()}
     out |= {f"id.{k}": ident.values.get(k, math.nan) for k in IDENT_METRICS}
-    errors |= {f"identification_{k}": ident.errors.get(k, math.nan) for k in ("M_T", "K_T",
-                                                                               "xi")}
+    errors |= {f"identification_{k}": ident.errors.get(k, math.nan)
+               for k in ("M_T", "K_T", "pair_damping_ratio")}
     if continuum:
         errors |= continuum_gaps(scenario, e, result.metrics)
     for name, approx in APPROXIMATIONS.items():
@@ -173,7 +173,7 @@ def errors_at_run(result, scenario, record=None) -> dict:
 
 
 errors_at_run.columns = COLUMNS + ("T0", "id_error") + tuple(
-    f"{p}.{k}" for p in ("id", "truth") for k in ("M_T", "K_T", "xi", "E"))
+    f"{p}.{k}" for p in ("id", "truth") for k in ("M_T", "K_T", "pair_damping_ratio", "E"))
 
 
 def grid_of(scenario, grid=E_GRID) -> tuple:

@@ -25,7 +25,7 @@ MODEL_KEYS = ("M_T", "C_T", "K_T", "m", "k", "restitution", "u1", "segments", "d
               "pad_damping_ratio")
 #: The identified quantities kept as ``id.*`` and their truth as ``truth.*`` (SI;
 #: compare.identification.IDENT_METRICS).
-IDENT_KEYS = ("M_T", "K_T", "xi", "E")
+IDENT_KEYS = ("M_T", "K_T", "pair_damping_ratio", "E")
 
 
 def load_analysis(ref: str):

@@ -497,7 +497,7 @@ _E_NAMES = ("restitution",)
 _CROWN_NAMES = ("crown_ratio", "trunk.crown_mass")
 #: The parameters the identification maps draw: E is K_T a^3 / (3 I) (eq 47) with a and I
 #: known, so its relative error is K_T's; the summary tables list it.
-MAPPED_IDENT_KEYS = ("M_T", "K_T", "xi")
+MAPPED_IDENT_KEYS = ("M_T", "K_T", "pair_damping_ratio")
 
 
 def _why_not_identified(sub) -> str:

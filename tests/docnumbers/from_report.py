@@ -12,7 +12,7 @@ from treeimpact.compare.runs import OK
 from .base import DISPLAY, TREES, finite, per_tree, put, rounded, span
 
 #: The truth's quantities the pages quote (the scenario's own 1-DOF model).
-TRUTH_KEYS = ("M_T", "K_T", "b", "omega_n", "xi")
+TRUTH_KEYS = ("M_T", "K_T", "b", "omega_n", "pair_damping_ratio")
 
 
 def _rung_group(rung_id: str, kind: str, backend: str) -> str:
