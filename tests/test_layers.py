@@ -285,6 +285,60 @@ def test_pyproject_maps_every_package_folder_under_treeimpact():
     assert config["package-data"]["treeimpact.analytic.model"] == ["scenarios/*.toml"]
 
 
+#: The package data the wheel carries: source folder -> patterns of files in it.
+PACKAGE_DATA = {"analytic/model": ["scenarios/*.toml"], "compare": ["tolerances.toml"],
+                "compare/report": ["templates/*.j2"], "mujoco_models": ["models/*.xml"],
+                "bullet_models": ["models/*.urdf"]}
+
+
+@pytest.fixture(scope="module")
+def wheel_files(tmp_path_factory) -> set[str]:
+    """The files of the wheel built from a copy of the checkout (offline: no build isolation,
+    no index; the checkout itself is left without a build/ folder)."""
+    import shutil
+    import zipfile
+
+    src, dist = tmp_path_factory.mktemp("src"), tmp_path_factory.mktemp("dist")
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, src / name)
+    for folder in FOLDERS:
+        shutil.copytree(ROOT / folder, src / folder,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-index",
+                           "--no-build-isolation", "-q", "-w", str(dist), str(src)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    (wheel,) = dist.glob("treeimpact-*.whl")
+    return set(zipfile.ZipFile(wheel).namelist())
+
+
+def test_the_wheel_holds_the_library_and_no_tests_or_tooling(wheel_files):
+    """No test module, conftest or tests folder and no docs tooling is installed."""
+    shipped = [f for f in wheel_files if f.startswith("treeimpact/")]
+    assert shipped
+    names = [Path(f).name for f in shipped]
+    assert not [n for n in names if n.startswith("test_") or n == "conftest.py"]
+    assert not [f for f in shipped if "/tests/" in f or "docnumbers" in f
+                or f.endswith("compare/docs.py")]
+
+
+def test_the_wheel_holds_every_module_and_its_data(wheel_files):
+    """Every module of the package (tests/test_layers.py's MODULES) and every file of the
+    package data (scenarios, tolerances.toml, the report's templates, the engines' models)."""
+    def installed(path: Path) -> str:
+        parts = path.relative_to(ROOT).parts  # a folder is its subpackage of treeimpact
+        return "/".join(parts if parts[0] == "treeimpact" else ("treeimpact", *parts))
+
+    modules = sorted(installed(p) for p in MODULES.values())
+    assert len(modules) > 100 and [m for m in modules if m not in wheel_files] == []
+    data = [installed(p) for folder, patterns in PACKAGE_DATA.items() for pattern in patterns
+            for p in sorted((ROOT / folder).glob(pattern))]
+    assert len(data) > 10 and [f for f in data if f not in wheel_files] == []
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert {f"treeimpact.{k.replace('/', '.')}": v for k, v in PACKAGE_DATA.items()} == \
+        config["package-data"]
+
+
 def test_installed_the_project_is_one_top_level_package(tmp_path):
     """From a directory outside the checkout: treeimpact imports, the folders' bare names
     do not (the installed distribution adds one top-level name)."""
