@@ -1,5 +1,5 @@
 """``treeimpact sweep``: a model-validity study over a grid (the arguments and the run live
-in :mod:`treeimpact.compare.sweep.cli_support`)."""
+in :mod:`treeimpact.compare.validity.cli_support`)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ HELP = "run a parameter sweep: validity maps and studies"
 
 
 def add_arguments(sp) -> None:
-    """The sweep's flags (compare.sweep.cli_support) and the run budget."""
+    """The sweep's flags (compare.validity.cli_support) and the run budget."""
     from treeimpact.compare.validity.cli_support import add_sweep_arguments
 
     add_sweep_arguments(sp)

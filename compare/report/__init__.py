@@ -53,7 +53,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     """The report's sections (not yet rendered) and the wall time each took (s); figures
     are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
     sections reported on stderr as they finish; ``study_jobs``: studies running beside the
-    report (compare.sweep.study_job.StudyJob), each a section once it ends."""
+    report (compare.validity.study_job.StudyJob), each a section once it ends."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..studies.contact_scan import scan_result, scan_sweep
@@ -163,7 +163,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     Options ``engines`` (tuple of engine backends) and ``segments`` (hinged trunk) go to
     the ladder. Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
     ``out_dir/figures``. Option ``study_jobs``: studies running beside the report
-    (compare.sweep.study_job.StudyJob), included when they end.
+    (compare.validity.study_job.StudyJob), included when they end.
     """
     from .base import environment
 

@@ -70,8 +70,8 @@ def one_dof_answer(scen_sections) -> list[dict]:
 
 def with_sensitivity(answer: list[dict], studies) -> None:
     """Each answer row with its cells' bands over the unmeasured inputs and the inputs that
-    decide each, from a study with a sensitivity part (compare.sensitivity); ``trajectories``
-    and ``held`` (the measured inputs) beside them."""
+    decide each, from a study with a sensitivity part (compare.studies.sensitivity);
+    ``trajectories`` and ``held`` (the measured inputs) beside them."""
     sens = next((s.study["sensitivity"] for s in studies
                  if s.study and s.study.get("sensitivity")), {})
     trees = sens.get("trees", {})

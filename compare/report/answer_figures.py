@@ -1,5 +1,5 @@
 """The answer's figure of the small-e half: each approximation's error against e, one panel
-per tree (compare.small_e; the report's first section)."""
+per tree (compare.studies.small_e; the report's first section)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 
 from .figures import _legend_right, plt
 
-#: Line styles of the approximations (compare.small_e.APPROXIMATIONS), in its order.
+#: Line styles of the approximations (compare.studies.small_e.APPROXIMATIONS), in its order.
 _STYLES = {"eq57_energy_loss": ("o-", "tab:red"),
            "eq58_energy_transferred": ("s-", "tab:orange"),
            "identification_M_T": ("^-", "tab:blue"),

@@ -53,7 +53,7 @@ def energy_ledger(rr) -> dict | None:
 
 
 def identification_sweep(table) -> list[dict]:
-    """Per e of the small-e sweep's table (compare.small_e): the procedure's values and
+    """Per e of the small-e sweep's table (compare.studies.small_e): the procedure's values and
     relative errors against the SDOF truth (M_T, K_T, xi, E), or why there are none."""
     out = []
     for r in sorted(table.to_dict("records"), key=lambda r: float(r["restitution"])):
@@ -183,7 +183,8 @@ class ScenarioSection(Section):
                   figure_sink=None, fits=None):
         """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
         lacks are made here, so prefetch them first) and its small-e sweep's table
-        (compare.small_e.small_e_sweep; None: the section has no identification against e)."""
+        (compare.studies.small_e.small_e_sweep; None: the section has no identification
+        against e)."""
         kw = {} if engines is None else {"engines": engines}
         ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)
         sweep = identification_sweep(e_table) if e_table is not None else []

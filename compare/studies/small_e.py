@@ -168,7 +168,8 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
 
 
 def errors_at_run(result, scenario, record=None) -> dict:
-    """The sweep's analysis (compare.sweep.run): :func:`errors_of_run` with the continuum."""
+    """The sweep's analysis (run by compare.sweep.execute): :func:`errors_of_run` with the
+    continuum."""
     return errors_of_run(result, scenario)
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from treeimpact.compare.backends import get_backend
 
-#: Seconds one record's analysis takes (a full-record fit of compare.ident_study, median
+#: Seconds one record's analysis takes (a full-record fit of compare.studies.ident_records, median
 #: 0.5 s, docs/identification.md): a run cheaper than this is repeated per record.
 ANALYSIS_COST = 0.5
 
