@@ -204,33 +204,10 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
     out = make_out(out)
     meta = dict(meta or {})
     table_path, table = _combined_table(out, sweeps, speed)
-    validity, ident, specs = [], [], {}
-    drawn = set()  # targets already mapped from an earlier (finer) sweep of the study
-    for name, d in sweeps.items():
-        df = read_table(d)
-        specs[name] = read_file(Path(d) / "sweep.json",
-                                lambda p: json.loads(p.read_text(encoding="utf-8")), "spec")
-        prefix = "" if len(sweeps) == 1 or name == "validity" else f"{name}-"
-        order = [t["id"] for t in specs[name].get("targets", [])]
-        validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity",
-                                  order=order, value=value, skip=drawn,
-                                  **({"metrics": metrics} if metrics else {}))
-        ident += identification_maps(df, out, prefix=f"{prefix}identification", order=order,
-                                     skip=drawn)
-        drawn |= set(order)
+    validity, ident, specs = _draw_maps(out, sweeps, tolerance=tolerance, metrics=metrics,
+                                        value=value)
     curves = (speed or {}).get("curves", [])
-    status = table["status"].value_counts().to_dict() if len(table) else {}
-    timings = {}
-    if len(table):
-        ok = table[table["status"] == OK].drop_duplicates(subset=["task"])
-        for b, g in ok.groupby("backend"):
-            timings[b] = {"runs": int(len(g)), "mean_wall_s": float(g["wall_s"].astype(float)
-                                                                    .mean())}
-    problems = []
-    if len(table):
-        bad = table[table["status"] != OK].drop_duplicates(subset=["target", "error"])
-        problems = [{"sweep": r["sweep"], "target": r["target"], "status": r["status"],
-                     "error": r["error"]} for _, r in bad.head(40).iterrows()]
+    status, timings, problems = _runs_of(table)
     summary = {
         "title": title, **meta, "sweeps": {n: {"scenario": s["scenario"]["name"],
                                                "grid": s["grid"]} for n, s in specs.items()},
@@ -261,6 +238,46 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
             "table": table_path,
             "figures": [v["path"] for v in validity + ident if v["path"]]
             + [c["path"] for c in curves if c["path"]]}
+
+
+def _draw_maps(out: Path, sweeps: dict, *, tolerance, metrics, value: str) -> tuple:
+    """The validity and identification maps of each finished sweep (``{name: sweep dir}``)
+    drawn into ``out``, a target mapped once (from the first, finest sweep that has it);
+    returns (validity maps, identification maps, each sweep's spec)."""
+    validity, ident, specs = [], [], {}
+    drawn = set()  # targets already mapped from an earlier (finer) sweep of the study
+    for name, d in sweeps.items():
+        df = read_table(d)
+        specs[name] = read_file(Path(d) / "sweep.json",
+                                lambda p: json.loads(p.read_text(encoding="utf-8")), "spec")
+        prefix = "" if len(sweeps) == 1 or name == "validity" else f"{name}-"
+        order = [t["id"] for t in specs[name].get("targets", [])]
+        validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity",
+                                  order=order, value=value, skip=drawn,
+                                  **({"metrics": metrics} if metrics else {}))
+        ident += identification_maps(df, out, prefix=f"{prefix}identification", order=order,
+                                     skip=drawn)
+        drawn |= set(order)
+    return validity, ident, specs
+
+
+def _runs_of(table) -> tuple:
+    """What the study's runs came to (its combined table): the count of each status, each
+    backend's runs and mean wall time (s) over its distinct tasks that succeeded, and up to
+    40 distinct failures (sweep, target, status, error)."""
+    status = table["status"].value_counts().to_dict() if len(table) else {}
+    timings = {}
+    if len(table):
+        ok = table[table["status"] == OK].drop_duplicates(subset=["task"])
+        for b, g in ok.groupby("backend"):
+            timings[b] = {"runs": int(len(g)), "mean_wall_s": float(g["wall_s"].astype(float)
+                                                                    .mean())}
+    problems = []
+    if len(table):
+        bad = table[table["status"] != OK].drop_duplicates(subset=["target", "error"])
+        problems = [{"sweep": r["sweep"], "target": r["target"], "status": r["status"],
+                     "error": r["error"]} for _, r in bad.head(40).iterrows()]
+    return status, timings, problems
 
 
 def render_study(summary: dict, fmt: str, *, level: int = 1, image=None) -> str:
