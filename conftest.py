@@ -26,14 +26,14 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 class _NoBareNames(importlib.abc.MetaPathFinder):
     """Refuse an import of the project's folders by their bare names (``analytic``,
     ``compare.ladder``, ...): installed they are subpackages of ``treeimpact`` only, and a
-    bare import would load a second copy of a module. pytest itself imports the test files
-    under ``compare/`` as ``compare.test_*`` (and ``compare.conftest``): those are let through."""
+    bare import would load a second copy of a module. pytest itself imports the tests of
+    ``compare/tests/`` (not installed) as ``compare.tests.*``, their package ``compare`` first:
+    those are let through."""
 
     def find_spec(self, fullname, path=None, target=None):
         top, _, rest = fullname.partition(".")
-        leaf = rest.rpartition(".")[2]
-        if top in _FOLDERS and not (top == "compare" and (not rest or leaf == "conftest"
-                                                          or leaf.startswith("test_"))):
+        if top in _FOLDERS and not (top == "compare" and (not rest or rest == "tests"
+                                                          or rest.startswith("tests."))):
             raise ImportError(f"{fullname}: import it as treeimpact.{fullname} (the project "
                               "installs one top-level package, treeimpact)")
         return None

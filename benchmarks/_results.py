@@ -1,5 +1,5 @@
 """A benchmark's results file: ``benchmarks/results/NAME.json``, what the docs quote timings
-from (compare/docs.py reads its ``numbers``; tests/test_doc_numbers.py checks the pages
+from (tests/docnumbers/ reads its ``numbers``; tests/test_doc_numbers.py checks the pages
 against them). Each file says when, on which machine, at which commit and under which load
 it was measured, since a timing means nothing without them.
 """

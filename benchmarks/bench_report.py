@@ -58,7 +58,7 @@ def main(argv=None) -> int:
         total = time.perf_counter() - t0
         import sys
 
-        conf = sys.modules.get("compare.conftest") or sys.modules.get("conftest")
+        conf = sys.modules.get("compare.tests.conftest") or sys.modules.get("conftest")
         _table(f"pytest compare (exit {int(code)})", total,
                conf.SESSION_CACHE.timings() if conf is not None else {})
 

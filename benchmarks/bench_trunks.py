@@ -155,7 +155,10 @@ def cheapest(rows: list, model: str) -> dict | None:
 def markdown(result: dict) -> str:
     """The tables of docs/engines.md from a result file: per scenario, every (model, N) at
     the runner's default step, then the cheapest run within TARGET on x_max."""
-    from treeimpact.compare.docs import trunk_rows_table
+    import sys
+
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the checkout
+    from tests.docnumbers.tables import trunk_rows_table
 
     lines = []
     for name, sc in result["scenarios"].items():

@@ -18,8 +18,15 @@ from .options import OPTIONS
 #: The engine interface (treeimpact.analytic.engine.interface.Engine), loaded on first use:
 #: the options above are read without importing the engine.
 _RUNNER = ("make_setup", "modes", "run", "simulate", "simulate_batch")
+#: Bullet's contact for a target law at a time step (contactStiffness/contactDamping, the
+#: largest step it holds) and the two-body collision, with the world's and the links' flags,
+#: that measures what a setting achieves: what ``treeimpact contact`` reads
+#: (compare.contact_engines). Loaded on first use: name -> its module.
+_CONTACT = {"bullet_contact": "_contact", "largest_time_step": "_contact",
+            "per_body": "_contact", "LINK_FLAGS": "_world", "WORLD_FLAGS": "_world",
+            "two_body_collision": "_world"}
 
-__all__ = ["OPTIONS", *_RUNNER]
+__all__ = ["OPTIONS", *_RUNNER, *_CONTACT]
 
 
 def __getattr__(name: str):
@@ -27,4 +34,8 @@ def __getattr__(name: str):
         from . import _runner
 
         return getattr(_runner, name)
+    if name in _CONTACT:
+        from importlib import import_module
+
+        return getattr(import_module(f"{__name__}.{_CONTACT[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

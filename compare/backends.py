@@ -100,7 +100,7 @@ class Backend:
     #: (None: the backend's only or default model): what orders and groups parallel runs
     run_cost: tuple = ()
     #: (option, values) whose values make separate speed-accuracy curves of an engine
-    #: (compare.sweep.speed), or None
+    #: (compare.studies.speed), or None
     variants: tuple | None = None
     #: the report's line colours of an engine's rungs (SDOF, chain, chain + full pendulum,
     #: its own elastic rod where it has one)

@@ -51,7 +51,7 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     each in MuJoCo between bodies of ``m1`` and ``m2`` kg (inf: fixed) (at dt, dt/2 and
     2 dt), beside the naive (uncorrected) solref's; or ``{"error", "largest_dt"}`` beyond
     Euler's omega dt < 2."""
-    from treeimpact.mujoco_models import _contact as mc
+    from treeimpact import mujoco_models as mc
 
     k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
     top = 2.0 / math.sqrt(k / mu)
@@ -98,8 +98,7 @@ def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     collision in Bullet between bodies of ``m1`` and ``m2`` kg (at dt, dt/2 and 2 dt)
     beside the naive settings'; or ``{"error", "largest_dt"}`` when its implicit step
     alone damps more than e allows."""
-    from treeimpact.bullet_models import _contact as bc
-    from treeimpact.bullet_models._world import LINK_FLAGS, WORLD_FLAGS, two_body_collision
+    from treeimpact import bullet_models as bc
 
     k, c = law["contact_stiffness"], law["contact_damping"]
     limit = bc.largest_time_step(k, c, mu)
@@ -115,12 +114,12 @@ def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     rows = {"settings": (ks, ds), "naive": (nk, nd)}
 
     def run(name, step):
-        return two_body_collision(m1, m2, step, *rows[name], SPEED).to_json()
+        return bc.two_body_collision(m1, m2, step, *rows[name], SPEED).to_json()
 
     out = {"contactStiffness": ks, "contactDamping": ds,
            "engine_contact_stiffness": b.stiffness, "engine_contact_damping": b.damping,
            "erp": b.erp, "cfm": b.cfm,
-           "world": {"fixedTimeStep": dt, **WORLD_FLAGS}, "link": dict(LINK_FLAGS),
+           "world": {"fixedTimeStep": dt, **bc.WORLD_FLAGS}, "link": dict(bc.LINK_FLAGS),
            "start": "touching (distance 0) or apart by whole steps: a contact that starts "
                     "inside a step is off by O(dt)",
            "achieved": run("settings", dt),

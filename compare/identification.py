@@ -20,14 +20,14 @@ from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from .runs import OK, SKIPPED, Status
 
 #: Parameters recovered by the identification procedure, compared with the model's truth,
-#: by their names in the ladder, the sweeps and the report (``xi``: the paper's symbol).
-IDENT_METRICS = ("M_T", "K_T", "xi", "E")
-#: Their names in analytic.identify.procedure (Identified, truth_of), where the metric's
-#: differs: the ladder's xi is the pair's damping ratio b / omega_n (eqs 42-43).
-PROCEDURE_NAMES = {"M_T": "M_T", "K_T": "K_T", "xi": "pair_damping_ratio", "E": "E"}
+#: by their names in analytic.identify.procedure (Identified, truth_of), the ladder
+#: (``id_`` + name), the sweeps (``id.`` and ``truth.`` + name) and the report:
+#: ``pair_damping_ratio`` is the paper's xi = b / omega_n of trunk and pendulum moving
+#: together (eqs 42-43), not the trunk's own damping ratio.
+IDENT_METRICS = ("M_T", "K_T", "pair_damping_ratio", "E")
 IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
                "K_T": ("N/m", "identified stiffness (eq 46)"),
-               "xi": ("1", "pair damping ratio b / omega_n = C_T / (2 sqrt((K_T + k)(M_T + m))): "
+               "pair_damping_ratio": ("1", "pair damping ratio xi = b / omega_n = C_T / (2 sqrt((K_T + k)(M_T + m))): "
                       "trunk and pendulum moving together (eqs 42-43)"),
                "E": ("Pa", "identified Young's modulus (eq 47)")}
 
@@ -59,10 +59,9 @@ class RungIdentification:
 
 
 def rung_truth(scenario: Scenario) -> dict:
-    """:func:`truth_of` ``scenario`` with the ladder's metric names (:data:`IDENT_METRICS`)."""
-    truth = truth_of(scenario)
-    return {**{k: v for k, v in truth.items() if k not in PROCEDURE_NAMES.values()},
-            **{k: truth[name] for k, name in PROCEDURE_NAMES.items()}}
+    """What the procedure should find on a rung's record of ``scenario``: :func:`truth_of`
+    (SI; :data:`IDENT_METRICS` among its keys)."""
+    return truth_of(scenario)
 
 
 def identify_rung(result, scenario: Scenario) -> RungIdentification:
@@ -84,8 +83,8 @@ def identify_rung(result, scenario: Scenario) -> RungIdentification:
                                   else f"identification failed: {text}", truth=shown)
     errors = identification_errors(ident, truth_of(scenario))
     return RungIdentification(
-        OK, values={k: getattr(ident, PROCEDURE_NAMES[k]) for k in IDENT_METRICS},
-        errors={k: errors[PROCEDURE_NAMES[k]] for k in IDENT_METRICS}, truth=shown,
+        OK, values={k: getattr(ident, k) for k in IDENT_METRICS},
+        errors={k: errors[k] for k in IDENT_METRICS}, truth=shown,
         regression={"t_first": reg.t_first, "t_together": reg.t_together,
                     "x_together": reg.x_together, "t_origin": reg.t_origin,
                     "coefficients": list(reg.coefficients), "x_max": reg.x_max,

@@ -126,7 +126,8 @@ def _end_workers(pool) -> None:
 #: What a forkserver imports once for all the workers it forks: the modules the pooled
 #: functions live in and the fit's (scipy.optimize), 0.3-1 s of imports a worker otherwise.
 #: Not the engines (a forkserver has no thread to fork, but pybullet prints on import).
-FORKSERVER_PRELOAD = ("treeimpact.compare.runs", "treeimpact.compare.ident_study",
+FORKSERVER_PRELOAD = ("treeimpact.compare.runs", "treeimpact.compare.studies.ident_fits",
+                      "treeimpact.compare.studies.ident_records",
                       "treeimpact.analytic.identify.record_fit")
 
 

@@ -21,13 +21,23 @@ from .options import OPTIONS
 #: The engine interface (treeimpact.analytic.engine.interface.Engine), loaded on first use:
 #: the options above are read without importing the engine.
 _RUNNER = ("build_model", "make_setup", "modes", "run", "simulate", "simulate_batch")
+#: MuJoCo's contact for a target law at a time step (solref/solimp, the engine law its
+#: Euler step needs) and the two-body collision that measures what a setting achieves:
+#: what ``treeimpact contact`` reads (compare.contact_engines). Loaded on first use.
+_CONTACT = ("IMPEDANCE", "SOLIMP_TAIL", "effective_denominator", "engine_law",
+            "solref_for_law", "time_constant_impedance", "time_constant_solref",
+            "two_body_collision", "two_body_mjcf")
 
-__all__ = ["OPTIONS", *_RUNNER]
+__all__ = ["OPTIONS", *_RUNNER, *_CONTACT]
 
 
 def __getattr__(name: str):
-    if name in _RUNNER:
-        from . import _runner
+    if name in _RUNNER or name in _CONTACT:
+        from . import _runner  # from the first use on, MuJoCo's warnings go to stderr
 
-        return getattr(_runner, name)
+        if name in _RUNNER:
+            return getattr(_runner, name)
+        from . import _contact
+
+        return getattr(_contact, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

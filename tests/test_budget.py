@@ -100,7 +100,7 @@ def test_the_readme_quotes_the_budget_the_code_applies():
     import re
 
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    readme = re.sub(r"<!--.*?-->", "", readme)  # the doc-number marks (compare/docs.py)
+    readme = re.sub(r"<!--.*?-->", "", readme)  # the doc-number marks (tests/docnumbers/)
     m = re.search(r"beyond the budget: (\S+) steps, a (\S+) GB record, (\S+) s\b", readme)
     assert m, "the README's budget sentence moved: update this test"
     assert float(m[1]) == budget.MAX_STEPS

@@ -1,5 +1,5 @@
 """Every number the README and docs/ quote is what the code computes or what a checked-in
-results file measured (issue 26 item 1; compare/docs.py): a quoted number that drifts
+results file measured (issue 26 item 1; tests/docnumbers/): a quoted number that drifts
 fails here.
 
 What is checked, and against what:
@@ -12,7 +12,7 @@ What is checked, and against what:
   seconds), the contact fit's file re-read at its fitted parameters, and the contact scan's
   crossings rerun at the crossing and the duration below it. The expensive rest (engines,
   the verdict counts, the sensitivity study) comes from a report and is refreshed with
-  ``make report`` + ``python -m treeimpact.compare.docs numbers reports``.
+  ``make report`` + ``python -m tests.docnumbers numbers reports``.
 """
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ import math
 
 import pytest
 
-from treeimpact.compare import docs
+from tests import docnumbers as docs
+from tests.docnumbers import marks
 
 
 def test_every_quoted_number_is_its_source_s():
@@ -59,7 +60,7 @@ def test_the_cheap_part_of_the_numbers_file_is_what_the_code_computes_now(fresh)
     unread = both - docs.used_keys(stored)
     assert not unread, f"kept but printed nowhere: {sorted(unread)}"
     problems = docs.check_now(fresh)
-    assert not problems, "rerun python -m treeimpact.compare.docs numbers:\n" + "\n".join(
+    assert not problems, "rerun python -m tests.docnumbers numbers:\n" + "\n".join(
         problems)
 
 
@@ -112,7 +113,7 @@ def test_the_contact_scan_s_crossings_hold_now():
     from treeimpact.analytic.contact.soft import simulate_soft
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.contact_scan import DURATIONS, HEADLINE_METRICS
+    from treeimpact.compare.studies.contact_scan import DURATIONS, HEADLINE_METRICS
     from treeimpact.compare.sweep.apply import apply_point
     from treeimpact.compare.verdicts import validity_tolerance
 
@@ -151,13 +152,13 @@ def test_the_contact_scan_s_crossings_hold_now():
     ("57-213", ["57", "213"]), ("-12..-14", ["-12", "-14"]), ("9, 21 and 33", ["9", "21", "33"]),
     ("+8.5 / +17.8 / +45.6", ["+8.5", "+17.8", "+45.6"]), ("1.2e-5", ["1.2e-5"])])
 def test_a_quoted_list_is_read_number_by_number(text, tokens):
-    assert docs._tokens(text) == tokens
+    assert marks._tokens(text) == tokens
 
 
 @pytest.mark.parametrize("token, half", [("8.5", 0.05), ("130", 0.5), ("1.2e-5", 5e-7),
                                          ("+0.35", 0.005)])
 def test_a_number_is_as_exact_as_its_printed_digits(token, half):
-    assert docs._half_unit(token) == pytest.approx(half)
+    assert marks._half_unit(token) == pytest.approx(half)
 
 
 def test_a_mark_fails_when_its_number_drifts(tmp_path):
@@ -193,7 +194,7 @@ def test_the_presets_quote_their_measured_cost():
     slice, results/presets.json); "about": within 25 % (the machine's noise, a factor ~2
     under load, is in the files' load averages, not here)."""
     from treeimpact.compare.cli import build_parser
-    from treeimpact.compare.sweep.study import PRESETS
+    from treeimpact.compare.validity.study import PRESETS
 
     made, full = _results("make"), _results("presets")
     sweep = build_parser()._subparsers._group_actions[0].choices["sweep"]
@@ -208,7 +209,7 @@ def test_the_presets_quote_their_measured_cost():
 
 def test_the_figures_the_pages_show_are_the_copies_recorded_with_the_numbers():
     """The README's picture "is a copy" of the report's contact scan (issue 34: it was an
-    older drawing): the file is the one `python -m treeimpact.compare.docs numbers` copied
+    older drawing): the file is the one `python -m tests.docnumbers numbers` copied
     from a report, by its SHA-1."""
     import hashlib
 

@@ -85,7 +85,7 @@ def test_every_test_id_shown_is_collected():
     ids = sorted({m for page in PAGES for m in re.findall(r"`(test_\w+\[[^\]`]+\])`",
                                                               page.read_text())})
     assert ids
-    files = {i: next(p for d in ("tests", "compare") for p in (ROOT / d).glob("test_*.py")
+    files = {i: next(p for d in ("tests", "compare/tests") for p in (ROOT / d).glob("test_*.py")
                      if f"def {i.split('[')[0]}(" in p.read_text()) for i in ids}
     for test_id, path in files.items():
         node = f"{path.relative_to(ROOT)}::{test_id}"

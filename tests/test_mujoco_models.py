@@ -449,7 +449,7 @@ def test_rk4_refuses_a_step_its_explicit_dampers_cannot_take(central):
 
 def test_speed_study_runs_one_curve_per_mujoco_integrator():
     from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.sweep.speed import engine_variants
+    from treeimpact.compare.studies.speed import engine_variants
 
     name, values, reason, runnable = engine_variants("mujoco")
     assert (name, reason, runnable) == ("integrator", None, True)

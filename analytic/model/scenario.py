@@ -41,7 +41,7 @@ _TOP_KEYS = {"name", "description", "t_end", "trunk", "impactor", "contact", "ca
 
 #: The fields a sensitivity study varies over their plausible ranges unless the file's
 #: ``[calibration] measured`` list says they were measured on the tree
-#: (compare/sensitivity.py holds those at the file's values).
+#: (compare/studies/sensitivity.py holds those at the file's values).
 MEASURABLE = ("trunk.clamp_mass", "trunk.density", "trunk.shear_modulus",
               "trunk.base_stiffness", "contact.duration", "contact.stiffness",
               "contact.restitution")

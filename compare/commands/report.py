@@ -34,7 +34,7 @@ def run(args) -> int:
     from treeimpact.compare.report import write_report
 
     if args.with_study is not None:
-        from treeimpact.compare.sweep.study import PRESETS
+        from treeimpact.compare.validity.study import PRESETS
 
         if args.with_study not in PRESETS:
             raise ParameterError(f"--with-study {args.with_study!r}: allowed "
@@ -47,7 +47,7 @@ def run(args) -> int:
     writable_dir("--out", args.out)
     jobs = []
     if args.with_study:
-        from treeimpact.compare.sweep.study_job import StudyJob
+        from treeimpact.compare.validity.study_job import StudyJob
 
         jobs.append(StudyJob(args.with_study, Path(args.out) / "study",
                              scenarios=args.scenarios))

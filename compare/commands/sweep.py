@@ -1,5 +1,5 @@
 """``treeimpact sweep``: a model-validity study over a grid (the arguments and the run live
-in :mod:`treeimpact.compare.sweep.cli_support`)."""
+in :mod:`treeimpact.compare.validity.cli_support`)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ HELP = "run a parameter sweep: validity maps and studies"
 
 
 def add_arguments(sp) -> None:
-    """The sweep's flags (compare.sweep.cli_support) and the run budget, added to its
+    """The sweep's flags (compare.validity.cli_support) and the run budget, added to its
     subparser ``sp``."""
-    from treeimpact.compare.sweep.cli_support import add_sweep_arguments
+    from treeimpact.compare.validity.cli_support import add_sweep_arguments
 
     add_sweep_arguments(sp)
     add_budget_flag(sp)
@@ -21,6 +21,6 @@ def add_arguments(sp) -> None:
 def run(args) -> int:
     """Run the sweep of the parsed command line ``args``; its exit code (130 when
     interrupted, with how to resume)."""
-    from treeimpact.compare.sweep.cli_support import run_sweep_command
+    from treeimpact.compare.validity.cli_support import run_sweep_command
 
     return run_sweep_command(args)

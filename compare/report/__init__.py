@@ -32,7 +32,7 @@ from pathlib import Path
 from treeimpact.analytic.results import to_jsonable
 
 from ..provenance import provenance, scenario_digest
-from ..small_e import E_GRID, RESOLUTION
+from ..studies.small_e import E_GRID, RESOLUTION
 from ..verdicts import Verdict, validity_tolerance
 from .answer import (
     ANSWER_METRICS,
@@ -55,16 +55,16 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     :func:`write_report`; figures
     are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
     sections reported on stderr as they finish; ``study_jobs``: studies running beside the
-    report (compare.sweep.study_job.StudyJob), each a section once it ends."""
+    report (compare.validity.study_job.StudyJob), each a section once it ends."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
-    from ..contact_scan import scan_result, scan_sweep
-    from ..ident_study import fit_one, fit_tasks
+    from ..studies.contact_scan import scan_result, scan_sweep
+    from ..studies.ident_fits import fit_one, fit_tasks
     from ..ladder import build_ladder, prefetch_ladders
     from ..pool import check_stop, process_map
     from ..progress import Progress
     from ..runs import RunCache, resolve_scenario
-    from ..small_e import small_e_answer, small_e_sweep
+    from ..studies.small_e import small_e_answer, small_e_sweep
     from ..sweep.run import run_sweeps
     from .answer_figures import small_e_figure
     from .figures import FigureFiles, contact_scan_figure
@@ -164,7 +164,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     :class:`compare.runs.RunCache` to take runs from (default: a new one).
     ``options`` (:func:`build_sections`'): ``engines`` (tuple of engine backends) and
     ``segments`` (hinged trunk) go to the ladder; ``progress``; ``study_jobs``: studies
-    running beside the report (compare.sweep.study_job.StudyJob), included when they end.
+    running beside the report (compare.validity.study_job.StudyJob), included when they end.
     Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
     ``out_dir/figures``.
     """

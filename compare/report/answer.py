@@ -72,7 +72,7 @@ def one_dof_answer(scen_sections) -> list[dict]:
 def with_sensitivity(answer: list[dict], studies) -> None:
     """Each ``answer`` row with its cells' bands over the unmeasured inputs and the inputs
     that decide each, from the first of ``studies`` (the report's study sections) with a
-    sensitivity part (compare.sensitivity); ``trajectories`` and ``held`` (the measured
+    sensitivity part (compare.studies.sensitivity); ``trajectories`` and ``held`` (the measured
     inputs) beside them. Changes the rows in place."""
     sens = next((s.study["sensitivity"] for s in studies
                  if s.study and s.study.get("sensitivity")), {})
@@ -88,7 +88,7 @@ def with_sensitivity(answer: list[dict], studies) -> None:
 
 def small_e_rows(trees: dict) -> list[dict]:
     """The small-e table's rows from ``trees`` (tree -> its small-e answers,
-    :func:`compare.small_e.small_e_answer`): per approximation its label, what it is
+    :func:`compare.studies.small_e.small_e_answer`): per approximation its label, what it is
     compared with, and per tree {holds (text), at_e (relative error at the tree's e), e,
     flag (beyond the tolerance at the tree's e)}."""
     tol = validity_tolerance()

@@ -1,5 +1,5 @@
 """The answer's figure of the small-e half: each approximation's error against e, one panel
-per tree (compare.small_e; the report's first section)."""
+per tree (compare.studies.small_e; the report's first section)."""
 
 from __future__ import annotations
 
@@ -9,12 +9,12 @@ import numpy as np
 
 from .figures import _legend_right, plt
 
-#: Line styles of the approximations (compare.small_e.APPROXIMATIONS), in its order.
+#: Line styles of the approximations (compare.studies.small_e.APPROXIMATIONS), in its order.
 _STYLES = {"eq57_energy_loss": ("o-", "tab:red"),
            "eq58_energy_transferred": ("s-", "tab:orange"),
            "identification_M_T": ("^-", "tab:blue"),
            "identification_K_T": ("v-", "tab:cyan"),
-           "identification_xi": ("D-", "tab:green"),
+           "identification_pair_damping_ratio": ("D-", "tab:green"),
            "eq45_area": ("P-", "tab:purple"),
            "one_dof_x_max": ("x--", "black"),
            "one_dof_energy_delivered": ("*--", "0.45")}
@@ -22,7 +22,7 @@ _STYLES = {"eq57_energy_loss": ("o-", "tab:red"),
 
 def small_e_figure(trees: dict, tolerance: float):
     """Per tree of ``trees`` (tree -> its small-e answers,
-    :func:`compare.small_e.small_e_answer`), every approximation's relative error (%)
+    :func:`compare.studies.small_e.small_e_answer`), every approximation's relative error (%)
     against e on the grid, the
     +-``tolerance`` band, the tree's own e (dotted) and where each holds up to (a tick on
     the band's edge); symmetric-log y so that -3 % and +300 % both read. An e where an

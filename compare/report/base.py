@@ -100,16 +100,16 @@ def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> s
 def input_name(key: str) -> str:
     """An unmeasured input of the sensitivity study in words ('pad stiffness' for
     log10_pad_duration), as its figure labels it; the key if unknown."""
-    from treeimpact.compare.sweep.maps import _INPUT_LABELS
+    from treeimpact.compare.sweep.maps import INPUT_LABELS
 
-    return _INPUT_LABELS.get(key, key).replace("\n", " ")
+    return INPUT_LABELS.get(key, key).replace("\n", " ")
 
 
 def output_name(key: str) -> str:
     """An output ``key`` of the sensitivity study in words ('x_max gap' for gap.x_max)."""
-    from treeimpact.compare.sweep.maps import _OUTPUT_LABELS
+    from treeimpact.compare.sweep.maps import OUTPUT_LABELS
 
-    return _OUTPUT_LABELS.get(key, key)
+    return OUTPUT_LABELS.get(key, key)
 
 
 def deciding(output: dict, crossing: bool = False) -> str:

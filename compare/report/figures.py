@@ -379,7 +379,7 @@ def energy_figure(ledgers: dict, initial_energy: float, name: str) -> Figure:
 
 
 def contact_scan_figure(scans: dict, shipped: dict | None = None) -> Figure:
-    """Per scenario of ``scans`` (name -> :func:`compare.contact_scan.scan_result`), the
+    """Per scenario of ``scans`` (name -> :func:`compare.studies.contact_scan.scan_result`), the
     continuum's gap to the 1-DOF model (%, beam vs soft SDOF, same pad)
     against the contact duration (ms, log), with the +-tolerance band: where the 1-DOF model
     is good enough; ``shipped``: the scenario's own pad ({name: duration in s}), marked.

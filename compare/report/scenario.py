@@ -10,7 +10,7 @@ import numpy as np
 
 from treeimpact.analytic.results import to_jsonable
 
-from ..ident_study import fit_one, fit_tasks
+from ..studies.ident_fits import fit_one, fit_tasks
 from ..identification import IDENT_METRICS
 from ..ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
 from ..mechanism import matched_loss_evidence
@@ -54,7 +54,7 @@ def energy_ledger(rr) -> dict | None:
 
 
 def identification_sweep(table) -> list[dict]:
-    """Per e of the small-e sweep's table (compare.small_e): the procedure's values and
+    """Per e of the small-e sweep's table (compare.studies.small_e): the procedure's values and
     relative errors against the SDOF truth (M_T, K_T, xi, E), or why there are none."""
     out = []
     for r in sorted(table.to_dict("records"), key=lambda r: float(r["restitution"])):
@@ -188,7 +188,7 @@ class ScenarioSection(Section):
                   figure_sink=None, fits=None):
         """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
         lacks are made here, so prefetch them first) and its small-e sweep's table
-        ``e_table`` (compare.small_e.small_e_sweep; None: the section has no identification
+        ``e_table`` (compare.studies.small_e.small_e_sweep; None: the section has no identification
         against e); ``engines`` and ``segments`` as :func:`compare.ladder.build_ladder`,
         ``figure_sink`` and ``fits`` as the constructor's."""
         kw = {} if engines is None else {"engines": engines}

@@ -5,7 +5,7 @@ linked where they are (paths relative to the page), its ``*.json`` files are car
 report.json, and a ``summary.md`` (or ``README.md``) is shown as its text. The section's
 title is the directory's name.
 
-A directory written by ``treeimpact sweep`` (its ``study.json``, :mod:`compare.sweep.study`)
+A directory written by ``treeimpact sweep`` (its ``study.json``, :mod:`compare.validity.study`)
 is rendered from that data with the study's own templates: each figure in place, under its
 caption, headings nested under the section's; figures it does not show follow it.
 """

@@ -1,18 +1,22 @@
-"""Model-validity studies: parameter sweeps, validity maps, speed-accuracy curves (issue 6).
+"""Parameter sweeps: a grid of points run on every target, resumable, into one table, and the
+maps drawn from it (issue 6). The studies built on sweeps are in :mod:`..studies`, the
+model-validity study (``treeimpact sweep``) in :mod:`..validity`.
 
 * :mod:`.grid` - ``--grid`` specs (``restitution=0:0.9:10``, ``segments=1,2,4``), names and ratios;
 * :mod:`.apply` - a grid point applied to a scenario (``dataclasses.replace``, validated);
-* :mod:`.run` - the runner: process pool or Dask, resumable CSV/Parquet table;
+* :mod:`.plan` - targets, grid points applied and refused, rows grouped into tasks;
+* :mod:`.execute` - one task run: a backend call, its columns or an analysis's;
+* :mod:`.cost` - the cost model: tasks grouped into worker calls;
+* :mod:`.journal` - the journal (resumable CSV), the Parquet table and the spec;
+* :mod:`.run` - the runner: sweeps planned, run on one pool (processes or Dask), journaled;
 * :mod:`.maps` - validity maps (discrepancy vs analytic, tolerance contour, dominating rung)
-  and identification maps;
-* :mod:`.speed` - speed-accuracy curves per engine;
-* :mod:`.study` - presets ``default`` and ``full``; study.html, study.md, results table;
-* :mod:`.cli_support` - ``treeimpact sweep`` arguments and command.
+  and identification maps.
 """
 
 from .grid import Axis, Grid, parse_axis, parse_grid
-from .run import SweepResult, make_targets, read_table, run_sweep
-from .study import PRESETS, run_study, write_study
+from .journal import read_table
+from .plan import make_targets
+from .run import SweepResult, run_sweep
 
-__all__ = ["Axis", "Grid", "PRESETS", "SweepResult", "make_targets", "parse_axis",
-           "parse_grid", "read_table", "run_study", "run_sweep", "write_study"]
+__all__ = ["Axis", "Grid", "SweepResult", "make_targets", "parse_axis", "parse_grid",
+           "read_table", "run_sweep"]

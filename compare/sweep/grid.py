@@ -11,6 +11,7 @@ import json
 import math
 import re
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 
@@ -22,11 +23,18 @@ MAX_AXIS_VALUES = 1000
 MAX_POINTS = 100_000
 GRID_FORM = "NAME=START:STOP:COUNT (COUNT values, both ends included) or NAME=V1,V2,..."
 
-SCENARIO = "scenario"
-OPTION = "option"
-DERIVED = "derived"
-RECORD = "record"
-INPUT = "input"
+
+class ParameterKind(StrEnum):
+    """What a grid NAME sets (:class:`Parameter`)."""
+
+    SCENARIO = "scenario"  # a scenario field (dotted path)
+    OPTION = "option"  # a backend option
+    DERIVED = "derived"  # a ratio of DERIVED_RATIOS, solved against the final values
+    RECORD = "record"  # how the run's record is sampled (read by an analysis)
+    INPUT = "input"  # an input of an analysis (the sensitivity study's)
+
+
+SCENARIO, OPTION, DERIVED, RECORD, INPUT = ParameterKind
 
 #: How a run's record is sampled before an analysis reads it (``record.NAME`` axes; a sweep
 #: with such axes needs an analysis that takes them): (type, low, low included, unit).
@@ -78,7 +86,7 @@ class Parameter:
     (dotted scenario path, option name, or ratio name)."""
 
     name: str
-    kind: str
+    kind: ParameterKind
     target: str
     given: str = ""  # the name as typed (messages name it), when it differs
 

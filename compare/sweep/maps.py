@@ -14,9 +14,10 @@ from treeimpact.analytic.errors import ParameterError
 # the ladder's metrics and tolerance file, so a study and the report speak of the same things
 from treeimpact.compare.ladder import LADDER_METRICS
 from treeimpact.compare.rungs import RungKind
+from treeimpact.compare.runs import OK
 from treeimpact.compare.verdicts import validity_tolerance
 
-from .run import IDENT_KEYS, OK
+from .execute import IDENT_KEYS
 
 #: A study's validity criterion (5 %), not a test tolerance: tolerances.toml [study] validity
 #: with its reason, the one tolerance source. Override with ``tolerance=`` / ``--tolerance``.
@@ -505,7 +506,7 @@ _E_NAMES = ("restitution",)
 _CROWN_NAMES = ("crown_ratio", "trunk.crown_mass")
 #: The parameters the identification maps draw: E is K_T a^3 / (3 I) (eq 47) with a and I
 #: known, so its relative error is K_T's; the summary tables list it.
-MAPPED_IDENT_KEYS = ("M_T", "K_T", "xi")
+MAPPED_IDENT_KEYS = ("M_T", "K_T", "pair_damping_ratio")
 
 
 def _why_not_identified(sub) -> str:
@@ -603,10 +604,10 @@ def identification_maps(df, figdir, *, prefix: str = "identification",
 
 
 #: Short labels of the sensitivity study's inputs and outputs on its figure.
-_INPUT_LABELS = {"clamp_mass": "clamp\nmass", "e_over_g": "E / G\n(shear)",
+INPUT_LABELS = {"clamp_mass": "clamp\nmass", "e_over_g": "E / G\n(shear)",
                  "log10_pad_duration": "pad\nstiffness", "restitution": "pad e",
                  "root_share": "root\ncompliance", "density": "wood\ndensity"}
-_OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
+OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
                   "gap.crown_peak": "crown peak gap",
                   "gap.crown_peak_acceleration": "crown accel. gap",
                   "gap.peak_force": "force gap", "crossing.x_max": "crossing, x_max",
@@ -614,7 +615,7 @@ _OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap"
 
 
 def sensitivity_figure(trees: dict, path: Path) -> Path | None:
-    """One panel per tree of ``trees`` (name -> :func:`compare.sensitivity.analyse`; a
+    """One panel per tree of ``trees`` (name -> :func:`compare.studies.sensitivity.analyse`; a
     second row for the crossing durations): each output's Morris
     mu* per unmeasured input as a bar, its 95 % interval (SALib's mu_star_conf) as a
     whisker, the inputs that decide it outlined; a held (measured) input has no bar.
@@ -629,7 +630,7 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
     outputs = list(dict.fromkeys(o for t in trees.values() for o in t["outputs"]))
     groups = [g for g in ([o for o in outputs if o.startswith("gap.")],
                           [o for o in outputs if o.startswith("crossing.")]) if g]
-    inputs = list(_INPUT_LABELS)
+    inputs = list(INPUT_LABELS)
     colours = dict(zip(inputs, ("tab:blue", "tab:orange", "tab:green", "tab:red",
                                 "tab:purple", "tab:brown")))
     fig = Figure(figsize=(3.4 * len(names) + 2.4, 0.85 * len(outputs) + 1.9),
@@ -654,7 +655,7 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
                             edgecolor="k" if i in out["deciding"] else "none", lw=1.2,
                             xerr=scale * v["mu_star_conf"],
                             error_kw={"lw": 0.8, "capsize": 1.5, "ecolor": "0.25"})
-            ax.set_yticks(range(len(group)), [_OUTPUT_LABELS.get(o, o) for o in group],
+            ax.set_yticks(range(len(group)), [OUTPUT_LABELS.get(o, o) for o in group],
                           fontsize=9)
             ax.set_ylim(len(group) - 0.5, -0.5)
             ax.grid(True, axis="x", lw=0.3)
@@ -663,7 +664,7 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
                 ax.set_title(name, fontsize=10)
             ax.set_xlabel("mu* (percentage points of the gap)" if scale == 100.0 else
                           "mu* (decades of the crossing duration)", fontsize=8.5)
-    handles = [Patch(color=colours[i], label=_INPUT_LABELS[i].replace("\n", " "))
+    handles = [Patch(color=colours[i], label=INPUT_LABELS[i].replace("\n", " "))
                for i in inputs]
     handles.append(Patch(facecolor="white", edgecolor="k", label="outlined: decides it\n"
                          "(several: not separable)"))

@@ -242,7 +242,7 @@ def beam_record(crown_ratio: float, rate: float, noise: float, seed: int, e: flo
     from treeimpact.analytic.identify.procedure import pendulum_test_of
     from treeimpact.analytic.model.two_body import two_body_model
     from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.ident_study import Case, _scenario
+    from treeimpact.compare.studies.ident_records import Case, _scenario
 
     scen = _scenario(Case("central-leader", e, crown_ratio, "beam"))
     scen = type(scen)(**{**scen.__dict__, "t_end": t_end})
@@ -689,7 +689,7 @@ def accuracy_numbers(seeds: int) -> dict:
 
 def write_numbers(path: Path, numbers: dict, about: str) -> None:
     """Merge ``numbers`` into the results file ``path`` (docs/results/identify-validation.json:
-    compare/docs.py reads its ``numbers``), with when and at which commit."""
+    tests/docnumbers/ reads its ``numbers``), with when and at which commit."""
     from treeimpact.compare.provenance import code_version
 
     data = json.loads(path.read_text()) if path.exists() else {"numbers": {}, "about": {}}

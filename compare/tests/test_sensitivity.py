@@ -1,4 +1,4 @@
-"""The answer with error bars (compare.sensitivity): the unmeasured inputs varied on the
+"""The answer with error bars (compare.studies.sensitivity): the unmeasured inputs varied on the
 same measured tree, the Morris design and its reading."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.sensitivity import (
+from treeimpact.compare.studies.sensitivity import (
     ANSWER,
     INPUTS,
     analyse,

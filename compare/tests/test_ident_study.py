@@ -1,12 +1,14 @@
-"""The identification validation (compare.ident_study): the full-record fit recovers the
-truth on SDOF records sampled as a test would be; the study's bookkeeping is right."""
+"""The identification validation (compare.studies.ident_study, ident_records): the full-record
+fit recovers the truth on SDOF records sampled as a test would be; the study's bookkeeping is
+right."""
 
 import math
 
 import numpy as np
 import pytest
 
-from treeimpact.compare.ident_study import Case, identify_case, sampled_record, summarise
+from treeimpact.compare.studies.ident_records import Case, identify_case, sampled_record
+from treeimpact.compare.studies.ident_study import summarise
 
 
 @pytest.mark.parametrize("e, crown", [(0.1, 0.0), (0.3, 1.0)])
@@ -56,7 +58,7 @@ def test_the_pendulum_s_samples_swing_in_before_the_contact():
     t = 0), after it the trajectory's; noise of the given fraction of its peak."""
     from treeimpact.analytic.identify.procedure import pendulum_test_of
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.ident_study import sampled_pendulum
+    from treeimpact.compare.studies.ident_records import sampled_pendulum
 
     class T:
         t = np.linspace(0.0, 0.1, 1001)
@@ -101,7 +103,8 @@ def test_summary_keeps_one_impact_records_out_of_the_goal_and_reports_them():
 def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
     """A rerun of the same study into the same directory reads its rows back from its
     sweeps' tables; a different grid runs again (only its new points)."""
-    import treeimpact.compare.ident_study as study
+    import treeimpact.compare.studies.ident_records as records
+    import treeimpact.compare.studies.ident_study as study
 
     kw = dict(workers=0, restitutions=(0.1,), crown_ratios=(0.0,), rungs=("analytic",),
               sampling_rungs=(), engine_rungs=())
@@ -109,8 +112,8 @@ def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
     def rerun(*args):
         pytest.fail("reran a finished case")
 
-    rerun.columns = study.RECORD_COLUMNS
-    monkeypatch.setattr(study, "record_identification", rerun)
+    rerun.columns = records.RECORD_COLUMNS
+    monkeypatch.setattr(records, "record_identification", rerun)
     assert study.run_identification_study(tmp_path, **kw)["rows"] == first["rows"]
     with pytest.raises(pytest.fail.Exception):
         study.run_identification_study(tmp_path, **{**kw, "restitutions": (0.3,)})
@@ -119,7 +122,7 @@ def test_a_finished_study_resumes_without_rerunning(tmp_path, monkeypatch):
 def test_sampling_rows_are_summarised_apart_from_the_grid():
     """The rate x noise cases are a sweep of their own (record axes), not on the maps; the
     worst error is over the parameters and seeds of one cell."""
-    from treeimpact.compare.ident_study import study_sweeps, summarise_sampling
+    from treeimpact.compare.studies.ident_study import study_sweeps, summarise_sampling
 
     specs = study_sweeps("out")
     assert {a.split("=")[0] for a in specs["sampling"].grid} >= {
@@ -149,14 +152,14 @@ def test_full_preset_validates_identification_on_every_rung():
     """The issue's validation: records from every rung (analytic, soft, beam, both engines'
     chains) at 1-20 kHz with 0.5-2 % noise; the default study keeps the cheap part."""
     from treeimpact.compare.backends import ENGINES
-    from treeimpact.compare.ident_study import (
+    from treeimpact.compare.studies.ident_study import (
         RUNGS,
         SAMPLING_NOISES,
         SAMPLING_RATES,
         study_sweeps,
     )
     from treeimpact.compare.sweep.grid import parse_grid
-    from treeimpact.compare.sweep.study import get_preset
+    from treeimpact.compare.validity.study import get_preset
 
     full = get_preset("full")
     assert full.identification and set(full.ident_engine_rungs) == set(ENGINES)

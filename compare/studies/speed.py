@@ -28,8 +28,10 @@ import numpy as np
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
 
-from .grid import Axis, Grid, Parameter, resolve_parameter
-from .run import OK, read_table, run_sweep
+from ..sweep.grid import OPTION, Axis, Grid, Parameter, resolve_parameter
+from ..runs import OK
+from ..sweep.journal import read_table
+from ..sweep.run import run_sweep
 
 #: Metrics of the error: those the contact model itself changes by at most b t_c
 #: (tolerances.toml [step.contact]), so the error against the paper can go to zero as the
@@ -99,7 +101,7 @@ def speed_sweep(scenario, out, *, engines=ENGINES, dts=(1e-4, 3e-5, 1e-5),
                 Axis(resolve_parameter("contact_stiffness"), tuple(float(k) for k in
                                                                      stiffnesses))]
         if name is not None:
-            axes.append(Axis(Parameter(f"option.{name}", "option", name), tuple(values)))
+            axes.append(Axis(Parameter(f"option.{name}", OPTION, name), tuple(values)))
         d = out / f"speed-{eng}"
         _warm_up(eng, scen, max(dts))
         run_sweep(scen, Grid(tuple(axes)), d, backends=("soft", eng),

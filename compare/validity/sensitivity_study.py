@@ -1,4 +1,4 @@
-"""The sensitivity part of a model-validity study (compare.sensitivity): one sweep per tree,
+"""The sensitivity part of a model-validity study (compare.studies.sensitivity): one sweep per tree,
 run on the pool of the study's validity sweep, then analysed and drawn. Design notes:
 docs/sensitivity.md."""
 
@@ -6,17 +6,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .run import run_sweeps
+from ..sweep.run import run_sweeps
 
 
 def sensitivity_specs(out, trajectories: int, *, crossings: bool = False,
                       scenarios=None) -> dict:
-    """The sensitivity study (compare.sensitivity) of each tree of ``scenarios`` (default:
+    """The sensitivity study (compare.studies.sensitivity) of each tree of ``scenarios`` (default:
     every shipped one) as sweeps into ``out/sensitivity/``, each tree's measured inputs
     held at its file's values: {trees, specs, trajectories, crossings}."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
     from treeimpact.compare.runs import resolve_scenario
-    from treeimpact.compare.sensitivity import sensitivity_sweep
+    from treeimpact.compare.studies.sensitivity import sensitivity_sweep
 
     scens = [resolve_scenario(s) for s in (scenarios or shipped_scenarios())]
     return {"trees": scens, "trajectories": trajectories, "crossings": crossings,
@@ -28,14 +28,14 @@ def sensitivity_result(out, sens: dict, done: list) -> dict:
     """The analysis of the finished sweeps ``done`` of :func:`sensitivity_specs` ``sens``
     and its figure (written into ``out``): {trajectories, crossings, trees: {name:
     analysis}, figure}."""
-    from treeimpact.compare.sensitivity import (
+    from treeimpact.compare.studies.sensitivity import (
         analyse,
         free_inputs,
         inputs_of,
         measured_inputs,
     )
 
-    from .maps import sensitivity_figure
+    from ..sweep.maps import sensitivity_figure
 
     trees = {}
     for s, r in zip(sens["trees"], done):

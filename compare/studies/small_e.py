@@ -16,6 +16,8 @@ import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..runs import OK
+
 #: The e of the curves (1): [0, 0.9] in steps of 0.05.
 E_GRID = tuple(round(0.05 * i, 2) for i in range(19))
 #: Where an approximation has no value at e = 0 (eq 45: x0 = T0 = A_x = 0; the pad law needs
@@ -51,7 +53,7 @@ APPROXIMATIONS = {
     "identification_K_T": Approximation(
         "identified K_T (eq 46)", "the paper's procedure on the exact record, against its "
         "K_T"),
-    "identification_xi": Approximation(
+    "identification_pair_damping_ratio": Approximation(
         "identified xi (eqs 42-43)", "the paper's procedure on the exact record, against "
         "the moving-together pair's damping ratio"),
     "eq45_area": Approximation(
@@ -104,7 +106,7 @@ def exact_run(scenario, e: float):
     the scenario at ``e``)."""
     from treeimpact.analytic.impact.simulate import simulate
 
-    from .rungs import analytic_samples
+    from ..rungs import analytic_samples
 
     s = at_restitution(scenario, e)
     return simulate(s, samples=analytic_samples(s.t_end)), s
@@ -139,7 +141,7 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     identification sweep's ``id.*``, ``truth.*``, ``id_error`` and ``T0`` columns (the
     scenario section's table of the identification against e); the continuum's gaps only
     with ``continuum``."""
-    from .identification import IDENT_METRICS, identify_rung
+    from ..identification import IDENT_METRICS, identify_rung
 
     e = scenario.contact.restitution
     errors = energy_errors(result)
@@ -149,8 +151,8 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     out = {"T0": result.metrics["T0"], "id_error": None if ident.ok else ident.reason}
     out |= {f"truth.{k}": v for k, v in ident.truth.items()}
     out |= {f"id.{k}": ident.values.get(k, math.nan) for k in IDENT_METRICS}
-    errors |= {f"identification_{k}": ident.errors.get(k, math.nan) for k in ("M_T", "K_T",
-                                                                               "xi")}
+    errors |= {f"identification_{k}": ident.errors.get(k, math.nan)
+               for k in ("M_T", "K_T", "pair_damping_ratio")}
     if continuum:
         errors |= continuum_gaps(scenario, e, result.metrics)
     for name, approx in APPROXIMATIONS.items():
@@ -172,7 +174,7 @@ def errors_at_run(result, scenario, record=None) -> dict:
 
 
 errors_at_run.columns = COLUMNS + ("T0", "id_error") + tuple(
-    f"{p}.{k}" for p in ("id", "truth") for k in ("M_T", "K_T", "xi", "E"))
+    f"{p}.{k}" for p in ("id", "truth") for k in ("M_T", "K_T", "pair_damping_ratio", "E"))
 
 
 def grid_of(scenario, grid=E_GRID) -> tuple:
@@ -185,13 +187,13 @@ def small_e_sweep(scenario, out):
     (:class:`compare.sweep.run.SweepSpec`)
     into ``out``: the exact solver at every e of :func:`grid_of`, :func:`errors_at_run` on
     each."""
-    from .runs import resolve_scenario
-    from .sweep.run import SweepSpec
+    from ..runs import resolve_scenario
+    from ..sweep.run import SweepSpec
 
     scen = resolve_scenario(scenario)
     return SweepSpec(scen, ["restitution=" + ",".join(repr(e) for e in grid_of(scen))],
                      Path(out), ("analytic",), identify=True,
-                     analysis="treeimpact.compare.small_e:errors_at_run")
+                     analysis="treeimpact.compare.studies.small_e:errors_at_run")
 
 
 def small_e_table(scenario, grid=E_GRID):
@@ -200,13 +202,13 @@ def small_e_table(scenario, grid=E_GRID):
     DataFrame)."""
     import pandas as pd
 
-    from .runs import resolve_scenario
+    from ..runs import resolve_scenario
 
     scen = resolve_scenario(scenario)
     rows = []
     for e in grid_of(scen, grid):
         run, s = exact_run(scen, e)
-        rows.append({"restitution": e, "status": "ok", "error": None} | errors_at_run(run, s))
+        rows.append({"restitution": e, "status": OK, "error": None} | errors_at_run(run, s))
     return pd.DataFrame(rows)
 
 
@@ -245,7 +247,7 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
     error_at_zero, verdict, label, what}; errors relative (NaN where none, with its
     reason), e in 1. The crossings are bisected here (the exact solver, and the continuum
     for the 1-DOF gaps, at a few more e)."""
-    from .verdicts import validity_tolerance
+    from ..verdicts import validity_tolerance
 
     tol = validity_tolerance() if tolerance is None else tolerance
     rows = sorted(table.to_dict("records"), key=lambda r: float(r["restitution"]))
@@ -267,8 +269,8 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
     out = {}
     for name, approx in APPROXIMATIONS.items():
         values = [_float(r.get(f"small_e.{name}")) for r in rows]
-        if any(r.get("status") != "ok" for r in rows):
-            values = [v if r.get("status") == "ok" else math.nan for v, r in zip(values, rows)]
+        if any(r.get("status") != OK for r in rows):
+            values = [v if r.get("status") == OK else math.nan for v, r in zip(values, rows)]
         holds, bracket = first_crossing(grid, values, evaluate(name), tol)
         at_e = next((v for e, v in zip(grid, values) if abs(e - e0) < 1e-12), None)
         reasons = {f"{e:g}": str(r.get(f"small_e_reason.{name}") or r.get("error"))

@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..runs import OK
+
 #: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it).
 INPUTS = {
     "clamp_mass": (1.0, 16.0, "kg",
@@ -171,7 +173,7 @@ def answer_and_crossings(result, scenario, params: dict) -> dict:
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
 
     from .contact_scan import shortest_within
-    from .verdicts import validity_tolerance
+    from ..verdicts import validity_tolerance
 
     scen, theory = vary(scenario, inputs_of(scenario) | dict(params))
     out = _answer(scen, theory)
@@ -189,8 +191,8 @@ def answer_and_crossings(result, scenario, params: dict) -> dict:
 
 answer_and_crossings.columns = OUTPUTS
 #: The analyses' references, as the sweeps load them in a worker.
-ANALYSES = {False: "treeimpact.compare.sensitivity:answer_under",
-            True: "treeimpact.compare.sensitivity:answer_and_crossings"}
+ANALYSES = {False: "treeimpact.compare.studies.sensitivity:answer_under",
+            True: "treeimpact.compare.studies.sensitivity:answer_and_crossings"}
 
 
 def design(trajectories: int, seed: int = SEED, names=None) -> np.ndarray:
@@ -207,9 +209,9 @@ def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
     into ``out``: the Morris design (:func:`design` of ``trajectories`` and ``seed``) over
     its free inputs (:func:`free_inputs`) as ``input.*`` axes, :func:`answer_under` (with
     ``crossings``, :func:`answer_and_crossings`) at each point."""
-    from .runs import resolve_scenario
-    from .sweep.grid import Design
-    from .sweep.run import SweepSpec
+    from ..runs import resolve_scenario
+    from ..sweep.grid import Design
+    from ..sweep.run import SweepSpec
 
     scen = resolve_scenario(scenario)
     names = free_inputs(scen)
@@ -280,7 +282,7 @@ def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
     rows = {tuple(round(float(r[f"input.{n}"]), 12) for n in names): r
             for r in table.to_dict("records")}
     ok = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
-    failed = [r for r in ok if r is None or r.get("status") != "ok"]
+    failed = [r for r in ok if r is None or r.get("status") != OK]
     out = {"inputs": {n: {"low": v[0], "high": v[1], "unit": v[2], "why": v[3],
                           "settle": v[4]} for n, v in INPUTS.items() if n in names},
            "held": dict(held or {}), "trajectories": trajectories, "points": len(X),

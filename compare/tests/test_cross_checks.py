@@ -12,9 +12,10 @@ from __future__ import annotations
 import pytest
 
 from treeimpact.analytic.model.scenario import shipped_scenarios
-from treeimpact.compare.conftest import assert_checks, require_run
 from treeimpact.compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs
 from treeimpact.compare.verdicts import load_tolerances
+
+from .conftest import assert_checks, require_run
 
 SCENARIOS = shipped_scenarios()
 TOL = load_tolerances()

@@ -1,11 +1,11 @@
 """The headline of the contact: from which contact duration the 1-DOF model is within 5 %
-of the continuum (compare.contact_scan)."""
+of the continuum (compare.studies.contact_scan)."""
 
 import math
 
 import pytest
 
-from treeimpact.compare.contact_scan import contact_scan, shortest_within
+from treeimpact.compare.studies.contact_scan import contact_scan, shortest_within
 
 
 def test_shortest_is_where_every_longer_contact_stays_inside():

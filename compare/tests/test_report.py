@@ -114,7 +114,7 @@ def test_every_axis_has_a_unit(tmp_path):
     from treeimpact.compare.report.answer_figures import small_e_figure
     from treeimpact.compare.report.figures import contact_scan_figure
     from treeimpact.compare.report.scenario import ScenarioSection
-    from treeimpact.compare.small_e import small_e_answer, small_e_sweep
+    from treeimpact.compare.studies.small_e import small_e_answer, small_e_sweep
     from treeimpact.compare.sweep.run import run_sweeps
 
     figs = []
@@ -236,7 +236,7 @@ def test_a_one_impact_record_shows_ranges_not_numbers(tmp_path):
     apart (docs/identification.md): the fit table gives ranges holding the truth, says
     "not fixed" and why, and the JSON keeps the ranges."""
     from treeimpact.analytic.model.two_body import two_body_model
-    from treeimpact.compare.ident_study import Case, _scenario
+    from treeimpact.compare.studies.ident_records import Case, _scenario
 
     scen = _scenario(Case("central-leader", 0.3, 4.0, "analytic"))
     paths = write_report(tmp_path, scenarios=[scen], runs=RunCache(),
@@ -532,7 +532,7 @@ def test_the_pooled_record_fits_are_each_rungs_own(report):
     """The report fits every rung's record in a process pool (compare.report.build_sections):
     each fit lands on its own rung, in the ladder's order, and equals the fit made in this
     process (the same record, noise seed and optimiser: equal to rounding of the JSON)."""
-    from treeimpact.compare.ident_study import fit_one, fit_tasks
+    from treeimpact.compare.studies.ident_fits import fit_one, fit_tasks
     from treeimpact.compare.ladder import build_ladder
 
     paths, cache = report
@@ -549,7 +549,7 @@ def test_the_answer_answers_both_halves_first(report):
     """The first screen: a sentence per half, the 1-DOF table, then the small-e table and
     figure, before the summary; report.json's answer.small_e.<tree>.<name> holds each
     approximation's crossing, its error at the tree's e and its curve."""
-    from treeimpact.compare.small_e import APPROXIMATIONS, E_GRID
+    from treeimpact.compare.studies.small_e import APPROXIMATIONS, E_GRID
 
     paths, _ = report
     data = json.loads(paths["json"].read_text())

@@ -19,7 +19,7 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
-from .grid import GRID_FORM
+from ..sweep.grid import GRID_FORM
 
 OPTION_FORM = "[BACKEND.]NAME=VALUE, e.g. trunk=sdof or mujoco.integrator=RK4"
 
@@ -158,11 +158,12 @@ def _run(args) -> int:
     import time
 
     t_start = time.perf_counter()
-    from .grid import parse_grid
-    from .run import _check_backends, run_sweep
+    from ..sweep.grid import parse_grid
+    from ..sweep.plan import check_backends
+    from ..sweep.run import run_sweep
     from .study import run_study, write_study
 
-    backends = _check_backends(args.backend)
+    backends = check_backends(args.backend)
     grid = parse_grid(args.grid) if args.grid else None
     options = parse_options(args.option, backends)
     if args.sensitivity_scenarios and not args.preset:

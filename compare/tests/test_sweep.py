@@ -24,8 +24,10 @@ from treeimpact.analytic.results import METRIC_KEYS
 from treeimpact.compare.sweep.apply import apply_point
 from treeimpact.compare.sweep.grid import derived_ratios, parse_axis, parse_grid
 from treeimpact.compare.sweep.maps import discrepancies, identification_maps, validity_maps
-from treeimpact.compare.sweep.run import INVALID, JOURNAL, TABLE, read_table, run_sweep
-from treeimpact.compare.sweep.speed import speed_points
+from treeimpact.compare.runs import INVALID
+from treeimpact.compare.sweep.journal import JOURNAL, TABLE, read_table
+from treeimpact.compare.sweep.run import run_sweep
+from treeimpact.compare.studies.speed import speed_points
 
 # --------------------------------------------------------------------------- grid specs
 
@@ -238,7 +240,7 @@ def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
 
 def test_segments_one_is_the_sdof_trunk_and_shares_its_run(monkeypatch):
     from treeimpact.compare import backends
-    from treeimpact.compare.sweep.run import make_targets, plan
+    from treeimpact.compare.sweep.plan import make_targets, plan
 
     monkeypatch.setitem(backends.BACKENDS, "eng", backends.Backend(
         "eng", f"{__name__}:_engine_with_trunk", None, "test engine",
@@ -402,7 +404,7 @@ def test_validity_map_of_soft_against_analytic(tmp_path):
 
 def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tmp_path):
     from treeimpact.compare.report.studies import StudySection
-    from treeimpact.compare.sweep.study import write_study
+    from treeimpact.compare.validity.study import write_study
 
     res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
                     backends=["analytic", "soft"], workers=0, progress=False)
@@ -434,7 +436,7 @@ def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tm
 def test_a_study_without_speed_curves_says_where_its_engine_runs_are(tmp_path, fake_engine):
     """A study whose engine runs are on its validity maps and which draws no speed-accuracy
     curves says so (not 'No engine in this study' above its engine runs)."""
-    from treeimpact.compare.sweep.study import write_study
+    from treeimpact.compare.validity.study import write_study
 
     res = run_sweep("central-leader", ["restitution=0.2,0.3"], tmp_path / "s",
                     backends=["analytic", fake_engine], workers=0, progress=False)
@@ -446,7 +448,8 @@ def test_a_study_without_speed_curves_says_where_its_engine_runs_are(tmp_path, f
 
 
 def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_engine):
-    from treeimpact.compare.sweep.run import _chunks, make_targets, plan
+    from treeimpact.compare.sweep.cost import chunks as _chunks
+    from treeimpact.compare.sweep.plan import make_targets, plan
 
     tasks, _ = plan(load_scenario("central-leader"), parse_grid(["restitution=0:0.9:40"]),
                     make_targets(["analytic", fake_engine]), identify=False)
@@ -471,8 +474,9 @@ def test_a_cheap_run_is_repeated_per_record_so_its_fits_spread_over_the_workers(
     record, so 18 fits of one record grid do not queue on one worker (the default study's
     sampling grid did: 10 s on one core)."""
     from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.ident_study import ANALYSIS
-    from treeimpact.compare.sweep.run import ANALYSIS_COST, make_targets, plan
+    from treeimpact.compare.studies.ident_records import ANALYSIS
+    from treeimpact.compare.sweep.cost import ANALYSIS_COST
+    from treeimpact.compare.sweep.plan import make_targets, plan
 
     grid = parse_grid(["restitution=0.1", "record.rate=1e3,5e3,2e4", "record.seed=1,2"])
     tasks, _ = plan(load_scenario("central-leader"), grid,
@@ -650,7 +654,7 @@ def test_every_map_of_a_study_shares_one_colour_scale_and_letters_only_where_sho
     """Validity and identification maps of one study on one colour scale; the study's text
     lists the rung letters a map prints, none when the maps show steps (no letters)."""
     from treeimpact.compare.sweep.maps import DEFAULT_TOLERANCE, colour_scale
-    from treeimpact.compare.sweep.study import write_study
+    from treeimpact.compare.validity.study import write_study
 
     res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"],
                     tmp_path / "s", backends=["analytic", "soft"], workers=0, progress=False)

@@ -206,14 +206,13 @@ def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
 def test_identification_tolerances_are_the_procedure_floor_at_e0(name):
     """The [identification] tolerances are the procedure's own error on the exact e = 0
     record (the paper's assumption). Measured here again: M_T, K_T, E within them for every
-    shipped scenario (xi for the light crowns), so the e = 0.1 findings are caused by e."""
+    shipped scenario (pair_damping_ratio for the light crowns), so the e = 0.1 findings are caused by e."""
     scen = load_scenario(name)
     res = simulate(scen, restitution=0.0, samples=int(round(scen.t_end / ANALYTIC_SAMPLE_STEP))
                    + 1)
     tr = res.trajectory
     ident, _ = identify_from_record(tr.t, tr.x, pendulum_test_of(scen), y=tr.y, reading="paper")
     err = identification_errors(ident, truth_of(scen))
-    err["xi"] = err.pop("pair_damping_ratio")  # the ladder's name of b / omega_n
     keys = IDENT_METRICS if name != "realistic-crown" else ("M_T", "K_T", "E")
     for k in keys:
         assert abs(err[k]) <= TOL["identification"][k]["rel"], (k, err[k])

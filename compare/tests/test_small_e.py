@@ -1,4 +1,4 @@
-"""The small-e answer (compare.small_e): each curve against something independent, the
+"""The small-e answer (compare.studies.small_e): each curve against something independent, the
 first crossing located to 0.01 in e, and the grid fine enough."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 from treeimpact.analytic.impact.ivp_reference import solve_ivp_impacts
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import two_body_model
-from treeimpact.compare.small_e import (
+from treeimpact.compare.studies.small_e import (
     APPROXIMATIONS,
     E_GRID,
     RESOLUTION,
@@ -127,7 +127,7 @@ def test_what_the_paper_derives_from_small_e_and_what_it_does_not(central_leader
         assert abs(a["error_at_zero"]) <= 0.05
     assert 0.3 < ans["eq57_energy_loss"]["holds_up_to_e"] < 0.45
     assert ans["identification_M_T"]["holds_up_to_e"] < 0.05
-    for name in ("identification_K_T", "identification_xi", "one_dof_x_max",
+    for name in ("identification_K_T", "identification_pair_damping_ratio", "one_dof_x_max",
                  "one_dof_energy_delivered"):
         a = ans[name]
         assert a["holds_up_to_e"] == 0.0 and a["bracket"] is None
@@ -160,6 +160,6 @@ def test_at_the_trees_own_e_the_gaps_are_the_answer_tables(central_leader, run_c
         assert ans[f"one_dof_{m}"]["error_at_e"] == pytest.approx(
             row["metrics"][m]["rel"], rel=1e-9)
     newton = section.ladder.rungs[0].identification
-    for k in ("M_T", "K_T", "xi"):
+    for k in ("M_T", "K_T", "pair_damping_ratio"):
         assert ans[f"identification_{k}"]["error_at_e"] == pytest.approx(
             newton.errors[k], rel=1e-9)

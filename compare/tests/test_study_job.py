@@ -1,4 +1,4 @@
-"""A study run beside the report (compare/sweep/study_job.py, ``report --with-study``): its
+"""A study run beside the report (compare/validity/study_job.py, ``report --with-study``): its
 section in the page, its failure as the report's, its end when the report stops."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.cli import main
 from treeimpact.compare.report import write_report
 from treeimpact.compare.runs import RunCache
-from treeimpact.compare.sweep.study_job import StudyJob
+from treeimpact.compare.validity.study_job import StudyJob
 
 
 def _quick(job: StudyJob, *grid: str) -> StudyJob:
@@ -45,7 +45,7 @@ def test_a_failed_study_fails_with_its_exit_code_and_last_line(tmp_path):
 def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypatch):
     """The report looks at its studies after its runs: one that already failed ends it
     there, not after the record fits and figures."""
-    import treeimpact.compare.ident_study as ident_study
+    import treeimpact.compare.studies.ident_fits as ident_fits
 
     job = _quick(StudyJob("default", tmp_path / "out" / "study"), "restitution=2").start()
     while job._proc.poll() is None:
@@ -54,7 +54,7 @@ def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypa
     def no_fit(task):
         pytest.fail("fitted records for a report whose study had failed")
 
-    monkeypatch.setattr(ident_study, "fit_one", no_fit)
+    monkeypatch.setattr(ident_fits, "fit_one", no_fit)
     with pytest.raises(ParameterError, match="exit code 2"):
         write_report(tmp_path / "out", scenarios=["open-center"], runs=RunCache(),
                      engines=(), study_jobs=(job,))
@@ -155,8 +155,8 @@ def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):
 
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.model.scenario_toml import scenario_toml
-    from treeimpact.compare.sweep.sensitivity_study import run_sensitivity
-    from treeimpact.compare.sweep.study import write_study
+    from treeimpact.compare.validity.sensitivity_study import run_sensitivity
+    from treeimpact.compare.validity.study import write_study
 
     tree = replace(load_scenario("open-center"), name="my-tree")
     text = scenario_toml(tree).replace(

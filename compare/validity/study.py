@@ -13,21 +13,14 @@ from pathlib import Path
 import numpy as np
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
-from treeimpact.compare.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
+from treeimpact.compare.studies.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
+from treeimpact.compare.runs import OK
 
-from .maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
-from .run import (
-    JOURNAL,
-    TABLE,
-    SweepSpec,
-    make_out,
-    read_file,
-    read_table,
-    run_sweep,
-    run_sweeps,
-)
+from ..sweep.maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
+from ..sweep.journal import JOURNAL, TABLE, make_out, read_file, read_table
+from ..sweep.run import SweepSpec, run_sweep, run_sweeps
 from .sensitivity_study import sensitivity_result, sensitivity_specs
 
 
@@ -49,7 +42,7 @@ class Preset:
     engine_grid: tuple = ()  # --grid specs of a coarser engine check (its own sweep)
     map_metrics: tuple | None = None  # metrics drawn on the maps (None: every ladder metric)
     map_value: str = "rel"  # "rel": against the paper's model; "step": against the rung below
-    identification: bool = False  # the identification validation (compare.ident_study)
+    identification: bool = False  # the identification validation (compare.studies.ident_study)
     ident_sampling_rungs: tuple = ("analytic",)  # its rate x noise grid on these rungs' records
     ident_sampling_seeds: tuple = SAMPLING_SEEDS  # ... with these seeds
     ident_crown_ratios: tuple = CROWN_RATIOS  # its e x crown grid's crown ratios
@@ -108,7 +101,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     ``progress`` and ``retry_failed`` as :func:`compare.sweep.run.run_sweeps`.
     ``sensitivity_scenarios``: the trees of its sensitivity study (shipped names, TOML paths
     or Scenarios; default: every shipped tree)."""
-    from .speed import speed_curves, speed_sweep
+    from ..studies.speed import speed_curves, speed_sweep
 
     p = get_preset(preset)
     t0 = time.perf_counter()
@@ -143,7 +136,7 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
         speed["curves"] = speed_curves(speed, out)
     ident_study = None
     if p.identification:
-        from treeimpact.compare.ident_study import run_identification_study
+        from treeimpact.compare.studies.ident_study import run_identification_study
 
         ident_study = run_identification_study(
             out, scen, workers=workers, progress=progress,
@@ -184,7 +177,7 @@ def _combined_table(out: Path, sweeps: dict, speed: dict | None):
 def _fmt_point(point) -> str:
     """A grid point as 'name = value unit, ...' in the maps' display units (a contact
     duration in ms; the table stores the point as JSON pairs in SI)."""
-    from .maps import point_text
+    from ..sweep.maps import point_text
 
     try:
         pairs = json.loads(point) if isinstance(point, str) else point
@@ -235,33 +228,10 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
     out = make_out(out)
     meta = dict(meta or {})
     table_path, table = _combined_table(out, sweeps, speed)
-    validity, ident, specs = [], [], {}
-    drawn = set()  # targets already mapped from an earlier (finer) sweep of the study
-    for name, d in sweeps.items():
-        df = read_table(d)
-        specs[name] = read_file(Path(d) / "sweep.json",
-                                lambda p: json.loads(p.read_text(encoding="utf-8")), "spec")
-        prefix = "" if len(sweeps) == 1 or name == "validity" else f"{name}-"
-        order = [t["id"] for t in specs[name].get("targets", [])]
-        validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity",
-                                  order=order, value=value, skip=drawn,
-                                  **({"metrics": metrics} if metrics else {}))
-        ident += identification_maps(df, out, prefix=f"{prefix}identification", order=order,
-                                     skip=drawn)
-        drawn |= set(order)
+    validity, ident, specs = _draw_maps(out, sweeps, tolerance=tolerance, metrics=metrics,
+                                        value=value)
     curves = (speed or {}).get("curves", [])
-    status = table["status"].value_counts().to_dict() if len(table) else {}
-    timings = {}
-    if len(table):
-        ok = table[table["status"] == "ok"].drop_duplicates(subset=["task"])
-        for b, g in ok.groupby("backend"):
-            timings[b] = {"runs": int(len(g)), "mean_wall_s": float(g["wall_s"].astype(float)
-                                                                    .mean())}
-    problems = []
-    if len(table):
-        bad = table[table["status"] != "ok"].drop_duplicates(subset=["target", "error"])
-        problems = [{"sweep": r["sweep"], "target": r["target"], "status": r["status"],
-                     "error": r["error"]} for _, r in bad.head(40).iterrows()]
+    status, timings, problems = _runs_of(table)
     summary = {
         "title": title, **meta, "sweeps": {n: {"scenario": s["scenario"]["name"],
                                                "grid": s["grid"]} for n, s in specs.items()},
@@ -292,6 +262,46 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
             "table": table_path,
             "figures": [v["path"] for v in validity + ident if v["path"]]
             + [c["path"] for c in curves if c["path"]]}
+
+
+def _draw_maps(out: Path, sweeps: dict, *, tolerance, metrics, value: str) -> tuple:
+    """The validity and identification maps of each finished sweep (``{name: sweep dir}``)
+    drawn into ``out``, a target mapped once (from the first, finest sweep that has it);
+    returns (validity maps, identification maps, each sweep's spec)."""
+    validity, ident, specs = [], [], {}
+    drawn = set()  # targets already mapped from an earlier (finer) sweep of the study
+    for name, d in sweeps.items():
+        df = read_table(d)
+        specs[name] = read_file(Path(d) / "sweep.json",
+                                lambda p: json.loads(p.read_text(encoding="utf-8")), "spec")
+        prefix = "" if len(sweeps) == 1 or name == "validity" else f"{name}-"
+        order = [t["id"] for t in specs[name].get("targets", [])]
+        validity += validity_maps(df, out, tolerance=tolerance, prefix=f"{prefix}validity",
+                                  order=order, value=value, skip=drawn,
+                                  **({"metrics": metrics} if metrics else {}))
+        ident += identification_maps(df, out, prefix=f"{prefix}identification", order=order,
+                                     skip=drawn)
+        drawn |= set(order)
+    return validity, ident, specs
+
+
+def _runs_of(table) -> tuple:
+    """What the study's runs came to (its combined table): the count of each status, each
+    backend's runs and mean wall time (s) over its distinct tasks that succeeded, and up to
+    40 distinct failures (sweep, target, status, error)."""
+    status = table["status"].value_counts().to_dict() if len(table) else {}
+    timings = {}
+    if len(table):
+        ok = table[table["status"] == OK].drop_duplicates(subset=["task"])
+        for b, g in ok.groupby("backend"):
+            timings[b] = {"runs": int(len(g)), "mean_wall_s": float(g["wall_s"].astype(float)
+                                                                    .mean())}
+    problems = []
+    if len(table):
+        bad = table[table["status"] != OK].drop_duplicates(subset=["target", "error"])
+        problems = [{"sweep": r["sweep"], "target": r["target"], "status": r["status"],
+                     "error": r["error"]} for _, r in bad.head(40).iterrows()]
+    return status, timings, problems
 
 
 def render_study(summary: dict, fmt: str, *, level: int = 1, image=None) -> str:
@@ -343,8 +353,8 @@ def _presentation(summary, validity, ident, curves) -> dict:
 
 
 def _ident_validation_text(iv) -> dict:
-    """The identification validation's texts and table rows (compare.ident_study)."""
-    from treeimpact.compare.ident_study import (
+    """The identification validation's texts and table rows (compare.studies.ident_study)."""
+    from treeimpact.compare.studies.ident_study import (
         ENGINE_CROWN_RATIOS,
         ENGINE_RESTITUTIONS,
         NOISE,
