@@ -31,12 +31,18 @@ MAX_COLLISION_STEPS = 1_000_000  # guard: a longer collision is a bad (k, c, h)
 
 def effective_denominator(inverse_mass: float, inverse_mass_approx: float,
                           impedance: float = IMPEDANCE) -> float:
-    """S = d A + (1 - d) A_hat (1/kg): MuJoCo's force is (k' delta + b' delta') / S."""
+    """S = d A + (1 - d) A_hat (1/kg) of a contact row, MuJoCo's force being
+    (k' delta + b' delta') / S (docs/contact-law.md): ``inverse_mass`` A = J M^-1 J^T (1/kg,
+    the exact inverse effective mass at the contact), ``inverse_mass_approx`` A_hat (1/kg,
+    MuJoCo's efc_diagApprox: the two bodies' body_invweight0) and the constant
+    ``impedance`` d (1, :data:`IMPEDANCE` by default)."""
     return impedance * inverse_mass + (1.0 - impedance) * inverse_mass_approx
 
 
 def solref_for_law(k: float, c: float, denominator: float) -> tuple[float, float]:
-    """Direct ``solref`` (-k S, -c S) giving the law F = k delta + c delta' (N/m, N s/m)."""
+    """Direct ``solref`` (-k S, -c S) (1/s^2, 1/s) giving the law F = k delta + c delta' of
+    stiffness ``k`` (N/m) and damping ``c`` (N s/m), S the row's ``denominator`` (1/kg,
+    :func:`effective_denominator`)."""
     return -k * denominator, -c * denominator
 
 
@@ -142,12 +148,15 @@ class EngineLaw:
 
 @functools.lru_cache(maxsize=1024)
 def engine_law(k: float, e: float, mu: float, h: float, integrator: str = "Euler") -> EngineLaw:
-    """The (k_d, c_d) MuJoCo needs so that one free collision of reduced mass mu rebounds at e.
+    """The (k_d, c_d) MuJoCo needs so that one free collision of reduced mass ``mu`` (kg)
+    rebounds at the restitution ``e`` (1), as an :class:`EngineLaw`.
 
-    k (N/m) is the continuous law's stiffness; c = 2 zeta(e) sqrt(k mu) its damping
-    (:func:`analytic.contact.law.damping_ratio_for_restitution`); then, for the integrators
-    with Euler's contact map, pole matching and Brent's method on c_d; for RK4 (k, c)
-    unchanged, its own restitution replayed (module docstring).
+    ``k`` (N/m) is the continuous law's stiffness; c = 2 zeta(e) sqrt(k mu) its damping
+    (:func:`analytic.contact.law.damping_ratio_for_restitution`); ``h`` (s) the time step and
+    ``integrator`` MuJoCo's (one of :data:`.options.INTEGRATORS`). For the integrators with
+    Euler's contact map, pole matching and Brent's method on c_d; for RK4 (k, c) unchanged,
+    its own restitution replayed (docs/contact-law.md). A one-line ParameterError for an
+    unknown integrator or a k, mu or h not in (0, inf).
     """
     if integrator not in INTEGRATORS:
         raise ParameterError(f"--integrator = {integrator!r}: allowed {', '.join(INTEGRATORS)}")
@@ -186,10 +195,12 @@ def law_restitution(k: float, c: float, mu: float) -> float:
 
 def time_constant_solref(k: float, c: float, denominator: float) -> tuple[float, float]:
     """The positive ``solref = (timeconst, dampratio)`` equal to the direct one of
-    :func:`solref_for_law`: with a constant impedance MuJoCo takes k' = 1 / (timeconst^2
-    dampratio^2) and b' = 2 / timeconst, so timeconst = 2 / (c S) (s) and dampratio =
-    c S / (2 sqrt(k S)). MuJoCo raises a timeconst below 2 dt to 2 dt unless the ``refsafe``
-    flag is disabled."""
+    :func:`solref_for_law` for the law (``k`` N/m, ``c`` N s/m) and the row's
+    ``denominator`` S (1/kg, :func:`effective_denominator`): with a constant impedance MuJoCo
+    takes k' = 1 / (timeconst^2 dampratio^2) and b' = 2 / timeconst, so timeconst =
+    2 / (c S) (s) and dampratio = c S / (2 sqrt(k S)) (1). MuJoCo raises a timeconst below
+    2 dt to 2 dt unless the ``refsafe`` flag is disabled. A one-line ParameterError unless
+    k S > 0 and c S > 0."""
     ks, cs = k * denominator, c * denominator
     if not (ks > 0 and cs > 0):
         raise ParameterError(f"contact (k, c) = ({k:.4g}, {c:.4g}): the time-constant solref "
@@ -201,9 +212,10 @@ MINVAL = 1e-15  # MuJoCo's mjMINVAL: it computes K = 1 / max(MINVAL, d^2 timecon
 
 
 def time_constant_impedance(k: float, denominator: float) -> float:
-    """The constant impedance d for a time-constant solref of stiffness k (N/m): MuJoCo
-    caps k' = 1 / (timeconst dampratio)^2 at d^2 / MINVAL (measured: 1e7 at d = 1e-4), so d
-    is :data:`IMPEDANCE` or, for a stiffer law, sqrt(10 k S MINVAL) (a tenth of the cap)."""
+    """The constant impedance d (1) for a time-constant solref of stiffness ``k`` (N/m) on a
+    row of ``denominator`` S (1/kg, :func:`effective_denominator`): MuJoCo caps
+    k' = 1 / (timeconst dampratio)^2 at d^2 / MINVAL (measured: 1e7 at d = 1e-4), so d is
+    :data:`IMPEDANCE` or, for a stiffer law, sqrt(10 k S MINVAL) (a tenth of the cap)."""
     return max(IMPEDANCE, math.sqrt(10.0 * k * denominator * MINVAL))
 
 
@@ -213,9 +225,11 @@ SPHERE_RADIUS = 0.05
 
 def two_body_mjcf(mass: float, other_mass: float, dt: float, solref, solimp,
                   refsafe: bool = True) -> str:
-    """A plain MJCF: sphere ``a`` (``mass``, free joint) touching sphere ``b`` (``other_mass``,
-    free joint; fixed in the world when infinite) along x, no gravity, Euler at ``dt``; the
-    only contact is the pair ``impact`` (condim 1, margin 0) with ``solref``/``solimp``."""
+    """A plain MJCF (text): sphere ``a`` (``mass``, kg, free joint) touching sphere ``b``
+    (``other_mass``, kg, free joint; fixed in the world when infinite) along x, no gravity,
+    Euler at ``dt`` (s); the only contact is the pair ``impact`` (condim 1, margin 0) with
+    ``solref``/``solimp``. ``refsafe`` False disables MuJoCo's refsafe flag (which raises a
+    time-constant solref's timeconst below 2 dt to 2 dt)."""
     import mujoco
 
     spec = mujoco.MjSpec()
@@ -263,14 +277,14 @@ def add_impact_pair(spec, geom1: str, geom2: str, solref, solimp):
 
 def two_body_collision(xml: str, speed: float = 1.0, overlap: float = 1e-12
                        ) -> FreeCollision:
-    """Collide body ``a`` of a :func:`two_body_mjcf`-like model into ``b`` at ``speed``
-    (m/s), starting touching (``overlap`` m, as the replay of :func:`discrete_collision`):
-    its :class:`analytic.results.FreeCollision` (restitution NaN where the state left the
-    finite: a step too large for the law). The duration ends where the pair's law force
-    (k' delta + b' delta') / S, evaluated on the engine's states (delta from the spheres'
-    centres), first reaches zero, interpolated between the steps it acts over (Euler: the
-    force of state n acts over step n, from n dt); MuJoCo's warnings told on stderr
-    (:func:`mujoco_models._warnings.mujoco_warnings`)."""
+    """Collide body ``a`` of a :func:`two_body_mjcf`-like model (its MJCF text ``xml``) into
+    ``b`` at ``speed`` (m/s), starting touching (``overlap`` m, as the replay of
+    :func:`discrete_collision`): its :class:`analytic.results.FreeCollision` (restitution
+    NaN where the state left the finite: a step too large for the law). The duration ends
+    where the pair's law force (k' delta + b' delta') / S, evaluated on the engine's states
+    (delta from the spheres' centres), first reaches zero, interpolated between the steps it
+    acts over (Euler: the force of state n acts over step n, from n dt); MuJoCo's warnings
+    told on stderr (:func:`mujoco_models._warnings.mujoco_warnings`)."""
     from ._warnings import mujoco_warnings
 
     with mujoco_warnings():

@@ -46,9 +46,9 @@ def _scenario(case: Case):
 
 def sampled_record(trajectory, rate: float = RATE, noise: float = NOISE, seed: int = 0, *,
                    rest: float = REST):
-    """(t, x) as a transducer would give them: ``rate`` (Hz) from ``rest`` s before the
-    impact, linear interpolation of the trajectory, Gaussian noise of ``noise`` x the peak
-    (m; none at 0)."""
+    """(t, x) as a transducer would give them: the ``trajectory``'s x (m) at ``rate`` (Hz)
+    from ``rest`` s before the impact (x = 0 there), linear interpolation, Gaussian noise of
+    ``noise`` x the peak (m; none at 0) drawn from the random ``seed``."""
     t = np.arange(-rest, float(trajectory.t[-1]), 1.0 / rate)
     x = np.where(t > 0.0, np.interp(t, trajectory.t, trajectory.x), 0.0)
     rng = np.random.default_rng(seed)
@@ -56,9 +56,11 @@ def sampled_record(trajectory, rate: float = RATE, noise: float = NOISE, seed: i
 
 
 def sampled_pendulum(trajectory, test, t: np.ndarray, noise: float = NOISE, seed: int = 0):
-    """The pendulum's y (m) at the record's times t: the free swing u_1 sin(w_2 s) / w_2
-    (eq 13) before the contact, the trajectory's after, Gaussian noise of ``noise`` x its
-    peak (its own stream)."""
+    """The pendulum's y (m) at the record's times ``t`` (s): the free swing
+    u_1 sin(w_2 t) / w_2 (eq 13; u_1 and w_2 of the ``test``, an
+    analytic.identify.procedure.PendulumTest) before the contact, the ``trajectory``'s y
+    after, Gaussian noise of ``noise`` x its peak from the random ``seed`` (a stream of its
+    own, apart from :func:`sampled_record`'s)."""
     w2 = math.sqrt(test.omega2_sq)
     before = test.impact_speed * (np.sin(w2 * t) / w2 if w2 > 0 else t)
     y = np.where(t > 0.0, np.interp(t, trajectory.t, trajectory.y), before)
@@ -74,10 +76,11 @@ RECORD_COLUMNS = (*_FITTED, "fit_not_fixed", "fit_covered.M_T", "fit_covered.K_T
 
 
 def record_identification(result, scenario, record: dict) -> dict:
-    """The sweep analysis of the study: the run's record sampled as a test would be
-    (``record``: rate Hz, noise fraction of the peak, seed), identified by the full-record
-    fit and by the paper's procedure; errors against the scenario's SDOF truth as flat
-    columns (:data:`RECORD_COLUMNS`). Never raises: a failing method is its column's text."""
+    """The sweep analysis of the study: the run's record (``result``, the backend's
+    SimulationResult, its trajectory) sampled as a test would be (``record``: rate Hz, noise
+    fraction of the peak, seed), identified by the full-record fit and by the paper's
+    procedure; errors (1) against the ``scenario``'s SDOF truth as flat columns
+    (:data:`RECORD_COLUMNS`). Never raises: a failing method is its column's text."""
     from treeimpact.analytic.errors import ParameterError
     from treeimpact.analytic.identify.procedure import (
         identify_from_record,

@@ -49,9 +49,12 @@ def _axis(name: str, values) -> str:
 def study_sweeps(out, scenario: str = "central-leader", *, restitutions=RESTITUTIONS,
                  crown_ratios=CROWN_RATIOS, rungs=RUNGS, sampling_rungs=SAMPLING_RUNGS,
                  engine_rungs=ENGINE_RUNGS, sampling_seeds=SAMPLING_SEEDS) -> dict:
-    """The study as sweeps (name -> :class:`compare.sweep.run.SweepSpec`) into
-    ``out/identification/``: the e x crown grid on ``rungs``, the engines' corner, and the
-    sampling grid (rate x noise x ``sampling_seeds`` on ``sampling_rungs``' records); each runs
+    """The study as sweeps (name -> :class:`compare.sweep.run.SweepSpec`) of the shipped
+    ``scenario`` (its name or a TOML path) into ``out/identification/``: the grid of
+    ``restitutions`` e (1) x ``crown_ratios`` (m_f / m_trunk, 1) on ``rungs``, the engines'
+    corner (:data:`ENGINE_RESTITUTIONS` x :data:`ENGINE_CROWN_RATIOS`) on ``engine_rungs``,
+    and the sampling grid (rate x noise x ``sampling_seeds`` on ``sampling_rungs``' records);
+    an empty tuple leaves its sweep out. Each runs
     :func:`.ident_records.record_identification` on its records."""
     from treeimpact.compare.sweep.run import SweepSpec
 
@@ -82,10 +85,12 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
                              rungs=RUNGS, sampling_rungs=SAMPLING_RUNGS,
                              engine_rungs=ENGINE_RUNGS, sampling_seeds=SAMPLING_SEEDS,
                              progress=None) -> dict:
-    """Run (or resume) the study's sweeps (:func:`study_sweeps`, one pool); write
-    ident-study.json and one map per method into ``out``; returns {rows, figures, summary,
-    sampling}. ``progress``: as the sweeps' (None: a bar on a terminal, a line every few
-    seconds elsewhere; False: nothing)."""
+    """Run (or resume) the study's sweeps (:func:`study_sweeps`, one pool of ``workers``
+    processes: None one per core, 0 in this process); write ident-study.json and one map per
+    method into ``out``; returns {rows, figures, summary, sampling}. ``scenario``,
+    ``restitutions``, ``crown_ratios``, ``rungs``, ``sampling_rungs``, ``engine_rungs`` and
+    ``sampling_seeds`` as :func:`study_sweeps` takes them. ``progress``: as the sweeps'
+    (None: a bar on a terminal, a line every few seconds elsewhere; False: nothing)."""
     from treeimpact.compare.sweep.run import run_sweeps
 
     out = Path(out)
@@ -114,11 +119,12 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
 
 
 def summarise(rows: list[dict]) -> dict:
-    """Per rung and method: worst |error| per parameter over the grid and the share of
+    """Per rung and method, over ``rows`` (the grid's cases as :func:`.ident_records.case_row`
+    gives them): worst |error| (1, relative) per parameter over the grid and the share of
     e <= GOAL_MAX_E cells within GOAL, over the cells whose record fixes M_T and e; for the
     fit also how many records do not (one impact: ranges) and its worst error there with
     e given and with the pendulum's record, the share of intervals covering the truth and
-    of records it explains."""
+    of records it explains. Returns {rung: {method: {...}}}."""
     out = {}
     for rung in dict.fromkeys(r["rung"] for r in rows):
         rr = [r for r in rows if r["rung"] == rung]
@@ -151,9 +157,11 @@ def summarise(rows: list[dict]) -> dict:
 
 
 def summarise_sampling(rows: list[dict]) -> list[dict]:
-    """Per (rung, rate, noise) over the seeds: the fit's worst |error| over M_T, K_T and b,
-    the share of its 95 % intervals covering the truth (M_T, K_T, C_T) and of records it
-    says the 1-DOF model explains."""
+    """Per (rung, rate (Hz), noise) over the seeds of ``rows`` (the sampling sweep's cases
+    as :func:`.ident_records.case_row` gives them): the fit's worst |error| (1, relative)
+    over M_T, K_T and b, the share of its 95 % intervals covering the truth (M_T, K_T, C_T)
+    and of records it says the 1-DOF model explains; one dict per cell, in the rows'
+    order."""
     out = []
     for cell in dict.fromkeys((r.get("rung"), r["rate"], r["noise"]) for r in rows):
         rr = [r for r in rows if (r.get("rung"), r["rate"], r["noise"]) == cell]

@@ -34,11 +34,12 @@ def _run_cost(cost_class: tuple) -> float:
 
 
 def chunks(tasks: list, workers: int) -> list[list]:
-    """Tasks grouped into worker calls: runs of one cost class (:func:`_run_cost`) up to
-    :data:`CALL_BUDGET` seconds a call, and no fewer than about 8 calls per worker; order
-    kept within a class. The calls come longest first (estimated), so the short ones (the
-    analytic reference runs) fill the workers' last gaps instead of a long call running
-    alone at the end."""
+    """The ``tasks`` (:class:`.execute.Task`) grouped into worker calls for ``workers``
+    processes: runs of one cost class (:func:`_run_cost`) up to :data:`CALL_BUDGET` seconds
+    a call, and no fewer than about 8 calls per worker; order kept within a class. The
+    calls come longest first (estimated), so the short ones (the analytic reference runs)
+    fill the workers' last gaps instead of a long call running alone at the end. Returns
+    the calls, each a list of tasks."""
     classes = [_cost_class(t) for t in tasks]
     count = {c: classes.count(c) for c in set(classes)}
     size = {c: max(1, min(int(CALL_BUDGET / _run_cost(c)),

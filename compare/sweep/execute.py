@@ -29,8 +29,9 @@ IDENT_KEYS = ("M_T", "K_T", "pair_damping_ratio", "E")
 
 
 def load_analysis(ref: str):
-    """The analysis function of a ``module:function`` reference: ``fn(result, scenario,
-    record) -> {column: value}`` with its ``columns`` (a tuple) as an attribute."""
+    """The analysis function ``ref`` names (``module:function``, the module imported):
+    ``fn(result, scenario, record) -> {column: value}`` with its ``columns`` (a tuple) as an
+    attribute."""
     import importlib
 
     module, name = ref.split(":")
@@ -99,7 +100,8 @@ def execute(task: Task) -> list[dict]:
 
 
 def run_chunk(tasks: list) -> list:
-    """Worker entry point: each task's row outcomes, in order."""
+    """Worker entry point: :func:`execute` on each of ``tasks`` (:class:`Task`, one worker
+    call as compare.sweep.cost.chunks groups them); each task's row outcomes, in order."""
     return [execute(t) for t in tasks]
 
 

@@ -63,7 +63,10 @@ def read_file(path: Path, reader, what: str):
 
 
 class Journal:
-    """The CSV table, appended one flushed line per row."""
+    """The CSV table at ``path``, appended one flushed line per row with the ``columns``
+    (column names, in order) as its header: a new file gets the header, an existing one
+    loses an unfinished last line and is refused (one-line ParameterError) when its
+    header is not ``columns``."""
 
     def __init__(self, path: Path, columns: list[str]):
         self.path = Path(path)
@@ -103,7 +106,8 @@ def _cell(v):
 
 
 def drop_partial_line(path: Path) -> None:
-    """Cut a last line left unfinished by a killed sweep (it was never a finished row)."""
+    """Cut, in the file at ``path``, a last line left unfinished by a killed sweep (it was
+    never a finished row); a file ending in a newline is left as it is."""
     with open(path, "rb+") as fh:
         data = fh.read()
         if data.endswith(b"\n"):
@@ -112,9 +116,10 @@ def drop_partial_line(path: Path) -> None:
 
 
 def read_table(out, *, dedupe: bool = True, grid: Grid | None = None):
-    """The sweep's rows as a pandas DataFrame (last row per (point, target) when ``dedupe``;
-    only the points of ``grid`` when given: a directory resumed with other values keeps the
-    earlier rows in its journal)."""
+    """The rows of the sweep in the directory ``out`` as a pandas DataFrame, from its
+    journal, else its table (last row per (point, target) when ``dedupe``; only the points
+    of ``grid`` when given: a directory resumed with other values keeps the earlier rows in
+    its journal); a one-line ParameterError when there is neither."""
     import pandas as pd
 
     out = Path(out)
@@ -159,8 +164,9 @@ def make_out(out) -> Path:
 
 
 def spec_of(scenario: Scenario, grid: Grid, identify: bool, analysis: str | None) -> dict:
-    """What defines a sweep (``sweep.json``): its scenario, grid, axes, whether it
-    identifies and its analysis (``module:function`` or None)."""
+    """What defines a sweep (``sweep.json``), as a dict: its ``scenario`` (as its
+    ``to_dict``), ``grid`` (its specs and axes), whether it runs the paper's identification
+    (``identify``) and its ``analysis`` (``module:function`` or None)."""
     return {"version": 1, "scenario": scenario.to_dict(), "grid": grid.specs(),
             "axes": list(grid.names), "identify": identify, "analysis": analysis}
 
@@ -183,8 +189,9 @@ def check_spec(out: Path, spec: dict) -> None:
 
 
 def finished(journal_path: Path, retry_failed: bool = False) -> set:
-    """The (point, target) pairs an earlier run of the sweep finished (its journal's last
-    row of each; only those that succeeded when ``retry_failed``); empty for a new sweep."""
+    """The (point, target) pairs an earlier run of the sweep finished, read from its
+    journal at ``journal_path`` (its last row of each; only those that succeeded when
+    ``retry_failed``); empty for a new sweep."""
     if not (journal_path.exists() and journal_path.stat().st_size):
         return set()
     import pandas as pd

@@ -39,12 +39,16 @@ class Target:
 
     @property
     def reference(self) -> bool:
+        """Whether the target runs a reference rung (:data:`REFERENCE_BACKENDS`): a swept
+        option reaches it only where its simulate() takes it, and its trunk options are
+        not read as an engine's."""
         return self.backend in REFERENCE_BACKENDS
 
 
 def check_backends(backends) -> list[str]:
-    """The backend names of ``--backend`` (a list or a comma-separated string), each once,
-    in order; a one-line ParameterError naming the allowed ones for an unknown name."""
+    """The backend names of ``--backend``, ``backends`` (a list or a comma-separated
+    string), each once, in order; a one-line ParameterError naming the allowed ones for an
+    unknown name."""
     if isinstance(backends, str):
         backends = [b.strip() for b in backends.split(",") if b.strip()]
     out = []
@@ -63,7 +67,11 @@ def check_backends(backends) -> list[str]:
 
 def make_targets(backends=("analytic",), *, ladder: bool = False,
                  options: dict | None = None) -> list[Target]:
-    """The targets of a sweep (see the module docstring). ``options`` maps a backend name
+    """The targets of a sweep (see the module docstring) on ``backends`` (as
+    :func:`check_backends` takes them). ``ladder``: the ladder's own rung table
+    (compare.rungs.rung_table) for the engines asked for, chain segments left to the grid;
+    else the reference rungs asked for (analytic always), each compared with the one below,
+    and each engine as configured compared with the top one. ``options`` maps a backend name
     to fixed options for it (``{"mujoco": {"trunk": "sdof"}}``)."""
     names = check_backends(backends)
     options = options or {}
@@ -109,8 +117,14 @@ def apply_points(scenario: Scenario, grid: Grid) -> list[tuple]:
 def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: bool = True,
          done: set | None = None, applied: list | None = None, analysis: str | None = None,
          part: int = 0):
-    """(tasks to run, rows already decided without running: invalid points).
-    ``applied``: :func:`apply_points` of this scenario and grid, when already computed."""
+    """(tasks to run, rows already decided without running: invalid points) of the
+    ``scenario`` over ``grid`` on ``targets``: one :class:`Task` per distinct backend call,
+    holding its rows. ``identify``: the paper's identification on each run's record (an
+    analytic run sampled for it); ``done``: the (point key, target id) pairs an earlier run
+    finished, skipped; ``applied``: :func:`apply_points` of this scenario and grid, when
+    already computed; ``analysis``: ``module:function`` run on each result instead of the
+    standard columns (a run cheaper than :data:`ANALYSIS_COST` is repeated per record);
+    ``part``: the index of this sweep among :func:`.run.run_sweeps`' specs."""
     from treeimpact.compare.runs import options_key, scenario_key
 
     done = done or set()
@@ -180,12 +194,13 @@ def _trunk_options(opts: dict, accepted: set) -> dict:
 
 
 def check_grid(scenario: Scenario, grid: Grid, targets: list[Target]) -> list[tuple]:
-    """Refuse, before anything runs, what no grid point could run (one-line ParameterError
-    naming the ``--grid`` spec): an engine option that no backend of the sweep takes, and an
-    axis value outside its parameter's range at every point (``restitution=2``). A point that is
-    invalid only in combination with other axes (a clamp height above one of the swept
-    lengths) is kept: it becomes an ``invalid`` row and the sweep goes on. Returns
-    :func:`apply_points` of the grid, for :func:`plan`."""
+    """Refuse, before anything runs, what no point of ``grid`` applied to ``scenario`` could
+    run on the ``targets`` (one-line ParameterError naming the ``--grid`` spec): an engine
+    option that no backend of the sweep takes, and an axis value outside its parameter's
+    range at every point (``restitution=2``). A point that is invalid only in combination
+    with other axes (a clamp height above one of the swept lengths) is kept: it becomes an
+    ``invalid`` row and the sweep goes on. Returns :func:`apply_points` of the grid, for
+    :func:`plan`."""
     accepted = set().union(*(_accepted(t.backend) for t in targets))
     for ax in grid.axes:
         p = ax.parameter

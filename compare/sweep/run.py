@@ -57,6 +57,7 @@ class SweepResult:
 
     @property
     def journal(self) -> Path:
+        """The path of its journal (``results.csv`` in ``out``)."""
         return self.out / JOURNAL
 
 
@@ -81,11 +82,16 @@ def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = Fal
               options: dict | None = None, workers: int | None = None, scheduler=None,
               identify: bool = True, retry_failed: bool = False, progress=None,
               on_rows=None, analysis: str | None = None) -> SweepResult:
-    """Run (or resume) a sweep into the directory ``out``; see the module docstring.
+    """Run (or resume) a sweep into the directory ``out``; see the module docstring. Returns
+    its :class:`SweepResult`.
 
     ``scenario``: a Scenario, shipped name or TOML path; ``grid``: a :class:`Grid` or
-    ``--grid`` specs; ``scheduler``: a Dask scheduler address or ``Client``; ``on_rows``:
-    called with each batch of rows after it is written (tests interrupt a sweep there).
+    ``--grid`` specs; ``backends``, ``ladder`` and ``options``: the targets, as
+    compare.sweep.plan.make_targets takes them; ``identify``: the paper's identification on
+    each run's record (the ``id.*`` and ``truth.*`` columns); ``analysis``:
+    ``module:function`` run on each result instead of the standard columns. ``workers``,
+    ``scheduler``, ``retry_failed``, ``progress`` and ``on_rows`` as :func:`run_sweeps`
+    takes them.
     """
     spec = SweepSpec(scenario, grid, out, tuple(backends) if not isinstance(backends, str)
                      else backends, ladder, options, identify, analysis)
@@ -113,10 +119,17 @@ class _Part:
 
 def run_sweeps(specs, *, workers: int | None = None, scheduler=None,
                retry_failed: bool = False, progress=None, on_rows=None) -> list[SweepResult]:
-    """Run (or resume) several sweeps on one pool, with one progress report: every spec is
-    checked before anything runs, each sweep writes its own directory (table, spec), and
-    the runs of all of them are grouped into worker calls together. Returns one
-    :class:`SweepResult` per spec, in order."""
+    """Run (or resume) several sweeps, the ``specs`` (:class:`SweepSpec`), on one pool, with
+    one progress report: every spec is checked before anything runs, each sweep writes its
+    own directory (table, spec), and the runs of all of them are grouped into worker calls
+    together. Returns one :class:`SweepResult` per spec, in order.
+
+    ``workers``: worker processes (None: one per core; 0: in this process); ``scheduler``:
+    a Dask scheduler address or ``Client`` to run on instead (its workers counted);
+    ``retry_failed``: rerun the rows whose last outcome was not ok (failed, diverged,
+    invalid; else only unfinished rows run); ``progress``: None a bar on a terminal and a line every few seconds elsewhere,
+    True a bar, False nothing; ``on_rows``: called with each batch of rows after it is
+    written (tests interrupt a sweep there)."""
     from treeimpact.compare.runs import resolve_scenario
 
     t_start = time.perf_counter()
