@@ -28,10 +28,13 @@ FALSE_ALARM = 1e-3
 #: The longest stretch (s) a slope is read over on each side of a kink: well inside the
 #: impact process the paper reports (under 5 ms) and a tree's quarter period (about 20 ms).
 MAX_SLOPE_SPAN = 2e-3
+#: A kink read over more than one sample is placed where the lines through this many times
+#: as many samples on each side cross.
+HINGE_SPANS = 2
 #: The peak is fitted over the samples within this many noise deviations of it.
 PEAK_DEPTH = 10.0
-#: Of white noise, the variance of the fourth difference over sigma^2 (1 + 16 + 36 + 16 + 1).
-FOURTH_DIFFERENCE_VARIANCE = 70.0
+#: Of white noise, the variance of the third difference over sigma^2 (1 + 9 + 9 + 1).
+THIRD_DIFFERENCE_VARIANCE = 20.0
 #: The rest's spread over the high-pass noise beyond which the noise is not white (its
 #: samples correlated: the high-pass reading misses most of it) and the rest's is used: a
 #: ratio white noise's 12-sample rest passes one time in about 1e6.
@@ -65,11 +68,12 @@ class Impacts:
 
 
 def highpass_noise(x: np.ndarray) -> float:
-    """The noise (standard deviation, m) of ``x`` (m) from its fourth differences, robustly
+    """The noise (standard deviation, m) of ``x`` (m) from its third differences, robustly
     (their median absolute deviation): a motion sampled at omega dt << 1 adds only
-    (omega dt)^4 of its amplitude, an impact's kink moves a few of them."""
-    d4 = np.diff(np.asarray(x, float), 4)
-    return robust_sigma(d4) / math.sqrt(FOURTH_DIFFERENCE_VARIANCE) if d4.size else math.nan
+    (omega dt)^3 of its amplitude (1 % of 1 % noise at 1 kHz for a tree's 80 rad/s), an
+    impact's kink moves a few of them."""
+    d3 = np.diff(np.asarray(x, float), 3)
+    return robust_sigma(d3) / math.sqrt(THIRD_DIFFERENCE_VARIANCE) if d3.size else math.nan
 
 
 def moves(t: np.ndarray, x: np.ndarray, sel: np.ndarray, sigma: float) -> bool:
@@ -157,7 +161,28 @@ def _kinks(t, x, span, threshold):
     # Merge the samples of one jump (a slope read over ``span`` samples parts no kinks
     # closer than that); report the sample at the kink.
     groups = np.split(idx, np.nonzero(np.diff(idx) > span)[0] + 1)
-    return np.array([t[g[np.argmax(jumps[g])] + span] for g in groups]), float(np.max(jumps))
+    kinks = [int(g[np.argmax(jumps[g])]) + span for g in groups]
+    return np.array([hinge(t, x, k, span) for k in kinks]), float(np.max(jumps))
+
+
+def hinge(t: np.ndarray, x: np.ndarray, k: int, span: int) -> float:
+    """The time (s) of a kink found at sample ``k`` of ``x`` (m, at ``t`` s) read over
+    ``span`` samples: that sample's time for a one-sample reading (a record without
+    noise), else where the lines through the HINGE_SPANS ``span`` samples on each side
+    (the kink's own left out) cross, within a sample of ``k``: a reading over more
+    samples no longer moves the kink by a sample."""
+    if span == 1:
+        return float(t[k])
+    w = HINGE_SPANS * span
+    lo, hi = max(0, k - w), min(t.size, k + w + 1)
+    if k - lo < 2 or hi - k - 1 < 2:
+        return float(t[k])
+    left = np.polyfit(t[lo:k] - t[k], x[lo:k], 1)
+    right = np.polyfit(t[k + 1:hi] - t[k], x[k + 1:hi], 1)
+    if not right[0] > left[0]:
+        return float(t[k])
+    crossing = (left[1] - right[1]) / (right[0] - left[0])
+    return float(t[k] + np.clip(crossing, t[k - 1] - t[k], t[k + 1] - t[k]))
 
 
 def slope_increases(t: np.ndarray, x: np.ndarray, sigma: float, source: NoiseSource,
@@ -167,9 +192,9 @@ def slope_increases(t: np.ndarray, x: np.ndarray, sigma: float, source: NoiseSou
     ``source``) would make anywhere in the record but with probability FALSE_ALARM, read
     over the fewest samples on each side (up to MAX_SLOPE_SPAN, and no more than it takes
     the noise's jump below the fraction's) at which any stands out. Without one, a record
-    that leaves its first sample by more than the noise (2 z sigma) within MIN_REST_SAMPLES
-    has no rest: its contact is at its first sample; else ParameterError "not
-    identifiable"."""
+    already rising at its start (the slope of its first three samples above z times its
+    noise, sigma / (sqrt(2) dt)) has its contact at its first sample; else ParameterError
+    "not identifiable"."""
     dt = float(np.median(np.diff(t)))
     from scipy.stats import norm  # (imported here: the module loads without scipy.stats)
 
@@ -186,8 +211,8 @@ def slope_increases(t: np.ndarray, x: np.ndarray, sigma: float, source: NoiseSou
             largest, widest = top / threshold, span
         if noise_jump <= jump_fraction * slope_max:
             break  # the noise no longer sets the threshold: a longer reading only blurs
-    left = np.nonzero(np.abs(x - x[0]) > 2.0 * z * sigma)[0]
-    if left.size and left[0] < MIN_REST_SAMPLES:  # no rest: the contact is at its start
+    first = float(window_slopes(t[:3], x[:3], 2)[0])  # no rest: the contact at its start
+    if first > z * sigma * math.sqrt(0.5) / dt:
         return Impacts(np.array([float(t[0])]), 1, jump_fraction * float(np.max(
             window_slopes(t, x, 1))))
     raise ParameterError(
