@@ -113,11 +113,12 @@ def rest_of(x: np.ndarray, rest: np.ndarray | None, sigma: float,
 
 def find_events(t: np.ndarray, x: np.ndarray, jump_fraction: float
                 ) -> tuple[RecordNoise, Impacts]:
-    """The noise and resting level (:class:`RecordNoise`) and the impacts (:func:`slope_
-    increases`) of the record ``x`` (m, at ``t`` s). The thresholds come from the high-pass
-    noise of the whole record (:func:`highpass_noise`: no event moves it, however long the
-    rest), or from the rest's spread about a line where that is COLOURED_NOISE times more
-    (a correlated noise); the rest before the first impact gives the baseline."""
+    """The noise and resting level (:class:`RecordNoise`) and the impacts
+    (:func:`slope_increases`, above ``jump_fraction`` of the largest slope) of the record
+    ``x`` (m, at ``t`` s). The thresholds come from the high-pass noise of the whole record
+    (:func:`highpass_noise`: no event moves it, however long the rest), or from the rest's
+    spread about a line where that is COLOURED_NOISE times more (a correlated noise); the
+    rest before the first impact gives the baseline."""
     sigma, source = highpass_noise(x), NoiseSource.DIFFERENCES
     impacts = slope_increases(t, x, sigma, source, jump_fraction)
     rest = rest_before(t, x, impacts, sigma)
@@ -133,7 +134,8 @@ def find_events(t: np.ndarray, x: np.ndarray, jump_fraction: float
 
 
 def window_slopes(t: np.ndarray, x: np.ndarray, span: int) -> np.ndarray:
-    """The least-squares slope (m/s) of ``x`` over samples j..j+span, for every j."""
+    """The least-squares slope (m/s) of ``x`` (m, at times ``t``, s) over samples j..j+``span``,
+    for every j."""
     if span == 1:
         return np.diff(x) / np.diff(t)
     tw = np.lib.stride_tricks.sliding_window_view(t, span + 1)
