@@ -37,6 +37,9 @@ from treeimpact.analytic.model.parameters import (
 )
 from treeimpact.analytic.model.two_body import two_body_model
 
+from .events import find_events, peak
+from .noise import NoiseSource
+
 READINGS = ("paper", "printed", "consistent")
 
 
@@ -139,37 +142,35 @@ def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: f
 
 @dataclass(frozen=True)
 class Regression:
-    """Steps 1-3 on a record: where the bodies move together and the fitted polynomial."""
+    """Steps 1-3 on a record: where the bodies move together and the fitted polynomial,
+    every displacement from the record's resting level (``baseline``)."""
 
-    t_first: float  # s, first impact (first slope increase)
+    t_first: float  # s, first impact (first slope increase above the noise)
     t_together: float  # s, last slope increase: bodies move together
     x_together: float  # m, x at t_together (the paper's x0)
     t_origin: float  # s, origin after the linear extrapolation
     coefficients: tuple  # a0, a1, a2, ... in the shifted time
     x_max: float
     tau: float  # s, from t_origin
-
-
-def slope_increases(t: np.ndarray, x: np.ndarray, threshold: float) -> np.ndarray:
-    """Times where the slope of x(t) jumps up by more than ``threshold`` (m/s): impacts."""
-    s = np.diff(x) / np.diff(t)
-    jumps = np.diff(s)
-    idx = np.nonzero(jumps > threshold)[0]
-    if idx.size == 0:
-        return np.array([])
-    # Merge neighbouring samples of one jump; report the sample at the kink.
-    groups = np.split(idx, np.nonzero(np.diff(idx) > 1)[0] + 1)
-    return np.array([t[g[np.argmax(jumps[g])] + 1] for g in groups])
+    baseline: float = 0.0  # m, the resting level removed (0: no rest recorded)
+    noise: float = 0.0  # m, the record's noise the events were found against
+    noise_source: str = NoiseSource.DIFFERENCES.value  # where the noise came from
+    jump_threshold: float = 0.0  # m/s, the smallest slope increase counted as an impact
+    slope_span: int = 1  # samples each side a slope was read over to find the impacts
 
 
 def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: float = 0.02,
             search_time: float = 0.02, t_together: float | None = None) -> Regression:
     """Steps 1-3 of the procedure on a sampled displacement record x(t) (m, s).
 
-    An impact is a slope increase larger than ``jump_fraction`` of the largest slope; the
-    bodies move together at the last one within ``search_time`` (s) of the first (or at
-    ``t_together`` if given, e.g. from a contact channel as recorded by Pellerin et al.).
-    The polynomial of ``degree`` is fitted over ``window`` (s, at most 10 ms) from there.
+    The events are found against the record's noise (:mod:`.events`): the resting level
+    and the noise from the rest before the contact (else the sensor's zero and the
+    high-pass noise); an impact is a slope increase larger than ``jump_fraction`` of the
+    largest slope and than the noise could make; the bodies move together at the last one
+    within ``search_time`` (s) of the first (or at ``t_together`` if given, e.g. from a
+    contact channel as recorded by Pellerin et al.). The polynomial of ``degree`` is fitted
+    over ``window`` (s, at most 10 ms) from there. ParameterError "not identifiable" when
+    the record shows no impact, ends inside the window or before its peak.
     """
     t = np.asarray(t, float)
     x = np.asarray(x, float)
@@ -179,34 +180,31 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
         raise ParameterError("record: t and x must be finite")
     if not (0 < window <= 0.010 + 1e-12):
         raise ParameterError(f"window = {window!r} s is out of range: allowed (0, 0.01] s")
-    slope_max = float(np.max(np.diff(x) / np.diff(t)))
-    kinks = slope_increases(t, x, jump_fraction * slope_max)
-    t_first = float(kinks[0]) if kinks.size else float(t[0])
+    noise, impacts = find_events(t, x, jump_fraction)
+    x = x - noise.baseline
+    t_first = float(impacts.times[0])
     if t_together is None:
-        cand = kinks[kinks <= t_first + search_time] if kinks.size else np.array([t_first])
-        t_together = float(cand[-1]) if cand.size else t_first
+        cand = impacts.times[impacts.times <= t_first + search_time]
+        t_together = float(cand[-1])
     sel = (t >= t_together) & (t <= t_together + window)
     if np.count_nonzero(sel) <= degree + 1:
         raise ParameterError("record: too few samples in the regression window")
+    if t[-1] < t_together + window - np.median(np.diff(t)):
+        left = 1e3 * (t[-1] - t_together)
+        raise ParameterError(f"not identifiable: the record ends {left:.3g} ms after the "
+                             f"bodies move together, inside the {1e3 * window:.3g} ms "
+                             "regression window")
     s = t[sel] - t_together
     local = np.polynomial.polynomial.polyfit(s, x[sel], degree)
     x_tog, v_tog = local[0], local[1]
     t_origin = t_together - x_tog / v_tog  # linear extrapolation to x = 0
     coeffs = np.polynomial.polynomial.polyfit(t[sel] - t_origin, x[sel], degree)
-    i = int(np.argmax(x))
-    x_max, t_max = float(x[i]), float(t[i])
-    if 0 < i < x.size - 1:  # parabola through the three samples around the maximum
-        h0, h1 = t[i] - t[i - 1], t[i + 1] - t[i]
-        d0, d1 = (x[i] - x[i - 1]) / h0, (x[i + 1] - x[i]) / h1
-        curv = (d1 - d0) / (0.5 * (h0 + h1))
-        if curv < 0:
-            dt = -(0.5 * (d0 + d1)) / curv
-            dt = float(np.clip(dt, -h0, h1))
-            t_max = float(t[i] + dt)
-            x_max = float(x[i] + 0.5 * (d0 + d1) * dt + 0.5 * curv * dt * dt)
+    t_max, x_max = peak(t, x, noise.sigma)
     return Regression(t_first=t_first, t_together=t_together, x_together=float(x_tog),
                       t_origin=float(t_origin), coefficients=tuple(float(c) for c in coeffs),
-                      x_max=x_max, tau=t_max - float(t_origin))
+                      x_max=x_max, tau=t_max - float(t_origin), baseline=noise.baseline,
+                      noise=noise.sigma, noise_source=noise.source.value,
+                      jump_threshold=impacts.threshold, slope_span=impacts.span)
 
 
 def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "paper",
@@ -218,6 +216,7 @@ def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "pa
     t = np.asarray(t, float)
     x = np.asarray(x, float)
     reg = regress(t, x, **regress_kw)
+    x = x - reg.baseline
     x0 = reg.x_together
     T0 = reg.t_together - reg.t_first
     sel = (t >= reg.t_first) & (t <= reg.t_together)
