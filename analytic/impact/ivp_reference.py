@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.model.two_body import TwoBodyModel
 
-from .solver import Motion
+from .events import Motion
 
 
 def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
