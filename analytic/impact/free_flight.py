@@ -16,7 +16,8 @@ def next_contact(tree: Oscillator, pend: Oscillator, x0: float, vx0: float, y0: 
     (1 after an impact, 3 after a separation, 0 for a touch without relative velocity:
     found here from the gap's Taylor terms); ``rate``: the fastest rate of the two (1/s)."""
     tree_adv, pend_adv = tree.scalar_advance, pend.scalar_advance
-    tree_bounds, pend_bounds = tree.derivative_bounds, pend.derivative_bounds
+    # derivative_bounds(x, v) with its n_max = 5, without the call that picks it (hot path)
+    tree_bounds, pend_bounds = tree._bounds5, pend._bounds5
     # accelerations and jerks, x'' = -2 beta x' - Omega^2 x (inlined: the hot path)
     b2t, w2t = 2.0 * tree.beta, tree.omega_sq
     b2p, w2p = 2.0 * pend.beta, pend.omega_sq

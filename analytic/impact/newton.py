@@ -36,19 +36,17 @@ def common_velocity(M: float, m: float, vx: float, vy: float) -> float:
     return (M * vx + m * vy) / (M + m)
 
 
-def check_chatter(chatter: int, restitution: float, reduced_mass: float, vx: float,
-                  vy: float, initial_energy: float) -> None:
-    """Refuse a chattering sequence past :data:`MAX_CHATTER_IMPACTS` impacts (``chatter``
-    counts them) with a ParameterError naming ``contact.restitution`` (``restitution``);
-    the message gives the relative kinetic energy left, mu (vx - vy)^2 / 2 (``reduced_mass``
-    mu kg, separation velocities ``vx``, ``vy`` m/s), as a fraction of ``initial_energy``
-    (J)."""
-    if chatter > MAX_CHATTER_IMPACTS:
-        raise ParameterError(
-            f"contact.restitution = {restitution!r}: the chattering sequence still holds "
-            f"{0.5 * reduced_mass * (vx - vy) ** 2 / initial_energy:.1e} of the input energy "
-            f"after {MAX_CHATTER_IMPACTS} impacts (the exact solver's work grows as "
-            f"1 / (1 - e)); allowed here: a smaller e, e <= 0.99 always runs")
+def chatter_refused(restitution: float, reduced_mass: float, vx: float, vy: float,
+                    initial_energy: float) -> ParameterError:
+    """The error refusing a chattering sequence past :data:`MAX_CHATTER_IMPACTS` impacts,
+    naming ``contact.restitution`` (``restitution``); it gives the relative kinetic energy
+    left, mu (vx - vy)^2 / 2 (``reduced_mass`` mu kg, separation velocities ``vx``, ``vy``
+    m/s), as a fraction of ``initial_energy`` (J)."""
+    return ParameterError(
+        f"contact.restitution = {restitution!r}: the chattering sequence still holds "
+        f"{0.5 * reduced_mass * (vx - vy) ** 2 / initial_energy:.1e} of the input energy "
+        f"after {MAX_CHATTER_IMPACTS} impacts (the exact solver's work grows as "
+        f"1 / (1 - e)); allowed here: a smaller e, e <= 0.99 always runs")
 
 
 def close_tail(after_impact: int, t: float, gamma: float, relative_acceleration: float,

@@ -9,7 +9,6 @@ it records is :mod:`.events`, what it returns :class:`~.solution.ImpactSolution`
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 from treeimpact.analytic.errors import SimulationDiverged
 from treeimpact.analytic.model.two_body import TwoBodyModel
@@ -19,7 +18,7 @@ from .free_flight import next_contact
 from .newton import (
     MAX_CHATTER_IMPACTS,
     TAIL_ENERGY_FRACTION,
-    check_chatter,
+    chatter_refused,
     close_tail,
     common_velocity,
     newton_impact,
@@ -36,34 +35,30 @@ _MAX_EVENTS = 1_000_000  # a guard against a bug, not a cap on the physics: exce
 _MAX_STALLED_EVENTS = 1000  # events in a row at one time: a loop that no longer advances
 
 
-@dataclass(frozen=True)
 class _Bodies:
-    """What every event of one run needs of its ``model``, computed once: the masses, e,
-    mu, E0, the three oscillators (trunk, pendulum, together), the contact force's
-    coefficients, the tail's energy limit and ``t_end`` (s)."""
+    """What every event of one run needs of its ``model``, computed once (a plain class with
+    slots: it is built for every run, a record fit builds thousands): M_T, m, e, mu, E0, the
+    three oscillators (trunk, pendulum, together) and their fastest rate (1/s), the contact
+    force's coefficients (:func:`~.together.force_coefficients`), the tail's energy limit (J)
+    and ``t_end`` (s)."""
 
-    model: TwoBodyModel
-    t_end: float
-    tree: Oscillator
-    pend: Oscillator
-    both: Oscillator
-    rate: float  # 1/s, the fastest of trunk and pendulum
-    cx: float
-    cv: float
-    tail_limit: float  # J
+    __slots__ = ("M", "accelerations", "both", "cv", "cx", "e", "e0", "m", "model", "mu", "pend",
+                 "rate", "t_end", "tail_limit", "tree", "u_scale")
 
-    @classmethod
-    def of(cls, model: TwoBodyModel, t_end: float) -> _Bodies:
-        """The constants of ``model``'s run to ``t_end`` (s)."""
-        M, m = model.dynamic_mass, model.impactor_mass
-        tree = Oscillator.from_mck(M, model.damping, model.stiffness)
-        pend = Oscillator.from_mck(m, 0.0, model.impactor_stiffness)
-        both = Oscillator.from_mck(M + m, model.damping,
-                                   model.stiffness + model.impactor_stiffness)
-        cx, cv = force_coefficients(model)
-        return cls(model, t_end, tree, pend, both,
-                   max(tree.fastest_rate, pend.fastest_rate, 1e-12), cx, cv,
-                   TAIL_ENERGY_FRACTION * model.initial_energy)
+    def __init__(self, model: TwoBodyModel, t_end: float):
+        self.model, self.t_end = model, t_end
+        self.M, self.m = M, m = model.dynamic_mass, model.impactor_mass
+        self.e, self.mu, self.e0 = model.restitution, model.reduced_mass, model.initial_energy
+        self.tree = tree = Oscillator.from_mck(M, model.damping, model.stiffness)
+        self.pend = pend = Oscillator.from_mck(m, 0.0, model.impactor_stiffness)
+        self.both = Oscillator.from_mck(M + m, model.damping,
+                                        model.stiffness + model.impactor_stiffness)
+        self.rate = max(tree.fastest_rate, pend.fastest_rate, 1e-12)
+        self.cx, self.cv = force_coefficients(model)
+        self.tail_limit = TAIL_ENERGY_FRACTION * self.e0
+        self.u_scale = model.impact_speed  # m/s: what "no relative velocity left" is against
+        # x'' = -2 beta x' - Omega^2 x of trunk and pendulum: (2 beta, Omega^2) of each
+        self.accelerations = (2.0 * tree.beta, tree.omega_sq, 2.0 * pend.beta, pend.omega_sq)
 
 
 def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool = False,
@@ -76,7 +71,7 @@ def solve_impacts(model: TwoBodyModel, t_end: float, *, stop_at_separation: bool
     RuntimeError at a million."""
     if not (t_end > 0 and math.isfinite(t_end)):
         raise ValueError(f"t_end = {t_end!r} s: must be a finite positive number")
-    bodies = _Bodies.of(model, t_end)
+    bodies = _Bodies(model, t_end)
     sol = ImpactSolution(model=model, t_end=t_end)
     state = (0.0, 0.0, 0.0, 0.0, model.impact_speed)  # t, x, vx, y, vy at the first contact
     IMPACT, FREE = Motion.IMPACT, Motion.FREE
@@ -125,18 +120,17 @@ def _impact(bodies: _Bodies, sol: ImpactSolution, state: tuple, chatter: int):
     recorded in ``sol``; then what follows: moving together (the tail closed at its
     accumulation point, or no relative velocity left) or a free flight. Returns (state,
     motion, the order of the gap's zero at the flight's start)."""
-    model = bodies.model
-    M, m, e, mu = model.dynamic_mass, model.impactor_mass, model.restitution, model.reduced_mass
+    M, m, e, mu = bodies.M, bodies.m, bodies.e, bodies.mu
     t, x, vx, y, vy = state
     impact = newton_impact(len(sol.impacts) + 1, t, x, vx, vy, M, m, e, mu)
     sol.impacts.append(impact)
     vx, vy = impact.V, impact.v
-    check_chatter(chatter, e, mu, vx, vy, model.initial_energy)
+    if chatter > MAX_CHATTER_IMPACTS:
+        raise chatter_refused(e, mu, vx, vy, bodies.e0)
     gamma = vx - vy
-    b2t, w2t = 2.0 * bodies.tree.beta, bodies.tree.omega_sq  # x'' = -2 beta x' - Omega^2 x
-    b2p, w2p = 2.0 * bodies.pend.beta, bodies.pend.omega_sq
+    b2t, w2t, b2p, w2p = bodies.accelerations
     a_rel = (-b2t * vx - w2t * x) - (-b2p * vy - w2p * y)
-    if gamma <= 1e-15 * model.impact_speed:  # no relative velocity left (e = 0 or grazing)
+    if gamma <= 1e-15 * bodies.u_scale:  # no relative velocity left (e = 0 or grazing)
         mode, vx, vy = together_or_part(M, m, bodies.cx, bodies.cv, x, vx, vy)
         return (t, x, vx, y, vy), mode, 0
     tail = close_tail(len(sol.impacts), t, gamma, a_rel, e, mu, bodies.tail_limit)
@@ -164,9 +158,7 @@ def _free_flight(bodies: _Bodies, sol: ImpactSolution, state: tuple, order: int)
         return (t, x, vx, y, vy), None, order
     y = x  # in contact: the gap is zero to round-off
     if vy - vx <= 0.0:  # grazing: touching without approach
-        model = bodies.model
-        mode, vx, vy = together_or_part(model.dynamic_mass, model.impactor_mass, bodies.cx,
-                                        bodies.cv, x, vx, vy)
+        mode, vx, vy = together_or_part(bodies.M, bodies.m, bodies.cx, bodies.cv, x, vx, vy)
         return (t, x, vx, y, vy), mode, 0
     return (t, x, vx, y, vy), Motion.IMPACT, order
 
