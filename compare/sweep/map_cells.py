@@ -122,19 +122,7 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annota
     scale = dict(scale or colour_scale(tol))
     if vmax is not None:
         scale.update(vmin=-vmax, vmax=vmax)
-    xs = sorted(cell[a].unique())
-    ys = sorted(cell[b].unique())
-    Z = np.full((len(ys), len(xs)), np.nan)
-    L = np.full((len(ys), len(xs)), "", dtype=object)
-    why = np.full((len(ys), len(xs)), "", dtype=object)
-    xi = {v: i for i, v in enumerate(xs)}
-    yi = {v: i for i, v in enumerate(ys)}
-    for _, r in cell.iterrows():
-        j, i = yi[r[b]], xi[r[a]]
-        Z[j, i] = r[value_col]
-        if letters is not None and isinstance(r.get(letters), str):
-            L[j, i] = _letter(r[letters])
-        why[j, i] = _why_missing(r)
+    xs, ys, Z, L, why = _cell_grid(cell, a, b, value_col, letters)
     finite = np.isfinite(Z)
     masked = np.ma.masked_invalid(np.clip(Z, scale["vmin"], scale["vmax"]))
     cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.88")
@@ -168,6 +156,26 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annota
     ax.set_title(title, fontsize=10)
     ax.grid(False)
     return im
+
+
+def _cell_grid(cell, a: str, b: str, value_col: str, letters):
+    """The rows of ``cell`` on their grid: (xs, ys, values, letters, why) with xs the sorted
+    values of column ``a``, ys those of ``b``, and per grid cell its ``value_col``, the
+    letter of its rung in column ``letters`` (if given) and why it has no value."""
+    xs = sorted(cell[a].unique())
+    ys = sorted(cell[b].unique())
+    Z = np.full((len(ys), len(xs)), np.nan)
+    L = np.full((len(ys), len(xs)), "", dtype=object)
+    why = np.full((len(ys), len(xs)), "", dtype=object)
+    xi = {v: i for i, v in enumerate(xs)}
+    yi = {v: i for i, v in enumerate(ys)}
+    for _, r in cell.iterrows():
+        j, i = yi[r[b]], xi[r[a]]
+        Z[j, i] = r[value_col]
+        if letters is not None and isinstance(r.get(letters), str):
+            L[j, i] = _letter(r[letters])
+        why[j, i] = _why_missing(r)
+    return xs, ys, Z, L, why
 
 
 def _ink(cmap, norm, value) -> str:

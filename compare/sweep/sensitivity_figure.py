@@ -16,6 +16,8 @@ OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
                   "gap.crown_peak_acceleration": "crown accel. gap",
                   "gap.peak_force": "force gap", "crossing.x_max": "crossing, x_max",
                   "crossing.energy_delivered": "crossing, energy"}
+#: The bars' colours, one per unmeasured input of :data:`INPUT_LABELS`, in its order.
+_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 
 
 def sensitivity_figure(trees: dict, path: Path) -> Path | None:
@@ -35,39 +37,15 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
     groups = [g for g in ([o for o in outputs if o.startswith("gap.")],
                           [o for o in outputs if o.startswith("crossing.")]) if g]
     inputs = list(INPUT_LABELS)
-    colours = dict(zip(inputs, ("tab:blue", "tab:orange", "tab:green", "tab:red",
-                                "tab:purple", "tab:brown")))
+    colours = dict(zip(inputs, _COLOURS))
     fig = Figure(figsize=(3.4 * len(names) + 2.4, 0.85 * len(outputs) + 1.9),
                  layout="constrained")
     axes = fig.subplots(len(groups), len(names), squeeze=False, sharex="row", sharey="row",
                         gridspec_kw={"height_ratios": [len(g) for g in groups]})
-    h = 0.8 / len(inputs)
     for col, name in enumerate(names):
         for row, group in enumerate(groups):
-            ax = axes[row][col]
-            scale = 100.0 if group[0].startswith("gap.") else 1.0
-            for j, o in enumerate(group):
-                out = trees[name]["outputs"].get(o)
-                if out is None:
-                    continue
-                for k, i in enumerate(inputs):
-                    v = out["indices"].get(i)
-                    if v is None:
-                        continue
-                    y = j + (k - (len(inputs) - 1) / 2) * h
-                    ax.barh(y, scale * v["mu_star"], height=0.9 * h, color=colours[i],
-                            edgecolor="k" if i in out["deciding"] else "none", lw=1.2,
-                            xerr=scale * v["mu_star_conf"],
-                            error_kw={"lw": 0.8, "capsize": 1.5, "ecolor": "0.25"})
-            ax.set_yticks(range(len(group)), [OUTPUT_LABELS.get(o, o) for o in group],
-                          fontsize=9)
-            ax.set_ylim(len(group) - 0.5, -0.5)
-            ax.grid(True, axis="x", lw=0.3)
-            ax.tick_params(axis="x", labelsize=8)
-            if row == 0:
-                ax.set_title(name, fontsize=10)
-            ax.set_xlabel("mu* (percentage points of the gap)" if scale == 100.0 else
-                          "mu* (decades of the crossing duration)", fontsize=8.5)
+            _panel(axes[row][col], trees[name]["outputs"], group, colours,
+                   name if row == 0 else None)
     handles = [Patch(color=colours[i], label=INPUT_LABELS[i].replace("\n", " "))
                for i in inputs]
     handles.append(Patch(facecolor="white", edgecolor="k", label="outlined: decides it\n"
@@ -80,3 +58,35 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
     path = Path(path)
     fig.savefig(path, dpi=100)
     return path
+
+
+def _panel(ax, outputs: dict, group: list[str], colours: dict, title: str | None) -> None:
+    """One tree's panel on ``ax``: for each output of ``group`` (gaps in percentage points,
+    or crossing durations in decades) in the tree's ``outputs``, a bar of mu* per input in
+    its ``colours``, its interval as a whisker, the deciding inputs outlined; ``title``: the
+    tree's name on the top row."""
+    inputs = list(colours)
+    h = 0.8 / len(inputs)
+    scale = 100.0 if group[0].startswith("gap.") else 1.0
+    for j, o in enumerate(group):
+        out = outputs.get(o)
+        if out is None:
+            continue
+        for k, i in enumerate(inputs):
+            v = out["indices"].get(i)
+            if v is None:
+                continue
+            y = j + (k - (len(inputs) - 1) / 2) * h
+            ax.barh(y, scale * v["mu_star"], height=0.9 * h, color=colours[i],
+                    edgecolor="k" if i in out["deciding"] else "none", lw=1.2,
+                    xerr=scale * v["mu_star_conf"],
+                    error_kw={"lw": 0.8, "capsize": 1.5, "ecolor": "0.25"})
+    ax.set_yticks(range(len(group)), [OUTPUT_LABELS.get(o, o) for o in group],
+                  fontsize=9)
+    ax.set_ylim(len(group) - 0.5, -0.5)
+    ax.grid(True, axis="x", lw=0.3)
+    ax.tick_params(axis="x", labelsize=8)
+    if title is not None:
+        ax.set_title(title, fontsize=10)
+    ax.set_xlabel("mu* (percentage points of the gap)" if scale == 100.0 else
+                  "mu* (decades of the crossing duration)", fontsize=8.5)

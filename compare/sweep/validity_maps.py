@@ -59,39 +59,10 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
         if not ms:
             continue
         summary = _summaries(dt, ms, tolerance)
-        rel_axes = relevant_axes(df, target, num)
-        if pairs is not None:
-            plot_pairs = _pairs(num, pairs)
-        elif len(rel_axes) >= 2:
-            plot_pairs = _pairs(rel_axes)
-        elif len(rel_axes) == 1:
-            plot_pairs = [(rel_axes[0], None)]
-        else:
-            plot_pairs = []
+        plot_pairs = _plot_pairs(df, target, num, pairs)
         for a, b in plot_pairs:
-            fig, axes = _grid_figure(len(ms), dt[a].nunique(), dt[b].nunique() if b else 3)
-            im = None
-            for ax, m in zip(axes, ms):
-                tol = _tolerance_of(tolerance, m)
-                sub = dt[dt["metric"] == m]
-                if b is None:
-                    _line(ax, _worst(sub, "rel", a, a), a, "rel", tol, f"{m}: rel. discrepancy")
-                else:
-                    cell = _worst(sub, "rel", a, b)
-                    im = _heat(ax, cell, a, b, "rel", tol, f"{m} (tol {tol:.0%})",
-                               letters="dominant" if value == "rel" else None, scale=scale)
-            if im is not None:
-                cb = fig.colorbar(im, ax=axes, shrink=0.8, aspect=25,
-                                  extend=_extend(dt["rel"], scale["vmax"]))
-                _percent_colorbar(cb, scale, ("against the paper's model" if value == "rel"
-                                              else "step from the rung below")
-                                  + f" (%)\nsaturates at +-{scale['vmax']:.0%}")
-            what = f"{_label(a)} x {_label(b)}" if b else _label(a)
-            versus = "the paper's model (analytic)" if value == "rel" else \
-                f"the rung below ({_previous(df, target)})"
-            fig.suptitle(f"{target} vs {versus}: {what}", fontsize=10)
             path = figdir / f"{prefix}-{_safe(target)}-{_safe(a)}{'-' + _safe(b) if b else ''}.png"
-            fig.savefig(path, dpi=110)
+            _draw_target(df, dt, target, (a, b), ms, tolerance, scale, value, path)
             out.append({"path": path, "target": target, "axes": [a, b] if b else [a],
                         "caption": _validity_caption(target, a, b, tolerance, value),
                         "summary": summary, "scale": scale if b else None})
@@ -99,6 +70,50 @@ def validity_maps(df, figdir, *, metrics=LADDER_METRICS, tolerance=None, pairs=N
             out.append({"path": None, "target": target, "axes": [], "caption": "",
                         "summary": summary, "scale": None})
     return out
+
+
+def _plot_pairs(df, target: str, num: list[str], pairs) -> list[tuple]:
+    """The (a, b) axis pairs ``target``'s maps are drawn over (b None: a line plot): the
+    ``pairs`` asked for among the numeric axes ``num``, else every pair of the axes that
+    change the target's runs in the sweep table ``df``."""
+    rel_axes = relevant_axes(df, target, num)
+    if pairs is not None:
+        return _pairs(num, pairs)
+    if len(rel_axes) >= 2:
+        return _pairs(rel_axes)
+    if len(rel_axes) == 1:
+        return [(rel_axes[0], None)]
+    return []
+
+
+def _draw_target(df, dt, target: str, axis_pair: tuple, ms: list[str], tolerance, scale: dict,
+                 value: str, path: Path) -> None:
+    """One figure of ``target``'s discrepancies ``dt`` over ``axis_pair`` (a, b; b None: a
+    line plot), a panel per metric of ``ms`` (heatmaps on the study's colour ``scale``),
+    saved to ``path``; ``value``: "rel" (letters of the dominant rung) or "step"."""
+    a, b = axis_pair
+    fig, axes = _grid_figure(len(ms), dt[a].nunique(), dt[b].nunique() if b else 3)
+    im = None
+    for ax, m in zip(axes, ms):
+        tol = _tolerance_of(tolerance, m)
+        sub = dt[dt["metric"] == m]
+        if b is None:
+            _line(ax, _worst(sub, "rel", a, a), a, "rel", tol, f"{m}: rel. discrepancy")
+        else:
+            cell = _worst(sub, "rel", a, b)
+            im = _heat(ax, cell, a, b, "rel", tol, f"{m} (tol {tol:.0%})",
+                       letters="dominant" if value == "rel" else None, scale=scale)
+    if im is not None:
+        cb = fig.colorbar(im, ax=axes, shrink=0.8, aspect=25,
+                          extend=_extend(dt["rel"], scale["vmax"]))
+        _percent_colorbar(cb, scale, ("against the paper's model" if value == "rel"
+                                      else "step from the rung below")
+                          + f" (%)\nsaturates at +-{scale['vmax']:.0%}")
+    what = f"{_label(a)} x {_label(b)}" if b else _label(a)
+    versus = "the paper's model (analytic)" if value == "rel" else \
+        f"the rung below ({_previous(df, target)})"
+    fig.suptitle(f"{target} vs {versus}: {what}", fontsize=10)
+    fig.savefig(path, dpi=110)
 
 
 def _previous(df, target) -> str:
