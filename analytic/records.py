@@ -171,79 +171,35 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
     velocity is within ``common_velocity_tolerance`` x u1.
     """
     r = record
-    nan = math.nan
     peak = float(np.max(r.force))
     if not (math.isfinite(peak) and peak > 0):
         raise ParameterError("--t-end: no contact in the record: the pendulum never touched "
                              "the trunk within t_end (peak force <= 0)")
     intervals = contact_intervals(r.force, force_threshold * peak)
     t = r.t
-    together = None
-    for i0, i1 in intervals:
-        if t[i1] - t[i0] > persist_factor * collision_duration:
-            together = (i0, i1)
-            break
-    T0 = x0 = V = A_x = A_y = nan
-    loss = nan
-    n_impacts = len(intervals)
-    t_sep = nan
+    together = next((iv for iv in intervals
+                     if t[iv[1]] - t[iv[0]] > persist_factor * collision_duration), None)
     if together is not None:
-        i0, i1 = together
-        rel = r.vy[i0:i1 + 1] - r.vx[i0:i1 + 1]
-        tol = common_velocity_tolerance * impact_speed
-        g = np.abs(rel) - tol  # <= 0 once the velocities are common
-        if rel.size > 1:
-            cross = np.flatnonzero(((g[:-1] > 0) & (g[1:] <= 0))
-                                   | (np.sign(rel[:-1]) * np.sign(rel[1:]) < 0))
-        else:
-            cross = np.array([], dtype=int)
-        if g[0] <= 0 or not cross.size:
-            T0 = float(t[i0])
-        else:
-            k = int(cross[0])
-            # the sign change of rel, or the crossing of |rel| = tol, interpolated linearly
-            a, b = (rel[k], rel[k + 1]) if np.sign(rel[k]) != np.sign(rel[k + 1]) else (
-                g[k], g[k + 1])
-            frac = a / (a - b) if a != b else 0.0
-            T0 = float(t[i0 + k] + frac * (t[i0 + k + 1] - t[i0 + k]))
-        V = _interp(t, r.vx, T0)
-        x0 = _interp(t, r.x, T0)
-        A_x = _integral_to(t, r.x, T0)
-        A_y = _integral_to(t, r.y, T0)
-        loss = r.contact_loss(T0)
-        n_impacts = sum(1 for j0, _ in intervals if t[j0] <= T0)
-        t_sep = _release_time(t, r.force, i0, i1) if i1 < t.size - 1 else nan
+        joint = _together_metrics(r, intervals, together,
+                                  common_velocity_tolerance * impact_speed)
     else:
-        loss = r.contact_loss(float(t[-1]))
-    k_max = int(np.argmax(r.x))
-    x_max, t_xmax = float(r.x[k_max]), float(t[k_max])
-    if 0 < k_max < t.size - 1:  # parabola through the three samples around the maximum
-        y0, y1, y2 = r.x[k_max - 1:k_max + 2]
-        den = y0 - 2.0 * y1 + y2
-        if den < 0:
-            s = 0.5 * (y0 - y2) / den
-            h = 0.5 * (t[k_max + 1] - t[k_max - 1])
-            x_max = float(y1 - 0.25 * (y0 - y2) * s)
-            t_xmax = float(t[k_max] + s * h)
-    theta_b = e_transferred = nan
-    if intervals and intervals[-1][1] < t.size - 1 and together is not None:
-        e_pend = float(r.pendulum_energy[intervals[-1][1] + 1])
-        e_transferred = initial_energy - e_pend - loss
-        if equivalent_length is not None:
-            c = 1.0 - e_pend / (impactor_mass * gravity * equivalent_length)
-            theta_b = math.acos(max(-1.0, min(1.0, c)))
-    ledger = r.ledger_residual(initial_energy)
+        joint = _NOT_TOGETHER | {"impact_loss": r.contact_loss(float(t[-1])),
+                                 "n_impacts": len(intervals)}
+    theta_b, e_transferred = _after_contact(r, intervals, together, initial_energy,
+                                            joint["impact_loss"], impactor_mass, gravity,
+                                            equivalent_length)
+    x_max, t_xmax = _displacement_peak(t, r.x)
     m = impactor_mass
     metrics = {
-        "n_impacts": int(n_impacts),
-        "T0": T0, "x0": x0, "V": V,
-        "x_max": x_max, "t_xmax": t_xmax, "t_sep": t_sep,
-        "A_x": A_x, "A_y": A_y,
-        "impact_loss": float(loss),
+        "n_impacts": int(joint["n_impacts"]),
+        "T0": joint["T0"], "x0": joint["x0"], "V": joint["V"],
+        "x_max": x_max, "t_xmax": t_xmax, "t_sep": joint["t_sep"],
+        "A_x": joint["A_x"], "A_y": joint["A_y"],
+        "impact_loss": float(joint["impact_loss"]),
         "impact_loss_inelastic": 0.5 * m * impact_speed ** 2 * dynamic_mass / (dynamic_mass + m),
         "energy_transferred": e_transferred,
         "theta_b": theta_b,
-        "ledger_residual": ledger,
+        "ledger_residual": r.ledger_residual(initial_energy),
         **whole_event_metrics(
             r, intervals, initial_energy, impactor_mass=m, impact_speed=impact_speed,
             collision_duration=collision_duration,
@@ -252,6 +208,78 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
     }
     assert tuple(metrics) == METRIC_KEYS
     return metrics
+
+
+#: The moving-together metrics of a record whose bodies never move together.
+_NOT_TOGETHER = {"T0": math.nan, "x0": math.nan, "V": math.nan, "A_x": math.nan,
+                 "A_y": math.nan, "t_sep": math.nan}
+
+
+def _together_metrics(r, intervals: list, together: tuple, tol: float) -> dict:
+    """T0, x0, V, A_x, A_y (to T0), the impact loss to T0, the impacts before T0 and t_sep
+    of a record ``r`` whose bodies move together in the contact interval ``together`` (of
+    its contact ``intervals``): T0 where their relative velocity falls within ``tol``
+    (m/s), :func:`_common_velocity_time`."""
+    t = r.t
+    i0, i1 = together
+    T0 = _common_velocity_time(t, r.vy[i0:i1 + 1] - r.vx[i0:i1 + 1], i0, tol)
+    return {"T0": T0, "x0": _interp(t, r.x, T0), "V": _interp(t, r.vx, T0),
+            "A_x": _integral_to(t, r.x, T0), "A_y": _integral_to(t, r.y, T0),
+            "impact_loss": r.contact_loss(T0),
+            "n_impacts": sum(1 for j0, _ in intervals if t[j0] <= T0),
+            "t_sep": _release_time(t, r.force, i0, i1) if i1 < t.size - 1 else math.nan}
+
+
+def _common_velocity_time(t: np.ndarray, rel: np.ndarray, i0: int, tol: float) -> float:
+    """T0 (s): the first time in a contact from sample ``i0`` on where the relative velocity
+    ``rel`` (m/s, from that sample) changes sign or falls within ``tol``, interpolated
+    linearly between the samples at times ``t``; the contact's start if it is within
+    ``tol`` there or never."""
+    g = np.abs(rel) - tol  # <= 0 once the velocities are common
+    if rel.size > 1:
+        cross = np.flatnonzero(((g[:-1] > 0) & (g[1:] <= 0))
+                               | (np.sign(rel[:-1]) * np.sign(rel[1:]) < 0))
+    else:
+        cross = np.array([], dtype=int)
+    if g[0] <= 0 or not cross.size:
+        return float(t[i0])
+    k = int(cross[0])
+    # the sign change of rel, or the crossing of |rel| = tol, interpolated linearly
+    a, b = (rel[k], rel[k + 1]) if np.sign(rel[k]) != np.sign(rel[k + 1]) else (
+        g[k], g[k + 1])
+    frac = a / (a - b) if a != b else 0.0
+    return float(t[i0 + k] + frac * (t[i0 + k + 1] - t[i0 + k]))
+
+
+def _displacement_peak(t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
+    """(x_max m, t_xmax s) of the samples ``x`` at times ``t``: the largest sample, refined
+    by the parabola through it and its two neighbours."""
+    k_max = int(np.argmax(x))
+    x_max, t_xmax = float(x[k_max]), float(t[k_max])
+    if 0 < k_max < t.size - 1:  # parabola through the three samples around the maximum
+        y0, y1, y2 = x[k_max - 1:k_max + 2]
+        den = y0 - 2.0 * y1 + y2
+        if den < 0:
+            s = 0.5 * (y0 - y2) / den
+            h = 0.5 * (t[k_max + 1] - t[k_max - 1])
+            x_max = float(y1 - 0.25 * (y0 - y2) * s)
+            t_xmax = float(t[k_max] + s * h)
+    return x_max, t_xmax
+
+
+def _after_contact(r, intervals: list, together, initial_energy: float, loss: float,
+                   impactor_mass: float, gravity: float,
+                   equivalent_length: float | None) -> tuple[float, float]:
+    """(theta_b rad, energy transferred J, eq 58) from the pendulum's energy after the last
+    contact of record ``r``; NaN unless the bodies moved together and parted within it."""
+    theta_b = e_transferred = math.nan
+    if intervals and intervals[-1][1] < r.t.size - 1 and together is not None:
+        e_pend = float(r.pendulum_energy[intervals[-1][1] + 1])
+        e_transferred = initial_energy - e_pend - loss
+        if equivalent_length is not None:
+            c = 1.0 - e_pend / (impactor_mass * gravity * equivalent_length)
+            theta_b = math.acos(max(-1.0, min(1.0, c)))
+    return theta_b, e_transferred
 
 
 #: A peak is ambiguous when x(t) has another local maximum this close to its largest.

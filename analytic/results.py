@@ -147,7 +147,7 @@ class ImpactRecord(Deferred):
 class SimulationResult:
     """What every backend returns: metrics (METRIC_KEYS, SI), the model and scenario as
     dicts, the sampled motion, and what the backend solved: ``solution`` (the exact solver's
-    :class:`analytic.impact.solver.ImpactSolution`, Newton rungs) or ``record`` (the sampled
+    :class:`analytic.impact.solution.ImpactSolution`, Newton rungs) or ``record`` (the sampled
     :class:`analytic.results.ImpactRecord` with forces and energies, soft-contact rungs) with
     ``collision_duration`` (s, the free-collision duration its impacts are told apart by).
     ``extra``: backend diagnostics for people (JSON-able); no code reads it."""
@@ -158,7 +158,7 @@ class SimulationResult:
     scenario: dict
     trajectory: Trajectory | None = None
     extra: dict = field(default_factory=dict)
-    solution: object | None = None  # analytic.impact.solver.ImpactSolution
+    solution: object | None = None  # analytic.impact.solution.ImpactSolution
     record: ImpactRecord | None = None
     collision_duration: float = math.nan
 

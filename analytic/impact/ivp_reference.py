@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.model.two_body import TwoBodyModel
 
-from .solver import Motion
+from .events import Motion
 
 
 def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
@@ -30,10 +30,49 @@ def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
     ``gamma_tol``: the relative velocity after an impact, in units of u_1, below which the
     bodies move together; ``stop_at_separation``: end at the first separation.
     """
-    M, C, K = model.dynamic_mass, model.damping, model.stiffness
-    m, k, e = model.impactor_mass, model.impactor_stiffness, model.restitution
+    free, together, gap, force = _equations(model)
     u1 = model.impact_speed
     atol = list(atol)
+
+    def integrate(rhs, t0, t1, s0, event=None):  # DOP853 at the tolerances asked for
+        return solve_ivp(rhs, (t0, t1), s0, method="DOP853", rtol=rtol, atol=atol,
+                         **({} if event is None else {"events": event}))
+
+    out = {"impacts": [], "together": [], "separations": []}
+    t, s = 0.0, np.array([0.0, 0.0, 0.0, u1])
+    mode = Motion.IMPACT
+    while t < t_end:
+        if mode is Motion.IMPACT:
+            s, mode, (V, v) = _impact(model, out, t, s, gamma_tol * u1, force)
+            if mode is Motion.FREE:
+                t_skip = min(t_end, t + _contact_skip(model, s[0], V, v))
+                t, s = t_skip, integrate(free, t, t_skip, s).y[:, -1]
+            continue
+        rhs, event = (free, gap) if mode is Motion.FREE else (together, force)
+        sol = integrate(rhs, t, t_end, s, event)
+        if sol.t_events[0].size == 0:
+            t, s = t_end, sol.y[:, -1]
+            break
+        t, s = sol.t_events[0][0], sol.y_events[0][0]
+        if mode is Motion.FREE:
+            mode = Motion.IMPACT
+        else:
+            out["separations"].append((t, s[0], s[1]))
+            if stop_at_separation:
+                break
+            mode = Motion.FREE
+            t_skip = min(t_end, t + 1e-9)
+            t, s = t_skip, integrate(free, t, t_skip, s).y[:, -1]
+    out["final"] = (t, s)
+    return out
+
+
+def _equations(model: TwoBodyModel):
+    """The right-hand sides of ``model``'s free flight (eq 13) and joint motion (eq 34) and
+    the terminal events of each: the gap x - y (eq 12) and the contact force N (eq 34)
+    falling through zero; state (x, x', y, y')."""
+    M, C, K = model.dynamic_mass, model.damping, model.stiffness
+    m, k = model.impactor_mass, model.impactor_stiffness
 
     def free(_t, s):
         return [s[1], (-K * s[0] - C * s[1]) / M, s[3], -k * s[2] / m]
@@ -50,50 +89,39 @@ def solve_ivp_impacts(model: TwoBodyModel, t_end: float, *, rtol: float = 1e-12,
 
     gap.terminal, gap.direction = True, -1.0
     force.terminal, force.direction = True, -1.0
+    return free, together, gap, force
 
-    out = {"impacts": [], "together": [], "separations": []}
-    t, s = 0.0, np.array([0.0, 0.0, 0.0, u1])
-    mode = Motion.IMPACT
-    while t < t_end:
-        if mode is Motion.IMPACT:
-            U, u = s[1], s[3]
-            v = ((m - M * e) * u + M * (1 + e) * U) / (M + m)
-            V = v + e * (u - U)
-            out["impacts"].append((t, U, u, V, v))
-            s = np.array([s[0], V, s[0], v])
-            if V - v < gamma_tol * u1:
-                vc = (M * V + m * v) / (M + m)
-                s = np.array([s[0], vc, s[0], vc])
-                if force(t, s) > 0:
-                    mode = Motion.TOGETHER
-                    out["together"].append((t, s[0], vc))
-                    continue
-            mode = Motion.FREE
-            # Leave the contact before watching the gap again: it starts at zero, and within
-            # round-off of the positions an event would fire at once. Skip a thousandth of
-            # the flight 2 gamma / |a_rel| predicted under constant relative acceleration.
-            a_rel = (-K * s[0] - C * V) / M + k * s[0] / m
-            flight = 2.0 * (V - v) / -a_rel if a_rel < 0 else 1e-6
-            t_skip = min(t_end, t + min(1e-9, 1e-3 * flight))
-            sol = solve_ivp(free, (t, t_skip), s, method="DOP853", rtol=rtol, atol=atol)
-            t, s = t_skip, sol.y[:, -1]
-            continue
-        rhs, event = (free, gap) if mode is Motion.FREE else (together, force)
-        sol = solve_ivp(rhs, (t, t_end), s, method="DOP853", rtol=rtol, atol=atol,
-                        events=event)
-        if sol.t_events[0].size == 0:
-            t, s = t_end, sol.y[:, -1]
-            break
-        t, s = sol.t_events[0][0], sol.y_events[0][0]
-        if mode is Motion.FREE:
-            mode = Motion.IMPACT
-        else:
-            out["separations"].append((t, s[0], s[1]))
-            if stop_at_separation:
-                break
-            mode = Motion.FREE
-            t_skip = min(t_end, t + 1e-9)
-            sol = solve_ivp(free, (t, t_skip), s, method="DOP853", rtol=rtol, atol=atol)
-            t, s = t_skip, sol.y[:, -1]
-    out["final"] = (t, s)
-    return out
+
+def _impact(model: TwoBodyModel, out: dict, t: float, s: np.ndarray, gamma_min: float,
+            force):
+    """A Newton impact (eqs 20-21) at time ``t`` (s) and state ``s``, recorded in ``out``:
+    (the state after it, the motion that follows, the separation velocities (V, v) m/s):
+    moving together when the relative
+    velocity left is below ``gamma_min`` (m/s) and the contact ``force`` compressive (the
+    start recorded), else a free flight."""
+    M, m, e = model.dynamic_mass, model.impactor_mass, model.restitution
+    U, u = s[1], s[3]
+    v = ((m - M * e) * u + M * (1 + e) * U) / (M + m)
+    V = v + e * (u - U)
+    out["impacts"].append((t, U, u, V, v))
+    s = np.array([s[0], V, s[0], v])
+    if V - v < gamma_min:
+        vc = (M * V + m * v) / (M + m)
+        s = np.array([s[0], vc, s[0], vc])
+        if force(t, s) > 0:
+            out["together"].append((t, s[0], vc))
+            return s, Motion.TOGETHER, (V, v)
+    return s, Motion.FREE, (V, v)
+
+
+def _contact_skip(model: TwoBodyModel, x: float, V: float, v: float) -> float:
+    """How long (s) a free flight from contact at ``x`` (m) with separation velocities ``V``
+    (trunk) and ``v`` (pendulum, m/s) runs before the gap is watched again: it starts at
+    zero, and within round-off of the positions an event would fire at once. A thousandth
+    of the flight 2 gamma / |a_rel| predicted under constant relative acceleration, at most
+    1 ns."""
+    M, C, K = model.dynamic_mass, model.damping, model.stiffness
+    m, k = model.impactor_mass, model.impactor_stiffness
+    a_rel = (-K * x - C * V) / M + k * x / m
+    flight = 2.0 * (V - v) / -a_rel if a_rel < 0 else 1e-6
+    return min(1e-9, 1e-3 * flight)

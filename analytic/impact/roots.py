@@ -37,47 +37,13 @@ def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max:
     if t_max <= 0.0:
         return None
     polish = _polisher(f, fdf)
-    b2 = bounds[2]
     if order == 1 and len(taylor) > 3 and taylor[2] < 0.0:
         t_root = _fast_path(f, t_max, bounds, taylor, polish, fdf)
         if t_root is not None:
             return t_root if t_root > 0.0 else None
+    search = _bisection(f, df, polish, t_max, order, taylor, bounds)
     step = min(t_max, 0.3 / rate) if rate > 0 else t_max
-    lead = taylor[order] / math.factorial(order) if order > 0 else None
-    lip = bounds[order + 1] / math.factorial(order + 1) if order > 0 else None
-
-    def certified(ta, tb, fa, fb):
-        if ta == 0.0 and order > 0:
-            qb = fb / tb ** order
-            return lead > 0.0 and qb > 0.0 and lead + qb > lip * tb
-        return fa > 0.0 and fb > 0.0 and min(fa, fb) > b2 * (tb - ta) ** 2 / 8.0
-
-    evaluations = [0]
-
-    def search(ta, tb, fa, fb, depth):
-        evaluations[0] += 1
-        if evaluations[0] > MAX_EVALUATIONS:
-            raise SimulationDiverged(
-                f"root search: no certified answer after {MAX_EVALUATIONS} bisections "
-                f"on (0, {t_max:.3g}] s (a contact the bounds cannot resolve)")
-        if fb <= 0.0 and fa > 0.0 and (ta > 0.0 or order == 0):
-            dfa = df(ta)
-            if dfa < -b2 * (tb - ta):  # strictly decreasing on [ta, tb]: a single zero
-                return polish(ta, tb, fa, fb, None)
-        elif certified(ta, tb, fa, fb):
-            return None
-        if tb - ta <= 1e-14 * max(tb, 1e-300) or depth > 200:
-            # An interval too small to resolve: f touches zero here (grazing) or crosses it.
-            return tb if fb <= 0.0 else (ta if ta > 0.0 and fa <= 0.0 else None)
-        tm = 0.5 * (ta + tb)
-        fm = f(tm)
-        if ta > 0.0 and fa <= 0.0:
-            return ta
-        left = search(ta, tm, fa, fm, depth + 1)
-        if left is not None:
-            return left
-        return search(tm, tb, fm, fb, depth + 1)
-
+    b2 = bounds[2]
     ta, fa = 0.0, (taylor[0] if taylor else f(0.0))
     while ta < t_max:
         if ta > 0.0 and local_bounds is not None:
@@ -91,11 +57,57 @@ def first_zero(f: Callable[[float], float], df: Callable[[float], float], t_max:
             h = max(step, 0.9 * math.sqrt(8.0 * fa / b2))
         tb = min(t_max, ta + h)
         fb = f(tb)
-        root = search(ta, tb, fa, fb, 0)
+        root = search(ta, tb, fa, fb, b2, 0)
         if root is not None:
             return root
         ta, fa = tb, fb
     return None
+
+
+def _bisection(f, df, polish, t_max: float, order: int, taylor: Sequence[float],
+               bounds: Sequence[float]):
+    """The search of one sampling step of :func:`first_zero` (its ``f``, ``df``, ``t_max``,
+    ``order``, ``taylor`` and ``bounds``; ``polish``: :func:`_polisher`):
+    search(ta, tb, fa, fb, b2, depth) is the first zero in (ta, tb] (f(ta) = fa,
+    f(tb) = fb, b2 >= sup |f''| there), or None once the interval is certified zero-free;
+    intervals neither certified nor monotone across a sign change are bisected. One
+    counter of bisections for the whole search (:data:`MAX_EVALUATIONS`)."""
+    lead = taylor[order] / math.factorial(order) if order > 0 else None
+    lip = bounds[order + 1] / math.factorial(order + 1) if order > 0 else None
+
+    def certified(ta, tb, fa, fb, b2):
+        if ta == 0.0 and order > 0:
+            qb = fb / tb ** order
+            return lead > 0.0 and qb > 0.0 and lead + qb > lip * tb
+        return fa > 0.0 and fb > 0.0 and min(fa, fb) > b2 * (tb - ta) ** 2 / 8.0
+
+    evaluations = [0]
+
+    def search(ta, tb, fa, fb, b2, depth):
+        evaluations[0] += 1
+        if evaluations[0] > MAX_EVALUATIONS:
+            raise SimulationDiverged(
+                f"root search: no certified answer after {MAX_EVALUATIONS} bisections "
+                f"on (0, {t_max:.3g}] s (a contact the bounds cannot resolve)")
+        if fb <= 0.0 and fa > 0.0 and (ta > 0.0 or order == 0):
+            dfa = df(ta)
+            if dfa < -b2 * (tb - ta):  # strictly decreasing on [ta, tb]: a single zero
+                return polish(ta, tb, fa, fb, None)
+        elif certified(ta, tb, fa, fb, b2):
+            return None
+        if tb - ta <= 1e-14 * max(tb, 1e-300) or depth > 200:
+            # An interval too small to resolve: f touches zero here (grazing) or crosses it.
+            return tb if fb <= 0.0 else (ta if ta > 0.0 and fa <= 0.0 else None)
+        tm = 0.5 * (ta + tb)
+        fm = f(tm)
+        if ta > 0.0 and fa <= 0.0:
+            return ta
+        left = search(ta, tm, fa, fm, b2, depth + 1)
+        if left is not None:
+            return left
+        return search(tm, tb, fm, fb, b2, depth + 1)
+
+    return search
 
 
 def _polisher(f, fdf):

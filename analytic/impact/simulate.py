@@ -15,7 +15,10 @@ from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import with_static_shape_crown
 from treeimpact.analytic.results import METRIC_KEYS, ImpactRecord, SimulationResult, Trajectory
 
-from .solver import ImpactSolution, Motion, _force_coefficients, solve_impacts
+from .events import Motion
+from .solution import ImpactSolution
+from .solver import solve_impacts
+from .together import force_coefficients
 
 
 def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dict:
@@ -159,7 +162,7 @@ def sampled_record(sol: ImpactSolution, samples: int, scenario: Scenario | None 
     m = sol.model
     t = np.linspace(0.0, sol.t_end, samples)
     x, vx, y, vy = sol.state(t)
-    cx, cv = _force_coefficients(m)
+    cx, cv = force_coefficients(m)
     together = np.zeros(t.size, dtype=bool)
     for ph in sol.phases:
         if ph.kind is Motion.TOGETHER:

@@ -58,19 +58,11 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     report (compare.validity.study_job.StudyJob), each a section once it ends."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
-    from ..studies.contact_scan import scan_result, scan_sweep
-    from ..studies.ident_fits import fit_one, fit_tasks
-    from ..ladder import build_ladder, prefetch_ladders
-    from ..pool import check_stop, process_map
-    from ..progress import Progress
+    from ..ladder import prefetch_ladders
     from ..runs import RunCache, resolve_scenario
-    from ..studies.small_e import small_e_answer, small_e_sweep
-    from ..sweep.run import run_sweeps
-    from .answer_figures import small_e_figure
-    from .figures import FigureFiles, contact_scan_figure
+    from .figures import FigureFiles
     from .paper import PaperSection
     from .runlog import RunsSection
-    from .scenario import ScenarioSection, identification_sweep
     from .studies import StudySection
     from .trunks import TrunksSection
 
@@ -86,7 +78,38 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     wall["runs (process pool)"] = time.perf_counter() - t0
     for job in study_jobs:  # a study that failed meanwhile fails the report now
         job.check()
-    t0 = time.perf_counter()  # the report's own sweeps, one pool: contact scans, e sweeps
+    t0 = time.perf_counter()
+    contact, small_e, e_tables = _report_sweeps(scens, out_dir, sink, progress)
+    wall["sweeps (contact scan, the small-e curves)"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    paper = PaperSection()
+    wall["paper"] = time.perf_counter() - t0
+    scen_sections = _scenario_sections(scens, cache, e_tables, sink, wall, engines=engines,
+                                       segments=segments, progress=progress)
+    trunks = TrunksSection(tree=scens[0].name if scens else None)
+    t0 = time.perf_counter()
+    for job in study_jobs:
+        studies.append(StudySection(job.result(), page_dir=out_dir))
+        wall[f"study {job.preset} (a child process, beside all of the above)"] = job.wall_s
+    if study_jobs:
+        wall["waiting for the studies"] = time.perf_counter() - t0
+    log = RunsSection(cache, wall)
+    return {"paper": paper, "scenarios": scen_sections, "trunks": trunks, "studies": studies,
+            "runs": log, "contact": contact, "small_e": small_e}
+
+
+def _report_sweeps(scens: list, out_dir, sink, progress: bool) -> tuple[dict, dict, dict]:
+    """The report's own sweeps of the scenarios ``scens``, on one pool (into
+    ``out_dir/sweeps``, or a temporary folder without ``out_dir``): the contact scans and
+    the small-e curves, their figures given to ``sink`` (None: not drawn); ``progress``: a
+    bar on a terminal. Returns (contact {scans, figure}, small_e {trees, figure}, the e
+    sweeps' tables by scenario name)."""
+    from ..studies.contact_scan import scan_result, scan_sweep
+    from ..studies.small_e import small_e_answer, small_e_sweep
+    from ..sweep.run import run_sweeps
+    from .answer_figures import small_e_figure
+    from .figures import contact_scan_figure
+
     with _sweep_dir(out_dir) as folder:  # the tables are read before a temporary one goes
         specs = [scan_sweep(s, folder / f"contact-scan-{s.name}") for s in scens] + [
             small_e_sweep(s, folder / f"small-e-{s.name}") for s in scens]
@@ -99,10 +122,22 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         else None
     small_e_fig = sink(small_e_figure(small_e, validity_tolerance()), "small-e") if sink \
         else None
-    wall["sweeps (contact scan, the small-e curves)"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    paper = PaperSection()
-    wall["paper"] = time.perf_counter() - t0
+    return ({"scans": scans, "figure": scan_figure}, {"trees": small_e, "figure": small_e_fig},
+            e_tables)
+
+
+def _scenario_sections(scens: list, cache, e_tables: dict, sink, wall: dict, *, engines,
+                       segments, progress: bool) -> list:
+    """One section per scenario of ``scens``: its ladder (runs from ``cache``, with the
+    ``engines`` and ``segments`` asked for) drawn with its e sweep's table (``e_tables``)
+    into ``sink``, while every rung's record is fitted in a process pool; the wall time of
+    each step added to ``wall`` (s); ``progress``: bars on stderr."""
+    from ..ladder import build_ladder
+    from ..pool import check_stop, process_map
+    from ..progress import Progress
+    from ..studies.ident_fits import fit_one, fit_tasks
+    from .scenario import ScenarioSection, identification_sweep
+
     # every rung's record fitted, all scenarios in one process pool, while this process
     # draws the sections' figures (the fits are read only when the page is rendered)
     t_fits = time.perf_counter()
@@ -115,7 +150,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     with ThreadPoolExecutor(1) as fitter:
         pending = fitter.submit(process_map, fit_one, flat,
                                 done=fit_bar.update if fit_bar else None)
-        bar = Progress(len(names), "report sections", unit="scenario") if progress else None
+        bar = Progress(len(scens), "report sections", unit="scenario") if progress else None
         for scen, ladder in zip(scens, ladders):
             t0 = time.perf_counter()
             scen_sections.append(ScenarioSection(
@@ -133,17 +168,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     for section, ts in zip(scen_sections, tasks):
         section.fits = [next(done_fits) for _ in ts]
     wall["record fits (process pool)"] = time.perf_counter() - t_fits
-    trunks = TrunksSection(tree=scens[0].name if scens else None)
-    t0 = time.perf_counter()
-    for job in study_jobs:
-        studies.append(StudySection(job.result(), page_dir=out_dir))
-        wall[f"study {job.preset} (a child process, beside all of the above)"] = job.wall_s
-    if study_jobs:
-        wall["waiting for the studies"] = time.perf_counter() - t0
-    log = RunsSection(cache, wall)
-    return {"paper": paper, "scenarios": scen_sections, "trunks": trunks, "studies": studies,
-            "runs": log, "contact": {"scans": scans, "figure": scan_figure},
-            "small_e": {"trees": small_e, "figure": small_e_fig}}
+    return scen_sections
 
 
 @contextlib.contextmanager

@@ -155,8 +155,6 @@ def displacement_figure(ladder) -> Figure:
     x solid, y dashed; the 1-DOF trunks on one row and one scale, the flexible ones on
     others and their own scale (the continuum's x difference in grey behind each flexible
     rung, for comparison)."""
-    from matplotlib.lines import Line2D
-
     t_hi = _window_end(ladder)
     ref = _reference(ladder)
     rungs = _ok_rungs(ladder)
@@ -170,6 +168,29 @@ def displacement_figure(ladder) -> Figure:
         top, low = fig.subfigures(2, 1, height_ratios=(3.4, 1.9 * nrow + 0.4))
     else:
         top, low = fig, None
+    _displacements(top, ladder.name, rungs, t_hi)
+    if low is None:
+        return fig
+    beam = next((r for r in rungs if r.rung.kind == RungKind.BEAM), None)
+    axes, free = _family_grid(low, [len(g) for g in groups], ncol, sharex=True)
+    panels = [r for g in groups for r in g]
+    for ax, r in zip(axes, panels):
+        _difference_panel(ax, r, ref.result.trajectory, beam, t_hi)
+    start = 0
+    for g in groups:  # one y scale per family
+        _same_ylim(axes[start:start + len(g)])
+        start += len(g)
+    _difference_labels(axes)
+    _difference_key(low, free, ref.rung.id)
+    low.suptitle(f"Difference from the paper's model ({ref.rung.id}), one panel per rung",
+                 fontsize=10)
+    return fig
+
+
+def _displacements(top, name: str, rungs: list, t_hi: float) -> None:
+    """The top of :func:`displacement_figure` on the (sub)figure ``top``: x(t) and y(t) of
+    every rung of ``rungs`` up to ``t_hi`` (s), in mm and ms, titled with the ladder's
+    ``name`` and keyed by rung."""
     ax_x, ax_y = top.subplots(1, 2, sharex=True)
     for r in rungs:
         tr = r.result.trajectory
@@ -181,38 +202,38 @@ def displacement_figure(ladder) -> Figure:
              xlabel="time t (ms)")
     ax_y.set(title="pendulum at the contact point, y", ylabel="displacement y (mm)",
              xlabel="time t (ms)")
-    top.suptitle(f"{ladder.name}: displacement-time of every rung (the paper's Figs 4 and 5)",
+    top.suptitle(f"{name}: displacement-time of every rung (the paper's Figs 4 and 5)",
                  fontsize=11)
     top.legend(*ax_x.get_legend_handles_labels(), loc="outside right upper", frameon=False,
                fontsize=8.5)
-    if low is None:
-        return fig
-    rt = ref.result.trajectory
-    beam = next((r for r in rungs if r.rung.kind == RungKind.BEAM), None)
-    axes, free = _family_grid(low, [len(g) for g in groups], ncol, sharex=True)
-    panels = [r for g in groups for r in g]
-    for ax, r in zip(axes, panels):
-        tr = r.result.trajectory
-        sel = tr.t <= t_hi
-        st = rung_style(r.rung)
-        t_ms = tr.t[sel] * 1e3
-        dx = (tr.x[sel] - np.interp(tr.t[sel], rt.t, rt.x)) * 1e3
-        dy = (tr.y[sel] - np.interp(tr.t[sel], rt.t, rt.y)) * 1e3
-        if _family(r.rung) == "flexible" and beam is not None and r is not beam:
-            bt = beam.result.trajectory
-            bs = bt.t <= t_hi
-            ax.plot(bt.t[bs] * 1e3, (bt.x[bs] - np.interp(bt.t[bs], rt.t, rt.x)) * 1e3,
-                    color="0.72", lw=3.2, zorder=1)
-        ax.axhline(0.0, color="black", lw=0.6)
-        ax.plot(t_ms, dx, color=st["color"], lw=1.4, zorder=3)
-        ax.plot(t_ms, dy, color=st["color"], lw=1.1, ls="--", zorder=3)
-        big = max(float(np.max(np.abs(dx))), float(np.max(np.abs(dy)))) if sel.any() else 0
-        ax.set_title(f"{r.rung.id}: up to {big:.2g} mm", fontsize=9)
-        ax.tick_params(labelsize=8)
-    start = 0
-    for g in groups:  # one y scale per family
-        _same_ylim(axes[start:start + len(g)])
-        start += len(g)
+
+
+def _difference_panel(ax, r, rt, beam, t_hi: float) -> None:
+    """Rung ``r``'s difference from the reference trajectory ``rt`` on ``ax`` up to
+    ``t_hi`` (s), in mm: x solid, y dashed, the ``beam`` rung's x difference in grey behind
+    a flexible rung (None: no beam rung)."""
+    tr = r.result.trajectory
+    sel = tr.t <= t_hi
+    st = rung_style(r.rung)
+    t_ms = tr.t[sel] * 1e3
+    dx = (tr.x[sel] - np.interp(tr.t[sel], rt.t, rt.x)) * 1e3
+    dy = (tr.y[sel] - np.interp(tr.t[sel], rt.t, rt.y)) * 1e3
+    if _family(r.rung) == "flexible" and beam is not None and r is not beam:
+        bt = beam.result.trajectory
+        bs = bt.t <= t_hi
+        ax.plot(bt.t[bs] * 1e3, (bt.x[bs] - np.interp(bt.t[bs], rt.t, rt.x)) * 1e3,
+                color="0.72", lw=3.2, zorder=1)
+    ax.axhline(0.0, color="black", lw=0.6)
+    ax.plot(t_ms, dx, color=st["color"], lw=1.4, zorder=3)
+    ax.plot(t_ms, dy, color=st["color"], lw=1.1, ls="--", zorder=3)
+    big = max(float(np.max(np.abs(dx))), float(np.max(np.abs(dy)))) if sel.any() else 0
+    ax.set_title(f"{r.rung.id}: up to {big:.2g} mm", fontsize=9)
+    ax.tick_params(labelsize=8)
+
+
+def _difference_labels(axes) -> None:
+    """The difference panels' axis labels: y on the first column, time under the lowest
+    panel of each column."""
     bottom = {}
     for ax in axes:
         ss = ax.get_subplotspec()
@@ -221,8 +242,15 @@ def displacement_figure(ladder) -> Figure:
             ax.set_ylabel("difference (mm)", fontsize=9)
     for ax in bottom.values():
         ax.set_xlabel("time t (ms)", fontsize=9)
-    key = [Line2D([], [], color="0.3", lw=1.4, label=f"x - x[{ref.rung.id}], trunk"),
-           Line2D([], [], color="0.3", lw=1.1, ls="--", label=f"y - y[{ref.rung.id}], pendulum"),
+
+
+def _difference_key(low, free: list, ref_id: str) -> None:
+    """The difference panels' key on the subfigure ``low``: in its first ``free`` grid
+    slot, else below; ``ref_id``: the reference rung's id."""
+    from matplotlib.lines import Line2D
+
+    key = [Line2D([], [], color="0.3", lw=1.4, label=f"x - x[{ref_id}], trunk"),
+           Line2D([], [], color="0.3", lw=1.1, ls="--", label=f"y - y[{ref_id}], pendulum"),
            Line2D([], [], color="0.72", lw=3.2, label="x - x[analytic] of the beam rung")]
     if free:
         grid, r, c = free[0]
@@ -235,9 +263,6 @@ def displacement_figure(ladder) -> Figure:
     else:
         low.legend(handles=key, loc="outside lower center", ncol=3, frameon=False,
                    fontsize=8.5)
-    low.suptitle(f"Difference from the paper's model ({ref.rung.id}), one panel per rung",
-                 fontsize=10)
-    return fig
 
 
 def force_figure(ladder) -> Figure:

@@ -19,7 +19,7 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
     ``path``, the PNG written."""
     from matplotlib.figure import Figure
 
-    from treeimpact.compare.sweep.maps import (
+    from treeimpact.compare.sweep.map_cells import (
         DEFAULT_TOLERANCE,
         _norm,
         _percent_colorbar,
@@ -71,7 +71,7 @@ def _panel(ax, rows: list[dict], method: str, k: str, es: list, cs: list, scale:
     """One rung's panel of parameter ``k``: the errors over e (``es``) x crown ratio
     (``cs``) on the study's colour scale, each cell's value or why it has none; returns
     the mesh (for the colour bar)."""
-    from treeimpact.compare.sweep.maps import _ink
+    from treeimpact.compare.sweep.map_cells import _ink
 
     Z = np.full((len(cs), len(es)), np.nan)
     why = {}

@@ -9,8 +9,10 @@ model-validity study (``treeimpact sweep``) in :mod:`..validity`.
 * :mod:`.cost` - the cost model: tasks grouped into worker calls;
 * :mod:`.journal` - the journal (resumable CSV), the Parquet table and the spec;
 * :mod:`.run` - the runner: sweeps planned, run on one pool (processes or Dask), journaled;
-* :mod:`.maps` - validity maps (discrepancy vs analytic, tolerance contour, dominating rung)
-  and identification maps.
+* the maps, one module per kind (:mod:`.maps` names their public names): :mod:`.discrepancy`
+  (the long tables), :mod:`.map_cells` (the shared colour scale, axes, cells and panels),
+  :mod:`.validity_maps` (discrepancy vs analytic, tolerance contour, dominating rung),
+  :mod:`.identification_maps`, :mod:`.sensitivity_figure`.
 """
 
 from .grid import Axis, Grid, parse_axis, parse_grid

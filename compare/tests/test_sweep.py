@@ -590,7 +590,8 @@ def test_map_cells_print_their_values_outline_the_tolerance_and_say_why_na():
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
-    from treeimpact.compare.sweep.maps import _extend, _heat, _validity_caption
+    from treeimpact.compare.sweep.map_cells import _extend, _heat
+    from treeimpact.compare.sweep.validity_maps import _validity_caption
 
     matplotlib.use("Agg")
     cell = pd.DataFrame({"restitution": [0.1, 0.5, 0.9], "crown_ratio": [0.0, 0.0, 0.0],
@@ -618,7 +619,12 @@ def test_map_labels_fit_their_cells_and_ticks_read_in_the_texts_units():
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from treeimpact.compare.sweep.maps import _grid_figure, _heat, _percent_colorbar, colour_scale
+    from treeimpact.compare.sweep.map_cells import (
+        _grid_figure,
+        _heat,
+        _percent_colorbar,
+        colour_scale,
+    )
 
     durations = np.geomspace(2e-4, 2e-2, 8)
     crowns = np.linspace(0, 4, 6)
