@@ -137,8 +137,8 @@ def _end_workers(pool) -> None:
         if proc.is_alive():
             proc.kill()
             proc.join(END_WORKERS_S)
+    manager = getattr(pool, "_executor_manager_thread", None)  # shutdown forgets it
     pool.shutdown(wait=False, cancel_futures=True)
-    manager = getattr(pool, "_executor_manager_thread", None)
     if manager is not None:  # else interpreter exit can race its closing of the wakeup pipe
         manager.join(END_WORKERS_S)  # (concurrent.futures: 'OSError: Bad file descriptor')
 
