@@ -115,12 +115,32 @@ def _budget_environment() -> dict:
     return {name: os.environ.get(name) for name in VARIABLES.values()}
 
 
+#: Seconds a terminated worker gets to end before it is killed, and the pool's manager
+#: thread to wind up (it is joined again at interpreter exit, without a timeout).
+END_WORKERS_S = 2.0
+
+
 def _end_workers(pool) -> None:
-    """Terminate the worker processes this pool started (by their Process objects)."""
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+    """End the worker processes this pool started (by their Process objects) and its manager
+    thread, within about 2 * END_WORKERS_S: SIGTERM, then SIGKILL for a worker that lives on
+    (one forked by the ``fork`` start method carries this process's handlers until its
+    initializer runs, and a SIGTERM landing there only sets its STOP)."""
+    import time
+
+    procs = [p for p in list((getattr(pool, "_processes", None) or {}).values())
+             if p.is_alive()]
+    for proc in procs:
+        proc.terminate()
+    deadline = time.monotonic() + END_WORKERS_S
+    for proc in procs:
+        proc.join(max(0.0, deadline - time.monotonic()))
         if proc.is_alive():
-            proc.terminate()
+            proc.kill()
+            proc.join(END_WORKERS_S)
+    manager = getattr(pool, "_executor_manager_thread", None)  # shutdown forgets it
     pool.shutdown(wait=False, cancel_futures=True)
+    if manager is not None:  # else interpreter exit can race its closing of the wakeup pipe
+        manager.join(END_WORKERS_S)  # (concurrent.futures: 'OSError: Bad file descriptor')
 
 
 #: What a forkserver imports once for all the workers it forks: the modules the pooled

@@ -25,21 +25,34 @@ EXIT_INTERRUPTED = 130
 
 
 def _error(text: str) -> None:
+    """``text`` as one stderr line, on a line of its own (a progress bar drawn is ended)."""
+    from .progress import end_open_bars
+
+    end_open_bars()
     print(f"treeimpact: {text}", file=sys.stderr)
 
 
 def run_command(command, args) -> int:
     """``command(args)``'s exit code, with every way it can end as one line on stderr:
     bad input (ParameterError, an unreadable path, too little memory) exit 2, a diverged
-    simulation exit 3, Ctrl-C or SIGTERM exit 130; output piped into ``head`` ends quietly."""
+    simulation exit 3, Ctrl-C or SIGTERM exit 130; output piped into ``head`` ends quietly.
+    Once the command has returned or raised, a stop signal only marks it interrupted (its
+    one line is printed whole, never cut by a second KeyboardInterrupt)."""
     from .pool import STOP
 
+    _COMMAND["ended"] = False
     try:
-        code = command(args)
+        try:
+            code = command(args)
+        finally:
+            _COMMAND["ended"] = True  # from here a stop signal only sets STOP
         if STOP.is_set() and code != EXIT_INTERRUPTED:  # asked after the last look
             raise KeyboardInterrupt
+        if code == EXIT_INTERRUPTED:  # the command said so itself (a sweep's own line)
+            _forget_unhandled_interrupt()
         return code
     except KeyboardInterrupt:
+        _forget_unhandled_interrupt()
         _error("interrupted (Ctrl-C or SIGTERM); nothing more was written")
         return EXIT_INTERRUPTED
     except ParameterError as exc:
@@ -64,21 +77,53 @@ def run_command(command, args) -> int:
         return EXIT_BAD_INPUT
 
 
+#: The running command's state, read by the stop signals' handler: ``ended`` once
+#: run_command has its outcome (a late signal, or an interrupt delivered again, then only
+#: sets STOP instead of raising into the exit line).
+_COMMAND = {"ended": True}
+
+
+def _forget_unhandled_interrupt() -> None:
+    """CPython records a KeyboardInterrupt that escaped an ``exec`` of source text (dataclasses
+    and namedtuple build their methods so, at import) and, under ``python -m``, ends the
+    process by SIGINT (exit -2) even when the interrupt was handled; the next such exec that
+    ends normally clears the record. Called once the interrupt is handled (exit 130)."""
+    exec("None")  # noqa: S102 - a constant: only CPython's record of the interrupt is reset
+
+
+def _on_stop_signal(signum, frame) -> None:
+    """The stop signals' handler while a command runs: :func:`compare.pool.on_stop_signal`
+    (``signum``, ``frame`` as the signal module passes them), and once the command has its
+    outcome only the stop request. Imports nothing (a handler can land inside an import)."""
+    pool = sys.modules[__package__ + ".pool"]  # imported by stop_signals
+    if _COMMAND["ended"]:
+        pool.request_stop()
+        return
+    pool.on_stop_signal(signum, frame)
+
+
 @contextmanager
 def stop_signals():
     """Ctrl-C (SIGINT) and SIGTERM end the command alike: a stop request that a pool's loop
     answers at its next look, or at once outside one (compare.pool.on_stop_signal); an
     interrupt that lands where Python can only print it (a weakref callback, a __del__) is
-    delivered again, not lost (:func:`_unraisable`). Restored afterwards (main() may be
-    called from Python)."""
-    from .pool import STOP, on_stop_signal
+    delivered again, not lost (:func:`_unraisable`). A SIGINT this process inherited as
+    ignored (a background job of a shell without job control: Ctrl-C is for the foreground
+    job) stays ignored. Restored afterwards (main() may be called from Python)."""
+    from .pool import STOP
 
     STOP.clear()
-    previous = {s: signal.signal(s, on_stop_signal) for s in (signal.SIGTERM, signal.SIGINT)}
+    signals = [signal.SIGTERM]
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signals.append(signal.SIGINT)
+    previous = {s: signal.signal(s, _on_stop_signal) for s in signals}
     hook, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
         yield
     finally:
+        _COMMAND["ended"] = True
+        for thread in list(_REDELIVERIES):  # none left to trip a restored handler
+            thread.join(timeout=10 * REDELIVER_AFTER_S)
         sys.unraisablehook = hook
         for s, handler in previous.items():
             signal.signal(s, handler)
@@ -86,6 +131,8 @@ def stop_signals():
 
 #: Seconds after which a lost interrupt is delivered again (the hook returns in microseconds).
 REDELIVER_AFTER_S = 0.02
+#: The threads delivering a lost interrupt again (stop_signals waits for them).
+_REDELIVERIES: set = set()
 
 
 def _unraisable(info) -> None:
@@ -104,10 +151,16 @@ def _unraisable(info) -> None:
         STOP.set()
 
         def again():
-            time.sleep(REDELIVER_AFTER_S)
-            _thread.interrupt_main(signal.SIGINT)
+            try:
+                time.sleep(REDELIVER_AFTER_S)
+                if not _COMMAND["ended"]:  # an outcome already decided needs no interrupt
+                    _thread.interrupt_main(signal.SIGINT)
+            finally:
+                _REDELIVERIES.discard(threading.current_thread())
 
-        threading.Thread(target=again, daemon=True).start()
+        thread = threading.Thread(target=again, daemon=True)
+        _REDELIVERIES.add(thread)
+        thread.start()
         return
     _error(f"warning: ignored {info.exc_type.__name__} ({one_line(info.exc_value)})"
            if info.exc_value is not None else "warning: an ignored exception")

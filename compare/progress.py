@@ -6,9 +6,19 @@ from __future__ import annotations
 
 import sys
 import time
+import weakref
 
 #: Seconds between two progress lines when stderr is not a terminal.
 LINE_EVERY_S = 5.0
+#: The bars drawn and not yet closed (:func:`end_open_bars`).
+_OPEN_BARS: weakref.WeakSet = weakref.WeakSet()
+
+
+def end_open_bars() -> None:
+    """End every progress bar still drawn, its line closed by a newline where it stands, so
+    that a message printed next (an error, "interrupted") starts a line of its own."""
+    for progress in list(_OPEN_BARS):
+        progress.abandon()
 
 
 class Progress:
@@ -29,6 +39,7 @@ class Progress:
             from tqdm import tqdm
 
             self._bar = tqdm(total=total, unit=unit, desc=desc, file=self.stream)
+            _OPEN_BARS.add(self)
 
     def update(self, n: int = 1) -> None:
         """``n`` more items finished."""
@@ -54,8 +65,15 @@ class Progress:
         """The end: the bar closed, or the final line (when the run lasted long enough to
         print any)."""
         if self._bar is not None:
-            self._bar.close()
+            self.abandon()
         self._line(time.perf_counter(), final=True)
+
+    def abandon(self) -> None:
+        """The bar (if any) closed where it stands, its line ended by a newline; no final
+        line. A run that fails or is stopped."""
+        if self._bar is not None:
+            _OPEN_BARS.discard(self)
+            self._bar.close()
 
     def __enter__(self):
         return self

@@ -97,3 +97,32 @@ def test_a_pool_broken_by_the_stop_signal_is_the_stop_not_a_traceback(monkeypatc
     with pytest.raises(EOFError):  # without a stop request it is the error it is
         process_map(abs, [1, 2], workers=2)
     assert not pool.STOP.is_set()
+
+
+def _deaf_to_sigterm(seconds):
+    import signal
+    import time
+
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # as a fork-started worker before its
+    time.sleep(seconds)  # initializer: the parent's handler only sets its STOP flag
+    return seconds
+
+
+def test_ending_a_pool_kills_a_worker_that_outlives_sigterm_and_its_manager_thread():
+    """A stopped pool's workers are ended within about 2 * END_WORKERS_S even when one
+    ignores SIGTERM (it was killed), and its manager thread has wound up (left running, it
+    raced interpreter exit: 'OSError: Bad file descriptor' in concurrent.futures)."""
+    import time
+    from concurrent.futures import wait
+
+    from treeimpact.compare import pool as pool_module
+
+    pool = pool_module._executor(2, "fork")
+    futures = [pool.submit(_deaf_to_sigterm, 60) for _ in range(2)]
+    wait(futures, timeout=1.0)  # both started
+    procs, manager = list(pool._processes.values()), pool._executor_manager_thread
+    t0 = time.monotonic()
+    pool_module._end_workers(pool)
+    assert time.monotonic() - t0 < 3 * pool_module.END_WORKERS_S
+    assert not any(p.is_alive() for p in procs)
+    assert not manager.is_alive()
