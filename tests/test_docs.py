@@ -117,16 +117,13 @@ def test_every_local_link_and_image_resolves():
 
 
 def test_the_readme_names_the_cpus_its_timings_were_measured_on():
-    """The README's install note names the CPU each benchmark file it quotes records
-    (benchmarks/results/make.json, kernels.json), and no other vendor."""
+    """The README's install note names, as the machine it measured on, the CPU each
+    benchmark file it quotes records (benchmarks/results/make.json, kernels.json)."""
     import json
 
     text = (ROOT / "README.md").read_text()
-    note = text[text.index("## Start here"):text.index("([reproducibility]")]
-    cpus = [json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
-            ["machine"]["cpu"] for name in ("make", "kernels")]
-    for cpu in cpus:
-        assert cpu in note, f"the README's install note does not name {cpu!r}"
-    for vendor in ("Intel", "AMD"):
-        if vendor in note:
-            assert any(vendor in cpu for cpu in cpus), f"the README names {vendor}: measured on {cpus}"
+    note = " ".join(text[text.index("## Start here"):text.index("([reproducibility]")].split())
+    cpus = {json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
+            ["machine"]["cpu"] for name in ("make", "kernels")}
+    assert len(cpus) == 1, f"make.json and kernels.json were measured on different CPUs: {cpus}"
+    assert f"Measured on this project's 2-core machine, an {cpus.pop()} " in note
