@@ -221,17 +221,23 @@ def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
     assert "Traceback" not in err
 
 
-def _children(pid: int) -> list[int]:
-    """The live processes whose parent is ``pid`` (Linux /proc)."""
+def _live(field: int, value: int) -> list[int]:
+    """The live (not zombie) processes whose /proc stat ``field`` (after the name; 1: the
+    parent's pid, 2: the process group) is ``value`` (Linux /proc)."""
     out = []
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             fields = stat.read_text().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        if int(fields[1]) == pid and fields[0] != "Z":
+        if int(fields[field]) == value and fields[0] != "Z":
             out.append(int(stat.parent.name))
     return out
+
+
+def _children(pid: int) -> list[int]:
+    """The live processes whose parent is ``pid``."""
+    return _live(1, pid)
 
 
 @pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGINT])
@@ -379,16 +385,8 @@ def _reached(awaited: str, out: Path, pid: int) -> bool:
 
 
 def _group(pgid: int) -> list[int]:
-    """The live processes of process group ``pgid`` (Linux /proc)."""
-    out = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        if int(fields[2]) == pgid and fields[0] != "Z":
-            out.append(int(stat.parent.name))
-    return out
+    """The live processes of process group ``pgid``."""
+    return _live(2, pgid)
 
 
 #: Runs the rest of its argv with SIGINT at its default action, whatever the test run's
