@@ -57,6 +57,22 @@ NUMERICS = frozenset({
 _ROOT = Path(__file__).resolve().parent
 
 
+#: The longest one pytest process may run (s) before it prints every thread's stack and
+#: exits with an error: a hang (a test's thread or child that outlives it and blocks the
+#: interpreter's exit) then fails `make test` in minutes, not at CI's own limit. The whole
+#: suite takes about 5 minutes on 2 cores; ``TREEIMPACT_TEST_LIMIT_S`` overrides it.
+TEST_LIMIT_S = 1800.0
+
+
+def pytest_configure(config):
+    """Start the watchdog of :data:`TEST_LIMIT_S` on a copy of the real stderr (pytest's
+    capture has not taken it yet here), so the stacks reach the log wherever it hangs."""
+    import faulthandler
+
+    limit = float(os.environ.get("TREEIMPACT_TEST_LIMIT_S", TEST_LIMIT_S))
+    faulthandler.dump_traceback_later(limit, exit=True, file=os.dup(2))
+
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         path = Path(item.path).resolve()
