@@ -57,7 +57,7 @@ def test_regression_finds_the_moving_together_point_of_a_chattering_record():
     assert reg.t_together == pytest.approx(t_last_visible, abs=2e-5)  # one sample
 
 
-@pytest.mark.parametrize("e", [0.0, 0.1, 0.3])
+@pytest.mark.parametrize("e", [0.0, 0.1])
 def test_identification_error_grows_with_restitution(e):
     """The small-e question: with e = 0 the paper's procedure recovers M_T within ~15%;
     the errors are reported, not hidden, and grow with e."""
@@ -70,6 +70,15 @@ def test_identification_error_grows_with_restitution(e):
     if e == 0.0:
         assert abs(err["M_T"]) < 0.15
         assert abs(err["K_T"]) < 0.15
+
+
+def test_at_e_0_3_the_consistent_reading_refuses_a_negative_mass():
+    """At e = 0.3 the impact sequence from its start (T0 = 9.1 ms on central-leader) carries
+    so much of the momentum that eq 44 in the consistent reading gives M_T < 0: the
+    procedure says "not identifiable" and names it, never a number."""
+    scen, res, tr = record("central-leader", 0.3)
+    with pytest.raises(ParameterError, match="not identifiable: M_T = -.* non-positive mass"):
+        identify_from_record(tr.t, tr.x, pendulum_test_of(scen), y=tr.y, reading="consistent")
 
 
 def test_eq45_default_areas_are_half_x0_T0():

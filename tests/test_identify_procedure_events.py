@@ -5,6 +5,7 @@ record that cannot show an event is refused. docs/identification.md, "The paper'
 procedure"."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -163,3 +164,22 @@ def test_peak_of_a_noisy_record_is_not_biased_up_by_the_noise(central_leader):
         largest.append(float(np.max(x)))
     assert np.mean(fitted) == pytest.approx(true, rel=1e-3)
     assert np.mean(largest) > true * (1 + NOISE)
+
+
+@pytest.mark.parametrize("restitution", [0.05, 0.1, 0.3])
+def test_a_record_starting_at_the_impact_has_its_first_impact_at_its_start(restitution):
+    """A record with no rest (the ladder's own runs start at the contact) is already rising
+    at its first sample: the first impact is there, not at the next chattering impact the
+    kinks show. The moving-together point is then one of the exact solver's impacts (to a
+    sample; the last one the record resolves, before the chatter's accumulation point), so
+    T0 (eq 45) spans the impact sequence from its start."""
+    base = load_scenario("central-leader")
+    scen = replace(base, contact=replace(base.contact, restitution=restitution))
+    run = simulate(scen)
+    t, x = run.record.t, run.record.x
+    dt = t[1] - t[0]
+    reg = regress(t, x)
+    impacts = np.array([i.t for i in run.solution.impacts])
+    assert reg.t_first == t[0] == impacts[0]
+    assert np.min(np.abs(impacts[1:] - reg.t_together)) <= dt
+    assert reg.t_together <= run.solution.together_starts[0][0]

@@ -193,14 +193,17 @@ def slope_increases(t: np.ndarray, x: np.ndarray, sigma: float, source: NoiseSou
     ``jump_fraction`` of the largest slope and than white noise ``sigma`` (m, from
     ``source``) would make anywhere in the record but with probability FALSE_ALARM, read
     over the fewest samples on each side (up to MAX_SLOPE_SPAN, and no more than it takes
-    the noise's jump below the fraction's) at which any stands out. Without one, a record
-    already rising at its start (the slope of its first three samples above z times its
-    noise, sigma / (sqrt(2) dt)) has its contact at its first sample; else ParameterError
-    "not identifiable"."""
+    the noise's jump below the fraction's) at which any stands out. A record already rising
+    at its start (the slope of its first three samples above z times its noise,
+    sigma / (sqrt(2) dt): no rest recorded) has its first contact at its first sample,
+    before the impacts found later; a record with neither raises ParameterError "not
+    identifiable"."""
     dt = float(np.median(np.diff(t)))
     from scipy.stats import norm  # (imported here: the module loads without scipy.stats)
 
     z = float(norm.isf(FALSE_ALARM / t.size))
+    # No rest: a record already rising at its first samples starts at the contact.
+    rising = float(window_slopes(t[:3], x[:3], 2)[0]) > z * sigma * math.sqrt(0.5) / dt
     largest, widest = -math.inf, 1
     for span in range(1, max(1, min(int(MAX_SLOPE_SPAN / dt), (t.size - 1) // 2)) + 1):
         slope_max = float(np.max(window_slopes(t, x, span)))
@@ -208,13 +211,14 @@ def slope_increases(t: np.ndarray, x: np.ndarray, sigma: float, source: NoiseSou
         threshold = max(jump_fraction * slope_max, noise_jump)
         times, top = _kinks(t, x, span, threshold)
         if times.size:
+            if rising and times[0] > t[0]:
+                times = np.concatenate([[float(t[0])], times])
             return Impacts(times, span, threshold)
         if top / threshold > largest:
             largest, widest = top / threshold, span
         if noise_jump <= jump_fraction * slope_max:
             break  # the noise no longer sets the threshold: a longer reading only blurs
-    first = float(window_slopes(t[:3], x[:3], 2)[0])  # no rest: the contact at its start
-    if first > z * sigma * math.sqrt(0.5) / dt:
+    if rising:
         return Impacts(np.array([float(t[0])]), 1, jump_fraction * float(np.max(
             window_slopes(t, x, 1))))
     raise ParameterError(
