@@ -167,8 +167,9 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
     and the noise from the rest before the contact (else the sensor's zero and the
     high-pass noise); an impact is a slope increase larger than ``jump_fraction`` of the
     largest slope and than the noise could make; the bodies move together at the last one
-    within ``search_time`` (s) of the first (or at ``t_together`` if given, e.g. from a
-    contact channel as recorded by Pellerin et al.). The polynomial of ``degree`` is fitted
+    within ``search_time`` (s) of the first or before the displacement's peak (a heavy
+    crown's pendulum may return later than search_time: the sequence is read whole), or
+    at ``t_together`` if given (e.g. from a contact channel, as Pellerin et al. recorded). The polynomial of ``degree`` is fitted
     over ``window`` (s, at most 10 ms) from there. ParameterError "not identifiable" when
     the record shows no impact, ends inside the window or before its peak.
     """
@@ -183,8 +184,10 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
     noise, impacts = find_events(t, x, jump_fraction)
     x = x - noise.baseline
     t_first = float(impacts.times[0])
-    if t_together is None:
-        cand = impacts.times[impacts.times <= t_first + search_time]
+    t_max, x_max = peak(t, x, noise.sigma)
+    if t_together is None:  # the sequence runs on while impacts come before the peak
+        cand = impacts.times[(impacts.times <= t_first + search_time)
+                             | (impacts.times < t_max)]
         t_together = float(cand[-1])
     sel = (t >= t_together) & (t <= t_together + window)
     if np.count_nonzero(sel) <= degree + 1:
@@ -199,7 +202,6 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
     x_tog, v_tog = local[0], local[1]
     t_origin = t_together - x_tog / v_tog  # linear extrapolation to x = 0
     coeffs = np.polynomial.polynomial.polyfit(t[sel] - t_origin, x[sel], degree)
-    t_max, x_max = peak(t, x, noise.sigma)
     return Regression(t_first=t_first, t_together=t_together, x_together=float(x_tog),
                       t_origin=float(t_origin), coefficients=tuple(float(c) for c in coeffs),
                       x_max=x_max, tau=t_max - float(t_origin), baseline=noise.baseline,
