@@ -10,6 +10,7 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
+from ..exits import ExitCode
 from ._common import number
 
 NAME = "identify"
@@ -154,7 +155,7 @@ def run(args) -> int:
             _plot(args.plot, record, fit, paper, test)
     if args.json:
         print(json.dumps(to_jsonable(_json(args, record, fit, paper)), indent=2))
-        return 0
+        return ExitCode.OK
     for line in fit.warnings:
         print(f"treeimpact: warning: {line}", file=sys.stderr)
     print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
@@ -162,7 +163,7 @@ def run(args) -> int:
     if math.isfinite(fit.residual_rms):  # else not fitted (units): the conclusion says why
         _print_values(fit, paper.get("paper", {}))
     _print_conclusion(fit)
-    return 0
+    return ExitCode.OK
 
 
 def _json(args, record, fit, paper) -> dict:
