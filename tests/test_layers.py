@@ -406,7 +406,7 @@ def test_pyproject_maps_every_package_folder_under_treeimpact():
 
 #: The package data the wheel carries: source folder -> patterns of files in it.
 PACKAGE_DATA = {"analytic/model": ["scenarios/*.toml"], "compare": ["tolerances.toml"],
-                "compare/report": ["templates/*.j2"], "mujoco_models": ["models/*.xml"],
+                "compare/report": ["templates/*.j2", "data/*.json"], "mujoco_models": ["models/*.xml"],
                 "bullet_models": ["models/*.urdf"]}
 
 

@@ -7,7 +7,7 @@ Sections, one module each, each a class with a jinja2 template under ``templates
 * :mod:`.scenario` - per scenario: Figs 4-5 redrawn for every rung, contact force, impact
   sequence, energy ledger, the ladder table, identification against the truth;
 * :mod:`.trunks` - which MuJoCo trunk (hinged chain or elastic rod), how many segments,
-  which step and at what cost, from ``benchmarks/results/trunks.json``;
+  which step and at what cost, from the package's ``data/trunks.json`` (bench_trunks.py's);
 * :mod:`.studies` - one per model-validity study directory given;
 * :mod:`.runlog` - every backend run, its status (skips with their reasons) and wall time.
 
