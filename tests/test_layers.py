@@ -406,16 +406,15 @@ def test_pyproject_maps_every_package_folder_under_treeimpact():
 
 #: The package data the wheel carries: source folder -> patterns of files in it.
 PACKAGE_DATA = {"analytic/model": ["scenarios/*.toml"], "compare": ["tolerances.toml"],
-                "compare/report": ["templates/*.j2", "data/*.json"], "mujoco_models": ["models/*.xml"],
-                "bullet_models": ["models/*.urdf"]}
+                "compare/report": ["templates/*.j2", "data/*.json"],
+                "mujoco_models": ["models/*.xml"], "bullet_models": ["models/*.urdf"]}
 
 
 @pytest.fixture(scope="module")
-def wheel_files(tmp_path_factory) -> set[str]:
-    """The files of the wheel built from a copy of the checkout (offline: no build isolation,
-    no index; the checkout itself is left without a build/ folder)."""
+def wheel(tmp_path_factory) -> Path:
+    """The wheel built from a copy of the checkout (offline: no build isolation, no index;
+    the checkout itself is left without a build/ folder)."""
     import shutil
-    import zipfile
 
     src, dist = tmp_path_factory.mktemp("src"), tmp_path_factory.mktemp("dist")
     for name in ("pyproject.toml", "README.md"):
@@ -427,7 +426,15 @@ def wheel_files(tmp_path_factory) -> set[str]:
                            "--no-build-isolation", "-q", "-w", str(dist), str(src)],
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    (wheel,) = dist.glob("treeimpact-*.whl")
+    (path,) = dist.glob("treeimpact-*.whl")
+    return path
+
+
+@pytest.fixture(scope="module")
+def wheel_files(wheel) -> set[str]:
+    """The files of :func:`wheel`."""
+    import zipfile
+
     return set(zipfile.ZipFile(wheel).namelist())
 
 
@@ -456,6 +463,55 @@ def test_the_wheel_holds_every_module_and_its_data(wheel_files):
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     assert {f"treeimpact.{k.replace('/', '.')}": v for k, v in PACKAGE_DATA.items()} == \
         config["package-data"]
+
+
+#: Run by the wheel's venv: where treeimpact and the trunk data were found, and the trunk
+#: section rendered (markdown) from the installed package's data.
+_RENDER_TRUNKS = """
+import json, treeimpact
+from treeimpact.compare.report.trunks import TRUNKS_JSON, TrunksSection
+section = TrunksSection(tree="central-leader")
+print(json.dumps({"package": treeimpact.__file__, "data": str(TRUNKS_JSON),
+                  "available": section.available, "md": section.render("md")}))
+"""
+
+
+def test_the_installed_wheel_renders_the_trunk_section_from_its_own_data(wheel, tmp_path):
+    """The wheel installed into a fresh venv outside the checkout (its dependencies from
+    this venv's site-packages by a .pth line, nothing downloaded), run from a directory
+    outside the checkout: the trunk section finds its data in the installed package and
+    renders the same page as the checkout's."""
+    import json
+    import sysconfig
+
+    from treeimpact.compare.report.trunks import TrunksSection
+
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True,
+                   timeout=120)
+    python = venv / "bin" / "python"
+    proc = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install",
+                           "--no-deps", "--no-index", "-q", str(wheel)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    site = Path(subprocess.run([python, "-c", "import sysconfig; print(sysconfig."
+                                "get_paths()['purelib'])"], capture_output=True, text=True,
+                               check=True).stdout.strip())
+    # a plain path line: this venv's packages after the fresh one's, and not its .pth files
+    # (the editable install's finder would put the checkout first)
+    (site / "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    cwd = tmp_path / "elsewhere"
+    cwd.mkdir()
+    proc = subprocess.run([python, "-I", "-c", _RENDER_TRUNKS], cwd=cwd, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert Path(out["package"]).is_relative_to(site)  # the wheel's, not the checkout's
+    assert Path(out["data"]).is_relative_to(site) and out["available"]
+    assert out["md"] == TrunksSection(tree="central-leader").render("md")  # the checkout's
+    plain = out["md"].replace("`", "").replace("**", "")
+    assert plain.count(": use --trunk ") == 3 and "is not in this checkout" not in plain  # a
+    # sentence per shipped tree: the numbers are there (test_report reads them back)
 
 
 def test_installed_the_project_is_one_top_level_package(tmp_path):
