@@ -51,3 +51,11 @@ def test_every_metric_is_the_baselines(case):
     assert set(got) == set(case["metrics"])
     off = {k: (got[k], v) for k, v in case["metrics"].items() if not _close(got[k], v)}
     assert not off, f"metrics moved beyond {RTOL:g} relative (new, old): {off}"
+
+
+@pytest.mark.parametrize("name", ["central-leader", "open-center", "realistic-crown"])
+def test_the_ledger_residual_is_the_largest_of_the_ledgers_rows(name):
+    """The metric's inlined loop (ImpactSolution.ledger_residual) against the ledger's rows
+    (energy_terms at every event): the same operations, so equal to the bit."""
+    sol = ti.simulate(name).result.solution
+    assert sol.ledger_residual() == max(r["residual"] for r in sol.ledger())

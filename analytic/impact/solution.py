@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 from bisect import bisect_right
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 
@@ -17,6 +16,24 @@ from treeimpact.analytic.model.two_body import TwoBodyModel
 
 from .events import Motion, Phase
 from .oscillator import Oscillator, first_peak_time, gauss_legendre_integral
+
+
+class cached_property:  # noqa: N801 - functools' name: the same, without its lock
+    """functools.cached_property without the lock Python 3.11 takes on every first read (a
+    run reads six of them once each, ~1 us apiece): two threads reading one solution at
+    once may both compute a value, the same value."""
+
+    def __init__(self, func):
+        self.func, self.name, self.__doc__ = func, func.__name__, func.__doc__
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, objtype=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.func(obj)
+        return value
 
 
 @dataclass
@@ -91,14 +108,6 @@ class ImpactSolution:
             dy, vy = self._osc[1].scalar_advance(s, ph.y0, ph.vy0)
             got = memo[(k, s)] = (ph.y0 + dy, vy)
         return got
-
-    def seed(self, k: int, s: float, trunk: tuple, pendulum: tuple | None = None) -> None:
-        """Record the states at s (s) into phase k that the solver computed as it ended the
-        phase (``trunk`` (x0 + dx, vx), ``pendulum`` (y0 + dy, vy) of a free phase): the
-        same numbers :meth:`_trunk_at` and :meth:`_pendulum_at` would compute there."""
-        self._memo[0][(k, s)] = trunk
-        if pendulum is not None:
-            self._memo[1][(k, s)] = pendulum
 
     @cached_property
     def _starts(self) -> list:
@@ -249,9 +258,26 @@ class ImpactSolution:
 
     def ledger_residual(self) -> float:
         """The largest relative residual of :meth:`ledger` (the metric ledger_residual),
-        without its rows."""
-        e0 = self.model.initial_energy
-        return max(abs(e0 - sum(self._terms(t))) / e0 for t in self._ledger_times())
+        without its rows: :meth:`_terms` and :meth:`_integral` inlined (the same operations;
+        tests/test_newton_equivalence.py holds the two equal to the bit)."""
+        m, phases, starts = self.model, self.phases, self._starts
+        e0 = m.initial_energy
+        cum = self._cumulative["damping"]
+        ti, li, tt, lt = self._event_losses
+        residuals = []
+        for t in self._ledger_times():
+            k = max(0, bisect_right(starts, t) - 1)
+            ph = phases[k]
+            s = t - ph.t0
+            x, vx = self._trunk_at(k, s)
+            y, vy = (x, vx) if ph.kind is Motion.TOGETHER else self._pendulum_at(k, s)
+            damping = 0.0 if t <= starts[0] else (
+                cum[k] + self._phase_integrals(k, min(ph.t1, t), "damping")[2])
+            losses = sum(li[:bisect_right(ti, t)])
+            losses += sum(lt[:bisect_right(tt, t)])
+            total = sum((m.kinetic_energy(vx, vy), m.potential_energy(x, y), damping, losses))
+            residuals.append(abs(e0 - total) / e0)
+        return max(residuals)
 
     @cached_property
     def x_max(self) -> tuple[float, float]:
