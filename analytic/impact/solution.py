@@ -18,12 +18,13 @@ from .events import Motion, Phase
 from .oscillator import Oscillator, first_peak_time, gauss_legendre_integral
 
 
-class cached_property:  # noqa: N801 - functools' name: the same, without its lock
+class _once:  # noqa: N801 - a decorator, named like one
     """functools.cached_property without the lock Python 3.11 takes on every first read (a
     run reads six of them once each, ~1 us apiece): two threads reading one solution at
     once may both compute a value, the same value."""
 
     def __init__(self, func):
+        """``func``: the method whose value is cached on first read."""
         self.func, self.name, self.__doc__ = func, func.__name__, func.__doc__
 
     def __set_name__(self, owner, name):
@@ -49,7 +50,7 @@ class ImpactSolution:
     together_starts: list = field(default_factory=list)  # (t, x, V)
 
     # -- motion -----------------------------------------------------------------------
-    @cached_property
+    @_once
     def _osc(self):
         m = self.model
         return (Oscillator.from_mck(m.dynamic_mass, m.damping, m.stiffness),
@@ -80,7 +81,7 @@ class ImpactSolution:
         y, vy = self._pendulum_at(k, s)
         return x, vx, y, vy
 
-    @cached_property
+    @_once
     def _memo(self) -> tuple[dict, dict]:
         """The trunk's and the pendulum's states already evaluated, {(phase, s): (x, v)}."""
         return {}, {}
@@ -109,7 +110,7 @@ class ImpactSolution:
             got = memo[(k, s)] = (ph.y0 + dy, vy)
         return got
 
-    @cached_property
+    @_once
     def _starts(self) -> list:
         return [ph.t0 for ph in self.phases]
 
@@ -198,7 +199,7 @@ class ImpactSolution:
         val = gauss_legendre_integral(fn, 0.0, t1 - ph.t0, rate)
         return self.model.damping * val if which == "damping" else val
 
-    @cached_property
+    @_once
     def _cumulative(self) -> dict:
         """Integrals over whole phases, cumulated: {which: [0, I_0, I_0 + I_1, ...]}."""
         acc_x, acc_y, acc_d = [0.0], [0.0], [0.0]
@@ -218,7 +219,7 @@ class ImpactSolution:
         done = self._cumulative[which][k]
         return done + self._phase_integral(which, k, min(ph.t1, t_stop))
 
-    @cached_property
+    @_once
     def _event_losses(self) -> tuple:
         """(impact times, their losses, tail start times, their losses), each in the order
         found: the solver records both in time order, so the events up to a time are a
@@ -279,7 +280,7 @@ class ImpactSolution:
             residuals.append(abs(e0 - total) / e0)
         return max(residuals)
 
-    @cached_property
+    @_once
     def x_max(self) -> tuple[float, float]:
         """(x_max, t_xmax): largest trunk displacement and its time (eq 37), in closed form:
         per phase the larger of its end points and its first interior maximum."""
