@@ -33,7 +33,14 @@ Accuracy, like with like (the quantities the metrics report, :func:`impact_metri
 Targets (issue 2): a paper scenario through separation in under 0.2 ms median, at least
 50 times faster than solve_ivp, with the exact solver the more accurate of the two.
 
+Then (issue 39) ``ti.simulate`` through the public API against the code of ``--baseline``
+(default ee677a4) in fresh processes, alternating, ``--rounds`` a side (target: 0.3 ms),
+with every metric of the 53 cases of tests/data/newton_metrics.json computed by both (1e-9
+relative, bitwise where the arithmetic is unchanged), and the floor estimated from the
+evaluations one run makes (:func:`_floor`).
+
     python benchmarks/bench_solver.py [--repeats 200] [--through separation|t_end]
+        [--baseline ee677a4] [--rounds 5]
 """
 
 from __future__ import annotations
@@ -52,7 +59,7 @@ from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import two_body_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import _results  # noqa: E402
+import _results  # noqa: E402  (and _baseline, imported where used)
 
 _DEFAULT_ATOL = (1e-15, 1e-12, 1e-15, 1e-12)  # solve_ivp_impacts' default
 _EPS = 2.220446049250313e-16
@@ -151,11 +158,176 @@ def _bench_simulate(names, repeats: int) -> dict:
     return out
 
 
+#: Run in fresh processes by :func:`_bench_baseline`, old code and new alternating: the
+#: medians of ti.simulate (the public API, backend analytic) and of the solver alone per
+#: tree, and the metrics of the equivalence cases (tests/data/newton_metrics.json's).
+_API_SNIPPET = """
+import json, statistics, sys, time
+import treeimpact as ti
+from treeimpact.analytic.impact.solver import solve_impacts
+from treeimpact.analytic.model.two_body import two_body_model
+from treeimpact.compare.sweep.apply import apply_point
+REPEATS = int(sys.argv[1])
+def median_us(fn):
+    fn()
+    out = []
+    for _ in range(REPEATS):
+        t0 = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t0)
+    return statistics.median(out) * 1e6
+res = {}
+for name in ("open-center", "central-leader", "realistic-crown"):
+    s = ti.load_scenario(name)
+    model = two_body_model(s)
+    res["api_us." + name] = median_us(lambda: ti.simulate(s))
+    res["solve_us." + name] = median_us(lambda: solve_impacts(model, s.t_end))
+cases = json.loads(sys.stdin.read()) if len(sys.argv) > 2 else []
+metrics = []
+for case in cases:
+    scen, options = apply_point(ti.load_scenario(case["scenario"]), case["point"])
+    m = ti.simulate(scen, backend="analytic", **options).metrics
+    metrics.append({k: getattr(m, k) for k in m.__dataclass_fields__})
+print(json.dumps({"times": res, "metrics": metrics}))
+"""
+
+
+def _run_side(site, repeats: int, cases: list | None) -> dict:
+    """One fresh process of :data:`_API_SNIPPET` with ``site`` first on sys.path (None:
+    today's package), one BLAS thread as the library sets it."""
+    import json
+    import os
+    import subprocess
+    import tempfile
+
+    env = dict(os.environ)
+    if site is not None:
+        env["PYTHONPATH"] = os.pathsep.join([str(site), env.get("PYTHONPATH", "")])
+    argv = [sys.executable, "-c", _API_SNIPPET, str(repeats)] + (["cases"] if cases else [])
+    with tempfile.TemporaryDirectory(prefix="treeimpact-bench-") as cwd:
+        proc = subprocess.run(argv, input=json.dumps(cases or []), capture_output=True,
+                              text=True, env=env, cwd=cwd)
+    if proc.returncode != 0:
+        raise RuntimeError(f"snippet failed ({site or 'installed'}):\n{proc.stderr[-3000:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def _rel(new, old) -> float:
+    """|new - old| / |old| (0 for equal values, NaN beside NaN included)."""
+    if new == old or (isinstance(old, float) and math.isnan(old) and math.isnan(new)):
+        return 0.0
+    return abs(new - old) / abs(old) if old else math.inf
+
+
+def _bench_baseline(rev: str, rounds: int, repeats: int) -> dict:
+    """ti.simulate of the three trees, old code (``rev``) against today's in fresh processes,
+    alternating (medians of the rounds' medians, ratio old / new), and every metric of the
+    53 equivalence cases of both (the largest relative difference, how many are bitwise
+    equal)."""
+    import json
+
+    from _baseline import baseline_tree
+
+    fixture = Path(__file__).resolve().parents[1] / "tests" / "data" / "newton_metrics.json"
+    cases = [{"scenario": c["scenario"], "point": c["point"]}
+             for c in json.loads(fixture.read_text())["cases"] if "error" not in c]
+    times: dict = {"old": [], "new": []}
+    with baseline_tree(rev) as old:
+        sides = {"old": old, "new": None}
+        metrics = {side: _run_side(site, 1, cases)["metrics"] for side, site in sides.items()}
+        for r in range(rounds):
+            for side in (("old", "new") if r % 2 == 0 else ("new", "old")):
+                times[side].append(_run_side(sides[side], repeats, None)["times"])
+    out: dict = {}
+    print(f"\nti.simulate (API, analytic), {rev} against today, {rounds} fresh processes "
+          f"each, {repeats} runs a process, medians in us:")
+    print(f"{'scenario':16s} {'old API':>8s} {'new API':>8s} {'ratio':>6s} "
+          f"{'old solve':>9s} {'new solve':>9s}")
+    for name in ("open-center", "central-leader", "realistic-crown"):
+        med = {f"{side}.{what}": statistics.median(t[f"{what}_us.{name}"] for t in times[side])
+               for side in times for what in ("api", "solve")}
+        ratio = med["old.api"] / med["new.api"]
+        print(f"{name:16s} {med['old.api']:8.1f} {med['new.api']:8.1f} {ratio:6.2f} "
+              f"{med['old.solve']:9.1f} {med['new.solve']:9.1f}")
+        out |= {f"api_us.old.{name}": round(med["old.api"], 1),
+                f"api_us.new.{name}": round(med["new.api"], 1),
+                f"api_ratio.{name}": round(ratio, 2),
+                f"solve_us.old.{name}": round(med["old.solve"], 1),
+                f"solve_us.new.{name}": round(med["new.solve"], 1)}
+    diffs = [_rel(n[k], o[k]) for n, o in zip(metrics["new"], metrics["old"]) for k in o]
+    out |= {"equivalence.cases": len(cases), "equivalence.metrics": len(diffs),
+            "equivalence.bitwise": sum(d == 0.0 for d in diffs),
+            "equivalence.max_rel_diff": max(diffs)}
+    print(f"equivalence on {len(cases)} cases: {out['equivalence.bitwise']} of {len(diffs)} "
+          f"metrics bitwise equal, the largest relative difference {max(diffs):.1e} "
+          "(bound 1e-9)")
+    return out
+
+
+def _floor(names) -> dict:
+    """The floor estimated per tree: what the exact solution must evaluate, at the cost of
+    the bare evaluations, without the bookkeeping around them. The closed-form advances
+    (eq 13/34, one oscillator at one time) and derivative bounds the solver and the metrics
+    make in one run are counted (each oscillator's cached closures wrapped), the impacts
+    too (eqs 20-21); floor = advances x the cost of one + bounds x theirs + impacts x a
+    Newton impact's, each cost the median of a timed loop."""
+    import timeit
+
+    from treeimpact.analytic.impact.newton import newton_impact
+    from treeimpact.analytic.impact.oscillator import Oscillator
+
+    def cost_us(fn):
+        return min(timeit.repeat(fn, number=20000, repeat=5)) / 20000 * 1e6
+
+    out: dict = {}
+    print("\nfloor: evaluations of one run (solver + metrics) x their bare cost")
+    print(f"{'scenario':16s} {'impacts':>7s} {'advances':>8s} {'bounds':>6s} {'floor us':>8s}")
+    for name in names:
+        scenario = load_scenario(name)
+        model = two_body_model(scenario)
+        oscs = {Oscillator.from_mck(model.dynamic_mass, model.damping, model.stiffness),
+                Oscillator.from_mck(model.impactor_mass, 0.0, model.impactor_stiffness),
+                Oscillator.from_mck(model.dynamic_mass + model.impactor_mass, model.damping,
+                                    model.stiffness + model.impactor_stiffness)}
+        counts = {"scalar_advance": 0, "_bounds5": 0}
+        saved = {}
+        for osc in oscs:
+            for attr in counts:
+                fn = saved[(osc, attr)] = getattr(osc, attr)
+                osc.__dict__[attr] = (lambda f, a: lambda *args: (
+                    counts.__setitem__(a, counts[a] + 1), f(*args))[1])(fn, attr)
+        try:
+            sol = solve_impacts(model, scenario.t_end)
+            impact_metrics(sol, scenario)
+        finally:
+            for (osc, attr), fn in saved.items():
+                osc.__dict__[attr] = fn
+        tree = Oscillator.from_mck(model.dynamic_mass, model.damping, model.stiffness)
+        adv, bnd = tree.scalar_advance, tree._bounds5
+        t_adv = cost_us(lambda: adv(1e-3, 1e-3, 0.5))
+        t_bnd = cost_us(lambda: bnd(1e-3, 0.5))
+        M, m, e = model.dynamic_mass, model.impactor_mass, model.restitution
+        mu = model.reduced_mass
+        t_imp = cost_us(lambda: newton_impact(1, 0.0, 0.0, 0.0, 1.0, M, m, e, mu))
+        n_imp = len(sol.impacts)
+        floor = counts["scalar_advance"] * t_adv + counts["_bounds5"] * t_bnd + n_imp * t_imp
+        print(f"{name:16s} {n_imp:7d} {counts['scalar_advance']:8d} {counts['_bounds5']:6d} "
+              f"{floor:8.1f}")
+        out |= {f"floor_us.{name}": round(floor, 1),
+                f"floor.advances.{name}": counts["scalar_advance"],
+                f"floor.bounds.{name}": counts["_bounds5"], f"floor.impacts.{name}": n_imp,
+                f"floor.advance_us.{name}": round(t_adv, 3)}
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=200)
     ap.add_argument("--through", choices=("separation", "t_end"), default="separation")
     ap.add_argument("--out", help="results file (default benchmarks/results/solver.json)")
+    ap.add_argument("--baseline", default="ee677a4",
+                    help="the commit the API's times and metrics are compared with")
+    ap.add_argument("--rounds", type=int, default=5, help="fresh processes a side")
     args = ap.parse_args(argv)
     start_load = _results.load_average()
     stop = args.through == "separation"
@@ -219,6 +391,8 @@ def main(argv=None) -> int:
             print(f"{name:16s} {label:>14s} {d_ex:9.1e} {r_ex:6.1f} {d_ivp:9.1e} {r_ivp:7.1f} "
                   f"{u:9.1e}  {verdict}")
     numbers |= _bench_simulate(names, args.repeats)
+    numbers |= _bench_baseline(args.baseline, args.rounds, 10 * args.repeats)
+    numbers |= _floor(names)
     numbers["metric_rel_diff"] = max(numbers[f"metric_rel_diff.{n}"] for n in names)
     for key in ("simulate_ms", "ratio", "solver_ratio"):
         numbers[key] = _results.span(numbers[f"{key}.{n}"] for n in names)
