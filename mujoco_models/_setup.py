@@ -75,6 +75,7 @@ class Setup(EngineSetup):
     initial_state: np.ndarray = field(repr=False, compare=False)  # mjSTATE_FULLPHYSICS, t = 0
     rest_potential: float = field(repr=False, compare=False)  # J: springs + pendulum gravity
     flex: _flex.FlexTrunk | None = field(default=None, repr=False, compare=False)
+    step_set_by: str = "given"  # what set dt: "given", "contact" or "highest mode"
 
     @property
     def effective_mass(self) -> float:
@@ -215,7 +216,7 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
                  calibration=calibration, inverse_mass_approx=fit.inverse_mass_approx,
                  solref=tuple(fit.solref), integrator=integrator, mjmodel=mjmodel, spec=spec,
                  initial_state=state0, rest_potential=_rest_potential(mjmodel, root),
-                 flex=tspec.flex)
+                 flex=tspec.flex, step_set_by=fit.step_set_by)
 
 
 @dataclass(frozen=True)
@@ -229,6 +230,7 @@ class _ContactFit:
     dt: float  # s
     law: _contact.EngineLaw
     solref: tuple
+    step_set_by: str  # "given", "contact" (t_c) or "highest mode" (omega_max)
 
 
 def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad: float, dt,
@@ -246,8 +248,10 @@ def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad
     omega_max = highest_frequency(*engine_trunk_matrices(m1)) if tspec.kind == "chain" else \
         highest_frequency(*flex_trunk_matrices(m1, tspec.flex)) if tspec.kind == "flex" else None
     fastest = omega_max if omega_max is not None else sdof_rate(model)
+    reason = "given"
     if dt is None:
         dt = choose_time_step(t_c, fastest)
+        reason = "highest mode" if dt < choose_time_step(t_c) else "contact"
     dt = check_time_step(dt, t_c, fastest)
     _check_work(m1, t_end, dt)
     law = _contact.engine_law(float(k), float(e), float(mu), float(dt), integrator)
@@ -259,7 +263,7 @@ def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad
             "smaller --dt")
     solref = _contact.solref_for_law(law.stiffness, law.damping,
                                      _contact.effective_denominator(A, A_hat))
-    return _ContactFit(A, A_hat, t_c, omega_max, dt, law, solref)
+    return _ContactFit(A, A_hat, t_c, omega_max, dt, law, solref, reason)
 
 
 def _check_rk4_damping(mjmodel: mujoco.MjModel, dt: float) -> None:
