@@ -39,6 +39,11 @@ from treeimpact.analytic.model.two_body import TwoBodyModel
 from . import _contact, _urdf
 from .options import CONTACTS, ENGINE_NAME, MAX_SEGMENTS
 
+#: Steps per period of the trunk's highest mode in the default step, as MuJoCo's
+#: (mujoco_models._setup.STEPS_PER_PERIOD, docs/time-step.md): 10, a third of the stability
+#: limit omega dt = 2.
+STEPS_PER_PERIOD = 10
+
 
 @dataclass(frozen=True)
 class Setup(EngineSetup):
@@ -158,7 +163,7 @@ def _soft_contact(model: TwoBodyModel, scenario: Scenario, bodies: _Bodies,
     fastest = bodies.omega_max if bodies.omega_max is not None else sdof_rate(model)
     reason = "given"
     if dt is None:
-        dt = choose_time_step(t_c, fastest)
+        dt = choose_time_step(t_c, fastest, steps_per_period=STEPS_PER_PERIOD)
         reason = step_reason(t_c, fastest)
         limit = _contact.largest_time_step(k_c, c_c, mu)
         if dt > limit:
@@ -183,7 +188,8 @@ def _newton_contact(model: TwoBodyModel, bodies: _Bodies, contact_stiffness, dt)
         (model.stiffness + model.impactor_stiffness) / min(model.dynamic_mass, m))
     reason = "given"
     if dt is None:
-        dt = choose_time_step(DEFAULT_CONTACT_DURATION, bodies.omega_max)
+        dt = choose_time_step(DEFAULT_CONTACT_DURATION, bodies.omega_max,
+                              steps_per_period=STEPS_PER_PERIOD)
         reason = step_reason(DEFAULT_CONTACT_DURATION, bodies.omega_max)
     check_time_step(dt, math.pi / w, w)
     return dt, dt, reason
@@ -201,7 +207,8 @@ def step_reason(collision_duration: float, fastest: float | None) -> str:
     1/s, the chain's highest mode; None: none): "contact" or "highest mode"."""
     if fastest is None:
         return "contact"
-    with_mode = choose_time_step(collision_duration, fastest)
+    with_mode = choose_time_step(collision_duration, fastest,
+                                 steps_per_period=STEPS_PER_PERIOD)
     return "highest mode" if with_mode < choose_time_step(collision_duration) else "contact"
 
 

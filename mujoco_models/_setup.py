@@ -52,6 +52,12 @@ RK4_RESTITUTION_TOLERANCE = 0.01  # |e - target| of the replayed RK4 free collis
 # the law uncorrected): beyond it the run's contact is not the scenario's (the speed curves stay
 # within 1e-3 at >= 3 steps per collision; dt = 1.86e-4 s on a 0.5 ms contact gives 0.22)
 SETUP_CACHE_SIZE = 64  # setups kept by make_setup (a repeated run does not recompile)
+#: Steps per period of the trunk's highest mode in the default step (docs/time-step.md): a
+#: chain's highest mode is its discretisation's, far above the beam's resolved modes; 10
+#: steps (omega dt = 0.63, a third of the stability limit 2) leave the metrics of a
+#: 32-segment chain within 0.2 % of 20 steps' (benchmarks/bench_chains.py); the chains of
+#: fewer than about 20 segments are stepped by their contact and do not change.
+STEPS_PER_PERIOD = 10
 
 #: The trunk's root body per trunk model (its subtree's gravity is compensated).
 ROOT_BODIES = {"sdof": "trunk", "chain": "segment_0", "flex": "trunk_root"}
@@ -169,7 +175,7 @@ def _check_work_before_building(model, scenario, chain, k: float, c: float, t_en
     if dt is None:
         n = chain.segments  # the highest mode only (all of them: 16 s at 1000 segments)
         w2 = scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=[n - 1, n - 1])
-        dt = choose_time_step(t_c, float(math.sqrt(w2[0])))
+        dt = choose_time_step(t_c, float(math.sqrt(w2[0])), steps_per_period=STEPS_PER_PERIOD)
     check_work(t_end, dt, step_cost_of(chain.segments + 1))
 
 
@@ -250,7 +256,7 @@ def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad
     fastest = omega_max if omega_max is not None else sdof_rate(model)
     reason = "given"
     if dt is None:
-        dt = choose_time_step(t_c, fastest)
+        dt = choose_time_step(t_c, fastest, steps_per_period=STEPS_PER_PERIOD)
         reason = "highest mode" if dt < choose_time_step(t_c) else "contact"
     dt = check_time_step(dt, t_c, fastest)
     _check_work(m1, t_end, dt)
