@@ -97,9 +97,10 @@ def summarise(details: list) -> dict:
     """The flat numbers of the cases' ``details`` (one dict per case, :func:`main`'s):
     per case ``SCENARIO.ENGINE.TRUNK.PENDULUM.SEGMENTS.`` old and new median wall (s),
     their ratio, steps, wall per step (us), 1 where the two sides' numbers are the same to
-    the last bit (else 0) and the largest metric change; per group (report, preset) the
-    count of bit-identical runs, the median ratio and the sums of the medians (s). Printed
-    as a table too."""
+    the last bit (else 0) and the largest compared metric's change; per group (report,
+    preset) and engine and trunk the [low, high] of the new steps, wall per step (us) and
+    ratio; per group the count of bit-identical runs, the median ratio and the sums of the
+    medians (s). Printed as a table too."""
     numbers: dict = {}
     groups: dict = {}
     for d in details:
@@ -114,6 +115,14 @@ def summarise(details: list) -> dict:
               f"{d['new_step_us']} set by {d.get('new_step_set_by')} "
               + ("bit-identical" if d["bit_identical"] else
                  f"compared metrics changed by at most {d['largest_compared_change']:.2g}"))
+    kinds: dict = {}
+    for d in details:
+        scen, engine, opts = d["case"]
+        group = "preset" if opts["segments"] >= 32 else "report"
+        kinds.setdefault(f"{group}.{engine}.{opts['trunk']}", []).append(d)
+    for name, ds in kinds.items():  # ranges over the trees and pendulums
+        for k in ("new_steps", "new_step_us", "ratio"):
+            numbers[f"{name}.{k}"] = _results.span(d[k] for d in ds)
     for name, ds in groups.items():
         numbers[f"{name}.runs"] = len(ds)
         numbers[f"{name}.bit_identical"] = sum(d["bit_identical"] for d in ds)
