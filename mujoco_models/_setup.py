@@ -54,9 +54,9 @@ RK4_RESTITUTION_TOLERANCE = 0.01  # |e - target| of the replayed RK4 free collis
 SETUP_CACHE_SIZE = 64  # setups kept by make_setup (a repeated run does not recompile)
 #: Steps per period of the trunk's highest mode in the default step (docs/time-step.md): a
 #: chain's highest mode is its discretisation's, far above the beam's resolved modes; 10
-#: steps (omega dt = 0.63, a third of the stability limit 2) leave the metrics of a
-#: 32-segment chain within 0.2 % of 20 steps' (benchmarks/bench_chains.py); the chains of
-#: fewer than about 20 segments are stepped by their contact and do not change.
+#: steps (omega dt = 0.63, a third of the stability limit 2) leave the metrics the ladder
+#: compares a 32-segment chain by within 0.5 % of 20 steps' (benchmarks/bench_chains.py);
+#: the chains of fewer than about 20 segments are stepped by their contact and do not change.
 STEPS_PER_PERIOD = 10
 
 #: The trunk's root body per trunk model (its subtree's gravity is compensated).
