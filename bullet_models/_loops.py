@@ -4,7 +4,9 @@ SI units."""
 
 from __future__ import annotations
 
+import itertools
 import math
+from operator import itemgetter
 
 import numpy as np
 
@@ -95,6 +97,13 @@ def _loop_sdof(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
 
 
 def _loop_chain(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
+    """Step the chain; per step one read of every hinge's state, one array of hinge torques,
+    the pendulum's state and torque, one contact query.
+
+    The hinge states (theta, theta') are read into one flat float array by ``np.fromiter``
+    (no tuple per hinge, no 2-D array to flatten: the torques and the record are the same
+    numbers); the record's arrays are built after the loop.
+    """
     p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
     model = setup.model
     M, K, _ = setup.matrices
@@ -113,19 +122,20 @@ def _loop_chain(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
     torque = np.empty((nj, 2 * nj))
     torque[:, 0::2] = -np.diag(kdiag) + (Dq if Dq is not None else 0.0)
     torque[:, 1::2] = -Dv
-    trunk_states = []  # (nj, 2) arrays: theta, theta' of each step
+    trunk_states = []  # flat arrays theta_0, theta'_0, theta_1, ... of each step
     pendulum_states = []  # q, q' of each step, flat
     keep, keep_pendulum = trunk_states.append, pendulum_states.append
     contact_force = {}  # step -> summed normal force, N (steps with contact only)
     sin = math.sin
+    fromiter, flat, pair, n2 = np.fromiter, itertools.chain.from_iterable, itemgetter(0, 1), 2 * nj
     for n in range(n_steps):
-        z = np.array([s[:2] for s in gjss(tb, joints, cid)])
+        z = fromiter(flat(map(pair, gjss(tb, joints, cid))), float, n2)
         ps = gjs(pb, 0, cid)
         y = ps[0]
         keep(z)
         keep_pendulum(y)
         keep_pendulum(ps[1])
-        sjma(tb, joints, TQ, forces=(torque @ z.ravel()).tolist(), physicsClientId=cid)
+        sjma(tb, joints, TQ, forces=(torque @ z).tolist(), physicsClientId=cid)
         # positional arguments as in _loop_sdof
         sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
         step(cid)
@@ -136,9 +146,9 @@ def _loop_chain(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
             tick(1024)  # the progress of a long run
             if not np.all(np.isfinite(z)):
                 raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
-    keep(np.array([s[:2] for s in gjss(tb, joints, cid)]))
+    keep(fromiter(flat(map(pair, gjss(tb, joints, cid))), float, n2))
     pendulum_states.extend(gjs(pb, 0, cid)[:2])
-    states = np.array(trunk_states)
+    states = np.array(trunk_states).reshape(n_steps + 1, nj, 2)
     Q, QD = states[:, :, 0], states[:, :, 1]
     q, qd = np.array(pendulum_states).reshape(n_steps + 1, 2).T
     force = np.zeros(n_steps + 1)

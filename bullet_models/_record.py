@@ -77,9 +77,11 @@ def _record(setup, rec: dict, t_shift: float, e0: float, inertia) -> ImpactRecor
     return record
 
 
-def _result(setup, rec: dict, t_shift: float, e0: float, inertia) -> SimulationResult:
+def _result(setup, rec: dict, t_shift: float, e0: float, inertia,
+            stepping: dict | None = None) -> SimulationResult:
     """The run's SimulationResult: :func:`_record`'s record, its metrics and the model as
-    Bullet ran it (its contact's stiffness, damping, ERP and CFM)."""
+    Bullet ran it (its contact's stiffness, damping, ERP and CFM); ``stepping``: what the
+    stepping cost (:func:`._runner.stepping_record`), kept in ``extra``."""
     model = setup.model
     record = _record(setup, rec, t_shift, e0, inertia)
     b = setup.bullet
@@ -104,4 +106,5 @@ def _result(setup, rec: dict, t_shift: float, e0: float, inertia) -> SimulationR
             "contact_erp": b.erp if b else 0.0, "contact_cfm": b.cfm if b else 0.0,
             "restitution_velocity_threshold": (
                 RESTITUTION_THRESHOLD_FRACTION * model.impact_speed
-                if setup.contact == "newton" else 0.0)})
+                if setup.contact == "newton" else 0.0)},
+        extra={"stepping": stepping} if stepping else None)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 
 from treeimpact.analytic.budget import progress
 from treeimpact.analytic.engine.interface import chain_modes, trunk_chain
@@ -40,6 +41,7 @@ def run(setup: Setup) -> SimulationResult:
     imp = setup.scenario.impactor
     m = model.impactor_mass
     pb = world.pendulum
+    t0 = time.perf_counter()
     if full:
         le, g = imp.equivalent_length, imp.gravity
         inertia = m * le * le * (1.0 + _urdf.BOB_INERTIA_FRACTION)
@@ -51,9 +53,21 @@ def run(setup: Setup) -> SimulationResult:
     n_steps = int(math.ceil(setup.t_end / dt))
     loop = _loop_chain if setup.trunk == "chain" else _loop_sdof
     estimate = n_steps * step_cost(setup.segments or 1).seconds
+    t1 = time.perf_counter()
     with progress("bullet", n_steps, estimate) as tick:
         rec = loop(world, setup, n_steps, full, le, g, m, tick)
-    return _result(setup, rec, t_shift, e0, inertia)
+    stepping = stepping_record(setup, n_steps, time.perf_counter() - t1, t1 - t0)
+    return _result(setup, rec, t_shift, e0, inertia, stepping)
+
+
+def stepping_record(setup: Setup, steps: int, wall_s: float, swing_s: float) -> dict:
+    """What a run's stepping cost (the result's ``extra["stepping"]``, the report's run
+    log): ``steps`` after the touch, the step ``dt`` (s) and what set it
+    (:data:`._setup.STEP_REASONS`), the loop's ``wall_s`` (s, record built after it) and
+    per step (us), and the full pendulum's free swing before the touch (``swing_s``, s)."""
+    return {"steps": int(steps), "dt": setup.dt, "step_set_by": setup.step_set_by,
+            "stepping_s": wall_s, "step_us": 1e6 * wall_s / max(steps, 1),
+            "swing_s": swing_s}
 
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",

@@ -39,6 +39,11 @@ from treeimpact.analytic.model.two_body import TwoBodyModel
 from . import _contact, _urdf
 from .options import CONTACTS, ENGINE_NAME, MAX_SEGMENTS
 
+#: Steps per period of the trunk's highest mode in the default step, as MuJoCo's
+#: (mujoco_models._setup.STEPS_PER_PERIOD, docs/time-step.md): 10, a third of the stability
+#: limit omega dt = 2.
+STEPS_PER_PERIOD = 10
+
 
 @dataclass(frozen=True)
 class Setup(EngineSetup):
@@ -55,6 +60,7 @@ class Setup(EngineSetup):
     apparent_mass: float  # kg: trunk mass seen by the contact
     calibration: str = "pad"  # analytic.contact.law.CALIBRATIONS
     matrices: tuple | None = field(default=None, repr=False)  # chain (M, K, D)
+    step_set_by: str = "given"  # what set dt (:data:`STEP_REASONS`)
 
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
@@ -80,11 +86,12 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
     bodies = _bodies(scenario, trunk, segments, pendulum)
     segments = bodies.segments
     if contact == "soft":
-        k_c, c_c, bullet, dt, col = _soft_contact(model, scenario, bodies, contact_stiffness,
-                                                  dt, t_end, calibration)
+        k_c, c_c, bullet, dt, col, reason = _soft_contact(model, scenario, bodies,
+                                                          contact_stiffness, dt, t_end,
+                                                          calibration)
     else:
         k_c = c_c = bullet = None
-        dt, col = _newton_contact(model, bodies, contact_stiffness, dt)
+        dt, col, reason = _newton_contact(model, bodies, contact_stiffness, dt)
     check_work(t_end, dt, step_cost(segments or 1))
     return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
                  contact=contact, damping=damping, segments=segments, dt=float(dt),
@@ -92,7 +99,8 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                  pendulum_urdf=bodies.pendulum_urdf, contact_stiffness=k_c,
                  contact_damping=c_c, bullet=bullet, collision_duration=col,
                  omega_max=bodies.omega_max, apparent_mass=bodies.apparent_mass,
-                 matrices=bodies.matrices, calibration=calibration)
+                 matrices=bodies.matrices, calibration=calibration,
+                 step_set_by=reason)
 
 
 @dataclass(frozen=True)
@@ -136,9 +144,10 @@ def _bodies(scenario: Scenario, trunk: str, segments, pendulum: str) -> _Bodies:
 
 def _soft_contact(model: TwoBodyModel, scenario: Scenario, bodies: _Bodies,
                   contact_stiffness, dt, t_end: float, calibration: str) -> tuple:
-    """(k_c N/m, c_c N s/m, Bullet's contact, dt s, detection duration s) of the pad on the
-    trunk's apparent mass: the step from the collision Bullet integrates and the fastest
-    mode (given ``dt`` checked), within the step Bullet's implicit contact can hold."""
+    """(k_c N/m, c_c N s/m, Bullet's contact, dt s, detection duration s, what set dt
+    (:data:`STEP_REASONS`)) of the pad on the trunk's apparent mass: the step from the
+    collision Bullet integrates and the fastest mode (given ``dt`` checked), within the step
+    Bullet's implicit contact can hold."""
     m = model.impactor_mass
     mu = bodies.apparent_mass * m / (bodies.apparent_mass + m)
     k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
@@ -152,31 +161,55 @@ def _soft_contact(model: TwoBodyModel, scenario: Scenario, bodies: _Bodies,
     t_c = collision_duration(law_model, k_c, _contact.law_for_restitution(
         model.restitution, k_c, mu))
     fastest = bodies.omega_max if bodies.omega_max is not None else sdof_rate(model)
+    reason = "given"
     if dt is None:
-        dt = choose_time_step(t_c, fastest)
+        dt = choose_time_step(t_c, fastest, steps_per_period=STEPS_PER_PERIOD)
+        reason = step_reason(t_c, fastest)
         limit = _contact.largest_time_step(k_c, c_c, mu)
         if dt > limit:
             dt = 0.9 * limit
+            reason = "implicit contact"
     check_time_step(dt, t_c, fastest)
     check_work(t_end, dt, step_cost(bodies.segments or 1))  # before the replays of dt's steps
     bullet = _contact.bullet_contact(k_c, c_c, mu, dt)
     # Impacts are told from moving together on the scale of the SDOF model's free
     # collision, the same for every rung (the chain's local collision, t_c, is shorter).
-    return k_c, c_c, bullet, dt, detection_duration(model, scenario.contact, stiffness=k_c)
+    return (k_c, c_c, bullet, dt, detection_duration(model, scenario.contact, stiffness=k_c),
+            reason)
 
 
 def _newton_contact(model: TwoBodyModel, bodies: _Bodies, contact_stiffness, dt) -> tuple:
-    """(dt s, detection duration s = dt) of Bullet's restitution impulses: the step from the
-    default contact duration and the fastest mode (given ``dt`` checked)."""
+    """(dt s, detection duration s = dt, what set dt) of Bullet's restitution impulses: the
+    step from the default contact duration and the fastest mode (given ``dt`` checked)."""
     if contact_stiffness is not None:
         raise ParameterError("--contact-stiffness: only for --contact soft")
     m = model.impactor_mass
     w = bodies.omega_max if bodies.omega_max is not None else math.sqrt(
         (model.stiffness + model.impactor_stiffness) / min(model.dynamic_mass, m))
+    reason = "given"
     if dt is None:
-        dt = choose_time_step(DEFAULT_CONTACT_DURATION, bodies.omega_max)
+        dt = choose_time_step(DEFAULT_CONTACT_DURATION, bodies.omega_max,
+                              steps_per_period=STEPS_PER_PERIOD)
+        reason = step_reason(DEFAULT_CONTACT_DURATION, bodies.omega_max)
     check_time_step(dt, math.pi / w, w)
-    return dt, dt
+    return dt, dt, reason
+
+
+#: What can set a run's step: ``--dt`` given; the collision (t_c / steps per collision);
+#: the chain's highest mode (its period / steps per period); Bullet's implicit contact (0.9
+#: of the largest step at which it keeps the law's e, :func:`._contact.largest_time_step`).
+STEP_REASONS = ("given", "contact", "highest mode", "implicit contact")
+
+
+def step_reason(collision_duration: float, fastest: float | None) -> str:
+    """Which term of :func:`analytic.contact.timestep.choose_time_step` sets the default
+    step for a collision of ``collision_duration`` (s) and the ``fastest`` rate (rad/s or
+    1/s, the chain's highest mode; None: none): "contact" or "highest mode"."""
+    if fastest is None:
+        return "contact"
+    with_mode = choose_time_step(collision_duration, fastest,
+                                 steps_per_period=STEPS_PER_PERIOD)
+    return "highest mode" if with_mode < choose_time_step(collision_duration) else "contact"
 
 
 def step_cost(joints: int) -> StepCost:

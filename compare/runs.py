@@ -60,16 +60,29 @@ class Run:
         """Whether the run finished (status OK)."""
         return self.status == OK
 
+    @property
+    def stepping(self) -> dict | None:
+        """What an engine run's stepping cost (its result's ``extra["stepping"]``: steps,
+        dt s, what set dt, wall s and us per step, the full pendulum's swing s); None for a
+        run without a result or a backend that does not step (docs/engines.md)."""
+        if self.result is None:
+            return None
+        return self.result.extra.get("stepping")
+
     def describe(self) -> str:
         """``scenario backend(name=value, ...)``, one line."""
         opts = ", ".join(f"{k}={v}" for k, v in sorted(self.options.items()))
         return f"{self.scenario} {self.backend}({opts})"
 
     def to_json(self) -> dict:
-        """scenario, backend, options, status, reason and wall time (s); not the result."""
-        return {"scenario": self.scenario, "backend": self.backend,
-                "options": dict(self.options), "status": self.status,
-                "reason": self.reason, "wall_s": self.wall_s}
+        """scenario, backend, options, status, reason, wall time (s) and an engine run's
+        :attr:`stepping` (absent otherwise); not the result."""
+        out = {"scenario": self.scenario, "backend": self.backend,
+               "options": dict(self.options), "status": self.status,
+               "reason": self.reason, "wall_s": self.wall_s}
+        if self.stepping is not None:
+            out["stepping"] = dict(self.stepping)
+        return out
 
 
 def attempt(backend, scenario: Scenario, options: dict) -> Run:

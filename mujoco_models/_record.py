@@ -238,7 +238,10 @@ def _with_crown(setup, record: ImpactRecord, states: np.ndarray) -> ImpactRecord
     return with_crown(record, *lateral_motion(chain, q, v, chain.segments))
 
 
-def _result(setup, state0, states, sensors) -> SimulationResult:
+def _result(setup, state0, states, sensors, stepping: dict | None = None) -> SimulationResult:
+    """The run's SimulationResult from its rollout (the initial state, every step's states
+    and sensors), the model as MuJoCo ran it; ``stepping``: what the stepping cost
+    (:func:`._rollout.stepping_record`), kept in ``extra``."""
     record, e0, _ = _record(setup, state0, states, sensors)
     if setup.trunk == "chain":  # the chain's top, from the hinge angles of the recorded states
         record = _with_crown(setup, record, states)
@@ -259,4 +262,5 @@ def _result(setup, state0, states, sensors) -> SimulationResult:
             "solref": list(setup.solref),
             "solimp": [_contact.IMPEDANCE, _contact.IMPEDANCE, *_contact.SOLIMP_TAIL],
             "touch_duration": setup.collision_duration, "omega_max": setup.omega_max},
-        extra={"impact_speed_measured": float(record.vy[0] - record.vx[0])})
+        extra={"impact_speed_measured": float(record.vy[0] - record.vx[0]),
+               **({"stepping": stepping} if stepping else {})})

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import mujoco
@@ -52,7 +53,8 @@ CHUNK_SECONDS = 0.5
 
 def _rollout(models, states, nsteps, nthread, tick=lambda n: None):
     """Roll each model (one size signature) from its state for its steps; per model the
-    states and sensor values of every step. Each model runs in chunks of about
+    states and sensor values of every step and the wall time (s) its rollout took (on its
+    own thread). Each model runs in chunks of about
     :data:`CHUNK_SECONDS` with its own MjData, the solver's warm start carried from chunk to
     chunk (bitwise the steps of one call), on up to ``nthread`` threads (MuJoCo's rollout
     releases the GIL); ``tick(n)`` after every n steps."""
@@ -65,6 +67,7 @@ def _rollout(models, states, nsteps, nthread, tick=lambda n: None):
     lock = threading.Lock()
 
     def one(i):
+        t0 = time.perf_counter()
         m, data = models[i], mujoco.MjData(models[i])
         state, warm, left = np.asarray(states[i])[None], None, int(nsteps[i])
         st_parts, sd_parts = [], []
@@ -76,7 +79,7 @@ def _rollout(models, states, nsteps, nthread, tick=lambda n: None):
             state, warm, left = st[:, -1], data.qacc_warmstart.copy()[None], left - n
             with lock:
                 tick(n)
-        return np.concatenate(st_parts), np.concatenate(sd_parts)
+        return np.concatenate(st_parts), np.concatenate(sd_parts), time.perf_counter() - t0
 
     if len(models) == 1 or nthread <= 1:  # in this thread: a signal ends it between chunks
         return [one(i) for i in range(len(models))]
@@ -98,6 +101,7 @@ class _Plan:
     state0: np.ndarray  # state at the start of the recorded phase (filled after the swing)
     nstep: int
     swing_steps: int = 0
+    swing_s: float = 0.0  # wall time of the free swing (s)
 
 
 def _initial_qpos_qvel(m: mujoco.MjModel, pendulum: str, model: TwoBodyModel,
@@ -140,7 +144,8 @@ def _swing_models(plans):
 
 
 def _run_group(plans: list[_Plan], nthread: int) -> list:
-    """Roll out a group of plans with one size signature; returns per plan (states, sensors).
+    """Roll out a group of plans with one size signature; returns per plan (initial state,
+    states, sensors, :func:`stepping_record`).
     A run estimated longer than analytic.budget.PROGRESS_AFTER_S reports its progress."""
 
     swing = [p for p in plans if p.swing_steps > 0]
@@ -148,14 +153,26 @@ def _run_group(plans: list[_Plan], nthread: int) -> list:
         models = _swing_models(swing)
         out = _rollout(models, [p.state0 for p in swing], [p.swing_steps for p in swing],
                        nthread)
-        for (st, _), p in zip(out, swing):
+        for (st, _, wall), p in zip(out, swing):
             s = st[p.swing_steps - 1].copy()
             s[0] = 0.0  # time restarts: the recorded phase is timed by its own steps
             p.state0 = s
+            p.swing_s = wall
     total = sum(p.nstep for p in plans)
     estimate = total * step_cost(plans[0].setup.mjmodel).seconds / max(1, min(nthread,
                                                                                  len(plans)))
     with progress("mujoco", total, estimate) as tick:
         out = _rollout([p.setup.mjmodel for p in plans], [p.state0 for p in plans],
                        [p.nstep for p in plans], nthread, tick)
-    return [(p.state0, st, sd) for p, (st, sd) in zip(plans, out)]
+    return [(p.state0, st, sd, stepping_record(p, wall)) for p, (st, sd, wall) in zip(plans, out)]
+
+
+def stepping_record(plan: _Plan, wall_s: float) -> dict:
+    """What a run's stepping cost (the result's ``extra["stepping"]``, the report's run
+    log): the ``steps`` of the recorded phase (from the touch, or from just before it after
+    the full pendulum's swing), the step ``dt`` (s) and what set it (``step_set_by``), the
+    rollout's ``wall_s`` (s) and per step (us), and the free swing's (``swing_s``, s)."""
+    setup = plan.setup
+    return {"steps": int(plan.nstep), "dt": setup.dt, "step_set_by": setup.step_set_by,
+            "stepping_s": wall_s, "step_us": 1e6 * wall_s / max(plan.nstep, 1),
+            "swing_s": plan.swing_s}

@@ -52,6 +52,12 @@ RK4_RESTITUTION_TOLERANCE = 0.01  # |e - target| of the replayed RK4 free collis
 # the law uncorrected): beyond it the run's contact is not the scenario's (the speed curves stay
 # within 1e-3 at >= 3 steps per collision; dt = 1.86e-4 s on a 0.5 ms contact gives 0.22)
 SETUP_CACHE_SIZE = 64  # setups kept by make_setup (a repeated run does not recompile)
+#: Steps per period of the trunk's highest mode in the default step (docs/time-step.md): a
+#: chain's highest mode is its discretisation's, far above the beam's resolved modes; 10
+#: steps (omega dt = 0.63, a third of the stability limit 2) leave the metrics the ladder
+#: compares a 32-segment chain by within 0.5 % of 20 steps' (benchmarks/bench_chains.py);
+#: the chains of fewer than about 20 segments are stepped by their contact and do not change.
+STEPS_PER_PERIOD = 10
 
 #: The trunk's root body per trunk model (its subtree's gravity is compensated).
 ROOT_BODIES = {"sdof": "trunk", "chain": "segment_0", "flex": "trunk_root"}
@@ -75,6 +81,7 @@ class Setup(EngineSetup):
     initial_state: np.ndarray = field(repr=False, compare=False)  # mjSTATE_FULLPHYSICS, t = 0
     rest_potential: float = field(repr=False, compare=False)  # J: springs + pendulum gravity
     flex: _flex.FlexTrunk | None = field(default=None, repr=False, compare=False)
+    step_set_by: str = "given"  # what set dt: "given", "contact" or "highest mode"
 
     @property
     def effective_mass(self) -> float:
@@ -168,7 +175,7 @@ def _check_work_before_building(model, scenario, chain, k: float, c: float, t_en
     if dt is None:
         n = chain.segments  # the highest mode only (all of them: 16 s at 1000 segments)
         w2 = scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=[n - 1, n - 1])
-        dt = choose_time_step(t_c, float(math.sqrt(w2[0])))
+        dt = choose_time_step(t_c, float(math.sqrt(w2[0])), steps_per_period=STEPS_PER_PERIOD)
     check_work(t_end, dt, step_cost_of(chain.segments + 1))
 
 
@@ -215,7 +222,7 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
                  calibration=calibration, inverse_mass_approx=fit.inverse_mass_approx,
                  solref=tuple(fit.solref), integrator=integrator, mjmodel=mjmodel, spec=spec,
                  initial_state=state0, rest_potential=_rest_potential(mjmodel, root),
-                 flex=tspec.flex)
+                 flex=tspec.flex, step_set_by=fit.step_set_by)
 
 
 @dataclass(frozen=True)
@@ -229,6 +236,7 @@ class _ContactFit:
     dt: float  # s
     law: _contact.EngineLaw
     solref: tuple
+    step_set_by: str  # "given", "contact" (t_c) or "highest mode" (omega_max)
 
 
 def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad: float, dt,
@@ -246,8 +254,10 @@ def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad
     omega_max = highest_frequency(*engine_trunk_matrices(m1)) if tspec.kind == "chain" else \
         highest_frequency(*flex_trunk_matrices(m1, tspec.flex)) if tspec.kind == "flex" else None
     fastest = omega_max if omega_max is not None else sdof_rate(model)
+    reason = "given"
     if dt is None:
-        dt = choose_time_step(t_c, fastest)
+        dt = choose_time_step(t_c, fastest, steps_per_period=STEPS_PER_PERIOD)
+        reason = "highest mode" if dt < choose_time_step(t_c) else "contact"
     dt = check_time_step(dt, t_c, fastest)
     _check_work(m1, t_end, dt)
     law = _contact.engine_law(float(k), float(e), float(mu), float(dt), integrator)
@@ -259,7 +269,7 @@ def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad
             "smaller --dt")
     solref = _contact.solref_for_law(law.stiffness, law.damping,
                                      _contact.effective_denominator(A, A_hat))
-    return _ContactFit(A, A_hat, t_c, omega_max, dt, law, solref)
+    return _ContactFit(A, A_hat, t_c, omega_max, dt, law, solref, reason)
 
 
 def _check_rk4_damping(mjmodel: mujoco.MjModel, dt: float) -> None:

@@ -1,4 +1,5 @@
-"""Report section: every backend run behind the page, its status, reason and wall time.
+"""Report section: every backend run behind the page, its status, reason and wall time (an
+engine run's steps, wall time per step and what set its step beside it).
 
 The page lists the runs that did not succeed first (with their reasons), then every run in a
 collapsed list, options rounded to what a reader needs (3 significant digits, with units).
@@ -36,7 +37,8 @@ def run_rows(runs) -> list[dict]:
             units[r.backend] = option_units(r.backend)
         rows.append({"scenario": r.scenario, "backend": r.backend, "ok": r.ok,
                      "options": options_text(r.options, units[r.backend]),
-                     "status": r.status, "wall_s": r.wall_s, "reason": tidy(r.reason)})
+                     "status": r.status, "wall_s": r.wall_s, "reason": tidy(r.reason),
+                     "stepping": r.stepping})
     return sorted(rows, key=lambda x: (x["ok"], x["scenario"], x["backend"], x["options"]))
 
 

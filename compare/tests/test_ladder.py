@@ -253,3 +253,23 @@ def test_peak_time_of_two_near_equal_maxima_is_flagged_not_judged(ladder_of, sce
     else:
         assert len(chain.peaks) == 1 and check.verdict == "finding"
     assert ladder.step_check(chain.rung.id, "x_max").verdict == "finding"  # x_max is robust
+
+
+def test_every_engine_run_says_its_steps_and_what_set_its_step(ladder_of, run_cache):
+    """The ladder's engine runs carry their stepping (steps, wall per step, what set dt) into
+    report.json's run list and the page's; the analytic backends, which do not step, none.
+    The report's chains (10-12 segments) are stepped by their contact, not the chain's
+    highest mode (docs/time-step.md)."""
+    from treeimpact.compare.backends import ENGINES
+    from treeimpact.compare.report.runlog import run_rows
+
+    ladder_of("open-center")
+    runs = [r for r in run_cache if r.ok]
+    engine_runs = [r for r in runs if r.backend in ENGINES]
+    assert engine_runs and all(r.backend in ENGINES for r in runs if r.stepping)
+    for r in engine_runs:
+        js = r.to_json()["stepping"]
+        assert js["steps"] >= r.result.scenario["t_end"] / js["dt"] and js["step_us"] > 0
+        assert js["step_set_by"] in ("contact", "implicit contact"), r.describe()
+    rows = run_rows(engine_runs)
+    assert all(row["stepping"]["steps"] > 0 for row in rows)

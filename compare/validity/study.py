@@ -78,8 +78,8 @@ PRESETS = {
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
         identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
         ident_engine_rungs=ENGINES, sensitivity=60, sensitivity_crossings=True,
-        expected="about 6 CPU-hours: 190 minutes with 2 workers, 24 on 16 (measured on a "
-                 "slice of the preset, 280 s of runs per (e, crown) pair: "
+        expected="about 1.4 CPU-hours: 41 minutes with 2 workers, 5 on 16 (measured on a "
+                 "slice of the preset, 61 s of runs per (e, crown) pair: "
                  "benchmarks/bench_presets.py); resumable"),
 }
 
