@@ -21,25 +21,28 @@ from treeimpact.analytic.results import ImpactRecord
 
 from .exact_record import record
 from .linear_model import LinearImpactModel, initial_state, matrices
-from .modal import Modal, Observable, ledger_forms, observation_rows
+from .modal import Observable, decomposed, observation_rows, work_forms
 from .phases import ContactPhase, Signal, bracket, check_switches, switch
 
-#: Largest block of samples the ``exact`` method evaluates at once (32, 256, then this).
-_BLOCK = 1024
+#: Elements (samples x modes kept) of the largest block of samples the ``exact`` method
+#: evaluates at once (32, 256, ... up to this over the modes, at least 1024 samples): 1 MB of
+#: powers exp(lambda i h).
+_BLOCK_ELEMENTS = 2 ** 16
 _EPS = float(np.finfo(float).eps)
 
 
 class _State:
-    """One contact state of the ``exact`` method: its :class:`Modal` solution, the
-    observation rows over the kept half of the spectrum, exp(lambda i h) for the sample
-    spacing h (i = 0.._BLOCK) and the work integrals of the ledger."""
+    """One contact state of the ``exact`` method: its :class:`Modal` solution (shared by
+    :func:`.modal.decomposed`), the observation rows over the kept half of the spectrum (as
+    the real operand of the samples' product), exp(lambda i h) for the sample spacing h
+    (i = 0..block) and the work integrals of the ledger."""
 
     def __init__(self, model: LinearImpactModel, contact: bool, h: float):
         M, C, K, g = matrices(model, contact)
-        self.modal = modal = Modal(M, C, K)
+        self.modal = modal = decomposed(M, C, K)
         self.contact = contact
-        forms = ledger_forms(model, modal, contact, g)
-        works = [forms.damping] + ([forms.pad] if contact else [])
+        damping, pad = work_forms(model, modal, contact, g)
+        works = [damping] + ([pad] if contact else [])
         # the works' integrals: H_int stacked (damping; and the pad's, in contact)
         self.H_int = np.stack([f.H_int for f in works])
         self.H_lin = np.stack([f.H_lin for f in works])
@@ -49,11 +52,15 @@ class _State:
         self.lam = modal.lam[kept]
         rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
         self.rows = (rows[:, kept] * modal.weight).T.copy()  # m x 8: obs = Re(U @ rows)
+        self.rows_conj = self.rows.T.conj().copy()  # 8 x m: see _scan
         # delta and the law F = k_c delta + c_c delta', and their slopes
         delta, rate = self.rows[:, Observable.DELTA], self.rows[:, Observable.DELTA_RATE]
         law = np.stack([delta, k_c * delta + c_c * rate])
         self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
-        self.steps = _powers(np.exp(self.lam * h))
+        self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
+        self.steps = _powers(np.exp(self.lam * h), self.block)
+        # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1)
+        self.steps_ri = np.ascontiguousarray(self.steps.view(float).T)
         self.gd = modal.displacement_row(g)
         self.k_c = k_c
 
@@ -77,13 +84,13 @@ class _State:
         return kin, pot - pad, pad
 
 
-def _powers(step: np.ndarray) -> np.ndarray:
-    """step^i, i = 0.._BLOCK, by doubling (round-off log2(_BLOCK) eps)."""
-    steps = np.ones((_BLOCK + 1, len(step)), dtype=complex)
+def _powers(step: np.ndarray, count: int) -> np.ndarray:
+    """step^i, i = 0..count, by doubling (round-off log2(count) eps)."""
+    steps = np.ones((count + 1, len(step)), dtype=complex)
     steps[1] = step
     n = 1
-    while n < _BLOCK:
-        m = min(n, _BLOCK - n)
+    while n < count:
+        m = min(n, count - n)
         steps[n + 1:n + 1 + m] = steps[1:1 + m] * steps[n]
         n += m
     return steps
@@ -150,8 +157,8 @@ class _ExactSamples:
 
 @dataclass
 class _Grid:
-    """The sample grid (s) and what is written on it: the observables (n x 8) and the
-    contact flag."""
+    """The sample grid (s) and what is written on it: the observables (8 x n, one row per
+    :class:`Observable`) and the contact flag."""
 
     t: np.ndarray
     obs: np.ndarray
@@ -167,7 +174,7 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
     to_state = {True: states[True].modal.transfer(states[False].modal),
                 False: states[False].modal.transfer(states[True].modal)}
-    grid = _Grid(t_grid, np.empty((t_grid.size, 8)), np.zeros(t_grid.size, dtype=bool))
+    grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.zeros(t_grid.size, dtype=bool))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
     work = np.zeros(2)  # damping, pad
@@ -197,7 +204,11 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
           wk: np.ndarray):
     """Write the observables of the phase started at ``t`` (modal coefficients ``wk`` over
     the kept spectrum) block by block until it ends; returns (time into the phase, next
-    phase) of the switch, or None when it lasts to the grid's end."""
+    phase) of the switch, or None when it lasts to the grid's end.
+
+    A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
+    one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
+    powers (2m x block), half the flops of the complex product's real part."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
     t_grid, n_t = grid.t, grid.t.size
     j0 = int(np.searchsorted(t_grid, t, side="left"))
@@ -207,22 +218,26 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     base = np.exp(st.lam * (t_grid[j0] - t)) * wk
     while j < n_t:
         jj = min(n_t, j + block)
-        ob = (st.steps[:jj - j] @ (base[:, None] * st.rows)).real
-        d = ob[:, Observable.DELTA]
-        f = k_c * d + c_c * ob[:, Observable.DELTA_RATE]
+        ob = (st.rows_conj * base.conj()).view(float) @ st.steps_ri[:, :jj - j]
+        d = ob[Observable.DELTA]
+        f = k_c * d + c_c * ob[Observable.DELTA_RATE]
         ended = kind.has_ended(d, f)
         if j == j0 and t_grid[j0] == t:
             ended[0] = False  # the phase's own start
         k = int(np.argmax(ended))
         if ended[k]:
             s_lo = max(t_grid[j + k - 1] - t, 0.0) if j + k > j0 else 0.0
-            grid.obs[j:j + k] = ob[:k]
+            grid.obs[:, j:j + k] = ob[:, :k]
             grid.in_contact[j:j + k] = kind.touching
-            return _locate(kind, st, wk, s_lo, t_grid[j + k] - t, d[k], f[k])
-        grid.obs[j:jj] = ob
+            lo_values = None
+            if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
+                d_lo = float(grid.obs[Observable.DELTA, j + k - 1])
+                lo_values = (d_lo, k_c * d_lo + c_c * grid.obs[Observable.DELTA_RATE, j + k - 1])
+            return _locate(kind, st, wk, s_lo, t_grid[j + k] - t, d[k], f[k], lo_values)
+        grid.obs[:, j:jj] = ob
         grid.in_contact[j:jj] = kind.touching
         base = base * st.steps[jj - j]
-        j, block = jj, min(8 * block, _BLOCK)
+        j, block = jj, min(8 * block, st.block)
     return None
 
 
@@ -244,7 +259,7 @@ def _close(model: LinearImpactModel, st: _State, w: np.ndarray, end_s: float,
 def _samples(model: LinearImpactModel, grid: _Grid, solution: _Solution) -> _ExactSamples:
     """The :class:`_ExactSamples` of the written grid."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
-    x, y, vx, vy, delta, ddelta, crown, crown_v = grid.obs.T
+    x, y, vx, vy, delta, ddelta, crown, crown_v = grid.obs
     force = np.where(grid.in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
     m, kp = model.impactor_mass, model.impactor_stiffness
     return _ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=force,
@@ -253,36 +268,40 @@ def _samples(model: LinearImpactModel, grid: _Grid, solution: _Solution) -> _Exa
 
 
 def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
-            d_hi: float, f_hi: float):
+            d_hi: float, f_hi: float, lo_values: tuple | None):
     """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]
     (:func:`.phases.switch`), each root by Newton's method on the exact solution's delta
-    and law with their slopes."""
-    lam, law = st.lam, st.law
-
-    def at(s):  # delta, F, delta', F'
-        return (np.exp(lam * s) * wk) @ law
+    and law with their slopes; ``lo_values``: (delta, law) at s_lo from the samples, or
+    None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`)."""
+    lam = st.lam
+    c = wk[:, None] * st.law  # m x 4: (delta, F, delta', F') = Re(exp(lambda s) @ c)
 
     def fun(i):
         def value(s):
-            v = at(s).real
-            return float(v[i]), float(v[i + 2])
+            v = (np.exp(lam * s) @ c).real.tolist()
+            return v[i], v[i + 2]
         return value
 
-    signals = {Signal.DELTA: (fun(0), d_hi), Signal.LAW: (fun(1), f_hi)}
+    d_lo, f_lo = lo_values if lo_values is not None else (None, None)
+    signals = {Signal.DELTA: (fun(0), d_hi, d_lo), Signal.LAW: (fun(1), f_hi, f_lo)}
 
     def root(signal):
-        value, end_value = signals[signal]
-        return _newton_root(value, s_lo, s_hi, end_value)
+        value, end_value, lo_value = signals[signal]
+        return _newton_root(value, s_lo, s_hi, end_value, lo_value)
 
     return switch(kind, root, lambda s: signals[Signal.DELTA][0](s)[0], d_hi, f_hi)
 
 
-def _newton_root(fun, lo: float, hi: float, f_hi: float) -> float:
-    """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi:
-    a phase that starts on its own boundary (value 0 at lo) is bracketed from just after its
-    start; then Newton's steps inside the shrinking bracket (bisection otherwise), to
-    1e-15 s."""
-    found = bracket(lambda u: fun(u)[0], lo, hi, f_hi)
+def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = None
+                 ) -> float:
+    """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi
+    (``f_lo`` at lo, if known): a phase that starts on its own boundary (value 0 at lo) is
+    bracketed from just after its start; then Newton's steps inside the shrinking bracket
+    (bisection otherwise), to 1e-15 s."""
+    if f_lo is not None and f_lo * f_hi <= 0 and f_lo != 0.0:
+        found = lo, f_lo  # what bracket() returns for a sign change at lo
+    else:
+        found = bracket(lambda u: fun(u)[0], lo, hi, f_hi)
     if found is None:
         return hi
     lo, f_lo = found
