@@ -25,9 +25,10 @@ from .modal import Observable, decomposed, observation_rows, work_forms
 from .phases import ContactPhase, Signal, bracket, check_switches, switch
 
 #: Elements (samples x modes kept) of the largest block of samples the ``exact`` method
-#: evaluates at once (32, 256, ... up to this over the modes, at least 1024 samples): 1 MB of
-#: powers exp(lambda i h).
-_BLOCK_ELEMENTS = 2 ** 16
+#: evaluates at once (32, 256, ... up to this over the modes, at least 1024 samples): the
+#: powers exp(lambda i h) stay in cache (the soft SDOF, 2 modes: 4096 samples a block took
+#: half the time of 16384, benchmarks/bench_exact.py).
+_BLOCK_ELEMENTS = 2 ** 13
 _EPS = float(np.finfo(float).eps)
 
 

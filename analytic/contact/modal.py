@@ -243,8 +243,9 @@ def ledger_forms(model: LinearImpactModel, modal: Modal, contact: bool,
 
 def work_forms(model: LinearImpactModel, modal: Modal, contact: bool, g: np.ndarray
                ) -> tuple[Quadratic, Quadratic | None]:
-    """The rates of the trunk's damping work and (in contact, else None) of the pad's work
-    F delta' of :func:`ledger_forms` (W), their H = V^T Q V formed from Q's structure: the
+    """The rates of the trunk's damping work and (``contact``, else None) of the pad's work
+    F delta' of :func:`ledger_forms` (W) of ``model`` on its solution ``modal`` (delta =
+    ``g`` . q), their H = V^T Q V formed from Q's structure: the
     damping acts on the velocities only (V_v^T Phi^T D Phi V_v, V_v the velocity rows of V),
     the pad's form is of rank 2 (its rows over u, gd and gv: V^T gd, V^T gv); O(n^2) for the
     pad and half the products for the damping, instead of two n^3 products each."""
