@@ -14,7 +14,8 @@ through the same pad) of each scenario:
 4. the cheapest (N, dt) within 1 % of the continuum on x_max, per model: the table of
    docs/engines.md.
 
-Writes everything to ``--out`` (JSON, default benchmarks/results/trunks.json) after each
+Writes everything to ``--out`` (JSON, default compare/report/data/trunks.json: package data,
+the file the report's trunk section reads installed or not) after each
 scenario, keeping the other scenarios already in the file, with where it was measured (the
 ``measured`` date, ``machine``, ``load_average`` before the runs and ``git_commit``, at the
 top for the last run and per scenario as ``record``; null where an older file lacks them).
@@ -44,7 +45,8 @@ from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.provenance import code_version
 from treeimpact.mujoco_models import make_setup, modes, simulate
 
-OUT = pathlib.Path(__file__).resolve().parent / "results" / "trunks.json"
+#: The package's copy (compare/report/trunks.py's TRUNKS_JSON), the only one.
+OUT = pathlib.Path(__file__).resolve().parents[1] / "compare" / "report" / "data" / "trunks.json"
 MODELS = ("chain", "flex")
 DT_FACTORS = (1, 2, 4, 8, 16)
 TARGET = 0.01  # |x_max / beam - 1| of the actionable table

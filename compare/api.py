@@ -226,9 +226,11 @@ def record_from_simulation(simulation: Simulation, *, rate_hz: float = 5000.0,
     return Record(t=t, x=x, source=f"{simulation.scenario.name} ({simulation.backend})")
 
 
-def _pendulum_test(test, clamp_height, diameter):
-    """The identification's PendulumTest of a Scenario, or of a Pendulum and the trunk's
-    clamp height and diameter (m)."""
+def pendulum_test(test, clamp_height, diameter):
+    """The identification's PendulumTest (analytic.identify.procedure) of ``test``: a
+    Scenario (its pendulum, its trunk's clamp height and diameter), or a Pendulum with the
+    ``clamp_height`` a and ``diameter`` d (m) it struck; each checked against its range
+    (ParameterError naming it). Shared by :func:`identify` and ``treeimpact identify``."""
     from treeimpact.analytic.identify.procedure import PendulumTest
     from treeimpact.analytic.model.parameters import LIMITS, Pendulum, Scenario, check_range
 
@@ -283,7 +285,7 @@ def identify(record, test, *, clamp_height: float | None = None,
 
     from .api_results import identification_of
 
-    pendulum_test = _pendulum_test(test, clamp_height, diameter)
+    the_test = pendulum_test(test, clamp_height, diameter)
     if isinstance(record, (str, Path)):
         record = read_record(record)
     if not isinstance(record, Record):
@@ -291,7 +293,7 @@ def identify(record, test, *, clamp_height: float | None = None,
                              f"{type(record).__name__}")
     if restitution is not None:
         check_range("restitution", restitution, low=0.0, high=1.0)
-    return identification_of(fit_record(record, pendulum_test, restitution=restitution),
+    return identification_of(fit_record(record, the_test, restitution=restitution),
                              record)
 
 

@@ -16,7 +16,6 @@ from treeimpact.analytic.errors import ParameterError
 
 from .commands import COMMANDS
 from .commands._common import backend_options  # noqa: F401 - docs/cli.md names it here
-from .process import EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED  # noqa: F401
 
 
 class _Parser(argparse.ArgumentParser):

@@ -143,27 +143,54 @@ def _end_workers(pool) -> None:
         manager.join(END_WORKERS_S)  # (concurrent.futures: 'OSError: Bad file descriptor')
 
 
-#: What a forkserver imports once for all the workers it forks: the modules the pooled
-#: functions live in and the fit's (scipy.optimize), 0.3-1 s of imports a worker otherwise.
-#: Not the engines (a forkserver has no thread to fork, but pybullet prints on import).
-FORKSERVER_PRELOAD = ("treeimpact.compare.runs", "treeimpact.compare.studies.ident_fits",
-                      "treeimpact.compare.studies.ident_records",
-                      "treeimpact.analytic.identify.record_fit")
+#: The modules this process's forkserver imports once for all the workers it forks, beyond
+#: the pooled function's own: the ones callers named (:func:`preload_in_workers`), in order.
+_PRELOAD: dict[str, None] = {}
 
 
-def _executor(workers: int, start_method: str | None):
+def preload_in_workers(*names: str) -> None:
+    """Have this process's forkserver import the modules ``names`` (dotted names) once for
+    all the workers it forks (0.3-1 s of imports a worker otherwise: the report names its
+    record fit's). Read when the forkserver starts, at the first pool of
+    :func:`process_map`: a caller names them before its first pool. Each name is looked up
+    now: ImportError naming it if there is no such module (the forkserver itself would
+    ignore one). Not the engines (a forkserver has no thread to fork, but pybullet prints
+    on import)."""
+    for name in names:
+        _PRELOAD[_found(name)] = None
+
+
+def _found(name: str) -> str:
+    """``name`` if it names a module (found, not imported), else ImportError naming it."""
+    import importlib.util
+
+    if importlib.util.find_spec(name) is None:  # a missing parent package raises here
+        raise ImportError(f"preload_in_workers: no module named {name!r}", name=name)
+    return name
+
+
+def _forkserver_preload(modules=()) -> list[str]:
+    """What the forkserver imports: the named modules (:func:`preload_in_workers`), then
+    ``modules`` that are this package's (the pooled function's), each checked as
+    :func:`preload_in_workers` checks it."""
+    ours = __name__.partition(".")[0]
+    extra = [_found(m) for m in modules if m.partition(".")[0] == ours and m not in _PRELOAD]
+    return [*_PRELOAD, *extra]
+
+
+def _executor(workers: int, start_method: str | None, preload=()):
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context(start_method) if start_method else None
     if start_method == "forkserver":  # read when this process's forkserver starts
-        ctx.set_forkserver_preload(list(FORKSERVER_PRELOAD))
+        ctx.set_forkserver_preload(_forkserver_preload(preload))
     return ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint,
                                initargs=(_budget_environment(),), mp_context=ctx)
 
 
 def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=None,
-               start_method: str | None = None) -> int:
+               start_method: str | None = None, preload=()) -> int:
     """``fn(chunk) -> outcomes`` (a list, one per item) for every chunk, on ``workers`` local
     processes or the Dask ``client``; ``on_result(chunk, outcomes)`` as each finishes.
 
@@ -171,12 +198,14 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
     broke run again on a fresh pool, and a chunk broken twice runs one item at a time in a
     one-worker pool, so only an item that kills its worker gets ``on_died(item, exc)`` as
     its outcome (on Dask: every item of a chunk that killed every worker it was given).
-    ``start_method``: the local pool's multiprocessing start method (None: the default).
+    ``start_method``: the local pool's multiprocessing start method (None: the default);
+    ``preload``: with ``forkserver``, modules it imports too (:func:`preload_in_workers`).
     Returns the number of items run."""
     ACTIVE.set()
     try:
         return _run_chunks(fn, chunks, workers=workers, on_result=on_result,
-                           on_died=on_died, client=client, start_method=start_method)
+                           on_died=on_died, client=client, start_method=start_method,
+                           preload=preload)
     except Exception:
         if STOP.is_set():  # the stop signal reached the group too: a forkserver or worker it
             raise KeyboardInterrupt from None  # ended mid-start (EOFError...) is the stop
@@ -186,7 +215,7 @@ def run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client=Non
 
 
 def _run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client,
-                start_method: str | None) -> int:
+                start_method: str | None, preload) -> int:
     if client is not None:
         return _run_dask(fn, chunks, client, on_result, on_died)
     from concurrent.futures.process import BrokenProcessPool
@@ -197,7 +226,7 @@ def _run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client,
     suspects = []
     while pending:
         broken, unsent, futures = [], [], {}
-        pool = _executor(min(workers, len(pending)), start_method)
+        pool = _executor(min(workers, len(pending)), start_method, preload)
         try:
             for c in pending:
                 try:
@@ -225,7 +254,7 @@ def _run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client,
     try:
         for item in (i for c in suspects for i in c):
             if pool is None:
-                pool = _executor(1, start_method)
+                pool = _executor(1, start_method, preload)
             try:
                 outcome = next(_as_completed([pool.submit(fn, [item])])).result()[0]
             except BrokenProcessPool as exc:
@@ -320,7 +349,7 @@ def process_map(fn, items, *, workers: int | None = None, done=None, died=None) 
     """``[fn(item) for item in items]`` on :func:`run_chunks`' local processes, in the items'
     order. ``fn`` must pickle (a module-level function). ``workers``: default the CPU count;
     1, or a single item, runs in this process. Workers start by ``forkserver`` (the engines'
-    thread pools are never forked). ``done()`` is called once per finished item (progress);
+    thread pools are never forked), which imports ``fn``'s module once for them. ``done()`` is called once per finished item (progress);
     ``died(item, exc)`` is the outcome of an item that kills its worker (default: raise)."""
     items = list(items)
     if workers is None:
@@ -347,7 +376,7 @@ def process_map(fn, items, *, workers: int | None = None, done=None, died=None) 
 
     run_chunks(partial(_each_indexed, fn), [[(i, x)] for i, x in enumerate(items)],
                workers=workers, on_result=on_result, on_died=on_died,
-               start_method="forkserver")
+               start_method="forkserver", preload=(getattr(fn, "__module__", None) or "",))
     return out
 
 

@@ -2,8 +2,8 @@
 code and one line on stderr for every way it can end), the stop signals, the run budget it
 sets for itself and its workers, and Python warnings as one stderr line each.
 
-Exit codes: 0 success; 2 bad input; 3 a simulation diverged; 130 interrupted (Ctrl-C or
-SIGTERM).
+Exit codes (:class:`compare.exits.ExitCode`): 0 success; 2 bad input; 3 a simulation
+diverged; 130 interrupted (Ctrl-C or SIGTERM).
 """
 
 from __future__ import annotations
@@ -18,10 +18,7 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
 
-EXIT_BAD_INPUT = 2
-EXIT_DIVERGED = 3
-#: Exit code of an interrupted command (Ctrl-C or SIGTERM): 128 + SIGINT, as a shell says.
-EXIT_INTERRUPTED = 130
+from .exits import ExitCode
 
 
 def _error(text: str) -> None:
@@ -46,35 +43,35 @@ def run_command(command, args) -> int:
             code = command(args)
         finally:
             _COMMAND["ended"] = True  # from here a stop signal only sets STOP
-        if STOP.is_set() and code != EXIT_INTERRUPTED:  # asked after the last look
+        if STOP.is_set() and code != ExitCode.INTERRUPTED:  # asked after the last look
             raise KeyboardInterrupt
-        if code == EXIT_INTERRUPTED:  # the command said so itself (a sweep's own line)
+        if code == ExitCode.INTERRUPTED:  # the command said so itself (a sweep's own line)
             _forget_unhandled_interrupt()
         return code
     except KeyboardInterrupt:
         _forget_unhandled_interrupt()
         _error("interrupted (Ctrl-C or SIGTERM); nothing more was written")
-        return EXIT_INTERRUPTED
+        return ExitCode.INTERRUPTED
     except ParameterError as exc:
         _error(f"error: {exc}")
-        return EXIT_BAD_INPUT
+        return ExitCode.BAD_INPUT
     except SimulationDiverged as exc:
         _error(f"simulation diverged: {exc}")
-        return EXIT_DIVERGED
+        return ExitCode.DIVERGED
     except BrokenPipeError:  # output piped into head & co.
         sys.stderr.close()
-        return 0
+        return ExitCode.OK
     except MemoryError:
         _error("error: the run needs more memory than this machine has: a shorter --t-end "
                "or a softer contact")
-        return EXIT_BAD_INPUT
+        return ExitCode.BAD_INPUT
     except ArithmeticError as exc:  # overflow or division by zero: no numbers to report
         _error(f"simulation diverged: {type(exc).__name__} ({one_line(exc)})")
-        return EXIT_DIVERGED
+        return ExitCode.DIVERGED
     except OSError as exc:  # a path that cannot be read or written
         where = f" {exc.filename!r}" if exc.filename else ""
         _error(f"error:{where} {exc.strerror or one_line(exc)}")
-        return EXIT_BAD_INPUT
+        return ExitCode.BAD_INPUT
 
 
 #: The running command's state, read by the stop signals' handler: ``ended`` once

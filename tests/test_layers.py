@@ -27,9 +27,10 @@ ANALYTIC_FLOORS = ("errors", "budget", "results", "model", "records", "impact", 
 #: a subpackage of compare); a module imports only its own floor or lower ones, and the
 #: units of one floor import each other without a circle.
 COMPARE_FLOORS = (
-    # 1 what a run is: the backends by name, one run record, verdicts, the rung table, the pool
+    # 1 what a run is: the backends by name, one run record, verdicts, the rung table, the
+    # pool, the exit codes
     ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "verdicts",
-     "rungs"),
+     "rungs", "exits"),
     # 2 one scenario, one record, one contact: the ladder and the identification
     ("identification", "ladder", "mechanism", "contact_engines", "contact_settings"),
     # 3 the sweep machinery: grid, plan, run, journal, maps
@@ -62,9 +63,10 @@ def _modules() -> dict[str, Path]:
 
 
 MODULES = _modules()
-#: A ``module:function`` reference in a string, resolved by importlib (the backends'
-#: registry, the sweeps' analyses): an import as much as an import statement.
-_REFERENCE = re.compile(r"(treeimpact(?:\.\w+)+):\w+")
+#: A project module named in a string: ``module:function`` (resolved by importlib: the
+#: backends' registry, the sweeps' analyses), a dotted module name (a forkserver's preload
+#: list) or a ``-m`` command line (a child process): a dependency as much as an import.
+_NAMED = re.compile(r"(?:(-m)\s+)?\b(treeimpact(?:\.\w+)+)(?::(\w+))?")
 
 
 def _closest(name: str, modules) -> str:
@@ -74,11 +76,43 @@ def _closest(name: str, modules) -> str:
     return name
 
 
-def _imports_of(name: str, package: str, source: str, modules=MODULES) -> set[str]:
-    """The project modules the source of module ``name`` (in package ``package``) imports
-    anywhere (in functions too): every name of every import, and every ``module:function``
-    reference in a string."""
+def _docstrings(tree) -> set[int]:
+    """The ids of the docstring nodes of a module, its classes and functions (prose: a name
+    there is documentation, not a use)."""
     out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) \
+                and node.body and isinstance(node.body[0], ast.Expr) \
+                and isinstance(node.body[0].value, ast.Constant):
+            out.add(id(node.body[0].value))
+    return out
+
+
+def _named_in_strings(source: str) -> list[tuple[str, str | None, bool]]:
+    """Every project module a string of ``source`` names outside docstrings: (dotted name,
+    the function after its colon or None, whether a ``-m`` launches it), whether the ``-m``
+    is in the same string or the element before it in a list or tuple."""
+    tree = ast.parse(source)
+    docs, launched = _docstrings(tree), set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.List, ast.Tuple)):
+            launched |= {id(b) for a, b in zip(node.elts, node.elts[1:])
+                         if isinstance(a, ast.Constant) and a.value == "-m"}
+    return [(m, function or None, bool(dash) or id(node) in launched)
+            for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and isinstance(node.value, str)
+            and id(node) not in docs
+            for dash, m, function in _NAMED.findall(node.value)]
+
+
+def _references_of(name: str, package: str, source: str, modules=MODULES
+                   ) -> tuple[set[str], set[str]]:
+    """(imported, launched): the project modules the source of module ``name`` (in package
+    ``package``) imports anywhere (in functions too: every name of every import, and every
+    module named in a string, :func:`_named_in_strings`), and those it starts as a child
+    process (``-m``). A child process is no import: it counts for the floors, not for the
+    circles."""
+    imported, launched = set(), set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.ImportFrom):
             if node.level:
@@ -87,24 +121,29 @@ def _imports_of(name: str, package: str, source: str, modules=MODULES) -> set[st
             else:
                 module = node.module or ""
             # each name is a submodule, or a name in the module (or the closest package)
-            found = {_closest(f"{module}.{a.name}", modules) for a in node.names}
+            imported |= {_closest(f"{module}.{a.name}", modules) for a in node.names}
         elif isinstance(node, ast.Import):
-            found = {_closest(a.name, modules) for a in node.names}
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
-            found = {_closest(m, modules) for m in _REFERENCE.findall(node.value)}
-        else:
-            continue
-        out |= {m for m in found if m and m != name}
-    return out
+            imported |= {_closest(a.name, modules) for a in node.names}
+    for module, _, launch in _named_in_strings(source):
+        (launched if launch else imported).add(_closest(module, modules))
+    return ({m for m in imported if m and m != name}, {m for m in launched if m and m != name})
 
 
-def _imported(name: str, path: Path) -> set[str]:
-    """The project modules ``name`` imports anywhere in its file (:func:`_imports_of`)."""
+def _imports_of(name: str, package: str, source: str, modules=MODULES) -> set[str]:
+    """The project modules module ``name`` imports (:func:`_references_of`'s first set)."""
+    return _references_of(name, package, source, modules)[0]
+
+
+def _references(name: str, path: Path) -> tuple[set[str], set[str]]:
+    """:func:`_references_of` for module ``name`` and its file."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    return _imports_of(name, package, path.read_text())
+    return _references_of(name, package, path.read_text())
 
 
-GRAPH = {name: _imported(name, path) for name, path in MODULES.items()}
+REFERENCES = {name: _references(name, path) for name, path in MODULES.items()}
+#: Imports only (the circles); LAUNCHES: the modules each starts as a child process.
+GRAPH = {name: refs[0] for name, refs in REFERENCES.items()}
+LAUNCHES = {name: refs[1] for name, refs in REFERENCES.items()}
 
 
 def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
@@ -223,22 +262,102 @@ def _floor_name(top: str, floor: int) -> str:
     return names if isinstance(names, str) else "/".join(names)
 
 
+def _upward(module: str, deps) -> list[str]:
+    """The dependencies among ``deps`` that module ``module`` may not have, one message
+    each: analytic imports neither engine nor compare; an engine package imports analytic
+    only; inside analytic and inside compare no module names a higher floor
+    (ANALYTIC_FLOORS, COMPARE_FLOORS)."""
+    top, floor = _layer(module)
+    out = []
+    for dep in sorted(deps):
+        dep_top, dep_floor = _layer(dep)
+        if (top == "analytic" and dep_top != "analytic") or (
+                top in ENGINES and dep_top not in ("analytic", top)):
+            out.append(f"{module} imports {dep}")
+        elif top in ("analytic", "compare") and dep_top == top and dep_floor > floor:
+            out.append(f"{module} (floor {floor + 1}, {_floor_name(top, floor)}) names {dep} "
+                       f"(floor {dep_floor + 1}, {_floor_name(top, dep_floor)})")
+    return out
+
+
 @pytest.mark.parametrize("module", sorted(MODULES))
 def test_dependencies_flow_one_way(module):
-    """analytic imports neither engine nor compare; an engine package imports analytic only;
-    inside analytic and inside compare no module imports a higher floor (ANALYTIC_FLOORS,
-    COMPARE_FLOORS)."""
-    top, floor = _layer(module)
-    for dep in GRAPH[module]:
-        dep_top, dep_floor = _layer(dep)
-        if top == "analytic":
-            assert dep_top == "analytic", f"{module} imports {dep}"
-        elif top in ENGINES:
-            assert dep_top in ("analytic", top), f"{module} imports {dep}"
-        if top in ("analytic", "compare") and dep_top == top:
-            assert dep_floor <= floor, (
-                f"{module} (floor {floor + 1}, {_floor_name(top, floor)}) imports {dep} "
-                f"(floor {dep_floor + 1}, {_floor_name(top, dep_floor)})")
+    """No import, module named in a string, or child process started with ``-m`` goes
+    against the flow (:func:`_upward`)."""
+    assert _upward(module, GRAPH[module] | LAUNCHES[module]) == []
+
+
+#: Today's two upward edges before issue 42 (pool.py preloaded floor 4 by name; study_job.py
+#: started the command line): the finder must see both, and the floor check refuse both.
+_UPWARD_BEFORE = {
+    "treeimpact.compare.pool": (
+        'FORKSERVER_PRELOAD = ("treeimpact.compare.runs", '
+        '"treeimpact.compare.studies.ident_fits",\n'
+        '                      "treeimpact.compare.studies.ident_records")\n'),
+    "treeimpact.compare.validity.study_job": (
+        'import sys\nargv = [sys.executable, "-m", "treeimpact.compare.cli", "sweep"]\n'),
+}
+
+
+def test_the_floor_check_refuses_the_upward_edges_of_before():
+    """The check above can fail: pool.py's old preload names (floor 1 naming floor 4) and
+    study_job.py's old command line (floor 6 starting floor 7) are refused."""
+    pool, job = (_references_of(m, m.rpartition(".")[0], src)
+                 for m, src in _UPWARD_BEFORE.items())
+    assert pool == ({"treeimpact.compare.runs", "treeimpact.compare.studies.ident_fits",
+                     "treeimpact.compare.studies.ident_records"}, set())
+    assert job == (set(), {"treeimpact.compare.cli"})
+    assert len(_upward("treeimpact.compare.pool", pool[0])) == 2
+    assert _upward("treeimpact.compare.validity.study_job", job[1]) == [
+        "treeimpact.compare.validity.study_job (floor 6, validity) names "
+        "treeimpact.compare.cli (floor 7, api_results/api/process/cli/commands)"]
+
+
+def _top_level_names(path: Path) -> set[str]:
+    """The names a module defines or imports at its top level, and the strings of its
+    top-level tables (a lazy ``__getattr__``'s names)."""
+    out = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            out |= {(a.asname or a.name).split(".")[0] for a in node.names}
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            out |= {t.id for t in targets if isinstance(t, ast.Name)}
+            out |= {c.value for c in ast.walk(node) if isinstance(c, ast.Constant)
+                    and isinstance(c.value, str)}
+    return out
+
+
+def _unresolved(source: str, modules=MODULES) -> list[str]:
+    """The names in the strings of ``source`` (:func:`_named_in_strings`) that are not a
+    module of the package, or whose ``:function`` that module does not define."""
+    out = []
+    for module, function, _ in _named_in_strings(source):
+        if module not in modules:
+            out.append(module)
+        elif function and function not in _top_level_names(modules[module]):
+            out.append(f"{module}:{function}")
+    return out
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_every_module_named_in_a_string_exists(module):
+    """A renamed module fails here, not silently (a forkserver ignores a preload it cannot
+    import; importlib's ``module:function`` and ``-m`` fail only when run)."""
+    assert _unresolved(MODULES[module].read_text()) == []
+
+
+def test_a_misspelled_name_in_a_string_is_found():
+    """The check above can fail: a misspelled module, a missing function, a ``-m`` of a
+    module that is not there."""
+    source = ('PRELOAD = ("treeimpact.compare.studies.ident_fitz",)\n'
+              'RUN = "treeimpact.compare.runs:no_such_function"\n'
+              'ARGV = ["-m", "treeimpact.compare.clli"]\n')
+    assert sorted(_unresolved(source)) == ["treeimpact.compare.clli",
+                                           "treeimpact.compare.runs:no_such_function",
+                                           "treeimpact.compare.studies.ident_fitz"]
 
 
 @pytest.mark.parametrize("top", ["analytic", "compare"])
@@ -287,16 +406,15 @@ def test_pyproject_maps_every_package_folder_under_treeimpact():
 
 #: The package data the wheel carries: source folder -> patterns of files in it.
 PACKAGE_DATA = {"analytic/model": ["scenarios/*.toml"], "compare": ["tolerances.toml"],
-                "compare/report": ["templates/*.j2"], "mujoco_models": ["models/*.xml"],
-                "bullet_models": ["models/*.urdf"]}
+                "compare/report": ["templates/*.j2", "data/*.json"],
+                "mujoco_models": ["models/*.xml"], "bullet_models": ["models/*.urdf"]}
 
 
 @pytest.fixture(scope="module")
-def wheel_files(tmp_path_factory) -> set[str]:
-    """The files of the wheel built from a copy of the checkout (offline: no build isolation,
-    no index; the checkout itself is left without a build/ folder)."""
+def wheel(tmp_path_factory) -> Path:
+    """The wheel built from a copy of the checkout (offline: no build isolation, no index;
+    the checkout itself is left without a build/ folder)."""
     import shutil
-    import zipfile
 
     src, dist = tmp_path_factory.mktemp("src"), tmp_path_factory.mktemp("dist")
     for name in ("pyproject.toml", "README.md"):
@@ -308,7 +426,15 @@ def wheel_files(tmp_path_factory) -> set[str]:
                            "--no-build-isolation", "-q", "-w", str(dist), str(src)],
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    (wheel,) = dist.glob("treeimpact-*.whl")
+    (path,) = dist.glob("treeimpact-*.whl")
+    return path
+
+
+@pytest.fixture(scope="module")
+def wheel_files(wheel) -> set[str]:
+    """The files of :func:`wheel`."""
+    import zipfile
+
     return set(zipfile.ZipFile(wheel).namelist())
 
 
@@ -337,6 +463,55 @@ def test_the_wheel_holds_every_module_and_its_data(wheel_files):
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     assert {f"treeimpact.{k.replace('/', '.')}": v for k, v in PACKAGE_DATA.items()} == \
         config["package-data"]
+
+
+#: Run by the wheel's venv: where treeimpact and the trunk data were found, and the trunk
+#: section rendered (markdown) from the installed package's data.
+_RENDER_TRUNKS = """
+import json, treeimpact
+from treeimpact.compare.report.trunks import TRUNKS_JSON, TrunksSection
+section = TrunksSection(tree="central-leader")
+print(json.dumps({"package": treeimpact.__file__, "data": str(TRUNKS_JSON),
+                  "available": section.available, "md": section.render("md")}))
+"""
+
+
+def test_the_installed_wheel_renders_the_trunk_section_from_its_own_data(wheel, tmp_path):
+    """The wheel installed into a fresh venv outside the checkout (its dependencies from
+    this venv's site-packages by a .pth line, nothing downloaded), run from a directory
+    outside the checkout: the trunk section finds its data in the installed package and
+    renders the same page as the checkout's."""
+    import json
+    import sysconfig
+
+    from treeimpact.compare.report.trunks import TrunksSection
+
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True,
+                   timeout=120)
+    python = venv / "bin" / "python"
+    proc = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install",
+                           "--no-deps", "--no-index", "-q", str(wheel)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    site = Path(subprocess.run([python, "-c", "import sysconfig; print(sysconfig."
+                                "get_paths()['purelib'])"], capture_output=True, text=True,
+                               check=True).stdout.strip())
+    # a plain path line: this venv's packages after the fresh one's, and not its .pth files
+    # (the editable install's finder would put the checkout first)
+    (site / "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    cwd = tmp_path / "elsewhere"
+    cwd.mkdir()
+    proc = subprocess.run([python, "-I", "-c", _RENDER_TRUNKS], cwd=cwd, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert Path(out["package"]).is_relative_to(site)  # the wheel's, not the checkout's
+    assert Path(out["data"]).is_relative_to(site) and out["available"]
+    assert out["md"] == TrunksSection(tree="central-leader").render("md")  # the checkout's
+    plain = out["md"].replace("`", "").replace("**", "")
+    assert plain.count(": use --trunk ") == 3 and "is not in this checkout" not in plain  # a
+    # sentence per shipped tree: the numbers are there (test_report reads them back)
 
 
 def test_installed_the_project_is_one_top_level_package(tmp_path):

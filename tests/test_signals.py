@@ -109,7 +109,7 @@ def test_an_error_line_starts_its_own_line_after_a_half_drawn_bar(monkeypatch):
         bar.update(3)  # never closed: the command fails mid-run
         raise ParameterError("--t-end = -1 s is out of range")
 
-    assert run_command(command, None) == process.EXIT_BAD_INPUT
+    assert run_command(command, None) == 2  # bad input, as docs/cli.md documents
     text = stream.getvalue()
     assert "3/10" in text  # the bar was drawn
     assert "\ntreeimpact: error: --t-end" in text, repr(text)

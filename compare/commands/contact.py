@@ -11,6 +11,7 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
+from ..exits import ExitCode
 from ._common import number
 
 NAME = "contact"
@@ -65,9 +66,9 @@ def run(args) -> int:
         from treeimpact.analytic.results import to_jsonable
 
         print(json.dumps(to_jsonable(res), indent=2))
-        return 0
+        return ExitCode.OK
     print_settings(res, engines)
-    return 0
+    return ExitCode.OK
 
 
 def _fmt(v: float) -> str:

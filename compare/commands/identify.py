@@ -10,6 +10,7 @@ import math
 
 from treeimpact.analytic.errors import ParameterError
 
+from ..exits import ExitCode
 from ._common import number
 
 NAME = "identify"
@@ -52,8 +53,10 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
 
 
 def _test(args):
-    from treeimpact.analytic.identify.procedure import PendulumTest
+    """The PendulumTest of the flags (:func:`compare.api.pendulum_test`, as the API's
+    identify), each flag checked as typed first (an error names the flag)."""
     from treeimpact.analytic.model.parameters import LIMITS, Pendulum, check_range
+    from treeimpact.compare.api import pendulum_test
 
     for flag, value, field in (("--mass", args.mass, "impactor.mass"),
                                ("--equivalent-length", args.equivalent_length,
@@ -68,9 +71,7 @@ def _test(args):
                     release_angle_deg=args.release_angle_deg)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, low=0.0, high=1.0)
-    return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
-                        release_angle=pend.release_angle_rad, clamp_height=args.clamp_height,
-                        diameter=args.diameter, gravity=pend.gravity)
+    return pendulum_test(pend, args.clamp_height, args.diameter)
 
 
 def _paper(record, test) -> dict:
@@ -154,7 +155,7 @@ def run(args) -> int:
             _plot(args.plot, record, fit, paper, test)
     if args.json:
         print(json.dumps(to_jsonable(_json(args, record, fit, paper)), indent=2))
-        return 0
+        return ExitCode.OK
     for line in fit.warnings:
         print(f"treeimpact: warning: {line}", file=sys.stderr)
     print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
@@ -162,7 +163,7 @@ def run(args) -> int:
     if math.isfinite(fit.residual_rms):  # else not fitted (units): the conclusion says why
         _print_values(fit, paper.get("paper", {}))
     _print_conclusion(fit)
-    return 0
+    return ExitCode.OK
 
 
 def _json(args, record, fit, paper) -> dict:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+from ..exits import ExitCode
 from ._common import add_option_flags, fmt, options_of, relative_text
 
 NAME = "modes"
@@ -43,7 +44,7 @@ def run(args) -> int:
 
         res = res | {"provenance": provenance(scenario, backend=args.backend, options=opts)}
         print(json.dumps(to_jsonable(res), indent=2))
-        return 0
+        return ExitCode.OK
     model, beam = res["model"], res["beam"]
     theory = "Timoshenko" if getattr(args, "beam_theory", None) == "timoshenko" \
         else "Euler-Bernoulli"
@@ -55,4 +56,4 @@ def run(args) -> int:
              for i, (w, wb) in enumerate(zip(model["omegas"], beam["omegas"]))]
     for name, v, vb, unit in rows:
         print(f"  {name:<26}{fmt(v):>14}{fmt(vb):>14}{relative_text(v, vb):>12}  {unit}")
-    return 0
+    return ExitCode.OK

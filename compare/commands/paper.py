@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import math
 
+from ..exits import ExitCode
 from ._common import fmt
 
 NAME = "paper"
@@ -97,8 +98,8 @@ def run(args) -> int:
         from treeimpact.compare.provenance import provenance
 
         print(json.dumps(to_jsonable(res | {"provenance": provenance()}), indent=2))
-        return 0
+        return ExitCode.OK
     if "contact_fit" in res:
         _print_contact_fit(res["contact_fit"])
     _print_tables(res)
-    return 0
+    return ExitCode.OK

@@ -3,14 +3,19 @@ given scenarios, with finished studies and optionally a study run beside it."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 
+from ..exits import ExitCode
 from ._common import add_budget_flag, writable_dir
 
 NAME = "report"
 HELP = "write the discrepancy report (html, md, json)"
+#: The ``treeimpact`` program as a child process runs it: ``--with-study``'s study is its
+#: ``sweep --preset`` (compare.validity.study_job.StudyJob), beside the report.
+PROGRAM = (sys.executable, "-m", "treeimpact.compare.cli")
 
 
 def add_arguments(sp) -> None:
@@ -49,7 +54,7 @@ def run(args) -> int:
     if args.with_study:
         from treeimpact.compare.validity.study_job import StudyJob
 
-        jobs.append(StudyJob(args.with_study, Path(args.out) / "study",
+        jobs.append(StudyJob(args.with_study, Path(args.out) / "study", PROGRAM,
                              scenarios=args.scenarios))
     try:
         for job in jobs:
@@ -61,4 +66,4 @@ def run(args) -> int:
             job.stop()
     for kind, path in paths.items():
         print(f"{kind}: {path}")
-    return 0
+    return ExitCode.OK

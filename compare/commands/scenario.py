@@ -12,6 +12,7 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 
+from ..exits import ExitCode
 from ._common import number
 
 NAME = "scenario"
@@ -186,11 +187,11 @@ def run(args) -> int:
     text = scenario_toml(scenario)
     if args.out is None:
         print(text, end="")
-        return 0
+        return ExitCode.OK
     out = Path(args.out)
     path = out / f"{args.name}.toml" if out.is_dir() else out
     if not path.parent.is_dir():
         raise ParameterError(f"--out {args.out!r}: no such directory {str(path.parent)!r}")
     path.write_text(text, encoding="utf-8")
     print(f"wrote {path}")
-    return 0
+    return ExitCode.OK

@@ -7,6 +7,7 @@ import json
 
 from treeimpact.analytic.errors import ParameterError
 
+from ..exits import ExitCode
 from ._common import (
     add_budget_flag,
     add_option_flags,
@@ -96,7 +97,7 @@ def run(args) -> int:
 
         out = result.to_json() | {"provenance": provenance(scenario, result, options=opts)}
         print(json.dumps(to_jsonable(out), indent=2))
-        return 0
+        return ExitCode.OK
     reference = None
     if args.backend != "analytic":  # the paper's model beside it (a few ms)
         opts = options_of(args, ("restitution", "t_end"))
@@ -104,7 +105,7 @@ def run(args) -> int:
     print_simulation(scenario, result, reference)
     if written:
         print(written)
-    return 0
+    return ExitCode.OK
 
 
 def add_record_arguments(sp) -> None:

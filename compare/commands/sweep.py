@@ -1,26 +1,208 @@
-"""``treeimpact sweep``: a model-validity study over a grid (the arguments and the run live
-in :mod:`treeimpact.compare.validity.cli_support`)."""
+"""``treeimpact sweep``: a parameter sweep or a whole model-validity study (its presets, maps
+and page: :mod:`treeimpact.compare.validity`).
+
+    treeimpact sweep --grid restitution=0:0.9:10 --grid crown_ratio=0:4:9 [--scenario NAME]
+        [--backend analytic,soft,mujoco,bullet] [--ladder] [--option [BACKEND.]NAME=VALUE]
+        [--workers N] [--scheduler ADDRESS] [--tolerance REL] [--retry-failed]
+        [--no-identify] --out DIR
+    treeimpact sweep --preset default|full --out DIR      (a whole study)
+
+Writes the sweep table (results.csv, results.parquet), the validity and identification maps
+and study.md / study.html into DIR. Rerunning with the same DIR resumes; Ctrl-C keeps every
+finished row and exits 130 with one line. Bad input: one line naming the flag and the
+allowed form or range (exit 2).
+"""
 
 from __future__ import annotations
 
+import argparse
+import math
+
+from treeimpact.analytic.errors import ParameterError
+
+from ..exits import ExitCode
+from ..sweep.grid import GRID_FORM
 from ._common import add_budget_flag
 
 NAME = "sweep"
 HELP = "run a parameter sweep: validity maps and studies"
 
+OPTION_FORM = "[BACKEND.]NAME=VALUE, e.g. trunk=sdof or mujoco.integrator=RK4"
+
+
+def _workers(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return n
+
+
+def _tolerance(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"expected a relative tolerance > 0 (0.05 = 5 %), "
+                                         f"got {text!r}")
+    return v
+
+
+def add_sweep_arguments(parser) -> None:
+    """Add the arguments of ``treeimpact sweep`` to ``parser``."""
+    parser.add_argument("--grid", action="append", default=[], metavar="SPEC",
+                        help=f"swept parameter, repeatable: {GRID_FORM}; NAME is a dotted "
+                             "scenario field (trunk.crown_mass), restitution, "
+                             "contact_stiffness, contact_duration, a ratio (mass_ratio, "
+                             "a_over_l, crown_ratio) or a backend option (segments, dt, "
+                             "integrator, ...)")
+    parser.add_argument("--scenario", default="central-leader",
+                        help="shipped scenario name or TOML path (default: central-leader)")
+    from treeimpact.compare.backends import BACKENDS
+
+    parser.add_argument("--backend", default=",".join(BACKENDS),
+                        help="comma-separated backends (analytic is always run as the "
+                             f"reference; default: all, {','.join(BACKENDS)})")
+    parser.add_argument("--ladder", action="store_true",
+                        help="run each engine as the ladder's rungs (SDOF, chain, chain + full "
+                             "pendulum) so maps show which assumption dominates")
+    parser.add_argument("--option", action="append", default=[], metavar="OPT",
+                        help=f"fixed backend option, repeatable: {OPTION_FORM}")
+    parser.add_argument("--workers", type=_workers, default=None,
+                        help="local worker processes (default: CPU count; 0: this process)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="Dask scheduler address (tcp://host:8786): run on that cluster")
+    parser.add_argument("--preset", default=None, choices=("default", "full"),
+                        help="run a whole study: default (contact duration x crown ratio on "
+                             "the analytic, soft and beam backends, engines on 2 x 2 points) "
+                             "takes about 45 s on 2 cores beside make report's own runs (less alone); full (restitution=0:0.9:10, "
+                             "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 6 CPU-hours, "
+                             "190 min with 2 workers; --grid replaces the preset's validity grid")
+    parser.add_argument("--sensitivity-scenario", action="append", default=None,
+                        dest="sensitivity_scenarios", metavar="SCENARIO",
+                        help="with --preset: a tree of its sensitivity study, shipped name or "
+                             "TOML path (repeatable; default: every shipped tree); a file's "
+                             "[calibration] measured fields are held at its values")
+    parser.add_argument("--tolerance", type=_tolerance, default=None,
+                        help="validity tolerance, relative (default 0.05)")
+    parser.add_argument("--retry-failed", action="store_true", dest="retry_failed",
+                        help="on resume, rerun rows whose status is not ok")
+    parser.add_argument("--no-identify", action="store_false", dest="identify",
+                        help="skip the identification procedure on each record")
+    parser.add_argument("--out", required=True, help="output directory (resumable)")
+
+
+def parse_options(specs, backends) -> dict:
+    """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine among
+    ``backends``, the sweep's), each name and value checked against the backend's OPTIONS
+    (one line naming the spec)."""
+    from treeimpact.compare.backends import ENGINES, get_backend
+
+    out: dict = {}
+    for spec in specs or []:
+        if spec.count("=") != 1 or not spec.split("=")[0].strip() or not spec.split("=")[1]:
+            raise ParameterError(f"--option {spec!r}: expected {OPTION_FORM}")
+        name, text = (s.strip() for s in spec.split("="))
+        if "." in name:
+            backend, name = name.split(".", 1)
+            if not name:
+                raise ParameterError(f"--option {spec!r}: expected {OPTION_FORM}")
+            targets = [backend]
+        else:
+            targets = [b for b in backends if b in ENGINES]
+            if not targets:
+                raise ParameterError(f"--option {spec!r}: no engine among --backend "
+                                     f"{','.join(backends)}; write BACKEND.NAME=VALUE")
+        for b in targets:
+            table = get_backend(b).options()
+            option = table.get(name)
+            if option is None:
+                raise ParameterError(
+                    f"--option {spec!r}: backend {b!r} has no option {name!r}; allowed: "
+                    f"{', '.join(sorted(k for k, o in table.items() if o.cli))}")
+            value = text if option.choices else _option_number(text)
+            out.setdefault(b, {})[name] = option.check(name, value,
+                                                       label=f"--option {spec!r}: {name}")
+    return out
+
+
+def _option_number(text: str):
+    """The number an --option value spells, or the text (the option's check names it)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
 
 def add_arguments(sp) -> None:
-    """The sweep's flags (compare.validity.cli_support) and the run budget, added to its
+    """The sweep's flags (:func:`add_sweep_arguments`) and the run budget, added to its
     subparser ``sp``."""
-    from treeimpact.compare.validity.cli_support import add_sweep_arguments
-
     add_sweep_arguments(sp)
     add_budget_flag(sp)
 
 
 def run(args) -> int:
-    """Run the sweep of the parsed command line ``args``; its exit code (130 when
-    interrupted, with how to resume)."""
-    from treeimpact.compare.validity.cli_support import run_sweep_command
+    """Run ``treeimpact sweep`` with the parsed command line ``args``; returns the exit
+    code (ExitCode.OK; ExitCode.INTERRUPTED when interrupted by Ctrl-C or SIGTERM, with one
+    line saying how to resume; bad input raises ParameterError)."""
+    import sys
 
-    return run_sweep_command(args)
+    from treeimpact.compare.pool import STOP
+
+    try:
+        code = _run(args)
+        if not STOP.is_set():  # else the request came after the last look: still a stop
+            return code
+    except KeyboardInterrupt:
+        pass
+    print(f"treeimpact: sweep interrupted; the finished rows are kept in {args.out}: "
+          f"rerun the same command to resume", file=sys.stderr)
+    return ExitCode.INTERRUPTED
+
+
+def _run(args) -> int:
+    import time
+
+    t_start = time.perf_counter()
+    from ..sweep.grid import parse_grid
+    from ..sweep.plan import check_backends
+    from ..sweep.run import run_sweep
+    from ..validity.study import run_study, write_study
+
+    backends = check_backends(args.backend)
+    grid = parse_grid(args.grid) if args.grid else None
+    options = parse_options(args.option, backends)
+    if args.sensitivity_scenarios and not args.preset:
+        raise ParameterError("--sensitivity-scenario: used with --preset (a study's "
+                             "sensitivity part)")
+    if args.preset:
+        if options:
+            raise ParameterError("--option: not used with --preset (the preset fixes the "
+                                 "engines' options); run a plain sweep instead")
+        paths = run_study(args.out, args.preset, scenario=args.scenario, backends=backends,
+                          workers=args.workers, scheduler=args.scheduler,
+                          tolerance=args.tolerance, grid=args.grid or None,
+                          retry_failed=args.retry_failed,
+                          sensitivity_scenarios=args.sensitivity_scenarios)
+    else:
+        if grid is None:
+            raise ParameterError(f"--grid: give at least one ({GRID_FORM}) or --preset")
+        res = run_sweep(args.scenario, grid, args.out, backends=backends, ladder=args.ladder,
+                        options=options, workers=args.workers, scheduler=args.scheduler,
+                        identify=args.identify, retry_failed=args.retry_failed)
+        status = res.table["status"].value_counts().to_dict()
+        print(f"sweep: {len(res.table)} rows ("
+              + ", ".join(f"{k} {v}" for k, v in sorted(status.items()))
+              + f"); {res.rows_written} written now, {res.rows_done_before} done before; "
+              f"runs {res.wall_s:.1f} s")
+        paths = write_study(args.out, {"sweep": res.out}, tolerance=args.tolerance,
+                            title=f"Sweep of {res.table['scenario'].iloc[0] if len(res.table) else args.scenario}",
+                            meta={"wall_s": res.wall_s})
+    for kind in ("table", "md", "html"):
+        print(f"{kind}: {paths[kind]}")
+    print(f"figures: {len(paths['figures'])} in {paths['md'].parent}")
+    print(f"wall time: {time.perf_counter() - t_start:.1f} s (runs, maps and the study)")
+    return ExitCode.OK

@@ -7,7 +7,7 @@ Sections, one module each, each a class with a jinja2 template under ``templates
 * :mod:`.scenario` - per scenario: Figs 4-5 redrawn for every rung, contact force, impact
   sequence, energy ledger, the ladder table, identification against the truth;
 * :mod:`.trunks` - which MuJoCo trunk (hinged chain or elastic rod), how many segments,
-  which step and at what cost, from ``benchmarks/results/trunks.json``;
+  which step and at what cost, from the package's ``data/trunks.json`` (bench_trunks.py's);
 * :mod:`.studies` - one per model-validity study directory given;
 * :mod:`.runlog` - every backend run, its status (skips with their reasons) and wall time.
 
@@ -59,6 +59,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..ladder import prefetch_ladders
+    from ..pool import preload_in_workers
     from ..runs import RunCache, resolve_scenario
     from .figures import FigureFiles
     from .paper import PaperSection
@@ -68,6 +69,9 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
 
     studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]  # read (and refused)
     # before any run
+    # the record fits' modules (scipy.optimize) imported once by the forkserver the runs start
+    preload_in_workers("treeimpact.compare.studies.ident_fits",
+                       "treeimpact.analytic.identify.record_fit")
     cache = RunCache() if runs is None else runs
     sink = FigureFiles(Path(out_dir) / "figures") if out_dir is not None else None
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)

@@ -1,8 +1,9 @@
 """Report section: which MuJoCo trunk, how many segments, which step, at what cost.
 
-Renders ``benchmarks/results/trunks.json`` (``benchmarks/bench_trunks.py``: the hinged chain
-and MuJoCo's elastic rod, ``--trunk chain`` / ``--trunk flex``, against the exact continuum
-through the same pad) as the table a MuJoCo user acts on: per tree, the cheapest run within
+Renders ``data/trunks.json``, this package's data (read by importlib.resources: an installed
+package has it too), which ``benchmarks/bench_trunks.py`` writes (the hinged chain and
+MuJoCo's elastic rod, ``--trunk chain`` / ``--trunk flex``, against the exact continuum
+through the same pad), as the table a MuJoCo user acts on: per tree, the cheapest run within
 the file's target (1 %) of the continuum on x_max, then, for one tree, every segment count
 at the runner's default step (static stiffness at a, the first two frequencies, x_max and
 the energy delivered against the continuum, the default and largest stable steps, the cost).
@@ -13,16 +14,18 @@ from __future__ import annotations
 
 import json
 import math
+from importlib import resources
 from pathlib import Path
 
 from treeimpact.analytic.results import to_jsonable
 
 from .base import Section
 
-#: The benchmark's result file, in the checkout the report runs from.
-TRUNKS_JSON = Path(__file__).resolve().parents[2] / "benchmarks" / "results" / "trunks.json"
-#: How the page names the file.
-SOURCE = "benchmarks/results/trunks.json"
+#: The benchmark's result file: package data (pyproject's package-data ships it), the one
+#: copy, which benchmarks/bench_trunks.py writes in a checkout.
+TRUNKS_JSON = resources.files(__package__) / "data" / "trunks.json"
+#: How the page names the file (its place in the checkout).
+SOURCE = "compare/report/data/trunks.json"
 
 
 def _record(data: dict) -> dict:
@@ -75,10 +78,10 @@ class TrunksSection(Section):
     anchor = "trunks"
 
     def __init__(self, path=None, tree: str | None = None):
-        """``path``: the result file (default :data:`TRUNKS_JSON`); ``tree``: the one whose
-        every segment count is shown (default the file's first tree)."""
-        self.path = Path(TRUNKS_JSON if path is None else path)
-        self.data = json.loads(self.path.read_text()) if self.path.exists() else None
+        """``path``: the result file (default :data:`TRUNKS_JSON`, the package's); ``tree``:
+        the one whose every segment count is shown (default the file's first tree)."""
+        self.path = TRUNKS_JSON if path is None else Path(path)
+        self.data = json.loads(self.path.read_text()) if self.path.is_file() else None
         trees = list((self.data or {}).get("scenarios", {}))
         self.tree = tree if tree in trees else (trees[0] if trees else None)
 

@@ -126,3 +126,40 @@ def test_ending_a_pool_kills_a_worker_that_outlives_sigterm_and_its_manager_thre
     assert time.monotonic() - t0 < 3 * pool_module.END_WORKERS_S
     assert not any(p.is_alive() for p in procs)
     assert not manager.is_alive()
+
+
+def test_a_preload_name_that_is_no_module_is_refused_loudly():
+    """A renamed module named for the forkserver's preload fails in the caller (the
+    forkserver itself ignores an ImportError), and names it."""
+    from treeimpact.compare import pool as pool_module
+
+    before = dict(pool_module._PRELOAD)
+    with pytest.raises(ImportError, match="treeimpact.compare.studies.no_such_module"):
+        pool_module.preload_in_workers("treeimpact.compare.studies.no_such_module")
+    with pytest.raises(ImportError):  # a missing package above it too
+        pool_module.preload_in_workers("treeimpact.no_such_package.module")
+    assert pool_module._PRELOAD == before
+    # the pooled function's module joins the named ones when it is the package's
+    preload = pool_module._forkserver_preload(("treeimpact.compare.runs", "builtins"))
+    assert preload[:len(before)] == list(before) and "builtins" not in preload
+    assert "treeimpact.compare.runs" in preload
+
+
+def test_the_forkserver_imports_what_the_caller_named(tmp_path):
+    """In a fresh process (its own forkserver): the workers find the named module already
+    imported, and not one nobody named (the control)."""
+    import subprocess
+    import sys
+
+    (tmp_path / "probe.py").write_text(
+        "import sys\n\ndef loaded(name):\n    return name in sys.modules\n")
+    code = ("import sys; sys.path.insert(0, '.')\n"
+            "from probe import loaded\n"
+            "from treeimpact.compare.pool import preload_in_workers, process_map\n"
+            "preload_in_workers('treeimpact.compare.studies.ident_fits')\n"
+            "names = ['treeimpact.compare.studies.ident_fits', 'treeimpact.compare.sweep.grid']\n"
+            "print(process_map(loaded, names, workers=2))\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[True, False]"

@@ -448,7 +448,7 @@ def _tables(text: str, fmt: str) -> list[list[list[str]]]:
 
 @pytest.mark.parametrize("fmt", ["html", "md"])
 def test_trunk_section_shows_the_numbers_of_trunks_json(fmt):
-    """The trunk section's numbers are benchmarks/results/trunks.json's, read back from the
+    """The trunk section's numbers are its package data's (data/trunks.json), read back from the
     rendered page as numbers: per tree the cheapest run within the target on x_max (the
     sentence and the table), and every (trunk, N) of one tree at the default step."""
     from treeimpact.compare.report.trunks import TRUNKS_JSON, TrunksSection
@@ -510,7 +510,7 @@ def test_trunk_section_says_where_its_numbers_come_from(tmp_path, report):
     unrecorded = {**data, "machine": None, "measured": None}
     (tmp_path / "a.json").write_text(json.dumps(unrecorded))
     html = TrunksSection(tmp_path / "a.json").render("html")
-    assert "benchmarks/results/trunks.json" in html and "machine not recorded" in html
+    assert "compare/report/data/trunks.json" in html and "machine not recorded" in html
     recorded = {**data, "machine": "x86_64, 2 cores, Python 3.11.7", "measured": "2026-01-02",
                 "load_average": 0.5, "git_commit": "0123456789abcdef"}
     recorded["scenarios"] = {n: {**s, "record": {"machine": recorded["machine"]}}
@@ -524,7 +524,7 @@ def test_trunk_section_says_where_its_numbers_come_from(tmp_path, report):
     paths, _ = report
     assert 'id="trunks"' in paths["html"].read_text()
     shown = json.loads(paths["json"].read_text())["trunks"]
-    assert shown["source"] == "benchmarks/results/trunks.json"
+    assert shown["source"] == "compare/report/data/trunks.json"
     assert [t["name"] for t in shown["trees"]] == list(data["scenarios"])
 
 

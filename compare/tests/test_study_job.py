@@ -11,6 +11,7 @@ import pytest
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.cli import main
+from treeimpact.compare.commands.report import PROGRAM
 from treeimpact.compare.report import write_report
 from treeimpact.compare.runs import RunCache
 from treeimpact.compare.validity.study_job import StudyJob
@@ -18,14 +19,15 @@ from treeimpact.compare.validity.study_job import StudyJob
 
 def _quick(job: StudyJob, *grid: str) -> StudyJob:
     """The job running a two-point analytic sweep instead of its preset (seconds, not 30)."""
-    job.argv = [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--scenario",
+    job.argv = [*PROGRAM, "sweep", "--scenario",
                 "open-center", "--backend", "analytic", "--workers", "0", "--out",
                 str(job.out), *(a for g in grid for a in ("--grid", g))]
     return job
 
 
 def test_a_study_run_beside_the_report_becomes_its_section(tmp_path):
-    job = _quick(StudyJob("default", tmp_path / "out" / "study"), "restitution=0.1,0.2")
+    job = _quick(StudyJob("default", tmp_path / "out" / "study", PROGRAM),
+                 "restitution=0.1,0.2")
     paths = write_report(tmp_path / "out", scenarios=["open-center"], runs=RunCache(),
                          engines=(), study_jobs=(job.start(),))
     assert (tmp_path / "out" / "study" / "study.json").exists()
@@ -37,7 +39,7 @@ def test_a_study_run_beside_the_report_becomes_its_section(tmp_path):
 
 
 def test_a_failed_study_fails_with_its_exit_code_and_last_line(tmp_path):
-    job = _quick(StudyJob("default", tmp_path / "study"), "restitution=2").start()
+    job = _quick(StudyJob("default", tmp_path / "study", PROGRAM), "restitution=2").start()
     with pytest.raises(ParameterError, match=r"--with-study default: .*exit code 2: .*restitution"):
         job.result()
 
@@ -47,7 +49,8 @@ def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypa
     there, not after the record fits and figures."""
     import treeimpact.compare.studies.ident_fits as ident_fits
 
-    job = _quick(StudyJob("default", tmp_path / "out" / "study"), "restitution=2").start()
+    job = _quick(StudyJob("default", tmp_path / "out" / "study", PROGRAM),
+                 "restitution=2").start()
     while job._proc.poll() is None:
         time.sleep(0.1)
 
@@ -68,7 +71,7 @@ def test_an_unknown_preset_is_refused_before_anything_runs(tmp_path, capsys):
 
 
 def test_stopping_the_report_ends_the_study(tmp_path):
-    job = StudyJob("default", tmp_path / "study")
+    job = StudyJob("default", tmp_path / "study", PROGRAM)
     job.argv = [sys.executable, "-c", "import time; time.sleep(60)"]
     job.start()
     t0 = time.perf_counter()
@@ -138,13 +141,13 @@ def test_the_reports_trees_are_its_studys_sensitivity_trees(tmp_path):
     path = tmp_path / "my-tree.toml"
     path.write_text(scenario_toml(tree))
     other = replace(tree, name="other-tree")
-    job = StudyJob("default", tmp_path / "study", scenarios=["central-leader", str(path),
-                                                             other])
+    job = StudyJob("default", tmp_path / "study", PROGRAM,
+                   scenarios=["central-leader", str(path), other])
     flags = [job.argv[i + 1] for i, a in enumerate(job.argv) if a == "--sensitivity-scenario"]
     written = tmp_path / "study" / "scenarios" / "other-tree.toml"
     assert flags == ["central-leader", str(path.resolve()), str(written.resolve())]
     assert load_scenario(written) == other
-    assert "--sensitivity-scenario" not in StudyJob("default", tmp_path / "s2").argv
+    assert "--sensitivity-scenario" not in StudyJob("default", tmp_path / "s2", PROGRAM).argv
 
 
 def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):

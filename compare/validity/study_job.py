@@ -1,7 +1,9 @@
 """A model-validity study run beside other work: ``treeimpact sweep --preset NAME --out DIR``
 in a child process with its own worker pool, so that ``treeimpact report --with-study NAME``
 makes the report's own runs, fits and figures while the study runs (on 2 cores neither
-leaves a core idle while it draws its figures alone). Design notes: docs/report.md."""
+leaves a core idle while it draws its figures alone). The program the child runs is its
+caller's to name (the command line sits above this floor: docs/architecture.md). Design
+notes: docs/report.md."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 
+from ..exits import ExitCode
 from ..pool import POLL_S, check_stop
 from .study import PRESETS
 
@@ -25,15 +28,16 @@ class StudyJob:
     waits for it (its directory), :meth:`stop` ends it. Its progress lines and its summary
     go to this process's stderr as it prints them."""
 
-    def __init__(self, preset: str, out, scenarios=None):
-        """``scenarios``: the report's trees (shipped names, TOML paths or Scenarios), the
-        trees of the study's sensitivity part (default: every shipped one); a Scenario
-        object is written into ``out/scenarios/`` for the child to read."""
+    def __init__(self, preset: str, out, program, scenarios=None):
+        """``program``: the command line of the ``treeimpact`` program (a list of str, e.g.
+        ``[sys.executable, "-m", NAME]``), which runs ``sweep --preset``; ``scenarios``: the
+        report's trees (shipped names, TOML paths or Scenarios), the trees of the study's
+        sensitivity part (default: every shipped one); a Scenario object is written into
+        ``out/scenarios/`` for the child to read."""
         if preset not in PRESETS:  # a one-line error before anything starts
             raise ParameterError(f"--with-study {preset!r}: allowed {', '.join(PRESETS)}")
         self.preset, self.out = preset, Path(out)
-        self.argv = [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--preset",
-                     preset, "--out", str(self.out)]
+        self.argv = [*program, "sweep", "--preset", preset, "--out", str(self.out)]
         for s in scenarios or ():
             self.argv += ["--sensitivity-scenario", self._source(s)]
         self._proc = None
@@ -82,20 +86,20 @@ class StudyJob:
         self._relay.join()
         self.wall_s = time.perf_counter() - self._t0
         code = self._proc.returncode
-        if code == 0:
+        if code == ExitCode.OK:
             return self.out
         what = f"the study (treeimpact sweep --preset {self.preset}) ended with exit code " \
                f"{code}: {self._last}"
-        if code == 130:
+        if code == ExitCode.INTERRUPTED:
             raise KeyboardInterrupt
-        if code == 3:
+        if code == ExitCode.DIVERGED:
             raise SimulationDiverged(what)
         raise ParameterError(f"--with-study {self.preset}: {what}")
 
     def check(self) -> None:
         """Raise now if the study has already failed (as :meth:`result`), so a report does
         not finish its own work for a page it cannot write; nothing if it runs or passed."""
-        if self._proc is not None and self._proc.poll() not in (None, 0):
+        if self._proc is not None and self._proc.poll() not in (None, ExitCode.OK):
             self.result()
 
     def stop(self) -> None:

@@ -7,6 +7,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from treeimpact.compare.report.trunks import TRUNKS_JSON  # noqa: F401 - bench_trunks.py's file
+
 ROOT = Path(__file__).resolve().parents[2]
 NUMBERS = ROOT / "docs" / "numbers.json"
 CONTACT_FIT = ROOT / "docs" / "results" / "contact-fit.json"

@@ -14,6 +14,7 @@ from .base import (
     CONTACT_FIT,
     IDENTIFY_VALIDATION,
     NUMBERS,
+    TRUNKS_JSON,
     finite,
     put,
     rounded,
@@ -72,13 +73,14 @@ def from_benchmarks(results: Path | None = None) -> dict:
         if isinstance(load, dict) and load.get("start") and load.get("end"):  # 1-minute
             put(out, f"bench.{path.stem}.load_average",
                  span([load["start"][0], load["end"][0]]))
-    if (results / "trunks.json").exists():
-        out |= from_trunks(json.loads((results / "trunks.json").read_text()))
+    trunks = TRUNKS_JSON if results is BENCHMARKS else results / "trunks.json"
+    if trunks.is_file():  # bench_trunks.py's file is the report's package data
+        out |= from_trunks(json.loads(trunks.read_text()))
     return out
 
 
 def from_trunks(data: dict) -> dict:
-    """benchmarks/results/trunks.json (bench_trunks.py): per tree, trunk model and segment
+    """compare/report/data/trunks.json (bench_trunks.py): per tree, trunk model and segment
     count, its errors against the continuum (%) and cost at the default step, and each
     step's run (``run<factor>``)."""
     out: dict = {}

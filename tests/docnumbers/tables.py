@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import math
 
-from .base import BENCHMARKS, CONTACT_FIT, TREES
+from .base import CONTACT_FIT, TREES, TRUNKS_JSON
 from .rerun import CONTACT_CASES
 
 
@@ -83,12 +83,12 @@ def contact_fit_table(n: dict) -> str:
 
 
 def _trunks() -> dict:
-    return json.loads((BENCHMARKS / "trunks.json").read_text())
+    return json.loads(TRUNKS_JSON.read_text())
 
 
 def trunks_cheapest_table(n: dict) -> str:
     """docs/engines.md: the cheapest MuJoCo run within 1 % of the continuum on x_max, per
-    tree and trunk (benchmarks/results/trunks.json, bench_trunks.py)."""
+    tree and trunk (compare/report/data/trunks.json, bench_trunks.py)."""
     rows = ["| tree | use | N | dt (s) | x default | x_max | energy delivered "
             "| s per simulated s |", "|---|---|---|---|---|---|---|---|"]
     for tree, sc in _trunks()["scenarios"].items():
