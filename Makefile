@@ -36,14 +36,21 @@ lock:
 # $(OUT)/report.html, report.md, report.json; the study in $(OUT)/study, run beside the
 # report's own runs (--with-study: a child process, so neither leaves a core idle). The pages
 # link their figures (PNG files in $(OUT)/figures and $(OUT)/study): move the folder whole.
+# No OPENBLAS_NUM_THREADS: the command and its workers limit BLAS threads themselves
+# (analytic/threads.py, docs/reproducibility.md "BLAS threads").
 report: $(STAMP)
 	rm -rf $(OUT)/study  # a fresh study: rows resumed from an older code version would be stale
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/treeimpact report --out $(OUT) --with-study default
+	$(BIN)/treeimpact report --out $(OUT) --with-study default
 
 # The whole suite on this machine's BLAS kernel, then the tests marked numerics (BLAS
 # round-off: conftest.py NUMERICS) under two other machines' OpenBLAS kernels
 # (tests/blas_kernels.py picks them), the two passes side by side (one per core); a pass's
 # full output is shown when it fails. Nothing pins a kernel outside these runs.
+# THREADS: the tests call the library below its public entry points, where its own thread
+# limit (analytic/threads.py) is not applied, and compare round-off-level numbers made with
+# one thread (a threaded OpenBLAS may split a sum across threads, another round-off):
+# the variables hold them at one thread from the interpreter's start (conftest.py sets the
+# same defaults for a bare pytest).
 THREADS := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 test: $(STAMP)
 	$(THREADS) $(BIN)/python -m pytest tests compare

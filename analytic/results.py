@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import ParameterError, SimulationDiverged
+from .threads import blas_limit
 
 #: Metric keys, their units and meaning (paper's symbols).
 METRIC_UNITS = {
@@ -65,7 +66,8 @@ class Deferred:
         sample = self.__dict__.get("_sample")
         if sample is None or name not in self.__dataclass_fields__:
             raise AttributeError(name)
-        full = sample()
+        with blas_limit():  # read after the API call returned: the library's limit again
+            full = sample()
         for f in self.__dataclass_fields__:
             object.__setattr__(self, f, getattr(full, f))
         del self.__dict__["_sample"]

@@ -1,7 +1,8 @@
 """The public API re-exported by :mod:`treeimpact` (docs/api.md): one function per job, in SI
 units (angles in degrees, named ``_deg``), each a thin call into the module that does the
 work, returning the typed results of :mod:`treeimpact.compare.api_results`. Its defaults
-are the command line's.
+are the command line's. Each runs with one BLAS thread (the library's matrices are small:
+analytic.threads), the caller's own setting put back when it returns.
 
 Bad input raises :class:`treeimpact.ParameterError` in one line naming the keyword argument
 as typed (``t_end``, not the command line's ``--t-end``) and its allowed range; a run with
@@ -15,6 +16,7 @@ import re
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.threads import enter_limit, exit_limit
 
 from .api_results import Identification, Modes, Simulation
 from .backends import BACKENDS
@@ -37,13 +39,18 @@ def _keywords(text: str) -> str:
 
 
 def _api(func):
-    """An API function whose ParameterError names keyword arguments, not flags."""
+    """An API function whose ParameterError names keyword arguments, not flags, run with
+    the library's BLAS thread limit (analytic.threads: the caller's setting is back when it
+    returns)."""
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
+        enter_limit()
         try:
             return func(*args, **kwargs)
         except ParameterError as exc:
             raise ParameterError(_keywords(str(exc))) from None
+        finally:
+            exit_limit()
     return wrapper
 
 

@@ -149,10 +149,14 @@ class Model:
     @classmethod
     def from_dict(cls, model: dict) -> Model:
         """The Model of a backend's model dict (keys beyond the fields: engine_settings)."""
-        names = {f.name for f in dataclasses.fields(cls)} - {"engine_settings"}
+        names = _MODEL_FIELDS
         rest = {k: v for k, v in model.items() if k not in names}
         return cls(**{k: v for k, v in model.items() if k in names},
                    engine_settings=types.MappingProxyType(rest))
+
+
+#: Model's fields that a backend's model dict fills (the rest goes to engine_settings).
+_MODEL_FIELDS = frozenset(f.name for f in dataclasses.fields(Model)) - {"engine_settings"}
 
 
 @dataclass(frozen=True)

@@ -88,12 +88,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    """Run ``treeimpact`` with ``argv`` (default: sys.argv[1:]); returns the exit code."""
+    """Run ``treeimpact`` with ``argv`` (default: sys.argv[1:]), every command with one BLAS
+    thread (analytic.threads; the caller's setting back on return); returns the exit code."""
+    from treeimpact.analytic.threads import blas_limit
+
     from .process import command_environment, run_command, stop_signals
 
     def command(_):
         args = build_parser().parse_args(argv)
-        with command_environment(getattr(args, "max_seconds", None)):
+        with command_environment(getattr(args, "max_seconds", None)), blas_limit():
             return COMMANDS[args.command].run(args)
 
     with stop_signals():

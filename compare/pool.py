@@ -94,12 +94,16 @@ def ignore_sigint(environment: dict | None = None) -> None:
     its default action (a forked worker would inherit the parent's handler, which turns it
     into a KeyboardInterrupt and a traceback when the parent ends the worker). The parent's
     run budgets (``environment``: analytic.budget.VARIABLES as set when the pool started) hold
-    in the worker too: a forkserver started earlier has the environment of its own start."""
+    in the worker too: a forkserver started earlier has the environment of its own start.
+    The worker runs with the library's one BLAS thread (analytic.threads.limit_process)."""
     import os
     import signal
 
+    from treeimpact.analytic.threads import limit_process
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    limit_process()
     for name, value in (environment or {}).items():
         if value is None:
             os.environ.pop(name, None)
@@ -317,12 +321,22 @@ def _where(client) -> str:
     return f"--scheduler {client.scheduler.address!r}" if client.scheduler else "--scheduler"
 
 
+def _blas_limited_call(fn, chunk):
+    """``fn(chunk)`` on a Dask worker with the library's one BLAS thread, the worker's own
+    setting back after it (a Dask worker is the user's process, its threads share the
+    limit: analytic.threads)."""
+    from treeimpact.analytic.threads import blas_limit
+
+    with blas_limit():
+        return fn(chunk)
+
+
 def _run_dask(fn, chunks, client, on_result, on_died) -> int:
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
     ran = 0
-    futures = client.map(fn, chunks, pure=False)
+    futures = client.map(partial(_blas_limited_call, fn), chunks, pure=False)
     owner = {f.key: c for f, c in zip(futures, chunks)}
     try:
         for fut in as_completed(futures):
