@@ -10,6 +10,7 @@ checked at every switch and at t_end. Design notes: docs/beam-impact.md.
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass, field
 from functools import partial
@@ -65,24 +66,33 @@ class _State:
         self.gd = modal.displacement_row(g)
         self.k_c = k_c
 
-    def works(self, w: np.ndarray, s: float, a: np.ndarray | None = None) -> np.ndarray:
-        """The works of the trunk's damping (and of the pad, in contact) over [0, s] of a
-        phase started with modal coefficients w (``a`` = exp(lambda s) w if known), J: the
-        closed form of :class:`.modal.Quadratic`."""
-        a = np.exp(self.modal.lam * s) * w if a is None else a
-        out = (self.H_int @ a) @ a - (self.H_int @ w) @ w
+    def works(self, w: np.ndarray, s: np.ndarray, a: np.ndarray | None = None
+              ) -> np.ndarray:
+        """The works of the trunk's damping (and of the pad, in contact) over [0, s_p] of
+        the phases p started with modal coefficients w (phases x 2N, s: phases; ``a`` =
+        exp(lambda s) w if known), J: (works, phases), the closed form of
+        :class:`.modal.Quadratic`."""
+        a = np.exp(self.modal.lam * s[:, None]) * w if a is None else a
+        out = _forms(self.H_int, a) - _forms(self.H_int, w)
         if self.secular:
-            out = out + s * ((self.H_lin @ w) @ w)
+            out = out + s * _forms(self.H_lin, w)
         return out.real
 
-    def energies(self, u: np.ndarray) -> tuple[float, float, float]:
+    def energies(self, u: np.ndarray) -> tuple:
         """(kinetic, elastic energy of the trunk's and pendulum's springs, the pad's elastic
-        energy k_c delta^2 / 2 when in contact; J) of the state u."""
+        energy k_c delta^2 / 2 when in contact; J) of the states u (phases x 2N): arrays
+        over the phases."""
         N = self.modal.N
-        kin = 0.5 * float(u[N:] @ u[N:])
-        pot = 0.5 * float(u[:N] @ u[:N])
-        pad = 0.5 * self.k_c * float(self.gd @ u) ** 2 if self.contact else 0.0
+        kin = 0.5 * (u[:, N:] * u[:, N:]).sum(axis=1)
+        pot = 0.5 * (u[:, :N] * u[:, :N]).sum(axis=1)
+        pad = 0.5 * self.k_c * (u @ self.gd) ** 2 if self.contact else np.zeros(len(u))
         return kin, pot - pad, pad
+
+
+def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """w_p^T H_f w_p for each form H_f of the stack H (forms x n x n) and each row w_p of
+    w (phases x n): (forms, phases)."""
+    return ((H @ w.T) * w.T).sum(axis=1)
 
 
 def _powers(step: np.ndarray, count: int) -> np.ndarray:
@@ -97,40 +107,75 @@ def _powers(step: np.ndarray, count: int) -> np.ndarray:
     return steps
 
 
-@dataclass(frozen=True)
-class _Phase:
-    """One phase of the solution: start (s), kind, modal coefficients at its start over the
-    full spectrum, damping and contact work so far (J)."""
+@dataclass
+class _Ends:
+    """Each phase as the loop leaves it: start (s), kind, modal coefficients at its start
+    over the full spectrum, duration (s), the coefficients exp(lambda s) w and the state u
+    at its end."""
 
-    t: float
-    kind: ContactPhase
-    w: np.ndarray = field(repr=False)
-    damping_work: float
-    contact_work: float
+    t: list
+    kind: list
+    w: list
+    s: list
+    a: list
+    u: list
+
+    def add(self, t: float, kind: ContactPhase, w, s: float, a, u) -> None:
+        for name, value in (("t", t), ("kind", kind), ("w", w), ("s", s), ("a", a),
+                            ("u", u)):
+            getattr(self, name).append(value)
 
 
 @dataclass(frozen=True)
 class _Solution:
-    """The exact solution as its phases, and its values at any time (SI units)."""
+    """The exact solution as its phases (starts s, kinds, modal coefficients at the start,
+    the pad's work done before each, J), and its values at any time (SI units)."""
 
     states: dict = field(repr=False)
-    phases: tuple
+    starts: list
+    kinds: list
+    w: list = field(repr=False)
+    contact_work: list
     t_end: float
     ledger: float  # max |energy ledger| / initial energy at every switch and at t_end
 
-    def phase_at(self, t: float) -> _Phase:
-        starts = [p.t for p in self.phases]
-        return self.phases[max(0, int(np.searchsorted(starts, t, side="right")) - 1)]
-
     def contact_loss(self, t: float) -> float:
         """The pad's work so far less the elastic energy it holds at ``t`` (s), J."""
-        p = self.phase_at(t)
-        if not p.kind.touching:
-            return p.contact_work
-        st = self.states[True]
-        work = p.contact_work + float(st.works(p.w, t - p.t)[1])
-        u = (st.modal.Vu @ (np.exp(st.modal.lam * (t - p.t)) * p.w)).real
-        return work - st.energies(u)[2]
+        k = max(0, bisect.bisect_right(self.starts, t) - 1)
+        if not self.kinds[k].touching:
+            return self.contact_work[k]
+        st, s = self.states[True], np.array([t - self.starts[k]])
+        w = self.w[k][None, :]
+        work = self.contact_work[k] + float(st.works(w, s)[1, 0])
+        u = (st.modal.Vu @ (np.exp(st.modal.lam * s[0]) * self.w[k])).real
+        return work - float(st.energies(u[None, :])[2][0])
+
+
+def _ledger(model: LinearImpactModel, states: dict, ends: _Ends, t_end: float
+            ) -> _Solution:
+    """The :class:`_Solution` of the phases ``ends``: each phase's works (the closed forms,
+    all phases of a state at once), the pad's work before each phase (running sums in
+    phase order) and the energy ledger's largest residual at the phases' ends relative to
+    the input energy. Raises SimulationDiverged at a non-finite state."""
+    P = len(ends.t)
+    works, energy = np.zeros((P, 2)), np.zeros(P)
+    for contact, st in states.items():
+        idx = [p for p in range(P) if ends.kind[p].touching == contact]
+        if not idx:
+            continue
+        W, A = np.array([ends.w[p] for p in idx]), np.array([ends.a[p] for p in idx])
+        works[idx, :1 + contact] = st.works(W, np.array([ends.s[p] for p in idx]), A).T
+        kin, pot, _ = st.energies(np.array([ends.u[p] for p in idx]))
+        energy[idx] = kin + pot
+    if not np.all(np.isfinite(energy)):
+        p = int(np.argmin(np.isfinite(energy)))
+        raise SimulationDiverged(f"beam: non-finite state at t = {ends.t[p] + ends.s[p]:.6g} s")
+    done = np.cumsum(works, axis=0)  # the works to each phase's end, in phase order
+    e0 = model.initial_energy
+    ledger = float(np.max(np.abs(energy + done.sum(axis=1) - e0)) / e0)
+    before = [0.0, *done[:-1, 1].tolist()]
+    return _Solution(states=states, starts=ends.t, kinds=ends.kind, w=ends.w,
+                     contact_work=before, t_end=t_end, ledger=ledger)
 
 
 @dataclass(frozen=True)
@@ -159,11 +204,11 @@ class _ExactSamples:
 @dataclass
 class _Grid:
     """The sample grid (s) and what is written on it: the observables (8 x n, one row per
-    :class:`Observable`) and the contact flag."""
+    :class:`Observable`) and the pad's force (N)."""
 
     t: np.ndarray
     obs: np.ndarray
-    in_contact: np.ndarray
+    force: np.ndarray
 
 
 def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
@@ -175,41 +220,39 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
     to_state = {True: states[True].modal.transfer(states[False].modal),
                 False: states[False].modal.transfer(states[True].modal)}
-    grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.zeros(t_grid.size, dtype=bool))
+    grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.empty(t_grid.size))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
-    work = np.zeros(2)  # damping, pad
-    phases, ledger = [], 0.0
-    switches = 0
+    ends = _Ends([], [], [], [], [], [])
     while True:
         st = states[kind.touching]
         w = st.modal.Wu @ u
-        phases.append(_Phase(t, kind, w, float(work[0]), float(work[1])))
         end = _scan(model, st, kind, grid, t, w[st.modal.kept])
         end_s, nxt = end if end is not None else (t_end - t, None)
-        u, residual = _close(model, st, w, end_s, work, t)
-        ledger = max(ledger, residual)
+        a = np.exp(st.modal.lam * end_s) * w
+        u = (st.modal.Vu @ a).real
+        ends.add(t, kind, w, end_s, a, u)
         if nxt is None:
             break
         t += end_s
         if nxt.touching != kind.touching:  # to the other state's energy coordinates
             u = to_state[nxt.touching] @ u
         kind = nxt
-        switches += 1
-        check_switches(switches, t)
-    solution = _Solution(states=states, phases=tuple(phases), t_end=t_end, ledger=ledger)
-    return _samples(model, grid, solution), switches
+        check_switches(len(ends.t), t)
+    solution = _ledger(model, states, ends, t_end)
+    return _samples(model, grid, solution), len(ends.t) - 1
 
 
 def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid, t: float,
           wk: np.ndarray):
-    """Write the observables of the phase started at ``t`` (modal coefficients ``wk`` over
-    the kept spectrum) block by block until it ends; returns (time into the phase, next
-    phase) of the switch, or None when it lasts to the grid's end.
+    """Write the observables and the force of the phase started at ``t`` (modal
+    coefficients ``wk`` over the kept spectrum) block by block until it ends; returns (time
+    into the phase, next phase) of the switch, or None when it lasts to the grid's end.
 
     A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
     one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
-    powers (2m x block), half the flops of the complex product's real part."""
+    powers (2m x block), half the flops of the complex product's real part. The force is
+    max(0, F) of the law F computed for the switch (0 apart)."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
     t_grid, n_t = grid.t, grid.t.size
     j0 = int(np.searchsorted(t_grid, t, side="left"))
@@ -217,6 +260,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
         return None
     j, block = j0, 32
     base = np.exp(st.lam * (t_grid[j0] - t)) * wk
+    touching = kind.touching
     while j < n_t:
         jj = min(n_t, j + block)
         ob = (st.rows_conj * base.conj()).view(float) @ st.steps_ri[:, :jj - j]
@@ -225,47 +269,53 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
         ended = kind.has_ended(d, f)
         if j == j0 and t_grid[j0] == t:
             ended[0] = False  # the phase's own start
-        k = int(np.argmax(ended))
+        k = int(ended.argmax())
         if ended[k]:
+            _write(grid, j, ob, f, k, touching)
             s_lo = max(t_grid[j + k - 1] - t, 0.0) if j + k > j0 else 0.0
-            grid.obs[:, j:j + k] = ob[:, :k]
-            grid.in_contact[j:j + k] = kind.touching
             lo_values = None
             if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
-                d_lo = float(grid.obs[Observable.DELTA, j + k - 1])
-                lo_values = (d_lo, k_c * d_lo + c_c * grid.obs[Observable.DELTA_RATE, j + k - 1])
+                lo_values = (float(grid.obs[Observable.DELTA, j + k - 1]),
+                             k_c * grid.obs[Observable.DELTA, j + k - 1]
+                             + c_c * grid.obs[Observable.DELTA_RATE, j + k - 1])
             return _locate(kind, st, wk, s_lo, t_grid[j + k] - t, d[k], f[k], lo_values)
-        grid.obs[:, j:jj] = ob
-        grid.in_contact[j:jj] = kind.touching
+        _write(grid, j, ob, f, jj - j, touching)
         base = base * st.steps[jj - j]
         j, block = jj, min(8 * block, st.block)
     return None
 
 
-def _close(model: LinearImpactModel, st: _State, w: np.ndarray, end_s: float,
-           work: np.ndarray, t: float) -> tuple[np.ndarray, float]:
-    """At the end ``end_s`` (s) of the phase started at ``t`` with modal coefficients w:
-    add its works to ``work`` (in place, J) and return the state u there and the energy
-    ledger's residual relative to the input energy."""
-    a = np.exp(st.modal.lam * end_s) * w
-    work += st.works(w, end_s, a) if st.contact else (st.works(w, end_s, a)[0], 0.0)
-    u = (st.modal.Vu @ a).real
-    kin, pot, _ = st.energies(u)
-    if not math.isfinite(kin + pot):
-        raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
-    e0 = model.initial_energy
-    return u, abs(kin + pot + work.sum() - e0) / e0
+def _write(grid: _Grid, j: int, ob: np.ndarray, law: np.ndarray, k: int, touching: bool
+           ) -> None:
+    """The first ``k`` samples of a block (observables ``ob``, the ``law`` F) into the grid
+    from sample ``j``: the force max(0, F) in contact, else 0."""
+    grid.obs[:, j:j + k] = ob[:, :k]
+    if touching:
+        np.maximum(0.0, law[:k], out=grid.force[j:j + k])
+    else:
+        grid.force[j:j + k] = 0.0
 
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: _Solution) -> _ExactSamples:
     """The :class:`_ExactSamples` of the written grid."""
-    k_c, c_c = model.contact_stiffness, model.contact_damping
-    x, y, vx, vy, delta, ddelta, crown, crown_v = grid.obs
-    force = np.where(grid.in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
-    m, kp = model.impactor_mass, model.impactor_stiffness
-    return _ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=force,
-                         pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2, crown=crown,
+    x, y, vx, vy, _, _, crown, crown_v = grid.obs
+    return _ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
+                         pendulum_energy=_PendulumEnergy(model, y, vy), crown=crown,
                          crown_velocity=crown_v, solution=solution)
+
+
+@dataclass(frozen=True)
+class _PendulumEnergy:
+    """The pendulum's energy 0.5 m y'^2 + 0.5 k y^2 (J, eq 13) at the samples the metrics
+    read (``energy[i]``), not formed on the whole grid."""
+
+    model: LinearImpactModel = field(repr=False)
+    y: np.ndarray = field(repr=False)
+    vy: np.ndarray = field(repr=False)
+
+    def __getitem__(self, i):
+        m, kp = self.model.impactor_mass, self.model.impactor_stiffness
+        return 0.5 * m * self.vy[i] ** 2 + 0.5 * kp * self.y[i] ** 2
 
 
 def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
