@@ -60,9 +60,9 @@ class _State:
         law = np.stack([delta, k_c * delta + c_c * rate])
         self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
         self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
-        self.steps = _powers(np.exp(self.lam * h), self.block)
-        # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1)
-        self.steps_ri = np.ascontiguousarray(self.steps.view(float).T)
+        # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
+        # step^b of each block's length b (32, 256, ..., block), a block's base to the next
+        self.steps_ri, self.jumps = _powers(np.exp(self.lam * h), self.block)
         self.gd = modal.displacement_row(g)
         self.k_c = k_c
 
@@ -95,16 +95,24 @@ def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
     return ((H @ w.T) * w.T).sum(axis=1)
 
 
-def _powers(step: np.ndarray, count: int) -> np.ndarray:
-    """step^i, i = 0..count, by doubling (round-off log2(count) eps)."""
-    steps = np.ones((count + 1, len(step)), dtype=complex)
-    steps[1] = step
+def _powers(step: np.ndarray, count: int) -> tuple[np.ndarray, dict]:
+    """step^i, i = 0..count, by doubling (round-off log2(count) eps), as the interleaved
+    (Re, Im) rows of each step (2m x (count + 1)); and {b: step^b} for the block lengths
+    b = 32, 256, ... (x 8), count."""
+    m = len(step)
+    steps = np.ones((m, count + 1), dtype=complex)
+    steps[:, 1] = step
     n = 1
     while n < count:
-        m = min(n, count - n)
-        steps[n + 1:n + 1 + m] = steps[1:1 + m] * steps[n]
-        n += m
-    return steps
+        k = min(n, count - n)
+        steps[:, n + 1:n + 1 + k] = steps[:, 1:1 + k] * steps[:, n:n + 1]
+        n += k
+    ri = np.empty((m, 2, count + 1))
+    ri[:, 0], ri[:, 1] = steps.real, steps.imag
+    jumps, b = {count: steps[:, count].copy()}, 32
+    while b < count:
+        jumps[b], b = steps[:, b].copy(), 8 * b
+    return ri.reshape(2 * m, count + 1), jumps
 
 
 @dataclass
@@ -263,7 +271,8 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     touching = kind.touching
     while j < n_t:
         jj = min(n_t, j + block)
-        ob = (st.rows_conj * base.conj()).view(float) @ st.steps_ri[:, :jj - j]
+        ob = np.matmul((st.rows_conj * base.conj()).view(float), st.steps_ri[:, :jj - j],
+                       out=grid.obs[:, j:jj])
         d = ob[Observable.DELTA]
         f = k_c * d + c_c * ob[Observable.DELTA_RATE]
         ended = kind.has_ended(d, f)
@@ -271,25 +280,26 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
             ended[0] = False  # the phase's own start
         k = int(ended.argmax())
         if ended[k]:
-            _write(grid, j, ob, f, k, touching)
-            s_lo = max(t_grid[j + k - 1] - t, 0.0) if j + k > j0 else 0.0
+            _write(grid, j, f, k, touching)
+            s_lo = max(float(t_grid[j + k - 1]) - t, 0.0) if j + k > j0 else 0.0
             lo_values = None
             if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
-                lo_values = (float(grid.obs[Observable.DELTA, j + k - 1]),
-                             k_c * grid.obs[Observable.DELTA, j + k - 1]
-                             + c_c * grid.obs[Observable.DELTA_RATE, j + k - 1])
-            return _locate(kind, st, wk, s_lo, t_grid[j + k] - t, d[k], f[k], lo_values)
-        _write(grid, j, ob, f, jj - j, touching)
-        base = base * st.steps[jj - j]
+                d_lo, r_lo = grid.obs[Observable.DELTA:Observable.DELTA_RATE + 1,
+                                      j + k - 1].tolist()
+                lo_values = (d_lo, k_c * d_lo + c_c * r_lo)
+            return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, float(d[k]),
+                           float(f[k]), lo_values)
+        _write(grid, j, f, jj - j, touching)
+        if jj < n_t:
+            base = base * st.jumps[block]
         j, block = jj, min(8 * block, st.block)
     return None
 
 
-def _write(grid: _Grid, j: int, ob: np.ndarray, law: np.ndarray, k: int, touching: bool
-           ) -> None:
-    """The first ``k`` samples of a block (observables ``ob``, the ``law`` F) into the grid
-    from sample ``j``: the force max(0, F) in contact, else 0."""
-    grid.obs[:, j:j + k] = ob[:, :k]
+def _write(grid: _Grid, j: int, law: np.ndarray, k: int, touching: bool) -> None:
+    """The force of the first ``k`` samples of a block from sample ``j`` (the ``law`` F,
+    the observables written by the product itself) into the grid: max(0, F) in contact,
+    else 0 (the samples after a switch are written again by the next phase)."""
     if touching:
         np.maximum(0.0, law[:k], out=grid.force[j:j + k])
     else:
@@ -326,21 +336,24 @@ def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: f
     None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`)."""
     lam = st.lam
     c = wk[:, None] * st.law  # m x 4: (delta, F, delta', F') = Re(exp(lambda s) @ c)
+    exp, dot = np.exp, np.dot
 
-    def fun(i):
-        def value(s):
-            v = (np.exp(lam * s) @ c).real.tolist()
-            return v[i], v[i + 2]
-        return value
+    def delta(s):
+        v = dot(exp(lam * s), c).real.tolist()
+        return v[0], v[2]
+
+    def law(s):
+        v = dot(exp(lam * s), c).real.tolist()
+        return v[1], v[3]
 
     d_lo, f_lo = lo_values if lo_values is not None else (None, None)
-    signals = {Signal.DELTA: (fun(0), d_hi, d_lo), Signal.LAW: (fun(1), f_hi, f_lo)}
 
     def root(signal):
-        value, end_value, lo_value = signals[signal]
-        return _newton_root(value, s_lo, s_hi, end_value, lo_value)
+        if signal is Signal.DELTA:
+            return _newton_root(delta, s_lo, s_hi, d_hi, d_lo)
+        return _newton_root(law, s_lo, s_hi, f_hi, f_lo)
 
-    return switch(kind, root, lambda s: signals[Signal.DELTA][0](s)[0], d_hi, f_hi)
+    return switch(kind, root, lambda s: delta(s)[0], d_hi, f_hi)
 
 
 def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = None
