@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import threading
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -62,9 +63,14 @@ class _State:
         self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
         # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
         # step^b of each block's length b (32, 256, ..., block), a block's base to the next
-        self.steps_ri, self.jumps = _powers(np.exp(self.lam * h), self.block)
+        # (in this thread's scratch memory, see _scratch; released by :meth:`done`)
+        self.steps_ri, self.jumps = _powers(np.exp(self.lam * h), self.block, contact)
         self.gd = modal.displacement_row(g)
         self.k_c = k_c
+
+    def done(self) -> None:
+        """Drop the powers (the solve is over: their scratch memory serves the next)."""
+        self.steps_ri = self.jumps = None
 
     def works(self, w: np.ndarray, s: np.ndarray, a: np.ndarray | None = None
               ) -> np.ndarray:
@@ -95,24 +101,45 @@ def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
     return ((H @ w.T) * w.T).sum(axis=1)
 
 
-def _powers(step: np.ndarray, count: int) -> tuple[np.ndarray, dict]:
+def _powers(step: np.ndarray, count: int, slot) -> tuple[np.ndarray, dict]:
     """step^i, i = 0..count, by doubling (round-off log2(count) eps), as the interleaved
-    (Re, Im) rows of each step (2m x (count + 1)); and {b: step^b} for the block lengths
-    b = 32, 256, ... (x 8), count."""
+    (Re, Im) rows of each step (2m x (count + 1), in the scratch memory ``slot``); and
+    {b: step^b} for the block lengths b = 32, 256, ... (x 8), count."""
     m = len(step)
-    steps = np.ones((m, count + 1), dtype=complex)
-    steps[:, 1] = step
+    steps = _scratch("powers", (m, count + 1), complex)
+    steps[:, 0], steps[:, 1] = 1.0, step
+    product = _scratch("product", (m * (count // 2 + 1),), complex)
     n = 1
     while n < count:
         k = min(n, count - n)
-        steps[:, n + 1:n + 1 + k] = steps[:, 1:1 + k] * steps[:, n:n + 1]
+        # through a separate array: np.multiply into an output overlapping its inputs'
+        # array takes another loop, which rounds otherwise (6e-14 apart after the doublings)
+        part = product[:m * k].reshape(m, k)
+        np.multiply(steps[:, 1:1 + k], steps[:, n:n + 1], out=part)
+        steps[:, n + 1:n + 1 + k] = part
         n += k
-    ri = np.empty((m, 2, count + 1))
+    ri = _scratch(("rows", slot), (m, 2, count + 1), float)
     ri[:, 0], ri[:, 1] = steps.real, steps.imag
     jumps, b = {count: steps[:, count].copy()}, 32
     while b < count:
         jumps[b], b = steps[:, b].copy(), 8 * b
     return ri.reshape(2 * m, count + 1), jumps
+
+
+#: Per thread, arrays that outlive one solve to serve the next (:func:`_scratch`).
+_SCRATCH = threading.local()
+
+
+def _scratch(slot, shape: tuple, dtype) -> np.ndarray:
+    """An uninitialised array of ``shape`` in this thread's memory ``slot``, reused by the
+    next call on the slot: the power tables (about 1 MB a state at 12 elements) are not
+    allocated afresh by every solve (each fresh page costs a fault, about 1-2 us here)."""
+    pool = _SCRATCH.__dict__.setdefault("pool", {})
+    size = math.prod(shape)
+    buf = pool.get(slot)
+    if buf is None or buf.size < size or buf.dtype != dtype:
+        buf = pool[slot] = np.empty(size, dtype)
+    return buf[:size].reshape(shape)
 
 
 @dataclass
@@ -247,6 +274,8 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
             u = to_state[nxt.touching] @ u
         kind = nxt
         check_switches(len(ends.t), t)
+    for st in states.values():
+        st.done()
     solution = _ledger(model, states, ends, t_end)
     return _samples(model, grid, solution), len(ends.t) - 1
 
