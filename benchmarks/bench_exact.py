@@ -15,11 +15,18 @@ out).
 The floor: what the exact solution cannot skip, timed here in the same child: the two
 contact states' eigen-decompositions (numpy eig of the 2N x 2N matrix B, ~10 (2N)^3 flops,
 and the inverse of its eigenvectors, ~(8/3) 8 (2N)^3), and the observables on the sample
-grid (one real product of 8 x 2m by 2m x n_samples, 32 m flops a sample, m = N modes kept),
+grid (the solver's real products of 8 x 2m by 2m x block, written into the grid, 32 m flops
+a sample, m = N modes kept),
 plus the metrics (:func:`analytic.records.model_metrics`, not this solver's) and the API's
 own cost (scenario, options, checks; measured as a run less ``simulate_beam``).
 
-    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev ee677a4]
+The last columns: the cold run above its floor per contact phase (us), the per-phase
+Python and numpy calls the floor leaves out, and the metrics' largest relative difference.
+glibc's malloc settings reach both sides' children through the environment
+(``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=268435456 ... --out
+exact-malloc``: fresh pages' faults measured apart, docs/beam-impact.md).
+
+    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev ee677a4] [--out NAME]
 """
 
 from __future__ import annotations
@@ -117,8 +124,9 @@ def _linear_model(name: str, backend: str, options: dict):
 def measure_floor(cases, repeats: int) -> dict:
     """Per case and shipped tree (s, medians of ``repeats``): ``decompositions`` (numpy eig
     of both contact states' B and the inverse of its eigenvectors), ``samples`` (the
-    observables' real product on the whole grid), ``metrics`` and ``api`` (a run less the
-    backend's simulate), their ``total``; ``solver`` the first two."""
+    observables' real products on the whole grid, block by block as the solver does),
+    ``metrics`` and ``api`` (a run less the backend's simulate), their ``total``; ``solver``
+    the first two; ``phases`` the solution's contact phases."""
     import numpy as np
 
     import treeimpact
@@ -145,9 +153,16 @@ def measure_floor(cases, repeats: int) -> dict:
                                   repeats)
             n = int(np.ceil(scen.t_end / dt - 1e-9)) + 1
             m = len(Bs[0]) // 2
-            rows, powers = np.ones((8, 2 * m)), np.ones((2 * m, n), order="F")
-            product = _median_time(lambda: rows @ powers, repeats)
-            samples, _ = exact_solve.solve(model, scen.t_end, dt)
+            block = max(1024, 1 << (exact_solve._BLOCK_ELEMENTS // m).bit_length() - 1)
+            rows, powers = np.ones((8, 2 * m)), np.ones((2 * m, block))
+            grid = np.empty((8, n))
+
+            def product_blocks():  # the solver's blocks, written into the grid
+                for j in range(0, n, block):
+                    jj = min(n, j + block)
+                    np.matmul(rows, powers[:, :jj - j], out=grid[:, j:jj])
+            product = _median_time(product_blocks, repeats)
+            samples, switches = exact_solve.solve(model, scen.t_end, dt)
             metrics = _median_time(lambda: model_metrics(
                 samples, sdof, scen.impactor, collision_duration=dt * 100), repeats)
 
@@ -162,7 +177,7 @@ def measure_floor(cases, repeats: int) -> dict:
             out[f"{label}.{name}"] = {
                 "decompositions": decomp, "samples": product, "metrics": metrics,
                 "api": max(api, 0.0), "solver": decomp + product,
-                "total": decomp + product + metrics + max(api, 0.0),
+                "total": decomp + product + metrics + max(api, 0.0), "phases": switches + 1,
                 "flops": {"eig": 2 * 10 * (2 * m) ** 3, "inverse": 2 * 8 * (2 * m) ** 3,
                           "samples": 32 * m * n}}
     return out
@@ -175,6 +190,8 @@ def main() -> int:
     ap.add_argument("--rev", default=BASELINE)
     ap.add_argument("--cases", nargs="+", choices=[c[0] for c in CASES],
                     default=[c[0] for c in CASES], help="the cases to time (default all)")
+    ap.add_argument("--out", help="results name (default exact, or exact-partial with "
+                                  "--cases): e.g. for a run under other malloc settings")
     args = ap.parse_args()
     cases = tuple(c for c in CASES if c[0] in args.cases)
     start_load = _results.load_average()
@@ -190,8 +207,11 @@ def main() -> int:
                 sides.setdefault(side, []).append(
                     _baseline.run_snippet(code, site if side == "old" else None, env))
     numbers, ok = _report(sides, cases)
-    _results.write("exact" if len(cases) == len(CASES) else "exact-partial", numbers, {"rounds": args.rounds, "repeats": args.repeats,
-                                      "baseline": args.rev, "floor": sides["new"][0]["floor"]},
+    name = args.out or ("exact" if len(cases) == len(CASES) else "exact-partial")
+    malloc = {k: v for k, v in os.environ.items() if k.startswith("MALLOC_")}
+    _results.write(name, numbers, {"rounds": args.rounds, "repeats": args.repeats,
+                                   "baseline": args.rev, "malloc": malloc,
+                                   "floor": sides["new"][0]["floor"]},
                    started_load=start_load)
     return 0 if ok else 1
 
@@ -201,26 +221,29 @@ def _report(sides: dict, cases) -> tuple[dict, bool]:
     floor = sides["new"][0]["floor"]
     numbers, ok = {}, True
     print(f"{'case':<28}{'old ms':>9}{'new ms':>9}{'warm ms':>9}{'ratio':>7}{'solver fl':>10}"
-          f"{'floor ms':>10}{'new/floor':>10}{'max rel':>10}")
+          f"{'floor ms':>10}{'new/floor':>10}{'us/phase':>9}{'max rel':>10}")
     for key in (k for k in sides["new"][0] if k != "floor"):
         old = statistics.median(r[key]["cold"] for r in sides["old"]) * 1e3
         new = statistics.median(r[key]["cold"] for r in sides["new"]) * 1e3
         warm = statistics.median(r[key]["warm"] for r in sides["new"]) * 1e3
         fl, sf = floor[key]["total"] * 1e3, floor[key]["solver"] * 1e3
+        per_phase = (new - fl) * 1e3 / floor[key]["phases"]  # us above the floor a phase
         mo, mn = sides["old"][0][key]["metrics"], sides["new"][0][key]["metrics"]
         rel = max((abs(mn[k] / mo[k] - 1) for k in mo
                    if k != "ledger_residual" and mo[k] and mo[k] == mo[k]), default=0.0)
         ok &= rel <= 1e-9
         print(f"{key:<28}{old:>9.2f}{new:>9.2f}{warm:>9.2f}{old / new:>7.2f}{sf:>10.2f}{fl:>10.2f}"
-              f"{new / fl:>10.2f}{rel:>10.1e}")
+              f"{new / fl:>10.2f}{per_phase:>9.0f}{rel:>10.1e}")
         numbers |= {f"old_ms.{key}": round(old, 2), f"new_ms.{key}": round(new, 2),
                     f"warm_ms.{key}": round(warm, 2), f"ratio.{key}": round(old / new, 2),
                     f"floor_ms.{key}": round(fl, 2), f"solver_floor_ms.{key}": round(sf, 2),
                     f"over_floor.{key}": round(new / fl, 2),
+                    f"phases.{key}": floor[key]["phases"],
+                    f"above_floor_us_per_phase.{key}": round(per_phase),
                     f"metrics_max_rel.{key}": rel}
     for label, _, _ in cases:
         for what in ("old_ms", "new_ms", "warm_ms", "ratio", "floor_ms", "solver_floor_ms",
-                     "over_floor"):
+                     "over_floor", "above_floor_us_per_phase"):
             numbers[f"{what}.{label}"] = _results.span(
                 v for k, v in numbers.items() if k.startswith(f"{what}.{label}."))
     print("targets (ms, cold): " + ", ".join(f"{k} <= {v:g}" for k, v in TARGET_MS.items()))
