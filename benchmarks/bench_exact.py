@@ -167,10 +167,7 @@ def measure_floor(cases, repeats: int) -> dict:
                 samples, sdof, scen.impactor, collision_duration=dt * 100), repeats)
 
             def cold(func):
-                def timed():
-                    clear_cache()
-                    func()
-                return timed
+                return lambda: (clear_cache(), func())
             api = _median_time(cold(lambda: treeimpact.simulate(name, backend=backend,
                                                                 **options)), repeats) \
                 - _median_time(cold(run), repeats)

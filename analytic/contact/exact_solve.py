@@ -10,17 +10,17 @@ checked at every switch and at t_end. Design notes: docs/beam-impact.md.
 
 from __future__ import annotations
 
-import bisect
 import math
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
-from treeimpact.analytic.errors import SimulationDiverged
 from treeimpact.analytic.results import ImpactRecord
 
+from .exact_ledger import (ExactSamples, ExactSolution, PendulumEnergy, PhaseEnds,
+                           ledger_solution)
 from .exact_record import record
 from .linear_model import LinearImpactModel, initial_state, matrices
 from .modal import Observable, decomposed, observation_rows, work_forms
@@ -143,100 +143,6 @@ def _scratch(slot, shape: tuple, dtype) -> np.ndarray:
 
 
 @dataclass
-class _Ends:
-    """Each phase as the loop leaves it: start (s), kind, modal coefficients at its start
-    over the full spectrum, duration (s), the coefficients exp(lambda s) w and the state u
-    at its end."""
-
-    t: list
-    kind: list
-    w: list
-    s: list
-    a: list
-    u: list
-
-    def add(self, t: float, kind: ContactPhase, w, s: float, a, u) -> None:
-        for name, value in (("t", t), ("kind", kind), ("w", w), ("s", s), ("a", a),
-                            ("u", u)):
-            getattr(self, name).append(value)
-
-
-@dataclass(frozen=True)
-class _Solution:
-    """The exact solution as its phases (starts s, kinds, modal coefficients at the start,
-    the pad's work done before each, J), and its values at any time (SI units)."""
-
-    states: dict = field(repr=False)
-    starts: list
-    kinds: list
-    w: list = field(repr=False)
-    contact_work: list
-    t_end: float
-    ledger: float  # max |energy ledger| / initial energy at every switch and at t_end
-
-    def contact_loss(self, t: float) -> float:
-        """The pad's work so far less the elastic energy it holds at ``t`` (s), J."""
-        k = max(0, bisect.bisect_right(self.starts, t) - 1)
-        if not self.kinds[k].touching:
-            return self.contact_work[k]
-        st, s = self.states[True], np.array([t - self.starts[k]])
-        w = self.w[k][None, :]
-        work = self.contact_work[k] + float(st.works(w, s)[1, 0])
-        u = (st.modal.Vu @ (np.exp(st.modal.lam * s[0]) * self.w[k])).real
-        return work - float(st.energies(u[None, :])[2][0])
-
-
-def _ledger(model: LinearImpactModel, states: dict, ends: _Ends, t_end: float
-            ) -> _Solution:
-    """The :class:`_Solution` of the phases ``ends``: each phase's works (the closed forms,
-    all phases of a state at once), the pad's work before each phase (running sums in
-    phase order) and the energy ledger's largest residual at the phases' ends relative to
-    the input energy. Raises SimulationDiverged at a non-finite state."""
-    P = len(ends.t)
-    works, energy = np.zeros((P, 2)), np.zeros(P)
-    for contact, st in states.items():
-        idx = [p for p in range(P) if ends.kind[p].touching == contact]
-        if not idx:
-            continue
-        W, A = np.array([ends.w[p] for p in idx]), np.array([ends.a[p] for p in idx])
-        works[idx, :1 + contact] = st.works(W, np.array([ends.s[p] for p in idx]), A).T
-        kin, pot, _ = st.energies(np.array([ends.u[p] for p in idx]))
-        energy[idx] = kin + pot
-    if not np.all(np.isfinite(energy)):
-        p = int(np.argmin(np.isfinite(energy)))
-        raise SimulationDiverged(f"beam: non-finite state at t = {ends.t[p] + ends.s[p]:.6g} s")
-    done = np.cumsum(works, axis=0)  # the works to each phase's end, in phase order
-    e0 = model.initial_energy
-    ledger = float(np.max(np.abs(energy + done.sum(axis=1) - e0)) / e0)
-    before = [0.0, *done[:-1, 1].tolist()]
-    return _Solution(states=states, starts=ends.t, kinds=ends.kind, w=ends.w,
-                     contact_work=before, t_end=t_end, ledger=ledger)
-
-
-@dataclass(frozen=True)
-class _ExactSamples:
-    """What :func:`analytic.records.metrics_from_record` reads, from the exact solution:
-    the motion on the sample grid (SI) and the energies in closed form where it reads them."""
-
-    t: np.ndarray
-    x: np.ndarray
-    vx: np.ndarray
-    y: np.ndarray
-    vy: np.ndarray
-    force: np.ndarray
-    pendulum_energy: np.ndarray
-    crown: np.ndarray
-    crown_velocity: np.ndarray
-    solution: _Solution = field(repr=False)
-
-    def contact_loss(self, t: float) -> float:
-        return self.solution.contact_loss(t)
-
-    def ledger_residual(self, initial_energy: float) -> float:
-        return self.solution.ledger
-
-
-@dataclass
 class _Grid:
     """The sample grid (s) and what is written on it: the observables (8 x n, one row per
     :class:`Observable`) and the pad's force (N)."""
@@ -248,7 +154,7 @@ class _Grid:
 
 def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     """The ``exact`` method on ``model``: the solution's phases and the observables on the
-    sample grid every ``dt_sample`` to ``t_end`` (s). Returns ``(_ExactSamples, switches)``
+    sample grid every ``dt_sample`` to ``t_end`` (s). Returns ``(ExactSamples, switches)``
     (the number of contact switches)."""
     steps = int(math.ceil(t_end / dt_sample - 1e-9))
     t_grid = np.linspace(0.0, t_end, steps + 1)
@@ -258,7 +164,7 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.empty(t_grid.size))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
-    ends = _Ends([], [], [], [], [], [])
+    ends = PhaseEnds([], [], [], [], [], [])
     while True:
         st = states[kind.touching]
         w = st.modal.Wu @ u
@@ -276,7 +182,7 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
         check_switches(len(ends.t), t)
     for st in states.values():
         st.done()
-    solution = _ledger(model, states, ends, t_end)
+    solution = ledger_solution(model, states, ends, t_end)
     return _samples(model, grid, solution), len(ends.t) - 1
 
 
@@ -335,26 +241,12 @@ def _write(grid: _Grid, j: int, law: np.ndarray, k: int, touching: bool) -> None
         grid.force[j:j + k] = 0.0
 
 
-def _samples(model: LinearImpactModel, grid: _Grid, solution: _Solution) -> _ExactSamples:
-    """The :class:`_ExactSamples` of the written grid."""
+def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
+    """The :class:`ExactSamples` of the written grid."""
     x, y, vx, vy, _, _, crown, crown_v = grid.obs
-    return _ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
-                         pendulum_energy=_PendulumEnergy(model, y, vy), crown=crown,
-                         crown_velocity=crown_v, solution=solution)
-
-
-@dataclass(frozen=True)
-class _PendulumEnergy:
-    """The pendulum's energy 0.5 m y'^2 + 0.5 k y^2 (J, eq 13) at the samples the metrics
-    read (``energy[i]``), not formed on the whole grid."""
-
-    model: LinearImpactModel = field(repr=False)
-    y: np.ndarray = field(repr=False)
-    vy: np.ndarray = field(repr=False)
-
-    def __getitem__(self, i):
-        m, kp = self.model.impactor_mass, self.model.impactor_stiffness
-        return 0.5 * m * self.vy[i] ** 2 + 0.5 * kp * self.y[i] ** 2
+    return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
+                        pendulum_energy=PendulumEnergy(model, y, vy), crown=crown,
+                        crown_velocity=crown_v, solution=solution)
 
 
 def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
