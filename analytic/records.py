@@ -32,22 +32,53 @@ def with_static_shape_crown(record: "ImpactRecord", trunk) -> "ImpactRecord":
 
 def window_means(t: np.ndarray, cumulative: np.ndarray, window: float) -> np.ndarray:
     """(C(t + window) - C(t)) / window at every sample with t + window inside the record (C
-    the ``cumulative`` array at the times t, s): the
+    the ``cumulative`` array at the increasing times t, s): the
     mean over ``window`` (s) of the quantity whose running integral is C (a velocity gives
     the mean acceleration, the force's running impulse the mean force). Empty if the record
     is shorter than the window."""
     t, c = np.asarray(t, dtype=float), np.asarray(cumulative, dtype=float)
     if not (window > 0 and t[-1] - t[0] > window):
         return np.array([])
-    inside = t <= t[-1] - window
-    return (np.interp(t[inside] + window, t, c) - c[inside]) / window
+    inside = int(np.searchsorted(t, t[-1] - window, side="right"))  # t <= t[-1] - window
+    ahead = _interp_shifted(t, c, inside, window)
+    ahead -= c[:inside]
+    ahead /= window
+    return ahead
+
+
+def _interp_shifted(t: np.ndarray, c: np.ndarray, n: int, shift: float) -> np.ndarray:
+    """np.interp(t[:n] + shift, t, c), bitwise, for increasing t: when every x_i = t_i +
+    shift lies strictly inside the same interval (t_(i+q), t_(i+q+1)) (an even grid),
+    numpy's own formula (c_(j+1) - c_j) / (t_(j+1) - t_j) (x - t_j) + c_j on slices,
+    without its search; else (or on a non-finite value) np.interp itself."""
+    x = t[:n] + shift
+    q = int(np.searchsorted(t, x[0], side="right")) - 1
+    if not 0 <= q < t.size - n:
+        return np.interp(x, t, c)
+    t_lo, t_hi = t[q:q + n], t[q + 1:q + 1 + n]
+    if not (np.all(t_lo < x) and np.all(x < t_hi)):
+        return np.interp(x, t, c)
+    c_lo = c[q:q + n]
+    slope = np.subtract(c[q + 1:q + 1 + n], c_lo)
+    x_lo = np.subtract(t_hi, t_lo)
+    slope /= x_lo
+    np.subtract(x, t_lo, out=x_lo)  # x - t_j
+    x_lo *= slope
+    x_lo += c_lo
+    return x_lo if np.all(np.isfinite(x_lo)) else np.interp(x, t, c)
 
 
 def _running_integral(t: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Trapezoidal running integral of f over t, 0 at t[0] (numpy only: the command line's
     start-up does not pay for scipy)."""
     t, f = np.asarray(t, dtype=float), np.asarray(f, dtype=float)
-    return np.concatenate(([0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))))
+    step = f[1:] + f[:-1]
+    step *= 0.5
+    step *= np.diff(t)
+    out = np.empty(t.size)
+    out[0] = 0.0
+    np.cumsum(step, out=out[1:])
+    return out
 
 
 def _peak(values: np.ndarray) -> float:

@@ -154,3 +154,24 @@ def test_a_record_still_in_contact_has_no_whole_event_energies():
     scen = load_scenario("central-leader")
     res = simulate_soft(dataclasses.replace(scen), t_end=1e-4)
     assert all(math.isnan(res.metrics[k]) for k in WHOLE)
+
+
+@pytest.mark.parametrize("grid", ["even", "uneven", "short"])
+def test_window_means_are_numpys_interpolation_bitwise(grid):
+    """The window means (peak force, crown acceleration) skip np.interp's search on an even
+    grid: the same numbers bit for bit as (np.interp(t + w, t, C) - C) / w over the
+    samples with t + w inside, on a linspace grid (whose round-off could put a shifted
+    sample on another interval), an uneven one (np.interp itself) and a window of a
+    whole number of samples (shifted samples on the nodes)."""
+    from treeimpact.analytic.records import window_means
+
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        n = int(rng.integers(50, 40000))
+        t = (np.linspace(0.0, 0.1, n) if grid != "uneven"
+             else np.sort(rng.uniform(0.0, 0.1, n)))
+        c = np.cumsum(rng.normal(size=n))
+        w = 7 * (t[1] - t[0]) if grid == "short" else float(rng.uniform(1e-4, 0.05))
+        inside = t <= t[-1] - w
+        want = (np.interp(t[inside] + w, t, c) - c[inside]) / w
+        assert np.array_equal(window_means(t, c, w), want)

@@ -15,7 +15,7 @@ from treeimpact.analytic.errors import SimulationDiverged
 from treeimpact.analytic.results import ImpactRecord
 
 from .linear_model import LinearImpactModel, initial_state, matrices
-from .modal import LedgerForms, Modal, Observable, ledger_forms, observation_rows
+from .modal import LedgerForms, Modal, Observable, decomposed, ledger_forms, observation_rows
 from .phases import ContactPhase, Signal, bracket, check_switches, switch
 
 _DELTA = slice(Observable.DELTA, Observable.DELTA_RATE + 1)
@@ -43,7 +43,7 @@ class _Samples:
 
 def _state_solution(model: LinearImpactModel, contact: bool) -> _StateSolution:
     M, C, K, g = matrices(model, contact)
-    modal = Modal(M, C, K)
+    modal = decomposed(M, C, K)  # the ``exact`` run's, when the record is read after it
     return _StateSolution(modal, ledger_forms(model, modal, contact, g),
                           observation_rows(model, modal, g))
 

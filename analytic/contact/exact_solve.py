@@ -11,35 +11,41 @@ checked at every switch and at t_end. Design notes: docs/beam-impact.md.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import threading
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
-from treeimpact.analytic.errors import SimulationDiverged
 from treeimpact.analytic.results import ImpactRecord
 
+from .exact_ledger import (ExactSamples, ExactSolution, PendulumEnergy, PhaseEnds,
+                           ledger_solution)
 from .exact_record import record
 from .linear_model import LinearImpactModel, initial_state, matrices
-from .modal import Modal, Observable, ledger_forms, observation_rows
+from .modal import Observable, decomposed, observation_rows, work_forms
 from .phases import ContactPhase, Signal, bracket, check_switches, switch
 
-#: Largest block of samples the ``exact`` method evaluates at once (32, 256, then this).
-_BLOCK = 1024
+#: Elements (samples x modes kept) of the largest block of samples the ``exact`` method
+#: evaluates at once (32, 256, ... up to this over the modes, at least 1024 samples): the
+#: powers exp(lambda i h) stay in cache (the soft SDOF, 2 modes: 4096 samples a block took
+#: half the time of 16384, benchmarks/bench_exact.py).
+_BLOCK_ELEMENTS = 2 ** 13
 _EPS = float(np.finfo(float).eps)
 
 
 class _State:
-    """One contact state of the ``exact`` method: its :class:`Modal` solution, the
-    observation rows over the kept half of the spectrum, exp(lambda i h) for the sample
-    spacing h (i = 0.._BLOCK) and the work integrals of the ledger."""
+    """One contact state of the ``exact`` method: its :class:`Modal` solution (shared by
+    :func:`.modal.decomposed`), the observation rows over the kept half of the spectrum (as
+    the real operand of the samples' product), exp(lambda i h) for the sample spacing h
+    (i = 0..block) and the work integrals of the ledger."""
 
     def __init__(self, model: LinearImpactModel, contact: bool, h: float):
         M, C, K, g = matrices(model, contact)
-        self.modal = modal = Modal(M, C, K)
+        self.modal = modal = decomposed(M, C, K)
         self.contact = contact
-        forms = ledger_forms(model, modal, contact, g)
-        works = [forms.damping] + ([forms.pad] if contact else [])
+        damping, pad = work_forms(model, modal, contact, g)
+        works = [damping] + ([pad] if contact else [])
         # the works' integrals: H_int stacked (damping; and the pad's, in contact)
         self.H_int = np.stack([f.H_int for f in works])
         self.H_lin = np.stack([f.H_lin for f in works])
@@ -49,155 +55,147 @@ class _State:
         self.lam = modal.lam[kept]
         rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
         self.rows = (rows[:, kept] * modal.weight).T.copy()  # m x 8: obs = Re(U @ rows)
+        self.rows_conj = self.rows.T.conj().copy()  # 8 x m: see _scan
         # delta and the law F = k_c delta + c_c delta', and their slopes
         delta, rate = self.rows[:, Observable.DELTA], self.rows[:, Observable.DELTA_RATE]
         law = np.stack([delta, k_c * delta + c_c * rate])
         self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
-        self.steps = _powers(np.exp(self.lam * h))
+        self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
+        # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
+        # step^b of each block's length b (32, 256, ..., block), a block's base to the next
+        # (in this thread's scratch memory, see _scratch; released by :meth:`done`)
+        self.steps_ri, self.jumps = _powers(np.exp(self.lam * h), self.block, contact)
         self.gd = modal.displacement_row(g)
         self.k_c = k_c
 
-    def works(self, w: np.ndarray, s: float, a: np.ndarray | None = None) -> np.ndarray:
-        """The works of the trunk's damping (and of the pad, in contact) over [0, s] of a
-        phase started with modal coefficients w (``a`` = exp(lambda s) w if known), J: the
-        closed form of :class:`.modal.Quadratic`."""
-        a = np.exp(self.modal.lam * s) * w if a is None else a
-        out = (self.H_int @ a) @ a - (self.H_int @ w) @ w
+    def done(self) -> None:
+        """Drop the powers (the solve is over: their scratch memory serves the next)."""
+        self.steps_ri = self.jumps = None
+
+    def works(self, w: np.ndarray, s: np.ndarray, a: np.ndarray | None = None
+              ) -> np.ndarray:
+        """The works of the trunk's damping (and of the pad, in contact) over [0, s_p] of
+        the phases p started with modal coefficients w (phases x 2N, s: phases; ``a`` =
+        exp(lambda s) w if known), J: (works, phases), the closed form of
+        :class:`.modal.Quadratic`."""
+        a = np.exp(self.modal.lam * s[:, None]) * w if a is None else a
+        out = _forms(self.H_int, a) - _forms(self.H_int, w)
         if self.secular:
-            out = out + s * ((self.H_lin @ w) @ w)
+            out = out + s * _forms(self.H_lin, w)
         return out.real
 
-    def energies(self, u: np.ndarray) -> tuple[float, float, float]:
+    def energies(self, u: np.ndarray) -> tuple:
         """(kinetic, elastic energy of the trunk's and pendulum's springs, the pad's elastic
-        energy k_c delta^2 / 2 when in contact; J) of the state u."""
+        energy k_c delta^2 / 2 when in contact; J) of the states u (phases x 2N): arrays
+        over the phases."""
         N = self.modal.N
-        kin = 0.5 * float(u[N:] @ u[N:])
-        pot = 0.5 * float(u[:N] @ u[:N])
-        pad = 0.5 * self.k_c * float(self.gd @ u) ** 2 if self.contact else 0.0
+        kin = 0.5 * (u[:, N:] * u[:, N:]).sum(axis=1)
+        pot = 0.5 * (u[:, :N] * u[:, :N]).sum(axis=1)
+        pad = 0.5 * self.k_c * (u @ self.gd) ** 2 if self.contact else np.zeros(len(u))
         return kin, pot - pad, pad
 
 
-def _powers(step: np.ndarray) -> np.ndarray:
-    """step^i, i = 0.._BLOCK, by doubling (round-off log2(_BLOCK) eps)."""
-    steps = np.ones((_BLOCK + 1, len(step)), dtype=complex)
-    steps[1] = step
+def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """w_p^T H_f w_p for each form H_f of the stack H (forms x n x n) and each row w_p of
+    w (phases x n): (forms, phases)."""
+    return ((H @ w.T) * w.T).sum(axis=1)
+
+
+def _powers(step: np.ndarray, count: int, slot) -> tuple[np.ndarray, dict]:
+    """step^i, i = 0..count, by doubling (round-off log2(count) eps), as the interleaved
+    (Re, Im) rows of each step (2m x (count + 1), in the scratch memory ``slot``); and
+    {b: step^b} for the block lengths b = 32, 256, ... (x 8), count."""
+    m = len(step)
+    steps = _scratch("powers", (m, count + 1), complex)
+    steps[:, 0], steps[:, 1] = 1.0, step
+    product = _scratch("product", (m * (count // 2 + 1),), complex)
     n = 1
-    while n < _BLOCK:
-        m = min(n, _BLOCK - n)
-        steps[n + 1:n + 1 + m] = steps[1:1 + m] * steps[n]
-        n += m
-    return steps
+    while n < count:
+        k = min(n, count - n)
+        # through a separate array: np.multiply into an output overlapping its inputs'
+        # array takes another loop, which rounds otherwise (6e-14 apart after the doublings)
+        part = product[:m * k].reshape(m, k)
+        np.multiply(steps[:, 1:1 + k], steps[:, n:n + 1], out=part)
+        steps[:, n + 1:n + 1 + k] = part
+        n += k
+    ri = _scratch(("rows", slot), (m, 2, count + 1), float)
+    ri[:, 0], ri[:, 1] = steps.real, steps.imag
+    jumps, b = {count: steps[:, count].copy()}, 32
+    while b < count:
+        jumps[b], b = steps[:, b].copy(), 8 * b
+    return ri.reshape(2 * m, count + 1), jumps
 
 
-@dataclass(frozen=True)
-class _Phase:
-    """One phase of the solution: start (s), kind, modal coefficients at its start over the
-    full spectrum, damping and contact work so far (J)."""
-
-    t: float
-    kind: ContactPhase
-    w: np.ndarray = field(repr=False)
-    damping_work: float
-    contact_work: float
+#: Per thread, arrays that outlive one solve to serve the next (:func:`_scratch`).
+_SCRATCH = threading.local()
 
 
-@dataclass(frozen=True)
-class _Solution:
-    """The exact solution as its phases, and its values at any time (SI units)."""
-
-    states: dict = field(repr=False)
-    phases: tuple
-    t_end: float
-    ledger: float  # max |energy ledger| / initial energy at every switch and at t_end
-
-    def phase_at(self, t: float) -> _Phase:
-        starts = [p.t for p in self.phases]
-        return self.phases[max(0, int(np.searchsorted(starts, t, side="right")) - 1)]
-
-    def contact_loss(self, t: float) -> float:
-        """The pad's work so far less the elastic energy it holds at ``t`` (s), J."""
-        p = self.phase_at(t)
-        if not p.kind.touching:
-            return p.contact_work
-        st = self.states[True]
-        work = p.contact_work + float(st.works(p.w, t - p.t)[1])
-        u = (st.modal.Vu @ (np.exp(st.modal.lam * (t - p.t)) * p.w)).real
-        return work - st.energies(u)[2]
-
-
-@dataclass(frozen=True)
-class _ExactSamples:
-    """What :func:`analytic.records.metrics_from_record` reads, from the exact solution:
-    the motion on the sample grid (SI) and the energies in closed form where it reads them."""
-
-    t: np.ndarray
-    x: np.ndarray
-    vx: np.ndarray
-    y: np.ndarray
-    vy: np.ndarray
-    force: np.ndarray
-    pendulum_energy: np.ndarray
-    crown: np.ndarray
-    crown_velocity: np.ndarray
-    solution: _Solution = field(repr=False)
-
-    def contact_loss(self, t: float) -> float:
-        return self.solution.contact_loss(t)
-
-    def ledger_residual(self, initial_energy: float) -> float:
-        return self.solution.ledger
+def _scratch(slot, shape: tuple, dtype) -> np.ndarray:
+    """An uninitialised array of ``shape`` in this thread's memory ``slot``, reused by the
+    next call on the slot: the power tables (about 1 MB a state at 12 elements) are not
+    allocated afresh by every solve (each fresh page costs a fault, about 1-2 us here)."""
+    pool = _SCRATCH.__dict__.setdefault("pool", {})
+    size = math.prod(shape)
+    buf = pool.get(slot)
+    if buf is None or buf.size < size or buf.dtype != dtype:
+        buf = pool[slot] = np.empty(size, dtype)
+    return buf[:size].reshape(shape)
 
 
 @dataclass
 class _Grid:
-    """The sample grid (s) and what is written on it: the observables (n x 8) and the
-    contact flag."""
+    """The sample grid (s) and what is written on it: the observables (8 x n, one row per
+    :class:`Observable`) and the pad's force (N)."""
 
     t: np.ndarray
     obs: np.ndarray
-    in_contact: np.ndarray
+    force: np.ndarray
 
 
 def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     """The ``exact`` method on ``model``: the solution's phases and the observables on the
-    sample grid every ``dt_sample`` to ``t_end`` (s). Returns ``(_ExactSamples, switches)``
+    sample grid every ``dt_sample`` to ``t_end`` (s). Returns ``(ExactSamples, switches)``
     (the number of contact switches)."""
     steps = int(math.ceil(t_end / dt_sample - 1e-9))
     t_grid = np.linspace(0.0, t_end, steps + 1)
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
     to_state = {True: states[True].modal.transfer(states[False].modal),
                 False: states[False].modal.transfer(states[True].modal)}
-    grid = _Grid(t_grid, np.empty((t_grid.size, 8)), np.zeros(t_grid.size, dtype=bool))
+    grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.empty(t_grid.size))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
-    work = np.zeros(2)  # damping, pad
-    phases, ledger = [], 0.0
-    switches = 0
+    ends = PhaseEnds([], [], [], [], [], [])
     while True:
         st = states[kind.touching]
         w = st.modal.Wu @ u
-        phases.append(_Phase(t, kind, w, float(work[0]), float(work[1])))
         end = _scan(model, st, kind, grid, t, w[st.modal.kept])
         end_s, nxt = end if end is not None else (t_end - t, None)
-        u, residual = _close(model, st, w, end_s, work, t)
-        ledger = max(ledger, residual)
+        a = np.exp(st.modal.lam * end_s) * w
+        u = (st.modal.Vu @ a).real
+        ends.add(t, kind, w, end_s, a, u)
         if nxt is None:
             break
         t += end_s
         if nxt.touching != kind.touching:  # to the other state's energy coordinates
             u = to_state[nxt.touching] @ u
         kind = nxt
-        switches += 1
-        check_switches(switches, t)
-    solution = _Solution(states=states, phases=tuple(phases), t_end=t_end, ledger=ledger)
-    return _samples(model, grid, solution), switches
+        check_switches(len(ends.t), t)
+    for st in states.values():
+        st.done()
+    solution = ledger_solution(model, states, ends, t_end)
+    return _samples(model, grid, solution), len(ends.t) - 1
 
 
 def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid, t: float,
           wk: np.ndarray):
-    """Write the observables of the phase started at ``t`` (modal coefficients ``wk`` over
-    the kept spectrum) block by block until it ends; returns (time into the phase, next
-    phase) of the switch, or None when it lasts to the grid's end."""
+    """Write the observables and the force of the phase started at ``t`` (modal
+    coefficients ``wk`` over the kept spectrum) block by block until it ends; returns (time
+    into the phase, next phase) of the switch, or None when it lasts to the grid's end.
+
+    A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
+    one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
+    powers (2m x block), half the flops of the complex product's real part. The force is
+    max(0, F) of the law F computed for the switch (0 apart)."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
     t_grid, n_t = grid.t, grid.t.size
     j0 = int(np.searchsorted(t_grid, t, side="left"))
@@ -205,84 +203,90 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
         return None
     j, block = j0, 32
     base = np.exp(st.lam * (t_grid[j0] - t)) * wk
+    touching = kind.touching
     while j < n_t:
         jj = min(n_t, j + block)
-        ob = (st.steps[:jj - j] @ (base[:, None] * st.rows)).real
-        d = ob[:, Observable.DELTA]
-        f = k_c * d + c_c * ob[:, Observable.DELTA_RATE]
+        ob = np.matmul((st.rows_conj * base.conj()).view(float), st.steps_ri[:, :jj - j],
+                       out=grid.obs[:, j:jj])
+        d = ob[Observable.DELTA]
+        f = k_c * d + c_c * ob[Observable.DELTA_RATE]
         ended = kind.has_ended(d, f)
         if j == j0 and t_grid[j0] == t:
             ended[0] = False  # the phase's own start
-        k = int(np.argmax(ended))
+        k = int(ended.argmax())
         if ended[k]:
-            s_lo = max(t_grid[j + k - 1] - t, 0.0) if j + k > j0 else 0.0
-            grid.obs[j:j + k] = ob[:k]
-            grid.in_contact[j:j + k] = kind.touching
-            return _locate(kind, st, wk, s_lo, t_grid[j + k] - t, d[k], f[k])
-        grid.obs[j:jj] = ob
-        grid.in_contact[j:jj] = kind.touching
-        base = base * st.steps[jj - j]
-        j, block = jj, min(8 * block, _BLOCK)
+            _write(grid, j, f, k, touching)
+            s_lo = max(float(t_grid[j + k - 1]) - t, 0.0) if j + k > j0 else 0.0
+            lo_values = None
+            if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
+                d_lo, r_lo = grid.obs[Observable.DELTA:Observable.DELTA_RATE + 1,
+                                      j + k - 1].tolist()
+                lo_values = (d_lo, k_c * d_lo + c_c * r_lo)
+            return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, float(d[k]),
+                           float(f[k]), lo_values)
+        _write(grid, j, f, jj - j, touching)
+        if jj < n_t:
+            base = base * st.jumps[block]
+        j, block = jj, min(8 * block, st.block)
     return None
 
 
-def _close(model: LinearImpactModel, st: _State, w: np.ndarray, end_s: float,
-           work: np.ndarray, t: float) -> tuple[np.ndarray, float]:
-    """At the end ``end_s`` (s) of the phase started at ``t`` with modal coefficients w:
-    add its works to ``work`` (in place, J) and return the state u there and the energy
-    ledger's residual relative to the input energy."""
-    a = np.exp(st.modal.lam * end_s) * w
-    work += st.works(w, end_s, a) if st.contact else (st.works(w, end_s, a)[0], 0.0)
-    u = (st.modal.Vu @ a).real
-    kin, pot, _ = st.energies(u)
-    if not math.isfinite(kin + pot):
-        raise SimulationDiverged(f"beam: non-finite state at t = {t + end_s:.6g} s")
-    e0 = model.initial_energy
-    return u, abs(kin + pot + work.sum() - e0) / e0
+def _write(grid: _Grid, j: int, law: np.ndarray, k: int, touching: bool) -> None:
+    """The force of the first ``k`` samples of a block from sample ``j`` (the ``law`` F,
+    the observables written by the product itself) into the grid: max(0, F) in contact,
+    else 0 (the samples after a switch are written again by the next phase)."""
+    if touching:
+        np.maximum(0.0, law[:k], out=grid.force[j:j + k])
+    else:
+        grid.force[j:j + k] = 0.0
 
 
-def _samples(model: LinearImpactModel, grid: _Grid, solution: _Solution) -> _ExactSamples:
-    """The :class:`_ExactSamples` of the written grid."""
-    k_c, c_c = model.contact_stiffness, model.contact_damping
-    x, y, vx, vy, delta, ddelta, crown, crown_v = grid.obs.T
-    force = np.where(grid.in_contact, np.maximum(0.0, k_c * delta + c_c * ddelta), 0.0)
-    m, kp = model.impactor_mass, model.impactor_stiffness
-    return _ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=force,
-                         pendulum_energy=0.5 * m * vy ** 2 + 0.5 * kp * y ** 2, crown=crown,
-                         crown_velocity=crown_v, solution=solution)
+def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
+    """The :class:`ExactSamples` of the written grid."""
+    x, y, vx, vy, _, _, crown, crown_v = grid.obs
+    return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
+                        pendulum_energy=PendulumEnergy(model, y, vy), crown=crown,
+                        crown_velocity=crown_v, solution=solution)
 
 
 def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
-            d_hi: float, f_hi: float):
+            d_hi: float, f_hi: float, lo_values: tuple | None):
     """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]
     (:func:`.phases.switch`), each root by Newton's method on the exact solution's delta
-    and law with their slopes."""
-    lam, law = st.lam, st.law
+    and law with their slopes; ``lo_values``: (delta, law) at s_lo from the samples, or
+    None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`)."""
+    lam = st.lam
+    c = wk[:, None] * st.law  # m x 4: (delta, F, delta', F') = Re(exp(lambda s) @ c)
+    exp, dot = np.exp, np.dot
 
-    def at(s):  # delta, F, delta', F'
-        return (np.exp(lam * s) * wk) @ law
+    def delta(s):
+        v = dot(exp(lam * s), c).real.tolist()
+        return v[0], v[2]
 
-    def fun(i):
-        def value(s):
-            v = at(s).real
-            return float(v[i]), float(v[i + 2])
-        return value
+    def law(s):
+        v = dot(exp(lam * s), c).real.tolist()
+        return v[1], v[3]
 
-    signals = {Signal.DELTA: (fun(0), d_hi), Signal.LAW: (fun(1), f_hi)}
+    d_lo, f_lo = lo_values if lo_values is not None else (None, None)
 
     def root(signal):
-        value, end_value = signals[signal]
-        return _newton_root(value, s_lo, s_hi, end_value)
+        if signal is Signal.DELTA:
+            return _newton_root(delta, s_lo, s_hi, d_hi, d_lo)
+        return _newton_root(law, s_lo, s_hi, f_hi, f_lo)
 
-    return switch(kind, root, lambda s: signals[Signal.DELTA][0](s)[0], d_hi, f_hi)
+    return switch(kind, root, lambda s: delta(s)[0], d_hi, f_hi)
 
 
-def _newton_root(fun, lo: float, hi: float, f_hi: float) -> float:
-    """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi:
-    a phase that starts on its own boundary (value 0 at lo) is bracketed from just after its
-    start; then Newton's steps inside the shrinking bracket (bisection otherwise), to
-    1e-15 s."""
-    found = bracket(lambda u: fun(u)[0], lo, hi, f_hi)
+def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = None
+                 ) -> float:
+    """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi
+    (``f_lo`` at lo, if known): a phase that starts on its own boundary (value 0 at lo) is
+    bracketed from just after its start; then Newton's steps inside the shrinking bracket
+    (bisection otherwise), to 1e-15 s."""
+    if f_lo is not None and f_lo * f_hi <= 0 and f_lo != 0.0:
+        found = lo, f_lo  # what bracket() returns for a sign change at lo
+    else:
+        found = bracket(lambda u: fun(u)[0], lo, hi, f_hi)
     if found is None:
         return hi
     lo, f_lo = found

@@ -70,18 +70,23 @@ def _element_matrices(h: float, ei: float, rho_a: float):
     return k, m
 
 
-def _elements(trunk: Trunk, nodes: np.ndarray, beam_theory: str):
+def _elements(trunk: Trunk, nodes: np.ndarray, beam_theory: str) -> list:
     """Per element (K, M, D), dofs (w1, r1, w2, r2), r the slope w' (Euler-Bernoulli) or the
-    section's rotation psi (Timoshenko); D the consistent damping of the distributed C."""
+    section's rotation psi (Timoshenko); D the consistent damping of the distributed C.
+    Elements of the same length share one computation (the same matrices)."""
     ei, rho_a = trunk.bending_stiffness, trunk.density * trunk.area
-    for h in np.diff(nodes):
+    done: dict = {}
+    for h in np.diff(nodes).tolist():
+        if h in done:
+            continue
         if beam_theory == EULER_BERNOULLI:
             k, m = _element_matrices(h, ei, rho_a)
-            yield k, m, _element_matrices(h, 1.0, trunk.damping)[1]
+            done[h] = k, m, _element_matrices(h, 1.0, trunk.damping)[1]
         else:
             k, m, shape = element_matrices(h, ei, rho_a, trunk.density * trunk.second_moment,
                                            trunk.shear_rigidity)
-            yield k, m, trunk.damping * shape
+            done[h] = k, m, trunk.damping * shape
+    return [done[h] for h in np.diff(nodes).tolist()]
 
 
 def _scatter(blocks, n: int, l: float) -> np.ndarray:
@@ -106,9 +111,13 @@ def assemble(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOULLI
     _check_trunk(trunk)
     check_beam_theory(beam_theory)
     nodes = np.asarray(nodes, dtype=float)
+    return _assemble(trunk, nodes, _elements(trunk, nodes, beam_theory))
+
+
+def _assemble(trunk: Trunk, nodes: np.ndarray, els: list):
+    """:func:`assemble`'s (K, M, free) from the elements ``els`` of :func:`_elements`."""
     n = len(nodes)
     l = trunk.length
-    els = list(_elements(trunk, nodes, beam_theory))
     K = _scatter([k for k, _, _ in els], n, l)
     M = _scatter([m for _, m, _ in els], n, l)
     i_a = int(np.argmin(np.abs(nodes - trunk.clamp_height)))
@@ -325,9 +334,10 @@ def beam_matrices(trunk: Trunk, elements: int, beam_theory: str = EULER_BERNOULL
     shape functions with C in place of rho A (no rotary part), no point masses.
     """
     nodes = mesh(trunk, elements)
-    K, M, keep = assemble(trunk, nodes, beam_theory)
-    D = _scatter([d for _, _, d in _elements(trunk, nodes, beam_theory)], len(nodes),
-                 trunk.length)
+    check_beam_theory(beam_theory)
+    els = _elements(trunk, nodes, beam_theory)
+    K, M, keep = _assemble(trunk, nodes, els)
+    D = _scatter([d for _, _, d in els], len(nodes), trunk.length)
     return M, D[np.ix_(keep, keep)], K, nodes, keep
 
 
