@@ -54,7 +54,9 @@ class _State:
         kept = modal.kept
         self.lam = modal.lam[kept]
         rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
-        self.rows = (rows[:, kept] * modal.weight).T.copy()  # m x 8: obs = Re(U @ rows)
+        # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
+        # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
+        self.rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
         self.rows_conj = self.rows.T.conj().copy()  # 8 x m: see _scan
         # delta and the law F = k_c delta + c_c delta', and their slopes
         delta, rate = self.rows[:, Observable.DELTA], self.rows[:, Observable.DELTA_RATE]

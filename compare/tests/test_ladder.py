@@ -270,6 +270,8 @@ def test_every_engine_run_says_its_steps_and_what_set_its_step(ladder_of, run_ca
     for r in engine_runs:
         js = r.to_json()["stepping"]
         assert js["steps"] >= r.result.scenario["t_end"] / js["dt"] and js["step_us"] > 0
-        assert js["step_set_by"] in ("contact", "implicit contact"), r.describe()
+        # the session's cache also holds other tests' runs with a dt of their own
+        expected = ("given",) if "dt" in r.options else ("contact", "implicit contact")
+        assert js["step_set_by"] in expected, r.describe()
     rows = run_rows(engine_runs)
     assert all(row["stepping"]["steps"] > 0 for row in rows)
