@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from treeimpact.compare.cli import main
+from treeimpact.compare.exits import ExitCode
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = (ROOT / "analytic" / "model" / "scenarios" / "open-center.toml").read_text()
@@ -169,22 +170,40 @@ def test_calibration_that_is_not_a_table(tmp_path, capsys):
 def test_results_beyond_the_geometry_or_the_ledger_are_divergences():
     import dataclasses
 
-    from treeimpact.analytic.errors import SimulationDiverged
+    from treeimpact.analytic.errors import OutsideValidity, SimulationDiverged
     from treeimpact.analytic.impact.simulate import simulate
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.results import check_plausible
 
     good = simulate(load_scenario("open-center"))
     assert check_plausible(good) is good
-    for change, words in (({"x_max": 2.0}, "x_max = 2.0 m"),  # a = 0.354 m
-                          ({"x_max": math.nan}, "x_max = nan"),
+    for change, words in (({"x_max": math.nan}, "x_max = nan"),
                           ({"ledger_residual": 0.3}, "ledger residual 0.3"),
                           ({"energy_delivered": 1e6}, "energy_delivered = 1e+06 J beyond"),
                           ({"impact_loss": -50.0}, "the contact created energy"),
                           ({"t_xmax": 1e3}, "t_xmax = 1000 s outside the run")):
         bad = dataclasses.replace(good, metrics={**good.metrics, **change})
-        with pytest.raises(SimulationDiverged, match=re.escape(words)):
+        with pytest.raises(SimulationDiverged, match=re.escape(words)) as info:
             check_plausible(bad)
+        assert not isinstance(info.value, OutsideValidity), words
+
+
+def test_a_sound_result_beyond_the_clamp_height_is_outside_validity_not_a_divergence():
+    """x_max 2 m on open-center (a = 0.354 m), its ledger and energies sound: was
+    SimulationDiverged "x_max = 2.0 m"; now OutsideValidity naming the clamp height and
+    the small-deflection trunk of eq 1."""
+    import dataclasses
+
+    from treeimpact.analytic.errors import OutsideValidity
+    from treeimpact.analytic.impact.simulate import simulate
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.analytic.results import check_plausible
+
+    good = simulate(load_scenario("open-center"))
+    bad = dataclasses.replace(good, metrics={**good.metrics, "x_max": 2.0})
+    with pytest.raises(OutsideValidity, match=r"x_max = 2 m beyond the clamp height "
+                       r"a = 0\.354 m: the small-deflection trunk of eq 1"):
+        check_plausible(bad)
 
 
 def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tmp_path):
@@ -522,6 +541,37 @@ def test_scenario_writes_only_files_that_run(tmp_path, capsys, change):
 def test_scenario_refuses_a_given_t_end_its_tree_outlasts(tmp_path, capsys):
     one_line(capsys, ["scenario", "t", *_scenario_argv(t_end="0.001")], 2,
              "--t-end = 0.001 s is too short")
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"a1": "1e300", "x_max": "0.01", "tau": "0.1"},
+     ["--a1 = 1e+300 m/s is out of range: allowed (0, 100] m/s"]),
+    ({"a1": "1.167", "x_max": "0.01", "tau": "1e300"},
+     ["--tau = 1e+300 s is out of range: allowed (0, 10] s"]),
+    ({"a1": "1e-300", "x_max": "0.01", "tau": "0.1"},
+     ["--a1 = 1e-300 m/s", "b tau = 3.48e+300", "an overdamped motion"]),
+    ({"a1": "1.167", "x_max": "0.5", "tau": "0.1"},
+     ["--x-max = 0.5 m is out of range: allowed (0, 0.315] m"]),
+], ids=["a1-1e300", "tau-1e300", "a1-1e-300", "x_max-beyond-a"])
+def test_regression_inputs_beyond_double_precision_are_bad_input(capsys, change, words):
+    """Each was exit 3 "simulation diverged: OverflowError" (e^(b tau) overflowed), or a file
+    written from an x_max beyond the clamp height; now exit 2 naming the flag."""
+    argv = _scenario_argv(a2="-34.8", **change)
+    i = argv.index("--equivalent-stiffness")
+    one_line(capsys, ["scenario", "t", *argv[:i], *argv[i + 2:]], 2, *words)
+
+
+def test_a_tree_the_small_deflection_model_cannot_hold_is_outside_validity(capsys):
+    """A 10,000 kg pendulum at 60 deg on a thin trunk: the analytic x_max 0.344 m exceeds
+    a = 0.315 m; was exit 3 "simulation diverged"; now exit 4 worded as the model's
+    validity, the clamp height named."""
+    argv = _scenario_argv(diameter="0.05", mass="10000", release_angle_deg="60",
+                          dynamic_mass="20", equivalent_stiffness="300")
+    i = argv.index("--a1")
+    err = one_line(capsys, ["scenario", "t", *argv[:i], *argv[i + 4:], "--damping-rate",
+                            "1"], ExitCode.NOT_ACHIEVED, "outside the model's validity: ",
+                   "x_max = 0.3444 m beyond the clamp height a = 0.315 m")
+    assert "diverged" not in err
 
 
 @pytest.mark.parametrize("argv, words", [
