@@ -376,7 +376,8 @@ def test_identify_json_stdout_holds_only_json_when_lapack_complains(tmp_path, ca
     code = main(["identify", rec, *IDENTIFY, "--json"])
     out, _ = capfd.readouterr()
     data = json.loads(out)  # only JSON on stdout
-    assert code == 0 and not data["explained"]
+    assert not data["explained"] and data["verdict"].endswith("not fitted; declare the units")
+    assert code == ExitCode.NOT_ACHIEVED  # not fitted: was 0
     assert not any(v["determined"] for v in data["fit"].values())  # nothing "determined"
 
 
@@ -640,8 +641,15 @@ def test_lapack_s_own_lines_reach_the_terminal_worded(tmp_path, capfd):
 # independent fuzzer found; the validation set (tests/data/identify) holds more of each.
 
 def _identify_json(capsys, path, *flags) -> dict:
-    assert main(["identify", str(path), *IDENTIFY, *flags, "--json"]) == 0
-    return json.loads(capsys.readouterr().out)
+    """identify --json's output; exit 0 for a record fitted, 4 (one stderr line) for one
+    not fitted."""
+    code = main(["identify", str(path), *IDENTIFY, *flags, "--json"])
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    fitted = "not fitted" not in data["verdict"]
+    assert code == (ExitCode.OK if fitted else ExitCode.NOT_ACHIEVED), err
+    assert fitted or err.startswith("treeimpact: not achieved: the record was not fitted")
+    return data
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
@@ -695,6 +703,9 @@ def test_identify_explains_the_record_from_the_impact_to_the_separation(tmp_path
     assert data["explained"] is True and data["verdict"] == "explained"
     assert data["held"] == {"x_offset": "held at 0", "x_drift": "held at 0",
                             "x_drift2": "held at 0"}
+    for k in data["held"]:  # were "determined": true beside the table's "held at 0"
+        assert data["fit"][k]["held"] == "held at 0" and data["fit"][k]["determined"] is False
+    assert data["fit"]["M_T"]["held"] is None and data["fit"]["M_T"]["determined"] is True
     assert "sensor-held" in {d["kind"] for d in data["diagnoses"]}
     for k, v in (("M_T", tree.M_T), ("K_T", tree.K_T)):
         assert abs(data["fit"][k]["value"] / v - 1.0) < 0.02, (k, data["fit"][k])
@@ -706,12 +717,19 @@ def test_identify_names_both_columns_of_an_undeclared_ms_mm_record(capsys):
     spec = ROOT / "tests" / "data" / "identify" / "files" / "undeclared-ms-mm.csv"
     flags = ["--mass", "100", "--equivalent-length", "1.5", "--release-angle-deg", "35",
              "--clamp-height", "0.45", "--diameter", "0.15"]  # tree B's pendulum and clamp
-    assert main(["identify", str(spec), *flags]) == 0
+    assert main(["identify", str(spec), *flags]) == ExitCode.NOT_ACHIEVED  # was 0
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1
+    assert captured.err.startswith("treeimpact: not achieved: the record was not fitted: ")
     assert "t looks like ms and x like mm, not s and m" in captured.err
     assert "--time-unit ms --length-unit mm" in captured.err
     assert "NOT explained (units)" in captured.out
+    assert main(["identify", str(spec), *flags, "--json"]) == ExitCode.NOT_ACHIEVED
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["verdict"].startswith("NOT explained (units)")
+    assert captured.err.count("\n") == 1 and "--time-unit ms" in captured.err
+    assert main(["identify", str(spec), *flags, "--time-unit", "ms", "--length-unit",
+                 "mm"]) == ExitCode.OK, capsys.readouterr().err  # the flags it names
 
 
 def test_identify_given_restitution_is_its_own_interval(tmp_path, capsys):
