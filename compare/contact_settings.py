@@ -137,7 +137,8 @@ def what_holds(engine: str, law: dict, mu: float, m1: float, m2: float, dt: floa
     e) this dt holds within it, and ``largest_dt``, the largest step (s) that holds the
     target within it; each the first on a grid :data:`SEARCH_RATIO` apart whose next point
     holds too (the miss oscillates with the steps per touch), None when none of
-    :data:`SEARCH_STEPS` does. Masses in kg (``mu`` reduced)."""
+    :data:`SEARCH_STEPS` does. The bodies of ``m1`` and ``m2`` kg (``mu`` their reduced
+    mass)."""
     found = {"smallest_touch_duration": None, "largest_dt": None}
     grid = [SEARCH_RATIO ** k for k in range(1, SEARCH_STEPS + 2)]
     ok = [None] * len(grid)
