@@ -753,3 +753,9 @@ def test_identify_constant_pendulum_column_is_one_line_naming_it(tmp_path, capsy
         f"{i / 5000},{0.0 if i < 100 else 1e-5 * (i - 100)},3.5\n" for i in range(600)))
     one_line(capsys, ["identify", str(path), *IDENTIFY], 2, "column 'pendulum (mm)' never "
              "changes", "the pendulum's column holds no motion")
+
+
+def test_simulate_s_removed_spelling_names_its_new_flag(capsys):
+    """Issue 41: `simulate --damping` was refused without naming --trunk-damping-model."""
+    one_line(capsys, ["simulate", "open-center", "--damping", "joint"], 2,
+             "--damping was renamed: did you mean --trunk-damping-model?")
