@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import ParameterError, SimulationDiverged
+from .errors import OutsideValidity, ParameterError, SimulationDiverged
 from .threads import blas_limit
 
 #: Metric keys, their units and meaning (paper's symbols).
@@ -198,20 +198,24 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
     """``result`` if its numbers can be reported, else :class:`SimulationDiverged` naming the
     check that failed, in one line:
 
-    * x_max finite and within the geometry (0 < x_max <= a: the small-deflection beam of
-      eq 1 cannot move further than its clamp height), impact loss finite, the energy ledger
+    * x_max finite and positive, impact loss finite, the energy ledger
       finite and at most :data:`LEDGER_DIVERGED` of the input;
     * no energy beyond the input: the energy delivered, the rebound energy and the contact's
       dissipation each in [-tol, 1 + tol] x 0.5 m u_1^2 (tol: :data:`LEDGER_DIVERGED`), and
       no negative dissipation beyond the run's own ledger error (a contact cannot create
       energy);
-    * times within the run: T0, t_xmax, t_sep and the first contact in [0, t_end]."""
+    * times within the run: T0, t_xmax, t_sep and the first contact in [0, t_end].
+
+    A run that passes them with x_max beyond the clamp height a raises
+    :class:`OutsideValidity` instead (the small-deflection beam of eq 1 cannot move further
+    than a: the model's validity failed, not the solver); a run cut short by t_end a
+    ParameterError naming --t-end."""
     m = result.metrics
     model, scen = result.model or {}, result.scenario or {}
     a = (scen.get("trunk") or {}).get("clamp_height", math.inf)
     x_max, loss, ledger = m.get("x_max"), m.get("impact_loss"), m.get("ledger_residual")
     problem = None
-    if not finite_number(x_max) or not 0.0 < x_max <= a:
+    if not finite_number(x_max) or not 0.0 < x_max:
         problem = f"x_max = {x_max!r} m (allowed (0, a = {a:g}] m: the clamp height)"
     elif not finite_number(loss):
         problem = f"impact_loss = {loss!r} J"
@@ -222,6 +226,11 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
         problem = _energy_problem(m, model, ledger) or _time_problem(m, scen.get("t_end"))
     if problem is not None:
         raise SimulationDiverged(f"{result.backend}: {problem}")
+    if x_max > a:  # a sound run (ledger and energies hold) that the beam cannot represent
+        raise OutsideValidity(
+            f"{result.backend}: x_max = {x_max:.4g} m beyond the clamp height a = {a:g} m: "
+            "the small-deflection trunk of eq 1 cannot move that far (a stiffer or heavier "
+            "tree, or a lighter or slower pendulum, stays within it)")
     short = _truncation_problem(m, scen.get("t_end"))
     if short is not None:
         raise ParameterError(f"--t-end = {scen['t_end']:.4g} s is too short for this run "

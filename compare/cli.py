@@ -3,8 +3,9 @@ builds the parser and dispatches: each command lives in :mod:`treeimpact.compare
 how a command ends (exit codes, signals, warnings) in :mod:`treeimpact.compare.process`.
 
 Exit codes: 0 success; 2 bad input (one line on stderr naming the field and its range,
-no traceback); 3 a simulation diverged (reported as such, never as numbers); 130
-interrupted.
+no traceback); 3 a simulation diverged (reported as such, never as numbers); 4 ran, but
+could not do what was asked or its result lies outside the model's validity (one line saying
+what was achieved instead); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -79,7 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``treeimpact`` parser: one subparser per module of compare.commands."""
     p = _TopParser(prog="treeimpact", description="The fruit-tree trunk impact model of the paper "
                 "and its cross-checks against MuJoCo and PyBullet (SI units; exit codes: 0 "
-                "success, 2 bad input, 3 the simulation diverged).")
+                "success, 2 bad input, 3 the simulation diverged, 4 ran but not as asked or outside "
+                "the model's validity).")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for module in COMMANDS.values():
         sp = sub.add_parser(module.NAME, help=module.HELP)

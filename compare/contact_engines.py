@@ -14,6 +14,9 @@ SPEED = 1.0  # m/s: approach speed of the simulated collision (the law is linear
 
 #: The steps each setting is also run at, as multiples of the step it was made for.
 STEP_FACTORS = {"at_half_dt": 0.5, "at_double_dt": 2.0}
+#: Where in a step the first touch falls, for the spread printed beside each engine's
+#: setting: the fractions 0, 1/8, ..., 7/8 of a step (:func:`phase_spread`).
+PHASES = 8
 #: The MJCF snippet's geom names: placeholders for the user's two colliding geoms.
 GEOM_PLACEHOLDERS = ("GEOM_OF_BODY_1", "GEOM_OF_BODY_2")
 
@@ -39,6 +42,26 @@ def mjcf_snippet(dt, solref, solimp, refsafe_off=False) -> str:
             f"solimp=\"{' '.join(_fmt(v) for v in solimp)}\"/>\n</contact>")
 
 
+def phase_spread(collide, dt: float, speed: float = SPEED) -> dict:
+    """The range of e and touch duration (s) over where in a step the first touch falls:
+    ``collide(overlap)`` (a FreeCollision started with the bodies ``overlap`` m into each
+    other, approaching at ``speed`` m/s) at overlaps of j / :data:`PHASES` of a step's travel
+    speed dt (``dt`` s), the same state a body reaches that first touched j / PHASES of a step
+    before the step's end; the duration counted from that first touch (the run's own plus
+    overlap / speed). Returns ``{"restitution": [min, max], "touch_duration": [min, max],
+    "phases": PHASES}`` (NaN where a run left the finite)."""
+    es, ts = [], []
+    for j in range(PHASES):
+        overlap = max(1e-12, j / PHASES * speed * dt)  # 1e-12: touching, as the runs start
+        c = collide(overlap)
+        es.append(c.restitution)
+        ts.append(c.touch_duration + overlap / speed)
+    finite = all(math.isfinite(v) for v in es + ts)
+    return {"restitution": [float(min(es)), float(max(es))] if finite else [math.nan] * 2,
+            "touch_duration": [float(min(ts)), float(max(ts))] if finite else [math.nan] * 2,
+            "phases": PHASES}
+
+
 def _cannot(engine: str, dt: float, largest: float, why: str) -> dict:
     return {"error": f"{engine} cannot hold --dt = {dt:.6g} s for this contact: it needs "
                      f"dt <= {largest:.3g} s ({why})", "largest_dt": largest}
@@ -49,8 +72,9 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     :func:`compare.contact_settings.target_law`)
     on the reduced mass ``mu`` (kg) at ``dt`` (s), the MJCF to paste, and the collision of
     each in MuJoCo between bodies of ``m1`` and ``m2`` kg (inf: fixed) (at dt, dt/2 and
-    2 dt), beside the naive (uncorrected) solref's; or ``{"error", "largest_dt"}`` beyond
-    Euler's omega dt < 2."""
+    2 dt), beside the naive (uncorrected) solref's, and the direct solref's
+    ``phase_spread`` (:func:`phase_spread`); or ``{"error", "largest_dt"}`` beyond Euler's
+    omega dt < 2."""
     from treeimpact import mujoco_models as mc
 
     k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
@@ -78,6 +102,7 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
         return mc.two_body_collision(mc.two_body_mjcf(m1, m2, step, ref, imp, refsafe=safe),
                                      SPEED).to_json()
 
+    xml = mc.two_body_mjcf(m1, m2, dt, solref, solimp)
     out = {"solref": solref, "solref_timeconst": tc, "solimp": solimp,
            "solimp_timeconst": solimp_tc, "engine_contact_stiffness": eng.stiffness,
            "engine_contact_damping": eng.damping, "refsafe_disable_needed": not refsafe,
@@ -86,7 +111,9 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
            "mjcf_timeconst": mjcf_snippet(dt, tc, solimp_tc, refsafe_off=not refsafe),
            "achieved": {"solref": run("solref", dt),
                         "solref_timeconst": run("solref_timeconst", dt)},
-           "naive": {"solref": naive, **run("naive", dt)}}
+           "naive": {"solref": naive, **run("naive", dt)},
+           "phase_spread": phase_spread(
+               lambda overlap: mc.two_body_collision(xml, SPEED, overlap=overlap), dt)}
     for key, f in STEP_FACTORS.items():
         out[key] = {name: run(name, f * dt) for name in rows}
     return out
@@ -127,6 +154,34 @@ def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     for key, f in STEP_FACTORS.items():
         out[key] = {name: run(name, f * dt) for name in rows}
     return out
+
+
+def collision_at(engine: str, law: dict, mu: float, m1: float, m2: float, dt: float):
+    """The collision (FreeCollision) that ``engine``'s corrected setting for ``law`` gives
+    at ``dt`` (s) between bodies of ``m1`` and ``m2`` kg (reduced mass ``mu``), as
+    ``achieved`` of :func:`mujoco_settings` (direct solref) and :func:`bullet_settings`;
+    None where the engine cannot hold the step. What the search for a target that holds
+    runs (compare.contact_settings.what_holds)."""
+    k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
+    try:
+        if engine == "mujoco":
+            from treeimpact import mujoco_models as mc
+
+            if dt >= 2.0 / math.sqrt(k / mu):
+                return None
+            eng = mc.engine_law(k, e, mu, dt)
+            S = mc.effective_denominator(1.0 / mu, 1.0 / mu)
+            solref = mc.solref_for_law(eng.stiffness, eng.damping, S)
+            solimp = [mc.IMPEDANCE, mc.IMPEDANCE, *mc.SOLIMP_TAIL]
+            return mc.two_body_collision(mc.two_body_mjcf(m1, m2, dt, solref, solimp), SPEED)
+        from treeimpact import bullet_models as bc
+
+        if dt > bc.largest_time_step(k, c, mu):
+            return None
+        ks, ds = bc.bullet_contact(k, c, mu, dt).per_body
+        return bc.two_body_collision(m1, m2, dt, ks, ds, SPEED)
+    except ParameterError:
+        return None
 
 
 #: engine name -> its settings function (compare.contact_settings.ENGINES).

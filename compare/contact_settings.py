@@ -107,12 +107,82 @@ def check_dt(dt, law: dict) -> float:
     return check_range("--dt", dt, low=low, high=law["touch_duration"], unit="s")
 
 
+#: The largest relative miss of e or of the touch duration a setting's collision may have
+#: for the command to call the target held (issue 41: 10 %).
+HOLD_TOLERANCE = 0.10
+#: The search for what would hold the target: durations (or steps) a factor SEARCH_RATIO
+#: apart, at most SEARCH_STEPS of them (1.05^60 = 18.7 x the target's duration).
+SEARCH_RATIO = 1.05
+SEARCH_STEPS = 60
+
+
+def miss(achieved: dict, law: dict) -> float:
+    """The larger relative miss of ``achieved``'s restitution and touch_duration (a
+    FreeCollision's JSON) against ``law``'s (of :func:`target_law`); inf where not finite."""
+    out = max(abs(achieved["restitution"] / law["restitution"] - 1.0),
+              abs(achieved["touch_duration"] / law["touch_duration"] - 1.0))
+    return out if math.isfinite(out) else math.inf
+
+
+def _holds(engine, law, mu, m1, m2, dt) -> bool:
+    from .contact_engines import collision_at
+
+    c = collision_at(engine, law, mu, m1, m2, dt)
+    return c is not None and miss(c.to_json(), law) <= HOLD_TOLERANCE
+
+
+def what_holds(engine: str, law: dict, mu: float, m1: float, m2: float, dt: float) -> dict:
+    """For a target ``law`` that ``engine`` misses at ``dt`` (s) by more than
+    :data:`HOLD_TOLERANCE`: ``smallest_touch_duration``, the shortest touch duration (s, same
+    e) this dt holds within it, and ``largest_dt``, the largest step (s) that holds the
+    target within it; each the first on a grid :data:`SEARCH_RATIO` apart whose next point
+    holds too (the miss oscillates with the steps per touch), None when none of
+    :data:`SEARCH_STEPS` does. The bodies of ``m1`` and ``m2`` kg (``mu`` their reduced
+    mass)."""
+    found = {"smallest_touch_duration": None, "largest_dt": None}
+    grid = [SEARCH_RATIO ** k for k in range(1, SEARCH_STEPS + 2)]
+    ok = [None] * len(grid)
+    for i, f in enumerate(grid):
+        t = law["touch_duration"] * f
+        if t > TOUCH_DURATION_RANGE[1]:
+            break
+        ok[i] = _holds(engine, target_law(mu, restitution=law["restitution"],
+                                          touch_duration=t), mu, m1, m2, dt)
+        if i and ok[i - 1] and ok[i]:
+            found["smallest_touch_duration"] = law["touch_duration"] * grid[i - 1]
+            break
+    low = law["touch_duration"] / MAX_STEPS_PER_COLLISION
+    ok = [None] * len(grid)
+    for i, f in enumerate(grid):
+        if dt / f < low:
+            break
+        ok[i] = _holds(engine, law, mu, m1, m2, dt / f)
+        if i and ok[i - 1] and ok[i]:
+            found["largest_dt"] = dt / grid[i - 1]
+            break
+    return found
+
+
+def _check_held(out: dict, law: dict, mu, m1, m2, dt, engines) -> None:
+    """Mark each engine's result in ``out`` with ``holds_target`` (its setting's collision
+    within :data:`HOLD_TOLERANCE` of ``law``) and, where it does not, ``what_holds``."""
+    for engine in engines:
+        res = out[engine]
+        if "error" in res:
+            continue
+        achieved = res["achieved"]["solref"] if engine == "mujoco" else res["achieved"]
+        res["holds_target"] = bool(miss(achieved, law) <= HOLD_TOLERANCE)
+        if not res["holds_target"]:
+            res["what_holds"] = what_holds(engine, law, mu, m1, m2, dt)
+
+
 def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitution=None,
                      touch_duration=None, contact_stiffness=None, contact_damping=None,
                      dt=None, engines=ENGINES) -> dict:
     """Everything ``treeimpact contact`` prints (its JSON): ``inputs``, ``target``
     (:func:`target_law`) and, for each of ``engines`` ("mujoco", "bullet"), its settings
-    and simulated collisions or ``{"error", "largest_dt"}`` when it cannot hold ``dt``.
+    and simulated collisions or ``{"error", "largest_dt"}`` when it cannot hold ``dt``, with
+    ``holds_target`` (within :data:`HOLD_TOLERANCE`) and, where not, ``what_holds``.
     The masses: ``mass`` and ``other_mass`` (None: fixed) or ``effective_mass`` alone
     (:func:`masses`); the collision: ``restitution`` with ``touch_duration``, or
     ``contact_stiffness`` with ``contact_damping`` (:func:`target_law`). Arguments are SI
@@ -130,6 +200,7 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
     with quiet_stdout():  # PyBullet prints on import; --json keeps stdout for JSON
         for engine in engines:
             out[engine] = ENGINE_SETTINGS[engine](law, mu, m1, m2, dt)
+        _check_held(out, law, mu, m1, m2, dt, engines)
     return out
 
 

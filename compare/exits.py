@@ -18,5 +18,9 @@ class ExitCode(IntEnum):
     BAD_INPUT = 2
     #: A simulation diverged (reported as such, never as numbers).
     DIVERGED = 3
+    #: Ran, but could not do what was asked: one stderr line saying what was achieved
+    #: instead and what would achieve it (a contact target the step cannot hold, a record
+    #: not fitted), or that the result lies outside the model's validity.
+    NOT_ACHIEVED = 4
     #: Interrupted by Ctrl-C or SIGTERM: 128 + SIGINT, as a shell says.
     INTERRUPTED = 130

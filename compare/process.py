@@ -3,7 +3,8 @@ code and one line on stderr for every way it can end), the stop signals, the run
 sets for itself and its workers, and Python warnings as one stderr line each.
 
 Exit codes (:class:`compare.exits.ExitCode`): 0 success; 2 bad input; 3 a simulation
-diverged; 130 interrupted (Ctrl-C or SIGTERM).
+diverged; 4 ran but not achieved (or outside the model's validity); 130 interrupted (Ctrl-C
+or SIGTERM).
 """
 
 from __future__ import annotations
@@ -16,7 +17,13 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
+from treeimpact.analytic.errors import (
+    NotAchieved,
+    OutsideValidity,
+    ParameterError,
+    SimulationDiverged,
+    one_line,
+)
 
 from .exits import ExitCode
 
@@ -32,7 +39,9 @@ def _error(text: str) -> None:
 def run_command(command, args) -> int:
     """``command(args)``'s exit code, with every way it can end as one line on stderr:
     bad input (ParameterError, an unreadable path, too little memory) exit 2, a diverged
-    simulation exit 3, Ctrl-C or SIGTERM exit 130; output piped into ``head`` ends quietly.
+    simulation exit 3, a run that could not do what was asked (NotAchieved; OutsideValidity
+    worded as outside the model's validity) exit 4, Ctrl-C or SIGTERM exit 130; output piped
+    into ``head`` ends quietly.
     Once the command has returned or raised, a stop signal only marks it interrupted (its
     one line is printed whole, never cut by a second KeyboardInterrupt)."""
     from .pool import STOP
@@ -55,6 +64,12 @@ def run_command(command, args) -> int:
     except ParameterError as exc:
         _error(f"error: {exc}")
         return ExitCode.BAD_INPUT
+    except OutsideValidity as exc:
+        _error(f"outside the model's validity: {exc}")
+        return ExitCode.NOT_ACHIEVED
+    except NotAchieved as exc:
+        _error(f"not achieved: {exc}")
+        return ExitCode.NOT_ACHIEVED
     except SimulationDiverged as exc:
         _error(f"simulation diverged: {exc}")
         return ExitCode.DIVERGED

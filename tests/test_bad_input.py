@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from treeimpact.compare.cli import main
+from treeimpact.compare.exits import ExitCode
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = (ROOT / "analytic" / "model" / "scenarios" / "open-center.toml").read_text()
@@ -169,22 +170,40 @@ def test_calibration_that_is_not_a_table(tmp_path, capsys):
 def test_results_beyond_the_geometry_or_the_ledger_are_divergences():
     import dataclasses
 
-    from treeimpact.analytic.errors import SimulationDiverged
+    from treeimpact.analytic.errors import OutsideValidity, SimulationDiverged
     from treeimpact.analytic.impact.simulate import simulate
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.results import check_plausible
 
     good = simulate(load_scenario("open-center"))
     assert check_plausible(good) is good
-    for change, words in (({"x_max": 2.0}, "x_max = 2.0 m"),  # a = 0.354 m
-                          ({"x_max": math.nan}, "x_max = nan"),
+    for change, words in (({"x_max": math.nan}, "x_max = nan"),
                           ({"ledger_residual": 0.3}, "ledger residual 0.3"),
                           ({"energy_delivered": 1e6}, "energy_delivered = 1e+06 J beyond"),
                           ({"impact_loss": -50.0}, "the contact created energy"),
                           ({"t_xmax": 1e3}, "t_xmax = 1000 s outside the run")):
         bad = dataclasses.replace(good, metrics={**good.metrics, **change})
-        with pytest.raises(SimulationDiverged, match=re.escape(words)):
+        with pytest.raises(SimulationDiverged, match=re.escape(words)) as info:
             check_plausible(bad)
+        assert not isinstance(info.value, OutsideValidity), words
+
+
+def test_a_sound_result_beyond_the_clamp_height_is_outside_validity_not_a_divergence():
+    """x_max 2 m on open-center (a = 0.354 m), its ledger and energies sound: was
+    SimulationDiverged "x_max = 2.0 m"; now OutsideValidity naming the clamp height and
+    the small-deflection trunk of eq 1."""
+    import dataclasses
+
+    from treeimpact.analytic.errors import OutsideValidity
+    from treeimpact.analytic.impact.simulate import simulate
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.analytic.results import check_plausible
+
+    good = simulate(load_scenario("open-center"))
+    bad = dataclasses.replace(good, metrics={**good.metrics, "x_max": 2.0})
+    with pytest.raises(OutsideValidity, match=r"x_max = 2 m beyond the clamp height "
+                       r"a = 0\.354 m: the small-deflection trunk of eq 1"):
+        check_plausible(bad)
 
 
 def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tmp_path):
@@ -357,7 +376,8 @@ def test_identify_json_stdout_holds_only_json_when_lapack_complains(tmp_path, ca
     code = main(["identify", rec, *IDENTIFY, "--json"])
     out, _ = capfd.readouterr()
     data = json.loads(out)  # only JSON on stdout
-    assert code == 0 and not data["explained"]
+    assert not data["explained"] and data["verdict"].endswith("not fitted; declare the units")
+    assert code == ExitCode.NOT_ACHIEVED  # not fitted: was 0
     assert not any(v["determined"] for v in data["fit"].values())  # nothing "determined"
 
 
@@ -524,6 +544,37 @@ def test_scenario_refuses_a_given_t_end_its_tree_outlasts(tmp_path, capsys):
              "--t-end = 0.001 s is too short")
 
 
+@pytest.mark.parametrize("change, words", [
+    ({"a1": "1e300", "x_max": "0.01", "tau": "0.1"},
+     ["--a1 = 1e+300 m/s is out of range: allowed (0, 100] m/s"]),
+    ({"a1": "1.167", "x_max": "0.01", "tau": "1e300"},
+     ["--tau = 1e+300 s is out of range: allowed (0, 10] s"]),
+    ({"a1": "1e-300", "x_max": "0.01", "tau": "0.1"},
+     ["--a1 = 1e-300 m/s", "b tau = 3.48e+300", "an overdamped motion"]),
+    ({"a1": "1.167", "x_max": "0.5", "tau": "0.1"},
+     ["--x-max = 0.5 m is out of range: allowed (0, 0.315] m"]),
+], ids=["a1-1e300", "tau-1e300", "a1-1e-300", "x_max-beyond-a"])
+def test_regression_inputs_beyond_double_precision_are_bad_input(capsys, change, words):
+    """Each was exit 3 "simulation diverged: OverflowError" (e^(b tau) overflowed), or a file
+    written from an x_max beyond the clamp height; now exit 2 naming the flag."""
+    argv = _scenario_argv(a2="-34.8", **change)
+    i = argv.index("--equivalent-stiffness")
+    one_line(capsys, ["scenario", "t", *argv[:i], *argv[i + 2:]], 2, *words)
+
+
+def test_a_tree_the_small_deflection_model_cannot_hold_is_outside_validity(capsys):
+    """A 10,000 kg pendulum at 60 deg on a thin trunk: the analytic x_max 0.344 m exceeds
+    a = 0.315 m; was exit 3 "simulation diverged"; now exit 4 worded as the model's
+    validity, the clamp height named."""
+    argv = _scenario_argv(diameter="0.05", mass="10000", release_angle_deg="60",
+                          dynamic_mass="20", equivalent_stiffness="300")
+    i = argv.index("--a1")
+    err = one_line(capsys, ["scenario", "t", *argv[:i], *argv[i + 4:], "--damping-rate",
+                            "1"], ExitCode.NOT_ACHIEVED, "outside the model's validity: ",
+                   "x_max = 0.3444 m beyond the clamp height a = 0.315 m")
+    assert "diverged" not in err
+
+
 @pytest.mark.parametrize("argv, words", [
     (["simulate", "open-center", "--rate", "1"], ["--rate: only with --record"]),
     (["simulate", "open-center", "--noise", "-5"], ["--noise: only with --record"]),
@@ -580,18 +631,26 @@ def test_a_row_wider_than_the_header_is_refused_not_a_pandas_warning(tmp_path, c
 def test_lapack_s_own_lines_reach_the_terminal_worded(tmp_path, capfd):
     """The degenerate record's " ** On entry to DLASCL parameter number 4" lines."""
     rec = _record(tmp_path / "r.csv", [0.01 if i == 300 else 0.0 for i in range(600)])
-    assert main(["identify", rec, *IDENTIFY, "--json"]) == 0
+    assert main(["identify", rec, *IDENTIFY, "--json"]) == ExitCode.NOT_ACHIEVED  # units
     _, err = capfd.readouterr()
     lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert lines and all(ln.startswith("treeimpact: warning: ") for ln in lines), err
+    assert lines[-1].startswith("treeimpact: not achieved: the record was not fitted"), err
+    assert all(ln.startswith("treeimpact: warning: ") for ln in lines[:-1]), err
     assert any("LAPACK: On entry to DLASCL" in ln for ln in lines), err
 # ------------------------------------------------------------------------------------------
 # issue 35 (identify says only what the record supports): one case of each class the
 # independent fuzzer found; the validation set (tests/data/identify) holds more of each.
 
 def _identify_json(capsys, path, *flags) -> dict:
-    assert main(["identify", str(path), *IDENTIFY, *flags, "--json"]) == 0
-    return json.loads(capsys.readouterr().out)
+    """identify --json's output; exit 0 for a record fitted, 4 (one stderr line) for one
+    not fitted."""
+    code = main(["identify", str(path), *IDENTIFY, *flags, "--json"])
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    fitted = "not fitted" not in data["verdict"]
+    assert code == (ExitCode.OK if fitted else ExitCode.NOT_ACHIEVED), err
+    assert fitted or err.startswith("treeimpact: not achieved: the record was not fitted")
+    return data
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
@@ -645,6 +704,9 @@ def test_identify_explains_the_record_from_the_impact_to_the_separation(tmp_path
     assert data["explained"] is True and data["verdict"] == "explained"
     assert data["held"] == {"x_offset": "held at 0", "x_drift": "held at 0",
                             "x_drift2": "held at 0"}
+    for k in data["held"]:  # were "determined": true beside the table's "held at 0"
+        assert data["fit"][k]["held"] == "held at 0" and data["fit"][k]["determined"] is False
+    assert data["fit"]["M_T"]["held"] is None and data["fit"]["M_T"]["determined"] is True
     assert "sensor-held" in {d["kind"] for d in data["diagnoses"]}
     for k, v in (("M_T", tree.M_T), ("K_T", tree.K_T)):
         assert abs(data["fit"][k]["value"] / v - 1.0) < 0.02, (k, data["fit"][k])
@@ -656,12 +718,19 @@ def test_identify_names_both_columns_of_an_undeclared_ms_mm_record(capsys):
     spec = ROOT / "tests" / "data" / "identify" / "files" / "undeclared-ms-mm.csv"
     flags = ["--mass", "100", "--equivalent-length", "1.5", "--release-angle-deg", "35",
              "--clamp-height", "0.45", "--diameter", "0.15"]  # tree B's pendulum and clamp
-    assert main(["identify", str(spec), *flags]) == 0
+    assert main(["identify", str(spec), *flags]) == ExitCode.NOT_ACHIEVED  # was 0
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1
+    assert captured.err.startswith("treeimpact: not achieved: the record was not fitted: ")
     assert "t looks like ms and x like mm, not s and m" in captured.err
     assert "--time-unit ms --length-unit mm" in captured.err
     assert "NOT explained (units)" in captured.out
+    assert main(["identify", str(spec), *flags, "--json"]) == ExitCode.NOT_ACHIEVED
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["verdict"].startswith("NOT explained (units)")
+    assert captured.err.count("\n") == 1 and "--time-unit ms" in captured.err
+    assert main(["identify", str(spec), *flags, "--time-unit", "ms", "--length-unit",
+                 "mm"]) == ExitCode.OK, capsys.readouterr().err  # the flags it names
 
 
 def test_identify_given_restitution_is_its_own_interval(tmp_path, capsys):
@@ -684,3 +753,9 @@ def test_identify_constant_pendulum_column_is_one_line_naming_it(tmp_path, capsy
         f"{i / 5000},{0.0 if i < 100 else 1e-5 * (i - 100)},3.5\n" for i in range(600)))
     one_line(capsys, ["identify", str(path), *IDENTIFY], 2, "column 'pendulum (mm)' never "
              "changes", "the pendulum's column holds no motion")
+
+
+def test_simulate_s_removed_spelling_names_its_new_flag(capsys):
+    """Issue 41: `simulate --damping` was refused without naming --trunk-damping-model."""
+    one_line(capsys, ["simulate", "open-center", "--damping", "joint"], 2,
+             "--damping was renamed: did you mean --trunk-damping-model?")

@@ -27,9 +27,9 @@ def test_the_codes_are_the_documented_ones():
     sentence = re.search(r"Exit codes: (.*?)\. ", text).group(1)
     documented = {int(n): words for n, words in re.findall(r"(\d+) ([a-zA-Z ]+)", sentence)}
     assert documented == {0: "success", 2: "bad input ", 3: "the simulation diverged ",
-                          130: "stopped by Ctrl"}
+                          4: "not achieved ", 130: "stopped by Ctrl"}
     assert {c.name: int(c) for c in ExitCode} == {"OK": 0, "BAD_INPUT": 2, "DIVERGED": 3,
-                                                 "INTERRUPTED": 130}
+                                                 "NOT_ACHIEVED": 4, "INTERRUPTED": 130}
 
 
 def bare_codes(source: str) -> list[str]:
@@ -80,3 +80,25 @@ def test_the_check_finds_the_bare_codes_of_before():
     assert sorted(bare_codes(before)) == [
         "line 10: return 0", "line 3: code == 0", "line 5: code == 130",
         "line 8: self._proc.poll() not in (None, 0)"]
+
+
+@pytest.mark.parametrize("error, start", [
+    ("NotAchieved", "treeimpact: not achieved: the target"),
+    ("OutsideValidity", "treeimpact: outside the model's validity: the target"),
+    ("SimulationDiverged", "treeimpact: simulation diverged: the target"),
+])
+def test_each_way_a_run_falls_short_has_its_code_and_its_words(capsys, error, start):
+    """Not achieved and outside the model's validity are exit 4, each in its own words (an
+    OutsideValidity is also a SimulationDiverged, yet never worded as diverged); a
+    divergence stays exit 3."""
+    from treeimpact.analytic import errors
+    from treeimpact.compare.process import run_command
+
+    def command(_):
+        raise getattr(errors, error)("the target")
+
+    code = run_command(command, None)
+    err = capsys.readouterr().err
+    assert err == start + "\n"
+    assert code == (ExitCode.DIVERGED if error == "SimulationDiverged"
+                    else ExitCode.NOT_ACHIEVED)

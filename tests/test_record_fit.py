@@ -208,7 +208,7 @@ def test_identify_json_layout_and_plot(tmp_path, capsys):
     assert data["warnings"] == [] and data["flagged_rows"] == []
     assert {"M_T", "K_T", "C_T", "trunk_damping_ratio", "pair_damping_ratio", "restitution", "E",
             "omega_1", "V_1"} <= set(data["fit"])
-    assert set(data["fit"]["M_T"]) == {"value", "low", "high", "determined"}
+    assert set(data["fit"]["M_T"]) == {"value", "low", "high", "determined", "held"}
     assert data["fit"]["M_T"]["determined"] is True and data["note"] == ""
     assert data["fit"]["M_T"]["value"] == pytest.approx(model.dynamic_mass, rel=0.02)
     assert set(data["paper"]) == {"paper", "printed", "consistent"}

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import math
 
-from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.errors import NotAchieved, ParameterError
 
 from ..exits import ExitCode
 from ._common import number
@@ -50,8 +50,10 @@ def add_arguments(sp) -> None:
 
 def run(args) -> int:
     """Print the settings and the simulated collisions for the parsed command line ``args``
-    (text or ``--json``); exit code 0 when at least one engine holds the step, else
-    ParameterError (exit 2) with each engine's reason."""
+    (text or ``--json``); exit code 0 when at least one engine holds the step and each
+    engine that gives settings holds the target within 10 %; NotAchieved (exit 4, after
+    the output) naming what was achieved and what would hold it when one does not;
+    ParameterError (exit 2) with each engine's reason when no engine holds the step."""
     from treeimpact.compare.contact_settings import contact_settings
 
     engines = ENGINE_CHOICES[args.engine]
@@ -66,9 +68,40 @@ def run(args) -> int:
         from treeimpact.analytic.results import to_jsonable
 
         print(json.dumps(to_jsonable(res), indent=2))
-        return ExitCode.OK
-    print_settings(res, engines)
+    else:
+        print_settings(res, engines)
+    missed = [not_held_text(res, e) for e in engines if res[e].get("holds_target") is False]
+    if missed:
+        raise NotAchieved("; ".join(missed))
     return ExitCode.OK
+
+
+#: The engines' names as printed.
+ENGINE_NAMES = {"mujoco": "MuJoCo", "bullet": "Bullet"}
+
+
+def not_held_text(res: dict, engine: str) -> str:
+    """One line: what ``engine``'s setting achieved against the target of ``res`` (what
+    :func:`contact_settings` returns) and what would hold the target (its ``what_holds``)."""
+    from treeimpact.compare.contact_settings import HOLD_TOLERANCE
+
+    law, dt, r = res["target"], res["inputs"]["dt"], res[engine]
+    got = r["achieved"]["solref"] if engine == "mujoco" else r["achieved"]
+    e, t = got["restitution"], got["touch_duration"]
+    text = (f"{ENGINE_NAMES[engine]}'s setting gives e {e:.4g} and a touch duration of "
+            f"{1e3 * t:.4g} ms ({t / law['touch_duration'] - 1:+.2%}) for the e "
+            f"{law['restitution']:g}, {1e3 * law['touch_duration']:g} ms asked at --dt "
+            f"{dt:g} s, beyond {HOLD_TOLERANCE:.0%}")
+    holds = r["what_holds"]
+    ways = []
+    if holds["smallest_touch_duration"] is not None:
+        ways.append(f"the shortest touch duration this --dt holds within "
+                    f"{HOLD_TOLERANCE:.0%} is {1e3 * holds['smallest_touch_duration']:.4g} ms "
+                    "(same e)")
+    if holds["largest_dt"] is not None:
+        ways.append(f"the {1e3 * law['touch_duration']:g} ms touch needs --dt <= "
+                    f"{holds['largest_dt']:.3g} s")
+    return text + (": " + ", or ".join(ways) if ways else "")
 
 
 def _fmt(v: float) -> str:
@@ -177,3 +210,22 @@ def print_settings(res: dict, engines) -> None:
     for label, at, half, double in _collision_rows(res, engines):
         line = _row(label, at, law)
         print(f"{line}  {_moved(half)}  {_moved(double)}".rstrip())
+    _print_phases(res, engines)
+
+
+def _print_phases(res: dict, engines) -> None:
+    """How e and the touch duration move with where in a step the first touch falls."""
+    rows = []
+    if "mujoco" in engines and "error" not in res["mujoco"]:
+        rows.append(("MuJoCo solref (direct)", res["mujoco"]["phase_spread"]))
+    if not rows:
+        return
+    print(f"Where in a step the first touch falls ({rows[0][1]['phases']} fractions of a "
+          "step, the setting as printed; the duration from the first touch):")
+    for label, spread in rows:
+        (e0, e1), (t0, t1) = spread["restitution"], spread["touch_duration"]
+        if not math.isfinite(e0):
+            print(f"  {label:<32}diverged at some fraction of the step")
+            continue
+        print(f"  {label:<32}e {e0:.4f} to {e1:.4f}, touch duration {1e3 * t0:.4g} to "
+              f"{1e3 * t1:.4g} ms")

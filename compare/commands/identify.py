@@ -132,7 +132,8 @@ def _provenance(args, record) -> dict:
 
 def run(args) -> int:
     """Fit the record of the parsed command line ``args`` and print the result (text or
-    ``--json``); exit code 0."""
+    ``--json``); exit code 0 (explained or not, the verdict says), or NotAchieved (exit 4,
+    after the output) for a record not fitted, its one line naming the unit flags to pass."""
     import sys
 
     import numpy as np
@@ -153,17 +154,34 @@ def run(args) -> int:
             paper = _paper(record, test)
         if args.plot and math.isfinite(fit.residual_rms):
             _plot(args.plot, record, fit, paper, test)
+    refusal = _not_fitted(fit)
     if args.json:
         print(json.dumps(to_jsonable(_json(args, record, fit, paper)), indent=2))
+        if refusal:
+            raise refusal
         return ExitCode.OK
     for line in fit.warnings:
-        print(f"treeimpact: warning: {line}", file=sys.stderr)
+        if not (refusal and line in str(refusal)):  # said once, in the not-achieved line
+            print(f"treeimpact: warning: {line}", file=sys.stderr)
     print(f"{args.record}: {record.t.size} samples over {record.t[-1] - record.t[0]:.4g} s "
           f"(read in {record.time_unit} and {record.length_unit})")
     if math.isfinite(fit.residual_rms):  # else not fitted (units): the conclusion says why
         _print_values(fit, paper.get("paper", {}))
     _print_conclusion(fit)
+    if refusal:
+        raise refusal
     return ExitCode.OK
+
+
+def _not_fitted(fit):
+    """A NotAchieved for a record that was not fitted (its numbers look like another unit),
+    its diagnosis as the message (the unit flags to pass), or None for a fitted one."""
+    from treeimpact.analytic.errors import NotAchieved
+
+    if fit.conclusion.fitted:
+        return None
+    why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
+    return NotAchieved(f"the record was not fitted: {why}")
 
 
 def _json(args, record, fit, paper) -> dict:
@@ -171,7 +189,7 @@ def _json(args, record, fit, paper) -> dict:
     rests on, the provenance (kinds and sources as their names)."""
     from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS
 
-    return {"fit": fit.to_json(), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
+    return {"fit": _quantities(fit), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
             "residual_rms": fit.residual_rms, "residual_rms_y": fit.residual_rms_y,
             "explained": fit.explained, "note": fit.note, "held": fit.held,
             "verdict": str(fit.conclusion),
@@ -180,6 +198,18 @@ def _json(args, record, fit, paper) -> dict:
             "misfit_ratio": fit.misfit_ratio,
             "flagged_rows": [record.row(int(i)) for i in fit.flagged],
             "warnings": list(fit.warnings), "provenance": _provenance(args, record)}
+
+
+def _quantities(fit) -> dict:
+    """The fit's quantities as JSON (:meth:`FitResult.to_json`), each with ``held`` (the
+    table's "given" or "held at 0", else None); a quantity held at 0 (the sensor's offset or
+    drift, not fitted) is not ``determined``: the record did not fix it, the table says so."""
+    out = fit.to_json()
+    for name, q in out.items():
+        q["held"] = fit.held.get(name)
+        if q["held"] == "held at 0":
+            q["determined"] = False
+    return out
 
 
 def _print_values(fit, reading: dict) -> None:

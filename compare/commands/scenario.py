@@ -64,6 +64,48 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
                                   "default: print it")
 
 
+#: Allowed ranges of the regression's inputs (Figs 4-5), SI: a1 = V up to 100 m/s (a pendulum
+#: of the allowed l_e and theta_r is far slower), a2 down to -1e6 m/s^2, x_max up to the
+#: clamp height a (the small-deflection trunk of eq 1 cannot move further), tau up to the
+#: longest run, 10 s; beyond them e^(b tau) and b leave double precision.
+REGRESSION_RANGES = {"a1": (0.0, 100.0, "m/s"), "a2": (-1e6, 0.0, "m/s^2"),
+                     "x_max": (0.0, None, "m"), "tau": (0.0, 10.0, "s")}
+
+
+def check_regression(args) -> None:
+    """--a1, --a2, --x-max and --tau of the parsed ``args`` (those given) in
+    :data:`REGRESSION_RANGES` (x_max at most --clamp-height), one line naming the flag."""
+    from treeimpact.analytic.model.parameters import check_range
+
+    for key, (low, high, unit) in REGRESSION_RANGES.items():
+        value = getattr(args, key)
+        if value is None:
+            continue
+        if key == "x_max":
+            high = check_range("--clamp-height", args.clamp_height, low=0.0, low_open=True,
+                               unit="m")
+        check_range(f"--{key.replace('_', '-')}", value, low=low, high=high, unit=unit,
+                    low_open=key != "a2")
+
+
+def _stiffness(args, pendulum) -> float:
+    """K_T (N/m) from --a1, --a2, --x-max, --tau (eqs 43, 46); an e^(b tau) beyond double
+    precision is the overdamped motion it means (omega_n = 0 <= b), one line."""
+    from treeimpact.analytic.model.calibration import stiffness_from_regression
+
+    try:
+        return stiffness_from_regression(
+            a1=args.a1, a2=args.a2, x_max=args.x_max, tau=args.tau,
+            dynamic_mass=args.dynamic_mass, impactor_mass=args.mass,
+            impactor_stiffness=pendulum.stiffness)
+    except OverflowError:
+        b = -args.a2 / args.a1
+        raise ParameterError(f"--a1 = {args.a1:g} m/s, --a2 = {args.a2:g} m/s^2, --tau = "
+                             f"{args.tau:g} s: b tau = {b * args.tau:.4g}, so omega_n = a1 / "
+                             "(x_max e^(b tau)) is 0 <= b: an overdamped motion with no "
+                             "maximum of that kind (eqs 37, 43)") from None
+
+
 def _pick(args, key):
     v = getattr(args, key)
     return DEFAULTS[key] if v is None else v
@@ -76,12 +118,12 @@ def build_scenario(args):
         calibrate_trunk,
         calibration_notes,
         damping_rate_from_regression,
-        stiffness_from_regression,
     )
     from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario, Trunk
 
     pendulum = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
                         release_angle_deg=args.release_angle_deg)
+    check_regression(args)
     given = ["a", "d", "theta_r", "m", "l_e", "M_T"]
     if args.damping_rate is not None:
         if args.a1 is not None or args.a2 is not None:
@@ -100,9 +142,7 @@ def build_scenario(args):
         k_t = args.equivalent_stiffness
         given.append("K_T")
     elif None not in (args.x_max, args.tau, args.a1, args.a2):
-        k_t = stiffness_from_regression(a1=args.a1, a2=args.a2, x_max=args.x_max, tau=args.tau,
-                                        dynamic_mass=args.dynamic_mass, impactor_mass=args.mass,
-                                        impactor_stiffness=pendulum.stiffness)
+        k_t = _stiffness(args, pendulum)
         given.append(f"K_T from x_max = {args.x_max:g} m, tau = {args.tau:g} s (eqs 43, 46)")
     else:
         raise ParameterError("--equivalent-stiffness: missing (give K_T in N/m, or --x-max, "
@@ -177,7 +217,9 @@ def fit_t_end(scenario, given: bool):
 
 def run(args) -> int:
     """Write (or print) the scenario file of the parsed command line ``args``, one that
-    runs (:func:`fit_t_end`); exit code 0."""
+    runs (:func:`fit_t_end`); exit code 0. Bad input is a ParameterError naming the flag
+    (exit 2); a tree whose analytic x_max lies beyond the clamp height is OutsideValidity
+    (exit 4, nothing written)."""
     from treeimpact.analytic.model.scenario_toml import scenario_toml
 
     try:

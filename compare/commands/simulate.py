@@ -22,6 +22,8 @@ from ._common import (
 
 NAME = "simulate"
 HELP = "simulate one scenario"
+#: Removed spellings -> their names now (compare.names).
+RENAMED = {"damping": "trunk_damping_model", "release_angle": "release_angle_deg"}
 
 
 def add_arguments(sp) -> None:
