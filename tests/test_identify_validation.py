@@ -22,6 +22,7 @@ from treeimpact.analytic.identify.intervals import DETERMINED_FACTOR, TREE
 from treeimpact.analytic.identify.pendulum_record import read_record
 from treeimpact.analytic.identify.record_fit import Record, fit_record
 from treeimpact.compare.cli import main
+from treeimpact.compare.exits import ExitCode
 
 DATA = Path(__file__).resolve().parent / "data" / "identify"
 sys.path.insert(0, str(DATA))
@@ -152,14 +153,16 @@ def test_the_cli_warns_of_units_on_one_line_and_in_the_json(capsys):
             "--equivalent-length", str(flags["equivalent_length"]), "--release-angle-deg",
             str(flags["release_angle_deg"]), "--clamp-height", str(flags["clamp_height"]),
             "--diameter", str(flags["diameter"])]
-    assert main(args) == 0
+    # not fitted: exit 4 (ran, but could not do what was asked), one line naming the flag
+    assert main(args) == ExitCode.NOT_ACHIEVED
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1 and "x looks like mm" in captured.err
+    assert "not achieved" in captured.err and "--length-unit mm" in captured.err
     assert "NOT explained (units)" in captured.out
-    assert main(args + ["--json"]) == 0
+    assert main(args + ["--json"]) == ExitCode.NOT_ACHIEVED
     captured = capsys.readouterr()
     data = json.loads(captured.out)
-    assert captured.err == "" and data["explained"] is False
+    assert captured.err.count("\n") == 1 and data["explained"] is False
     assert len(data["warnings"]) == 1 and "--length-unit mm" in data["warnings"][0]
     assert main(args + ["--length-unit", "mm"]) == 0  # declared: read right, fitted
     out = capsys.readouterr().out
