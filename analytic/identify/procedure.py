@@ -37,7 +37,7 @@ from treeimpact.analytic.model.parameters import (
 )
 from treeimpact.analytic.model.two_body import two_body_model
 
-from .events import find_events, peak
+from .events import find_events, impact_sequence, moving_together, peak
 from .noise import NoiseSource
 
 READINGS = ("paper", "printed", "consistent")
@@ -157,21 +157,26 @@ class Regression:
     noise_source: str = NoiseSource.DIFFERENCES.value  # where the noise came from
     jump_threshold: float = 0.0  # m/s, the smallest slope increase counted as an impact
     slope_span: int = 1  # samples each side a slope was read over to find the impacts
+    sequence: tuple = ()  # s, the impacts read as the impact process (first ... together)
 
 
-def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: float = 0.02,
-            search_time: float = 0.02, t_together: float | None = None) -> Regression:
+def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: float = 1e-4,
+            search_time: float = 0.02, t_together: float | None = None,
+            y=None) -> Regression:
     """Steps 1-3 of the procedure on a sampled displacement record x(t) (m, s).
 
     The events are found against the record's noise (:mod:`.events`): the resting level
     and the noise from the rest before the contact (else the sensor's zero and the
     high-pass noise); an impact is a slope increase larger than ``jump_fraction`` of the
-    largest slope and than the noise could make; the bodies move together at the last one
-    within ``search_time`` (s) of the first or before the displacement's peak (a heavy
-    crown's pendulum may return later than search_time: the sequence is read whole), or
-    at ``t_together`` if given (e.g. from a contact channel, as Pellerin et al. recorded). The polynomial of ``degree`` is fitted
+    largest slope and than the noise could make, each read against the motion's own
+    curvature; the bodies move together at the last impact of the sequence
+    (:func:`.events.impact_sequence`: its gaps shrink, eq 33) within ``search_time`` (s) of
+    the first or before the displacement's peak, or at ``t_together`` if given (e.g. from
+    a contact channel, as Pellerin et al. recorded). The polynomial of ``degree`` is fitted
     over ``window`` (s, at most 10 ms) from there. ParameterError "not identifiable" when
-    the record shows no impact, ends inside the window or before its peak.
+    the record shows no impact, a second strike before its peak, impacts up to its peak,
+    ends inside the window or before its peak, or (with the pendulum's record ``y``, m)
+    the bodies apart on the way to the peak (:func:`.events.moving_together`).
     """
     t = np.asarray(t, float)
     x = np.asarray(x, float)
@@ -185,10 +190,14 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
     x = x - noise.baseline
     t_first = float(impacts.times[0])
     t_max, x_max = peak(t, x, noise.sigma)
-    if t_together is None:  # the sequence runs on while impacts come before the peak
-        cand = impacts.times[(impacts.times <= t_first + search_time)
-                             | (impacts.times < t_max)]
-        t_together = float(cand[-1])
+    sequence = ()
+    if t_together is None:  # the last impact of the sequence, before the peak
+        dt = float(np.median(np.diff(t)))
+        seq = impact_sequence(impacts.times, t_first, t_max, dt, search_time)
+        t_together, sequence = float(seq[-1]), tuple(float(v) for v in seq)
+        if y is not None:
+            moving_together(t, x, np.asarray(y, float) - noise.baseline, t_together, t_max,
+                            noise.sigma)
     sel = (t >= t_together) & (t <= t_together + window)
     if np.count_nonzero(sel) <= degree + 1:
         raise ParameterError("record: too few samples in the regression window")
@@ -206,7 +215,8 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
                       t_origin=float(t_origin), coefficients=tuple(float(c) for c in coeffs),
                       x_max=x_max, tau=t_max - float(t_origin), baseline=noise.baseline,
                       noise=noise.sigma, noise_source=noise.source.value,
-                      jump_threshold=impacts.threshold, slope_span=impacts.span)
+                      jump_threshold=impacts.threshold, slope_span=impacts.span,
+                      sequence=sequence)
 
 
 def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "paper",
@@ -217,7 +227,7 @@ def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "pa
     point); A_y from the pendulum record ``y`` if given, else eq 45 (x0 T0 / 2)."""
     t = np.asarray(t, float)
     x = np.asarray(x, float)
-    reg = regress(t, x, **regress_kw)
+    reg = regress(t, x, y=y, **regress_kw)
     x = x - reg.baseline
     x0 = reg.x_together
     T0 = reg.t_together - reg.t_first
