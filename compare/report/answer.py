@@ -110,10 +110,18 @@ def small_e_rows(trees: dict) -> list[dict]:
 
 
 def holds_text(a: dict) -> str:
-    """'0.36' (to 0.01, rounded down), '>= 0.9' (the whole range), or '0: -25 % at e = 0'
-    (not a small-e effect)."""
+    """'0.375-0.380' (the crossing's bracket, rounded outward; 'not monotone' before it when
+    the curve is not, '; 2nd strike from e = 0.2' when the exact run it counts strikes
+    again), '>= 0.9' (the whole range), or '0: -25 % at e = 0' (not a small-e effect)."""
+    from ..studies.small_e import bracket_text
+
     if a["bracket"] is not None:
-        return f"{math.floor(100 * a['holds_up_to_e'] + 1e-9) / 100:.2f}"
+        text = bracket_text(a["bracket"])
+        if not a.get("monotone", True):
+            text = f"not monotone (exits {text})"
+        if a.get("second_strike_from") is not None:
+            text += f"; 2nd strike from e = {a['second_strike_from']:g}"
+        return text
     if a["holds_up_to_e"] > 0:
         return f">= {a['holds_up_to_e']:g}"
     z = a["error_at_zero"]
@@ -159,8 +167,8 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
                         else f"{label} (no value at e = 0 for every tree)")
                 (trunk if first[name].get("model") == "continuum" else off).append(part)
             else:
-                ups = [math.floor(100 * a["holds_up_to_e"] + 1e-9) / 100 for a in answers]
-                held.append(f"{_range(ups, lambda v: f'{v:.2f}')} for {label}")
+                ups = [a["holds_up_to_e"] for a in answers]
+                held.append(f"{_range(ups, lambda v: f'{v:.3f}')} for {label}")
         text = (f"Small e: each consequence stays within {100 * tol:.0f} % of the exact result "
                 + ("up to e = " + ", ".join(held) if held else "at no e") + ".")
         if off:
