@@ -321,8 +321,8 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
 
 
 def k_t_split(scenario) -> dict:
-    """K_T's error at e = 0 (one impact: the procedure's reading of the sequence plays no
-    part) split into its two causes, relative to the true K_T: ``fit``, eq 46 read with
+    """K_T's error at e = 0 of the tree ``scenario`` (one impact: the procedure's reading of
+    the sequence plays no part) split into its two causes, relative to the true K_T: ``fit``, eq 46 read with
     the undamped omega_n (K_T = omega_n^2 (M_T + m) - k, exact for eq 34) on the 10 ms
     quadratic fit's omega_n and M_T: the fit's bias alone; ``reading``, eq 46 with the
     damped frequency omega_n sqrt(1 - xi^2) (the reading that reproduces Table 1) on the
