@@ -171,11 +171,14 @@ def curvature_free(jumps: np.ndarray, span: int) -> np.ndarray:
     there (a x'' read over ``span`` samples: a span dt): the median of the jumps within
     CURVATURE_SPANS ``span`` samples on each side, the kink's own samples left out, so a
     kink on a decelerating trunk (the impacts of the chattering, eq 33: their jumps shrink
-    like e^i, below the deceleration's a dt for small e) stands out by its own size."""
+    like e^i, below the deceleration's a dt for small e) stands out by its own size. At the
+    record's ends the jumps are continued by odd reflection (their trend carried on): a
+    repeated end value would read the curvature at a record starting at the contact as a
+    second kink."""
     w, n = CURVATURE_SPANS * span, jumps.size
     if n <= 2 * (w + span):
         return jumps
-    pad = np.pad(jumps, w, mode="edge")
+    pad = np.pad(jumps, w, mode="reflect", reflect_type="odd")
     win = np.lib.stride_tricks.sliding_window_view(pad, 2 * w + 1)
     keep = np.r_[np.arange(w - span), np.arange(w + span + 1, 2 * w + 1)]
     return jumps - np.median(win[:, keep], axis=1)
