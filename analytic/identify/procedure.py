@@ -219,15 +219,38 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
                       sequence=sequence)
 
 
+def short_process(t_first: float, t_together: float, t_origin: float, t_max: float,
+                  x0_share: float) -> None:
+    """Raises ParameterError "not identifiable" unless the line through the moving-together
+    point (``t_together``, s; x0 at ``x0_share`` of x_max) reaches x = 0 (``t_origin``, s)
+    no further before the first impact (``t_first``, s) than the first impact lies before
+    the peak (``t_max``, s). Eqs 42-43 read the motion from that origin as if the bodies
+    had moved together from it (x0 = 0: "the bodies move together within a very short time
+    after the start of the impact process"); an origin earlier than that is a time the tree
+    had not been struck yet, and tau = t_max - t_origin no time of the record (a long
+    sequence ending near the peak: realistic-crown at e = 0.1, docs/identification.md)."""
+    if t_first - t_origin > t_max - t_first:
+        raise ParameterError(
+            f"not identifiable: the impact process is not short (the bodies move together "
+            f"{1e3 * (t_together - t_first):.3g} ms after the first impact, at "
+            f"{100 * x0_share:.0f} % of x_max; the line through that point reaches x = 0 "
+            f"{1e3 * (t_first - t_origin):.3g} ms before the first impact, more than the "
+            f"{1e3 * (t_max - t_first):.3g} ms to the peak): eqs 42-43's x0 = 0 does not hold")
+
+
 def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "paper",
                          **regress_kw) -> tuple[Identified, Regression]:
     """The whole procedure on a record x(t) (``x`` m at the times ``t`` s) of the pendulum
     ``test``, in the ``reading`` of eqs 44 and 46; ``regress_kw`` go to :func:`regress`.
     A_x comes from the record (trapezoid from the first impact to the moving-together
-    point); A_y from the pendulum record ``y`` if given, else eq 45 (x0 T0 / 2)."""
+    point); A_y from the pendulum record ``y`` if given, else eq 45 (x0 T0 / 2).
+    ParameterError "not identifiable" as :func:`regress`, when the impact process is not
+    short (:func:`short_process`) or the result breaks a premise (:func:`check_identifiable`)."""
     t = np.asarray(t, float)
     x = np.asarray(x, float)
     reg = regress(t, x, y=y, **regress_kw)
+    short_process(reg.t_first, reg.t_together, reg.t_origin, reg.t_origin + reg.tau,
+                  reg.x_together / reg.x_max)
     x = x - reg.baseline
     x0 = reg.x_together
     T0 = reg.t_together - reg.t_first
