@@ -111,8 +111,9 @@ def small_e_rows(trees: dict) -> list[dict]:
 
 def holds_text(a: dict) -> str:
     """'0.375-0.380' (the crossing's bracket, rounded outward; 'not monotone' before it when
-    the curve is not, '; 2nd strike from e = 0.2' when the exact run it counts strikes
-    again), '>= 0.9' (the whole range), or '0: -25 % at e = 0' (not a small-e effect)."""
+    the curve is not, '; 2nd strike from e = 0.2 (first contact only: 0.215-0.220)' when
+    the exact run it counts strikes again), '>= 0.9' (the whole range), or '0: -25 % at
+    e = 0' (not a small-e effect)."""
     from ..studies.small_e import bracket_text
 
     if a["bracket"] is not None:
@@ -121,6 +122,8 @@ def holds_text(a: dict) -> str:
             text = f"not monotone (exits {text})"
         if a.get("second_strike_from") is not None:
             text += f"; 2nd strike from e = {a['second_strike_from']:g}"
+            if a.get("first_contact_bracket") is not None:
+                text += f" (first contact only: {bracket_text(a['first_contact_bracket'])})"
         return text
     if a["holds_up_to_e"] > 0:
         return f">= {a['holds_up_to_e']:g}"

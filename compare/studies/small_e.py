@@ -153,6 +153,21 @@ def second_strike(result) -> bool:
     return not sol.together_starts and len(sol.impacts) > 1
 
 
+def first_contact_error(scenario, e: float) -> float:
+    """eq 57 against the loss of the first contact only of the exact run of ``scenario`` at
+    ``e`` (relative): its impacts up to the first separation where the bodies move
+    together, else the first impact alone ((1 - e^2) of eq 57's loss, so the error is
+    e^2 / (1 - e^2)): the curve without the second strike :func:`second_strike` flags."""
+    sol = exact_run(scenario, e)[0].solution
+    model, impacts = sol.model, sol.impacts
+    if sol.together_starts:
+        end = sol.separations[0].t if sol.separations else math.inf
+        loss = sum(i.loss for i in impacts if i.t < end)
+    else:
+        loss = impacts[0].loss
+    return _rel(model.reduced_mass * model.impact_speed ** 2 / 2.0, loss)
+
+
 def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     """The sweep table's columns at the exact run ``result`` (at the scenario's own e, with
     the record the procedure needs): each approximation's error (``small_e.NAME``) and why
@@ -313,6 +328,13 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
                      "second_strike_from": strike_from,
                      "verdict": _verdict(holds, bracket, values[0], grid, tol, mono,
                                          strike_from)}
+        if strike_from is not None and name == "eq57_energy_loss":
+            first = [first_contact_error(scenario, e) for e in grid]
+            out[name]["first_contact_bracket"] = first_crossing(
+                grid, first, lambda e: first_contact_error(scenario, e), tol)[1]
+            if out[name]["first_contact_bracket"] is not None:
+                out[name]["verdict"] += (" (the first contact only: "
+                                         f"{bracket_text(out[name]['first_contact_bracket'])})")
         if name == "identification_K_T":
             out[name]["split_at_zero"] = split
             out[name]["verdict"] += (f" (the 10 ms fit {100 * split['fit']:+.0f} %, eq 46's "

@@ -204,8 +204,14 @@ def test_eq58_is_eq57_restated_and_a_second_strike_is_said(central_leader):
     assert ans["eq57_energy_loss"]["second_strike_from"] is None
     crown = load_scenario("realistic-crown")
     crown_ans = small_e_answer(crown, small_e_table(crown, grid=(0.0, 0.1, 0.2, 0.25, 0.3)))
+    from treeimpact.compare.report.answer import holds_text
     assert crown_ans["eq57_energy_loss"]["second_strike_from"] == 0.2
     assert "second strike" in crown_ans["eq57_energy_loss"]["verdict"]
+    # the first contact only: one impact from e ~ 0.19, whose loss is (1 - e^2) of eq 57's,
+    # so the error e^2 / (1 - e^2) reaches 5 % at e = sqrt(0.05 / 1.05) = 0.218 (closed form)
+    lo, hi = crown_ans["eq57_energy_loss"]["first_contact_bracket"]
+    assert lo <= math.sqrt(0.05 / 1.05) <= hi and hi - lo <= RESOLUTION
+    assert "first contact only: 0.21" in holds_text(crown_ans["eq57_energy_loss"])
 
 
 def test_k_t_at_e_0_splits_into_the_fit_and_the_reading(central_leader):
