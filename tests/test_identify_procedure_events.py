@@ -295,11 +295,12 @@ def test_an_impact_process_that_is_not_short_is_refused():
 @pytest.mark.parametrize("tree", ["open-center", "central-leader"])
 def test_a_soft_record_starting_at_the_contact_reads_each_contact_once(tree):
     """The pad's record (the soft SDOF rung's, starting at the contact) decelerates from its
-    first sample on: the curvature read at the record's start must continue that trend (odd
-    reflection, :func:`curvature_free`), else the second sample reads as a second kink 3 us
-    after the first and the gap rule refuses the record as a second strike (every engine and
-    soft rung was). The sequence read is the pad's contact onsets (force rising from 0), each
-    within a sample (a kink is placed at the sample after it)."""
+    first sample on: read against the record's repeated end values (:func:`curvature_free`)
+    its second sample stood out as a second kink 3 us after the first and the gap rule
+    refused the record as a second strike (every engine and soft rung was); a kink within
+    two spans of a record's first contact is that contact's
+    (:func:`slope_increases`). The sequence read is the pad's contact onsets (force rising
+    from 0), each within a sample (a kink is placed at the sample after it)."""
     from treeimpact.analytic.contact.soft import simulate_soft
 
     tr = simulate_soft(load_scenario(tree)).trajectory
