@@ -73,7 +73,8 @@ def _validate(data: dict, path: str) -> None:
         if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
             raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
         if "rel" not in entry and not entry.get("report_only") and not entry.get("undefined") \
-                and where != "identification_reported":
+                and where != "identification_reported" \
+                and not where.startswith("identification_refused"):
             raise ParameterError(f"{path}: {where}: give rel or report_only = true (or "
                                  "undefined = true: no check)")
 
@@ -84,6 +85,11 @@ def _validate(data: dict, path: str) -> None:
     for metric, entry in data.get("identification", {}).items():
         need_reason(f"identification.{metric}", entry)
     need_reason("identification_reported", data.get("identification_reported"))
+    for name, entry in data.get("identification_refused", {}).items():
+        need_reason(f"identification_refused.{name}", entry)
+        if not str(entry.get("match", "")).startswith("not identifiable"):
+            raise ParameterError(f"{path}: identification_refused.{name}.match: the "
+                                 "refusal's words, starting 'not identifiable'")
     for name, entry in data.get("study", {}).items():
         need_reason(f"study.{name}", entry)
     for kind, entry in data.get("ledger", {}).items():

@@ -37,7 +37,7 @@ from treeimpact.analytic.model.parameters import (
 )
 from treeimpact.analytic.model.two_body import two_body_model
 
-from .events import find_events, peak
+from .events import find_events, impact_sequence, moving_together, peak
 from .noise import NoiseSource
 
 READINGS = ("paper", "printed", "consistent")
@@ -157,21 +157,26 @@ class Regression:
     noise_source: str = NoiseSource.DIFFERENCES.value  # where the noise came from
     jump_threshold: float = 0.0  # m/s, the smallest slope increase counted as an impact
     slope_span: int = 1  # samples each side a slope was read over to find the impacts
+    sequence: tuple = ()  # s, the impacts read as the impact process (first ... together)
 
 
-def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: float = 0.02,
-            search_time: float = 0.02, t_together: float | None = None) -> Regression:
+def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: float = 1e-4,
+            search_time: float = 0.02, t_together: float | None = None,
+            y=None) -> Regression:
     """Steps 1-3 of the procedure on a sampled displacement record x(t) (m, s).
 
     The events are found against the record's noise (:mod:`.events`): the resting level
     and the noise from the rest before the contact (else the sensor's zero and the
     high-pass noise); an impact is a slope increase larger than ``jump_fraction`` of the
-    largest slope and than the noise could make; the bodies move together at the last one
-    within ``search_time`` (s) of the first or before the displacement's peak (a heavy
-    crown's pendulum may return later than search_time: the sequence is read whole), or
-    at ``t_together`` if given (e.g. from a contact channel, as Pellerin et al. recorded). The polynomial of ``degree`` is fitted
+    largest slope and than the noise could make, each read against the motion's own
+    curvature; the bodies move together at the last impact of the sequence
+    (:func:`.events.impact_sequence`: its gaps shrink, eq 33) within ``search_time`` (s) of
+    the first or before the displacement's peak, or at ``t_together`` if given (e.g. from
+    a contact channel, as Pellerin et al. recorded). The polynomial of ``degree`` is fitted
     over ``window`` (s, at most 10 ms) from there. ParameterError "not identifiable" when
-    the record shows no impact, ends inside the window or before its peak.
+    the record shows no impact, a second strike before its peak, impacts up to its peak,
+    ends inside the window or before its peak, or (with the pendulum's record ``y``, m)
+    the bodies apart on the way to the peak (:func:`.events.moving_together`).
     """
     t = np.asarray(t, float)
     x = np.asarray(x, float)
@@ -185,10 +190,14 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
     x = x - noise.baseline
     t_first = float(impacts.times[0])
     t_max, x_max = peak(t, x, noise.sigma)
-    if t_together is None:  # the sequence runs on while impacts come before the peak
-        cand = impacts.times[(impacts.times <= t_first + search_time)
-                             | (impacts.times < t_max)]
-        t_together = float(cand[-1])
+    sequence = ()
+    if t_together is None:  # the last impact of the sequence, before the peak
+        dt = float(np.median(np.diff(t)))
+        seq = impact_sequence(impacts.times, t_first, t_max, dt, search_time)
+        t_together, sequence = float(seq[-1]), tuple(float(v) for v in seq)
+        if y is not None:
+            moving_together(t, x, np.asarray(y, float) - noise.baseline, t_together, t_max,
+                            noise.sigma)
     sel = (t >= t_together) & (t <= t_together + window)
     if np.count_nonzero(sel) <= degree + 1:
         raise ParameterError("record: too few samples in the regression window")
@@ -206,7 +215,27 @@ def regress(t, x, *, window: float = 0.010, degree: int = 2, jump_fraction: floa
                       t_origin=float(t_origin), coefficients=tuple(float(c) for c in coeffs),
                       x_max=x_max, tau=t_max - float(t_origin), baseline=noise.baseline,
                       noise=noise.sigma, noise_source=noise.source.value,
-                      jump_threshold=impacts.threshold, slope_span=impacts.span)
+                      jump_threshold=impacts.threshold, slope_span=impacts.span,
+                      sequence=sequence)
+
+
+def short_process(t_first: float, t_together: float, t_origin: float, t_max: float,
+                  x0_share: float) -> None:
+    """Raises ParameterError "not identifiable" unless the line through the moving-together
+    point (``t_together``, s; x0 at ``x0_share`` of x_max) reaches x = 0 (``t_origin``, s)
+    no further before the first impact (``t_first``, s) than the first impact lies before
+    the peak (``t_max``, s). Eqs 42-43 read the motion from that origin as if the bodies
+    had moved together from it (x0 = 0: "the bodies move together within a very short time
+    after the start of the impact process"); an origin earlier than that is a time the tree
+    had not been struck yet, and tau = t_max - t_origin no time of the record (a long
+    sequence ending near the peak: realistic-crown at e = 0.1, docs/identification.md)."""
+    if t_first - t_origin > t_max - t_first:
+        raise ParameterError(
+            f"not identifiable: the impact process is not short (the bodies move together "
+            f"{1e3 * (t_together - t_first):.3g} ms after the first impact, at "
+            f"{100 * x0_share:.0f} % of x_max; the line through that point reaches x = 0 "
+            f"{1e3 * (t_first - t_origin):.3g} ms before the first impact, more than the "
+            f"{1e3 * (t_max - t_first):.3g} ms to the peak): eqs 42-43's x0 = 0 does not hold")
 
 
 def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "paper",
@@ -214,10 +243,14 @@ def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "pa
     """The whole procedure on a record x(t) (``x`` m at the times ``t`` s) of the pendulum
     ``test``, in the ``reading`` of eqs 44 and 46; ``regress_kw`` go to :func:`regress`.
     A_x comes from the record (trapezoid from the first impact to the moving-together
-    point); A_y from the pendulum record ``y`` if given, else eq 45 (x0 T0 / 2)."""
+    point); A_y from the pendulum record ``y`` if given, else eq 45 (x0 T0 / 2).
+    ParameterError "not identifiable" as :func:`regress`, when the impact process is not
+    short (:func:`short_process`) or the result breaks a premise (:func:`check_identifiable`)."""
     t = np.asarray(t, float)
     x = np.asarray(x, float)
-    reg = regress(t, x, **regress_kw)
+    reg = regress(t, x, y=y, **regress_kw)
+    short_process(reg.t_first, reg.t_together, reg.t_origin, reg.t_origin + reg.tau,
+                  reg.x_together / reg.x_max)
     x = x - reg.baseline
     x0 = reg.x_together
     T0 = reg.t_together - reg.t_first

@@ -36,6 +36,7 @@ from ..studies.small_e import E_GRID, RESOLUTION
 from ..verdicts import Verdict, validity_tolerance
 from .answer import (
     ANSWER_METRICS,
+    grid_text,
     in_short,
     one_dof_answer,
     small_e_rows,
@@ -218,7 +219,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     small_e = sections["small_e"]
     summary["small_e"] = {**small_e, "rows": small_e_rows(small_e["trees"]),
                           "step": E_GRID[1] - E_GRID[0], "e_max": E_GRID[-1],
-                          "resolution": RESOLUTION}
+                          "grid": grid_text(E_GRID), "resolution": RESOLUTION}
     summary["in_short"] = in_short(summary["answer"], small_e["trees"])
     env = environment()
     paths = {}

@@ -86,6 +86,18 @@ def with_sensitivity(answer: list[dict], studies) -> None:
             if tree else {}
 
 
+def grid_text(grid) -> str:
+    """The e grid of the small-e curves as the table's caption says it: '0.005 on [0, 0.05],
+    then 0.05 to 0.9' (each run of equal steps, rounded to 1e-6)."""
+    steps = [round(b - a, 6) for a, b in zip(grid, grid[1:])]
+    parts, start = [], 0
+    for i in range(1, len(steps) + 1):
+        if i == len(steps) or steps[i] != steps[start]:
+            parts.append(f"{steps[start]:g} on [{grid[start]:g}, {grid[i]:g}]")
+            start = i
+    return ", then ".join(parts)
+
+
 def small_e_rows(trees: dict) -> list[dict]:
     """The small-e table's rows from ``trees`` (tree -> its small-e answers,
     :func:`compare.studies.small_e.small_e_answer`): per approximation its label, what it is
@@ -99,6 +111,7 @@ def small_e_rows(trees: dict) -> list[dict]:
         for tree, answers in trees.items():
             a = answers[name]
             at_e = a["error_at_e"]
+            at_e = at_e if at_e is not None and math.isfinite(at_e) else None  # n/a
             cells[tree] = {"holds": holds_text(a), "at_e": at_e, "e": a["e"],
                            "flag": not (at_e is not None and math.isfinite(at_e)
                                         and abs(at_e) <= tol),
@@ -110,13 +123,27 @@ def small_e_rows(trees: dict) -> list[dict]:
 
 
 def holds_text(a: dict) -> str:
-    """'0.36' (to 0.01, rounded down), '>= 0.9' (the whole range), or '0: -25 % at e = 0'
-    (not a small-e effect)."""
+    """'0.375-0.380' (the crossing's bracket, rounded outward; 'not monotone' before it when
+    the curve is not, '; 2nd strike from e = 0.2 (first contact only: 0.215-0.220)' when
+    the exact run it counts strikes again), '>= 0.9' (the whole range), or '0: -25 % at
+    e = 0' (not a small-e effect)."""
+    from ..studies.small_e import bracket_text
+
     if a["bracket"] is not None:
-        return f"{math.floor(100 * a['holds_up_to_e'] + 1e-9) / 100:.2f}"
+        text = bracket_text(a["bracket"])
+        if not a.get("monotone", True):
+            text = f"not monotone (exits {text})"
+        if a.get("second_strike_from") is not None:
+            text += f"; 2nd strike from e = {a['second_strike_from']:g}"
+            if a.get("first_contact_bracket") is not None:
+                text += f" (first contact only: {bracket_text(a['first_contact_bracket'])})"
+        return text
     if a["holds_up_to_e"] > 0:
         return f">= {a['holds_up_to_e']:g}"
-    z = a["error_at_zero"]
+    z, split = a["error_at_zero"], a.get("split_at_zero")
+    if split and math.isfinite(z) and all(math.isfinite(v) for v in split.values()):
+        return (f"0: {100 * z:+.0f} % at e = 0 (10 ms fit {100 * split['fit']:+.0f} %, "
+                f"eq 46 damped omega {100 * split['reading']:+.0f} %)")
     return f"0: {100 * z:+.0f} % at e = 0" if z is not None and math.isfinite(z) else \
         "0: no value at e = 0"
 
@@ -159,8 +186,13 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
                         else f"{label} (no value at e = 0 for every tree)")
                 (trunk if first[name].get("model") == "continuum" else off).append(part)
             else:
-                ups = [math.floor(100 * a["holds_up_to_e"] + 1e-9) / 100 for a in answers]
-                held.append(f"{_range(ups, lambda v: f'{v:.2f}')} for {label}")
+                ups = [a["holds_up_to_e"] for a in answers]
+                notes = [f"not monotone on {tree}" for tree, t in trees.items()
+                         if not t[name].get("monotone", True)] + [
+                    f"counting a second strike on {tree}" for tree, t in trees.items()
+                    if t[name].get("second_strike_from") is not None]
+                held.append(f"{_range(ups, lambda v: f'{v:.3f}')} for {label}"
+                            + (f" ({'; '.join(notes)})" if notes else ""))
         text = (f"Small e: each consequence stays within {100 * tol:.0f} % of the exact result "
                 + ("up to e = " + ", ".join(held) if held else "at no e") + ".")
         if off:

@@ -18,13 +18,20 @@ from pathlib import Path
 
 from ..runs import OK
 
-#: The e of the curves (1): [0, 0.9] in steps of 0.05.
-E_GRID = tuple(round(0.05 * i, 2) for i in range(19))
+#: The e of the curves (1): [0, 0.05] in steps of 0.005 (the identification's and eq 45's
+#: crossings lie there), then to 0.9 in steps of 0.05.
+E_GRID = tuple(round(0.005 * i, 3) for i in range(10)) + tuple(
+    round(0.05 * i, 2) for i in range(1, 19))
 #: Where an approximation has no value at e = 0 (eq 45: x0 = T0 = A_x = 0; the pad law needs
 #: e > 0), its e = 0 point is read here (1).
 E_FLOOR = 1e-3
-#: How finely the crossing of the tolerance is located (1, in e).
-RESOLUTION = 0.01
+#: How finely the crossing of the tolerance is located (1, in e): the bracket [lo, hi]
+#: printed is at most this wide.
+RESOLUTION = 0.005
+#: How far (relative error) |error| may fall between two grid points before its first exit
+#: and the curve still count as monotone there (round-off of the procedure's sampled
+#: reading: its T0 moves by a sample, 20 us, between neighbouring e).
+MONOTONE_SLACK = 0.005
 
 
 @dataclass(frozen=True)
@@ -45,8 +52,10 @@ APPROXIMATIONS = {
         "eq 57 energy loss", "eq 57, the one-impact loss M_T m u1^2 / (2 (M_T + m)), against "
         "the exact loss over every impact (eq 56, the exact solver's sum over the event)"),
     "eq58_energy_transferred": Approximation(
-        "eq 58 energy transferred", "eq 58, the pendulum's loss (release to rebound) less eq "
-        "57's, against the energy the exact model delivers to the tree"),
+        "eq 58 energy transferred (eq 57 restated)", "eq 58, the pendulum's loss (release "
+        "to the exact model's rebound) less eq 57's, against the energy the exact model "
+        "delivers: with the exact rebound its error is eq 57's times the loss over the "
+        "energy delivered, so it restates eq 57, not an independent check"),
     "identification_M_T": Approximation(
         "identified M_T (eq 44)", "the paper's procedure (eqs 39-47) on the exact 1-DOF "
         "model's own record, against its M_T"),
@@ -134,6 +143,31 @@ def _why_none(name: str) -> str:
     return "no value"
 
 
+def second_strike(result) -> bool:
+    """Whether the exact run ``result`` strikes again after the bodies parted: an impact
+    after the first separation, or more than one impact and the bodies never together (the
+    energy curves then count that strike in their loss)."""
+    sol = result.solution
+    if sol.separations and any(i.t > sol.separations[0].t for i in sol.impacts):
+        return True
+    return not sol.together_starts and len(sol.impacts) > 1
+
+
+def first_contact_error(scenario, e: float) -> float:
+    """eq 57 against the loss of the first contact only of the exact run of ``scenario`` at
+    ``e`` (relative): its impacts up to the first separation where the bodies move
+    together, else the first impact alone ((1 - e^2) of eq 57's loss, so the error is
+    e^2 / (1 - e^2)): the curve without the second strike :func:`second_strike` flags."""
+    sol = exact_run(scenario, e)[0].solution
+    model, impacts = sol.model, sol.impacts
+    if sol.together_starts:
+        end = sol.separations[0].t if sol.separations else math.inf
+        loss = sum(i.loss for i in impacts if i.t < end)
+    else:
+        loss = impacts[0].loss
+    return _rel(model.reduced_mass * model.impact_speed ** 2 / 2.0, loss)
+
+
 def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     """The sweep table's columns at the exact run ``result`` (at the scenario's own e, with
     the record the procedure needs): each approximation's error (``small_e.NAME``) and why
@@ -148,7 +182,8 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     floor = result if e >= E_FLOOR else exact_run(scenario, E_FLOOR)[0]
     errors["eq45_area"] = area_error(floor)
     ident = identify_rung(result, scenario)
-    out = {"T0": result.metrics["T0"], "id_error": None if ident.ok else ident.reason}
+    out = {"T0": result.metrics["T0"], "id_error": None if ident.ok else ident.reason,
+           "second_strike": second_strike(result)}
     out |= {f"truth.{k}": v for k, v in ident.truth.items()}
     out |= {f"id.{k}": ident.values.get(k, math.nan) for k in IDENT_METRICS}
     errors |= {f"identification_{k}": ident.errors.get(k, math.nan)
@@ -173,7 +208,7 @@ def errors_at_run(result, scenario, record=None) -> dict:
     return errors_of_run(result, scenario)
 
 
-errors_at_run.columns = COLUMNS + ("T0", "id_error") + tuple(
+errors_at_run.columns = COLUMNS + ("T0", "id_error", "second_strike") + tuple(
     f"{p}.{k}" for p in ("id", "truth") for k in ("M_T", "K_T", "pair_damping_ratio", "E"))
 
 
@@ -267,11 +302,21 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
         return at
 
     out = {}
+    split = k_t_split(scenario)
     for name, approx in APPROXIMATIONS.items():
         values = [_float(r.get(f"small_e.{name}")) for r in rows]
         if any(r.get("status") != OK for r in rows):
             values = [v if r.get("status") == OK else math.nan for v, r in zip(values, rows)]
         holds, bracket = first_crossing(grid, values, evaluate(name), tol)
+        seen = sorted([(e, v) for e, v in zip(grid, values)] + [
+            (e, c[f"small_e.{name}"]) for (e, mdl), c in cache.items()
+            if mdl == approx.model and f"small_e.{name}" in c])
+        mono = monotone_until(seen, bracket[1]) if bracket else True
+        strikes = [e for e, r in zip(grid, rows) if r.get("second_strike") in (True, 1, "True")]
+        strike_from = min(strikes) if strikes and approx.model == "exact" \
+            and name.startswith("eq5") else None
+        if strike_from is not None and strike_from > (bracket[1] if bracket else holds):
+            strike_from = None
         at_e = next((v for e, v in zip(grid, values) if abs(e - e0) < 1e-12), None)
         reasons = {f"{e:g}": str(r.get(f"small_e_reason.{name}") or r.get("error"))
                    for e, v, r in zip(grid, values, rows) if not math.isfinite(v)}
@@ -279,19 +324,80 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
                      "e": e0,
                      "holds_up_to_e": holds, "bracket": list(bracket) if bracket else None,
                      "error_at_e": at_e, "error_at_zero": values[0], "e_grid": grid,
-                     "errors": values, "reasons": reasons,
-                     "verdict": _verdict(holds, bracket, values[0], grid, tol)}
+                     "errors": values, "reasons": reasons, "monotone": mono,
+                     "second_strike_from": strike_from,
+                     "verdict": _verdict(holds, bracket, values[0], grid, tol, mono,
+                                         strike_from)}
+        if strike_from is not None and name == "eq57_energy_loss":
+            first = [first_contact_error(scenario, e) for e in grid]
+            out[name]["first_contact_bracket"] = first_crossing(
+                grid, first, lambda e: first_contact_error(scenario, e), tol)[1]
+            if out[name]["first_contact_bracket"] is not None:
+                out[name]["verdict"] += (" (the first contact only: "
+                                         f"{bracket_text(out[name]['first_contact_bracket'])})")
+        if name == "identification_K_T":
+            out[name]["split_at_zero"] = split
+            out[name]["verdict"] += (f" (the 10 ms fit {100 * split['fit']:+.0f} %, eq 46's "
+                                     f"damped frequency {100 * split['reading']:+.0f} %)")
     return out
 
 
-def _verdict(holds, bracket, at_zero, grid, tol) -> str:
+def k_t_split(scenario) -> dict:
+    """K_T's error at e = 0 of the tree ``scenario`` (one impact: the procedure's reading of
+    the sequence plays no part) split into its two causes, relative to the true K_T: ``fit``, eq 46 read with
+    the undamped omega_n (K_T = omega_n^2 (M_T + m) - k, exact for eq 34) on the 10 ms
+    quadratic fit's omega_n and M_T: the fit's bias alone; ``reading``, eq 46 with the
+    damped frequency omega_n sqrt(1 - xi^2) (the reading that reproduces Table 1) on the
+    true omega_n, xi and M_T: the reading alone, -xi^2 omega_n^2 (M_T + m) / K_T;
+    ``total``, the paper's reading on the fit (the curve's e = 0 point). NaN where the
+    procedure refuses the record."""
+    from ..identification import identify_rung
+
+    run, s = exact_run(scenario, 0.0)
+    ident = identify_rung(run, s)
+    truth = ident.truth
+    if not ident.ok:
+        return dict.fromkeys(("fit", "reading", "total"), math.nan)
+    got, k_true = ident.identified, truth["K_T"]
+    model = run.solution.model
+    m, k = model.impactor_mass, model.impactor_stiffness
+    wn_true = math.sqrt((k_true + k) / (truth["M_T"] + m))
+    xi_true = truth["pair_damping_ratio"]
+    fit = got["omega_n"] ** 2 * (got["M_T"] + m) - k
+    reading = wn_true ** 2 * (1.0 - xi_true ** 2) * (truth["M_T"] + m) - k
+    return {"fit": _rel(fit, k_true), "reading": _rel(reading, k_true),
+            "total": ident.errors["K_T"]}
+
+
+def monotone_until(points, hi: float) -> bool:
+    """Whether |error| of the (e, error) ``points`` never falls by more than MONOTONE_SLACK
+    from one e to the next up to ``hi`` (the first exit's bracket end): a crossing of a
+    curve that is not is no threshold."""
+    mags = [abs(v) for e, v in points if e <= hi + 1e-12 and math.isfinite(v)]
+    return all(b >= a - MONOTONE_SLACK for a, b in zip(mags, mags[1:]))
+
+
+def bracket_text(bracket) -> str:
+    """The bracket [lo, hi] of a crossing as printed, rounded outward to 0.001:
+    '0.375-0.380'."""
+    lo, hi = bracket
+    return f"{math.floor(1000 * lo + 1e-6) / 1000:.3f}-{math.ceil(1000 * hi - 1e-6) / 1000:.3f}"
+
+
+def _verdict(holds, bracket, at_zero, grid, tol, monotone=True, strike_from=None) -> str:
     if holds == 0.0 and bracket is None:
         if not math.isfinite(at_zero):
             return "no value at e = 0"
         return f"not a small-e effect: {100 * at_zero:+.0f} % at e = 0"
     if bracket is None:
         return f"within {100 * tol:.0f} % over the whole range (e <= {grid[-1]:g})"
-    return f"holds up to e = {math.floor(100 * holds + 1e-9) / 100:.2f}"
+    text = f"crosses {100 * tol:.0f} % at e = {bracket_text(bracket)}"
+    if not monotone:
+        text = f"not monotone before it first leaves {100 * tol:.0f} % (at e = " \
+               f"{bracket_text(bracket)}): no threshold"
+    if strike_from is not None:
+        text += f"; counts a second strike from e = {strike_from:g}"
+    return text
 
 
 def _float(v) -> float:

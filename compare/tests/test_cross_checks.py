@@ -114,9 +114,16 @@ def ident_cases():
 
 @pytest.mark.parametrize("scenario, rung, metric", ident_cases())
 def test_identification_against_truth(ladder_of, scenario, rung, metric):
+    """Judged against the truth, or refused where tolerances.toml documents the refusal
+    ([identification_refused]: its words) and nowhere else."""
     ladder = ladder_of(scenario)
     require_run(ladder, rung.id)
-    assert ladder[rung.id].identification.ok, ladder[rung.id].identification
+    ident = ladder[rung.id].identification
+    refused = TOL.get("identification_refused", {}).get(scenario)
+    if refused is not None:
+        assert not ident.ok and ident.reason.startswith(refused["match"]), ident
+        return
+    assert ident.ok, ident
     assert_checks(ladder, [ladder.identification_check(rung.id, metric)])
 
 
@@ -141,6 +148,12 @@ def test_engines_agree(ladder_of, scenario, kind, metric):
     ids = [r.rung.id for r in ladder.rungs if r.rung.kind == kind]
     for rid in ids:
         require_run(ladder, rid)
+    idents = [ladder[rid].identification for rid in ids]
+    if metric.startswith("id_") and not any(i.ok for i in idents):
+        # both refuse the record: they agree when for the same reason (its words up to
+        # the first figure, "not identifiable: the impact process is not short (")
+        assert len({i.reason.split("(")[0] for i in idents}) == 1, idents
+        return
     assert_checks(ladder, [ladder.engines_check(kind, metric)])
 
 

@@ -16,7 +16,7 @@ from treeimpact.analytic.identify.procedure import (
 )
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.options import Option
-from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 from treeimpact.compare import backends
 from treeimpact.compare.backends import Backend
 from treeimpact.compare.ladder import (
@@ -199,6 +199,12 @@ def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
         load_tolerances(bad)
     bad.write_text('[step.engine]\nV = { reason = "no number" }\n')
     with pytest.raises(ParameterError, match="rel or report_only"):
+        load_tolerances(bad)
+    for name, entry in TOL.get("identification_refused", {}).items():
+        assert name in shipped_scenarios() and len(entry["reason"]) > 20, name
+    bad.write_text('[identification_reported]\nreason = "reported"\n[identification_refused]\n'
+                   'x = { match = "refused", reason = "a refusal without its words" }\n')
+    with pytest.raises(ParameterError, match="not identifiable"):
         load_tolerances(bad)
 
 
