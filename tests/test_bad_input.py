@@ -628,15 +628,34 @@ def test_a_row_wider_than_the_header_is_refused_not_a_pandas_warning(tmp_path, c
     one_line(capsys, ["identify", str(path), *IDENTIFY], 2, "every row needs 2 values at row 2")
 
 
-def test_lapack_s_own_lines_reach_the_terminal_worded(tmp_path, capfd):
-    """The degenerate record's " ** On entry to DLASCL parameter number 4" lines."""
+def test_degenerate_record_says_only_treeimpact_lines(tmp_path, capfd):
+    """The record zero but one sample is refused before any fit (no chattering sequence to
+    read): stderr holds treeimpact's own warnings, then its one not-achieved line."""
     rec = _record(tmp_path / "r.csv", [0.01 if i == 300 else 0.0 for i in range(600)])
     assert main(["identify", rec, *IDENTIFY, "--json"]) == ExitCode.NOT_ACHIEVED  # units
     _, err = capfd.readouterr()
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert lines[-1].startswith("treeimpact: not achieved: the record was not fitted"), err
     assert all(ln.startswith("treeimpact: warning: ") for ln in lines[:-1]), err
-    assert any("LAPACK: On entry to DLASCL" in ln for ln in lines), err
+
+
+def test_lapack_s_own_lines_reach_the_terminal_worded(capfd):
+    """LAPACK's " ** On entry to DLASCL parameter number 4" lines (a least-squares solve of
+    NaNs, as identify's fits could meet) come out as treeimpact's worded warnings."""
+    import numpy as np
+
+    from treeimpact.compare.backends import worded_c_output
+
+    with worded_c_output("LAPACK", "the caller checks its own results"):
+        with pytest.raises(np.linalg.LinAlgError):
+            np.linalg.lstsq(np.full((5, 3), np.nan), np.ones(5), rcond=None)
+    out, err = capfd.readouterr()
+    assert out == ""
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert lines and all(ln.startswith("treeimpact: warning: LAPACK: ") for ln in lines), err
+    assert any("On entry to DLASCL" in ln for ln in lines), err
+
+
 # ------------------------------------------------------------------------------------------
 # issue 35 (identify says only what the record supports): one case of each class the
 # independent fuzzer found; the validation set (tests/data/identify) holds more of each.
