@@ -153,8 +153,34 @@ def _range(values, fmt, sep="-") -> str:
     return fmt(lo) if fmt(lo) == fmt(hi) else f"{fmt(lo)}{sep}{fmt(hi)}"
 
 
+def _inner(v) -> str:
+    """A crossing's inner end (an e up to which something holds) rounded inward to 0.001,
+    as its bracket is printed outward (``small_e_curves.bracket_text``)."""
+    return f"{math.floor(1000 * v + 1e-6) / 1000:.3f}"
+
+
 def _pct(v) -> str:
     return f"{100 * v:+.0f}"
+
+
+def _steady(trees: dict, tol: float) -> str:
+    """The words for where the 1-DOF trunk's gaps stop being the trunk's alone: each gap
+    stays within ``tol`` (as points) of its e = 0 value up to the bracket the small-e
+    answers ``trees`` hold (``steady_bracket``); "" when no gap has one."""
+    parts = []
+    first = next(iter(trees.values()))
+    for name, a in first.items():
+        if "steady_up_to_e" not in a:
+            continue
+        label = a["label"].split(": ", 1)[-1]
+        ups = [t[name]["steady_up_to_e"] for t in trees.values() if "steady_up_to_e" in t[name]]
+        whole = all(t[name].get("steady_bracket") is None for t in trees.values())
+        parts.append(f"{label} over the whole range" if whole
+                     else f"{label} up to e = {_range(ups, _inner)}")
+    if not parts:
+        return ""
+    return (f"; the trunk alone sets them (within {100 * tol:.0f} points of their e = 0 "
+            "value) for " + ", ".join(parts) + ", and beyond that e moves them too")
 
 
 def in_short(one_dof: list[dict], trees: dict) -> dict:
@@ -191,7 +217,7 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
                          if not t[name].get("monotone", True)] + [
                     f"counting a second strike on {tree}" for tree, t in trees.items()
                     if t[name].get("second_strike_from") is not None]
-                held.append(f"{_range(ups, lambda v: f'{v:.3f}')} for {label}"
+                held.append(f"{_range(ups, _inner)} for {label}"
                             + (f" ({'; '.join(notes)})" if notes else ""))
         text = (f"Small e: each consequence stays within {100 * tol:.0f} % of the exact result "
                 + ("up to e = " + ", ".join(held) if held else "at no e") + ".")
@@ -199,6 +225,6 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
             text += (" Off already at e = 0, so not small-e effects: " + ", ".join(off) + ".")
         if trunk:
             text += (" Nor does e make the 1-DOF trunk's gaps: " + ", ".join(trunk)
-                     + " already at e = 0.")
+                     + " already at e = 0" + _steady(trees, tol) + ".")
         out["small_e"] = text
     return out

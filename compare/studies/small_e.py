@@ -17,6 +17,16 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..runs import OK
+from .small_e_curves import (  # noqa: F401 (the curves' reading, re-exported)
+    MONOTONE_SLACK,
+    RESOLUTION,
+    bracket_text,
+    first_crossing,
+    monotone_until,
+    steady_bracket,
+    steady_text,
+    verdict,
+)
 
 #: The e of the curves (1): [0, 0.05] in steps of 0.005 (the identification's and eq 45's
 #: crossings lie there), then to 0.9 in steps of 0.05.
@@ -25,13 +35,6 @@ E_GRID = tuple(round(0.005 * i, 3) for i in range(10)) + tuple(
 #: Where an approximation has no value at e = 0 (eq 45: x0 = T0 = A_x = 0; the pad law needs
 #: e > 0), its e = 0 point is read here (1).
 E_FLOOR = 1e-3
-#: How finely the crossing of the tolerance is located (1, in e): the bracket [lo, hi]
-#: printed is at most this wide.
-RESOLUTION = 0.005
-#: How far (relative error) |error| may fall between two grid points before its first exit
-#: and the curve still count as monotone there (round-off of the procedure's sampled
-#: reading: its T0 moves by a sample, 20 us, between neighbouring e).
-MONOTONE_SLACK = 0.005
 
 
 @dataclass(frozen=True)
@@ -247,33 +250,6 @@ def small_e_table(scenario, grid=E_GRID):
     return pd.DataFrame(rows)
 
 
-def first_crossing(grid, values, evaluate, tolerance: float,
-                   resolution: float = RESOLUTION) -> tuple[float, tuple | None]:
-    """The largest e up to which an error STAYS within ``tolerance`` (|error| <= it; NaN is
-    outside), from its ``values`` on the ``grid`` of e: 0 when the first value is outside,
-    the grid's end when none is; else the
-    first crossing from e = 0, bracketed by the grid and bisected with ``evaluate(e)``
-    until the bracket is at most ``resolution`` wide. Returns (the bracket's inner end, the
-    bracket or None). A later return inside the tolerance does not count; an excursion
-    narrower than the grid's step is not seen (docs/report.md: the convergence check)."""
-    def within(v):
-        return math.isfinite(v) and abs(v) <= tolerance
-
-    if not within(values[0]):
-        return 0.0, None
-    for i in range(1, len(grid)):
-        if not within(values[i]):
-            lo, hi = float(grid[i - 1]), float(grid[i])
-            while hi - lo > resolution:
-                mid = 0.5 * (lo + hi)
-                if within(evaluate(mid)):
-                    lo = mid
-                else:
-                    hi = mid
-            return lo, (lo, hi)
-    return float(grid[-1]), None
-
-
 def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
     """The small-e answer of one tree (``scenario``) from its sweep's ``table``
     (:func:`small_e_sweep`), judged against ``tolerance`` (None: the studies' validity
@@ -326,7 +302,7 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
                      "error_at_e": at_e, "error_at_zero": values[0], "e_grid": grid,
                      "errors": values, "reasons": reasons, "monotone": mono,
                      "second_strike_from": strike_from,
-                     "verdict": _verdict(holds, bracket, values[0], grid, tol, mono,
+                     "verdict": verdict(holds, bracket, values[0], grid, tol, mono,
                                          strike_from)}
         if strike_from is not None and name == "eq57_energy_loss":
             first = [first_contact_error(scenario, e) for e in grid]
@@ -335,6 +311,11 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
             if out[name]["first_contact_bracket"] is not None:
                 out[name]["verdict"] += (" (the first contact only: "
                                          f"{bracket_text(out[name]['first_contact_bracket'])})")
+        if approx.model == "continuum" and holds == 0.0 and bracket is None:
+            steady = steady_bracket(grid, values, evaluate(name), tol)
+            out[name]["steady_up_to_e"] = steady[0]
+            out[name]["steady_bracket"] = list(steady[1]) if steady[1] else None
+            out[name]["verdict"] += f"; {steady_text(steady, tol)}"
         if name == "identification_K_T":
             out[name]["split_at_zero"] = split
             out[name]["verdict"] += (f" (the 10 ms fit {100 * split['fit']:+.0f} %, eq 46's "
@@ -367,37 +348,6 @@ def k_t_split(scenario) -> dict:
     reading = wn_true ** 2 * (1.0 - xi_true ** 2) * (truth["M_T"] + m) - k
     return {"fit": _rel(fit, k_true), "reading": _rel(reading, k_true),
             "total": ident.errors["K_T"]}
-
-
-def monotone_until(points, hi: float) -> bool:
-    """Whether |error| of the (e, error) ``points`` never falls by more than MONOTONE_SLACK
-    from one e to the next up to ``hi`` (the first exit's bracket end): a crossing of a
-    curve that is not is no threshold."""
-    mags = [abs(v) for e, v in points if e <= hi + 1e-12 and math.isfinite(v)]
-    return all(b >= a - MONOTONE_SLACK for a, b in zip(mags, mags[1:]))
-
-
-def bracket_text(bracket) -> str:
-    """The bracket [lo, hi] of a crossing as printed, rounded outward to 0.001:
-    '0.375-0.380'."""
-    lo, hi = bracket
-    return f"{math.floor(1000 * lo + 1e-6) / 1000:.3f}-{math.ceil(1000 * hi - 1e-6) / 1000:.3f}"
-
-
-def _verdict(holds, bracket, at_zero, grid, tol, monotone=True, strike_from=None) -> str:
-    if holds == 0.0 and bracket is None:
-        if not math.isfinite(at_zero):
-            return "no value at e = 0"
-        return f"not a small-e effect: {100 * at_zero:+.0f} % at e = 0"
-    if bracket is None:
-        return f"within {100 * tol:.0f} % over the whole range (e <= {grid[-1]:g})"
-    text = f"crosses {100 * tol:.0f} % at e = {bracket_text(bracket)}"
-    if not monotone:
-        text = f"not monotone before it first leaves {100 * tol:.0f} % (at e = " \
-               f"{bracket_text(bracket)}): no threshold"
-    if strike_from is not None:
-        text += f"; counts a second strike from e = {strike_from:g}"
-    return text
 
 
 def _float(v) -> float:

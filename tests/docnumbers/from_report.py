@@ -294,13 +294,19 @@ def from_small_e(trees: dict) -> dict:
         for name, a in answers.items():
             out[f"small_e.{name}.holds_up_to_e.{tree}"] = rounded(
                 math.floor(100.0 * a["holds_up_to_e"] + 1e-9) / 100.0)
+            if "steady_up_to_e" in a:
+                out[f"small_e.{name}.steady_up_to_e.{tree}"] = rounded(
+                    math.floor(100.0 * a["steady_up_to_e"] + 1e-9) / 100.0)
             for key, v in (("error_at_zero_pct", a["error_at_zero"]),
                            ("error_at_e_pct", a["error_at_e"])):
                 if finite(v):
                     out[f"small_e.{name}.{key}.{tree}"] = rounded(100.0 * v)
     names = {k.split(".")[1] for k in out}
     for name in names:
-        for key in ("holds_up_to_e", "error_at_zero_pct", "error_at_e_pct"):
+        for key in ("holds_up_to_e", "steady_up_to_e", "error_at_zero_pct",
+                    "error_at_e_pct"):
+            if not any(f"small_e.{name}.{key}.{t}" in out for t in trees):
+                continue
             put(out, f"small_e.{name}.{key}",
                  span([out.get(f"small_e.{name}.{key}.{t}") for t in trees]))
     return out
