@@ -20,7 +20,10 @@ the field and the allowed range.
 
 from __future__ import annotations
 
+import copy
+import functools
 import tomllib
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
@@ -213,17 +216,26 @@ def load_scenario(source: str | Path) -> Scenario:
         raise ParameterError(
             f"scenario {str(source)!r}: no such file or shipped scenario "
             f"(shipped: {', '.join(shipped_scenarios())})")
+    scenario = _parsed(raw, default, str(source))
+    return replace(scenario, notes=copy.deepcopy(scenario.notes))  # a caller's own notes
+
+
+@functools.lru_cache(maxsize=64)
+def _parsed(raw: bytes, default: str, source: str) -> Scenario:
+    """The scenario of a file's bytes ``raw`` (named ``default`` unless it names itself;
+    ``source`` as typed, for the errors): parsed once per distinct content, since a sweep or
+    a study loads the same file for every run (TOML parsing was 0.2 ms of a 3 ms soft run)."""
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise ParameterError(f"scenario {str(source)!r}: not UTF-8 text (byte "
+        raise ParameterError(f"scenario {source!r}: not UTF-8 text (byte "
                              f"0x{raw[exc.start]:02x} at offset {exc.start}); TOML files are "
                              "UTF-8") from None
     try:
         data = tomllib.loads(text)
     except RecursionError:
-        raise ParameterError(f"scenario {str(source)!r}: nested too deeply to be a scenario "
+        raise ParameterError(f"scenario {source!r}: nested too deeply to be a scenario "
                              "file (tables trunk, impactor, contact of numbers)") from None
     except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"scenario {str(source)!r}: malformed TOML: {exc}") from None
+        raise ParameterError(f"scenario {source!r}: malformed TOML: {exc}") from None
     return scenario_from_dict(data, default_name=default)
