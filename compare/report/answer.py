@@ -126,7 +126,8 @@ def holds_text(a: dict) -> str:
     """'0.375-0.380' (the crossing's bracket, rounded outward; 'not monotone' before it when
     the curve is not, '; 2nd strike from e = 0.2 (first contact only: 0.215-0.220)' when
     the exact run it counts strikes again), '>= 0.9' (the whole range), or '0: -25 % at
-    e = 0' (not a small-e effect)."""
+    e = 0' (not a small-e effect; a 1-DOF trunk's gap adds from which e it moves by more than
+    the validity tolerance in points, :func:`small_e_curves.steady_bracket`)."""
     from ..studies.small_e import bracket_text
 
     if a["bracket"] is not None:
@@ -144,8 +145,14 @@ def holds_text(a: dict) -> str:
     if split and math.isfinite(z) and all(math.isfinite(v) for v in split.values()):
         return (f"0: {100 * z:+.0f} % at e = 0 (10 ms fit {100 * split['fit']:+.0f} %, "
                 f"eq 46 damped omega {100 * split['reading']:+.0f} %)")
-    return f"0: {100 * z:+.0f} % at e = 0" if z is not None and math.isfinite(z) else \
-        "0: no value at e = 0"
+    if z is None or not math.isfinite(z):
+        return "0: no value at e = 0"
+    text, tol = f"0: {100 * z:+.0f} % at e = 0", 100 * validity_tolerance()
+    if a.get("steady_bracket") is not None:
+        text += f"; moves > {tol:.0f} points from e = {bracket_text(a['steady_bracket'])}"
+    elif "steady_up_to_e" in a:
+        text += f"; within {tol:.0f} points of it for every e"
+    return text
 
 
 def _range(values, fmt, sep="-") -> str:

@@ -250,7 +250,7 @@ def test_the_trunk_decides_the_heavy_crown_s_gaps_only_at_small_e():
     at e = 0, -12 % at e = 0.9). The gap now says from which e it moves by more than 5
     points: on realistic-crown x_max from e ~ 0.21 (read off the exact runs: +0.43 at 0,
     +0.40 at 0.2, +0.29 at 0.3), and the first screen's sentence says e moves it beyond."""
-    from treeimpact.compare.report.answer import in_short
+    from treeimpact.compare.report.answer import holds_text, in_short
 
     crown = load_scenario("realistic-crown")
     ans = small_e_answer(crown, small_e_table(crown))
@@ -259,5 +259,6 @@ def test_the_trunk_decides_the_heavy_crown_s_gaps_only_at_small_e():
     assert 0.2 <= lo < hi <= 0.3 and hi - lo <= RESOLUTION
     assert abs(x["errors"][x["e_grid"].index(0.9)] - x["error_at_zero"]) > 0.05
     assert f"e moves it by more than 5 points from e = {bracket_text((lo, hi))}" in x["verdict"]
+    assert holds_text(x) == f"0: +43 % at e = 0; moves > 5 points from e = {bracket_text((lo, hi))}"
     text = in_short([], {"realistic-crown": ans})["small_e"]
     assert "beyond that e moves them too" in text and f"x_max up to e = {lo:.2f}" in text
