@@ -95,9 +95,11 @@ def main(argv=None) -> int:
     from treeimpact.analytic.threads import blas_limit
 
     from .process import command_environment, run_command, stop_signals
+    from .progress import set_job
 
     def command(_):
         args = build_parser().parse_args(argv)
+        set_job(args.command)
         with command_environment(getattr(args, "max_seconds", None)), blas_limit():
             return COMMANDS[args.command].run(args)
 

@@ -45,6 +45,7 @@ def run_command(command, args) -> int:
     Once the command has returned or raised, a stop signal only marks it interrupted (its
     one line is printed whole, never cut by a second KeyboardInterrupt)."""
     from .pool import STOP
+    from .progress import finish as finish_progress
 
     _COMMAND["ended"] = False
     try:
@@ -52,6 +53,7 @@ def run_command(command, args) -> int:
             code = command(args)
         finally:
             _COMMAND["ended"] = True  # from here a stop signal only sets STOP
+            finish_progress()  # every bar ended before the command's last lines
         if STOP.is_set() and code != ExitCode.INTERRUPTED:  # asked after the last look
             raise KeyboardInterrupt
         if code == ExitCode.INTERRUPTED:  # the command said so itself (a sweep's own line)

@@ -168,7 +168,7 @@ class RunCache:
 
         # slowest first; a backend not in the registry is a run that records its own skip
         todo.sort(key=lambda t: -(BACKENDS[t[2]].cost(t[3]) if t[2] in BACKENDS else 0.0))
-        bar = Progress(len(todo), "runs") if progress and todo else None
+        bar = Progress(len(todo), "runs") if progress else None  # a stage even when cached
         runs = process_map(_run_uncached, [t[1:] for t in todo], workers=workers,
                            done=bar.update if bar is not None else None, died=_died)
         for (key, *_), run in zip(todo, runs):

@@ -131,12 +131,12 @@ def test_max_seconds_admits_a_run_and_long_runs_tell_their_progress(capsys, monk
     from treeimpact.analytic import budget
 
     monkeypatch.setattr(budget, "PROGRESS_AFTER_S", 0.0)  # every run is "long"
-    monkeypatch.setattr("treeimpact.compare.progress.LINE_EVERY_S", 0.0)
+    monkeypatch.setattr("treeimpact.compare.progress._on_terminal", lambda stream: True)
     code = main(["simulate", "central-leader", "--backend", "mujoco", "--segments", "4",
                  "--t-end", "0.02", "--max-seconds", "1000", "--json"])
     out, err = capsys.readouterr()
     assert code == 0 and json.loads(out)["backend"] == "mujoco"
-    assert "mujoco (estimated" in err and "steps" in err
+    assert "simulate: mujoco (estimated" in err and "step/s" in err  # the bar, its job named
     assert os.environ.get("TREEIMPACT_MAX_SECONDS") is None  # restored after the command
     assert budget._REPORTER is None
 
@@ -383,7 +383,7 @@ def test_identify_json_stdout_holds_only_json_when_lapack_complains(tmp_path, ca
 
 #: When a report of one scenario is stopped (issue 35: one SIGINT in 22 was swallowed):
 #: (what is awaited, seconds after it), each an event every report has on any machine and
-#: with any cache (progress lines are not: a phase shorter than LINE_EVERY_S prints none):
+#: with any cache (progress is not: it is drawn on a terminal only):
 #: the command runs (its --out folder exists; imports follow), its first pool's workers
 #: exist, its sweeps have started (their journals), its sections' figures are drawn while
 #: the record fits run on a pool. Measured here: 0.1, 5, 9 and 16 s into a 60 s report.

@@ -143,7 +143,6 @@ def test_the_docs_quote_the_budget_progress_and_chunks_the_code_applies():
     import re
 
     from treeimpact.bullet_models.options import MAX_SEGMENTS
-    from treeimpact.compare.progress import LINE_EVERY_S
     from treeimpact.mujoco_models._rollout import CHUNK_SECONDS
 
     doc = (Path(__file__).resolve().parents[1] / "docs" / "budgets.md").read_text()
@@ -151,8 +150,8 @@ def test_the_docs_quote_the_budget_progress_and_chunks_the_code_applies():
         "steps": r"\| steps \| (\S+) \|", "bytes": r"\| memory the run keeps \| (\S+) GB \|",
         "seconds": r"\| estimated wall time of one run \| (\S+) s \|",
         "progress": r"longer than (\S+) s \(`PROGRESS_AFTER_S`\)",
-        "line": r"else a line every (\S+) s", "chunk": r"in chunks of ~(\S+) s",
+        "chunk": r"in chunks of ~(\S+) s",
         "bullet": r"more than (\S+) hinges in one PyBullet"}.items()}
     assert number == {"steps": budget.MAX_STEPS, "bytes": budget.MAX_BYTES / 1e9,
                       "seconds": budget.MAX_SECONDS, "progress": budget.PROGRESS_AFTER_S,
-                      "line": LINE_EVERY_S, "chunk": CHUNK_SECONDS, "bullet": MAX_SEGMENTS}
+                      "chunk": CHUNK_SECONDS, "bullet": MAX_SEGMENTS}

@@ -31,6 +31,7 @@ from pathlib import Path
 
 from treeimpact.analytic.results import to_jsonable
 
+from ..progress import plan
 from ..provenance import provenance, scenario_digest
 from ..studies.small_e import E_GRID, RESOLUTION
 from ..verdicts import Verdict, validity_tolerance
@@ -79,6 +80,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     scens = [resolve_scenario(s) for s in names]
     wall = {}
     t0 = time.perf_counter()
+    if progress:
+        plan(4)  # the report's stages: runs, sweeps, record fits, sections (compare.progress)
     prefetch_ladders(cache, scens, engines=engines, segments=segments, progress=progress)
     wall["runs (process pool)"] = time.perf_counter() - t0
     for job in study_jobs:  # a study that failed meanwhile fails the report now

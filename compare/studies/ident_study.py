@@ -90,7 +90,7 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
     method into ``out``; returns {rows, figures, summary, sampling}. ``scenario``,
     ``restitutions``, ``crown_ratios``, ``rungs``, ``sampling_rungs``, ``engine_rungs`` and
     ``sampling_seeds`` as :func:`study_sweeps` takes them. ``progress``: as the sweeps'
-    (None: a bar on a terminal, a line every few seconds elsewhere; False: nothing)."""
+    (None: a bar on a terminal, nothing elsewhere; False: nothing)."""
     from treeimpact.compare.sweep.run import run_sweeps
 
     out = Path(out)

@@ -63,7 +63,8 @@ def bracket_text(bracket) -> str:
 def verdict(holds, bracket, at_zero, grid, tol, monotone=True, strike_from=None) -> str:
     """The curve's verdict in words from :func:`first_crossing`'s (``holds``, ``bracket``),
     its error ``at_zero``, the ``grid``, the tolerance ``tol``, whether it is ``monotone``
-    before its first exit and the e a counted second strike starts from (or None)."""
+    before its first exit and ``strike_from``, the e a counted second strike starts from (or
+    None)."""
     if holds == 0.0 and bracket is None:
         if not math.isfinite(at_zero):
             return "no value at e = 0"
@@ -84,8 +85,8 @@ def verdict(holds, bracket, at_zero, grid, tol, monotone=True, strike_from=None)
 def steady_bracket(grid, values, evaluate, tolerance: float) -> tuple[float, tuple | None]:
     """For a gap already there at e = 0 (a 1-DOF trunk's), the largest e up to which it stays
     within ``tolerance`` (relative, as points: 0.05 is 5 points of %) of its e = 0 value,
-    read like :func:`first_crossing` on ``values`` minus ``values[0]``: (inner end, bracket
-    or None). Up to there the trunk, not e, sets the gap; beyond it e moves it too."""
+    read like :func:`first_crossing` on ``values`` (on the ``grid`` of e) minus
+    ``values[0]``, bisected with ``evaluate(e)``: (inner end, bracket or None). Up to there the trunk, not e, sets the gap; beyond it e moves it too."""
     v0 = values[0]
     if not math.isfinite(v0):
         return 0.0, None

@@ -127,7 +127,7 @@ def run_sweeps(specs, *, workers: int | None = None, scheduler=None,
     ``workers``: worker processes (None: one per core; 0: in this process); ``scheduler``:
     a Dask scheduler address or ``Client`` to run on instead (its workers counted);
     ``retry_failed``: rerun the rows whose last outcome was not ok (failed, diverged,
-    invalid; else only unfinished rows run); ``progress``: None a bar on a terminal and a line every few seconds elsewhere,
+    invalid; else only unfinished rows run); ``progress``: None a bar on a terminal (nothing elsewhere),
     True a bar, False nothing; ``on_rows``: called with each batch of rows after it is
     written (tests interrupt a sweep there)."""
     from treeimpact.compare.runs import resolve_scenario
@@ -233,8 +233,8 @@ def _rows_of(task: Task, outcomes: list, scenario: Scenario) -> list[dict]:
 
 
 def _progress(total: int, enabled):
-    """Rows reported on stderr: ``enabled`` None, a bar on a terminal and a line every few
-    seconds elsewhere; True, a bar; False, nothing."""
+    """Rows reported on stderr: ``enabled`` None, a bar on a terminal and nothing elsewhere (a
+    child job's records for its parent); True, a bar; False, nothing."""
     if enabled is False or total == 0:
         return None
     from ..progress import Progress

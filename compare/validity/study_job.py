@@ -8,7 +8,6 @@ notes: docs/report.md."""
 from __future__ import annotations
 
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
@@ -25,8 +24,9 @@ STOP_GRACE_S = 10.0
 
 class StudyJob:
     """The study of preset ``preset`` into ``out``, started by :meth:`start`; :meth:`result`
-    waits for it (its directory), :meth:`stop` ends it. Its progress lines and its summary
-    go to this process's stderr as it prints them."""
+    waits for it (its directory), :meth:`stop` ends it. Its progress is drawn in this
+    process's display (compare.progress.Relay) and its other lines go to this process's
+    stderr as it prints them, each after "study: "."""
 
     def __init__(self, preset: str, out, program, scenarios=None):
         """``program``: the command line of the ``treeimpact`` program (a list of str, e.g.
@@ -64,18 +64,29 @@ class StudyJob:
     def start(self) -> "StudyJob":
         """Start the child process (``treeimpact sweep --preset``), its output relayed by a
         thread; returns the job."""
+        import os
+
+        from ..progress import RELAY_ENV
+
         self._t0 = time.perf_counter()
-        self._proc = subprocess.Popen(self.argv, stdout=subprocess.PIPE,
+        env = os.environ | {RELAY_ENV: "study"}  # its progress as records for this display
+        self._proc = subprocess.Popen(self.argv, stdout=subprocess.PIPE, env=env,
                                       stderr=subprocess.STDOUT, text=True, bufsize=1)
         self._relay = threading.Thread(target=self._pass_on, daemon=True)
         self._relay.start()
         return self
 
     def _pass_on(self) -> None:
-        for line in self._proc.stdout:
-            sys.stderr.write(line)
-            if line.strip():
-                self._last = line.strip()
+        from ..progress import RECORD, Relay
+
+        relay = Relay("study")
+        try:
+            for line in self._proc.stdout:
+                relay.line(line)
+                if line.strip() and not line.startswith(RECORD):
+                    self._last = line.strip()
+        finally:
+            relay.abandon()
 
     def result(self) -> Path:
         """Wait for the study (looking at the stop request every POLL_S s); its directory,
