@@ -21,7 +21,7 @@ RECORD = "treeimpact-progress\t"
 RECORD_EVERY_S = 0.2
 _LOCK = threading.RLock()
 _IDS = itertools.count(1)
-_CURRENT = {"job": "treeimpact"}
+_CURRENT = {"job": ""}  # a library caller's: no name
 
 
 def _on_terminal(stream) -> bool:
@@ -65,8 +65,9 @@ class _Job:
             self.bar.set_postfix_str(active, refresh=False)
             self.bar.update(self.percent - self.bar.n)
         elif stage is not None and stage.id in self.open:
-            if self.bar is None or self.bar.desc != f"{self.name}: {stage.desc}":
-                self._draw(stage.total, f"{self.name}: {stage.desc}", stage.unit)
+            desc = f"{self.name}: {stage.desc}" if self.name else stage.desc
+            if self.bar is None or self.bar.desc != desc:
+                self._draw(stage.total, desc, stage.unit)
             self.bar.update(stage.done - self.bar.n)
 
     def close(self) -> None:
@@ -79,8 +80,12 @@ _JOBS: dict[str, _Job] = {}
 
 
 def _job(name: str, stream) -> _Job:
+    """Job ``name``, drawn on ``stream`` unless it is drawing elsewhere now."""
     with _LOCK:
-        return _JOBS.setdefault(name, _Job(name, stream))
+        job = _JOBS.setdefault(name, _Job(name, stream))
+        if not job.open and job.bar is None and job.stream is not stream:
+            job.stream, job.drawn = stream, _on_terminal(stream)
+        return job
 
 
 def set_job(name: str) -> None:

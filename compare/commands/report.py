@@ -28,7 +28,8 @@ def add_arguments(sp) -> None:
     sp.add_argument("--with-study", dest="with_study", metavar="PRESET",
                     help="also run the study PRESET (treeimpact sweep --preset PRESET) into "
                          "OUT/study beside the report's own runs, and include it (resumes a "
-                         "study already there)")
+                         "study already there); with --scenario, its maps are of the first "
+                         "tree given and its sensitivity of every one")
     add_budget_flag(sp)
 
 

@@ -204,5 +204,6 @@ def _run(args) -> int:
     for kind in ("table", "md", "html"):
         print(f"{kind}: {paths[kind]}")
     print(f"figures: {len(paths['figures'])} in {paths['md'].parent}")
-    print(f"wall time: {time.perf_counter() - t_start:.1f} s (runs, maps and the study)")
+    print(f"wall time: {time.perf_counter() - t_start:.1f} s (the whole command: its runs and "
+          "sweeps, then its maps and pages)")
     return ExitCode.OK

@@ -98,7 +98,8 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     t0 = time.perf_counter()
     for job in study_jobs:
         studies.append(StudySection(job.result(), page_dir=out_dir))
-        wall[f"study {job.preset} (a child process, beside all of the above)"] = job.wall_s
+        wall[f"study {job.preset} (a child process beside all of the above, from its start "
+             "to its end)"] = job.wall_s
     if study_jobs:
         wall["waiting for the studies"] = time.perf_counter() - t0
     log = RunsSection(cache, wall)

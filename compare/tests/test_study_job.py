@@ -34,7 +34,8 @@ def test_a_study_run_beside_the_report_becomes_its_section(tmp_path):
     data = json.loads(paths["json"].read_text())
     assert len(data["studies"]) == 1
     wall = data["runs"]["wall_s"]
-    assert wall["study default (a child process, beside all of the above)"] == job.wall_s > 0
+    assert wall["study default (a child process beside all of the above, from its start "
+                "to its end)"] == job.wall_s > 0
     assert "waiting for the studies" in wall
 
 
@@ -130,7 +131,8 @@ def _alive_in_group(pgid: int) -> list[str]:
 
 def test_the_reports_trees_are_its_studys_sensitivity_trees(tmp_path):
     """report --scenario ... --with-study: the study's sensitivity part runs on the report's
-    trees: a shipped name as it is, a file by its absolute path, a Scenario object written
+    trees and its maps on the first of them (issue 41: they were central-leader's on a
+    user's tree): a shipped name as it is, a file by its absolute path, a Scenario object written
     into the study's own folder (it loads back equal)."""
     from dataclasses import replace
 
@@ -147,7 +149,11 @@ def test_the_reports_trees_are_its_studys_sensitivity_trees(tmp_path):
     written = tmp_path / "study" / "scenarios" / "other-tree.toml"
     assert flags == ["central-leader", str(path.resolve()), str(written.resolve())]
     assert load_scenario(written) == other
+    assert job.argv[job.argv.index("--scenario") + 1] == "central-leader"  # its maps' tree
     assert "--sensitivity-scenario" not in StudyJob("default", tmp_path / "s2", PROGRAM).argv
+    assert "--scenario" not in StudyJob("default", tmp_path / "s3", PROGRAM).argv  # preset's
+    mine = StudyJob("default", tmp_path / "s4", PROGRAM, scenarios=[str(path)])
+    assert mine.argv[mine.argv.index("--scenario") + 1] == str(path.resolve())
 
 
 def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):

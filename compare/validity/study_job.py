@@ -32,14 +32,18 @@ class StudyJob:
         """``program``: the command line of the ``treeimpact`` program (a list of str, e.g.
         ``[sys.executable, "-m", NAME]``), which runs ``sweep --preset``; ``scenarios``: the
         report's trees (shipped names, TOML paths or Scenarios), the trees of the study's
-        sensitivity part (default: every shipped one); a Scenario object is written into
-        ``out/scenarios/`` for the child to read."""
+        sensitivity part (default: every shipped one), the first of them the tree of its
+        maps, speed and identification parts (default: the preset's); a Scenario object is
+        written into ``out/scenarios/`` for the child to read."""
         if preset not in PRESETS:  # a one-line error before anything starts
             raise ParameterError(f"--with-study {preset!r}: allowed {', '.join(PRESETS)}")
         self.preset, self.out = preset, Path(out)
         self.argv = [*program, "sweep", "--preset", preset, "--out", str(self.out)]
-        for s in scenarios or ():
-            self.argv += ["--sensitivity-scenario", self._source(s)]
+        sources = [self._source(s) for s in scenarios or ()]
+        if sources:  # the maps, speed and identification parts: the report's first tree
+            self.argv += ["--scenario", sources[0]]
+        for source in sources:
+            self.argv += ["--sensitivity-scenario", source]
         self._proc = None
         self._relay = None
         self._last = ""
