@@ -24,10 +24,12 @@ RATE = 5000.0  # Hz: the issue's sampling rate
 NOISE = 0.01  # of the peak: 1 % white noise
 
 
-def synthetic(e: float, seed: int, extra=None, pendulum=False, **changes):
+def synthetic(e: float, seed: int, extra=None, pendulum=False, noise=None, **changes):
     """A 0.1 s record of the central-leader model (``changes`` to its TwoBodyModel fields)
-    at RATE with NOISE, contact at 10 ms; with ``pendulum`` also the pendulum's y (the
-    swing u_1 sin(w_2 s) / w_2 before the contact, its own noise: 1 % of its peak)."""
+    at RATE with ``noise`` (of the peak; default NOISE), contact at 10 ms; with ``pendulum``
+    also the pendulum's y (the swing u_1 sin(w_2 s) / w_2 before the contact, its own
+    noise of its own peak)."""
+    noise = NOISE if noise is None else noise
     s = load_scenario("central-leader")
     model = dataclasses.replace(two_body_model(s), restitution=e, **changes)
     t = np.arange(0.0, 0.1, 1.0 / RATE)
@@ -37,12 +39,12 @@ def synthetic(e: float, seed: int, extra=None, pendulum=False, **changes):
     if extra is not None:
         clean = clean + extra(t)
     rng = np.random.default_rng(seed)
-    noisy = clean + NOISE * clean.max() * rng.standard_normal(t.size)
+    noisy = clean + noise * clean.max() * rng.standard_normal(t.size)
     y = None
     if pendulum:
         w2 = math.sqrt(model.impactor_stiffness / model.impactor_mass)
         y = np.where(t > 0.01, state[2], model.impact_speed * np.sin(w2 * (t - 0.01)) / w2)
-        y = y + NOISE * np.max(np.abs(y)) * rng.standard_normal(t.size) + 0.003  # offset
+        y = y + noise * np.max(np.abs(y)) * rng.standard_normal(t.size) + 0.003  # offset
     return model, Record(t, noisy, y), pendulum_test_of(s)
 
 

@@ -130,24 +130,31 @@ def determined(name: str, interval) -> bool:
 
 def widened_over_profile(best: Fit, profile: RestitutionProfile, intervals: dict,
                          test: PendulumTest, floor: float, threshold: float, *,
-                         pendulum: bool) -> dict:
+                         pendulum: bool, basin_threshold: float | None = None) -> dict:
     """``intervals`` widened over the restitutions the record cannot rule out: each point of
     e's ``profile`` within ``threshold`` of the ``best`` fit, with the others' uncertainty at
     that e (the covariance given e, residual variance at least ``floor`` m squared, of the
     pendulum ``test``; its sensor offset too if ``pendulum``); e's own from the Jacobian
     where the cost is quadratic in it (e off its bounds, its interval under 0.2 wide),
-    hulled with the profile's range, else the profile's range alone."""
+    hulled with the profile's range, else the profile's range alone. Another valley of the
+    profile within ``basin_threshold`` (the joint 95 % threshold of every fitted parameter:
+    choosing a basin chooses them all) widens them too, with its own covariance given e
+    (the Jacobian at its point), e's range included."""
     p, out = best.p, dict(intervals)
     given = best.problem.covariance(p, floor, given_e=True)
     e_lo, e_hi = out["restitution"]
     local = 0.02 < p[Slot.RESTITUTION] < E_MAX - 0.02 and e_hi - e_lo < 0.2
     if not local:  # e at a bound or the cost not quadratic in it: the profile alone
         _, out = estimates(p, given, test, pendulum=pendulum)
-    for q in profile.inside(best, threshold):
-        _, iv = estimates(q, given, test, pendulum=pendulum)
+    basins = profile.basins(best, basin_threshold) if basin_threshold is not None else []
+    own = [best.problem.covariance(q, floor, given_e=True) for q in basins]  # its own
+    for q, cov in [*((q, given) for q in profile.inside(best, threshold)), *zip(basins, own)]:
+        _, iv = estimates(q, cov, test, pendulum=pendulum)
         for k in RIDGE + DAMPING_RATIOS + ("omega_1", "V_1"):
             out[k] = (min(out[k][0], iv[k][0]), max(out[k][1], iv[k][1]))
     lo, hi = profile.e_range(best, threshold)
+    for q in basins:
+        lo, hi = min(lo, q[Slot.RESTITUTION]), max(hi, q[Slot.RESTITUTION])
     e = p[Slot.RESTITUTION]
     out["restitution"] = ((min(out["restitution"][0], lo), max(out["restitution"][1], hi))
                           if local else (min(lo, e), max(hi, e)))

@@ -136,6 +136,13 @@ class RestitutionProfile:
             self._floor = min(0.5 * float(r @ r), min(f.cost for f in self.points))
         return self._floor
 
+    def basins(self, best: Fit, threshold: float) -> list:
+        """The lowest points (p) of the profile's valleys (up to PROFILE_BASINS) whose cost is
+        within ``threshold`` of the lowest: each another explanation of the record (a second
+        basin in e and M_T) that the intervals must cover."""
+        level = self._min(best) + threshold
+        return [c.p for c in self.centres if c.cost <= level]
+
     def inside(self, best: Fit, threshold: float) -> list:
         """The points (p) of the restitutions the record cannot rule out: the profile's
         within ``threshold`` of the lower of its own and the ``best`` fit's cost and, at each

@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.stats import chi2
 
 from treeimpact.analytic.model.parameters import check_range
 
@@ -208,12 +209,14 @@ def _what_is_fixed(staged: Staged, test: PendulumTest, floor: float, rms: float,
     s2 = max((max(rms, floor) / fitter.scale[0]) ** 2,
              (rms_y / fitter.scale[1]) ** 2 if pendulum else 0.0)  # the cost's noise
     threshold = 0.5 * CHI2_95 * s2
+    basin_threshold = 0.5 * float(chi2.ppf(0.95, len(best.problem.free))) * s2  # joint 95 %
     values, intervals = estimates(best.p, best.problem.covariance(best.p, floor), test,
                                   pendulum=pendulum)
     fixed = _Fixed(values, intervals, dict.fromkeys(values, True))
     if staged.profile is not None:
         intervals = widened_over_profile(best, staged.profile, intervals, test, floor,
-                                         threshold, pendulum=pendulum)
+                                         threshold, pendulum=pendulum,
+                                         basin_threshold=basin_threshold)
         fixed = _Fixed(values, intervals, fixed.determined)
         ridge = None if pendulum or not staged.profile.reaches_top(best, threshold) else \
             find_ridge(fitter, staged.profile, best, staged.keep, test, threshold)
@@ -222,7 +225,7 @@ def _what_is_fixed(staged: Staged, test: PendulumTest, floor: float, rms: float,
                                             values, intervals))
     fixed.values["t0"] += t_shift  # back on the record's own clock
     fixed.intervals["t0"] = tuple(v + t_shift for v in fixed.intervals["t0"])
-    return _undetermined(fixed, best.problem.params, impact)
+    return _undetermined(fixed, best.problem.params, impact, best.p)
 
 
 #: The reported quantities a fit may hold at a value, and the words for it.
@@ -230,22 +233,54 @@ _HELD = {Slot.RESTITUTION: ("restitution", "given"), Slot.X_OFFSET: ("x_offset",
          Slot.X_DRIFT: ("x_drift", "held at 0"), Slot.X_DRIFT2: ("x_drift2", "held at 0")}
 
 
-def _undetermined(fixed: _Fixed, params, impact: bool) -> _Fixed:
+#: The reported quantities each fitted parameter moves: a parameter at an end of the fit's
+#: range (no tree's value) leaves none of them determined.
+_MOVES = {Slot.LN_M_T: ("M_T", "C_T", "pair_damping_ratio", "omega_1", "V_1"),
+          Slot.LN_K_T: ("K_T", "C_T", "pair_damping_ratio", "E", "omega_1"),
+          Slot.TRUNK_DAMPING_RATIO: ("trunk_damping_ratio", "C_T", "pair_damping_ratio"),
+          Slot.RESTITUTION: ("restitution", "V_1"), Slot.T0: ("t0",)}
+#: A parameter this close to a bound, in its optimiser scales, is at it.
+AT_BOUND = 1e-6
+
+
+def at_range_end(p, params) -> set:
+    """The reported quantities moved by a free parameter of ``params`` that the fitted
+    ``p`` leaves at an end of its range (e = 0 excepted: a plastic pad, a physical value)."""
+    out = set()
+    for slot, names in _MOVES.items():
+        q = params[slot]
+        if q.frozen:
+            continue
+        tol = AT_BOUND * q.scale
+        low = p[slot] <= q.low + tol and not (slot == Slot.RESTITUTION and q.low == 0.0)
+        if low or p[slot] >= q.high - tol:
+            out.update(names)
+    return out
+
+
+def _undetermined(fixed: _Fixed, params, impact: bool, p=None) -> _Fixed:
     """``fixed`` with each quantity the record does not determine (:func:`intervals.
-    determined`; any of the tree's without an ``impact``) not fixed: its value NaN, its
+    determined`; any of the tree's without an ``impact``; any a parameter at an end of its
+    range moves, :func:`at_range_end` of the fitted ``p``) not fixed: its value NaN, its
     interval its range. A held parameter (``params`` frozen: e given, a drift not fitted)
     is determined, its interval its value."""
     held = {name: how for slot, (name, how) in _HELD.items() if params[slot].frozen}
+    ends = at_range_end(p, params) if p is not None else set()
     values, ok = dict(fixed.values), dict(fixed.determined)
     for name, interval in fixed.intervals.items():
         if name in held:
             ok[name] = True
             continue
-        ok[name] = ok[name] and determined(name, interval) and (impact or name not in TREE)
+        ok[name] = (ok[name] and determined(name, interval) and (impact or name not in TREE)
+                    and name not in ends)
         if not ok[name]:
             values[name] = math.nan
     note = fixed.note if impact else ("no impact above the noise: the record fixes none of "
                                       "the tree's quantities")
+    if ends & set(fixed.values):
+        note = "; ".join(filter(None, [note, (
+            f"{', '.join(sorted(ends & set(fixed.values)))}: the fit ends at its range's "
+            "end, no tree's value")]))
     return _Fixed(values, fixed.intervals, ok, note, held)
 
 

@@ -13,6 +13,7 @@ flexible trunks come from the ``beam`` backend (the continuum, with a crown mass
     python tests/data/identify/make_records.py --seeds 20 --out DIR   # the full set elsewhere
     python tests/data/identify/make_records.py --evaluate [--out DIR] [--every N]
     python tests/data/identify/make_records.py --check    # the integrator against the solver
+    python tests/data/identify/make_records.py --coverage 40 --numbers docs/results/identify-validation.json
 
 Units: SI; times of a record start at 0 (the logger's start), the contact 20 ms later plus a
 fraction of a sample.
@@ -687,6 +688,40 @@ def accuracy_numbers(seeds: int) -> dict:
     return out
 
 
+#: The noise levels (of the peak) of the coverage check (issue 41: 1, 5, 10 and 20 %).
+COVERAGE_NOISES = (0.01, 0.05, 0.1, 0.2)
+COVERED = ("M_T", "K_T", "C_T", "restitution")
+
+
+def coverage_numbers(seeds: int, e: float = 0.1) -> dict:
+    """How often the fit's 95 % intervals cover the truth on ``seeds`` records of the
+    central-leader model (e = ``e``) at each of :data:`COVERAGE_NOISES`, on x alone and with
+    the pendulum's y: per quantity of :data:`COVERED` the count covered (a range of a
+    quantity not fixed counts as its interval) and the count determined."""
+    sys.path.insert(0, str(HERE.parent.parent))
+    from test_record_fit import synthetic
+
+    from treeimpact.analytic.identify.record_fit import fit_record
+
+    out = {}
+    for noise in COVERAGE_NOISES:
+        for pendulum in (False, True):
+            key = f"coverage.{100 * noise:g}pct.{'xy' if pendulum else 'x'}"
+            covered, fixed = dict.fromkeys(COVERED, 0), dict.fromkeys(COVERED, 0)
+            for seed in range(seeds):
+                model, record, test = synthetic(e, seed, pendulum=pendulum, noise=noise)
+                fit = fit_record(record, test)
+                truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness,
+                         "C_T": model.damping, "restitution": e}
+                for k, v in truth.items():
+                    covered[k] += fit.intervals[k][0] <= v <= fit.intervals[k][1]
+                    fixed[k] += bool(fit.determined[k])
+            out |= {f"{key}.seeds": seeds}
+            out |= {f"{key}.covered_{k}_pct": 100.0 * v / seeds for k, v in covered.items()}
+            out |= {f"{key}.determined_{k}_pct": 100.0 * v / seeds for k, v in fixed.items()}
+    return out
+
+
 def write_numbers(path: Path, numbers: dict, about: str) -> None:
     """Merge ``numbers`` into the results file ``path`` (docs/results/identify-validation.json:
     tests/docnumbers/ reads its ``numbers``), with when and at which commit."""
@@ -735,9 +770,17 @@ def main(argv=None) -> int:
                          "before.validation for an older fit's evaluation)")
     ap.add_argument("--accuracy", type=int, metavar="SEEDS",
                     help="measure the central-leader accuracy on this many seeds")
+    ap.add_argument("--coverage", type=int, metavar="SEEDS",
+                    help="measure the intervals' coverage at 1-20 %% noise on this many seeds")
     args = ap.parse_args(argv)
     if args.check:
         check()
+        return 0
+    if args.coverage:
+        numbers = coverage_numbers(args.coverage)
+        print(json.dumps(numbers, indent=1))
+        if args.numbers:
+            write_numbers(args.numbers, numbers, "coverage")
         return 0
     if args.accuracy:
         numbers = accuracy_numbers(args.accuracy)
