@@ -164,6 +164,10 @@ def test_the_cli_warns_of_units_on_one_line_and_in_the_json(capsys):
     data = json.loads(captured.out)
     assert captured.err.count("\n") == 1 and data["explained"] is False
     assert len(data["warnings"]) == 1 and "--length-unit mm" in data["warnings"][0]
+    # the paper's procedure refuses it too (issue 41: it printed M_T = 2.5e8 kg beside the
+    # fit's refusal), in every reading, for the same reason
+    assert data["paper"] and all(r == {"error": f"not read: {data['warnings'][0]}"}
+                                 for r in data["paper"].values()), data["paper"]
     assert main(args + ["--length-unit", "mm"]) == 0  # declared: read right, fitted
     out = capsys.readouterr().out
     assert "verdict: explained" in out

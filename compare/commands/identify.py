@@ -74,10 +74,14 @@ def _test(args):
     return pendulum_test(pend, args.clamp_height, args.diameter)
 
 
-def _paper(record, test) -> dict:
-    """The paper's procedure (eqs 39-48) in each of its readings, or why it cannot run."""
+def _paper(record, test, fit=None) -> dict:
+    """The paper's procedure (eqs 39-48) in each of its readings, or why it cannot run: not
+    at all on a record the ``fit`` refused for its units (every method refuses it)."""
     from treeimpact.analytic.identify.procedure import READINGS, identify_from_record
 
+    if fit is not None and not fit.conclusion.fitted:
+        why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
+        return {reading: {"error": f"not read: {why}"} for reading in READINGS}
     out = {}
     for reading in READINGS:
         try:
@@ -151,7 +155,7 @@ def run(args) -> int:
                              length_unit=args.length_unit)
         fit = fit_record(record, test, restitution=args.restitution)
         with np.errstate(all="ignore"):  # its readings are checked, and fail in one line
-            paper = _paper(record, test)
+            paper = _paper(record, test, fit)
         if args.plot and math.isfinite(fit.residual_rms):
             _plot(args.plot, record, fit, paper, test)
     refusal = _not_fitted(fit)
