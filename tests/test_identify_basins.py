@@ -43,3 +43,15 @@ def test_a_second_basin_widens_m_t_to_cover_the_truth():
     assert lo <= 123.0 and hi >= 244.0 and lo <= 110.0 * 1.1  # both basins; the truth near
     e_lo, e_hi = fit.intervals["restitution"]
     assert e_lo <= 0.1 <= e_hi and e_hi >= 0.54
+
+
+def test_a_rest_the_noise_hid_is_not_called_absent():
+    """The fuzzer's seed 6 (20 % noise): the record's shape reads the contact at its first
+    sample, while the fit puts it 20 ms in (the record's 20 ms of rest); the diagnosis said
+    "the record has no rest before the contact" and now says the noise hid it."""
+    sim = ti.simulate("central-leader")
+    record = ti.record_from_simulation(sim, noise=0.2, seed=6)
+    fit = fit_record(record, pendulum_test(sim.scenario, None, None))
+    held = [d.message for d in fit.diagnoses if d.kind.value == "sensor-held"]
+    assert held and "has no rest before the contact" not in held[0]
+    assert "the noise hides it" in held[0] and 0.019 < fit.values["t0"] < 0.023

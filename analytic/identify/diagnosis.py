@@ -14,7 +14,14 @@ from .fit_model import drift_at, model_motion
 from .fit_parameters import DRIFTS, K_RANGE, M_RANGE, XI_RANGE, Slot
 from .fitter import REFINE_NFEV
 from .intervals import DETERMINED_FACTOR
-from .noise import RESOLUTION, ImpactTest, NoiseJudgement, NoiseSource, dominant_frequency
+from .noise import (
+    MIN_REST_SAMPLES,
+    RESOLUTION,
+    ImpactTest,
+    NoiseJudgement,
+    NoiseSource,
+    dominant_frequency,
+)
 from .procedure import PendulumTest
 
 #: A record that ends before the trunk's first swing back is truncated when it leaves the
@@ -230,13 +237,22 @@ def no_impact(test: ImpactTest, drift_degree: int) -> Diagnosis | None:
         f"motion is the sensor's noise, not a tree's response"))
 
 
-def sensor_held(t_end: float, feat_quarter: float) -> Diagnosis:
+def sensor_held(t_end: float, feat_quarter: float, rest_fit: int = 0,
+                t_read: float = math.nan, t0: float = math.nan) -> Diagnosis:
     """No sensor offset or drift fitted: the record (ending ``t_end`` s after the contact)
-    has no rest before the contact and no ring-down past a period (about 4 x
-    ``feat_quarter`` s)."""
+    showed no rest before the contact read from its shape (at ``t_read`` s) and no ring-down
+    past a period (about 4 x ``feat_quarter`` s); ``rest_fit``: the samples before the
+    fit's contact ``t0`` (s): when they are a rest the shape's reading missed (the noise
+    hid it), said so."""
+    if rest_fit >= MIN_REST_SAMPLES:
+        rest = (f"the contact read from the record's shape at {t_read:.3g} s left no rest "
+                f"before it (the noise hides it), though the fit puts the contact at "
+                f"{t0:.3g} s, after {rest_fit} samples; the record ")
+    else:
+        rest = "the record has no rest before the contact and "
     return Diagnosis(DiagnosisKind.SENSOR_HELD, (
-        f"the sensor's offset and drift held at 0 (its zero taken as the trunk's rest): the "
-        f"record has no rest before the contact and ends {t_end:.3g} s after it, within a "
+        f"the sensor's offset and drift held at 0 (its zero taken as the trunk's rest): "
+        f"{rest}ends {t_end:.3g} s after it, within a "
         f"period of the motion (about {4.0 * feat_quarter:.3g} s), where an offset or a "
         f"drift cannot be told from the motion; a record from before the impact or past a "
         f"period fits them"))

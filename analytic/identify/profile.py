@@ -138,8 +138,8 @@ class RestitutionProfile:
 
     def basins(self, best: Fit, threshold: float) -> list:
         """The lowest points (p) of the profile's valleys (up to PROFILE_BASINS) whose cost is
-        within ``threshold`` of the lowest: each another explanation of the record (a second
-        basin in e and M_T) that the intervals must cover."""
+        within ``threshold`` of the lowest (the profile's or the ``best`` fit's): each another
+        explanation of the record (a second basin in e and M_T) the intervals must cover."""
         level = self._min(best) + threshold
         return [c.p for c in self.centres if c.cost <= level]
 

@@ -297,8 +297,11 @@ def _diagnose(staged: Staged, test: PendulumTest, judged: NoiseJudgement,
     if impact.significant:
         found += _fit_findings(staged, test, judged, fixed, feat, t_shift, resid)
     if fitter.params[Slot.X_OFFSET].frozen:
+        t0 = float(staged.best.p[Slot.T0])
         found.append(dx.sensor_held(float(fitter.t[-1] - feat.t_contact),
-                                   max(feat.t_peak - feat.t_contact, feat.dt)))
+                                   max(feat.t_peak - feat.t_contact, feat.dt),
+                                   int(np.count_nonzero(fitter.t < t0 - 2.0 * feat.dt)),
+                                   feat.t_contact + t_shift, t0 + t_shift))
     diagnoses = [d for d in found if d is not None]
     explained = judged.limited and judged.y_limited and not any(
         d.kind in dx.REFUSING for d in diagnoses)
