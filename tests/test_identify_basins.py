@@ -55,3 +55,18 @@ def test_a_rest_the_noise_hid_is_not_called_absent():
     held = [d.message for d in fit.diagnoses if d.kind.value == "sensor-held"]
     assert held and "has no rest before the contact" not in held[0]
     assert "the noise hides it" in held[0] and 0.019 < fit.values["t0"] < 0.023
+
+
+def test_a_record_declared_in_cm_that_is_in_m_is_refused():
+    """The fuzzer's 1 % record (x in m) read with --length-unit cm: a trunk moving at 0.0108
+    m/s after a 132 kg pendulum at 2.4 m/s is a dynamic mass of 3e4 kg (eq 21), beyond any
+    tree a pendulum tests (M_PLAUSIBLE, 1e4 kg): it was fitted (M_T = 23,560 kg); now it is
+    refused for its units, naming the unit that reads it right."""
+    from treeimpact.analytic.identify.pendulum_record import Record
+
+    sim = ti.simulate("central-leader")
+    rec = ti.record_from_simulation(sim, noise=0.01, seed=1)
+    wrong = Record(t=rec.t, x=rec.x * 1e-2, length_unit="cm")  # its numbers read as cm
+    fit = fit_record(wrong, pendulum_test(sim.scenario, None, None))
+    assert not fit.conclusion.fitted and "x looks like m, not cm" in fit.warnings[0]
+    assert fit_record(rec, pendulum_test(sim.scenario, None, None)).conclusion.fitted

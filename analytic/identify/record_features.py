@@ -75,9 +75,18 @@ LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6}
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 
 
-def _plausible(peak: float, rise: float, dt: float, speed: float) -> dict:
+#: The largest dynamic mass a pendulum test meets at the clamp, kg (10 t: a whole large
+#: tree): after the first impact the trunk moves at V_1 / u_1 = m (1 + e) / (M_T + m) (eq 21)
+#: >= m / (M_PLAUSIBLE + m), so a slower trunk is read in a wrong unit.
+M_PLAUSIBLE = 1e4
+
+
+def _plausible(peak: float, rise: float, dt: float, speed: float,
+               speed_low: float = PLAUSIBLE["speed"][0]) -> dict:
     values = {"peak": peak, "rise": rise, "dt": dt, "speed": speed}
-    return {k: PLAUSIBLE[k][0] <= v <= PLAUSIBLE[k][1] for k, v in values.items()}
+    ok = {k: PLAUSIBLE[k][0] <= v <= PLAUSIBLE[k][1] for k, v in values.items()}
+    ok["speed"] = ok["speed"] and speed >= speed_low
+    return ok
 
 
 def _distance(**values) -> float:
@@ -85,7 +94,7 @@ def _distance(**values) -> float:
 
 
 def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
-                    length_unit: str = "m") -> list[str]:
+                    length_unit: str = "m", impactor_mass: float | None = None) -> list[str]:
     """One line per record whose numbers look like another unit than declared (its
     features ``feat``, against the pendulum's impact speed ``u1``, m/s): the peak
     displacement, the time from the contact to the peak, the sample interval or the trunk's
@@ -93,10 +102,13 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
     and plausible once a column, or both, is read in another unit (a factor 1e2-1e6 each;
     one column rather than two, the likeliest when several would do). ``time_unit`` and
     ``length_unit``: what the record was declared in (its numbers already converted to
-    SI)."""
+    SI). With the pendulum's ``impactor_mass`` m (kg), a trunk slower after the contact than
+    a tree of :data:`M_PLAUSIBLE` would move is implausible too."""
     peak, rise = feat.span, max(feat.t_peak - feat.t_contact, feat.dt)
     speed = feat.velocity / u1
-    ok = _plausible(peak, rise, feat.dt, speed)
+    low = PLAUSIBLE["speed"][0] if impactor_mass is None else max(
+        PLAUSIBLE["speed"][0], impactor_mass / (M_PLAUSIBLE + impactor_mass))
+    ok = _plausible(peak, rise, feat.dt, speed, low)
     if all(ok.values()):
         return []
     options = []
@@ -107,7 +119,7 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
             changed = [c for c, u, d in (("t", time, time_unit), ("x", length, length_unit))
                        if u != d]
             if changed and all(_plausible(peak * g, rise * k, feat.dt * k,
-                                          speed * g / k).values()):
+                                          speed * g / k, low).values()):
                 options.append((len(changed), _distance(peak=peak * g, rise=rise * k,
                                                         speed=speed * g / k),
                                 {"t": time, "x": length}, changed))

@@ -133,7 +133,7 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     feat = features(t, x)
     warnings = list(getattr(record, "warnings", ()))
     units = unit_suspicions(feat, test.impact_speed, getattr(record, "time_unit", "s"),
-                            getattr(record, "length_unit", "m"))
+                            getattr(record, "length_unit", "m"), test.impactor_mass)
     if units:  # no tree's values to find: said so at once (a fit of a record 1000 x too
         # long or too large is slow and meaningless)
         return _unit_result(record, feat, units, warnings + units)
