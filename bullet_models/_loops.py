@@ -149,10 +149,19 @@ def _loop_chain(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
     keep(fromiter(flat(map(pair, gjss(tb, joints, cid))), float, n2))
     pendulum_states.extend(gjs(pb, 0, cid)[:2])
     states = np.array(trunk_states).reshape(n_steps + 1, nj, 2)
-    Q, QD = states[:, :, 0], states[:, :, 1]
     q, qd = np.array(pendulum_states).reshape(n_steps + 1, 2).T
     force = np.zeros(n_steps + 1)
     force[list(contact_force)] = list(contact_force.values())
+    return _chain_record(setup, states[:, :, 0], states[:, :, 1], q, qd, force,
+                         (M, kdiag, Dv, Dq))
+
+
+def _chain_record(setup, Q, QD, q, qd, force, operators) -> dict:
+    """The chain run's record from its hinge angles ``Q`` and rates ``QD`` (steps x hinges),
+    the pendulum's ``q``, ``qd`` and the contact ``force`` per step (N): the clamp's and
+    crown's lateral motion, the trunk's energies and the damping's power (``operators``:
+    the mass matrix M, the hinge stiffnesses, Dv and Dq of :func:`damping_operators`)."""
+    M, kdiag, Dv, Dq = operators
     chain = hinged_chain(setup.scenario.trunk, setup.segments)
     x, vx = lateral_motion(chain, Q, QD, chain.clamp_index)
     crown, crown_v = lateral_motion(chain, Q, QD, chain.segments)

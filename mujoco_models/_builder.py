@@ -114,74 +114,89 @@ def _inertial(body, mass, com_z, inertia):
     body.inertia = [float(inertia)] * 3
 
 
+#: The trunk's colour in MuJoCo's viewer (RGBA).
+WOOD = (0.55, 0.4, 0.25, 1.0)
+
+
 def add_trunk(spec: mujoco.MjSpec, trunk: TrunkSpec, clamp_height: float, diameter: float):
     """Add the trunk to ``spec``; returns the name of its root body."""
-    r = diameter / 2.0
-    wood = (0.55, 0.4, 0.25, 1.0)
     if trunk.kind == "flex":
         return _flex.add_flex_trunk(spec, trunk.flex)
     if trunk.kind == "sdof":
-        tree = trunk.sdof
-        body = spec.worldbody.add_body()
-        body.name = "trunk"
-        body.pos = [0.0, 0.0, clamp_height]
-        body.gravcomp = 1.0
-        _inertial(body, tree.dynamic_mass, 0.0, 0.5 * tree.dynamic_mass * r * r)
-        j = body.add_joint()
-        j.name = "trunk_x"
-        j.type = mujoco.mjtJoint.mjJNT_SLIDE
-        j.axis = [1.0, 0.0, 0.0]
-        j.stiffness[0] = tree.stiffness
-        j.damping[0] = tree.damping
-        _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r], rgba=wood)
-        _site(body, "impact_point", (0.0, 0.0, 0.0), 0.2 * r)
-        return "trunk"
+        return _add_sdof(spec, trunk.sdof, clamp_height, diameter / 2.0)
     chain = trunk.chain
-    tr = chain.trunk
-    z = np.asarray(chain.boundaries)
-    h = chain.lengths
-    parent = spec.worldbody
-    bodies = []
     damp = joint_damping(chain) if trunk.damping == "joint" else None
+    parent = spec.worldbody
     for j in range(chain.segments):
-        body = parent.add_body()
-        body.name = f"segment_{j}"
-        body.pos = [0.0, 0.0, 0.0 if j == 0 else float(h[j - 1])]
-        body.gravcomp = 1.0
-        masses = [(chain.masses[j], h[j] / 2.0)]
-        rot = chain.inertias[j]
-        if j == chain.clamp_segment and tr.clamp_mass > 0:
-            masses.append((tr.clamp_mass, h[j]))
-        if j == chain.crown_segment and tr.crown_mass > 0:
-            masses.append((tr.crown_mass, h[j]))
-        mass = sum(mm for mm, _ in masses)
-        com = sum(mm * zz for mm, zz in masses) / mass
-        inertia = rot + sum(mm * (zz - com) ** 2 for mm, zz in masses)
-        _inertial(body, mass, com, inertia)
-        hinge = body.add_joint()
-        hinge.name = f"hinge_{j}"
-        hinge.type = mujoco.mjtJoint.mjJNT_HINGE
-        hinge.axis = [0.0, 1.0, 0.0]
-        hinge.stiffness[0] = chain.hinge_stiffnesses[j]
-        if damp is not None:
-            hinge.damping[0] = float(damp[j])
-        _geom(body, f"segment_{j}_wood", mujoco.mjtGeom.mjGEOM_CYLINDER, [r],
-              fromto=(0.0, 0.0, 0.0, 0.0, 0.0, float(h[j])), rgba=wood, group=1)
-        if j == chain.clamp_segment:
-            _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r],
-                  pos=(0.0, 0.0, float(h[j])), rgba=(0.3, 0.3, 0.3, 0.5))
-            _site(body, "impact_point", (0.0, 0.0, float(h[j])), 0.2 * r)
-        bodies.append(body)
-        parent = body
-    if trunk.damping == "distributed" and tr.damping > 0:
-        for p, (zp, cp) in enumerate(zip(chain.damping_heights, chain.damping_coefficients)):
-            ten = spec.add_tendon()
-            ten.name = f"damper_{p}"
-            ten.damping[0] = float(cp)
-            for j in range(chain.segments):
-                if z[j] < zp:
-                    ten.wrap_joint(f"hinge_{j}", float(zp - z[j]))
+        parent = _add_segment(parent, chain, j, diameter / 2.0, damp)
+    if trunk.damping == "distributed" and chain.trunk.damping > 0:
+        _add_dampers(spec, chain)
     return "segment_0"
+
+
+def _add_sdof(spec: mujoco.MjSpec, tree, clamp_height: float, r: float) -> str:
+    """The 1-DOF trunk ``tree`` (M_T, K_T, C_T) as a body on a slide joint at the clamp."""
+    body = spec.worldbody.add_body()
+    body.name = "trunk"
+    body.pos = [0.0, 0.0, clamp_height]
+    body.gravcomp = 1.0
+    _inertial(body, tree.dynamic_mass, 0.0, 0.5 * tree.dynamic_mass * r * r)
+    j = body.add_joint()
+    j.name = "trunk_x"
+    j.type = mujoco.mjtJoint.mjJNT_SLIDE
+    j.axis = [1.0, 0.0, 0.0]
+    j.stiffness[0] = tree.stiffness
+    j.damping[0] = tree.damping
+    _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r], rgba=WOOD)
+    _site(body, "impact_point", (0.0, 0.0, 0.0), 0.2 * r)
+    return "trunk"
+
+
+def _add_segment(parent, chain, j: int, r: float, damp):
+    """Segment ``j`` of the hinged ``chain`` under ``parent`` (radius ``r`` m; its hinge's
+    damping from ``damp`` when given): its masses (wood, the clamp's, the crown's) lumped
+    with their inertia about its centre, the pad and impact site on the clamp segment."""
+    tr, h = chain.trunk, chain.lengths
+    body = parent.add_body()
+    body.name = f"segment_{j}"
+    body.pos = [0.0, 0.0, 0.0 if j == 0 else float(h[j - 1])]
+    body.gravcomp = 1.0
+    masses = [(chain.masses[j], h[j] / 2.0)]
+    if j == chain.clamp_segment and tr.clamp_mass > 0:
+        masses.append((tr.clamp_mass, h[j]))
+    if j == chain.crown_segment and tr.crown_mass > 0:
+        masses.append((tr.crown_mass, h[j]))
+    mass = sum(mm for mm, _ in masses)
+    com = sum(mm * zz for mm, zz in masses) / mass
+    inertia = chain.inertias[j] + sum(mm * (zz - com) ** 2 for mm, zz in masses)
+    _inertial(body, mass, com, inertia)
+    hinge = body.add_joint()
+    hinge.name = f"hinge_{j}"
+    hinge.type = mujoco.mjtJoint.mjJNT_HINGE
+    hinge.axis = [0.0, 1.0, 0.0]
+    hinge.stiffness[0] = chain.hinge_stiffnesses[j]
+    if damp is not None:
+        hinge.damping[0] = float(damp[j])
+    _geom(body, f"segment_{j}_wood", mujoco.mjtGeom.mjGEOM_CYLINDER, [r],
+          fromto=(0.0, 0.0, 0.0, 0.0, 0.0, float(h[j])), rgba=WOOD, group=1)
+    if j == chain.clamp_segment:
+        _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r],
+              pos=(0.0, 0.0, float(h[j])), rgba=(0.3, 0.3, 0.3, 0.5))
+        _site(body, "impact_point", (0.0, 0.0, float(h[j])), 0.2 * r)
+    return body
+
+
+def _add_dampers(spec: mujoco.MjSpec, chain) -> None:
+    """The trunk's distributed damping as tendons: one per damping height, wrapping every
+    hinge below it with the lever arm to it."""
+    z = np.asarray(chain.boundaries)
+    for p, (zp, cp) in enumerate(zip(chain.damping_heights, chain.damping_coefficients)):
+        ten = spec.add_tendon()
+        ten.name = f"damper_{p}"
+        ten.damping[0] = float(cp)
+        for j in range(chain.segments):
+            if z[j] < zp:
+                ten.wrap_joint(f"hinge_{j}", float(zp - z[j]))
 
 
 def add_pendulum(spec: mujoco.MjSpec, impactor, kind: str, clamp_height: float,

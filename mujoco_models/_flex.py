@@ -80,8 +80,38 @@ def add_flex_trunk(spec: mujoco.MjSpec, rod: FlexTrunk) -> str:
     flex ``trunk`` (dim 1, E and radius d / 2) gives the bending; the pad and ``impact_point``
     are on the vertex at a.
     """
+    r = rod.trunk.diameter / 2.0
+    _add_root(spec, rod)
+    names = ["trunk_root", "trunk_root"]
+    vert = [0.0, 0.0, -rod.ghost, 0.0, 0.0, 0.0]
+    for k in range(1, rod.segments + 1):
+        names.append(_add_vertex(spec, rod, k, r))
+        vert += [0.0, 0.0, 0.0]
+    for k in range(1, rod.segments + 1):  # MuJoCo refuses joint damping on flex vertices
+        if rod.dampers[k - 1] > 0.0:
+            ten = spec.add_tendon()
+            ten.name = f"damper_{k}"
+            ten.damping[0] = rod.dampers[k - 1]
+            ten.wrap_joint(f"vertex_{k}_x", 1.0)
+    flex = spec.add_flex()
+    flex.name = "trunk"
+    flex.dim = 1
+    flex.radius = r
+    flex.young = rod.trunk.youngs_modulus
+    flex.poisson = 0.0  # no twist dof here: only the bending (E, I) enters
+    flex.vertbody = names
+    flex.vert = vert
+    flex.elem = [v for k in range(rod.segments + 1) for v in (k, k + 1)]
+    flex.contype = 0
+    flex.conaffinity = 0
+    flex.rgba = [0.55, 0.4, 0.25, 1.0]
+    return "trunk_root"
+
+
+def _add_root(spec: mujoco.MjSpec, rod: FlexTrunk) -> None:
+    """The base body ``trunk_root``: vertex 0's share of the mass on the hinge axis, on the
+    hinge ``root_hinge`` with the root spring k_theta (fixed for a rigid clamp)."""
     tr = rod.trunk
-    r = tr.diameter / 2.0
     root = spec.worldbody.add_body()
     root.name = "trunk_root"
     root.gravcomp = 1.0
@@ -96,53 +126,35 @@ def add_flex_trunk(spec: mujoco.MjSpec, rod: FlexTrunk) -> str:
         j.type = mujoco.mjtJoint.mjJNT_HINGE
         j.axis = [0.0, 1.0, 0.0]
         j.stiffness[0] = tr.base_stiffness
-    names = ["trunk_root", "trunk_root"]
-    vert = [0.0, 0.0, -rod.ghost, 0.0, 0.0, 0.0]
-    for k in range(1, rod.segments + 1):
-        body = spec.worldbody.add_body()
-        body.name = f"vertex_{k}"
-        body.pos = [0.0, 0.0, rod.heights[k]]
-        body.gravcomp = 1.0
-        body.explicitinertial = True
-        body.mass = rod.masses[k - 1]
-        body.ipos = [0.0, 0.0, 0.0]
-        body.inertia = [rod.masses[k - 1] * r * r / 4.0] * 3  # never enters: no rotation dof
-        j = body.add_joint()
-        j.name = f"vertex_{k}_x"
-        j.type = mujoco.mjtJoint.mjJNT_SLIDE
-        j.axis = [1.0, 0.0, 0.0]
-        if k == rod.clamp_vertex:
-            g = body.add_geom()
-            g.name = "trunk_pad"
-            g.type = mujoco.mjtGeom.mjGEOM_SPHERE
-            g.size = [r, 0.0, 0.0]
-            g.contype = 0
-            g.conaffinity = 0
-            g.rgba = [0.3, 0.3, 0.3, 0.5]
-            s = body.add_site()
-            s.name = "impact_point"
-            s.size = [0.2 * r, 0.0, 0.0]
-        names.append(body.name)
-        vert += [0.0, 0.0, 0.0]
-    for k in range(1, rod.segments + 1):  # MuJoCo refuses joint damping on flex vertices
-        if rod.dampers[k - 1] > 0.0:
-            ten = spec.add_tendon()
-            ten.name = f"damper_{k}"
-            ten.damping[0] = rod.dampers[k - 1]
-            ten.wrap_joint(f"vertex_{k}_x", 1.0)
-    flex = spec.add_flex()
-    flex.name = "trunk"
-    flex.dim = 1
-    flex.radius = r
-    flex.young = tr.youngs_modulus
-    flex.poisson = 0.0  # no twist dof here: only the bending (E, I) enters
-    flex.vertbody = names
-    flex.vert = vert
-    flex.elem = [v for k in range(rod.segments + 1) for v in (k, k + 1)]
-    flex.contype = 0
-    flex.conaffinity = 0
-    flex.rgba = [0.55, 0.4, 0.25, 1.0]
-    return "trunk_root"
+
+
+def _add_vertex(spec: mujoco.MjSpec, rod: FlexTrunk, k: int, r: float) -> str:
+    """Vertex ``k`` (1..N) as body ``vertex_k`` on the slide ``vertex_k_x`` with its lumped
+    mass (radius ``r`` m); the pad and ``impact_point`` on the clamp's vertex. Its name."""
+    body = spec.worldbody.add_body()
+    body.name = f"vertex_{k}"
+    body.pos = [0.0, 0.0, rod.heights[k]]
+    body.gravcomp = 1.0
+    body.explicitinertial = True
+    body.mass = rod.masses[k - 1]
+    body.ipos = [0.0, 0.0, 0.0]
+    body.inertia = [rod.masses[k - 1] * r * r / 4.0] * 3  # never enters: no rotation dof
+    j = body.add_joint()
+    j.name = f"vertex_{k}_x"
+    j.type = mujoco.mjtJoint.mjJNT_SLIDE
+    j.axis = [1.0, 0.0, 0.0]
+    if k == rod.clamp_vertex:
+        g = body.add_geom()
+        g.name = "trunk_pad"
+        g.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        g.size = [r, 0.0, 0.0]
+        g.contype = 0
+        g.conaffinity = 0
+        g.rgba = [0.3, 0.3, 0.3, 0.5]
+        s = body.add_site()
+        s.name = "impact_point"
+        s.size = [0.2 * r, 0.0, 0.0]
+    return body.name
 
 
 def flex_dofs(m: mujoco.MjModel) -> tuple[int | None, list[int]]:

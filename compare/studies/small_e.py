@@ -250,6 +250,31 @@ def small_e_table(scenario, grid=E_GRID):
     return pd.DataFrame(rows)
 
 
+class _Exact:
+    """The exact runs a crossing's bisection asks for beyond the sweep's grid, each made
+    once: ``at(name)(e)`` is approximation ``name``'s error at e (the continuum too for
+    the 1-DOF gaps); ``seen(name)`` the (e, error) pairs computed so far."""
+
+    def __init__(self, scenario):
+        self.scenario, self.cache = scenario, {}
+
+    def at(self, name):
+        model = APPROXIMATIONS[name].model
+
+        def error(e):
+            key = (e, model)
+            if key not in self.cache:
+                run, s = exact_run(self.scenario, e)
+                self.cache[key] = errors_of_run(run, s, continuum=model == "continuum")
+            return self.cache[key][f"small_e.{name}"]
+        return error
+
+    def seen(self, name) -> list:
+        model = APPROXIMATIONS[name].model
+        return [(e, c[f"small_e.{name}"]) for (e, mdl), c in self.cache.items()
+                if mdl == model and f"small_e.{name}" in c]
+
+
 def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
     """The small-e answer of one tree (``scenario``) from its sweep's ``table``
     (:func:`small_e_sweep`), judged against ``tolerance`` (None: the studies' validity
@@ -262,65 +287,63 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
 
     tol = validity_tolerance() if tolerance is None else tolerance
     rows = sorted(table.to_dict("records"), key=lambda r: float(r["restitution"]))
-    grid = [float(r["restitution"]) for r in rows]
-    e0 = float(scenario.contact.restitution)
-    cache: dict = {}
-
-    def evaluate(name):
-        model = APPROXIMATIONS[name].model
-
-        def at(e):
-            key = (e, model)
-            if key not in cache:
-                run, s = exact_run(scenario, e)
-                cache[key] = errors_of_run(run, s, continuum=model == "continuum")
-            return cache[key][f"small_e.{name}"]
-        return at
-
+    exact, split = _Exact(scenario), k_t_split(scenario)
     out = {}
-    split = k_t_split(scenario)
-    for name, approx in APPROXIMATIONS.items():
-        values = [_float(r.get(f"small_e.{name}")) for r in rows]
-        if any(r.get("status") != OK for r in rows):
-            values = [v if r.get("status") == OK else math.nan for v, r in zip(values, rows)]
-        holds, bracket = first_crossing(grid, values, evaluate(name), tol)
-        seen = sorted([(e, v) for e, v in zip(grid, values)] + [
-            (e, c[f"small_e.{name}"]) for (e, mdl), c in cache.items()
-            if mdl == approx.model and f"small_e.{name}" in c])
-        mono = monotone_until(seen, bracket[1]) if bracket else True
-        strikes = [e for e, r in zip(grid, rows) if r.get("second_strike") in (True, 1, "True")]
-        strike_from = min(strikes) if strikes and approx.model == "exact" \
-            and name.startswith("eq5") else None
-        if strike_from is not None and strike_from > (bracket[1] if bracket else holds):
-            strike_from = None
-        at_e = next((v for e, v in zip(grid, values) if abs(e - e0) < 1e-12), None)
-        reasons = {f"{e:g}": str(r.get(f"small_e_reason.{name}") or r.get("error"))
-                   for e, v, r in zip(grid, values, rows) if not math.isfinite(v)}
-        out[name] = {"label": approx.label, "what": approx.what, "model": approx.model,
-                     "e": e0,
-                     "holds_up_to_e": holds, "bracket": list(bracket) if bracket else None,
-                     "error_at_e": at_e, "error_at_zero": values[0], "e_grid": grid,
-                     "errors": values, "reasons": reasons, "monotone": mono,
-                     "second_strike_from": strike_from,
-                     "verdict": verdict(holds, bracket, values[0], grid, tol, mono,
-                                         strike_from)}
-        if strike_from is not None and name == "eq57_energy_loss":
-            first = [first_contact_error(scenario, e) for e in grid]
-            out[name]["first_contact_bracket"] = first_crossing(
-                grid, first, lambda e: first_contact_error(scenario, e), tol)[1]
-            if out[name]["first_contact_bracket"] is not None:
-                out[name]["verdict"] += (" (the first contact only: "
-                                         f"{bracket_text(out[name]['first_contact_bracket'])})")
-        if approx.model == "continuum" and holds == 0.0 and bracket is None:
-            steady = steady_bracket(grid, values, evaluate(name), tol)
-            out[name]["steady_up_to_e"] = steady[0]
-            out[name]["steady_bracket"] = list(steady[1]) if steady[1] else None
-            out[name]["verdict"] += f"; {steady_text(steady, tol)}"
-        if name == "identification_K_T":
-            out[name]["split_at_zero"] = split
-            out[name]["verdict"] += (f" (the 10 ms fit {100 * split['fit']:+.0f} %, eq 46's "
-                                     f"damped frequency {100 * split['reading']:+.0f} %)")
+    for name in APPROXIMATIONS:
+        out[name] = _curve(name, rows, scenario, exact, tol)
+        _extras(out[name], name, rows, scenario, exact, tol, split)
     return out
+
+
+def _curve(name: str, rows: list, scenario, exact: _Exact, tol: float) -> dict:
+    """Approximation ``name``'s curve over the sweep's ``rows``: its crossing of ``tol``
+    bisected with ``exact``, monotonicity before it, a counted second strike, its error at
+    the tree's own e, the reasons for missing points, and the verdict."""
+    approx, e0 = APPROXIMATIONS[name], float(scenario.contact.restitution)
+    grid = [float(r["restitution"]) for r in rows]
+    values = [_float(r.get(f"small_e.{name}")) if r.get("status") == OK else math.nan
+              for r in rows]
+    holds, bracket = first_crossing(grid, values, exact.at(name), tol)
+    mono = monotone_until(sorted([*zip(grid, values), *exact.seen(name)]),
+                          bracket[1]) if bracket else True
+    strikes = [e for e, r in zip(grid, rows) if r.get("second_strike") in (True, 1, "True")]
+    strike_from = min(strikes) if strikes and approx.model == "exact" \
+        and name.startswith("eq5") else None
+    if strike_from is not None and strike_from > (bracket[1] if bracket else holds):
+        strike_from = None
+    at_e = next((v for e, v in zip(grid, values) if abs(e - e0) < 1e-12), None)
+    reasons = {f"{e:g}": str(r.get(f"small_e_reason.{name}") or r.get("error"))
+               for e, v, r in zip(grid, values, rows) if not math.isfinite(v)}
+    return {"label": approx.label, "what": approx.what, "model": approx.model, "e": e0,
+            "holds_up_to_e": holds, "bracket": list(bracket) if bracket else None,
+            "error_at_e": at_e, "error_at_zero": values[0], "e_grid": grid,
+            "errors": values, "reasons": reasons, "monotone": mono,
+            "second_strike_from": strike_from,
+            "verdict": verdict(holds, bracket, values[0], grid, tol, mono, strike_from)}
+
+
+def _extras(a: dict, name: str, rows: list, scenario, exact: _Exact, tol: float,
+            split: dict) -> None:
+    """Add to curve ``a`` of ``name``: eq 57's first-contact crossing when it counts a
+    second strike, a 1-DOF gap's steady bracket (:func:`steady_bracket`), K_T's e = 0
+    ``split``; each said in its verdict."""
+    grid, values = a["e_grid"], a["errors"]
+    if a["second_strike_from"] is not None and name == "eq57_energy_loss":
+        first = [first_contact_error(scenario, e) for e in grid]
+        a["first_contact_bracket"] = first_crossing(
+            grid, first, lambda e: first_contact_error(scenario, e), tol)[1]
+        if a["first_contact_bracket"] is not None:
+            a["verdict"] += (" (the first contact only: "
+                             f"{bracket_text(a['first_contact_bracket'])})")
+    if a["model"] == "continuum" and a["holds_up_to_e"] == 0.0 and a["bracket"] is None:
+        steady = steady_bracket(grid, values, exact.at(name), tol)
+        a["steady_up_to_e"] = steady[0]
+        a["steady_bracket"] = list(steady[1]) if steady[1] else None
+        a["verdict"] += f"; {steady_text(steady, tol)}"
+    if name == "identification_K_T":
+        a["split_at_zero"] = split
+        a["verdict"] += (f" (the 10 ms fit {100 * split['fit']:+.0f} %, eq 46's "
+                         f"damped frequency {100 * split['reading']:+.0f} %)")
 
 
 def k_t_split(scenario) -> dict:
