@@ -171,10 +171,11 @@ SPHERE_RADIUS = 0.05  # m: the two-body collision's spheres (geometry only)
 
 def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: float,
                        damping: float, speed: float = 1.0, flags: bool = True,
-                       overlap: float = 1e-12) -> FreeCollision:
+                       overlap: float = 0.0) -> FreeCollision:
     """Collide sphere a (``mass``) into sphere b (``other_mass``; fixed when infinite) at
-    ``speed`` (m/s), starting touching (``overlap`` m into b, as MuJoCo's
-    :func:`mujoco_models.two_body_collision`: where in a step the touch fell), each link given ``stiffness``/``damping`` (per link,
+    ``speed`` (m/s), starting touching (default: at distance 0, where Bullet's contact
+    starts) or ``overlap`` m into b (as MuJoCo's :func:`mujoco_models.two_body_collision`),
+    each link given ``stiffness``/``damping`` (per link,
     N/m and N s/m) and, with ``flags``, :data:`WORLD_FLAGS` and :data:`LINK_FLAGS`;
     its :class:`analytic.results.FreeCollision` (restitution, touch duration s, steps with a
     normal force, peak penetration m; NaN where the state left the finite). The duration
