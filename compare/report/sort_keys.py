@@ -3,10 +3,10 @@ duration" column sorted 21, 33, 9.1 ms, and "not up to 50 ms" first).
 
 :func:`add_sort_keys` gives each cell that begins with a number, and each cell of a numeric
 column (one where at least half the filled cells begin with a number), a ``data-sort`` that
-the page's sorter reads before the text: the cell's first number in SI (9.1 ms is 0.0091, +8.6 % is 0.086, 1.2 kN is 1200; a
-range such as 9-33 ms sorts by its first end, 0.009); a cell that says the value lies beyond
-what was scanned ("not up to 50 ms", "> 50 ms") sorts as ``Infinity``, after every number
-when ascending; a cell with no number (n/a, a word, empty) has the key ``none``, which the
+the page's sorter reads before the text: the cell's first number in SI (9.1 ms is 0.0091, "\u2265 21 ms" is 0.021, +8.6 % is 0.086,
+1.2 kN is 1200; a range such as 9-33 ms sorts by its first end, 0.009); a cell that says the
+value lies beyond what was scanned ("not up to 50 ms") sorts as ``Infinity``, after every
+number when ascending; a cell with no number (n/a, a word, empty) has the key ``none``, which the
 sorter puts last in either direction. A cell the template keyed itself keeps its key (an
 empty one is filled in)."""
 
@@ -31,12 +31,12 @@ NONE = "none"
 
 _NUMBER = r"[+\-\u2212]?(?:\d{1,3}(?:,\d{3})+(?!\d)|\d+(?:\.\d+)?|\.\d+)(?:[eE][+\-]?\d+)?"
 #: A cell that begins with a number, maybe a range's second end, then maybe a unit.
-LEADING = re.compile(rf"^(?:[~\u2248]\s*)?(?P<num>{_NUMBER})"
+LEADING = re.compile(rf"^(?:(?:[~\u2248\u2265\u2264]|[<>]=?)\s*)?(?P<num>{_NUMBER})"
                      rf"(?:\s*(?:-|\u2013|\.\.|to)\s*{_NUMBER})?"
                      r"(?:\s*(?P<unit>N s/m|[A-Za-z%\u00b5][A-Za-z/^0-9]*))?"
                      r"(?=$|[\s,;:()\[\]])")  # a whole token: not the 1 of "1-DOF"
 #: A cell that says its value lies beyond what was scanned or computed.
-_BEYOND = re.compile(r"^(not up to|beyond|above|>|&gt;)\s*", re.I)
+_BEYOND = re.compile(r"^(not up to|beyond|above)\b", re.I)
 _TABLE = re.compile(r"<table\b.*?</table>", re.S)
 _ROW = re.compile(r"<tr\b[^>]*>.*?</tr>", re.S)
 _CELL = re.compile(r"<(t[dh])\b([^>]*)>(.*?)</\1>", re.S)

@@ -19,8 +19,11 @@ from treeimpact.compare.runs import RunCache
 
 #: The units the report prints after a number, to SI (this test's own table).
 SI = {"%": 1e-2, "ms": 1e-3, "s": 1.0, "mm": 1e-3, "m": 1.0, "kN": 1e3, "N": 1.0, "J": 1.0,
-      "kg": 1.0, "us": 1e-6, "Hz": 1.0, "kHz": 1e3, "N/m": 1.0, "MN/m": 1e6, "m/s": 1.0}
-LEADING = re.compile(r"^[~\u2248]?\s*([+\-\u2212]?\d+(?:\.(\d+))?(?:[eE]([+\-]?\d+))?)"
+      "kg": 1.0, "us": 1e-6, "Hz": 1.0, "kHz": 1e3, "N/m": 1.0, "MN/m": 1e6, "m/s": 1.0,
+      "km/s\u00b2": 1e3, "m/s\u00b2": 1.0}
+#: A column header's unit, "(ms", "(km/s²)": the unit of its cells that print none.
+HEADER_UNIT = re.compile(r"\((ms|mm|s|m|J|kN|N|kg|%|km/s\u00b2|m/s\u00b2|m/s)[),]")
+LEADING = re.compile(r"^(?:[~\u2248\u2265\u2264<>]=?)?\s*([+\-\u2212]?\d+(?:\.(\d+))?(?:[eE]([+\-]?\d+))?)"
                      r"(?:\s*(?:-|\.\.)\s*([+\-]?\d+(?:\.\d+)?(?:[eE][+\-]?\d+)?))?"
                      r"\s*([A-Za-z%/]*)(?=$|[\s,;:()])")
 
@@ -33,7 +36,9 @@ class Tables(HTMLParser):
         self.tables, self._cell = [], None
 
     def handle_starttag(self, tag, attrs):
-        if tag == "table":
+        if tag == "br" and self._cell is not None:
+            self._cell[2] += " "  # a line break in a cell separates its words
+        elif tag == "table":
             self.tables.append([])
         elif tag == "tr" and self.tables:
             self.tables[-1].append([])
@@ -50,13 +55,15 @@ class Tables(HTMLParser):
             self._cell[2] += data
 
 
-def printed(text: str):
+def printed(text: str, header: str = ""):
     """(value in SI, a range's second end or the value, half the last printed digit in SI)
-    of a cell beginning with a number in a unit of :data:`SI` or none; None otherwise."""
+    of a cell beginning with a number in a unit of :data:`SI`, or none (then its column
+    ``header``'s unit, if it names one); None otherwise."""
     m = LEADING.match(" ".join(text.split()))
     if m is None or (m.group(5) and m.group(5) not in SI):
         return None
-    scale = SI.get(m.group(5), 1.0)
+    unit = HEADER_UNIT.search(header)
+    scale = SI[m.group(5)] if m.group(5) else SI[unit.group(1)] if unit else 1.0
     decimals = len(m.group(2) or "") - int(m.group(3) or 0)
     low = float(m.group(1).replace("\u2212", "-")) * scale
     high = float(m.group(4)) * scale if m.group(4) else low
@@ -71,9 +78,10 @@ def check(page: str) -> tuple[int, list[str]]:
     for table in parser.tables:
         if len(table) < 3:
             continue  # the page's sorter leaves a table of under 3 rows alone
+        heads = [cell[2] for cell in table[0]]
         for row in table[1:]:
-            for tag, attrs, text in row:
-                got = printed(text)
+            for col, (tag, attrs, text) in enumerate(row):
+                got = printed(text, heads[col] if col < len(heads) else "")
                 if tag != "td" or got is None or "colspan" in attrs:
                     continue
                 checked += 1
@@ -103,10 +111,10 @@ def _unkeyed_in_numeric_columns(page: str) -> list[str]:
 
 def test_the_issue_s_column_sorts_by_its_numbers_and_not_up_to_last():
     page = ("<table><tr><th>tree</th><th>energy delivered</th><th>x_max</th></tr>"
-            "<tr><td>a</td><td>21 ms</td><td>not up to 50 ms</td></tr>"
-            "<tr><td>b</td><td>33 ms</td><td>2.6 ms</td></tr>"
-            "<tr><td>c</td><td>9.1 ms</td><td>n/a</td></tr>"
-            "<tr><td>d</td><td data-sort=\"\">n/a</td><td>6 ms</td></tr></table>")
+            "<tr><td>a</td><td>&ge; 21 ms</td><td>not up to 50 ms</td></tr>"
+            "<tr><td>b</td><td>&ge; 33 ms</td><td>2.6 ms</td></tr>"
+            "<tr><td>c</td><td>&ge; 9.1 ms</td><td>n/a</td></tr>"
+            "<tr><td>d</td><td data-sort=\"\">n/a</td><td>&ge; 6 ms</td></tr></table>")
     keyed = add_sort_keys(page)
     parser = Tables()
     parser.feed(keyed)
@@ -118,7 +126,7 @@ def test_the_issue_s_column_sorts_by_its_numbers_and_not_up_to_last():
     assert x_max == ["Infinity", "0.0026", "none", "0.006"]
     numbers = sorted((float(k), t) for k, (_, _, t) in zip(x_max, (r[2] for r in rows))
                      if k != "none")
-    assert [t for _, t in numbers] == ["2.6 ms", "6 ms", "not up to 50 ms"]
+    assert [t for _, t in numbers] == ["2.6 ms", "\u2265 6 ms", "not up to 50 ms"]
     assert check(keyed) == (5, [])
     assert check(page)[1]  # the page as the templates wrote it fails the check
 
