@@ -16,7 +16,8 @@ ROUNDS = 4
 
 
 def renderer_of(fig):
-    """The figure's renderer (an Agg canvas attached to a bare ``Figure`` first)."""
+    """The renderer of the figure ``fig`` (an Agg canvas attached to a bare ``Figure``
+    first)."""
     if not hasattr(fig.canvas, "get_renderer"):
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -25,8 +26,8 @@ def renderer_of(fig):
 
 
 def titles(fig) -> list:
-    """(Text, its room in pixels) of the figure's suptitle and its subfigures' (their
-    widths) and of each axes' centre title (the axes' width), those with text."""
+    """(Text, its room in pixels) of the suptitle of the figure ``fig`` and its subfigures'
+    (their widths) and of each axes' centre title (the axes' width), those with text."""
     fig_width = fig.bbox.width
     out = []
     for part in (fig, *_subfigures(fig)):

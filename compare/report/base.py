@@ -45,8 +45,9 @@ def plain(v: float, digits: int) -> str:
 
 
 def span(values, digits: int = 3, sep: str = "-") -> str:
-    """The range of ``values`` as 'low-high' (:func:`num` at ``digits``), one value when its
-    ends print the same (17.7 J, not 17.7-17.7 J); n/a when there is none."""
+    """The range of ``values`` as 'low-high' (:func:`num` at ``digits``, the ends joined by
+    ``sep``), one value when its ends print the same (17.7 J, not 17.7-17.7 J); n/a when
+    there is none."""
     values = [v for v in values if v is not None]
     if not values:
         return "n/a"
@@ -61,8 +62,8 @@ _INPUT_WORDS = {"root_share": "of the static flexibility at the clamp",
 
 
 def input_value(v, key: str) -> str:
-    """A held (measured) input ``key`` of the sensitivity study with its unit: 'clamp mass
-    4 kg', 'root compliance 0.86 of the static flexibility at the clamp', the pad as its
+    """A held (measured) input ``key`` of the sensitivity study at its value ``v``, with
+    its unit: 'clamp mass 4 kg', 'root compliance 0.86 of the static flexibility at the clamp', the pad as its
     collision time in ms."""
     from treeimpact.compare.studies.sensitivity import INPUTS
 

@@ -45,7 +45,8 @@ _KEY = re.compile(r'\sdata-sort="([^"]*)"')
 
 
 def cell_text(inner: str) -> str:
-    """A cell's text as the reader sees it: tags dropped, entities read, spaces single."""
+    """A cell's text (its HTML ``inner``) as the reader sees it: tags dropped, entities
+    read, spaces single."""
     return " ".join(html.unescape(_TAG.sub(" ", inner)).split())
 
 
