@@ -104,3 +104,17 @@ def test_the_one_tree_figures_wrapped_their_suptitle(drawn):
             renderer = figure_text.renderer_of(fig)
             sup.set_text(" ".join(sup.get_text().split()))  # as drawn before the fix
             assert sup.get_window_extent(renderer).width > fig.bbox.width, path
+
+
+def test_every_figure_is_saved_through_the_title_fitting():
+    """No figure of the package is written past :func:`figure_text.save_figure` (the
+    studies' maps, identify's plot): ``.savefig(`` appears in figure_text.py alone."""
+    from pathlib import Path
+
+    root = Path(figure_text.__file__).resolve().parents[1]
+    files = [p for top in ("analytic", "compare", "mujoco_models", "bullet_models",
+                           "treeimpact") for p in (root / top).rglob("*.py")]
+    assert len(files) > 50, root
+    writers = sorted(str(p.relative_to(root)) for p in files
+                     if "tests" not in p.parts and ".savefig(" in p.read_text())
+    assert writers == ["compare/figure_text.py"], writers
