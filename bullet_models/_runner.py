@@ -72,7 +72,7 @@ def stepping_record(setup: Setup, steps: int, wall_s: float, swing_s: float) -> 
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
              contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             trunk_damping_model="distributed", calibration="pad") -> SimulationResult:
+             trunk_damping_model=None, calibration=None) -> SimulationResult:
     """Run one scenario in PyBullet (rules: docs/engines.md); backend "bullet".
 
     Args:
@@ -89,10 +89,11 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
             Bullet's implicit contact holds).
         restitution: e (None: the scenario's contact.restitution; soft: below 1).
         t_end: the time simulated after the touch, s (None: the scenario's).
-        trunk_damping_model: "distributed" (eq 9's C along the trunk) or "joint" (in the
-            chain's hinges).
-        calibration: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
-            recalibrated so that e holds on the trunk's effective mass at the clamp.
+        trunk_damping_model: "distributed" (None, the default: eq 9's C along the trunk) or
+            "joint" (in the chain's hinges); refused with ``trunk = "sdof"``.
+        calibration: "pad" (None, the default) the SDOF rung's (k_c, c_c); "effective" c_c
+            recalibrated so that e holds on the trunk's effective mass at the clamp; refused
+            with ``trunk = "sdof"`` (where both are the same).
 
     Returns:
         The SimulationResult: metrics, model, record (SI).

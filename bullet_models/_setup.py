@@ -30,6 +30,7 @@ from treeimpact.analytic.engine.interface import (
     check_choice,
     engine_model,
     trunk_chain,
+    trunk_options,
 )
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import DEFAULT_CONTACT_DURATION, Scenario
@@ -65,14 +66,14 @@ class Setup(EngineSetup):
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               trunk_damping_model="distributed", calibration="pad") -> Setup:
+               trunk_damping_model=None, calibration=None) -> Setup:
     """Validate the options and build everything a run of ``scenario`` needs, without the
     engine: ``trunk``, ``segments``, ``pendulum``, ``contact``, ``contact_stiffness``
     (N/m), ``dt`` (s), ``restitution``, ``t_end`` (s), ``trunk_damping_model`` and
     ``calibration`` as in :func:`bullet_models._runner.simulate`; ParameterError for a bad
     one (before any chain is built where it can)."""
     check_choice("contact", contact, CONTACTS)
-    damping = trunk_damping_model
+    damping, calibration = trunk_options(trunk, trunk_damping_model, calibration)
     model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
                                 trunk_damping_model=damping,
                                 calibration=calibration, restitution=restitution,

@@ -171,9 +171,11 @@ SPHERE_RADIUS = 0.05  # m: the two-body collision's spheres (geometry only)
 
 def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: float,
                        damping: float, speed: float = 1.0, flags: bool = True,
-                       overlap: float = 1e-12) -> FreeCollision:
+                       overlap: float = 0.0) -> FreeCollision:
     """Collide sphere a (``mass``) into sphere b (``other_mass``; fixed when infinite) at
-    ``speed`` (m/s), starting touching, each link given ``stiffness``/``damping`` (per link,
+    ``speed`` (m/s), starting touching (default: at distance 0, where Bullet's contact
+    starts) or ``overlap`` m into b (as MuJoCo's :func:`mujoco_models.two_body_collision`),
+    each link given ``stiffness``/``damping`` (per link,
     N/m and N s/m) and, with ``flags``, :data:`WORLD_FLAGS` and :data:`LINK_FLAGS`;
     its :class:`analytic.results.FreeCollision` (restitution, touch duration s, steps with a
     normal force, peak penetration m; NaN where the state left the finite). The duration
@@ -186,7 +188,7 @@ def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: flo
     p.setPhysicsEngineParameter(fixedTimeStep=dt, physicsClientId=cid,
                                 **(WORLD_FLAGS if flags else {"numSubSteps": 0}))
     bodies = []
-    for m, x in ((mass, -SPHERE_RADIUS), (other_mass, SPHERE_RADIUS)):
+    for m, x in ((mass, overlap - SPHERE_RADIUS), (other_mass, SPHERE_RADIUS)):
         fixed = not math.isfinite(m)
         text = _urdf.sphere_urdf(1.0 if fixed else m, SPHERE_RADIUS)
         body = load_urdf(p, cid, text, basePosition=[x, 0.0, 0.0], useFixedBase=fixed)
@@ -202,8 +204,8 @@ def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: flo
         (xb, _, _), _ = p.getBasePositionAndOrientation(b, physicsClientId=cid)
         va = p.getBaseVelocity(a, physicsClientId=cid)[0][0]
         vb = p.getBaseVelocity(b, physicsClientId=cid)[0][0]
-        overlap = 2.0 * SPHERE_RADIUS - (xb - xa)
-        return k * overlap + c * (va - vb), vb - va, overlap
+        depth = 2.0 * SPHERE_RADIUS - (xb - xa)
+        return k * depth + c * (va - vb), vb - va, depth
 
     law_prev, _, _ = state()
     pushing, t_release, peak = 0, None, 0.0
@@ -211,10 +213,10 @@ def two_body_collision(mass: float, other_mass: float, dt: float, stiffness: flo
         p.stepSimulation(physicsClientId=cid)
         if sum(cp[9] for cp in p.getContactPoints(a, b, physicsClientId=cid)) > 0.0:
             pushing += 1
-        law, sep, overlap = state()
+        law, sep, depth = state()
         if not (math.isfinite(law) and math.isfinite(sep)):
             return FreeCollision(math.nan, math.nan, pushing, math.nan)
-        peak = max(peak, overlap)
+        peak = max(peak, depth)
         if t_release is None and law <= 0.0:
             # the force of state n acted over step n (implicit): it stands at (n - 1) dt
             t_release = (n - 2 + law_prev / (law_prev - law)) * dt

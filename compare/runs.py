@@ -7,7 +7,11 @@ the report. A run that cannot produce numbers keeps the reason instead:
 * ``skipped``: the backend refused the run with a one-line :class:`ParameterError` (the
   engine package is not available here, or the engine cannot express the requested rung,
   e.g. an option it does not have);
-* ``diverged``: the simulation raised :class:`SimulationDiverged`;
+* ``diverged``: the simulation raised :class:`SimulationDiverged` (a solver or an engine
+  that diverged);
+* ``outside validity``: a sound run whose result the model cannot represent
+  (:class:`OutsideValidity`: x_max beyond the clamp height), worded "outside the model's
+  validity", never as diverged;
 * ``failed``: any other exception (a bug: the tests fail on it, the report shows it).
 
 Nothing is ever dropped silently: the report lists every run with its status and reason.
@@ -21,7 +25,12 @@ import time
 from dataclasses import dataclass, field
 from enum import StrEnum
 
-from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
+from treeimpact.analytic.errors import (
+    OutsideValidity,
+    ParameterError,
+    SimulationDiverged,
+    one_line,
+)
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import SimulationResult
 
@@ -32,11 +41,12 @@ class Status(StrEnum):
     OK = "ok"  # numbers
     SKIPPED = "skipped"  # refused with a one-line ParameterError (an option, an engine)
     DIVERGED = "diverged"  # SimulationDiverged: never numbers
+    OUTSIDE = "outside validity"  # OutsideValidity: the model's validity, not a solver
     FAILED = "failed"  # any other exception: a bug
     INVALID = "invalid"  # a sweep point whose parameters the scenario refuses
 
 
-OK, SKIPPED, DIVERGED, FAILED, INVALID = Status
+OK, SKIPPED, DIVERGED, OUTSIDE, FAILED, INVALID = Status
 
 
 @dataclass
@@ -88,13 +98,15 @@ class Run:
 def attempt(backend, scenario: Scenario, options: dict) -> Run:
     """The :class:`Run` of one backend run of ``scenario`` with ``options`` (``backend``: a
     :class:`compare.backends.Backend`), timed; never raises for a failing run (SKIPPED,
-    DIVERGED or FAILED with its reason)."""
+    OUTSIDE, DIVERGED or FAILED with its reason)."""
     t0 = time.perf_counter()
     result, reason, status = None, None, OK
     try:
         result = backend.simulate(scenario, **options)
     except ParameterError as exc:
         status, reason = SKIPPED, one_line(exc)
+    except OutsideValidity as exc:  # before SimulationDiverged, its base
+        status, reason = OUTSIDE, f"outside the model's validity: {one_line(exc)}"
     except SimulationDiverged as exc:
         status, reason = DIVERGED, f"diverged: {one_line(exc)}"
     except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests

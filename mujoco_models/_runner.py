@@ -31,7 +31,7 @@ __all__ = ["OPTIONS", "Setup", "build_model", "engine_trunk_matrices", "flex_mod
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
              contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             trunk_damping_model="distributed", integrator="Euler", calibration="pad"
+             trunk_damping_model=None, integrator="Euler", calibration=None
              ) -> SimulationResult:
     """Run one scenario in MuJoCo (rules: docs/engines.md); backend "mujoco".
 
@@ -47,12 +47,13 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
         dt: the time step, s (None: :mod:`analytic.contact.timestep`'s rule).
         restitution: e (None: the scenario's contact.restitution).
         t_end: the time simulated after the touch, s (None: the scenario's).
-        trunk_damping_model: "distributed" (eq 9's C along the trunk) or "joint" (in the
-            chain's hinges).
+        trunk_damping_model: "distributed" (None, the default: eq 9's C along the trunk) or
+            "joint" (in the chain's hinges); refused with ``trunk = "sdof"``.
         integrator: MuJoCo's ``Euler`` (default), ``implicit``, ``implicitfast`` or
             ``RK4``.
-        calibration: "pad" (default) the SDOF rung's (k_c, c_c); "effective" c_c
-            recalibrated so that e holds on the trunk's effective mass at the clamp.
+        calibration: "pad" (None, the default) the SDOF rung's (k_c, c_c); "effective" c_c
+            recalibrated so that e holds on the trunk's effective mass at the clamp; refused
+            with ``trunk = "sdof"`` (where both are the same).
 
     Returns:
         The SimulationResult: metrics, model, record (SI).

@@ -28,6 +28,7 @@ from treeimpact.analytic.engine.interface import (
     check_choice,
     engine_model,
     trunk_chain,
+    trunk_options,
 )
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Scenario
@@ -117,7 +118,7 @@ def _trunk_spec(scenario: Scenario, trunk: str, segments, damping) -> tuple:
 @mujoco_warnings
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
                contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               trunk_damping_model="distributed", integrator="Euler", calibration="pad"
+               trunk_damping_model=None, integrator="Euler", calibration=None
                ) -> Setup:
     """Validate the options and compile the model of ``scenario`` (rules in the module
     docstring): ``trunk``, ``segments``, ``pendulum``, ``contact_stiffness`` (N/m), ``dt``
@@ -188,6 +189,7 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
                 t_end, damping, integrator, calibration) -> Setup:
     """:func:`make_setup` without its cache (the options in its order, positional)."""
     check_choice("integrator", integrator, INTEGRATORS)
+    damping, calibration = trunk_options(trunk, damping, calibration)
     model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
                                 trunk_damping_model=damping,
                                 calibration=calibration, restitution=restitution,

@@ -105,6 +105,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
                   **pad_fields(k_c, c_c, model.reduced_mass)}
     scen = scenario.to_dict()
     scen["contact"]["restitution"] = model.restitution
+    scen["t_end"] = t_end  # the run's, as the engines record it (a --t-end's refusal names it)
     return SimulationResult(
         backend="analytic-soft", metrics=metrics, model=model_dict, scenario=scen,
         trajectory=trajectory, record=rec, collision_duration=t_col)

@@ -101,6 +101,31 @@ def check_choice(name: str, value, allowed):
     return value
 
 
+#: The chain-only options an SDOF trunk has no use for, and why (refused when given with
+#: ``--trunk sdof``, as ``--segments`` is by :func:`trunk_chain`).
+SDOF_IGNORES = {
+    "trunk_damping_model": "the SDOF trunk's damping is C_T at the clamp (eq 11), lumped "
+                           "in one slide joint",
+    "calibration": "the SDOF trunk's effective mass at the clamp is M_T, so 'pad' and "
+                   "'effective' set the same pad",
+}
+
+
+def trunk_options(trunk: str, trunk_damping_model, calibration) -> tuple[str, str]:
+    """The ``trunk_damping_model`` and ``calibration`` of a run of ``trunk`` (their defaults
+    where None); a one-line error naming the flag when one is given for ``trunk = sdof``,
+    which it does not change (:data:`SDOF_IGNORES`)."""
+    if trunk == "sdof":
+        given = {"trunk_damping_model": trunk_damping_model, "calibration": calibration}
+        for name, value in given.items():
+            if value is not None:
+                flag = "--" + name.replace("_", "-")
+                raise ParameterError(f"{flag} = {value!r}: only for a --trunk with segments, "
+                                     f"not --trunk sdof ({SDOF_IGNORES[name]})")
+    damping = DAMPINGS[0] if trunk_damping_model is None else trunk_damping_model
+    return damping, CALIBRATIONS[0] if calibration is None else calibration
+
+
 def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping_model: str,
                  calibration: str, restitution, t_end, trunks: tuple = TRUNKS
                  ) -> tuple[TwoBodyModel, float]:

@@ -312,4 +312,6 @@ def _plot(path, record, fit, paper, test) -> None:
     axr.axhline(0.0, color="k", lw=0.6)
     axr.set(xlabel="time t (ms)", ylabel="residual (mm)")
     axr.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    fig.savefig(path, dpi=110)
+    from treeimpact.compare.figure_text import save_figure
+
+    save_figure(fig, path, 110)

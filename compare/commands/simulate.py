@@ -61,23 +61,27 @@ def print_simulation(scenario, result, reference) -> None:
 
     print(f"{scenario.name} ({result.backend})")
     print("model:")
+    # every column as wide as its widest cell, header included (crown_peak_acceleration,
+    # 23 characters, pushed its row out of a 22-wide column)
+    wk = max(len(k) for k in ("metric", *result.model, *result.metrics)) + 1
+    wv = max(14, len(result.backend) + 1, *(len(fmt(v)) + 1 for v in result.metrics.values()))
     for key, value in result.model.items():
         text = fmt(value) if not isinstance(value, (list, tuple)) else " ".join(
             fmt(v) for v in value)
-        print(f"  {key:<22}{text:>14}  {unit_text(MODEL_UNITS.get(key, ''))}")
-    head = f"  {'metric':<22}{result.backend:>14}  {'unit':<7}"
+        print(f"  {key:<{wk}}{text:>{wv}}  {unit_text(MODEL_UNITS.get(key, ''))}")
+    head = f"  {'metric':<{wk}}{result.backend:>{wv}}  {'unit':<7}"
     if reference is not None:
-        head += f"{'paper model':>14}{'difference':>12}"
+        head += f"{'paper model':>{wv}}{'difference':>12}"
     print("metrics:" if reference is None else "metrics (paper model: the analytic backend, "
           "eqs 12-35):")
     print(head + "  meaning")
     for key, value in result.metrics.items():
         unit, meaning = METRIC_UNITS[key]
-        line = f"  {key:<22}{fmt(value):>14}  {unit_text(unit):<7}"
+        line = f"  {key:<{wk}}{fmt(value):>{wv}}  {unit_text(unit):<7}"
         if reference is not None:
             ref = reference.metrics.get(key)
             diff = "" if key in _NO_DIFFERENCE else relative_text(value, ref)
-            line += f"{fmt(ref):>14}{diff:>12}"
+            line += f"{fmt(ref):>{wv}}{diff:>12}"
         print(line + f"  {meaning}")
 
 

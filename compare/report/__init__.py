@@ -43,6 +43,7 @@ from .answer import (
     small_e_rows,
     with_sensitivity,
 )
+from .sort_keys import add_sort_keys
 
 __all__ = ["write_report", "build_sections"]
 
@@ -231,6 +232,8 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         parts = [(s, s.render(fmt)) for s in ordered]
         page = env.get_template(f"report.{fmt}.j2").render(
             sections=ordered, parts=parts, generated=stamp, summary=summary)
+        if fmt == "html":  # every numeric cell its number in SI for the sorter
+            page = add_sort_keys(page)
         paths[fmt] = out / name
         paths[fmt].write_text(page, encoding="utf-8")
     sections["runs"].wall_s["total"] = time.perf_counter() - t_start

@@ -29,8 +29,49 @@ def num(v, digits: int = 4) -> str:
             return "n/a"
         if v != 0 and (abs(v) >= 1e5 or abs(v) < 1e-3):
             return f"{v:.{digits - 1}e}"
-        return f"{v:.{digits}g}"
+        return plain(v, digits)
     return str(v)
+
+
+def plain(v: float, digits: int) -> str:
+    """A finite ``v`` rounded to ``digits`` significant digits, written without a power of
+    ten (130, not 1.3e+02) and without trailing zeros (0.86, not 0.860)."""
+    rounded = float(f"{v:.{digits}g}")
+    if rounded == 0:
+        return "0"
+    decimals = max(0, digits - 1 - math.floor(math.log10(abs(rounded))))
+    text = f"{rounded:.{decimals}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
+def span(values, digits: int = 3, sep: str = "-") -> str:
+    """The range of ``values`` as 'low-high' (:func:`num` at ``digits``, the ends joined by
+    ``sep``), one value when its ends print the same (17.7 J, not 17.7-17.7 J); n/a when
+    there is none."""
+    values = [v for v in values if v is not None]
+    if not values:
+        return "n/a"
+    low, high = num(min(values), digits), num(max(values), digits)
+    return low if low == high else f"{low}{sep}{high}"
+
+
+#: The sensitivity study's dimensionless inputs, what their number is
+#: (compare.studies.sensitivity.INPUTS gives the others' units).
+_INPUT_WORDS = {"root_share": "of the static flexibility at the clamp",
+                "e_over_g": "(E / G, 1)", "restitution": "(e, 1)"}
+
+
+def input_value(v, key: str) -> str:
+    """A held (measured) input ``key`` of the sensitivity study at its value ``v``, with
+    its unit: 'clamp mass 4 kg', 'root compliance 0.86 of the static flexibility at the clamp', the pad as its
+    collision time in ms."""
+    from treeimpact.compare.studies.sensitivity import INPUTS
+
+    unit = INPUTS[key][2] if key in INPUTS else ""
+    if unit == "log10 s" and isinstance(v, (int, float)):
+        return f"{input_name(key)} (its collision time {num(1e3 * 10.0 ** v, 3)} ms)"
+    words = _INPUT_WORDS.get(key, "" if unit == "1" else unit)
+    return f"{input_name(key)} {num(v, 3)} {words}".rstrip()
 
 
 def pct(v, digits: int = 2) -> str:
@@ -165,6 +206,8 @@ def environment() -> jinja2.Environment:
         _ENV.filters["input_name"] = input_name
         _ENV.filters["output_name"] = output_name
         _ENV.filters["deciding"] = deciding
+        _ENV.filters["span"] = span
+        _ENV.filters["input_value"] = input_value
         _ENV.globals["interval"] = interval
     return _ENV
 

@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from treeimpact.compare.backends import BACKENDS  # noqa: E402
+from treeimpact.compare.figure_text import save_figure  # noqa: E402
 from treeimpact.compare.rungs import ENGINE_KINDS, RungKind  # noqa: E402
 
 DPI = 110
@@ -65,7 +66,7 @@ class FigureFiles:
         self.directory.mkdir(parents=True, exist_ok=True)
         # every figure lays itself out (constrained layout, legends in its margins): no
         # tight bounding box, which draws the figure twice
-        fig.savefig(self.directory / name, format="png", dpi=DPI)
+        save_figure(fig, self.directory / name, DPI, format="png")  # titles fitted first
         plt.close(fig)
         return f"{self.prefix}/{name}"
 

@@ -51,7 +51,9 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
                                  f"saturates at +-{scale['vmax']:.0%}")
     fig.suptitle(f"Identification error, {label}: {RATE / 1e3:g} kHz records with "
                  f"{100 * NOISE:g} % noise", fontsize=10)
-    fig.savefig(path, dpi=100)
+    from treeimpact.compare.figure_text import save_figure
+
+    save_figure(fig, path, 100)
     return path
 
 

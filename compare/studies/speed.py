@@ -180,7 +180,9 @@ def speed_figure(points, path, engine: str) -> Path | None:
         ax.grid(True, which="both", lw=0.3)
     axes[1].legend(fontsize=6)
     fig.suptitle(f"{engine}: speed-accuracy (points along a curve: dt decreasing)", fontsize=9)
-    fig.savefig(path, dpi=110)
+    from treeimpact.compare.figure_text import save_figure
+
+    save_figure(fig, path, 110)
     return Path(path)
 
 

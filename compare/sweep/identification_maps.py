@@ -135,7 +135,9 @@ def _draw_target(dt, target: str, axis_pair: tuple, keys: list[str], scale: dict
         _percent_colorbar(cb, scale, "(identified - true) / true (%)\n"
                                      f"saturates at +-{scale['vmax']:.0%}")
     fig.suptitle(f"Identification (eqs 39-48) on the {target} record", fontsize=10)
-    fig.savefig(path, dpi=110)
+    from treeimpact.compare.figure_text import save_figure
+
+    save_figure(fig, path, 110)
 
 
 def _caption(target: str, axis_pair: tuple, first) -> str:

@@ -56,7 +56,9 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
                  f"{100 * first.get('conf_level', 0.95):.0f} % interval (whiskers), "
                  f"{first.get('trajectories', '?')} trajectories per tree", fontsize=10)
     path = Path(path)
-    fig.savefig(path, dpi=100)
+    from treeimpact.compare.figure_text import save_figure
+
+    save_figure(fig, path, 100)
     return path
 
 

@@ -113,7 +113,9 @@ def _draw_target(df, dt, target: str, axis_pair: tuple, ms: list[str], tolerance
     versus = "the paper's model (analytic)" if value == "rel" else \
         f"the rung below ({_previous(df, target)})"
     fig.suptitle(f"{target} vs {versus}: {what}", fontsize=10)
-    fig.savefig(path, dpi=110)
+    from treeimpact.compare.figure_text import save_figure
+
+    save_figure(fig, path, 110)
 
 
 def _previous(df, target) -> str:
