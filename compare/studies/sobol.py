@@ -38,18 +38,20 @@ HEADLINE = ("gap.x_max", "gap.energy_delivered")
 INDEX_KEYS = ("S1", "S1_conf", "ST", "ST_conf")
 
 
-def sobol_design(n: int, names=None, seed: int = SEED) -> np.ndarray:
+def sobol_design(n: int, names=None, seed: int = SEED, spec: dict | None = None) -> np.ndarray:
     """The Saltelli design of ``n`` base samples (a power of two) over :data:`INPUTS` (only
-    ``names``), scrambled Sobol points of ``seed``: n x (inputs + 2) rows, each base
-    sample's block (A, the inputs' AB rows, B) after the other, so its first n/2 blocks are
-    the design of n/2."""
+    ``names``; or the SALib problem ``spec``), scrambled Sobol points of ``seed``:
+    n x (inputs + 2) rows, each base sample's block (A, the inputs' AB rows, B) after the
+    other, so its first n/2 blocks are the design of n/2."""
     from SALib.sample import sobol
 
-    return sobol.sample(problem(names), n, calc_second_order=False, scramble=True, seed=seed)
+    return sobol.sample(spec or problem(names), n, calc_second_order=False, scramble=True,
+                        seed=seed)
 
 
-def sobol_indices(names, y) -> dict:
-    """SALib's Sobol analysis of ``y`` on :func:`sobol_design` over ``names``: per input
+def sobol_indices(names, y, spec: dict | None = None) -> dict | None:
+    """SALib's Sobol analysis of ``y`` on :func:`sobol_design` over ``names`` (or the SALib
+    problem ``spec``, whose names ``names`` are): per input
     {S1, S1_conf, ST, ST_conf} (conf: the half-width of the CONF_LEVEL interval from
     RESAMPLES seeded bootstrap resamples); None when ``y`` has no spread (no variance to
     share)."""
@@ -58,7 +60,7 @@ def sobol_indices(names, y) -> dict:
     y = np.asarray(y, dtype=float)
     if not np.ptp(y) > 0:
         return None
-    res = sobol.analyze(problem(names), y, calc_second_order=False, num_resamples=RESAMPLES,
+    res = sobol.analyze(spec or problem(names), y, calc_second_order=False, num_resamples=RESAMPLES,
                         conf_level=CONF_LEVEL, seed=SEED)
     return {n: {k: float(res[k][i]) for k in INDEX_KEYS} for i, n in enumerate(names)}
 
@@ -118,20 +120,22 @@ def verdict_text(v: dict, label=str) -> str:
     return f"unsettled: {', '.join(tied[:-1])} or {tied[-1]} (ST intervals overlap)"
 
 
-def convergence(names, X, y, n: int) -> tuple[dict | None, dict | None]:
-    """The indices at N (``n`` base samples of the design ``X`` with outputs ``y``) and at
-    N/2 (its first n/2 blocks); the N/2 ones None below 4 base samples."""
-    full = sobol_indices(names, y)
+def convergence(names, y, n: int, spec: dict | None = None) -> tuple:
+    """The indices (:func:`sobol_indices` over ``names`` or ``spec``) at N (the outputs
+    ``y`` of the design of ``n`` base samples) and at N/2 (its first n/2 blocks); the N/2
+    ones None below 4 base samples."""
+    full = sobol_indices(names, y, spec)
     if n < 4 or full is None:
         return full, None
     rows = (n // 2) * (len(names) + 2)
-    return full, sobol_indices(names, np.asarray(y)[:rows])
+    return full, sobol_indices(names, np.asarray(y)[:rows], spec)
 
 
-def output_entry(names, X, y, n: int) -> dict:
-    """One output's Sobol part: its indices at N with each input's N/2 values and the change
-    of ST and S1 from N/2 to N beside them, the :func:`verdict` and its spread (min, max)."""
-    full, half = convergence(names, X, y, n)
+def output_entry(names, y, n: int, spec: dict | None = None) -> dict:
+    """One output's Sobol part (its values ``y`` on the design of ``n`` over ``names`` or
+    ``spec``): the indices at N with each input's N/2 values and the change of ST and S1
+    from N/2 to N beside them, the :func:`verdict` and the output's spread (min, max)."""
+    full, half = convergence(names, y, n, spec)
     idx = {}
     for name in names:
         if full is None:
@@ -171,7 +175,7 @@ def analyse_sobol(table, n: int, names=None, seed: int = SEED) -> dict:
             continue
         with warnings.catch_warnings():  # a constant block of the bootstrap: nan conf, said
             warnings.simplefilter("ignore", RuntimeWarning)
-            out["outputs"][key] = output_entry(names, X, y, n)
+            out["outputs"][key] = output_entry(names, y, n)
     out["measure_first"] = measure_first(out["outputs"])
     return out
 
