@@ -144,6 +144,14 @@ def interval(low, high, digits: int = 3) -> str:
     return f"{a} to {b}"
 
 
+def sobol_verdict(output: dict) -> str:
+    """A Sobol output's verdict in words (compare.studies.sobol.verdict_text, the inputs
+    named as the figure labels them); 'no value' for an output without one."""
+    from treeimpact.compare.studies.sobol import verdict_text
+
+    return verdict_text(output, input_name) if "order" in output else "no value"
+
+
 _ENV = None
 
 
@@ -165,6 +173,7 @@ def environment() -> jinja2.Environment:
         _ENV.filters["input_name"] = input_name
         _ENV.filters["output_name"] = output_name
         _ENV.filters["deciding"] = deciding
+        _ENV.filters["sobol_verdict"] = sobol_verdict
         _ENV.globals["interval"] = interval
     return _ENV
 

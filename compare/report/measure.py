@@ -5,8 +5,8 @@ naming the measurement that matters most for the headline gaps (:func:`first_tex
 
 from __future__ import annotations
 
-from ..studies.sobol import HEADLINE, verdict_text
-from .base import input_name
+from ..studies.sobol import HEADLINE
+from .base import input_name, sobol_verdict
 
 #: The headline gaps as the sentence says them.
 GAP_WORDS = {"gap.x_max": "x_max", "gap.energy_delivered": "the energy delivered",
@@ -27,8 +27,7 @@ def with_sobol(answer: list[dict], studies) -> None:
         if not tree.get("outputs"):
             row["sobol"], row["measure_first"] = {}, {}
             continue
-        outputs = {k: {**v, "text": verdict_text(v, input_name) if "order" in v
-                       else "no value"} for k, v in tree["outputs"].items()}
+        outputs = {k: {**v, "text": sobol_verdict(v)} for k, v in tree["outputs"].items()}
         row["sobol"] = {**tree, "outputs": outputs}
         said = first_text(row["sobol"])
         row["measure_first"] = {**tree["measure_first"], "said": said,

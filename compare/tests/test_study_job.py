@@ -173,6 +173,8 @@ def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):
     assert mine["evaluations"] == 5  # one trajectory over the four inputs left
     assert mine["sobol"]["evaluations"] == 24  # Sobol N = 4: 4 x (4 inputs + 2)
     write_study(study, {}, sensitivity=sens)
+    for page in ("study.html", "study.md"):  # the study page's Sobol table of this tree
+        assert "my-tree (Sobol, 24 evaluations)" in (study / page).read_text()
     paths = write_report(tmp_path / "out", scenarios=[str(path)], study_dirs=[study],
                          runs=RunCache(), engines=())
     (row,) = json.loads(paths["json"].read_text())["answer"]["one_dof"]
