@@ -34,18 +34,17 @@ def with_sobol(answer: list[dict], studies) -> None:
                                 "sentence": f"{row['scenario']}: {said}"}
 
 
-def _share(idx: dict) -> str:
-    """An input's ST with its interval and the N/2 change: 'ST 0.62 +- 0.23, N/2 change
-    -0.27'."""
-    text = f"ST {idx['ST']:.2f} +- {idx['ST_conf']:.2f}"
-    return text + (f", N/2 change {idx['ST_change']:+.2f}" if "ST_change" in idx else "")
+def _share(name: str, idx: dict) -> str:
+    """An input and its ST with its interval: 'root compliance (ST 0.62 +- 0.23)'."""
+    return f"{input_name(name)} (ST {idx['ST']:.2f} +- {idx['ST_conf']:.2f})"
 
 
 def first_text(sobol: dict) -> str:
-    """What one tree's ``sobol`` analysis says to measure first: per headline gap (compare.studies.sobol.HEADLINE) the
-    measurement that fixes its settled leading input ('x_max: a static push test (root
-    compliance, ST 0.62 +- 0.10)'), or, unsettled, the tied inputs' measurements ('one of
-    ...'), or that no input moves it."""
+    """What one tree's ``sobol`` analysis says to measure first, per headline gap
+    (compare.studies.sobol.HEADLINE): its settled leader and the measurement that fixes it
+    ('the energy delivered: pad stiffness (ST 0.93 +- 0.30), by the contact force of one
+    strike'), or, unsettled, the tied inputs ('x_max: unsettled between root compliance
+    (ST 0.62 +- 0.23) and ...'), or that no input moves it."""
     parts = []
     for key in HEADLINE:
         out = sobol["outputs"].get(key)
@@ -55,14 +54,16 @@ def first_text(sobol: dict) -> str:
         gap = GAP_WORDS.get(key, key)
         if out.get("status") == "settled":
             n = first["inputs"][0]
-            parts.append(f"for {gap}, {first['measurements'][0]} ({input_name(n)}, "
-                         f"{_share(out['indices'][n])}; settled)")
+            parts.append(f"{gap}: {_share(n, out['indices'][n])}, by "
+                         f"{first['measurements'][0]}")
         elif out.get("status") == "unsettled":
-            tied = "; ".join(f"{m} ({input_name(n)}, {_share(out['indices'][n])})"
-                             for n, m in zip(first["inputs"], first["measurements"]))
-            parts.append(f"for {gap}, unsettled between {tied}")
+            tied = [_share(n, out["indices"][n]) for n in first["inputs"]]
+            names = tied[0] if len(tied) == 1 else \
+                f"{', '.join(tied[:-1])} and {tied[-1]}"
+            parts.append(f"{gap}: unsettled between {names}" if len(tied) > 1 else
+                         f"{gap}: unsettled ({names} leads at N but not at N/2)")
         else:
-            parts.append(f"for {gap}, none (no input moves it)")
+            parts.append(f"{gap}: no input moves it")
     return "; ".join(parts) + "."
 
 
@@ -73,9 +74,8 @@ def in_short_text(answer: list[dict]) -> str | None:
     if not rows:
         return None
     s = rows[0]["sobol"]
-    return (f"What to measure first (each measurement's share of the gap's variance over "
-            f"the unmeasured inputs, Sobol total index ST with its "
-            f"{100 * s['conf_level']:.0f} % interval, N = {s['n']}, {s['evaluations']} "
-            f"evaluations per tree; settled only when the leading input's interval clears "
-            f"every other's and it leads at N/2 too): "
+    return (f"What to measure first (the share of each gap's variance an unmeasured input "
+            f"carries: Sobol ST with its {100 * s['conf_level']:.0f} % interval, N = "
+            f"{s['n']}, {s['evaluations']} evaluations per tree; named only when its "
+            f"interval clears every other's and it leads at N/2 too): "
             + " ".join(a["measure_first"]["sentence"] for a in rows))

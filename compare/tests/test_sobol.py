@@ -237,10 +237,9 @@ def test_the_first_screen_sentence_is_generated_by_the_rule():
     }
     row = _study_row(outputs)
     said = row["measure_first"]["said"]
-    assert said.startswith("for x_max, unsettled between " + INPUTS["root_share"][4])
-    assert INPUTS["e_over_g"][4] in said.split("; for the energy")[0]
-    assert ("for the energy delivered, " + INPUTS["log10_pad_duration"][4]
-            + " (pad stiffness, ST 0.90 +- 0.01; settled)") in said
+    assert said == ("x_max: unsettled between root compliance (ST 0.50 +- 0.01) and E / G "
+                    "(shear) (ST 0.45 +- 0.01); the energy delivered: pad stiffness (ST 0.90 "
+                    "+- 0.01), by " + INPUTS["log10_pad_duration"][4] + ".")
     assert row["sobol"]["outputs"]["gap.energy_delivered"]["text"] == \
         "decided by pad stiffness"
     assert row["measure_first"]["sentence"] == f"t: {said}"
