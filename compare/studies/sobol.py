@@ -42,9 +42,14 @@ def sobol_design(n: int, names=None, seed: int = SEED, spec: dict | None = None)
     """The Saltelli design of ``n`` base samples (a power of two) over :data:`INPUTS` (only
     ``names``; or the SALib problem ``spec``), scrambled Sobol points of ``seed``:
     n x (inputs + 2) rows, each base sample's block (A, the inputs' AB rows, B) after the
-    other, so its first n/2 blocks are the design of n/2."""
+    other, so its first n/2 blocks are the design of n/2. ParameterError naming ``sobol``
+    unless n is a power of two (a Sobol sequence is balanced only at those)."""
     from SALib.sample import sobol
 
+    from treeimpact.analytic.errors import ParameterError
+
+    if n < 1 or n & (n - 1):
+        raise ParameterError(f"sobol: N = {n}, allowed a power of two (1, 2, 4, ... 4096)")
     return sobol.sample(spec or problem(names), n, calc_second_order=False, scramble=True,
                         seed=seed)
 

@@ -246,3 +246,22 @@ def test_the_first_screen_sentence_is_generated_by_the_rule():
     short = in_short_text([row])
     assert "N = 64, 512 evaluations per tree" in short and short.endswith(said)
     assert in_short_text([{"scenario": "u", "measure_first": {}}]) is None
+
+
+def test_n_is_a_power_of_two_and_the_docs_say_each_presets():
+    """A Sobol sequence is balanced only at powers of two: any other N is refused in one
+    line; every preset's N is one, and docs/sensitivity.md says the default's and the
+    full preset's."""
+    from pathlib import Path
+
+    from treeimpact.analytic.errors import ParameterError
+    from treeimpact.compare.validity.study import PRESETS
+
+    with pytest.raises(ParameterError, match="power of two"):
+        sobol_design(48)
+    text = (Path(__file__).resolve().parents[2] / "docs" / "sensitivity.md").read_text()
+    for name in ("default", "full"):
+        n = PRESETS[name].sobol
+        assert n > 0 and n & (n - 1) == 0, name
+        assert f"N = {n}" in text, name
+    assert PRESETS["full"].sobol >= 4096  # issue 40: the full preset's N >= 4096
