@@ -15,7 +15,7 @@ def sensitivity_specs(out, trajectories: int, *, crossings: bool = False,
     every shipped one) as sweeps into ``out/sensitivity/``, each tree's measured inputs
     held at its file's values: the Morris screen, then with ``sobol`` (base samples N, a
     power of two; 0: none) the Sobol design (compare.studies.sobol) into
-    ``out/sensitivity/sobol/``: {trees, specs (Morris, then Sobol), trajectories,
+    ``out/sensitivity-sobol/``: {trees, specs (Morris, then Sobol), trajectories,
     crossings, sobol}."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
     from treeimpact.compare.runs import resolve_scenario
@@ -26,7 +26,7 @@ def sensitivity_specs(out, trajectories: int, *, crossings: bool = False,
     specs = [sensitivity_sweep(s, Path(out) / "sensitivity" / s.name, trajectories,
                                crossings=crossings) for s in scens]
     if sobol:
-        specs += [sobol_sweep(s, Path(out) / "sensitivity" / "sobol" / s.name, sobol)
+        specs += [sobol_sweep(s, Path(out) / "sensitivity-sobol" / s.name, sobol)
                   for s in scens]
     return {"trees": scens, "trajectories": trajectories, "crossings": crossings,
             "sobol": sobol, "specs": specs}
