@@ -33,6 +33,14 @@ def num(v, digits: int = 4) -> str:
     return str(v)
 
 
+def share(v, signed: bool = False) -> str:
+    """A Sobol index (a share of variance, 1) to two decimals ('0.62'; signed: '+0.05'),
+    n/a for None/NaN."""
+    if v is None or not isinstance(v, (int, float)) or not math.isfinite(v):
+        return "n/a"
+    return f"{v:+.2f}" if signed else f"{v:.2f}"
+
+
 def pct(v, digits: int = 2) -> str:
     """A relative difference ``v`` as a signed percentage with ``digits`` decimals; "" for
     None/NaN."""
@@ -174,6 +182,7 @@ def environment() -> jinja2.Environment:
         _ENV.filters["output_name"] = output_name
         _ENV.filters["deciding"] = deciding
         _ENV.filters["sobol_verdict"] = sobol_verdict
+        _ENV.filters["share"] = share
         _ENV.globals["interval"] = interval
     return _ENV
 

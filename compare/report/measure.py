@@ -6,7 +6,7 @@ naming the measurement that matters most for the headline gaps (:func:`first_tex
 from __future__ import annotations
 
 from ..studies.sobol import HEADLINE
-from .base import input_name, sobol_verdict
+from .base import input_name, share, sobol_verdict
 
 #: The headline gaps as the sentence says them.
 GAP_WORDS = {"gap.x_max": "x_max", "gap.energy_delivered": "the energy delivered",
@@ -36,7 +36,7 @@ def with_sobol(answer: list[dict], studies) -> None:
 
 def _share(name: str, idx: dict) -> str:
     """An input and its ST with its interval: 'root compliance (ST 0.62 +- 0.23)'."""
-    return f"{input_name(name)} (ST {idx['ST']:.2f} +- {idx['ST_conf']:.2f})"
+    return f"{input_name(name)} (ST {share(idx['ST'])} +- {share(idx['ST_conf'])})"
 
 
 def first_text(sobol: dict) -> str:

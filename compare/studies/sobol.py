@@ -71,22 +71,33 @@ def sobol_indices(names, y, spec: dict | None = None) -> dict | None:
 
 
 def ranked(indices: dict) -> list[str]:
-    """The inputs of ``indices`` by ST, largest first (ties by name, for a stable order)."""
-    return sorted(indices, key=lambda n: (-indices[n]["ST"], n))
+    """The inputs of ``indices`` by ST, largest first (ties by name, for a stable order; a
+    non-finite ST last)."""
+    return sorted(indices, key=lambda n: (-indices[n]["ST"] if math.isfinite(indices[n]["ST"])
+                                          else math.inf, n))
+
+
+def bounds(index: dict) -> tuple[float, float]:
+    """An input's ST interval (ST - ST_conf, ST + ST_conf); (-inf, inf) when either is not
+    finite (a bootstrap with no spread to resample: nothing is known)."""
+    st, conf = index["ST"], index["ST_conf"]
+    if not (math.isfinite(st) and math.isfinite(conf)):
+        return -math.inf, math.inf
+    return st - conf, st + conf
 
 
 def settled_prefix(full: dict, half: dict | None) -> int:
     """How many leading inputs' order is settled: the largest k such that each of the first
-    k inputs by ST (``full``) has ST - ST_conf above ST + ST_conf of every input ranked
-    below it, and the same rank by ST at N/2 (``half``; None: no N/2 check, nothing
+    k inputs by ST (``full``) has its interval (:func:`bounds`) wholly above every lower-
+    ranked input's, and the same rank by ST at N/2 (``half``; None: no N/2 check, nothing
     settled)."""
     if half is None:
         return 0
     order, order_half = ranked(full), ranked(half)
     k = 0
     for i, name in enumerate(order[:-1]):
-        low = full[name]["ST"] - full[name]["ST_conf"]
-        rest = max(full[n]["ST"] + full[n]["ST_conf"] for n in order[i + 1:])
+        low = bounds(full[name])[0]
+        rest = max(bounds(full[n])[1] for n in order[i + 1:])
         if not (low > rest and order_half[i] == name):
             break
         k += 1
@@ -106,8 +117,8 @@ def verdict(full: dict | None, half: dict | None) -> dict:
     k = settled_prefix(full, half)
     if k:
         return {"status": "settled", "order": order, "settled": order[:k], "tied": []}
-    floor = full[order[0]]["ST"] - full[order[0]]["ST_conf"]
-    tied = [order[0]] + [n for n in order[1:] if full[n]["ST"] + full[n]["ST_conf"] >= floor]
+    floor = bounds(full[order[0]])[0]
+    tied = [order[0]] + [n for n in order[1:] if bounds(full[n])[1] >= floor]
     return {"status": "unsettled", "order": order, "settled": [], "tied": tied}
 
 
@@ -197,8 +208,10 @@ def measure_first(outputs: dict) -> dict:
         shares = {k: {"ST": v["indices"][name]["ST"], "ST_conf": v["indices"][name]["ST_conf"],
                       "rank": v["order"].index(name) + 1} for k, v in gaps.items()}
         rows.append({"input": name, "measurement": INPUTS[name][4], "gaps": shares,
-                     "largest_ST": max((s["ST"] for s in shares.values()), default=math.nan)})
-    rows.sort(key=lambda r: (-r["largest_ST"], r["input"]))
+                     "largest_ST": max((s["ST"] for s in shares.values()
+                                        if math.isfinite(s["ST"])), default=math.nan)})
+    rows.sort(key=lambda r: (-r["largest_ST"] if math.isfinite(r["largest_ST"]) else math.inf,
+                             r["input"]))
     first = {}
     for key in HEADLINE:
         v = outputs.get(key)

@@ -113,6 +113,17 @@ def test_the_rule_on_constructed_numbers():
     assert verdict_text(verdict(None, None)) == "no input moves it"
 
 
+def test_an_interval_the_bootstrap_could_not_give_settles_nothing():
+    """A NaN ST_conf (a bootstrap resample with no spread) is an unknown interval: it ties
+    with the leader instead of letting it clear; the page prints n/a for it."""
+    from treeimpact.compare.report.base import share
+
+    idx = _idx(a=(0.6, 0.05), b=(0.3, math.nan), c=(0.1, 0.05))
+    v = verdict(idx, idx)
+    assert v["status"] == "unsettled" and v["tied"] == ["a", "b"]
+    assert share(math.nan) == "n/a" and share(None) == "n/a" and share(0.054, True) == "+0.05"
+
+
 def test_a_flat_output_has_no_variance_to_share():
     names = ["x1", "x2", "x3"]
     assert sobol_indices(names, np.ones(5 * 8), ISHIGAMI) is None
