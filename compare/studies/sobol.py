@@ -173,6 +173,8 @@ def analyse_sobol(table, n: int, names=None, seed: int = SEED) -> dict:
     measure_first} (errors: up to 5 when points failed; then no outputs)."""
     names = list(INPUTS) if names is None else list(names)
     X = sobol_design(n, names, seed)
+    # a point's key to 12 digits: the design's floats come back from the sweep's table
+    # (parquet) exactly, the rounding only guards a text round trip (the Morris reading's)
     rows = {tuple(round(float(r[f"input.{k}"]), 12) for k in names): r
             for r in table.to_dict("records")}
     got = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
