@@ -30,6 +30,7 @@ REPORT_TERMS = (
     "truth", "the paper's procedure", "readings", "full-record fit", "explained",
     "not fixed", "identifiable", "band", "Not compared", "sweep", "study", "validity map",
     "dominating rung", "contact scan", "crossing", "sensitivity", "mu\\*",
+    "Sobol indices", "ST", "N/2 change", "settled", "unsettled", "what to measure first",
     "speed-accuracy curve")
 
 

@@ -43,6 +43,7 @@ from .answer import (
     small_e_rows,
     with_sensitivity,
 )
+from .measure import in_short_text, with_sobol
 from .sort_keys import add_sort_keys
 
 __all__ = ["write_report", "build_sections"]
@@ -218,6 +219,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     summary = _summary(sections["scenarios"])
     summary["answer"] = one_dof_answer(sections["scenarios"])
     with_sensitivity(summary["answer"], sections["studies"])
+    with_sobol(summary["answer"], sections["studies"])
     summary["answer_metrics"] = ANSWER_METRICS
     summary["answer_tolerance"] = validity_tolerance()
     summary["contact"] = sections["contact"]
@@ -226,6 +228,9 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
                           "step": E_GRID[1] - E_GRID[0], "e_max": E_GRID[-1],
                           "grid": grid_text(E_GRID), "resolution": RESOLUTION}
     summary["in_short"] = in_short(summary["answer"], small_e["trees"])
+    measure = in_short_text(summary["answer"])
+    if measure:
+        summary["in_short"]["measure_first"] = measure
     env = environment()
     paths = {}
     for fmt, name in (("html", "report.html"), ("md", "report.md")):
@@ -244,7 +249,9 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         "tolerances": "compare/tolerances.toml",
         "answer": {"tolerance": summary["answer_tolerance"], "in_short": summary["in_short"],
                    "one_dof": summary["answer"], "small_e": small_e["trees"],
-                   "small_e_figure": small_e["figure"]},
+                   "small_e_figure": small_e["figure"],
+                   "measure_first": {a["scenario"]: a["measure_first"]
+                                     for a in summary["answer"] if a.get("measure_first")}},
         "summary": {k: v for k, v in summary.items()
                     if k not in ("answer", "small_e", "in_short", "answer_tolerance")},
         "paper": sections["paper"].to_json(),

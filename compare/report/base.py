@@ -74,6 +74,14 @@ def input_value(v, key: str) -> str:
     return f"{input_name(key)} {num(v, 3)} {words}".rstrip()
 
 
+def share(v, signed: bool = False) -> str:
+    """A Sobol index (a share of variance, 1) to two decimals ('0.62'; signed: '+0.05'),
+    n/a for None/NaN."""
+    if v is None or not isinstance(v, (int, float)) or not math.isfinite(v):
+        return "n/a"
+    return f"{v:+.2f}" if signed else f"{v:.2f}"
+
+
 def pct(v, digits: int = 2) -> str:
     """A relative difference ``v`` as a signed percentage with ``digits`` decimals; "" for
     None/NaN."""
@@ -185,6 +193,14 @@ def interval(low, high, digits: int = 3) -> str:
     return f"{a} to {b}"
 
 
+def sobol_verdict(output: dict) -> str:
+    """A Sobol output's verdict in words (compare.studies.sobol.verdict_text, the inputs
+    named as the figure labels them); 'no value' for an output without one."""
+    from treeimpact.compare.studies.sobol import verdict_text
+
+    return verdict_text(output, input_name) if "order" in output else "no value"
+
+
 _ENV = None
 
 
@@ -208,6 +224,8 @@ def environment() -> jinja2.Environment:
         _ENV.filters["deciding"] = deciding
         _ENV.filters["span"] = span
         _ENV.filters["input_value"] = input_value
+        _ENV.filters["sobol_verdict"] = sobol_verdict
+        _ENV.filters["share"] = share
         _ENV.globals["interval"] = interval
     return _ENV
 

@@ -173,15 +173,25 @@ def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):
     path = tmp_path / "my-tree.toml"
     path.write_text(text)
     study = tmp_path / "study"
-    sens = run_sensitivity(study, 1, scenarios=[str(path)], workers=0)
+    sens = run_sensitivity(study, 1, scenarios=[str(path)], workers=0, sobol=4)
     mine = sens["trees"]["my-tree"]
     assert mine["held"] == {"clamp_mass": 4.0, "restitution": 0.1}
     assert mine["evaluations"] == 5  # one trajectory over the four inputs left
+    assert mine["sobol"]["evaluations"] == 24  # Sobol N = 4: 4 x (4 inputs + 2)
     write_study(study, {}, sensitivity=sens)
+    for page in ("study.html", "study.md"):  # the study page's Sobol table of this tree
+        assert "my-tree (Sobol, 24 evaluations)" in (study / page).read_text()
     paths = write_report(tmp_path / "out", scenarios=[str(path)], study_dirs=[study],
                          runs=RunCache(), engines=())
     (row,) = json.loads(paths["json"].read_text())["answer"]["one_dof"]
     assert row["scenario"] == "my-tree"
     band = row["sensitivity"]["gap.x_max"]
     assert band["evaluations"] == 5 and -1.0 < band["low"] < band["high"] < 10.0
-    assert "Held at the file's measured values: clamp mass 4" in paths["html"].read_text()
+    html = paths["html"].read_text()
+    assert "Held at the file's measured values: clamp mass 4" in html
+    # what to measure first for this tree: its four free inputs ranked, in report.json
+    first = json.loads(paths["json"].read_text())["answer"]["measure_first"]["my-tree"]
+    assert {r["input"] for r in first["rows"]} == {"e_over_g", "log10_pad_duration",
+                                                   "root_share", "density"}
+    assert set(first["first"]) == {"gap.x_max", "gap.energy_delivered"}
+    assert "What to measure first" in html and first["sentence"].startswith("my-tree: ")

@@ -10,18 +10,26 @@ from ..sweep.run import run_sweeps
 
 
 def sensitivity_specs(out, trajectories: int, *, crossings: bool = False,
-                      scenarios=None) -> dict:
+                      scenarios=None, sobol: int = 0) -> dict:
     """The sensitivity study (compare.studies.sensitivity) of each tree of ``scenarios`` (default:
     every shipped one) as sweeps into ``out/sensitivity/``, each tree's measured inputs
-    held at its file's values: {trees, specs, trajectories, crossings}."""
+    held at its file's values: the Morris screen, then with ``sobol`` (base samples N, a
+    power of two; 0: none) the Sobol design (compare.studies.sobol) into
+    ``out/sensitivity-sobol/``: {trees, specs (Morris, then Sobol), trajectories,
+    crossings, sobol}."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
     from treeimpact.compare.runs import resolve_scenario
     from treeimpact.compare.studies.sensitivity import sensitivity_sweep
+    from treeimpact.compare.studies.sobol import sobol_sweep
 
     scens = [resolve_scenario(s) for s in (scenarios or shipped_scenarios())]
+    specs = [sensitivity_sweep(s, Path(out) / "sensitivity" / s.name, trajectories,
+                               crossings=crossings) for s in scens]
+    if sobol:
+        specs += [sobol_sweep(s, Path(out) / "sensitivity-sobol" / s.name, sobol)
+                  for s in scens]
     return {"trees": scens, "trajectories": trajectories, "crossings": crossings,
-            "specs": [sensitivity_sweep(s, Path(out) / "sensitivity" / s.name, trajectories,
-                                        crossings=crossings) for s in scens]}
+            "sobol": sobol, "specs": specs}
 
 
 def sensitivity_result(out, sens: dict, done: list) -> dict:
@@ -34,27 +42,34 @@ def sensitivity_result(out, sens: dict, done: list) -> dict:
         inputs_of,
         measured_inputs,
     )
+    from treeimpact.compare.studies.sobol import analyse_sobol
 
     from ..sweep.maps import sensitivity_figure
 
     trees = {}
-    for s, r in zip(sens["trees"], done):
+    count = len(sens["trees"])
+    for i, s in enumerate(sens["trees"]):
         own = inputs_of(s)
-        trees[s.name] = analyse(r.table, sens["trajectories"], names=free_inputs(s),
+        trees[s.name] = analyse(done[i].table, sens["trajectories"], names=free_inputs(s),
                                 held={n: own[n] for n in measured_inputs(s)})
+        if sens.get("sobol"):
+            trees[s.name]["sobol"] = analyse_sobol(done[count + i].table, sens["sobol"],
+                                                   names=free_inputs(s))
     path = sensitivity_figure(trees, Path(out) / "sensitivity.png")
     return {"trajectories": sens["trajectories"], "crossings": sens["crossings"],
-            "trees": trees, "figure": path.name if path else None}
+            "sobol": sens.get("sobol", 0), "trees": trees,
+            "figure": path.name if path else None}
 
 
 def run_sensitivity(out, trajectories: int, *, crossings: bool = False, scenarios=None,
                     workers=None, scheduler=None, progress=None,
-                    retry_failed: bool = False) -> dict:
+                    retry_failed: bool = False, sobol: int = 0) -> dict:
     """The sensitivity study alone into ``out`` (:func:`sensitivity_specs` of
-    ``trajectories``, ``crossings`` and ``scenarios`` on one pool, then
+    ``trajectories``, ``crossings``, ``scenarios`` and ``sobol`` on one pool, then
     :func:`sensitivity_result`); ``workers``, ``scheduler``, ``progress`` and
     ``retry_failed`` as :func:`compare.sweep.run.run_sweeps`."""
-    sens = sensitivity_specs(out, trajectories, crossings=crossings, scenarios=scenarios)
+    sens = sensitivity_specs(out, trajectories, crossings=crossings, scenarios=scenarios,
+                             sobol=sobol)
     done = run_sweeps(sens["specs"], workers=workers, scheduler=scheduler,
                       progress=progress, retry_failed=retry_failed)
     return sensitivity_result(out, sens, done)

@@ -49,6 +49,7 @@ class Preset:
     ident_engine_rungs: tuple = ()  # engine chains on a corner of its e x crown grid
     sensitivity: int = 0  # Morris trajectories of the sensitivity study per tree (0: none)
     sensitivity_crossings: bool = False  # its crossing durations too (8 pads a point)
+    sobol: int = 0  # Sobol base samples N per tree (a power of two; N x (inputs + 2) runs)
     expected: str = ""
     notes: dict = field(default_factory=dict, compare=False)
 
@@ -62,7 +63,10 @@ PRESETS = {
         engine_grid=("contact_duration=5e-4,5e-3", "crown_ratio=0,4"),
         map_metrics=("x_max", "energy_delivered", "crown_peak_acceleration"),
         map_value="step", identification=True, ident_crown_ratios=(0.0, 4.0),
-        ident_sampling_rungs=(), sensitivity=30,
+        ident_sampling_rungs=(), sensitivity=30, sobol=64,
+        # Sobol N = 64: 512 evaluations per tree (8 per base sample with 6 inputs), one
+        # evaluation (Newton + soft + beam) 13 ms on one core: about 20 s for the three
+        # trees on one core (docs/sensitivity.md)
         # the identification's cheap part, for make report's minute and its CPU budget with
         # the sensitivity study's 630 evaluations: no engine corner (the report fits both
         # engines' chains of every tree: its record fits), the lightest and heaviest crown
@@ -71,16 +75,19 @@ PRESETS = {
                  "contact durations x 6 crown ratios on the analytic, soft and beam backends, "
                  "the engines' chains on 2 x 2 of them, the identification validation "
                  "(4 e x 2 crown ratios x 3 rungs) and the sensitivity study (30 Morris "
-                 "trajectories per tree, 210 evaluations)"),
+                 "trajectories per tree, 210 evaluations; Sobol N = 64, 512 evaluations "
+                 "per tree)"),
     "full": Preset(
         "full", "central-leader", ("restitution=0:0.9:10", "segments=1,2,4,8,16,32",
                                    "crown_ratio=0:4:9"),
         speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
         identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
         ident_engine_rungs=ENGINES, sensitivity=60, sensitivity_crossings=True,
+        sobol=4096,  # 32768 evaluations per tree, about 7 CPU-minutes each
         expected="about 1.4 CPU-hours: 41 minutes with 2 workers, 5 on 16 (measured on a "
                  "slice of the preset, 61 s of runs per (e, crown) pair: "
-                 "benchmarks/bench_presets.py); resumable"),
+                 "benchmarks/bench_presets.py), and about 0.4 CPU-hours more for its Sobol "
+                 "design (3 trees x 32768 evaluations of 13 ms); resumable"),
 }
 
 
@@ -112,7 +119,8 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     done = []  # the SweepResults of the study's table: what this run computed, what it found
     # the sensitivity study's sweeps (one per tree) share the validity sweep's pool
     sens = sensitivity_specs(out, p.sensitivity, crossings=p.sensitivity_crossings,
-                             scenarios=sensitivity_scenarios) if p.sensitivity else None
+                             scenarios=sensitivity_scenarios, sobol=p.sobol) \
+        if p.sensitivity else None
     with_sens = sens["specs"] if sens else []
     validity_backends = p.backends if p.engine_grid else (*p.backends, *engines)
     first = run_sweeps([SweepSpec(scen, list(grid or p.grid), out / "validity",
