@@ -209,7 +209,14 @@ def fit_to_measurements(scenario: Scenario, measured: dict, *, model: str = "bea
     ends = [least_squares(residuals, grid[i], bounds=(lo, hi), diff_step=1e-3, xtol=1e-6,
                           ftol=1e-8, max_nfev=30) for i in np.argsort(cost)[:STARTS]]
     x = min(ends, key=lambda r: r.cost).x
-    values = read(x)
+    return _fit_result(model, backend, free, x, lo, hi, read(x), measured, resolution) | {
+        "evaluations": len(cache)}
+
+
+def _fit_result(model: str, backend: str, free: list, x, lo, hi, values: dict,
+                measured: dict, resolution: dict) -> dict:
+    """:func:`fit_to_measurements`' result at its optimum ``x`` (within [``lo``, ``hi``])
+    of the ``free`` parameters, whose model reads ``values``, against ``measured``."""
     params = {}
     for f, v, a, b in zip(free, x, lo, hi):
         near = 1e-3 * (b - a)  # within 0.1 % of the range (log range for the duration)
@@ -227,8 +234,7 @@ def fit_to_measurements(scenario: Scenario, measured: dict, *, model: str = "bea
     return {"model": model, "backend": backend, "parameters": params, "targets": targets,
             "dof": len(TARGETS) - len(free),
             "rms": float(np.sqrt(np.mean(np.where(np.isfinite(res), res, 10.0) ** 2))),
-            "explains": [k for k, t in targets.items() if t["explained"]],
-            "evaluations": len(cache)}
+            "explains": [k for k, t in targets.items() if t["explained"]]}
 
 
 def fit_paper_trees(models=tuple(MODELS)) -> dict:

@@ -254,16 +254,34 @@ def _print_conclusion(fit) -> None:
         print(f"  {d.kind}: {d.message}")
 
 
+def _plot_paper(ax, axr, record, fit, reading: dict, test) -> None:
+    """The paper's procedure's ``reading`` (M_T, K_T, the trunk's damping ratio) drawn as
+    the exact model with the fit's contact, e and sensor terms, and its residual."""
+    import numpy as np
+
+    from treeimpact.analytic.identify.fit_parameters import Slot
+    from treeimpact.analytic.identify.record_fit import model_x
+
+    if not ("M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0
+            and 0 < reading["trunk_damping_ratio"]):  # the fit's parameter: the trunk's own
+        return
+    ms = 1e3
+    p = np.array(fit.point, float)  # the fit's contact, e and sensor terms
+    p[Slot.LN_M_T], p[Slot.LN_K_T] = math.log(reading["M_T"]), math.log(reading["K_T"])
+    p[Slot.TRUNK_DAMPING_RATIO] = reading["trunk_damping_ratio"]
+    xp = model_x(p, test, record.t)
+    ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
+            label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "
+                  f"{reading['K_T']:.4g} N/m)")
+    axr.plot(record.t * ms, (record.x - xp) * ms, "--", color="C3", lw=1,
+             label="x, the paper's procedure")
+
+
 def _plot(path, record, fit, paper, test) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
-
-    import numpy as np
-
-    from treeimpact.analytic.identify.fit_parameters import Slot
-    from treeimpact.analytic.identify.record_fit import model_x
 
     pendulum = record.y is not None
     fig = Figure(figsize=(10, 8.5 if pendulum else 6), layout="constrained")
@@ -294,18 +312,7 @@ def _plot(path, record, fit, paper, test) -> None:
         axy.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
         axr.plot(record.t * ms, (record.y - fit.model_y) * ms, "-", color="C2", lw=1,
                  label="y, full-record fit")
-    reading = paper.get("paper", {})
-    if "M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0 and 0 < reading[
-            "trunk_damping_ratio"]:  # the fit's parameter is the trunk's own ratio
-        p = np.array(fit.point, float)  # the fit's contact, e and sensor terms
-        p[Slot.LN_M_T], p[Slot.LN_K_T] = math.log(reading["M_T"]), math.log(reading["K_T"])
-        p[Slot.TRUNK_DAMPING_RATIO] = reading["trunk_damping_ratio"]
-        xp = model_x(p, test, record.t)
-        ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,
-                label=f"the paper's procedure (M_T {reading['M_T']:.4g} kg, K_T "
-                      f"{reading['K_T']:.4g} N/m)")
-        axr.plot(record.t * ms, (record.x - xp) * ms, "--", color="C3", lw=1,
-                 label="x, the paper's procedure")
+    _plot_paper(ax, axr, record, fit, paper.get("paper", {}), test)
     ax.set(ylabel="trunk displacement x (mm)",
            title="pendulum test: the record and the exact 1-DOF model fitted to it")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)

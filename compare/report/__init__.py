@@ -192,6 +192,28 @@ def _sweep_dir(out_dir):
         yield Path(tmp)
 
 
+def _page_summary(sections: dict) -> dict:
+    """What the page's first screen and answer read from the built ``sections``: the ladder
+    summary, the answer rows with their sensitivity, the contact scan, the small-e table,
+    and the answer in short."""
+    summary = _summary(sections["scenarios"])
+    summary["answer"] = one_dof_answer(sections["scenarios"])
+    with_sensitivity(summary["answer"], sections["studies"])
+    with_sobol(summary["answer"], sections["studies"])
+    summary["answer_metrics"] = ANSWER_METRICS
+    summary["answer_tolerance"] = validity_tolerance()
+    summary["contact"] = sections["contact"]
+    small_e = sections["small_e"]
+    summary["small_e"] = {**small_e, "rows": small_e_rows(small_e["trees"]),
+                          "step": E_GRID[1] - E_GRID[0], "e_max": E_GRID[-1],
+                          "grid": grid_text(E_GRID), "resolution": RESOLUTION}
+    summary["in_short"] = in_short(summary["answer"], small_e["trees"])
+    measure = in_short_text(summary["answer"])
+    if measure:
+        summary["in_short"]["measure_first"] = measure
+    return summary
+
+
 def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -> dict:
     """Write report.html, report.md and report.json into ``out_dir`` (created if needed).
 
@@ -216,21 +238,8 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     ordered = [sections["paper"], *sections["scenarios"], sections["trunks"],
                *sections["studies"], sections["runs"]]
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    summary = _summary(sections["scenarios"])
-    summary["answer"] = one_dof_answer(sections["scenarios"])
-    with_sensitivity(summary["answer"], sections["studies"])
-    with_sobol(summary["answer"], sections["studies"])
-    summary["answer_metrics"] = ANSWER_METRICS
-    summary["answer_tolerance"] = validity_tolerance()
-    summary["contact"] = sections["contact"]
+    summary = _page_summary(sections)
     small_e = sections["small_e"]
-    summary["small_e"] = {**small_e, "rows": small_e_rows(small_e["trees"]),
-                          "step": E_GRID[1] - E_GRID[0], "e_max": E_GRID[-1],
-                          "grid": grid_text(E_GRID), "resolution": RESOLUTION}
-    summary["in_short"] = in_short(summary["answer"], small_e["trees"])
-    measure = in_short_text(summary["answer"])
-    if measure:
-        summary["in_short"]["measure_first"] = measure
     env = environment()
     paths = {}
     for fmt, name in (("html", "report.html"), ("md", "report.md")):

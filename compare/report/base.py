@@ -75,8 +75,8 @@ def input_value(v, key: str) -> str:
 
 
 def share(v, signed: bool = False) -> str:
-    """A Sobol index (a share of variance, 1) to two decimals ('0.62'; signed: '+0.05'),
-    n/a for None/NaN."""
+    """A Sobol index ``v`` (a share of variance, 1) to two decimals ('0.62'; ``signed``:
+    '+0.05'), n/a for None/NaN."""
     if v is None or not isinstance(v, (int, float)) or not math.isfinite(v):
         return "n/a"
     return f"{v:+.2f}" if signed else f"{v:.2f}"

@@ -286,38 +286,11 @@ def force_figure(ladder) -> Figure:
     axes, _ = _family_grid(fig, [max(1, len(g)) for g in groups], ncol, sharex=True)
     families: dict = {}
     for ax, r in zip(axes, [r for g in groups for r in g]):
-        st = rung_style(r.rung)
         if r.rung.kind == RungKind.NEWTON:
-            sol = r.result.solution
-            imp = [(k.t, r.result.model["m"] * (k.u - k.v)) for k in (sol.impacts if sol
-                                                                       else ())]
-            shown = [(t, j) for t, j in imp if t <= t_hi]
-            if shown:
-                t, j = np.array(shown).T
-                ax.vlines(t * 1e3, 0, j, color=st["color"], lw=1.4)
-                ax.plot(t * 1e3, j, "o", color=st["color"], ms=4)
-                ax.set_ylim(0, 1.25 * float(np.max(j)))  # every marker inside the axes
-                ax.annotate(f"{j[0]:.3g} N s", (t[0] * 1e3, j[0]), xytext=(6, -2),
-                            textcoords="offset points", fontsize=8, va="top")
-            after = len(imp) - len(shown)
-            ax.set_title(f"{r.rung.id}: Newton impulses", fontsize=9)
-            ax.text(0.97, 0.95, f"{len(imp)} impulses" + (f"\n({after} later)" if after
-                                                          else ""),
-                    transform=ax.transAxes, ha="right", va="top", fontsize=8)
-            ax.set_ylabel("impulse (N s)", fontsize=9)
-            continue
-        tr = r.result.trajectory
-        sel = tr.t <= t_hi
-        f_kn = tr.force[sel] / 1e3
-        ax.fill_between(tr.t[sel] * 1e3, 0, f_kn, color=st["color"], alpha=0.25, lw=0)
-        ax.plot(tr.t[sel] * 1e3, f_kn, color=st["color"], lw=1.0)
-        peak = float(np.nanmax(f_kn)) if sel.any() else math.nan
-        episodes = r.values.get("contact_episodes", math.nan)
-        words = f"\n{episodes:.0f} contacts" if math.isfinite(episodes) else ""
-        ax.set_title(r.rung.id, fontsize=9)
-        ax.text(0.97, 0.95, f"peak {peak:.0f} kN{words}", transform=ax.transAxes,
-                ha="right", va="top", fontsize=8)
-        families.setdefault(_family(r.rung), []).append(ax)
+            _impulse_panel(ax, r, t_hi)
+        else:
+            _force_panel(ax, r, t_hi)
+            families.setdefault(_family(r.rung), []).append(ax)
     for group in families.values():
         _same_ylim(group, floor=0.0)
     bottom = {}
@@ -334,6 +307,43 @@ def force_figure(ladder) -> Figure:
                  "panel per rung (force on a linear axis; one scale for the 1-DOF trunks, "
                  "one for the flexible ones)", fontsize=10)
     return fig
+
+
+def _impulse_panel(ax, r, t_hi: float) -> None:
+    """The paper's model's Newton impulses (N s) of rung result ``r`` up to ``t_hi`` s, with
+    the first one's value and the count (those later than the window said)."""
+    st = rung_style(r.rung)
+    sol = r.result.solution
+    imp = [(k.t, r.result.model["m"] * (k.u - k.v)) for k in (sol.impacts if sol else ())]
+    shown = [(t, j) for t, j in imp if t <= t_hi]
+    if shown:
+        t, j = np.array(shown).T
+        ax.vlines(t * 1e3, 0, j, color=st["color"], lw=1.4)
+        ax.plot(t * 1e3, j, "o", color=st["color"], ms=4)
+        ax.set_ylim(0, 1.25 * float(np.max(j)))  # every marker inside the axes
+        ax.annotate(f"{j[0]:.3g} N s", (t[0] * 1e3, j[0]), xytext=(6, -2),
+                    textcoords="offset points", fontsize=8, va="top")
+    after = len(imp) - len(shown)
+    ax.set_title(f"{r.rung.id}: Newton impulses", fontsize=9)
+    ax.text(0.97, 0.95, f"{len(imp)} impulses" + (f"\n({after} later)" if after else ""),
+            transform=ax.transAxes, ha="right", va="top", fontsize=8)
+    ax.set_ylabel("impulse (N s)", fontsize=9)
+
+
+def _force_panel(ax, r, t_hi: float) -> None:
+    """Rung result ``r``'s contact force (kN) up to ``t_hi`` s, its peak and its contacts."""
+    st = rung_style(r.rung)
+    tr = r.result.trajectory
+    sel = tr.t <= t_hi
+    f_kn = tr.force[sel] / 1e3
+    ax.fill_between(tr.t[sel] * 1e3, 0, f_kn, color=st["color"], alpha=0.25, lw=0)
+    ax.plot(tr.t[sel] * 1e3, f_kn, color=st["color"], lw=1.0)
+    peak = float(np.nanmax(f_kn)) if sel.any() else math.nan
+    episodes = r.values.get("contact_episodes", math.nan)
+    words = f"\n{episodes:.0f} contacts" if math.isfinite(episodes) else ""
+    ax.set_title(r.rung.id, fontsize=9)
+    ax.text(0.97, 0.95, f"peak {peak:.0f} kN{words}", transform=ax.transAxes,
+            ha="right", va="top", fontsize=8)
 
 
 def sequence_figure(ladder) -> Figure:

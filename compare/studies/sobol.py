@@ -78,8 +78,8 @@ def ranked(indices: dict) -> list[str]:
 
 
 def bounds(index: dict) -> tuple[float, float]:
-    """An input's ST interval (ST - ST_conf, ST + ST_conf); (-inf, inf) when either is not
-    finite (a bootstrap with no spread to resample: nothing is known)."""
+    """An input's ST interval from its ``index`` (ST - ST_conf, ST + ST_conf); (-inf, inf)
+    when either is not finite (a bootstrap with no spread to resample: nothing is known)."""
     st, conf = index["ST"], index["ST_conf"]
     if not (math.isfinite(st) and math.isfinite(conf)):
         return -math.inf, math.inf
@@ -123,7 +123,7 @@ def verdict(full: dict | None, half: dict | None) -> dict:
 
 
 def verdict_text(v: dict, label=str) -> str:
-    """A :func:`verdict` in words, inputs named by ``label``: 'decided by A, then B',
+    """A :func:`verdict` ``v`` in words, inputs named by ``label``: 'decided by A, then B',
     'unsettled: A, B or C (ST intervals overlap)', 'unsettled: A ranks first at N but not at
     N/2', or 'no input moves it'."""
     if v["status"] == "nothing":

@@ -191,6 +191,51 @@ def _record_value(v, kind, low, closed, unit, label):
     return kind(v)
 
 
+def _range_values(body: str, spec: str, flag: str) -> list:
+    """The values of a ``START:STOP:COUNT`` range ``body`` of the spec ``spec``."""
+    parts = body.split(":")
+    if len(parts) != 3:
+        raise ParameterError(f"{flag} {spec!r}: a range needs exactly START:STOP:COUNT; "
+                             f"expected {GRID_FORM}")
+    start = _number(parts[0], spec, flag, "START")
+    stop = _number(parts[1], spec, flag, "STOP")
+    try:
+        count = int(parts[2])
+    except ValueError:
+        raise ParameterError(f"{flag} {spec!r}: COUNT {parts[2]!r} must be an integer >= 1; "
+                             f"expected {GRID_FORM}") from None
+    if count < 1 or count > MAX_AXIS_VALUES:
+        raise ParameterError(f"{flag} {spec!r}: COUNT = {count}: allowed 1 to "
+                             f"{MAX_AXIS_VALUES}; expected {GRID_FORM}")
+    if count == 1 and start != stop:
+        raise ParameterError(f"{flag} {spec!r}: COUNT = 1 needs START = STOP; "
+                             f"expected {GRID_FORM}")
+    # 12 significant digits: 0.3, not 0.30000000000000004 (linspace's rounding)
+    return [float(f"{v:.12g}") for v in np.linspace(start, stop, count)]
+
+
+def _list_values(body: str, spec: str, flag: str, param) -> list:
+    """The values of a comma list ``body``: finite numbers, or words for an engine option."""
+    items = [s.strip() for s in body.split(",")]
+    if any(not s for s in items):
+        raise ParameterError(f"{flag} {spec!r}: empty value in the list; expected {GRID_FORM}")
+    values = []
+    for s in items:
+        try:
+            v = float(s)
+        except ValueError:
+            if param.kind != OPTION:
+                raise ParameterError(f"{flag} {spec!r}: value {s!r} is not a number; "
+                                     f"expected {GRID_FORM}") from None
+            v = s  # a word, for engine options such as contact=soft,newton
+        else:
+            if not math.isfinite(v):
+                raise ParameterError(f"{flag} {spec!r}: value {s!r} must be finite; "
+                                     f"expected {GRID_FORM}")
+        values.append(v)
+    return values
+
+
 def parse_axis(spec: str, flag: str = "--grid") -> Axis:
     """Parse one ``--grid`` spec into an :class:`Axis` (one-line ParameterError naming
     ``flag`` and the allowed form on any mistake)."""
@@ -205,44 +250,8 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
             from None
     if not body:
         raise ParameterError(f"{flag} {spec!r}: no values; expected {GRID_FORM}")
-    if ":" in body:
-        parts = body.split(":")
-        if len(parts) != 3:
-            raise ParameterError(f"{flag} {spec!r}: a range needs exactly START:STOP:COUNT; "
-                                 f"expected {GRID_FORM}")
-        start = _number(parts[0], spec, flag, "START")
-        stop = _number(parts[1], spec, flag, "STOP")
-        try:
-            count = int(parts[2])
-        except ValueError:
-            raise ParameterError(f"{flag} {spec!r}: COUNT {parts[2]!r} must be an integer >= 1; "
-                                 f"expected {GRID_FORM}") from None
-        if count < 1 or count > MAX_AXIS_VALUES:
-            raise ParameterError(f"{flag} {spec!r}: COUNT = {count}: allowed 1 to "
-                                 f"{MAX_AXIS_VALUES}; expected {GRID_FORM}")
-        if count == 1 and start != stop:
-            raise ParameterError(f"{flag} {spec!r}: COUNT = 1 needs START = STOP; "
-                                 f"expected {GRID_FORM}")
-        # 12 significant digits: 0.3, not 0.30000000000000004 (linspace's rounding)
-        values = [float(f"{v:.12g}") for v in np.linspace(start, stop, count)]
-    else:
-        items = [s.strip() for s in body.split(",")]
-        if any(not s for s in items):
-            raise ParameterError(f"{flag} {spec!r}: empty value in the list; expected {GRID_FORM}")
-        values = []
-        for s in items:
-            try:
-                v = float(s)
-            except ValueError:
-                if param.kind != OPTION:
-                    raise ParameterError(f"{flag} {spec!r}: value {s!r} is not a number; "
-                                         f"expected {GRID_FORM}") from None
-                v = s  # a word, for engine options such as contact=soft,newton
-            else:
-                if not math.isfinite(v):
-                    raise ParameterError(f"{flag} {spec!r}: value {s!r} must be finite; "
-                                         f"expected {GRID_FORM}")
-            values.append(v)
+    values = _range_values(body, spec, flag) if ":" in body else \
+        _list_values(body, spec, flag, param)
     option = param.option
     if option is not None:  # its words, integers and range, from the backends' OPTIONS
         label = f"{flag} {spec!r}: {param.name}"
