@@ -140,12 +140,16 @@ def test_sampling_rows_are_summarised_apart_from_the_grid():
 def test_engine_chain_and_continuum_records_get_the_same_verdict(crown):
     """The engine's hinged chain is the continuum discretised (0.1-0.4 % on x_max): the fit's
     verdict on its record is the beam's (explained without a crown, not with m_f = 4 m_trunk:
-    measured in the default study), and its K_T within 5 % of the beam's best fit."""
+    measured in the default study), and its K_T within 5 % of the beam's best fit (with the
+    heavy crown both fits leave M_T, K_T not fixed, a second basin inside the joint
+    threshold: then the fits with e known are compared)."""
     pytest.importorskip("mujoco")
     chain = identify_case(Case("central-leader", 0.1, crown, "mujoco"))
     beam = identify_case(Case("central-leader", 0.1, crown, "beam"))
     assert chain["explained"] == beam["explained"] == (crown == 0.0)
-    assert abs(chain["fit"]["K_T"] - beam["fit"]["K_T"]) < 0.05
+    assert chain.get("fit_not_fixed", False) == beam.get("fit_not_fixed", False)
+    key = "fit_known_e" if chain.get("fit_not_fixed") else "fit"
+    assert abs(chain[key]["K_T"] - beam[key]["K_T"]) < 0.05  # the chain is the continuum
 
 
 def test_full_preset_validates_identification_on_every_rung():
