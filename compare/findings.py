@@ -46,15 +46,20 @@ def _reduced(a: float, b: float) -> float:
 QUANTITIES = tuple(f.name for f in fields(TreePhysics))
 
 
-def validate_when(where: str, when: dict) -> None:
+#: What a refusal's ``when`` reads: the Newton record's x0 / x_max.
+REFUSAL_QUANTITIES = ("x0_share",)
+
+
+def validate_when(where: str, when: dict, quantities: tuple = QUANTITIES) -> None:
     """Refuses a ``when`` table naming anything but ``<quantity>_above`` or
-    ``<quantity>_below`` of :class:`TreePhysics` (or the measured ``x0_share``)."""
+    ``<quantity>_below`` of ``quantities`` (a finding's: :class:`TreePhysics`; a refusal's:
+    :data:`REFUSAL_QUANTITIES`) with a number; ``where`` names the entry in the message."""
     for key, bound in when.items():
         name, _, side = key.rpartition("_")
-        if side not in ("above", "below") or name not in QUANTITIES + ("x0_share",) \
+        if side not in ("above", "below") or name not in quantities \
                 or not isinstance(bound, (int, float)):
             raise ParameterError(f"{where}.when.{key}: a <quantity>_above or _below with a "
-                                 f"number; quantities: {', '.join(QUANTITIES)}, x0_share")
+                                 f"number; quantities: {', '.join(quantities)}")
 
 
 def holds(when: dict, values: dict) -> bool:
@@ -70,8 +75,9 @@ def holds(when: dict, values: dict) -> bool:
 
 def finding_for(tol: dict, physics: TreePhysics | None, kind: str, metric: str,
                 rung_id: str) -> dict | None:
-    """The tolerance file's ``[[finding]]`` whose cause ``physics`` shows for ``metric`` on a
-    comparison of ``kind``; None without physics or without a matching rule."""
+    """The tolerance file ``tol``'s ``[[finding]]`` whose cause ``physics`` shows for
+    ``metric`` on a comparison of ``kind`` at ``rung_id``; None without physics or without
+    a matching rule."""
     if physics is None:
         return None
     values = {q: getattr(physics, q) for q in QUANTITIES}
@@ -86,8 +92,8 @@ def finding_for(tol: dict, physics: TreePhysics | None, kind: str, metric: str,
 
 
 def documented_refusal(tol: dict, reason: str, x0_share: float) -> dict | None:
-    """The ``[identification_refused]`` entry whose words begin ``reason`` (the procedure's
-    refusal) and whose ``when`` holds for the Newton record's ``x0_share`` (x0 / x_max);
+    """The tolerance file ``tol``'s ``[identification_refused]`` entry whose words (``match``) begin ``reason`` (the
+    procedure's refusal) and whose ``when`` holds for the Newton record's ``x0_share`` (x0 / x_max);
     None: the refusal is not documented."""
     for entry in tol.get("identification_refused", {}).values():
         if reason.startswith(entry["match"]) and holds(entry.get("when", {}),

@@ -16,7 +16,7 @@ from pathlib import Path
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import finite_number, to_jsonable
 
-from .findings import TreePhysics, finding_for, validate_when
+from .findings import REFUSAL_QUANTITIES, TreePhysics, finding_for, validate_when
 
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
@@ -92,7 +92,8 @@ def _validate(data: dict, path: str) -> None:
         if not str(entry.get("match", "")).startswith("not identifiable"):
             raise ParameterError(f"{path}: identification_refused.{name}.match: the "
                                  "refusal's words, starting 'not identifiable'")
-        validate_when(f"{path}: identification_refused.{name}", entry.get("when", {}))
+        validate_when(f"{path}: identification_refused.{name}", entry.get("when", {}),
+                      REFUSAL_QUANTITIES)
     for name, entry in data.get("study", {}).items():
         need_reason(f"study.{name}", entry)
     for kind, entry in data.get("ledger", {}).items():
