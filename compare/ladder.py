@@ -7,12 +7,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
 from .backends import ENGINES
+from .findings import TreePhysics
 from .identification import IDENT_METRICS, IDENT_UNITS, RungIdentification, rung_identification
 from .rungs import (  # noqa: F401
     ANALYTIC_SAMPLE_STEP,
@@ -131,6 +133,11 @@ class Ladder:
         """The scenario's name."""
         return self.scenario.name
 
+    @cached_property
+    def physics(self) -> TreePhysics:
+        """The tree's quantities that decide which findings apply (never its name)."""
+        return TreePhysics.of(self.scenario)
+
     def value(self, rung_id: str, metric: str) -> float:
         """The value of ``metric`` on the rung ``rung_id`` (SI; NaN when missing)."""
         return self[rung_id].values.get(metric, math.nan)
@@ -176,7 +183,7 @@ class Ladder:
             return ambiguous
         entry = self.tolerances.get("step", {}).get(r.rung.kind, {}).get(metric)
         return judge(self.name, rung_id, r.rung.kind, metric, self.value(rung_id, metric), prev,
-                     self.value(prev, metric), entry, self.tolerances)
+                     self.value(prev, metric), entry, self.tolerances, self.physics)
 
     def _ambiguous_peak(self, rung_id: str, reference: str, metric: str) -> Check | None:
         """t_xmax compared between a record with one clear maximum and one whose x(t) has a
@@ -205,7 +212,7 @@ class Ladder:
         entry = self.tolerances.get("identification", {}).get(metric)
         return judge(self.name, rung_id, r.rung.kind, f"id_{metric}",
                      r.values.get(f"id_{metric}", math.nan), "truth", self.truth[metric],
-                     entry, self.tolerances)
+                     entry, self.tolerances, self.physics)
 
     def engines_check(self, kind: str, metric: str) -> Check | None:
         """MuJoCo against Bullet on ``metric`` at one rung ``kind`` (engine, chain or
@@ -218,7 +225,7 @@ class Ladder:
             return ambiguous
         entry = self.tolerances.get("engines", {}).get(kind, {}).get(metric)
         return judge(self.name, ids[1], f"engines-{kind}", metric, self.value(ids[1], metric),
-                     ids[0], self.value(ids[0], metric), entry, self.tolerances)
+                     ids[0], self.value(ids[0], metric), entry, self.tolerances, self.physics)
 
     def checks(self) -> list[Check]:
         """Every comparison of the ladder: steps, identification, engines against each other."""

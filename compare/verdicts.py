@@ -16,6 +16,8 @@ from pathlib import Path
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import finite_number, to_jsonable
 
+from .findings import REFUSAL_QUANTITIES, TreePhysics, finding_for, validate_when
+
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
 
@@ -90,14 +92,20 @@ def _validate(data: dict, path: str) -> None:
         if not str(entry.get("match", "")).startswith("not identifiable"):
             raise ParameterError(f"{path}: identification_refused.{name}.match: the "
                                  "refusal's words, starting 'not identifiable'")
+        validate_when(f"{path}: identification_refused.{name}", entry.get("when", {}),
+                      REFUSAL_QUANTITIES)
     for name, entry in data.get("study", {}).items():
         need_reason(f"study.{name}", entry)
     for kind, entry in data.get("ledger", {}).items():
         need_reason(f"ledger.{kind}", entry)
     for i, f in enumerate(data.get("finding", [])):
-        for key in ("name", "scenario", "metric", "band", "reason", "kinds"):
+        for key in ("name", "metric", "band", "reason", "kinds", "when"):
             if key not in f:
                 raise ParameterError(f"{path}: finding[{i}].{key}: missing")
+        if "scenario" in f:
+            raise ParameterError(f"{path}: finding[{i}].scenario: a finding is recognised "
+                                 "from its physical cause (when), never from a tree's name")
+        validate_when(f"{path}: finding[{i}]", f["when"])
         lo, hi = f["band"]
         if not lo < hi:
             raise ParameterError(f"{path}: finding[{i}].band: need lo < hi")
@@ -136,17 +144,9 @@ def relative_step(value, reference) -> float:
     return (value - reference) / abs(reference)
 
 
-def _finding_for(tol: dict, scenario: str, kind: str, metric: str, rung_id: str):
-    for f in tol.get("finding", []):
-        if f["scenario"] == scenario and f["metric"] == metric and kind in f["kinds"]:
-            if "rungs" in f and rung_id not in f["rungs"]:
-                continue
-            return f
-    return None
-
-
 def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: str,
-          reference_value, entry: dict | None, tol: dict) -> Check:
+          reference_value, entry: dict | None, tol: dict,
+          physics: TreePhysics | None = None) -> Check:
     """The verdict of one comparison of ``value`` with ``reference_value`` (:class:`Verdict`).
 
     Args:
@@ -159,13 +159,15 @@ def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: st
         reference_value: its value (SI).
         entry: the tolerance file's entry (rel, reason; report_only), or None.
         tol: the whole tolerance file (its recorded findings).
+        physics: the tree's physical quantities, which decide the findings whose cause
+            it shows (:func:`compare.findings.finding_for`); None: no finding applies.
 
     Returns:
         The :class:`Check`: the relative difference, the tolerance, the verdict and the
         reason (a recorded finding's band and reason where one applies).
     """
     rel = relative_step(value, reference_value)
-    finding = _finding_for(tol, scenario, kind, metric, rung)
+    finding = finding_for(tol, physics, kind, metric, rung)
     tolerance = None if entry is None or entry.get("report_only") else float(entry["rel"])
     reason = entry["reason"] if entry else "no tolerance entry"
     if finding is not None:

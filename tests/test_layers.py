@@ -27,10 +27,10 @@ ANALYTIC_FLOORS = ("threads", "errors", "budget", "results", "model", "records",
 #: a subpackage of compare); a module imports only its own floor or lower ones, and the
 #: units of one floor import each other without a circle.
 COMPARE_FLOORS = (
-    # 1 what a run is: the backends by name, one run record, verdicts, the rung table, the
-    # pool, the exit codes, figure titles that fit
-    ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "verdicts",
-     "rungs", "exits", "figure_text"),
+    # 1 what a run is: the backends by name, one run record, findings and verdicts, the
+    # rung table, the pool, the exit codes, figure titles that fit
+    ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "findings",
+     "verdicts", "rungs", "exits", "figure_text"),
     # 2 one scenario, one record, one contact: the ladder and the identification
     ("identification", "ladder", "mechanism", "contact_engines", "contact_settings"),
     # 3 the sweep machinery: grid, plan, run, journal, maps

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-from treeimpact.analytic.model.scenario import shipped_scenarios
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
+from treeimpact.compare.findings import TreePhysics, documented_refusal, finding_for
 from treeimpact.compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs
 from treeimpact.compare.verdicts import load_tolerances
 
@@ -21,20 +22,19 @@ SCENARIOS = shipped_scenarios()
 TOL = load_tolerances()
 
 
-def _has_finding(scenario, kind, metric):
-    return any(f["scenario"] == scenario and f["metric"] == metric and kind in f["kinds"]
-               for f in TOL.get("finding", []))
+PHYSICS = {s: TreePhysics.of(load_scenario(s)) for s in SCENARIOS}
 
 
-def _tested(scenario, kind, metric, section="step"):
-    entry = TOL.get(section, {}).get(kind, {}).get(metric) if section == "step" else \
-        TOL.get(section, {}).get(metric)
-    return bool(entry and "rel" in entry) or _has_finding(scenario, kind, metric)
+def _tested(scenario, rung, metric):
+    """A tolerance, or a finding whose cause the tree's physics shows (never its name)."""
+    entry = TOL.get("step", {}).get(rung.kind, {}).get(metric)
+    return bool(entry and "rel" in entry) or \
+        finding_for(TOL, PHYSICS[scenario], rung.kind, metric, rung.id) is not None
 
 
 def step_cases(metric):
     return [pytest.param(s, r, id=f"{s}-{r.id}") for s in SCENARIOS for r in ladder_rungs(s)
-            if r.previous is not None and _tested(s, r.kind, metric)]
+            if r.previous is not None and _tested(s, r, metric)]
 
 
 def _step(ladder_of, scenario, rung, metric):
@@ -114,14 +114,17 @@ def ident_cases():
 
 @pytest.mark.parametrize("scenario, rung, metric", ident_cases())
 def test_identification_against_truth(ladder_of, scenario, rung, metric):
-    """Judged against the truth, or refused where tolerances.toml documents the refusal
-    ([identification_refused]: its words) and nowhere else."""
+    """Judged against the truth, or refused where tolerances.toml documents the refusal's
+    cause ([identification_refused]: its words and its condition on the Newton record's
+    x0 / x_max) and nowhere else."""
     ladder = ladder_of(scenario)
     require_run(ladder, rung.id)
     ident = ladder[rung.id].identification
-    refused = TOL.get("identification_refused", {}).get(scenario)
-    if refused is not None:
-        assert not ident.ok and ident.reason.startswith(refused["match"]), ident
+    share = ladder.value(rung.id, "x0") / ladder.value(rung.id, "x_max")
+    expected = [e for e in TOL.get("identification_refused", {}).values()
+                if documented_refusal(TOL, e["match"], share) is e]
+    if expected:
+        assert not ident.ok and documented_refusal(TOL, ident.reason, share), ident
         return
     assert ident.ok, ident
     assert_checks(ladder, [ladder.identification_check(rung.id, metric)])

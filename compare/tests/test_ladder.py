@@ -28,6 +28,7 @@ from treeimpact.compare.ladder import (
     ladder_rungs,
 )
 from treeimpact.compare.runs import DIVERGED, FAILED, OK, SKIPPED, RunCache
+from treeimpact.compare.findings import TreePhysics
 from treeimpact.compare.verdicts import judge, load_tolerances
 
 TOL = load_tolerances()
@@ -165,9 +166,10 @@ def test_ladder_values_are_the_backends_metrics_and_steps_are_relative():
     assert math.isnan(ladder.step("analytic", "V"))  # rung 1 has no step
 
 
-def _check(value, ref, entry, scenario="s", metric="V", findings=()):
+def _check(value, ref, entry, metric="V", findings=(), physics=None):
     tol = {"finding": list(findings)}
-    return judge(scenario, "r", "trunk", metric, value, "p", ref, entry, tol)
+    physics = TreePhysics(0.1, 12.0, 2.0) if physics is None else physics
+    return judge("s", "r", "trunk", metric, value, "p", ref, entry, tol, physics)
 
 
 def test_verdicts():
@@ -177,12 +179,20 @@ def test_verdicts():
     assert _check(-0.94, -1.0, entry).rel_diff == pytest.approx(0.06)
     assert _check(1.06, 1.0, {"report_only": True, "reason": "r"}).verdict == "reported"
     assert _check(math.nan, 1.0, entry).verdict == "n/a"
-    f = {"name": "heavy crown", "scenario": "s", "kinds": ["trunk"], "metric": "V",
-         "band": [0.2, 0.5], "reason": "finding"}
+    f = {"name": "light clamp", "kinds": ["trunk"], "metric": "V",
+         "when": {"loss_ratio_above": 2.0, "restitution_below": 0.5}, "band": [0.2, 0.5],
+         "reason": "finding"}
     assert _check(1.3, 1.0, entry, findings=[f]).verdict == "finding"
     assert _check(1.03, 1.0, entry, findings=[f]).verdict == "finding-lost"  # hidden
     assert _check(1.7, 1.0, entry, findings=[f]).verdict == "out-of-band"
-    assert _check(1.3, 1.0, entry, scenario="other", findings=[f]).verdict == "exceeds"
+    # the cause absent (a clamp as heavy as M_T; e above the rule's): judged as any step
+    assert _check(1.3, 1.0, entry, findings=[f],
+                  physics=TreePhysics(0.1, 1.5, 2.0)).verdict == "exceeds"
+    assert _check(1.3, 1.0, entry, findings=[f],
+                  physics=TreePhysics(0.6, 12.0, 2.0)).verdict == "exceeds"
+    # no physics, no finding: a tree's name never selects one
+    assert judge("s", "r", "trunk", "V", 1.3, "p", 1.0, entry,
+                 {"finding": [f]}).verdict == "exceeds"
 
 
 def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
@@ -201,7 +211,19 @@ def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
     with pytest.raises(ParameterError, match="rel or report_only"):
         load_tolerances(bad)
     for name, entry in TOL.get("identification_refused", {}).items():
-        assert name in shipped_scenarios() and len(entry["reason"]) > 20, name
+        assert name not in shipped_scenarios() and len(entry["reason"]) > 20, name
+        assert entry["when"], name  # expected under a physical condition, not for a tree
+    for f in TOL["finding"]:
+        assert "scenario" not in f and f["when"], f["name"]
+    head = '[identification_reported]\nreason = "reported"\n'
+    bad.write_text(head + '[[finding]]\nname = "n"\nscenario = "open-center"\nkinds = ["beam"]\n'
+                   'metric = "x_max"\nwhen = {}\nband = [0.1, 0.2]\nreason = "r"\n')
+    with pytest.raises(ParameterError, match="never from a tree's name"):
+        load_tolerances(bad)
+    bad.write_text(head + '[[finding]]\nname = "n"\nkinds = ["beam"]\nmetric = "x_max"\n'
+                   'when = { tree_above = 1 }\nband = [0.1, 0.2]\nreason = "r"\n')
+    with pytest.raises(ParameterError, match="quantities"):
+        load_tolerances(bad)
     bad.write_text('[identification_reported]\nreason = "reported"\n[identification_refused]\n'
                    'x = { match = "refused", reason = "a refusal without its words" }\n')
     with pytest.raises(ParameterError, match="not identifiable"):
@@ -230,7 +252,7 @@ def test_failure_table_names_metric_values_difference_tolerance_and_reason():
     ladder = build_ladder("open-center", cache=RunCache(), engines=())
     entry = {"rel": 1e-6, "reason": "a deliberately tiny tolerance"}
     c = judge("open-center", "soft", "contact", "x_max", ladder.value("soft", "x_max"),
-              "analytic", ladder.value("analytic", "x_max"), entry, TOL)
+              "analytic", ladder.value("analytic", "x_max"), entry, TOL, ladder.physics)
     assert c.verdict == "exceeds"
     text = failure_table(ladder, [c])
     lines = text.splitlines()
