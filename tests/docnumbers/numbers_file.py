@@ -40,10 +40,19 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
                        "provenance": report.get("provenance", {}).get("code")},
             "code": code_version(), "environment": environment(),
             "figures": copy_figures(Path(report_dir), report),
+            "texts": texts_from_report(report),
             "numbers": dict(sorted(out.items()))}
     path.write_text(json.dumps(data, indent=1) + "\n")
     return drift
 
+
+
+def texts_from_report(report: dict) -> dict:
+    """The report's generated sentences a page quotes whole (its generated blocks): what to
+    measure first on each tree (compare.report.measure.first_text), tree -> sentence."""
+    rows = report.get("answer", {}).get("one_dof", [])
+    return {"measure_first": {a["scenario"]: a["measure_first"]["said"] for a in rows
+                              if (a.get("measure_first") or {}).get("said")}}
 
 
 #: The report's figures the pages show, copied with the numbers: page path -> report path.

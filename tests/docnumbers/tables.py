@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import math
 
-from .base import CONTACT_FIT, TREES, TRUNKS_JSON
+from .base import CONTACT_FIT, NUMBERS, TREES, TRUNKS_JSON
 from .rerun import CONTACT_CASES
 
 
@@ -278,7 +278,14 @@ def sweep_grid_names(n: dict) -> str:
 
 
 #: The generated blocks: name -> function of the numbers giving the block's text.
-GENERATED = {"whole-event-table": whole_event_table, "mechanism-table": mechanism_table,
+def measure_first_list(n: dict) -> str:
+    """README: what to measure first on each tree, the report's own sentences (docs/numbers.json
+    ``texts``, from report.json's answer rows)."""
+    texts = json.loads(NUMBERS.read_text())["texts"]["measure_first"]
+    return "".join(f"  - {tree}: {said}\n" for tree, said in texts.items())
+
+
+GENERATED = {"measure-first-list": measure_first_list,"whole-event-table": whole_event_table, "mechanism-table": mechanism_table,
              "contact-fit-table": contact_fit_table, "timoshenko-table": timoshenko_table,
              "beam-cost-table": beam_cost_table, "solver-cost-table": solver_cost_table,
              "trunks-cheapest-table": trunks_cheapest_table,
