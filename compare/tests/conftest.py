@@ -3,6 +3,9 @@
 * Runs are shared by every test through this session's :data:`SESSION_CACHE` (fixture
   ``run_cache``, passed explicitly) and the ladders built from it (fixture ``ladder_of``):
   each (scenario, backend, options) is simulated once per session.
+* ``--scenario TREE`` (repeatable: a shipped name or a scenario TOML file) runs the
+  cross-checks (test_cross_checks.py, and only those) on these trees instead of the shipped
+  ones, under the same verdict rules (findings recognised from each tree's physics).
 * ``--report DIR`` writes the discrepancy report (report.html, report.md, report.json) into
   DIR at the end of the session, from the same runs.
 * A failing cross-check prints a compact table (metric, every rung's value, the compared
@@ -18,12 +21,47 @@ from treeimpact.compare.runs import DIVERGED, FAILED, SKIPPED, RunCache
 
 #: The session's runs: every test, the ladders and ``--report DIR`` share them.
 SESSION_CACHE = RunCache()
+#: The trees the cross-checks run on (``--scenario``; default every shipped one), filled in
+#: by :func:`pytest_configure` before the test modules are collected.
+SCENARIOS: list = []
+#: Each tree's name (its test ids), by the scenario as given.
+NAMES: dict = {}
 
 
 def pytest_addoption(parser):
     parser.addoption("--report", metavar="DIR", default=None,
                      help="also write the discrepancy report (report.html, .md, .json) into "
                           "DIR from the runs of this session")
+    parser.addoption("--scenario", metavar="TREE", action="append", default=None,
+                     dest="treeimpact_scenarios",
+                     help="run the cross-checks on this tree (a shipped name or a scenario "
+                          "TOML file; repeatable) instead of the shipped trees")
+
+
+def pytest_configure(config):
+    """The trees of the cross-checks: ``--scenario``'s, each loaded now (a bad one ends the
+    session at once with its one-line error, exit 2), else every shipped tree."""
+    from treeimpact.analytic.errors import ParameterError
+    from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
+
+    given = config.getoption("treeimpact_scenarios", default=None)
+    SCENARIOS[:] = given or list(shipped_scenarios())
+    for s in SCENARIOS:
+        try:
+            NAMES[s] = load_scenario(s).name
+        except ParameterError as exc:
+            pytest.exit(f"--scenario {s!r}: {exc}", returncode=2)
+
+
+def pytest_collection_modifyitems(config, items):
+    """With ``--scenario``, only the cross-checks run (the other tests check the code on the
+    shipped trees, not the user's)."""
+    if not config.getoption("treeimpact_scenarios", default=None):
+        return
+    keep = [i for i in items if i.path.name == "test_cross_checks.py"]
+    if len(keep) != len(items):
+        config.hook.pytest_deselected(items=[i for i in items if i not in keep])
+        items[:] = keep
 
 
 @pytest.fixture(scope="session")
@@ -40,11 +78,10 @@ def ladder_of(run_cache):
     from treeimpact.compare.ladder import build_ladder
 
     def get(name):
-        if not _LADDERS:  # first use: every shipped ladder's runs at once, on a process pool
-            from treeimpact.analytic.model.scenario import shipped_scenarios
+        if not _LADDERS:  # first use: every session tree's runs at once, on a process pool
             from treeimpact.compare.ladder import prefetch_ladders
 
-            prefetch_ladders(run_cache, list(shipped_scenarios()))
+            prefetch_ladders(run_cache, list(SCENARIOS))
         if name not in _LADDERS:
             _LADDERS[name] = build_ladder(name, cache=run_cache)
         return _LADDERS[name]
@@ -79,7 +116,7 @@ def pytest_sessionfinish(session, exitstatus):
         return
     from treeimpact.compare.report import write_report
 
-    paths = write_report(out, runs=SESSION_CACHE)
+    paths = write_report(out, scenarios=list(SCENARIOS), runs=SESSION_CACHE)
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
     if reporter is not None:
         reporter.ensure_newline()

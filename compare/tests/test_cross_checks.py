@@ -1,5 +1,6 @@
-"""Cross-checks of the discrepancy ladder, parametrised over the shipped scenarios, the
-backends and the rungs (ids ``<scenario>-<rung>``, e.g. ``open-center-mujoco-chain10``).
+"""Cross-checks of the discrepancy ladder, parametrised over the session's trees (the shipped
+scenarios, or ``pytest compare --scenario TREE``'s), the backends and the rungs (ids
+``<scenario name>-<rung>``, e.g. ``open-center-mujoco-chain10``).
 
 Each step test compares a rung with the rung below it (compare/ladder.py) under the
 tolerance of compare/tolerances.toml; only (rung kind, metric) pairs with a tolerance or a
@@ -11,14 +12,13 @@ from __future__ import annotations
 
 import pytest
 
-from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
+from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.findings import TreePhysics, documented_refusal, finding_for
 from treeimpact.compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs
 from treeimpact.compare.verdicts import load_tolerances
 
-from .conftest import assert_checks, require_run
+from .conftest import NAMES, SCENARIOS, assert_checks, require_run
 
-SCENARIOS = shipped_scenarios()
 TOL = load_tolerances()
 
 
@@ -33,7 +33,7 @@ def _tested(scenario, rung, metric):
 
 
 def step_cases(metric):
-    return [pytest.param(s, r, id=f"{s}-{r.id}") for s in SCENARIOS for r in ladder_rungs(s)
+    return [pytest.param(s, r, id=f"{NAMES[s]}-{r.id}") for s in SCENARIOS for r in ladder_rungs(s)
             if r.previous is not None and _tested(s, r, metric)]
 
 
@@ -94,7 +94,7 @@ WHOLE_EVENT = ("energy_delivered", "contact_dissipation", "rebound_energy", "imp
 
 
 def whole_event_cases():
-    return [pytest.param(s, r, m, id=f"{s}-{r.id}-{m}") for m in WHOLE_EVENT
+    return [pytest.param(s, r, m, id=f"{NAMES[s]}-{r.id}-{m}") for m in WHOLE_EVENT
             for s, r in ((p.values[0], p.values[1]) for p in step_cases(m))]
 
 
@@ -108,7 +108,7 @@ def test_whole_event(ladder_of, scenario, rung, metric):
 def ident_cases():
     """The paper's procedure is designed for the Newton record (rung 1): judged there against
     the truth, with the documented findings; on the other rungs it is reported."""
-    return [pytest.param(s, r, m, id=f"{s}-{r.id}-{m}") for s in SCENARIOS
+    return [pytest.param(s, r, m, id=f"{NAMES[s]}-{r.id}-{m}") for s in SCENARIOS
             for r in ladder_rungs(s) if r.kind == "newton" for m in IDENT_METRICS]
 
 
@@ -140,7 +140,7 @@ def engine_cases():
             for m in ALL_METRICS:
                 entry = TOL.get("engines", {}).get(kind, {}).get(m)
                 if entry and "rel" in entry:
-                    out.append(pytest.param(s, kind, m, id=f"{s}-{kind}-{m}"))
+                    out.append(pytest.param(s, kind, m, id=f"{NAMES[s]}-{kind}-{m}"))
     return out
 
 
@@ -161,7 +161,7 @@ def test_engines_agree(ladder_of, scenario, kind, metric):
 
 
 def rung_cases():
-    return [pytest.param(s, r, id=f"{s}-{r.id}") for s in SCENARIOS for r in ladder_rungs(s)]
+    return [pytest.param(s, r, id=f"{NAMES[s]}-{r.id}") for s in SCENARIOS for r in ladder_rungs(s)]
 
 
 @pytest.mark.parametrize("scenario, rung", rung_cases())
