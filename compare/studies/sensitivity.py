@@ -266,6 +266,17 @@ def _convergence(names, X, y, full: dict) -> dict | None:
             "max_change": change, "same_deciding": deciding(part)[0] == deciding(full)[0]}
 
 
+def design_rows(table, X, names) -> tuple[list, list]:
+    """The sweep ``table``'s row of each point of the design ``X`` (columns ``names``), None
+    where it has none, and those that failed or are missing. A point's key is its inputs to
+    12 digits: the design's floats come back from the table (parquet) exactly; the rounding
+    guards a text round trip."""
+    rows = {tuple(round(float(r[f"input.{k}"]), 12) for k in names): r
+            for r in table.to_dict("records")}
+    got = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
+    return got, [r for r in got if r is None or r.get("status") != OK]
+
+
 def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
             held: dict | None = None) -> dict:
     """Per output of the sweep's ``table`` (the design of ``trajectories`` and ``seed``):
@@ -279,10 +290,7 @@ def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
     leaves the range is a lower bound)."""
     names = list(INPUTS) if names is None else list(names)
     X = design(trajectories, seed, names)
-    rows = {tuple(round(float(r[f"input.{n}"]), 12) for n in names): r
-            for r in table.to_dict("records")}
-    ok = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
-    failed = [r for r in ok if r is None or r.get("status") != OK]
+    ok, failed = design_rows(table, X, names)
     out = {"inputs": {n: {"low": v[0], "high": v[1], "unit": v[2], "why": v[3],
                           "settle": v[4]} for n, v in INPUTS.items() if n in names},
            "held": dict(held or {}), "trajectories": trajectories, "points": len(X),

@@ -24,8 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..runs import OK
-from .sensitivity import ANSWER, CONF_LEVEL, INPUTS, problem
+from .sensitivity import ANSWER, CONF_LEVEL, INPUTS, design_rows, problem
 
 #: The seed of the scrambled Sobol sequence and of SALib's bootstrap.
 SEED = 20261128
@@ -173,12 +172,7 @@ def analyse_sobol(table, n: int, names=None, seed: int = SEED) -> dict:
     measure_first} (errors: up to 5 when points failed; then no outputs)."""
     names = list(INPUTS) if names is None else list(names)
     X = sobol_design(n, names, seed)
-    # a point's key to 12 digits: the design's floats come back from the sweep's table
-    # (parquet) exactly, the rounding only guards a text round trip (the Morris reading's)
-    rows = {tuple(round(float(r[f"input.{k}"]), 12) for k in names): r
-            for r in table.to_dict("records")}
-    got = [rows.get(tuple(round(float(v), 12) for v in x)) for x in X]
-    failed = [r for r in got if r is None or r.get("status") != OK]
+    got, failed = design_rows(table, X, names)
     out = {"n": n, "evaluations": len(X), "failed": len(failed), "conf_level": CONF_LEVEL,
            "num_resamples": RESAMPLES, "seed": seed, "names": names,
            "distribution": "uniform over each input's stated range, independent",

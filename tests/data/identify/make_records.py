@@ -776,18 +776,14 @@ def main(argv=None) -> int:
     if args.check:
         check()
         return 0
-    if args.coverage:
-        numbers = coverage_numbers(args.coverage)
-        print(json.dumps(numbers, indent=1))
-        if args.numbers:
-            write_numbers(args.numbers, numbers, "coverage")
-        return 0
-    if args.accuracy:
-        numbers = accuracy_numbers(args.accuracy)
-        print(json.dumps(numbers, indent=1))
-        if args.numbers:
-            write_numbers(args.numbers, numbers, "accuracy")
-        return 0
+    for label, seeds, measure in (("coverage", args.coverage, coverage_numbers),
+                                  ("accuracy", args.accuracy, accuracy_numbers)):
+        if seeds:
+            numbers = measure(seeds)
+            print(json.dumps(numbers, indent=1))
+            if args.numbers:
+                write_numbers(args.numbers, numbers, label)
+            return 0
     if args.evaluate:
         rows = [evaluate(c, args.from_truth) for c in load(args.out)[:: args.every]]
         print(summary(rows))
