@@ -74,8 +74,12 @@ def in_short_text(answer: list[dict]) -> str | None:
     if not rows:
         return None
     s = rows[0]["sobol"]
+    counts = {a["sobol"]["evaluations"] for a in rows}
+    evals = (f"{s['evaluations']} evaluations per tree" if len(counts) == 1 else
+             "evaluations " + ", ".join(f"{a['scenario']} {a['sobol']['evaluations']}"
+                                        for a in rows))
     return (f"What to measure first (the share of each gap's variance an unmeasured input "
             f"carries: Sobol ST with its {100 * s['conf_level']:.0f} % interval, N = "
-            f"{s['n']}, {s['evaluations']} evaluations per tree; named only when its "
+            f"{s['n']}, {evals}; named only when its "
             f"interval clears every other's and it leads at N/2 too): "
             + " ".join(a["measure_first"]["sentence"] for a in rows))

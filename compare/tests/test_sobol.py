@@ -257,6 +257,11 @@ def test_the_first_screen_sentence_is_generated_by_the_rule():
     short = in_short_text([row])
     assert "N = 64, 512 evaluations per tree" in short and short.endswith(said)
     assert in_short_text([{"scenario": "u", "measure_first": {}}]) is None
+    # a user's tree with two inputs held has fewer evaluations: each tree's count said
+    # (issue 41: the page said 210 where its answer table's tree had 150)
+    held = {**row, "scenario": "mine", "sobol": {**row["sobol"], "evaluations": 384}}
+    both = in_short_text([row, held])
+    assert "evaluations t 512, mine 384" in both and "per tree" not in both
 
 
 def test_n_is_a_power_of_two_and_the_docs_say_each_presets():
