@@ -209,13 +209,21 @@ def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
     into ``out``: the Morris design (:func:`design` of ``trajectories`` and ``seed``) over
     its free inputs (:func:`free_inputs`) as ``input.*`` axes, :func:`answer_under` (with
     ``crossings``, :func:`answer_and_crossings`) at each point."""
+    return design_sweep(scenario, out, lambda names: design(trajectories, seed, names),
+                        crossings=crossings)
+
+
+def design_sweep(scenario, out, make_design, *, crossings: bool = False):
+    """A design over one tree's free inputs (:func:`free_inputs` of ``scenario``) as a sweep
+    into ``out``: ``make_design(names)``'s rows as ``input.*`` axes, :func:`answer_under`
+    (with ``crossings``, :func:`answer_and_crossings`) at each point."""
     from ..runs import resolve_scenario
     from ..sweep.grid import Design
     from ..sweep.run import SweepSpec
 
     scen = resolve_scenario(scenario)
     names = free_inputs(scen)
-    X = design(trajectories, seed, names)
+    X = make_design(names)
     return SweepSpec(scen, Design.of([f"input.{n}" for n in names],
                                      [tuple(float(v) for v in row) for row in X]),
                      Path(out), ("analytic",), identify=False, analysis=ANALYSES[crossings])

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 
@@ -223,14 +222,6 @@ def sobol_sweep(scenario, out, n: int, seed: int = SEED):
     """The Sobol study of one tree (``scenario``) as a sweep into ``out``: the design of
     :func:`sobol_design` (``n``, ``seed``) over its free inputs as ``input.*`` axes, the
     answer's gaps (compare.studies.sensitivity.answer_under) at each point."""
-    from ..runs import resolve_scenario
-    from ..sweep.grid import Design
-    from ..sweep.run import SweepSpec
-    from .sensitivity import ANALYSES, free_inputs
+    from .sensitivity import design_sweep
 
-    scen = resolve_scenario(scenario)
-    names = free_inputs(scen)
-    X = sobol_design(n, names, seed)
-    return SweepSpec(scen, Design.of([f"input.{k}" for k in names],
-                                     [tuple(float(v) for v in row) for row in X]),
-                     Path(out), ("analytic",), identify=False, analysis=ANALYSES[False])
+    return design_sweep(scenario, out, lambda names: sobol_design(n, names, seed))
