@@ -78,7 +78,7 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--preset", default=None, choices=("default", "full"),
                         help="run a whole study: default (contact duration x crown ratio on "
                              "the analytic, soft and beam backends, engines on 2 x 2 points) "
-                             "takes about 45 s on 2 cores beside make report's own runs (less alone); full (restitution=0:0.9:10, "
+                             "takes about 60 s on 2 cores beside make report's own runs (less alone); full (restitution=0:0.9:10, "
                              "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 1.4 CPU-hours, "
                              "41 min with 2 workers; --grid replaces the preset's validity grid")
     parser.add_argument("--sensitivity-scenario", action="append", default=None,

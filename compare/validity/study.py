@@ -71,7 +71,7 @@ PRESETS = {
         # the sensitivity study's 630 evaluations: no engine corner (the report fits both
         # engines' chains of every tree: its record fits), the lightest and heaviest crown
         # ratios, no sampling grid (the full preset's; docs/identification.md)
-        expected="about 45 s with 2 workers beside make report's own runs (less alone): 8 "
+        expected="about 60 s with 2 workers beside make report's own runs (less alone): 8 "
                  "contact durations x 6 crown ratios on the analytic, soft and beam backends, "
                  "the engines' chains on 2 x 2 of them, the identification validation "
                  "(4 e x 2 crown ratios x 3 rungs) and the sensitivity study (30 Morris "
