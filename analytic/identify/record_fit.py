@@ -258,14 +258,14 @@ def at_range_end(p, params) -> set:
     return out
 
 
-def _undetermined(fixed: _Fixed, params, impact: bool, p=None) -> _Fixed:
+def _undetermined(fixed: _Fixed, params, impact: bool, p) -> _Fixed:
     """``fixed`` with each quantity the record does not determine (:func:`intervals.
     determined`; any of the tree's without an ``impact``; any a parameter at an end of its
     range moves, :func:`at_range_end` of the fitted ``p``) not fixed: its value NaN, its
     interval its range. A held parameter (``params`` frozen: e given, a drift not fitted)
     is determined, its interval its value."""
     held = {name: how for slot, (name, how) in _HELD.items() if params[slot].frozen}
-    ends = at_range_end(p, params) if p is not None else set()
+    ends = at_range_end(p, params)
     values, ok = dict(fixed.values), dict(fixed.determined)
     for name, interval in fixed.intervals.items():
         if name in held:

@@ -305,8 +305,6 @@ def from_small_e(trees: dict) -> dict:
     for name in names:
         for key in ("holds_up_to_e", "steady_up_to_e", "error_at_zero_pct",
                     "error_at_e_pct"):
-            if not any(f"small_e.{name}.{key}.{t}" in out for t in trees):
-                continue
             put(out, f"small_e.{name}.{key}",
                  span([out.get(f"small_e.{name}.{key}.{t}") for t in trees]))
     return out
