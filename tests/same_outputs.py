@@ -63,8 +63,8 @@ def table_differences(before: Path, after: Path) -> list:
     """Where two CSV or Parquet tables differ: columns, then cells (NaN equal to NaN)."""
     if before.suffix == ".parquet":
         a, b = (pd.read_parquet(p) for p in (before, after))
-    else:  # round_trip: the float each cell's text was written from, to the last bit
-        a, b = (pd.read_csv(p, float_precision="round_trip") for p in (before, after))
+    else:  # pandas 3's parser returns the float each cell's text was written from, bit for bit
+        a, b = (pd.read_csv(p) for p in (before, after))
     a, b = (_canonical(t.drop(columns=[c for c in t.columns if c in VOLATILE])) for t in (a, b))
     if list(a.columns) != list(b.columns) or a.shape != b.shape:
         return [f"columns or shape: {list(a.columns)} {a.shape} before, "
