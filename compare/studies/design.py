@@ -208,7 +208,7 @@ def pair_grid(scenario, pair, count: int, ranges: dict | None = None) -> list[st
     return specs
 
 
-def check_ranges(ranges: dict, flag: str = "--range") -> None:
+def check_ranges(ranges: dict, flag: str = "ranges") -> None:
     """ParameterError (one line) for an unknown input or a range outside its allowed one;
     ``ranges``: {name: (low, high)}."""
     for name, (low, high) in ranges.items():

@@ -101,7 +101,7 @@ def _mark(ax, points) -> None:
 
 def _scale(axis, set_scale, spec: Axis) -> None:
     """A log axis with ticks at 1, 2, 5 x 10^k inside its range, read as plain numbers."""
-    from matplotlib.ticker import NullFormatter, ScalarFormatter
+    from matplotlib.ticker import FuncFormatter, NullFormatter
 
     if not spec.log:
         return
@@ -110,5 +110,5 @@ def _scale(axis, set_scale, spec: Axis) -> None:
     ticks = [m * 10.0 ** k for k in range(-6, 6) for m in (1, 2, 5)
              if lo * 0.999 <= m * 10.0 ** k <= hi * 1.001]
     axis.set_ticks(ticks)
-    axis.set_major_formatter(ScalarFormatter())
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     axis.set_minor_formatter(NullFormatter())

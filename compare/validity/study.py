@@ -51,6 +51,7 @@ class Preset:
     sensitivity_crossings: bool = False  # its crossing durations too (8 pads a point)
     expected: str = ""
     notes: dict = field(default_factory=dict, compare=False)
+    runner: str = ""  # module:function running a study of another kind (its own module's)
 
 
 PRESETS = {
@@ -82,6 +83,10 @@ PRESETS = {
                  "slice of the preset, 61 s of runs per (e, crown) pair: "
                  "benchmarks/bench_presets.py); resumable"),
 }
+#: The design map (compare.validity.design_study, docs/design-map.md): its own runner.
+PRESETS["design"] = Preset(
+    "design", "central-leader", (), runner="treeimpact.compare.validity.design_study:"
+    "run_design_study", expected="about 30 s on 2 workers: 3 maps of 30 x 30 cells")
 
 
 def get_preset(name: str) -> Preset:
@@ -104,6 +109,12 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     from ..studies.speed import speed_curves, speed_sweep
 
     p = get_preset(preset)
+    if p.runner:  # a study of another kind: its module runs it
+        from ..sweep.execute import load_analysis
+
+        return load_analysis(p.runner)(out, scenario or p.scenario, workers=workers,
+                                       scheduler=scheduler, progress=progress, grid=grid,
+                                       retry_failed=retry_failed)
     t0 = time.perf_counter()
     out = make_out(out)
     scen = scenario or p.scenario

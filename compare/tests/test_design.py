@@ -1,0 +1,175 @@
+"""The design study (compare.studies.design, design_words, compare.validity.design_study):
+its cells against the rungs run directly on a tree rebuilt by hand, the words-from-map rule
+on constructed maps, the 5 % line where the cells change side, bad ranges refused in one
+line (exit 2), the page section and the registration."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.compare.studies import design as D
+from treeimpact.compare.studies import design_words as W
+
+
+# --------------------------------------------------------------------------- cells
+
+
+def _by_hand(scen, a_over_l: float, mass_ratio: float):
+    """The tree at (a/l, m/M_T) built without compare.sweep.apply: the clamp at a/l of l,
+    then the impactor's mass m/M_T times eq 7's M_T of that clamped trunk."""
+    from treeimpact.analytic.model.reduction import reduce_trunk
+
+    trunk = dataclasses.replace(scen.trunk, clamp_height=a_over_l * scen.trunk.length)
+    m = mass_ratio * reduce_trunk(trunk).dynamic_mass
+    return dataclasses.replace(scen, trunk=trunk,
+                               impactor=dataclasses.replace(scen.impactor, mass=m))
+
+
+def test_cells_agree_with_the_rungs_run_directly(tmp_path):
+    from treeimpact.analytic.contact.soft import simulate_soft
+    from treeimpact.analytic.continuum.beam_impact import simulate_beam
+    from treeimpact.analytic.impact.simulate import simulate
+    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.sweep.run import run_sweeps
+
+    scen = resolve_scenario("central-leader")
+    spec = D.design_spec(scen, ["a_over_l=0.15,0.5", "mass_ratio=0.3,3"], tmp_path / "m")
+    table = run_sweeps([spec], workers=0, progress=False)[0].table
+    assert len(table) == 4 and set(table["status"]) == {"ok"}
+    for _, row in table.iterrows():
+        s = _by_hand(scen, float(row["a_over_l"]), float(row["mass_ratio"]))
+        newton, beam = simulate(s, samples=2).metrics, simulate_beam(s).metrics
+        soft = simulate_soft(s).metrics
+        for q, ref in (("x_max", newton), ("energy_delivered", newton),
+                       ("crown_peak_acceleration", soft)):
+            want = (beam[q] - ref[q]) / abs(ref[q])
+            assert row[f"design.{q}"] == pytest.approx(want, rel=1e-9, abs=1e-12), q
+        # eq 57 against the exact loss, from the formula, not from small_e
+        model = simulate(s, samples=2).solution.model
+        eq57 = model.reduced_mass * model.impact_speed ** 2 / 2.0
+        loss = newton["contact_dissipation"]
+        assert row["design.eq57_energy_loss"] == pytest.approx((eq57 - loss) / loss, rel=1e-9)
+
+
+def test_the_cells_move_with_the_inputs_applied():
+    """A cell that ignored its point would repeat the tree's own numbers."""
+    from treeimpact.analytic.impact.simulate import simulate
+    from treeimpact.compare.runs import resolve_scenario
+
+    scen = resolve_scenario("central-leader")
+    low, high = _by_hand(scen, 0.15, 0.3), _by_hand(scen, 0.5, 3.0)
+    a = D.design_cell(simulate(low), low)
+    b = D.design_cell(simulate(high), high)
+    assert abs(a["design.x_max"] - b["design.x_max"]) > 0.01
+
+
+def test_operating_point_is_the_trees_own():
+    from treeimpact.compare.runs import resolve_scenario
+
+    scen = resolve_scenario("central-leader")
+    here = D.operating_point(scen)
+    assert here["a_over_l"] == pytest.approx(scen.trunk.clamp_height / scen.trunk.length)
+    assert here["contact_duration"] == pytest.approx(scen.contact.duration)
+    assert here["restitution"] == scen.contact.restitution
+
+
+# --------------------------------------------------------------------------- the rule
+
+
+def test_the_5_percent_line_lies_where_the_cells_change_side():
+    x = np.linspace(0.1, 0.6, 11)
+    gap = 0.5 * (0.4 - x)  # |gap| = 5 % at x = 0.3 and x = 0.5, exactly
+    found = W.crossings(x, gap, 0.05)
+    assert found == pytest.approx([0.3, 0.5], abs=1e-12)
+    # a curved gap: each crossing between the two cells on opposite sides
+    curved = (x - 0.33) ** 2 * 3.0
+    for c in W.crossings(x, curved, 0.05):
+        i = np.searchsorted(x, c)
+        assert (abs(curved[i - 1]) <= 0.05) != (abs(curved[i]) <= 0.05)
+        assert x[i - 1] <= c <= x[i]
+
+
+def test_within_intervals_and_their_words():
+    x = np.linspace(0.1, 0.6, 11)
+    assert W.within_intervals(x, 0.5 * (0.4 - x), 0.05) == [
+        pytest.approx((0.3, 0.5), abs=1e-12)]
+    assert W.within_intervals(x, np.full(11, 0.01), 0.05) == [(0.1, 0.6)]
+    assert W.within_intervals(x, np.full(11, 0.5), 0.05) == []
+    assert W.intervals_text("a_over_l", [], 0.1, 0.6) == \
+        "at no clamp height a/l from 0.1 to 0.6"
+    assert W.intervals_text("a_over_l", [(0.1, 0.6)], 0.1, 0.6).startswith("over the whole")
+    assert W.intervals_text("contact_duration", [(0.006, 0.05)], 2e-4, 5e-2) == \
+        "for contact duration from 6 ms to 50 ms"
+
+
+def test_the_sentence_is_read_off_a_constructed_map():
+    x = np.linspace(0.1, 0.6, 11)  # a/l
+    y = np.array(D.INPUTS["mass_ratio"].values(5))  # m/M_T 0.2-5, log
+    # gap falls with a/l, faster for a heavier impactor: at m/M_T = 1, 0.4 (1 - a/l)^1
+    z = np.array([[0.4 * (1.0 - xi) / r ** 0.5 for xi in x] for r in y])
+    here = {"a_over_l": 0.3, "mass_ratio": 1.0, "contact_duration": 5e-4, "restitution": 0.1}
+    text = W.sentence_along(x, y, z, ("a_over_l", "mass_ratio"), here, "x_max", 0.05)
+    # the line at m/M_T = 1 is interpolated on log m/M_T between 0.447 and 2.24
+    line = W.line_at(x, y, z, "mass_ratio", 1.0)
+    edge = W.crossings(x, line, 0.05)
+    assert len(edge) == 1
+    assert text == f"At mass ratio m/M_T = 1, x_max is within 5 % for clamp height a/l " \
+                   f"from {edge[0]:.3g} to 0.6."
+    assert W.grade(0.04) == "within 5 %" and W.grade(-0.19) == "within 20 %"
+    assert W.grade(0.34) == "off by +34 %"
+    s = W.sentence_at_point(here, {"x_max": 0.04, "energy_delivered": 0.6}, ("x_max",
+                                                                            "energy_delivered"))
+    assert s == ("Clamping at a/l = 0.3 with m/M_T = 1, a 0.5 ms pad and e = 0.1, the model "
+                 "is within 5 % on x_max and off by +60 % on energy delivered.")
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_a_bad_range_is_refused_in_one_line(tmp_path, capsys):
+    from treeimpact.compare.cli import main
+
+    rc = main(["sweep", "--preset", "design", "--grid", "a_over_l=0.01:0.6:5",
+               "--workers", "0", "--out", str(tmp_path / "d")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "\n" not in err and "Traceback" not in err
+    assert "--grid 'a_over_l=0.01:0.6:5'" in err and "0.05-1" in err
+    assert not (tmp_path / "d" / "a_over_l-mass_ratio").exists()
+    import treeimpact
+
+    with pytest.raises(ParameterError, match=r"^ranges: mass_ratio from 0 to 5 1; allowed "
+                                             r"0.05 <= low < high <= 20 1$"):
+        treeimpact.design_map(tmp_path / "e", ranges={"mass_ratio": (0.0, 5.0)})
+    with pytest.raises(ParameterError, match="count = 1"):
+        treeimpact.design_map(tmp_path / "e", count=1)
+
+
+# --------------------------------------------------------------------------- the study
+
+
+def test_the_study_writes_its_maps_words_and_section(tmp_path):
+    from treeimpact.compare.report.studies import StudySection
+    from treeimpact.compare.validity.design_study import run_design_study
+    from treeimpact.compare.validity.study import get_preset
+
+    assert get_preset("design").runner.endswith("design_study:run_design_study")
+    paths = run_design_study(tmp_path / "design", "central-leader", count=4, workers=0,
+                             progress=False)
+    import json
+
+    data = json.loads(paths["json"].read_text())
+    assert [p["pair"] for p in data["pairs"]] == [list(p) for p in D.PAIRS]
+    assert len(data["pairs"][0]["x"]) == 4 and len(data["family"]) == len(D.DIAMETER_FACTORS)
+    sec = StudySection(tmp_path / "design", page_dir=tmp_path)
+    html = sec.render("html")
+    assert data["at_point"] in html.replace("&#39;", "'")
+    for p in data["pairs"]:
+        assert p["figure"] in html
+        for s in p["sentences"]:
+            assert s["text"].split(",")[0] in html
+    assert sec.to_json()["data"]["design.json"]["tree"] == "central-leader"
