@@ -176,7 +176,7 @@ design_cell.columns = COLUMNS
 
 
 def operating_point(scenario) -> dict:
-    """The tree's own value of every input (:data:`INPUTS` units): a/l, m/M_T (M_T of eq 7),
+    """The tree ``scenario``'s own value of every input (:data:`INPUTS` units): a/l, m/M_T (M_T of eq 7),
     the pad's contact duration (s; from its stiffness on the 1-DOF pair if the file gives
     that) and e."""
     from treeimpact.analytic.model.two_body import two_body_model
@@ -195,7 +195,7 @@ def operating_point(scenario) -> dict:
 def pair_grid(scenario, pair, count: int, ranges: dict | None = None) -> list[str]:
     """The ``--grid`` specs of the map over ``pair`` (two :data:`INPUTS` names), ``count``
     values each over ``ranges`` ({name: (low, high)}, default the inputs' ranges), the other
-    inputs at the tree's operating point."""
+    inputs at the operating point of the tree ``scenario``."""
     ranges = ranges or {}
     here = operating_point(scenario)
     specs = []
@@ -209,8 +209,8 @@ def pair_grid(scenario, pair, count: int, ranges: dict | None = None) -> list[st
 
 
 def check_ranges(ranges: dict, flag: str = "ranges") -> None:
-    """ParameterError (one line) for an unknown input or a range outside its allowed one;
-    ``ranges``: {name: (low, high)}."""
+    """ParameterError (one line naming ``flag``) for an unknown input or a range outside its
+    allowed one; ``ranges``: {name: (low, high)}."""
     for name, (low, high) in ranges.items():
         if name not in INPUTS:
             raise ParameterError(f"{flag}: {name!r} is not a design input; allowed "
@@ -219,8 +219,9 @@ def check_ranges(ranges: dict, flag: str = "ranges") -> None:
 
 
 def check_grid_specs(specs, flag: str = "--grid") -> None:
-    """ParameterError (one line naming the spec as typed) for a ``--grid`` spec of a design
-    input with values outside its allowed range, or an axis that is not a design input."""
+    """ParameterError (one line naming ``flag`` and the spec as typed) for one of the
+    ``specs`` (``--grid`` specs) of a design input with values outside its allowed range,
+    or an axis that is not a design input."""
     from ..sweep.grid import parse_axis
 
     for spec in specs:

@@ -70,7 +70,8 @@ def shown(name: str, v: float) -> str:
 
 
 def grade(gap: float) -> str:
-    """Rule 1: 'within 5 %', 'within 20 %' or 'off by +34 %' (no number: 'not computed')."""
+    """Rule 1 on the relative ``gap``: 'within 5 %', 'within 20 %' or 'off by +34 %' (no
+    number: 'not computed')."""
     if not math.isfinite(gap):
         return "not computed"
     for level in LEVELS:
@@ -80,7 +81,8 @@ def grade(gap: float) -> str:
 
 
 def intervals_text(name: str, intervals, low: float, high: float) -> str:
-    """Rule 2's words for the input ``name`` whose map spans [low, high]: 'for a/l from
+    """Rule 2's words for the ``intervals`` ((low, high) pairs) of the input ``name`` whose
+    map spans [``low``, ``high``]: 'for a/l from
     0.21 to 0.6', 'over the whole map (a/l 0.1-0.6)', 'at no a/l from 0.1 to 0.6'."""
     label = INPUTS[name].label
     if not intervals:
@@ -94,8 +96,9 @@ def intervals_text(name: str, intervals, low: float, high: float) -> str:
 
 
 def along(x, y, z, pair, here: dict, tol: float) -> tuple:
-    """Rule 2 on one map: the intervals (input units) of ``pair[0]`` where |z| <= ``tol``
-    at the operating point's ``here[pair[1]]``; returns (intervals, the line's values)."""
+    """Rule 2 on one map ``z`` (z[j, i] at ``y[j]``, ``x[i]``): the intervals (input units)
+    of ``pair[0]`` where |z| <= ``tol`` at the operating point's ``here[pair[1]]``; returns
+    (intervals, the line's values)."""
     inp = INPUTS[pair[0]]
     line = line_at(x, y, z, pair[1], here[pair[1]])
     coords = inp.coordinate(np.asarray(x))
@@ -105,8 +108,10 @@ def along(x, y, z, pair, here: dict, tol: float) -> tuple:
 
 
 def sentence_at_point(here: dict, cell: dict, quantities) -> str:
-    """Rule 1 as a sentence: 'Clamping at a/l = A with m/M_T = B, a C ms pad and e = E, the
-    1-DOF model is within 5 % on x_max and off by +60 % on the energy delivered.'"""
+    """Rule 1 as a sentence at the operating point ``here`` ({input: value}) whose
+    ``cell`` ({quantity: relative gap}) is graded on the ``quantities``: 'Clamping at a/l =
+    A with m/M_T = B, a C ms pad and e = E, the model is within 5 % on x_max and off by
+    +60 % on energy delivered.'"""
     parts = [f"{grade(cell.get(q, math.nan))} on {QUANTITIES[q].label}" for q in quantities]
     return (f"Clamping at a/l = {shown('a_over_l', here['a_over_l'])} with m/M_T = "
             f"{shown('mass_ratio', here['mass_ratio'])}, a "
@@ -116,7 +121,9 @@ def sentence_at_point(here: dict, cell: dict, quantities) -> str:
 
 
 def sentence_along(x, y, z, pair, here: dict, quantity: str, tol: float) -> str:
-    """Rule 2 as a sentence: 'At m/M_T = 1.2, x_max is within 5 % for a/l from 0.2 to 0.6.'"""
+    """Rule 2 as a sentence, :func:`along` on the map ``z`` over ``x`` and ``y`` (the
+    inputs ``pair``) at ``here`` for ``quantity`` within ``tol``: 'At m/M_T = 1.2, x_max is
+    within 5 % for a/l from 0.2 to 0.6.'"""
     found, _ = along(x, y, z, pair, here, tol)
     text = intervals_text(pair[0], found, float(min(x)), float(max(x)))
     return (f"At {INPUTS[pair[1]].label} = {shown(pair[1], here[pair[1]])}, "

@@ -52,7 +52,7 @@ def _clean(obj):
 
 
 def tree_cell(scen) -> dict:
-    """The cell at the tree itself (its own a/l, m/M_T, pad and e), computed directly:
+    """The cell at the tree ``scen`` itself (its own a/l, m/M_T, pad and e), computed directly:
     {quantity: relative gap or error}."""
     from ..studies.small_e import exact_run
 
@@ -133,7 +133,8 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
     map; ``ranges``: {input: (low, high)} replacing the default ranges (ParameterError if
     outside the allowed); ``grid``: ``--grid`` specs of one more sweep over the design
     inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
-    ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps."""
+    ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``_ignored``: the
+    validity study's other arguments (compare.validity.study.run_study), unused."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..runs import resolve_scenario
