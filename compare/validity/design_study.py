@@ -115,14 +115,16 @@ def _family(table) -> list:
 
 
 def _cost(results, wall_s: float, workers) -> dict:
-    """What the maps cost: cells, the sweeps' wall time (s) on ``workers`` processes, and
-    per cell the wall time times the workers (CPU-seconds a cell, all rungs included)."""
+    """What the maps cost: cells (this run's and all), the sweeps' ``wall_s`` (s) on
+    ``workers`` processes, and per cell computed by this run of ``results`` the wall time
+    times the workers (CPU-seconds a cell, every rung and the pool included)."""
     import os
 
     n = workers if workers else (os.cpu_count() or 1) if workers is None else 1
     cells = sum(len(r.table) for r in results)
-    return {"cells": cells, "wall_s": wall_s, "workers": n,
-            "cpu_s_per_cell": wall_s * n / cells if cells else None}
+    made = sum(r.rows_written for r in results)  # this run's; the rest found done
+    return {"cells": cells, "cells_computed": made, "wall_s": wall_s, "workers": n,
+            "cpu_s_per_cell": wall_s * n / made if made else None}
 
 
 def run_design_study(out, scenario="central-leader", *, count: int = COUNT, ranges=None,
