@@ -128,3 +128,41 @@ def sentence_along(x, y, z, pair, here: dict, quantity: str, tol: float) -> str:
     text = intervals_text(pair[0], found, float(min(x)), float(max(x)))
     return (f"At {INPUTS[pair[1]].label} = {shown(pair[1], here[pair[1]])}, "
             f"{QUANTITIES[quantity].label} is within {100 * tol:.0f} % {text}.")
+
+
+def nearest_within(x, y, maps: dict, tols: dict, pair, here: dict):
+    """Rule 3: the cell of the map over ``x`` and ``y`` (the inputs ``pair``) nearest to
+    the operating point ``here`` at which every quantity of ``tols`` ({quantity:
+    tolerance}) is within its tolerance on ``maps`` ({quantity: z, z[j, i] at y[j], x[i]}),
+    the distance measured with each axis scaled to [0, 1] on its input's scale; (x value,
+    y value) or None where no cell is."""
+    ix, iy = INPUTS[pair[0]], INPUTS[pair[1]]
+    cx, cy = ix.coordinate(np.asarray(x)), iy.coordinate(np.asarray(y))
+    sx, sy = np.ptp(cx) or 1.0, np.ptp(cy) or 1.0
+    hx, hy = float(ix.coordinate(here[pair[0]])), float(iy.coordinate(here[pair[1]]))
+    ok = np.ones((len(y), len(x)), dtype=bool)
+    for q, tol in tols.items():
+        z = np.asarray(maps[q], dtype=float)
+        ok &= np.isfinite(z) & (np.abs(z) <= tol)
+    if not ok.any():
+        return None
+    gx, gy = np.meshgrid((cx - hx) / sx, (cy - hy) / sy)
+    dist = np.where(ok, np.hypot(gx, gy), np.inf)
+    j, i = np.unravel_index(np.argmin(dist), dist.shape)
+    return float(x[i]), float(y[j])
+
+
+def sentence_nearest(x, y, maps: dict, tols: dict, pair, here: dict) -> str:
+    """Rule 3 as a sentence (:func:`nearest_within` on ``x``, ``y``, ``maps``, ``tols``,
+    ``pair``, ``here``): 'The nearest choice on this map at which the model is within 5 %
+    on x_max and within 20 % on energy delivered: a/l = 0.57 with m/M_T = 1.2.'"""
+    what = " and ".join(f"within {100 * t:.0f} % on {QUANTITIES[q].label}"
+                        for q, t in tols.items())
+    found = nearest_within(x, y, maps, tols, pair, here)
+    if found is None:
+        return (f"No cell of the {INPUTS[pair[0]].label} x {INPUTS[pair[1]].label} map has "
+                f"the model {what}.")
+    return (f"The nearest choice on the {INPUTS[pair[0]].label} x {INPUTS[pair[1]].label} "
+            f"map at which the model is {what}: {INPUTS[pair[0]].label} = "
+            f"{shown(pair[0], found[0])} with {INPUTS[pair[1]].label} = "
+            f"{shown(pair[1], found[1])}.")

@@ -185,3 +185,23 @@ def test_the_study_writes_its_maps_words_and_section(tmp_path):
         for s in p["sentences"]:
             assert s["text"].split(",")[0] in html
     assert sec.to_json()["data"]["design.json"]["tree"] == "central-leader"
+
+
+def test_the_nearest_cell_within_every_target():
+    x = np.linspace(0.1, 0.6, 11)  # a/l
+    y = np.array(D.INPUTS["mass_ratio"].values(5))  # 0.2, 0.447, 1, 2.236, 5
+    xs, ys = np.meshgrid(x, y)
+    maps = {"x_max": np.where(xs >= 0.45, 0.01, 0.3),  # within 5 % from a/l = 0.45
+            "energy_delivered": np.where(ys >= 2.0, 0.1, 0.5)}  # within 20 % from 2.236
+    here = {"a_over_l": 0.3, "mass_ratio": 1.0}
+    target = {"x_max": 0.05, "energy_delivered": 0.20}
+    pair = ("a_over_l", "mass_ratio")
+    # the closest corner of the region [0.45, 0.6] x [2.236, 5] to (0.3, 1)
+    assert W.nearest_within(x, y, maps, target, pair, here) == pytest.approx((0.45, 2.236))
+    assert W.sentence_nearest(x, y, maps, target, pair, here) == (
+        "The nearest choice on the clamp height a/l x mass ratio m/M_T map at which the "
+        "model is within 5 % on x_max and within 20 % on energy delivered: clamp height "
+        "a/l = 0.45 with mass ratio m/M_T = 2.24.")
+    maps["x_max"] = np.full_like(xs, np.nan)  # no number is no cell within
+    assert W.nearest_within(x, y, maps, target, pair, here) is None
+    assert W.sentence_nearest(x, y, maps, target, pair, here).startswith("No cell of the")

@@ -18,7 +18,8 @@ import numpy as np
 from ..studies.design import (DIAMETER_FACTORS, HELD, INPUTS, LEVELS, PAIRS, QUANTITIES, Kind,
                               check_grid_specs, check_ranges, design_cell, design_spec,
                               map_of, operating_point, pair_grid)
-from ..studies.design_words import along, sentence_along, sentence_at_point, shown
+from ..studies.design_words import (along, nearest_within, sentence_along, sentence_at_point,
+                                    sentence_nearest, shown)
 from ..sweep.design_maps import Axis, Point, draw_pair
 from ..sweep.run import run_sweeps
 
@@ -31,6 +32,8 @@ READINGS = {PAIRS[0]: (("x_max", 0.05, True), ("energy_delivered", 0.20, True)),
             PAIRS[1]: (("x_max", 0.05, False), ("energy_delivered", 0.20, False)),
             PAIRS[2]: (("eq57_energy_loss", 0.05, False), ("identification_M_T", 0.05, False),
                        ("x_max", 0.05, False))}
+#: The designer's target on the 1-DOF maps (rule 3): x_max within 5 %, energy within 20 %.
+TARGET = {"x_max": 0.05, "energy_delivered": 0.20}
 #: The map's points per input when none is given (30 x 30 = 900 cells a pair).
 COUNT = 30
 
@@ -92,8 +95,12 @@ def _pair_part(out: Path, scen, pair, table, shipped) -> dict:
             flip = (pair[1], pair[0])
             text = sentence_along(y, x, maps[q].T, flip, here, q, tol)
             found = along(y, x, maps[q].T, flip, here, tol)[0]
-        sentences.append({"text": text, "quantity": q, "tolerance": tol,
+        sentences.append({"text": text, "rule": "along", "quantity": q, "tolerance": tol,
                           "along": pair[0] if first else pair[1], "within": found})
+    if all(QUANTITIES[q].kind is Kind.ONE_DOF for q in PANELS[pair]):
+        sentences.append({"text": sentence_nearest(x, y, maps, TARGET, pair, here),
+                          "rule": "nearest", "tolerances": TARGET,
+                          "at": nearest_within(x, y, maps, TARGET, pair, here)})
     figure = f"design-{_name(pair)}.png"
     what = "1-DOF gaps and small-e errors" if any(
         QUANTITIES[q].kind is Kind.SMALL_E for q in PANELS[pair]) else "1-DOF gaps"
