@@ -205,3 +205,60 @@ def test_the_nearest_cell_within_every_target():
     maps["x_max"] = np.full_like(xs, np.nan)  # no number is no cell within
     assert W.nearest_within(x, y, maps, target, pair, here) is None
     assert W.sentence_nearest(x, y, maps, target, pair, here).startswith("No cell of the")
+
+
+# --------------------------------------------------------------------------- engines
+
+
+def test_spot_points_are_the_corners_and_the_cells_at_the_5_percent_line():
+    from treeimpact.compare.studies.design_engines import spot_points
+
+    x = np.linspace(0.1, 0.6, 6)  # a/l
+    y = np.array(D.INPUTS["contact_duration"].values(7))  # 0.2-50 ms, log
+    # |gap| <= 5 % within half a decade of 2 ms (0.632-6.32 ms), whatever a/l
+    z = np.array([[0.1 * (math.log10(2e-3) - math.log10(v)) for _ in x] for v in y])
+    pair = ("a_over_l", "contact_duration")
+    here = {"a_over_l": 0.33, "contact_duration": 5e-4}
+    pts = spot_points(x, y, z, pair, here, 0.05)
+    assert pts[:4] == [{"a_over_l": 0.1, "contact_duration": 2e-4},
+                       {"a_over_l": 0.1, "contact_duration": 5e-2},
+                       {"a_over_l": 0.6, "contact_duration": 2e-4},
+                       {"a_over_l": 0.6, "contact_duration": 5e-2}]
+    # the crossings 0.632 ms and 6.32 ms lie nearest the cells 0.502 ms and 7.94 ms (on
+    # log10), in the a/l column nearest the tree's 0.33
+    assert [p["a_over_l"] for p in pts[4:]] == pytest.approx([0.3, 0.3])
+    assert [p["contact_duration"] for p in pts[4:]] == [float(y[1]), float(y[4])]
+    assert (y[1], y[4]) == pytest.approx((5.02e-4, 7.94e-3), rel=1e-3)
+
+
+def test_spot_sentence_names_every_disagreement():
+    from treeimpact.compare.studies.design_engines import spot_sentence
+
+    ok = {"rel": 0.001, "tolerance": 0.005, "within": True}
+    bad = {"rel": 0.52, "tolerance": 0.01, "within": False}
+    checks = [{"point": {"a_over_l": 0.6, "contact_duration": 0.05},
+               "rungs": {"Bullet chain": {"x_max": ok, "energy_delivered": bad,
+                                          "crown_peak_acceleration": ok},
+                         "MuJoCo chain": {"error": "skipped: not installed"}}}]
+    assert spot_sentence(checks, ("a_over_l", "contact_duration")) == (
+        "The engines' flexible trunks agree with the continuum within their stated "
+        "tolerances in 2 of 3 comparisons at 1 cells: they disagree on Bullet chain "
+        "energy_delivered +52.0 % (tolerance 1.0 %) at clamp height a/l = 0.6, contact "
+        "duration = 50 ms; MuJoCo chain at clamp height a/l = 0.6, contact duration = 50 ms: "
+        "no run (skipped: not installed).")
+
+
+def test_the_engines_agree_with_the_continuum_at_the_trees_own_cell():
+    """The shipped tree's own cell, where tolerances.toml's chain and rod tolerances were
+    measured: every engine within them (the map's other cells may not be: reported)."""
+    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.studies.design_engines import spot_check
+
+    scen = resolve_scenario("central-leader")
+    here = D.operating_point(scen)
+    check = spot_check((scen, {"a_over_l": here["a_over_l"],
+                               "contact_duration": here["contact_duration"]}))
+    for label, got in check["rungs"].items():
+        assert "error" not in got, (label, got)
+        for m in ("x_max", "energy_delivered", "crown_peak_acceleration"):
+            assert got[m]["within"], (label, m, got[m])

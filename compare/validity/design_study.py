@@ -136,13 +136,14 @@ def _cost(results, wall_s: float, workers) -> dict:
 
 def run_design_study(out, scenario="central-leader", *, count: int = COUNT, ranges=None,
                      workers=None, scheduler=None, progress=None, grid=None,
-                     retry_failed: bool = False, **_ignored) -> dict:
+                     retry_failed: bool = False, engines: bool = False, **_ignored) -> dict:
     """Run (or resume) the design study of ``scenario`` into ``out``; returns the paths
     ({"json", "md", "html", "table", "figures"}). ``count``: values per input of each pair's
     map; ``ranges``: {input: (low, high)} replacing the default ranges (ParameterError if
     outside the allowed); ``grid``: ``--grid`` specs of one more sweep over the design
     inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
-    ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``_ignored``: the
+    ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``engines``: the
+    engines' spot checks too (compare.studies.design_engines); ``_ignored``: the
     validity study's other arguments (compare.validity.study.run_study), unused."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
@@ -184,6 +185,12 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
             "pairs": pairs, "family": _family(results[len(PAIRS)].table),
             "cost": _cost(results, maps_wall, workers),
             "wall_s": time.perf_counter() - t0}
+    if engines:
+        from ..studies.design_engines import spot_checks
+
+        p = pairs[1]
+        data["spot_checks"] = spot_checks(scen, p["x"], p["y"], p["maps"]["x_max"],
+                                          tuple(p["pair"]), here, LEVELS[0], workers=workers)
     if grid:
         g = results[-1]
         data["grid"] = {"specs": list(grid), "cells": len(g.table)}
