@@ -331,5 +331,40 @@ def report(out=REPORT_DIR, scenarios=None, *, studies=()) -> dict:
     return write_report(out, scenarios=scens, study_dirs=tuple(studies))
 
 
-__all__ = ["backends", "identify", "ladder", "modes", "read_record", "record_from_simulation",
-           "report", "simulate", "sweep"]
+@_api
+def design_map(out, scenario=SWEEP_SCENARIO, *, count: int = 30, ranges: dict | None = None,
+               workers: int | None = None, scheduler=None, engines: bool = False) -> dict:
+    """The design study (docs/design-map.md), as ``treeimpact sweep --preset design``: where
+    the 1-DOF trunk and the small-e consequences hold for one tree over the clamp height,
+    the mass ratio, the pad and e; resumable in ``out``.
+
+    Args:
+        out: the output directory (rerunning with the same one resumes).
+        scenario: the tree (Scenario, shipped name or TOML path; default central-leader).
+        count: values per input of each pair's map (30: 30 x 30 cells a pair).
+        ranges: ``{input: (low, high)}`` replacing an input's default range; inputs
+            ``a_over_l`` (1), ``mass_ratio`` (1), ``contact_duration`` (s), ``restitution``.
+        workers: local worker processes (default one per CPU; 0 runs here).
+        scheduler: a Dask scheduler address or Client to run on instead.
+        engines: also run MuJoCo's and Bullet's chains and MuJoCo's flex rod at the corners
+            of the a/l x contact duration map and at the cells nearest its 5 % line, each
+            compared with the continuum against its stated tolerance (about a minute).
+
+    Returns:
+        dict: kind ("json", "md", "html", "figures") -> the written paths; design.json holds
+        every map's numbers and the sentences read off them.
+
+    Raises:
+        ParameterError: a range outside an input's allowed one, an unknown input, a count
+            below 2.
+    """
+    from .validity.design_study import run_design_study
+
+    if not isinstance(count, int) or isinstance(count, bool) or not 2 <= count <= 200:
+        raise ParameterError(f"count = {count!r}: allowed an integer from 2 to 200")
+    return run_design_study(out, scenario, count=count, ranges=ranges, workers=workers,
+                            scheduler=scheduler, progress=False, engines=bool(engines))
+
+
+__all__ = ["backends", "design_map", "identify", "ladder", "modes", "read_record",
+           "record_from_simulation", "report", "simulate", "sweep"]

@@ -37,6 +37,7 @@ _EXPORTS = {
     "backends": "treeimpact.compare.api",
     "ladder": "treeimpact.compare.api",
     "sweep": "treeimpact.compare.api",
+    "design_map": "treeimpact.compare.api",
     "read_record": "treeimpact.compare.api",
     "record_from_simulation": "treeimpact.compare.api",
     "identify": "treeimpact.compare.api",

@@ -5,7 +5,7 @@ and page: :mod:`treeimpact.compare.validity`).
         [--backend analytic,soft,mujoco,bullet] [--ladder] [--option [BACKEND.]NAME=VALUE]
         [--workers N] [--scheduler ADDRESS] [--tolerance REL] [--retry-failed]
         [--no-identify] --out DIR
-    treeimpact sweep --preset default|full --out DIR      (a whole study)
+    treeimpact sweep --preset default|full|design --out DIR      (a whole study)
 
 Writes the sweep table (results.csv, results.parquet), the validity and identification maps
 and study.md / study.html into DIR. Rerunning with the same DIR resumes; Ctrl-C keeps every
@@ -75,12 +75,15 @@ def add_sweep_arguments(parser) -> None:
                         help="local worker processes (default: CPU count; 0: this process)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask scheduler address (tcp://host:8786): run on that cluster")
-    parser.add_argument("--preset", default=None, choices=("default", "full"),
+    parser.add_argument("--preset", default=None, choices=("default", "full", "design"),
                         help="run a whole study: default (contact duration x crown ratio on "
                              "the analytic, soft and beam backends, engines on 2 x 2 points) "
                              "takes about 60 s on 2 cores beside make report's own runs (less alone); full (restitution=0:0.9:10, "
                              "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 1.4 CPU-hours, "
-                             "41 min with 2 workers; --grid replaces the preset's validity grid")
+                             "41 min with 2 workers; design (the design map of --scenario: a/l, "
+                             "m/M_T, contact duration, e; docs/design-map.md) about 30 s; "
+                             "--grid replaces the preset's validity grid (design: one more "
+                             "sweep over the design inputs)")
     parser.add_argument("--sensitivity-scenario", action="append", default=None,
                         dest="sensitivity_scenarios", metavar="SCENARIO",
                         help="with --preset: a tree of its sensitivity study, shipped name or "

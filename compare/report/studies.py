@@ -99,12 +99,23 @@ class StudySection(Section):
                                      f"{', '.join(missing)}, which the directory does not have")
             self.uri = uris.__getitem__
             self.images = [i for i in self.images if i["name"] not in shown]
+        design = self.data.get("design.json")  # the design study (compare.validity.design_study)
+        self.design = design if isinstance(design, dict) and "pairs" in design else None
+        if self.design is not None:
+            uris = {i["name"]: i["uri"] for i in self.images}
+            shown = {p.get("figure") for p in self.design["pairs"]}
+            missing = sorted(n for n in shown - set(uris) if n)
+            if missing:
+                raise ParameterError(f"study {d.name}: design.json shows "
+                                     f"{', '.join(missing)}, which the directory does not have")
+            self.uri = uris.__getitem__
+            self.images = [i for i in self.images if i["name"] not in shown]
 
     def context(self) -> dict:
         """The template's names: the figures, the summary text, the study's data."""
         # the section is an h2 (the report's <summary>): the study's title is an h3
         return {"images": self.images, "text": self.text, "s": self.study, "level": 3,
-                "image": self.uri, "files": sorted(self.data)}
+                "image": self.uri, "files": sorted(self.data), "d": self.design}
 
     def to_json(self) -> dict:
         """The folder, its figures, its JSON files' data and its summary text."""

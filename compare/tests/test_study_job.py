@@ -67,7 +67,7 @@ def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypa
 def test_an_unknown_preset_is_refused_before_anything_runs(tmp_path, capsys):
     assert main(["report", "--out", str(tmp_path), "--with-study", "nope"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["treeimpact: error: --with-study 'nope': allowed default, full"]
+    assert err == ["treeimpact: error: --with-study 'nope': allowed default, full, design"]
     assert not (tmp_path / "study").exists()
 
 

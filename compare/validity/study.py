@@ -52,6 +52,7 @@ class Preset:
     sobol: int = 0  # Sobol base samples N per tree (a power of two; N x (inputs + 2) runs)
     expected: str = ""
     notes: dict = field(default_factory=dict, compare=False)
+    runner: str = ""  # module:function running a study of another kind (its own module's)
 
 
 PRESETS = {
@@ -89,6 +90,10 @@ PRESETS = {
                  "benchmarks/bench_presets.py), and about 0.4 CPU-hours more for its Sobol "
                  "design (3 trees x 32768 evaluations of 13 ms); resumable"),
 }
+#: The design map (compare.validity.design_study, docs/design-map.md): its own runner.
+PRESETS["design"] = Preset(
+    "design", "central-leader", (), runner="treeimpact.compare.validity.design_study:"
+    "run_design_study", expected="about 30 s on 2 workers: 3 maps of 30 x 30 cells")
 
 
 def get_preset(name: str) -> Preset:
@@ -111,6 +116,12 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     from ..studies.speed import speed_curves, speed_sweep
 
     p = get_preset(preset)
+    if p.runner:  # a study of another kind: its module runs it
+        from ..sweep.execute import load_analysis
+
+        return load_analysis(p.runner)(out, scenario or p.scenario, workers=workers,
+                                       scheduler=scheduler, progress=progress, grid=grid,
+                                       retry_failed=retry_failed)
     t0 = time.perf_counter()
     out = make_out(out)
     scen = scenario or p.scenario

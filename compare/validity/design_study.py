@@ -1,0 +1,214 @@
+"""The design study (``treeimpact sweep --preset design``, ``report --with-study design``,
+the API's ``design_map``): the maps of compare.studies.design for one tree, one sweep per
+pair of inputs and one over the family of trunk diameters, all on one pool (resumable,
+Dask with ``scheduler``), then the contour figures, the sentences of
+compare.studies.design_words and the page. Writes into ``out``: design.json (every number),
+design.md, design.html, design-*.png, one sweep directory per map. Design notes:
+docs/design-map.md."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..studies.design import (DIAMETER_FACTORS, HELD, INPUTS, LEVELS, PAIRS, QUANTITIES, Kind,
+                              check_grid_specs, check_ranges, design_cell, design_spec,
+                              map_of, operating_point, pair_grid)
+from ..studies.design_words import (along, nearest_within, sentence_along, sentence_at_point,
+                                    sentence_nearest, shown)
+from ..sweep.design_maps import Axis, Point, draw_pair
+from ..sweep.run import run_sweeps
+
+#: The quantities each pair's figure draws, and the sentences read off it:
+#: (quantity, tolerance) along the pair's first input (True) or second (False).
+PANELS = {PAIRS[0]: ("x_max", "energy_delivered", "crown_peak_acceleration"),
+          PAIRS[1]: ("x_max", "energy_delivered", "crown_peak_acceleration"),
+          PAIRS[2]: ("x_max", "eq57_energy_loss", "identification_M_T", "identification_K_T")}
+READINGS = {PAIRS[0]: (("x_max", 0.05, True), ("energy_delivered", 0.20, True)),
+            PAIRS[1]: (("x_max", 0.05, False), ("energy_delivered", 0.20, False)),
+            PAIRS[2]: (("eq57_energy_loss", 0.05, False), ("identification_M_T", 0.05, False),
+                       ("x_max", 0.05, False))}
+#: The designer's target on the 1-DOF maps (rule 3): x_max within 5 %, energy within 20 %.
+TARGET = {"x_max": 0.05, "energy_delivered": 0.20}
+#: The map's points per input when none is given (30 x 30 = 900 cells a pair).
+COUNT = 30
+
+
+def _name(pair) -> str:
+    return f"{pair[0]}-{pair[1]}"
+
+
+def _clean(obj):
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _clean(obj.tolist())
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    return obj.item() if hasattr(obj, "item") else obj
+
+
+def tree_cell(scen) -> dict:
+    """The cell at the tree ``scen`` itself (its own a/l, m/M_T, pad and e), computed directly:
+    {quantity: relative gap or error}."""
+    from ..studies.small_e import exact_run
+
+    run, s = exact_run(scen, scen.contact.restitution)
+    return {k.split(".", 1)[1]: v for k, v in design_cell(run, s).items()}
+
+
+def _points(scen, pair, shipped) -> list:
+    out = []
+    for name, s in shipped.items():
+        here = operating_point(s)
+        out.append(Point(name, *(here[p] * INPUTS[p].show for p in pair)))
+    here = operating_point(scen)
+    out.append(Point(f"{scen.name} (this tree)", *(here[p] * INPUTS[p].show for p in pair),
+                     own=True))
+    return out
+
+
+def _axis(name, values) -> Axis:
+    inp = INPUTS[name]
+    unit = inp.shown_unit or inp.unit
+    return Axis(tuple(v * inp.show for v in values), f"{inp.label} ({unit})",
+                inp.scale.value == "log")
+
+
+def _pair_part(out: Path, scen, pair, table, shipped) -> dict:
+    here = operating_point(scen)
+    maps, sentences = {}, []
+    for q in QUANTITIES:
+        x, y, z = map_of(table, pair, q)
+        maps[q] = z
+    for q, tol, first in READINGS[pair]:
+        if first:
+            text = sentence_along(x, y, maps[q], pair, here, q, tol)
+            found = along(x, y, maps[q], pair, here, tol)[0]
+        else:
+            flip = (pair[1], pair[0])
+            text = sentence_along(y, x, maps[q].T, flip, here, q, tol)
+            found = along(y, x, maps[q].T, flip, here, tol)[0]
+        sentences.append({"text": text, "rule": "along", "quantity": q, "tolerance": tol,
+                          "along": pair[0] if first else pair[1], "within": found})
+    if all(QUANTITIES[q].kind is Kind.ONE_DOF for q in PANELS[pair]):
+        sentences.append({"text": sentence_nearest(x, y, maps, TARGET, pair, here),
+                          "rule": "nearest", "tolerances": TARGET,
+                          "at": nearest_within(x, y, maps, TARGET, pair, here)})
+    figure = f"design-{_name(pair)}.png"
+    what = "1-DOF gaps and small-e errors" if any(
+        QUANTITIES[q].kind is Kind.SMALL_E for q in PANELS[pair]) else "1-DOF gaps"
+    title = f"{scen.name}: {what} over {INPUTS[pair[0]].label} and {INPUTS[pair[1]].label}"
+    held = [f"{INPUTS[n].label} {shown(n, here[n])}" for n in INPUTS if n not in pair]
+    draw_pair(out / figure, _axis(pair[0], x), _axis(pair[1], y),
+              {f"{QUANTITIES[q].label} ({QUANTITIES[q].kind.value})": maps[q]
+               for q in PANELS[pair]}, _points(scen, pair, shipped),
+              title + f"\n(held at the tree's {', '.join(held)})")
+    return {"pair": list(pair), "x": list(x), "y": list(y), "figure": figure,
+            "held_at": {n: here[n] for n in INPUTS if n not in pair},
+            "maps": {q: maps[q] for q in QUANTITIES}, "sentences": sentences}
+
+
+def _family(table) -> list:
+    rows = table[table["status"] == "ok"].sort_values("trunk.diameter")
+    return [{"diameter": float(r["trunk.diameter"])} |
+            {q: float(r[f"design.{q}"]) for q in QUANTITIES} for _, r in rows.iterrows()]
+
+
+def _cost(results, wall_s: float, workers) -> dict:
+    """What the maps cost: cells (this run's and all), the sweeps' ``wall_s`` (s) on
+    ``workers`` processes, and per cell computed by this run of ``results`` the wall time
+    times the workers (CPU-seconds a cell, every rung and the pool included)."""
+    import os
+
+    n = workers if workers else (os.cpu_count() or 1) if workers is None else 1
+    cells = sum(len(r.table) for r in results)
+    made = sum(r.rows_written for r in results)  # this run's; the rest found done
+    return {"cells": cells, "cells_computed": made, "wall_s": wall_s, "workers": n,
+            "cpu_s_per_cell": wall_s * n / made if made else None}
+
+
+def run_design_study(out, scenario="central-leader", *, count: int = COUNT, ranges=None,
+                     workers=None, scheduler=None, progress=None, grid=None,
+                     retry_failed: bool = False, engines: bool = False, **_ignored) -> dict:
+    """Run (or resume) the design study of ``scenario`` into ``out``; returns the paths
+    ({"json", "md", "html", "table", "figures"}). ``count``: values per input of each pair's
+    map; ``ranges``: {input: (low, high)} replacing the default ranges (ParameterError if
+    outside the allowed); ``grid``: ``--grid`` specs of one more sweep over the design
+    inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
+    ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``engines``: the
+    engines' spot checks too (compare.studies.design_engines); ``_ignored``: the
+    validity study's other arguments (compare.validity.study.run_study), unused."""
+    from treeimpact.analytic.model.scenario import shipped_scenarios
+
+    from ..runs import resolve_scenario
+    from ..sweep.journal import make_out
+
+    ranges = dict(ranges or {})
+    check_ranges(ranges)
+    if grid:
+        check_grid_specs(grid)
+    t0 = time.perf_counter()
+    out = make_out(out)
+    scen = resolve_scenario(scenario)
+    specs = [design_spec(scen, pair_grid(scen, p, count, ranges), out / _name(p))
+             for p in PAIRS]
+    d = scen.trunk.diameter
+    specs.append(design_spec(scen, ["trunk.diameter=" + ",".join(
+        repr(float(f"{d * f:.6g}")) for f in DIAMETER_FACTORS)], out / "diameter"))
+    if grid:
+        specs.append(design_spec(scen, grid, out / "grid"))
+    results = run_sweeps(specs, workers=workers, scheduler=scheduler, progress=progress,
+                         retry_failed=retry_failed)
+    maps_wall = time.perf_counter() - t0
+    shipped = {n: resolve_scenario(n) for n in shipped_scenarios()}
+    pairs = [_pair_part(out, scen, p, r.table, shipped) for p, r in zip(PAIRS, results)]
+    cell = tree_cell(scen)
+    here = operating_point(scen)
+    data = {"title": f"Design map: {scen.name}", "tree": scen.name,
+            "operating_point": here, "cell": cell, "levels": list(LEVELS),
+            "inputs": {n: {"unit": i.unit, "low": i.low, "high": i.high,
+                           "allowed": list(i.allowed), "label": i.label, "why": i.why,
+                           "scale": i.scale.value} for n, i in INPUTS.items()},
+            "held": HELD, "count": count, "ranges": ranges,
+            "quantities": {q: {"label": v.label, "kind": v.kind.value}
+                           for q, v in QUANTITIES.items()},
+            "at_point": sentence_at_point(here, cell, ("x_max", "energy_delivered",
+                                                      "crown_peak_acceleration")),
+            "shipped": {n: operating_point(s) for n, s in shipped.items()},
+            "pairs": pairs, "family": _family(results[len(PAIRS)].table),
+            "cost": _cost(results, maps_wall, workers),
+            "wall_s": time.perf_counter() - t0}
+    if engines:
+        from ..studies.design_engines import spot_checks
+
+        p = pairs[1]
+        data["spot_checks"] = spot_checks(scen, p["x"], p["y"], p["maps"]["x_max"],
+                                          tuple(p["pair"]), here, LEVELS[0], workers=workers)
+    if grid:
+        g = results[-1]
+        data["grid"] = {"specs": list(grid), "cells": len(g.table)}
+    return write_design(out, _clean(data))
+
+
+def write_design(out, data: dict) -> dict:
+    """Write design.json, design.md and design.html of the study ``data`` into ``out``;
+    returns the paths."""
+    from treeimpact.compare.report.base import environment
+
+    out = Path(out)
+    (out / "design.json").write_text(json.dumps(data, indent=1), encoding="utf-8")
+    env = environment()
+    md = env.get_template("design_body.md.j2").render(d=data, level=1, image=lambda n: n)
+    html = env.get_template("design_page.html.j2").render(d=data, level=1, image=lambda n: n)
+    (out / "design.md").write_text(md, encoding="utf-8")
+    (out / "design.html").write_text(html, encoding="utf-8")
+    return {"json": out / "design.json", "md": out / "design.md", "html": out / "design.html",
+            "table": out / "design.json",
+            "figures": [out / p["figure"] for p in data["pairs"]]}
