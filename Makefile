@@ -33,14 +33,15 @@ lock:
 		--quiet -o requirements.lock
 
 # The discrepancy report with the default model-validity study as one of its sections:
-# $(OUT)/report.html, report.md, report.json; the study in $(OUT)/study, run beside the
-# report's own runs (--with-study: a child process, so neither leaves a core idle). The pages
-# link their figures (PNG files in $(OUT)/figures and $(OUT)/study): move the folder whole.
+# $(OUT)/report.html, report.md, report.json; the study in $(OUT)/study and the design map
+# in $(OUT)/design, run beside the report's own runs (--with-study: child processes, so none
+# leaves a core idle). The pages link their figures (PNG files in $(OUT)/figures,
+# $(OUT)/study and $(OUT)/design): move the folder whole.
 # No OPENBLAS_NUM_THREADS: the command and its workers limit BLAS threads themselves
 # (analytic/threads.py, docs/reproducibility.md "BLAS threads").
 report: $(STAMP)
-	rm -rf $(OUT)/study  # a fresh study: rows resumed from an older code version would be stale
-	$(BIN)/treeimpact report --out $(OUT) --with-study default
+	rm -rf $(OUT)/study $(OUT)/design  # fresh studies: rows resumed from an older code version would be stale
+	$(BIN)/treeimpact report --out $(OUT) --with-study default --with-study design
 
 # The whole suite on this machine's BLAS kernel, then the tests marked numerics (BLAS
 # round-off: conftest.py NUMERICS) under two other machines' OpenBLAS kernels

@@ -25,11 +25,13 @@ def add_arguments(sp) -> None:
                     help="shipped scenario name or TOML path (repeatable; default: all shipped)")
     sp.add_argument("--study", action="append", dest="studies", default=[],
                     help="directory of a finished study to include (repeatable)")
-    sp.add_argument("--with-study", dest="with_study", metavar="PRESET",
+    sp.add_argument("--with-study", dest="with_study", metavar="PRESET", action="append",
+                    default=[],
                     help="also run the study PRESET (treeimpact sweep --preset PRESET) into "
-                         "OUT/study beside the report's own runs, and include it (resumes a "
-                         "study already there); with --scenario, its maps are of the first "
-                         "tree given and its sensitivity of every one")
+                         "OUT/study (the design preset: OUT/design) beside the report's own "
+                         "runs, and include it (resumes a study already there; repeatable); "
+                         "with --scenario, its maps are of the first tree given and its "
+                         "sensitivity of every one")
     add_budget_flag(sp)
 
 
@@ -39,12 +41,7 @@ def run(args) -> int:
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.compare.report import write_report
 
-    if args.with_study is not None:
-        from treeimpact.compare.validity.study import PRESETS
-
-        if args.with_study not in PRESETS:
-            raise ParameterError(f"--with-study {args.with_study!r}: allowed "
-                                 f"{', '.join(PRESETS)}")
+    folders = _study_folders(args.with_study)
     scenarios = [load_scenario(n) for n in args.scenarios] if args.scenarios else None
     for study in args.studies:  # checked before an hour of runs, not after
         if not Path(study).is_dir():
@@ -55,8 +52,8 @@ def run(args) -> int:
     if args.with_study:
         from treeimpact.compare.validity.study_job import StudyJob
 
-        jobs.append(StudyJob(args.with_study, Path(args.out) / "study", PROGRAM,
-                             scenarios=args.scenarios))
+        jobs += [StudyJob(preset, Path(args.out) / folder, PROGRAM, scenarios=args.scenarios)
+                 for preset, folder in folders.items()]
     try:
         for job in jobs:
             job.start()
@@ -68,3 +65,21 @@ def run(args) -> int:
     for kind, path in paths.items():
         print(f"{kind}: {path}")
     return ExitCode.OK
+
+
+def _study_folders(presets: list) -> dict:
+    """``--with-study``'s presets -> their folders in OUT; a one-line ParameterError for an
+    unknown preset or two writing one folder."""
+    from treeimpact.compare.validity.study import PRESETS
+
+    folders: dict = {}
+    for preset in presets:
+        if preset not in PRESETS:
+            raise ParameterError(f"--with-study {preset!r}: allowed {', '.join(PRESETS)}")
+        folder = PRESETS[preset].folder
+        other = next((p for p, f in folders.items() if f == folder), None)
+        if other is not None:
+            raise ParameterError(f"--with-study {preset}: {other} writes OUT/{folder} too; "
+                                 "give one of them")
+        folders[preset] = folder
+    return folders

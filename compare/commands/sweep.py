@@ -185,7 +185,11 @@ def _run(args) -> int:
         if options:
             raise ParameterError("--option: not used with --preset (the preset fixes the "
                                  "engines' options); run a plain sweep instead")
-        paths = run_study(args.out, args.preset, scenario=args.scenario, backends=backends,
+        from treeimpact.compare.backends import BACKENDS
+
+        typed = args.backend != ",".join(BACKENDS)  # the default: the preset's own
+        paths = run_study(args.out, args.preset, scenario=args.scenario,
+                          backends=backends if typed or args.preset != "design" else None,
                           workers=args.workers, scheduler=args.scheduler,
                           tolerance=args.tolerance, grid=args.grid or None,
                           retry_failed=args.retry_failed,

@@ -43,6 +43,8 @@ from .answer import (
     small_e_rows,
     with_sensitivity,
 )
+from .design_answer import design_answer
+from .design_answer import in_short_text as design_in_short
 from .measure import in_short_text, with_sobol
 from .sort_keys import add_sort_keys
 
@@ -211,6 +213,9 @@ def _page_summary(sections: dict) -> dict:
     measure = in_short_text(summary["answer"])
     if measure:
         summary["in_short"]["measure_first"] = measure
+    summary["design"] = design_answer(sections["studies"])
+    if summary["design"]:
+        summary["in_short"]["design"] = design_in_short(summary["design"])
     return summary
 
 
@@ -260,9 +265,10 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
                    "one_dof": summary["answer"], "small_e": small_e["trees"],
                    "small_e_figure": small_e["figure"],
                    "measure_first": {a["scenario"]: a["measure_first"]
-                                     for a in summary["answer"] if a.get("measure_first")}},
+                                     for a in summary["answer"] if a.get("measure_first")},
+                   "design": summary["design"]},
         "summary": {k: v for k, v in summary.items()
-                    if k not in ("answer", "small_e", "in_short", "answer_tolerance")},
+                    if k not in ("answer", "small_e", "in_short", "answer_tolerance", "design")},
         "paper": sections["paper"].to_json(),
         "scenarios": {s.ladder.name: s.to_json() for s in sections["scenarios"]},
         "trunks": sections["trunks"].to_json(),

@@ -110,13 +110,13 @@ def along(x, y, z, pair, here: dict, tol: float) -> tuple:
 def sentence_at_point(here: dict, cell: dict, quantities) -> str:
     """Rule 1 as a sentence at the operating point ``here`` ({input: value}) whose
     ``cell`` ({quantity: relative gap}) is graded on the ``quantities``: 'Clamping at a/l =
-    A with m/M_T = B, a C ms pad and e = E, the model is within 5 % on x_max and off by
+    A with m/M_T = B, a C ms pad and e = E, the 1-DOF model is within 5 % on x_max and off by
     +60 % on energy delivered.'"""
     parts = [f"{grade(cell.get(q, math.nan))} on {QUANTITIES[q].label}" for q in quantities]
     return (f"Clamping at a/l = {shown('a_over_l', here['a_over_l'])} with m/M_T = "
             f"{shown('mass_ratio', here['mass_ratio'])}, a "
             f"{shown('contact_duration', here['contact_duration'])} pad and e = "
-            f"{shown('restitution', here['restitution'])}, the model is "
+            f"{shown('restitution', here['restitution'])}, the 1-DOF model is "
             + ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1] + ".")
 
 
@@ -154,15 +154,15 @@ def nearest_within(x, y, maps: dict, tols: dict, pair, here: dict):
 
 def sentence_nearest(x, y, maps: dict, tols: dict, pair, here: dict) -> str:
     """Rule 3 as a sentence (:func:`nearest_within` on ``x``, ``y``, ``maps``, ``tols``,
-    ``pair``, ``here``): 'The nearest choice on this map at which the model is within 5 %
+    ``pair``, ``here``): 'The nearest choice on this map at which the 1-DOF model is within 5 %
     on x_max and within 20 % on energy delivered: a/l = 0.57 with m/M_T = 1.2.'"""
     what = " and ".join(f"within {100 * t:.0f} % on {QUANTITIES[q].label}"
                         for q, t in tols.items())
     found = nearest_within(x, y, maps, tols, pair, here)
     if found is None:
         return (f"No cell of the {INPUTS[pair[0]].label} x {INPUTS[pair[1]].label} map has "
-                f"the model {what}.")
+                f"the 1-DOF model {what}.")
     return (f"The nearest choice on the {INPUTS[pair[0]].label} x {INPUTS[pair[1]].label} "
-            f"map at which the model is {what}: {INPUTS[pair[0]].label} = "
+            f"map at which the 1-DOF model is {what}: {INPUTS[pair[0]].label} = "
             f"{shown(pair[0], found[0])} with {INPUTS[pair[1]].label} = "
             f"{shown(pair[1], found[1])}.")

@@ -136,8 +136,8 @@ def test_the_sentence_is_read_off_a_constructed_map():
     assert W.grade(0.34) == "off by +34 %"
     s = W.sentence_at_point(here, {"x_max": 0.04, "energy_delivered": 0.6}, ("x_max",
                                                                             "energy_delivered"))
-    assert s == ("Clamping at a/l = 0.3 with m/M_T = 1, a 0.5 ms pad and e = 0.1, the model "
-                 "is within 5 % on x_max and off by +60 % on energy delivered.")
+    assert s == ("Clamping at a/l = 0.3 with m/M_T = 1, a 0.5 ms pad and e = 0.1, the 1-DOF "
+                 "model is within 5 % on x_max and off by +60 % on energy delivered.")
 
 
 # --------------------------------------------------------------------------- bad input
@@ -185,6 +185,25 @@ def test_the_study_writes_its_maps_words_and_section(tmp_path):
         for s in p["sentences"]:
             assert s["text"].split(",")[0] in html
     assert sec.to_json()["data"]["design.json"]["tree"] == "central-leader"
+    _the_answer_reads_the_study(sec, data)
+
+
+def _the_answer_reads_the_study(sec, data: dict) -> None:
+    """report.json's answer.design.<tree> and the first screen's item carry the study's own
+    sentences and numbers (compare/report/design_answer.py), not a recomputation."""
+    from treeimpact.compare.report.design_answer import FIRST_PAIR, design_answer, in_short_text
+
+    answer = design_answer([sec])["central-leader"]
+    assert answer["at_point"] == data["at_point"] and answer["gaps_at_point"] == data["cell"]
+    assert [s["text"] for s in answer["sentences"]] == [
+        s["text"] for p in data["pairs"] for s in p["sentences"]]
+    pair = data["pairs"][[tuple(p["pair"]) for p in data["pairs"]].index(FIRST_PAIR)]
+    assert answer["maps"]["-".join(FIRST_PAIR)]["maps"] == pair["maps"]
+    nearest = [s for s in pair["sentences"] if s["rule"] == "nearest"]
+    short = in_short_text({"central-leader": answer})
+    assert short.startswith("For a designer (central-leader): " + data["at_point"])
+    assert all(s["text"] in short for s in nearest)
+    assert design_answer([object()]) == {} and in_short_text({}) == ""
 
 
 def test_the_nearest_cell_within_every_target():
@@ -200,7 +219,7 @@ def test_the_nearest_cell_within_every_target():
     assert W.nearest_within(x, y, maps, target, pair, here) == pytest.approx((0.45, 2.236))
     assert W.sentence_nearest(x, y, maps, target, pair, here) == (
         "The nearest choice on the clamp height a/l x mass ratio m/M_T map at which the "
-        "model is within 5 % on x_max and within 20 % on energy delivered: clamp height "
+        "1-DOF model is within 5 % on x_max and within 20 % on energy delivered: clamp height "
         "a/l = 0.45 with mass ratio m/M_T = 2.24.")
     maps["x_max"] = np.full_like(xs, np.nan)  # no number is no cell within
     assert W.nearest_within(x, y, maps, target, pair, here) is None

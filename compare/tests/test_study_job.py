@@ -154,6 +154,21 @@ def test_the_reports_trees_are_its_studys_sensitivity_trees(tmp_path):
     assert "--scenario" not in StudyJob("default", tmp_path / "s3", PROGRAM).argv  # preset's
     mine = StudyJob("default", tmp_path / "s4", PROGRAM, scenarios=[str(path)])
     assert mine.argv[mine.argv.index("--scenario") + 1] == str(path.resolve())
+    design = StudyJob("design", tmp_path / "d", PROGRAM, scenarios=[str(path), "open-center"])
+    assert design.argv[design.argv.index("--scenario") + 1] == str(path.resolve())
+    assert "--sensitivity-scenario" not in design.argv  # the design study has no such part
+    assert design.name == "design" and mine.name == "study"  # their progress lines
+
+
+def test_two_studies_beside_one_report_need_two_folders(tmp_path, capsys):
+    """--with-study is repeatable (make report: default and design, in OUT/study and
+    OUT/design); two presets writing one folder are refused before anything runs."""
+    assert main(["report", "--out", str(tmp_path), "--with-study", "default",
+                 "--with-study", "full"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["treeimpact: error: --with-study full: default writes OUT/study too; "
+                   "give one of them"]
+    assert not (tmp_path / "study").exists()
 
 
 def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):

@@ -136,15 +136,14 @@ def _cost(results, wall_s: float, workers) -> dict:
 
 def run_design_study(out, scenario="central-leader", *, count: int = COUNT, ranges=None,
                      workers=None, scheduler=None, progress=None, grid=None,
-                     retry_failed: bool = False, engines: bool = False, **_ignored) -> dict:
+                     retry_failed: bool = False, engines: bool = False) -> dict:
     """Run (or resume) the design study of ``scenario`` into ``out``; returns the paths
     ({"json", "md", "html", "table", "figures"}). ``count``: values per input of each pair's
     map; ``ranges``: {input: (low, high)} replacing the default ranges (ParameterError if
     outside the allowed); ``grid``: ``--grid`` specs of one more sweep over the design
     inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
     ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``engines``: the
-    engines' spot checks too (compare.studies.design_engines); ``_ignored``: the
-    validity study's other arguments (compare.validity.study.run_study), unused."""
+    engines' spot checks too (compare.studies.design_engines)."""
     from treeimpact.analytic.model.scenario import shipped_scenarios
 
     from ..runs import resolve_scenario

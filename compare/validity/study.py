@@ -53,6 +53,8 @@ class Preset:
     expected: str = ""
     notes: dict = field(default_factory=dict, compare=False)
     runner: str = ""  # module:function running a study of another kind (its own module's)
+    folder: str = "study"  # its folder in a report's output (report --with-study) and its
+    #                        progress line's name
 
 
 PRESETS = {
@@ -93,7 +95,8 @@ PRESETS = {
 #: The design map (compare.validity.design_study, docs/design-map.md): its own runner.
 PRESETS["design"] = Preset(
     "design", "central-leader", (), runner="treeimpact.compare.validity.design_study:"
-    "run_design_study", expected="about 30 s on 2 workers: 3 maps of 30 x 30 cells")
+    "run_design_study", expected="about 30 s on 2 workers: 3 maps of 30 x 30 cells",
+    folder="design")
 
 
 def get_preset(name: str) -> Preset:
@@ -113,15 +116,29 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     ``progress`` and ``retry_failed`` as :func:`compare.sweep.run.run_sweeps`.
     ``sensitivity_scenarios``: the trees of its sensitivity study (shipped names, TOML paths
     or Scenarios; default: every shipped tree)."""
-    from ..studies.speed import speed_curves, speed_sweep
-
     p = get_preset(preset)
     if p.runner:  # a study of another kind: its module runs it
         from ..sweep.execute import load_analysis
 
+        for flag, given in (("--backend", backends), ("--tolerance", tolerance),
+                            ("--sensitivity-scenario", sensitivity_scenarios)):
+            if given is not None:
+                raise ParameterError(f"{flag}: not used with --preset {p.name} (its study "
+                                     "fixes what it runs and judges)")
+
         return load_analysis(p.runner)(out, scenario or p.scenario, workers=workers,
                                        scheduler=scheduler, progress=progress, grid=grid,
                                        retry_failed=retry_failed)
+    return _validity_study(out, p, scenario=scenario, backends=backends, workers=workers,
+                           scheduler=scheduler, progress=progress, tolerance=tolerance,
+                           grid=grid, retry_failed=retry_failed,
+                           sensitivity_scenarios=sensitivity_scenarios)
+
+
+def _validity_study(out, p: Preset, *, scenario, backends, workers, scheduler, progress,
+                    tolerance, grid, retry_failed, sensitivity_scenarios) -> dict:
+    """:func:`run_study` of a validity preset ``p`` (the sweeps, speed, identification and
+    sensitivity parts it asks for)."""
     t0 = time.perf_counter()
     out = make_out(out)
     scen = scenario or p.scenario
@@ -148,6 +165,8 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
                         retry_failed=retry_failed)
         sweeps["engines"] = eng.out
         done.append(eng)
+    from ..studies.speed import speed_curves, speed_sweep
+
     speed = None
     if p.speed and engines:
         speed = speed_sweep(scen, out, engines=engines, dts=p.speed_dts,

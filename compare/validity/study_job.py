@@ -38,11 +38,12 @@ class StudyJob:
         if preset not in PRESETS:  # a one-line error before anything starts
             raise ParameterError(f"--with-study {preset!r}: allowed {', '.join(PRESETS)}")
         self.preset, self.out = preset, Path(out)
+        self.name = PRESETS[preset].folder  # its progress line's
         self.argv = [*program, "sweep", "--preset", preset, "--out", str(self.out)]
         sources = [self._source(s) for s in scenarios or ()]
         if sources:  # the maps, speed and identification parts: the report's first tree
             self.argv += ["--scenario", sources[0]]
-        for source in sources:
+        for source in sources if PRESETS[preset].sensitivity else ():
             self.argv += ["--sensitivity-scenario", source]
         self._proc = None
         self._relay = None
@@ -73,7 +74,7 @@ class StudyJob:
         from ..progress import RELAY_ENV
 
         self._t0 = time.perf_counter()
-        env = os.environ | {RELAY_ENV: "study"}  # its progress as records for this display
+        env = os.environ | {RELAY_ENV: self.name}  # its progress as records for this display
         self._proc = subprocess.Popen(self.argv, stdout=subprocess.PIPE, env=env,
                                       stderr=subprocess.STDOUT, text=True, bufsize=1)
         self._relay = threading.Thread(target=self._pass_on, daemon=True)
@@ -83,7 +84,7 @@ class StudyJob:
     def _pass_on(self) -> None:
         from ..progress import RECORD, Relay
 
-        relay = Relay("study")
+        relay = Relay(self.name)
         try:
             for line in self._proc.stdout:
                 relay.line(line)

@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 from .base import NUMBERS, RECOMPUTE_REL, ROOT
+from .from_design import from_design
 from .from_report import from_sensitivity, from_small_e, from_study, from_view, view_from_report
 from .marks import used_keys
 from .rerun import cheap_numbers
@@ -24,7 +25,8 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
 
     report = json.loads((Path(report_dir) / "report.json").read_text())
     out = (from_view(view_from_report(report)) | from_sensitivity(report)
-           | from_small_e(report["answer"]["small_e"]))
+           | from_small_e(report["answer"]["small_e"])
+           | from_design(report["answer"].get("design", {})))
     study = Path(report_dir) / "study" / "study.json"
     if study.exists():
         out |= from_study(json.loads(study.read_text()))
@@ -49,15 +51,21 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
 
 def texts_from_report(report: dict) -> dict:
     """The report's generated sentences a page quotes whole (its generated blocks): what to
-    measure first on each tree (compare.report.measure.first_text), tree -> sentence."""
+    measure first on each tree (compare.report.measure.first_text) and the design answer on
+    the first screen (compare.report.design_answer.in_short_text), tree -> sentence."""
+    from treeimpact.compare.report.design_answer import tree_text
+
     rows = report.get("answer", {}).get("one_dof", [])
+    design = report.get("answer", {}).get("design", {})
     return {"measure_first": {a["scenario"]: a["measure_first"]["said"] for a in rows
-                              if (a.get("measure_first") or {}).get("said")}}
+                              if (a.get("measure_first") or {}).get("said")},
+            "design": {tree: tree_text(a) for tree, a in design.items()}}
 
 
 #: The report's figures the pages show, copied with the numbers: page path -> report path.
 FIGURES = {"docs/img/contact-scan.png": "figures/contact-scan.png",
-           "docs/img/small-e.png": "figures/small-e.png"}
+           "docs/img/small-e.png": "figures/small-e.png",
+           "docs/img/design-map.png": "design/design-a_over_l-contact_duration.png"}
 
 
 def copy_figures(report_dir: Path, report: dict) -> dict:

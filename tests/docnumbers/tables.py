@@ -285,7 +285,14 @@ def measure_first_list(n: dict) -> str:
     return "".join(f"  - {tree}: {said}\n" for tree, said in texts.items())
 
 
-GENERATED = {"measure-first-list": measure_first_list,"whole-event-table": whole_event_table, "mechanism-table": mechanism_table,
+def design_answer_list(n: dict) -> str:
+    """README: the design answer on each tree with a design study, the report's own sentences
+    (docs/numbers.json ``texts``, from report.json's answer.design)."""
+    texts = json.loads(NUMBERS.read_text())["texts"]["design"]
+    return "".join(f"  - {tree}: {said}\n" for tree, said in texts.items())
+
+
+GENERATED = {"measure-first-list": measure_first_list, "design-answer": design_answer_list,"whole-event-table": whole_event_table, "mechanism-table": mechanism_table,
              "contact-fit-table": contact_fit_table, "timoshenko-table": timoshenko_table,
              "beam-cost-table": beam_cost_table, "solver-cost-table": solver_cost_table,
              "trunks-cheapest-table": trunks_cheapest_table,
