@@ -25,9 +25,11 @@ from pathlib import Path
 import pandas as pd
 
 #: Keys and columns that differ between two runs of the same code on the same machine:
-#: measured times, which worker or task ran a point, when it finished, the commit and load.
+#: measured times, which worker or task ran a point, when it finished or was generated, the
+#: commit and load.
 VOLATILE = frozenset({"wall_s", "stepping_s", "swing_s", "step_us", "git_commit", "git_dirty",
-                      "measured", "load_average", "worker", "task", "finished"})
+                      "measured", "generated", "load_average", "worker", "task",
+                      "finished"})
 RENDERED = frozenset({".md", ".html"})
 MAX_LINES = 40
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 
@@ -75,15 +76,13 @@ def add_sweep_arguments(parser) -> None:
                         help="local worker processes (default: CPU count; 0: this process)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask scheduler address (tcp://host:8786): run on that cluster")
-    parser.add_argument("--preset", default=None, choices=("default", "full", "design"),
-                        help="run a whole study: default (contact duration x crown ratio on "
-                             "the analytic, soft and beam backends, engines on 2 x 2 points) "
-                             "takes about 60 s on 2 cores beside make report's own runs (less alone); full (restitution=0:0.9:10, "
-                             "segments=1,2,4,8,16,32, crown_ratio=0:4:9) about 1.4 CPU-hours, "
-                             "41 min with 2 workers; design (the design map of --scenario: a/l, "
-                             "m/M_T, contact duration, e; docs/design-map.md) about 30 s; "
-                             "--grid replaces the preset's validity grid (design: one more "
-                             "sweep over the design inputs)")
+    from treeimpact.compare.validity.presets import PRESETS
+
+    parser.add_argument("--preset", default=None, choices=tuple(PRESETS),
+                        help="run a whole study: "
+                             + "; ".join(p.help for p in PRESETS.values())
+                             + "; --grid replaces the preset's validity grid (design: one "
+                             "more sweep over the design inputs)")
     parser.add_argument("--sensitivity-scenario", action="append", default=None,
                         dest="sensitivity_scenarios", metavar="SCENARIO",
                         help="with --preset: a tree of its sensitivity study, shipped name or "
@@ -186,10 +185,12 @@ def _run(args) -> int:
             raise ParameterError("--option: not used with --preset (the preset fixes the "
                                  "engines' options); run a plain sweep instead")
         from treeimpact.compare.backends import BACKENDS
+        from treeimpact.compare.validity.presets import PRESETS
 
         typed = args.backend != ",".join(BACKENDS)  # the default: the preset's own
+        own_run = PRESETS[args.preset].run is not None  # a study of another kind
         paths = run_study(args.out, args.preset, scenario=args.scenario,
-                          backends=backends if typed or args.preset != "design" else None,
+                          backends=backends if typed or not own_run else None,
                           workers=args.workers, scheduler=args.scheduler,
                           tolerance=args.tolerance, grid=args.grid or None,
                           retry_failed=args.retry_failed,
@@ -208,9 +209,11 @@ def _run(args) -> int:
         paths = write_study(args.out, {"sweep": res.out}, tolerance=args.tolerance,
                             title=f"Sweep of {res.table['scenario'].iloc[0] if len(res.table) else args.scenario}",
                             meta={"wall_s": res.wall_s})
-    for kind in ("table", "md", "html"):
-        print(f"{kind}: {paths[kind]}")
-    print(f"figures: {len(paths['figures'])} in {paths['md'].parent}")
+    for kind in ("table", "md", "html", "json"):  # what the study wrote, of these
+        if kind in paths:
+            print(f"{kind}: {paths[kind]}")
+    if paths.get("figures"):
+        print(f"figures: {len(paths['figures'])} in {Path(paths['figures'][0]).parent}")
     print(f"wall time: {time.perf_counter() - t_start:.1f} s (the whole command: its runs and "
           "sweeps, then its maps and pages)")
     return ExitCode.OK

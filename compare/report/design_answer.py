@@ -5,14 +5,21 @@ study's own, read off its maps by the rule of docs/design-map.md; nothing is rec
 
 from __future__ import annotations
 
+from .study_kinds import StudyKind, register_kind
+
 #: The pair whose figure the answer shows first: where to clamp against the pad (the two
 #: choices a designer changes on a machine; the study's section shows all three maps).
 FIRST_PAIR = ("a_over_l", "contact_duration")
 
 
+#: The design map (compare/validity/design_study.py's design.json), rendered by design_body.
+register_kind(StudyKind("design", "design.json", "pairs", "design_body", "d",
+                        lambda d: {p.get("figure") for p in d["pairs"]}))
+
+
 def design_answer(studies) -> dict:
     """tree -> its design answer, from each of ``studies`` (the report's study sections)
-    holding a design study (``StudySection.design``): the operating point and the gaps
+    holding a design study (``StudySection.kinds``): the operating point and the gaps
     there (fractions, continuum against the 1-DOF model), the sentence at the point, the
     nearest choice within both targets on each map, every sentence (its text, rule and what
     it read: the intervals ``within`` along an input, or the cell ``at``), each map's axes,
@@ -20,7 +27,7 @@ def design_answer(studies) -> dict:
     (linked from the report's folder)."""
     out = {}
     for section in studies:
-        d = getattr(section, "design", None)
+        d = getattr(section, "kinds", {}).get("design", (None, None))[1]
         if d is None:
             continue
         maps = {_key(p["pair"]): {"x": p["x"], "y": p["y"], "held_at": p["held_at"],

@@ -19,6 +19,7 @@ from pathlib import Path
 from treeimpact.analytic.errors import ParameterError
 
 from .base import Section
+from .study_kinds import StudyKind, kinds_in, register_kind
 
 
 def _link(path: Path, page_dir) -> str:
@@ -62,6 +63,10 @@ def _figures_of(study: dict) -> set:
     return {n for n in named if n}
 
 
+#: The validity study (compare/validity/study.py's study.json), rendered by study_body.
+register_kind(StudyKind("validity", "study.json", "validity", "study_body", "s", _figures_of))
+
+
 class StudySection(Section):
     """A finished study's folder as a section: a study of compare.sweep rendered from its
     study.json, any other from its figures and summary text. ``directory``: the folder
@@ -87,26 +92,15 @@ class StudySection(Section):
             if (d / name).is_file():
                 self.text = _read(d / name, lambda q: q.read_text(encoding="utf-8"))
                 break
-        study = self.data.get("study.json")
-        self.study = study if isinstance(study, dict) and "validity" in study else None
+        self.kinds = kinds_in(self.data)
+        self.study = self.kinds.get("validity", (None, None))[1]
         self.uri = None
-        if self.study is not None:  # a study of compare.sweep: rendered from its data
-            shown = _figures_of(self.study)
-            uris = {i["name"]: i["uri"] for i in self.images}
+        uris = {i["name"]: i["uri"] for i in self.images}
+        for kind, data in self.kinds.values():  # rendered from its data, figures in place
+            shown = {n for n in kind.figures(data) if n}
             missing = sorted(shown - set(uris))
             if missing:
-                raise ParameterError(f"study {d.name}: study.json shows "
-                                     f"{', '.join(missing)}, which the directory does not have")
-            self.uri = uris.__getitem__
-            self.images = [i for i in self.images if i["name"] not in shown]
-        design = self.data.get("design.json")  # the design study (compare.validity.design_study)
-        self.design = design if isinstance(design, dict) and "pairs" in design else None
-        if self.design is not None:
-            uris = {i["name"]: i["uri"] for i in self.images}
-            shown = {p.get("figure") for p in self.design["pairs"]}
-            missing = sorted(n for n in shown - set(uris) if n)
-            if missing:
-                raise ParameterError(f"study {d.name}: design.json shows "
+                raise ParameterError(f"study {d.name}: {kind.data_file} shows "
                                      f"{', '.join(missing)}, which the directory does not have")
             self.uri = uris.__getitem__
             self.images = [i for i in self.images if i["name"] not in shown]
@@ -114,8 +108,10 @@ class StudySection(Section):
     def context(self) -> dict:
         """The template's names: the figures, the summary text, the study's data."""
         # the section is an h2 (the report's <summary>): the study's title is an h3
-        return {"images": self.images, "text": self.text, "s": self.study, "level": 3,
-                "image": self.uri, "files": sorted(self.data), "d": self.design}
+        return {"images": self.images, "text": self.text, "level": 3, "image": self.uri,
+                "files": sorted(self.data),
+                "bodies": [kind.body for kind, _ in self.kinds.values()],
+                **{kind.variable: data for kind, data in self.kinds.values()}}
 
     def to_json(self) -> dict:
         """The folder, its figures, its JSON files' data and its summary text."""

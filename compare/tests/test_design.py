@@ -169,7 +169,7 @@ def test_the_study_writes_its_maps_words_and_section(tmp_path):
     from treeimpact.compare.validity.design_study import run_design_study
     from treeimpact.compare.validity.study import get_preset
 
-    assert get_preset("design").runner.endswith("design_study:run_design_study")
+    assert get_preset("design").run is run_design_study  # registered beside it
     paths = run_design_study(tmp_path / "design", "central-leader", count=4, workers=0,
                              progress=False)
     import json

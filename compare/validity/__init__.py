@@ -2,10 +2,14 @@
 --with-study``; floor 6 of compare, docs/architecture.md): presets, the study's sweeps and
 studies run on one pool, its page (with the report's templates) and its run beside the report.
 
-* :mod:`.study` - presets ``default`` and ``full``; study.html, study.md, results table;
+* :mod:`.presets` - the registry of presets (``--preset NAME``): ``default`` and ``full``;
+* :mod:`.study` - the validity study: study.html, study.md, results table;
+* :mod:`.design_study` - the design map, preset ``design`` (registered below);
 * :mod:`.sensitivity_study` - its sensitivity part;
 * :mod:`.study_job` - a study run in a child process beside the report.
 
 The command that runs a study, ``treeimpact sweep``, is
 :mod:`treeimpact.compare.commands.sweep` (floor 7).
 """
+
+from . import design_study  # noqa: F401,E402 - registers the design preset

@@ -22,6 +22,7 @@ from ..studies.design_words import (along, nearest_within, sentence_along, sente
                                     sentence_nearest, shown)
 from ..sweep.design_maps import Axis, Point, draw_pair
 from ..sweep.run import run_sweeps
+from .presets import Preset, register
 
 #: The quantities each pair's figure draws, and the sentences read off it:
 #: (quantity, tolerance) along the pair's first input (True) or second (False).
@@ -211,3 +212,11 @@ def write_design(out, data: dict) -> dict:
     return {"json": out / "design.json", "md": out / "design.md", "html": out / "design.html",
             "table": out / "design.json",
             "figures": [out / p["figure"] for p in data["pairs"]]}
+
+
+#: The design map as ``treeimpact sweep --preset design`` and ``report --with-study design``.
+register(Preset("design", "central-leader", (), run=run_design_study, folder="design",
+                expected="about 20 s alone with 2 workers: 3 maps of 30 x 30 cells and 5 "
+                         "trunk diameters",
+                help="design (the design map of --scenario: a/l, m/M_T, contact duration, e; "
+                     "docs/design-map.md) about 20 s alone"))

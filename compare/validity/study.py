@@ -7,13 +7,10 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
-from treeimpact.compare.studies.ident_study import CROWN_RATIOS, SAMPLING_SEEDS
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.rungs import RungKind
 from treeimpact.compare.runs import OK
@@ -21,90 +18,8 @@ from treeimpact.compare.runs import OK
 from ..sweep.maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
 from ..sweep.journal import JOURNAL, TABLE, make_out, read_file, read_table
 from ..sweep.run import SweepSpec, run_sweep, run_sweeps
+from .presets import PRESETS, Preset, get_preset  # noqa: F401 - the study's presets, re-exported
 from .sensitivity_study import sensitivity_result, sensitivity_specs
-
-
-@dataclass(frozen=True)
-class Preset:
-    """A named study: its tree, the validity sweep's grid, the engines and their coarser
-    grid, the speed curves, the identification validation and the sensitivity part (each
-    field's comment says what it holds)."""
-
-    name: str
-    scenario: str
-    grid: tuple  # --grid specs of the validity sweep
-    ladder: bool = True
-    engines: tuple = ENGINES
-    speed: bool = True
-    speed_dts: tuple = (1e-4, 3e-5, 1e-5)  # s
-    speed_durations: tuple = (1e-3, 5e-4)  # s: contact durations giving the stiffnesses
-    backends: tuple = ("analytic", "soft")  # reference backends of the validity sweep
-    engine_grid: tuple = ()  # --grid specs of a coarser engine check (its own sweep)
-    map_metrics: tuple | None = None  # metrics drawn on the maps (None: every ladder metric)
-    map_value: str = "rel"  # "rel": against the paper's model; "step": against the rung below
-    identification: bool = False  # the identification validation (compare.studies.ident_study)
-    ident_sampling_rungs: tuple = ("analytic",)  # its rate x noise grid on these rungs' records
-    ident_sampling_seeds: tuple = SAMPLING_SEEDS  # ... with these seeds
-    ident_crown_ratios: tuple = CROWN_RATIOS  # its e x crown grid's crown ratios
-    ident_engine_rungs: tuple = ()  # engine chains on a corner of its e x crown grid
-    sensitivity: int = 0  # Morris trajectories of the sensitivity study per tree (0: none)
-    sensitivity_crossings: bool = False  # its crossing durations too (8 pads a point)
-    sobol: int = 0  # Sobol base samples N per tree (a power of two; N x (inputs + 2) runs)
-    expected: str = ""
-    notes: dict = field(default_factory=dict, compare=False)
-    runner: str = ""  # module:function running a study of another kind (its own module's)
-    folder: str = "study"  # its folder in a report's output (report --with-study) and its
-    #                        progress line's name
-
-
-PRESETS = {
-    "default": Preset(
-        "default", "central-leader",
-        ("contact_duration=" + ",".join(f"{d:.3g}" for d in np.geomspace(2e-4, 2e-2, 8)),
-         "crown_ratio=0:4:6"),
-        ladder=False, speed=False, backends=("analytic", "soft", "beam"),
-        engine_grid=("contact_duration=5e-4,5e-3", "crown_ratio=0,4"),
-        map_metrics=("x_max", "energy_delivered", "crown_peak_acceleration"),
-        map_value="step", identification=True, ident_crown_ratios=(0.0, 4.0),
-        ident_sampling_rungs=(), sensitivity=30, sobol=64,
-        # Sobol N = 64: 512 evaluations per tree (8 per base sample with 6 inputs), one
-        # evaluation (Newton + soft + beam) 13 ms on one core: about 20 s for the three
-        # trees on one core (docs/sensitivity.md)
-        # the identification's cheap part, for make report's minute and its CPU budget with
-        # the sensitivity study's 630 evaluations: no engine corner (the report fits both
-        # engines' chains of every tree: its record fits), the lightest and heaviest crown
-        # ratios, no sampling grid (the full preset's; docs/identification.md)
-        expected="about 60 s with 2 workers beside make report's own runs (less alone): 8 "
-                 "contact durations x 6 crown ratios on the analytic, soft and beam backends, "
-                 "the engines' chains on 2 x 2 of them, the identification validation "
-                 "(4 e x 2 crown ratios x 3 rungs) and the sensitivity study (30 Morris "
-                 "trajectories per tree, 210 evaluations; Sobol N = 64, 512 evaluations "
-                 "per tree)"),
-    "full": Preset(
-        "full", "central-leader", ("restitution=0:0.9:10", "segments=1,2,4,8,16,32",
-                                   "crown_ratio=0:4:9"),
-        speed_dts=(1e-4, 5e-5, 2e-5, 1e-5, 5e-6), speed_durations=(2e-3, 1e-3, 5e-4),
-        identification=True, ident_sampling_rungs=("analytic", "soft", "beam", *ENGINES),
-        ident_engine_rungs=ENGINES, sensitivity=60, sensitivity_crossings=True,
-        sobol=4096,  # 32768 evaluations per tree, about 7 CPU-minutes each
-        expected="about 1.4 CPU-hours: 41 minutes with 2 workers, 5 on 16 (measured on a "
-                 "slice of the preset, 61 s of runs per (e, crown) pair: "
-                 "benchmarks/bench_presets.py), and about 0.4 CPU-hours more for its Sobol "
-                 "design (3 trees x 32768 evaluations of 13 ms); resumable"),
-}
-#: The design map (compare.validity.design_study, docs/design-map.md): its own runner.
-PRESETS["design"] = Preset(
-    "design", "central-leader", (), runner="treeimpact.compare.validity.design_study:"
-    "run_design_study", expected="about 30 s on 2 workers: 3 maps of 30 x 30 cells",
-    folder="design")
-
-
-def get_preset(name: str) -> Preset:
-    """The :class:`Preset` called ``name``; ParameterError naming --preset if none."""
-    try:
-        return PRESETS[name]
-    except KeyError:
-        raise ParameterError(f"--preset {name!r}: allowed {', '.join(PRESETS)}") from None
 
 
 def run_study(out, preset: str = "default", *, scenario=None, backends=None, workers=None,
@@ -117,18 +32,15 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     ``sensitivity_scenarios``: the trees of its sensitivity study (shipped names, TOML paths
     or Scenarios; default: every shipped tree)."""
     p = get_preset(preset)
-    if p.runner:  # a study of another kind: its module runs it
-        from ..sweep.execute import load_analysis
-
+    if p.run is not None:  # a study of another kind: its module runs it
         for flag, given in (("--backend", backends), ("--tolerance", tolerance),
                             ("--sensitivity-scenario", sensitivity_scenarios)):
             if given is not None:
                 raise ParameterError(f"{flag}: not used with --preset {p.name} (its study "
                                      "fixes what it runs and judges)")
 
-        return load_analysis(p.runner)(out, scenario or p.scenario, workers=workers,
-                                       scheduler=scheduler, progress=progress, grid=grid,
-                                       retry_failed=retry_failed)
+        return p.run(out, scenario or p.scenario, workers=workers, scheduler=scheduler,
+                     progress=progress, grid=grid, retry_failed=retry_failed)
     return _validity_study(out, p, scenario=scenario, backends=backends, workers=workers,
                            scheduler=scheduler, progress=progress, tolerance=tolerance,
                            grid=grid, retry_failed=retry_failed,
