@@ -16,6 +16,7 @@ from treeimpact.analytic.engine.interface import chain_modes, trunk_chain
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import SimulationResult
+from treeimpact.analytic.threads import limit_process
 
 from . import _urdf
 from ._loops import _loop_chain, _loop_sdof, _swing
@@ -137,7 +138,9 @@ def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
     if workers <= 1:
         return [_batch_one((s, options)) for s in scenarios]
     ctx = mp.get_context("spawn")  # a forked child would share the parent's client
-    with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    # each process the library's BLAS limit from its start (analytic/threads.py)
+    with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                initializer=limit_process) as pool:
         return list(pool.map(_batch_one, [(s, options) for s in scenarios]))
 
 

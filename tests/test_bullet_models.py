@@ -319,3 +319,22 @@ def test_batch_over_a_process_pool_matches_serial_runs(central):
     for s, r in zip(scen, batch):
         serial = simulate(s, trunk="sdof", t_end=0.005)
         assert r.metrics["x_max"] == serial.metrics["x_max"]  # same deterministic engine
+
+
+def test_the_batchs_processes_start_with_the_librarys_blas_limit(central, monkeypatch):
+    """A spawned process does not inherit the parent's limit: the pool's initializer sets
+    it (analytic/threads.py), so a batch needs no OPENBLAS_NUM_THREADS either."""
+    import concurrent.futures as cf
+
+    from treeimpact.analytic.threads import limit_process
+
+    seen = {}
+
+    class Pool(cf.ThreadPoolExecutor):  # records the pool's arguments, runs in threads
+        def __init__(self, max_workers, mp_context=None, initializer=None):
+            seen.update(mp_context=mp_context.get_start_method(), initializer=initializer)
+            super().__init__(max_workers)
+
+    monkeypatch.setattr(cf, "ProcessPoolExecutor", Pool)
+    simulate_batch([central, central], trunk="sdof", t_end=0.002, max_workers=2)
+    assert seen == {"mp_context": "spawn", "initializer": limit_process}
