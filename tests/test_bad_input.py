@@ -711,6 +711,27 @@ def test_identify_fixes_nothing_from_a_record_that_ends_at_the_impact(tmp_path, 
         assert not q["determined"] and q["value"] is None, (k, q)
 
 
+def test_a_record_that_ends_at_the_impact_is_not_called_a_unit_error():
+    """Cut one sample into the impact, a record has no measured trunk speed (its rise is
+    within one sample): the trunk-speed bound (M_PLAUSIBLE) said "x looks like mm" on 11 of
+    the full validation set's 40 such records (tree D at 5 kHz, seeds 11-15 among them);
+    it is not judged on a speed it does not have. A record in cm declared as m still is."""
+    from treeimpact.analytic.identify.record_features import features, unit_suspicions
+
+    mr = _make_records()
+    tree = mr.TREES["D"]
+    for seed in (11, 13, 14, 15):
+        t, x, _, t_c = mr.sdof_record(tree, 5000.0, 0.01, seed)
+        cut_t, cut_x = mr.defect("ends-at-impact", t, x, tree, t_c, None)
+        feat = features(cut_t, cut_x)
+        assert not feat.velocity_resolved, seed
+        assert unit_suspicions(feat, 1.0, impactor_mass=132.4) == [], seed
+        whole = features(t, x)  # the same record whole: resolved, and cm caught
+        assert whole.velocity_resolved and unit_suspicions(whole, 1.0, impactor_mass=132.4) == []
+        in_cm = features(t, 100.0 * x)
+        assert unit_suspicions(in_cm, 1.0, impactor_mass=132.4)[0].startswith("x looks like cm")
+
+
 def test_identify_explains_the_record_from_the_impact_to_the_separation(tmp_path, capsys):
     """Tree D, 5 kHz, 1 % noise, from the impact to the pendulum's separation (27 ms): was
     "NOT explained (optimiser)", M_T -19 % with a drift fitted that so short a record

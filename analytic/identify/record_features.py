@@ -29,6 +29,12 @@ def robust_sigma(r: np.ndarray) -> float:
     return MAD_SIGMA * float(np.median(np.abs(r - np.median(r)))) if r.size else math.nan
 
 
+#: How far above the rest's noise (its sigma) the rise's 10 % level must stand for the rise,
+#: and so the trunk's speed, to count as measured: a record cut one sample into the impact
+#: has 0.1-0.4 sigma there, a whole one at 1 % noise 7-12 (the validation set's tree D).
+RESOLVED_SIGMAS = 3.0
+
+
 @dataclass(frozen=True)
 class Features:
     """A record's shape, read off its median-of-3 copy (SI)."""
@@ -39,6 +45,11 @@ class Features:
     velocity: float  # m/s, the slope between those crossings
     t_peak: float  # s, the time of the largest rise
     dt: float  # s, the median sample interval
+    #: the 10 % level stands above the rest's noise (3 sigma) and the 40 % crossing comes
+    #: after the 10 % one, so ``velocity`` is the rise's slope; else (a record ending at the
+    #: contact: its span a sample or two of noise; a rise within one sample) it is no
+    #: measure of the trunk's speed
+    velocity_resolved: bool = True
 
 
 def features(t: np.ndarray, x: np.ndarray) -> Features:
@@ -49,6 +60,8 @@ def features(t: np.ndarray, x: np.ndarray) -> Features:
     xs = median3(x)
     dt = float(np.median(np.diff(t)))
     rest = float(np.median(xs[: max(3, xs.size // 50)]))
+    # the rest's noise from its sample-to-sample steps (a slow drift does not count)
+    noise = robust_sigma(np.diff(np.asarray(x, float)[: max(5, xs.size // 50)])) / math.sqrt(2)
     span = float(np.max(xs) - rest)
     i10 = int(np.argmax(xs - rest > 0.1 * span))
     i40 = int(np.argmax(xs - rest > 0.4 * span))
@@ -60,7 +73,8 @@ def features(t: np.ndarray, x: np.ndarray) -> Features:
     t_contact = float(t[i10]) - (float(xs[i10]) - rest) / v
     t_contact = min(max(t_contact, float(t[0])), float(t[i10]))
     return Features(rest=rest, span=span, t_contact=t_contact, velocity=v,
-                    t_peak=float(t[int(np.argmax(xs))]), dt=dt)
+                    t_peak=float(t[int(np.argmax(xs))]), dt=dt,
+                    velocity_resolved=i40 > i10 and 0.1 * span > RESOLVED_SIGMAS * noise)
 
 
 #: What a pendulum test can record, a generous window around orchards' numbers: a peak
@@ -81,16 +95,18 @@ TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 M_PLAUSIBLE = 1e4
 
 
-def _plausible(peak: float, rise: float, dt: float, speed: float,
+def _plausible(peak: float, rise: float, dt: float, speed: float | None,
                speed_low: float = PLAUSIBLE["speed"][0]) -> dict:
+    """Which of the record's numbers lie in :data:`PLAUSIBLE` (``speed`` None: not measured,
+    not judged)."""
     values = {"peak": peak, "rise": rise, "dt": dt, "speed": speed}
-    ok = {k: PLAUSIBLE[k][0] <= v <= PLAUSIBLE[k][1] for k, v in values.items()}
-    ok["speed"] = ok["speed"] and speed >= speed_low
+    ok = {k: v is None or PLAUSIBLE[k][0] <= v <= PLAUSIBLE[k][1] for k, v in values.items()}
+    ok["speed"] = ok["speed"] and (speed is None or speed >= speed_low)
     return ok
 
 
 def _distance(**values) -> float:
-    return sum(abs(math.log(v / TYPICAL[k])) for k, v in values.items())
+    return sum(abs(math.log(v / TYPICAL[k])) for k, v in values.items() if v is not None)
 
 
 def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
@@ -103,9 +119,11 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
     one column rather than two, the likeliest when several would do). ``time_unit`` and
     ``length_unit``: what the record was declared in (its numbers already converted to
     SI). With the pendulum's ``impactor_mass`` m (kg), a trunk slower after the contact than
-    a tree of :data:`M_PLAUSIBLE` would move is implausible too."""
+    a tree of :data:`M_PLAUSIBLE` would move is implausible too. A record whose rise is not
+    resolved (``feat.velocity_resolved`` False: it ends at the contact, or rises within one
+    sample) has no measured speed, and is not judged on it."""
     peak, rise = feat.span, max(feat.t_peak - feat.t_contact, feat.dt)
-    speed = feat.velocity / u1
+    speed = feat.velocity / u1 if feat.velocity_resolved else None  # None: not measured
     low = PLAUSIBLE["speed"][0] if impactor_mass is None else max(
         PLAUSIBLE["speed"][0], impactor_mass / (M_PLAUSIBLE + impactor_mass))
     ok = _plausible(peak, rise, feat.dt, speed, low)
@@ -118,10 +136,11 @@ def unit_suspicions(feat: Features, u1: float, time_unit: str = "s",
             k = h / TIME_UNITS[time_unit]
             changed = [c for c, u, d in (("t", time, time_unit), ("x", length, length_unit))
                        if u != d]
-            if changed and all(_plausible(peak * g, rise * k, feat.dt * k,
-                                          speed * g / k, low).values()):
+            moved = None if speed is None else speed * g / k
+            if changed and all(_plausible(peak * g, rise * k, feat.dt * k, moved,
+                                          low).values()):
                 options.append((len(changed), _distance(peak=peak * g, rise=rise * k,
-                                                        speed=speed * g / k),
+                                                        speed=moved),
                                 {"t": time, "x": length}, changed))
     facts = (f"a peak of {peak:.3g} m, {rise:.3g} s from the contact to it, samples "
              f"{feat.dt:.3g} s apart and a trunk velocity of {feat.velocity:.3g} m/s after a "
