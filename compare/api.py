@@ -16,10 +16,25 @@ import re
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.identify.pendulum_record import Record
+from treeimpact.analytic.identify.pendulum_record import read_record as read
+from treeimpact.analytic.identify.procedure import PendulumTest
+from treeimpact.analytic.model.parameters import LIMITS, Pendulum, Scenario, check_range
 from treeimpact.analytic.threads import enter_limit, exit_limit
 
-from .api_results import Identification, Modes, Simulation
-from .backends import BACKENDS
+from .api_results import (
+    Identification,
+    Modes,
+    Simulation,
+    identification_of,
+    modes_of,
+    simulation_of,
+)
+from .backends import BACKENDS, ENGINES, get_backend, scenario_as_run
+from .ladder import build_ladder
+from .recording import check_sampling, sample
+from .runs import resolve_scenario
+from .sweep.run import run_sweep
 
 #: The backends a sweep runs when none are given: all of them (the command line's too).
 SWEEP_BACKENDS = tuple(BACKENDS)
@@ -78,10 +93,6 @@ def simulate(scenario, backend: str = "analytic", **options) -> Simulation:
             out of its range, or a run beyond the budget (TREEIMPACT_MAX_STEPS, ...).
         SimulationDiverged: the run has no physical numbers to report.
     """
-    from .api_results import simulation_of
-    from .backends import get_backend, scenario_as_run
-    from .runs import resolve_scenario
-
     scen = resolve_scenario(scenario)
     result = get_backend(backend).simulate(scen, **options)
     return simulation_of(result, scenario_as_run(scen, options))
@@ -106,10 +117,6 @@ def modes(scenario, backend: str = "analytic", **options) -> Modes:
     Raises:
         ParameterError: an unknown backend or option, or a value out of its range.
     """
-    from .api_results import modes_of
-    from .backends import get_backend
-    from .runs import resolve_scenario
-
     return modes_of(get_backend(backend).modes(resolve_scenario(scenario), **options))
 
 
@@ -122,8 +129,6 @@ def backends() -> dict[str, str]:
     Raises:
         Nothing.
     """
-    from .backends import BACKENDS
-
     return {name: b.description for name, b in BACKENDS.items()}
 
 
@@ -146,10 +151,6 @@ def ladder(scenario, *, engines=None, segments: int | None = None):
     Raises:
         ParameterError: an unknown engine or a bad segment count.
     """
-    from .backends import ENGINES
-    from .ladder import build_ladder
-    from .runs import resolve_scenario
-
     return build_ladder(resolve_scenario(scenario),
                         engines=ENGINES if engines is None else tuple(engines),
                         segments=segments)
@@ -178,8 +179,6 @@ def sweep(grid, out, *, scenario=SWEEP_SCENARIO, backends=SWEEP_BACKENDS,
     Raises:
         ParameterError: a malformed grid spec, an unknown backend or option.
     """
-    from .sweep.run import run_sweep
-
     return run_sweep(scenario, grid, out, backends=tuple(backends),
                      ladder=ladder, options=options, workers=workers, progress=False)
 
@@ -200,8 +199,6 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
     Raises:
         ParameterError: an unreadable file, a malformed header or row (named by its line).
     """
-    from treeimpact.analytic.identify.pendulum_record import read_record as read
-
     return read(path, time_unit=time_unit, length_unit=length_unit)
 
 
@@ -224,10 +221,6 @@ def record_from_simulation(simulation: Simulation, *, rate_hz: float = 5000.0,
         ParameterError: a rate, noise or seed out of range, or a backend without a
             trajectory.
     """
-    from treeimpact.analytic.identify.pendulum_record import Record
-
-    from .recording import check_sampling, sample
-
     check_sampling(rate_hz, noise, seed, names=("rate_hz", "noise", "seed"))
     t, x = sample(simulation.result, rate_hz, noise, seed)
     return Record(t=t, x=x, source=f"{simulation.scenario.name} ({simulation.backend})")
@@ -238,9 +231,6 @@ def pendulum_test(test, clamp_height, diameter):
     Scenario (its pendulum, its trunk's clamp height and diameter), or a Pendulum with the
     ``clamp_height`` a and ``diameter`` d (m) it struck; each checked against its range
     (ParameterError naming it). Shared by :func:`identify` and ``treeimpact identify``."""
-    from treeimpact.analytic.identify.procedure import PendulumTest
-    from treeimpact.analytic.model.parameters import LIMITS, Pendulum, Scenario, check_range
-
     if isinstance(test, Scenario):
         if clamp_height is not None or diameter is not None:
             raise ParameterError("clamp_height, diameter: the scenario's trunk gives them; "
@@ -286,11 +276,10 @@ def identify(record, test, *, clamp_height: float | None = None,
         ParameterError: an unreadable record, a test that is not a pendulum's, a value out
             of its range.
     """
-    from treeimpact.analytic.identify.pendulum_record import Record
+    # lazy: +643 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
     from treeimpact.analytic.identify.record_fit import fit_record
-    from treeimpact.analytic.model.parameters import check_range
 
-    from .api_results import identification_of
 
     the_test = pendulum_test(test, clamp_height, diameter)
     if isinstance(record, (str, Path)):
@@ -320,8 +309,8 @@ def report(out=REPORT_DIR, scenarios=None, *, studies=()) -> dict:
     Raises:
         ParameterError: an unknown scenario, a study that is not a directory.
     """
+    # lazy: +120 ms at import otherwise (jinja2), which this module's other callers do not need
     from .report import write_report
-    from .runs import resolve_scenario
 
     for study in studies:
         if not Path(study).is_dir():
@@ -358,6 +347,8 @@ def design_map(out, scenario=SWEEP_SCENARIO, *, count: int = 30, ranges: dict | 
         ParameterError: a range outside an input's allowed one, an unknown input, a count
             below 2.
     """
+    # lazy: +80 ms at import otherwise (treeimpact.compare.validity.design_study),
+    # which this module's other callers do not need
     from .validity.design_study import run_design_study
 
     if not isinstance(count, int) or isinstance(count, bool) or not 2 <= count <= 200:

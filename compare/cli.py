@@ -14,9 +14,13 @@ import argparse
 import sys
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.threads import blas_limit
 
 from .commands import COMMANDS
 from .commands._common import backend_options  # noqa: F401 - docs/cli.md names it here
+from .names import did_you_mean
+from .process import command_environment, run_command, stop_signals
+from .progress import set_job
 
 
 class _Parser(argparse.ArgumentParser):
@@ -55,8 +59,6 @@ def refuse_unknown_flags(parser: argparse.ArgumentParser, argv: list) -> None:
     """A one-line ParameterError for the first flag in ``argv`` that its command (a
     subcommand of ``parser``) does not have (a prefix, a removed spelling, a paper symbol),
     with what it may have meant."""
-    from .names import did_you_mean
-
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     command = next((t for t in argv if not t.startswith("-")), None)
     if command not in sub.choices:
@@ -92,11 +94,6 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     """Run ``treeimpact`` with ``argv`` (default: sys.argv[1:]), every command with one BLAS
     thread (analytic.threads; the caller's setting back on return); returns the exit code."""
-    from treeimpact.analytic.threads import blas_limit
-
-    from .process import command_environment, run_command, stop_signals
-    from .progress import set_job
-
     def command(_):
         args = build_parser().parse_args(argv)
         set_job(args.command)

@@ -9,14 +9,18 @@ or SIGTERM).
 
 from __future__ import annotations
 
+import _thread
 import math
 import os
 import signal
 import sys
+import threading
+import time
 import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
+from treeimpact.analytic import budget
 from treeimpact.analytic.errors import (
     NotAchieved,
     OutsideValidity,
@@ -26,12 +30,13 @@ from treeimpact.analytic.errors import (
 )
 
 from .exits import ExitCode
+from .pool import STOP
+from .progress import Progress, end_open_bars
+from .progress import finish as finish_progress
 
 
 def _error(text: str) -> None:
     """``text`` as one stderr line, on a line of its own (a progress bar drawn is ended)."""
-    from .progress import end_open_bars
-
     end_open_bars()
     print(f"treeimpact: {text}", file=sys.stderr)
 
@@ -44,9 +49,6 @@ def run_command(command, args) -> int:
     into ``head`` ends quietly.
     Once the command has returned or raised, a stop signal only marks it interrupted (its
     one line is printed whole, never cut by a second KeyboardInterrupt)."""
-    from .pool import STOP
-    from .progress import finish as finish_progress
-
     _COMMAND["ended"] = False
     try:
         try:
@@ -124,8 +126,6 @@ def stop_signals():
     delivered again, not lost (:func:`_unraisable`). A SIGINT this process inherited as
     ignored (a background job of a shell without job control: Ctrl-C is for the foreground
     job) stays ignored. Restored afterwards (main() may be called from Python)."""
-    from .pool import STOP
-
     STOP.clear()
     signals = [signal.SIGTERM]
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
@@ -155,12 +155,6 @@ def _unraisable(info) -> None:
     delivered again to the main thread, from a helper thread once this hook has returned
     (delivered now, it would land in this hook and be lost again); anything else is one
     warning line."""
-    import _thread
-    import threading
-    import time
-
-    from .pool import STOP
-
     if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
         STOP.set()
 
@@ -198,10 +192,6 @@ def install_budget(max_seconds) -> dict:
     default), progress reporter and one-line warnings; returns what
     :func:`restore_budget` puts back. ParameterError naming --max-seconds when it is not a
     finite positive number."""
-    from treeimpact.analytic import budget
-
-    from .progress import Progress
-
     name = budget.VARIABLES["seconds"]
     restore = {"environment": (name, os.environ.get(name)), "reporter": budget._REPORTER,
                "showwarning": warnings.showwarning}
@@ -217,8 +207,6 @@ def install_budget(max_seconds) -> dict:
 
 def restore_budget(restore: dict) -> None:
     """Undo :func:`install_budget` (``restore``: what it returned)."""
-    from treeimpact.analytic import budget
-
     if not restore:
         return
     warnings.showwarning = restore["showwarning"]

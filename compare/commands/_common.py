@@ -8,7 +8,10 @@ import math
 import os
 from pathlib import Path
 
+from treeimpact.analytic.budget import MAX_SECONDS, VARIABLES
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.compare.backends import BACKENDS
+from treeimpact.compare.verdicts import relative_step
 
 
 def number(text: str) -> float:
@@ -30,8 +33,6 @@ def count(text: str) -> int:
 def backend_options() -> dict:
     """option name -> (its Option, the backends that take it), over every backend's
     ``OPTIONS`` (read without loading an engine)."""
-    from treeimpact.compare.backends import BACKENDS
-
     out: dict = {}
     for name, backend in BACKENDS.items():
         try:
@@ -58,8 +59,6 @@ def add_option_flags(parser, names=None) -> None:
 
 def add_budget_flag(parser) -> None:
     """``--max-seconds``: the longest single run the command admits (s)."""
-    from treeimpact.analytic.budget import MAX_SECONDS, VARIABLES
-
     parser.add_argument(
         "--max-seconds", type=number, dest="max_seconds",
         help=f"refuse any single run estimated longer than this, s (default {MAX_SECONDS:g}, "
@@ -85,8 +84,6 @@ def unit_text(u: str) -> str:
 
 def relative_text(value, reference) -> str:
     """:func:`compare.verdicts.relative_step` as text ('' where it has no value)."""
-    from treeimpact.compare.verdicts import relative_step
-
     rel = relative_step(value, reference)
     return f"{rel:+.1%}" if math.isfinite(rel) else ""
 

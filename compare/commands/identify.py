@@ -5,10 +5,23 @@ side."""
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import math
+import sys
+from pathlib import Path
 
-from treeimpact.analytic.errors import ParameterError
+import numpy as np
+
+from treeimpact.analytic.errors import NotAchieved, ParameterError
+from treeimpact.analytic.identify.fit_parameters import Slot
+from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
+from treeimpact.analytic.identify.procedure import READINGS, identify_from_record
+from treeimpact.analytic.model.parameters import LIMITS, Pendulum, check_range
+from treeimpact.analytic.results import to_jsonable
+from treeimpact.compare.backends import worded_c_output
+from treeimpact.compare.figure_text import save_figure
+from treeimpact.compare.provenance import provenance
 
 from ..exits import ExitCode
 from ._common import number
@@ -28,8 +41,6 @@ UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
 def add_arguments(sp: argparse.ArgumentParser) -> None:
     """The command's flags, added to its subparser ``sp``: the record, the test's pendulum
     and trunk, the units."""
-    from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
-
     sp.add_argument("record", help="CSV with columns t, x (and y, the pendulum's), in any "
                                    "order, units in the header ('t [ms]', 'x (mm)') or below")
     sp.add_argument("--mass", type=number, required=True, help="pendulum mass m, kg")
@@ -55,7 +66,7 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
 def _test(args):
     """The PendulumTest of the flags (:func:`compare.api.pendulum_test`, as the API's
     identify), each flag checked as typed first (an error names the flag)."""
-    from treeimpact.analytic.model.parameters import LIMITS, Pendulum, check_range
+    # lazy: +53 ms at import otherwise (numpy), which this module's other callers do not need
     from treeimpact.compare.api import pendulum_test
 
     for flag, value, field in (("--mass", args.mass, "impactor.mass"),
@@ -77,8 +88,6 @@ def _test(args):
 def _paper(record, test, fit=None) -> dict:
     """The paper's procedure (eqs 39-48) in each of its readings, or why it cannot run: not
     at all on a record the ``fit`` refused for its units (every method refuses it)."""
-    from treeimpact.analytic.identify.procedure import READINGS, identify_from_record
-
     if fit is not None and not fit.conclusion.fitted:
         why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
         return {reading: {"error": f"not read: {why}"} for reading in READINGS}
@@ -105,8 +114,6 @@ PLOT_FORMATS = (".png", ".pdf", ".svg")
 
 def _check_plot_path(path: str) -> None:
     """--plot names a file of a format it writes, not a directory (one line, before the fit)."""
-    from pathlib import Path
-
     p = Path(path)
     if p.is_dir():
         raise ParameterError(f"--plot {path!r} is a directory: name a file in it, e.g. "
@@ -119,11 +126,6 @@ def _check_plot_path(path: str) -> None:
 def _provenance(args, record) -> dict:
     """Where the result came from: the code and environment, the record file (name, size,
     SHA-1 of its bytes, samples, units read) and the test's flags as given."""
-    import hashlib
-    from pathlib import Path
-
-    from treeimpact.compare.provenance import provenance
-
     data = Path(args.record).read_bytes()
     test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle_deg",
                                            "clamp_height", "diameter", "restitution")}
@@ -138,13 +140,9 @@ def run(args) -> int:
     """Fit the record of the parsed command line ``args`` and print the result (text or
     ``--json``); exit code 0 (explained or not, the verdict says), or NotAchieved (exit 4,
     after the output) for a record not fitted, its one line naming the unit flags to pass."""
-    import sys
-
-    import numpy as np
-
+    # lazy: +616 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
     from treeimpact.analytic.identify.record_fit import fit_record, read_record
-    from treeimpact.analytic.results import to_jsonable
-    from treeimpact.compare.backends import worded_c_output
 
     test = _test(args)
     if args.plot:
@@ -180,8 +178,6 @@ def run(args) -> int:
 def _not_fitted(fit):
     """A NotAchieved for a record that was not fitted (its numbers look like another unit),
     its diagnosis as the message (the unit flags to pass), or None for a fitted one."""
-    from treeimpact.analytic.errors import NotAchieved
-
     if fit.conclusion.fitted:
         return None
     why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
@@ -191,6 +187,7 @@ def _not_fitted(fit):
 def _json(args, record, fit, paper) -> dict:
     """identify --json: the fit's values, the paper's readings, the conclusion and what it
     rests on, the provenance (kinds and sources as their names)."""
+    # lazy: +51 ms at import otherwise (numpy), which this module's other callers do not need
     from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS
 
     return {"fit": _quantities(fit), "paper": paper, "definitions": DAMPING_RATIO_FORMULAS,
@@ -257,9 +254,8 @@ def _print_conclusion(fit) -> None:
 def _plot_paper(ax, axr, record, fit, reading: dict, test) -> None:
     """The paper's procedure's ``reading`` (M_T, K_T, the trunk's damping ratio) drawn as
     the exact model with the fit's contact, e and sensor terms, and its residual."""
-    import numpy as np
-
-    from treeimpact.analytic.identify.fit_parameters import Slot
+    # lazy: +616 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
     from treeimpact.analytic.identify.record_fit import model_x
 
     if not ("M_T" in reading and reading["M_T"] > 0 and reading["K_T"] > 0
@@ -278,9 +274,13 @@ def _plot_paper(ax, axr, record, fit, reading: dict, test) -> None:
 
 
 def _plot(path, record, fit, paper, test) -> None:
+    # lazy: +86 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     import matplotlib
 
     matplotlib.use("Agg")
+    # lazy: +314 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.figure import Figure
 
     pendulum = record.y is not None
@@ -319,6 +319,5 @@ def _plot(path, record, fit, paper, test) -> None:
     axr.axhline(0.0, color="k", lw=0.6)
     axr.set(xlabel="time t (ms)", ylabel="residual (mm)")
     axr.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    from treeimpact.compare.figure_text import save_figure
 
     save_figure(fig, path, 110)

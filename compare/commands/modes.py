@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import json
 
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.results import to_jsonable
+from treeimpact.compare.backends import BACKENDS, get_backend
+
 from ..exits import ExitCode
 from ._common import add_option_flags, fmt, options_of, relative_text
 
@@ -18,8 +22,6 @@ MODES_OPTIONS = ("segments", "elements", "beam_theory", "trunk")
 def add_arguments(sp) -> None:
     """The command's flags, added to its subparser ``sp``: the backend and the trunk
     options its modes() take."""
-    from treeimpact.compare.backends import BACKENDS
-
     sp.add_argument("scenario", help="shipped scenario name or TOML path")
     sp.add_argument("--backend", default="analytic", choices=tuple(BACKENDS),
                     help="analytic (the SDOF trunk), beam (its mesh), mujoco or bullet (their "
@@ -31,10 +33,6 @@ def add_arguments(sp) -> None:
 def run(args) -> int:
     """Print the backend's modes beside the beam's for the parsed command line ``args``
     (text or ``--json``); exit code 0."""
-    from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.analytic.results import to_jsonable
-    from treeimpact.compare.backends import get_backend
-
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
     opts = options_of(args, MODES_OPTIONS)

@@ -8,6 +8,8 @@ from __future__ import annotations
 import json
 import math
 
+from treeimpact.analytic.results import to_jsonable
+
 from ..exits import ExitCode
 from ._common import fmt
 
@@ -38,6 +40,8 @@ def _fit_cell(target: dict) -> str:
 
 
 def _print_contact_fit(trees: dict) -> None:
+    # lazy: +321 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
     from treeimpact.analytic.paper.contact_fit import RECORD_RATE
 
     print("Models held against every measured number (Table 1, Figs 4-5, the text): each "
@@ -86,8 +90,9 @@ def _print_tables(res: dict) -> None:
 def run(args) -> int:
     """Print the reproduction for the parsed command line ``args`` (text or ``--json``;
     with ``--fit-contact`` the models fitted to the measurements); exit code 0."""
+    # lazy: +304 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
     from treeimpact.analytic.paper.reproduction import reproduce
-    from treeimpact.analytic.results import to_jsonable
 
     res = reproduce()
     if getattr(args, "fit_contact", False):

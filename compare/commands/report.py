@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.scenario import load_scenario
 
 from ..exits import ExitCode
 from ._common import add_budget_flag, writable_dir
@@ -38,7 +39,8 @@ def add_arguments(sp) -> None:
 def run(args) -> int:
     """Write the report for the parsed command line ``args`` and print the written paths;
     exit code 0."""
-    from treeimpact.analytic.model.scenario import load_scenario
+    # lazy: +94 ms at import otherwise (jinja2, numpy),
+    # which this module's other callers do not need
     from treeimpact.compare.report import write_report
 
     folders = _study_folders(args.with_study)
@@ -70,6 +72,8 @@ def run(args) -> int:
 def _study_folders(presets: list) -> dict:
     """``--with-study``'s presets -> their folders in OUT; a one-line ParameterError for an
     unknown preset or two writing one folder."""
+    # lazy: +118 ms at import otherwise (jinja2, numpy),
+    # which this module's other callers do not need
     from treeimpact.compare.validity.study import PRESETS
 
     folders: dict = {}

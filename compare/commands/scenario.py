@@ -8,9 +8,27 @@ file records which values were given, chosen and calibrated, as the shipped file
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.calibration import (
+    MeasuredTree,
+    calibrate_trunk,
+    calibration_notes,
+    damping_rate_from_regression,
+    stiffness_from_regression,
+)
+from treeimpact.analytic.model.parameters import (
+    LIMITS,
+    Contact,
+    Pendulum,
+    Scenario,
+    Trunk,
+    check_range,
+)
+from treeimpact.analytic.model.scenario_toml import scenario_toml
+from treeimpact.compare.backends import get_backend
 
 from ..exits import ExitCode
 from ._common import number
@@ -75,8 +93,6 @@ REGRESSION_RANGES = {"a1": (0.0, 100.0, "m/s"), "a2": (-1e6, 0.0, "m/s^2"),
 def check_regression(args) -> None:
     """--a1, --a2, --x-max and --tau of the parsed ``args`` (those given) in
     :data:`REGRESSION_RANGES` (x_max at most --clamp-height), one line naming the flag."""
-    from treeimpact.analytic.model.parameters import check_range
-
     for key, (low, high, unit) in REGRESSION_RANGES.items():
         value = getattr(args, key)
         if value is None:
@@ -91,8 +107,6 @@ def check_regression(args) -> None:
 def _stiffness(args, pendulum) -> float:
     """K_T (N/m) from --a1, --a2, --x-max, --tau (eqs 43, 46); an e^(b tau) beyond double
     precision is the overdamped motion it means (omega_n = 0 <= b), one line."""
-    from treeimpact.analytic.model.calibration import stiffness_from_regression
-
     try:
         return stiffness_from_regression(
             a1=args.a1, a2=args.a2, x_max=args.x_max, tau=args.tau,
@@ -113,14 +127,6 @@ def _pick(args, key):
 
 def build_scenario(args):
     """The calibrated :class:`Scenario` of the command's parsed arguments ``args``."""
-    from treeimpact.analytic.model.calibration import (
-        MeasuredTree,
-        calibrate_trunk,
-        calibration_notes,
-        damping_rate_from_regression,
-    )
-    from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario, Trunk
-
     pendulum = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
                         release_angle_deg=args.release_angle_deg)
     check_regression(args)
@@ -191,11 +197,6 @@ def fit_t_end(scenario, given: bool):
     """``scenario`` with a t_end (s) its run can report: the analytic model's x_max and the
     separation inside it. A ``given`` t_end is kept or refused (naming --t-end); the default
     is doubled until the run fits, up to the limit of t_end (10 s), else refused."""
-    import dataclasses
-
-    from treeimpact.analytic.model.parameters import LIMITS
-    from treeimpact.compare.backends import get_backend
-
     analytic = get_backend("analytic")
     t_end = scenario.t_end
     while True:
@@ -220,8 +221,6 @@ def run(args) -> int:
     runs (:func:`fit_t_end`); exit code 0. Bad input is a ParameterError naming the flag
     (exit 2); a tree whose analytic x_max lies beyond the clamp height is OutsideValidity
     (exit 4, nothing written)."""
-    from treeimpact.analytic.model.scenario_toml import scenario_toml
-
     try:
         scenario = fit_t_end(build_scenario(args), given=args.t_end is not None)
     except ParameterError as exc:

@@ -6,6 +6,10 @@ from __future__ import annotations
 import json
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.results import METRIC_UNITS
+from treeimpact.compare.backends import BACKENDS, get_backend
+from treeimpact.compare.recording import DEFAULTS, REST, check_sampling, sample
 
 from ..exits import ExitCode
 from ._common import (
@@ -29,8 +33,6 @@ RENAMED = {"damping": "trunk_damping_model", "release_angle": "release_angle_deg
 def add_arguments(sp) -> None:
     """The command's flags, added to its subparser ``sp``: the backend, its options (from
     the backends' OPTIONS), the run budget, --json and the record flags."""
-    from treeimpact.compare.backends import BACKENDS
-
     sp.add_argument("scenario", help="shipped scenario name or TOML path")
     sp.add_argument("--backend", default="analytic", choices=tuple(BACKENDS),
                     help="the model to run (default: analytic, the paper's)")
@@ -57,8 +59,6 @@ def print_simulation(scenario, result, reference) -> None:
     """The text output of ``result`` (a run of ``scenario``): one key per line, units in
     their own column; beside a backend's value the paper's model (the analytic backend) and
     the relative difference, when ``reference`` (its result) is given."""
-    from treeimpact.analytic.results import METRIC_UNITS
-
     print(f"{scenario.name} ({result.backend})")
     print("model:")
     # every column as wide as its widest cell, header included (crown_peak_acceleration,
@@ -88,9 +88,6 @@ def print_simulation(scenario, result, reference) -> None:
 def run(args) -> int:
     """Run the scenario on the backend of the parsed command line ``args`` and print it
     (text or ``--json``; with ``--record`` also write the record); exit code 0."""
-    from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.backends import get_backend
-
     backend = get_backend(args.backend)
     scenario = load_scenario(args.scenario)
     opts = options_of(args, backend_options())
@@ -117,8 +114,6 @@ def run(args) -> int:
 def add_record_arguments(sp) -> None:
     """`treeimpact simulate --record FILE.csv [--rate HZ --noise FRAC --seed N]`: the flags,
     added to the subparser ``sp``."""
-    from treeimpact.compare.recording import DEFAULTS
-
     sp.add_argument("--record", help="also write the trunk's displacement as a pendulum-test "
                                      "record (CSV 't [s],x [m]', what `identify` reads)")
     sp.add_argument("--rate", type=number,
@@ -134,8 +129,6 @@ def check_record_arguments(args) -> None:
     """--rate, --noise and --seed of the parsed command line ``args`` in range (one line
     each) and only with --record (they would be ignored without it), before a run is spent;
     fills in their defaults."""
-    from treeimpact.compare.recording import DEFAULTS, check_sampling
-
     for key, default in DEFAULTS.items():
         if getattr(args, key) is not None and not args.record:
             raise ParameterError(f"--{key}: only with --record FILE.csv (it sets the "
@@ -151,8 +144,6 @@ def write_record(args, scenario, result) -> str:
     (compare.recording.sample at
     ``args.rate`` Hz, ``args.noise`` of the peak, ``args.seed``) to ``args.record``; returns
     a one-line summary. Raises ParameterError naming --record if it cannot be written."""
-    from treeimpact.compare.recording import REST, sample
-
     t, x = sample(result, args.rate, args.noise, args.seed)
     try:
         with open(args.record, "w", encoding="utf-8") as f:

@@ -17,12 +17,19 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+import time
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.compare.backends import BACKENDS, ENGINES, get_backend
+from treeimpact.compare.pool import STOP
+from treeimpact.compare.validity.presets import PRESETS
 
 from ..exits import ExitCode
-from ..sweep.grid import GRID_FORM
+from ..sweep.grid import GRID_FORM, parse_grid
+from ..sweep.plan import check_backends
+from ..sweep.run import run_sweep
 from ._common import add_budget_flag
 
 NAME = "sweep"
@@ -62,7 +69,6 @@ def add_sweep_arguments(parser) -> None:
                              "integrator, ...)")
     parser.add_argument("--scenario", default="central-leader",
                         help="shipped scenario name or TOML path (default: central-leader)")
-    from treeimpact.compare.backends import BACKENDS
 
     parser.add_argument("--backend", default=",".join(BACKENDS),
                         help="comma-separated backends (analytic is always run as the "
@@ -76,7 +82,6 @@ def add_sweep_arguments(parser) -> None:
                         help="local worker processes (default: CPU count; 0: this process)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask scheduler address (tcp://host:8786): run on that cluster")
-    from treeimpact.compare.validity.presets import PRESETS
 
     parser.add_argument("--preset", default=None, choices=tuple(PRESETS),
                         help="run a whole study: "
@@ -101,8 +106,6 @@ def parse_options(specs, backends) -> dict:
     """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine among
     ``backends``, the sweep's), each name and value checked against the backend's OPTIONS
     (one line naming the spec)."""
-    from treeimpact.compare.backends import ENGINES, get_backend
-
     out: dict = {}
     for spec in specs or []:
         if spec.count("=") != 1 or not spec.split("=")[0].strip() or not spec.split("=")[1]:
@@ -150,10 +153,6 @@ def run(args) -> int:
     """Run ``treeimpact sweep`` with the parsed command line ``args``; returns the exit
     code (ExitCode.OK; ExitCode.INTERRUPTED when interrupted by Ctrl-C or SIGTERM, with one
     line saying how to resume; bad input raises ParameterError)."""
-    import sys
-
-    from treeimpact.compare.pool import STOP
-
     try:
         code = _run(args)
         if not STOP.is_set():  # else the request came after the last look: still a stop
@@ -166,12 +165,9 @@ def run(args) -> int:
 
 
 def _run(args) -> int:
-    import time
-
     t_start = time.perf_counter()
-    from ..sweep.grid import parse_grid
-    from ..sweep.plan import check_backends
-    from ..sweep.run import run_sweep
+    # lazy: +112 ms at import otherwise (jinja2, numpy),
+    # which this module's other callers do not need
     from ..validity.study import run_study, write_study
 
     backends = check_backends(args.backend)

@@ -29,11 +29,18 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.analytic.results import to_jsonable
 
-from ..progress import plan
+from ..ladder import build_ladder, prefetch_ladders
+from ..pool import check_stop, preload_in_workers, process_map
+from ..progress import Progress, plan
 from ..provenance import provenance, scenario_digest
-from ..studies.small_e import E_GRID, RESOLUTION
+from ..runs import RunCache, resolve_scenario
+from ..studies.contact_scan import scan_result, scan_sweep
+from ..studies.ident_fits import fit_one, fit_tasks
+from ..studies.small_e import E_GRID, RESOLUTION, small_e_answer, small_e_sweep
+from ..sweep.run import run_sweeps
 from ..verdicts import Verdict, validity_tolerance
 from .answer import (
     ANSWER_METRICS,
@@ -43,10 +50,15 @@ from .answer import (
     small_e_rows,
     with_sensitivity,
 )
+from .base import environment
 from .design_answer import design_answer
 from .design_answer import in_short_text as design_in_short
 from .measure import in_short_text, with_sobol
+from .paper import PaperSection
+from .runlog import RunsSection
 from .sort_keys import add_sort_keys
+from .studies import StudySection
+from .trunks import TrunksSection
 
 __all__ = ["write_report", "build_sections"]
 
@@ -62,16 +74,9 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
     sections reported on stderr as they finish; ``study_jobs``: studies running beside the
     report (compare.validity.study_job.StudyJob), each a section once it ends."""
-    from treeimpact.analytic.model.scenario import shipped_scenarios
-
-    from ..ladder import prefetch_ladders
-    from ..pool import preload_in_workers
-    from ..runs import RunCache, resolve_scenario
+    # lazy: +291 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from .figures import FigureFiles
-    from .paper import PaperSection
-    from .runlog import RunsSection
-    from .studies import StudySection
-    from .trunks import TrunksSection
 
     studies = [StudySection(d, page_dir=out_dir) for d in study_dirs]  # read (and refused)
     # before any run
@@ -117,10 +122,12 @@ def _report_sweeps(scens: list, out_dir, sink, progress: bool) -> tuple[dict, di
     the small-e curves, their figures given to ``sink`` (None: not drawn); ``progress``: a
     bar on a terminal. Returns (contact {scans, figure}, small_e {trees, figure}, the e
     sweeps' tables by scenario name)."""
-    from ..studies.contact_scan import scan_result, scan_sweep
-    from ..studies.small_e import small_e_answer, small_e_sweep
-    from ..sweep.run import run_sweeps
+    # lazy: +314 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from .answer_figures import small_e_figure
+
+    # lazy: +291 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from .figures import contact_scan_figure
 
     with _sweep_dir(out_dir) as folder:  # the tables are read before a temporary one goes
@@ -145,10 +152,8 @@ def _scenario_sections(scens: list, cache, e_tables: dict, sink, wall: dict, *, 
     ``engines`` and ``segments`` asked for) drawn with its e sweep's table (``e_tables``)
     into ``sink``, while every rung's record is fitted in a process pool; the wall time of
     each step added to ``wall`` (s); ``progress``: bars on stderr."""
-    from ..ladder import build_ladder
-    from ..pool import check_stop, process_map
-    from ..progress import Progress
-    from ..studies.ident_fits import fit_one, fit_tasks
+    # lazy: +655 ms at import otherwise (matplotlib, scipy, numpy),
+    # which this module's other callers do not need
     from .scenario import ScenarioSection, identification_sweep
 
     # every rung's record fitted, all scenarios in one process pool, while this process
@@ -231,8 +236,6 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
     ``out_dir/figures``.
     """
-    from .base import environment
-
     t_start = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

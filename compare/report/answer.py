@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from ..rungs import RungKind
+from ..studies.small_e import bracket_text
 from ..verdicts import validity_tolerance
 from .base import deciding
 
@@ -128,8 +129,6 @@ def holds_text(a: dict) -> str:
     the exact run it counts strikes again), '>= 0.9' (the whole range), or '0: -25 % at
     e = 0' (not a small-e effect; a 1-DOF trunk's gap adds from which e it moves by more than
     the validity tolerance in points, :func:`small_e_curves.steady_bracket`)."""
-    from ..studies.small_e import bracket_text
-
     if a["bracket"] is not None:
         text = bracket_text(a["bracket"])
         if not a.get("monotone", True):

@@ -13,6 +13,10 @@ from pathlib import Path
 
 import jinja2
 
+from treeimpact.compare.studies.sensitivity import INPUTS
+from treeimpact.compare.studies.sobol import verdict_text
+from treeimpact.compare.sweep.maps import INPUT_LABELS, OUTPUT_LABELS
+
 TEMPLATES = Path(__file__).with_name("templates")
 
 
@@ -65,8 +69,6 @@ def input_value(v, key: str) -> str:
     """A held (measured) input ``key`` of the sensitivity study at its value ``v``, with
     its unit: 'clamp mass 4 kg', 'root compliance 0.86 of the static flexibility at the clamp', the pad as its
     collision time in ms."""
-    from treeimpact.compare.studies.sensitivity import INPUTS
-
     unit = INPUTS[key][2] if key in INPUTS else ""
     if unit == "log10 s" and isinstance(v, (int, float)):
         return f"{input_name(key)} (its collision time {num(1e3 * 10.0 ** v, 3)} ms)"
@@ -149,15 +151,11 @@ def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> s
 def input_name(key: str) -> str:
     """An unmeasured input of the sensitivity study in words ('pad stiffness' for
     log10_pad_duration), as its figure labels it; the key if unknown."""
-    from treeimpact.compare.sweep.maps import INPUT_LABELS
-
     return INPUT_LABELS.get(key, key).replace("\n", " ")
 
 
 def output_name(key: str) -> str:
     """An output ``key`` of the sensitivity study in words ('x_max gap' for gap.x_max)."""
-    from treeimpact.compare.sweep.maps import OUTPUT_LABELS
-
     return OUTPUT_LABELS.get(key, key)
 
 
@@ -196,8 +194,6 @@ def interval(low, high, digits: int = 3) -> str:
 def sobol_verdict(output: dict) -> str:
     """A Sobol output's verdict in words (compare.studies.sobol.verdict_text, the inputs
     named as the figure labels them); 'no value' for an output without one."""
-    from treeimpact.compare.studies.sobol import verdict_text
-
     return verdict_text(output, input_name) if "order" in output else "no value"
 
 

@@ -14,6 +14,7 @@ import re
 from pathlib import Path
 
 import matplotlib
+from matplotlib.lines import Line2D
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -248,8 +249,6 @@ def _difference_labels(axes) -> None:
 def _difference_key(low, free: list, ref_id: str) -> None:
     """The difference panels' key on the subfigure ``low``: in its first ``free`` grid
     slot, else below; ``ref_id``: the reference rung's id."""
-    from matplotlib.lines import Line2D
-
     key = [Line2D([], [], color="0.3", lw=1.4, label=f"x - x[{ref_id}], trunk"),
            Line2D([], [], color="0.3", lw=1.1, ls="--", label=f"y - y[{ref_id}], pendulum"),
            Line2D([], [], color="0.72", lw=3.2, label="x - x[analytic] of the beam rung")]

@@ -21,6 +21,8 @@ class PaperSection(Section):
     anchor = "paper"
 
     def __init__(self):
+        # lazy: +360 ms at import otherwise (scipy, numpy),
+        # which this module's other callers do not need
         from treeimpact.analytic.paper.reproduction import reproduce
 
         self.data = reproduce()

@@ -9,14 +9,13 @@ from __future__ import annotations
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import to_jsonable
+from treeimpact.compare.backends import BACKENDS
 
 from .base import Section, options_text, tidy
 
 
 def option_units(backend: str) -> dict:
     """Option name -> unit of a backend's options ({} for a backend not known here)."""
-    from treeimpact.compare.backends import BACKENDS
-
     b = BACKENDS.get(backend)
     if b is None:
         return {}

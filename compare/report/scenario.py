@@ -8,16 +8,19 @@ import math
 
 import numpy as np
 
+from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.results import to_jsonable
 
-from ..studies.ident_fits import fit_one, fit_tasks
 from ..identification import IDENT_METRICS
 from ..ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
 from ..mechanism import matched_loss_evidence
+from ..rungs import RungKind
 from ..runs import OK, SKIPPED
+from ..studies.ident_fits import fit_one, fit_tasks
 from ..verdicts import Verdict
 from . import figures
 from .base import Section, tidy
+
 
 def energy_ledger(rr) -> dict | None:
     """Energy terms at T0 (J) of one rung's result ``rr``: kinetic, potential (springs,
@@ -83,8 +86,6 @@ def record_fits(ladder) -> list[dict]:
 def fit_truth(ladder) -> dict:
     """What the full-record fit is compared with: the ``ladder``'s scenario's M_T (kg), K_T
     (N/m) and C_T (N s/m) of the two-body model (eqs 7-11) and its restitution e (1)."""
-    from treeimpact.analytic.model.two_body import two_body_model
-
     model = two_body_model(ladder.scenario)
     return {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping,
             "restitution": ladder.scenario.contact.restitution}
@@ -124,8 +125,6 @@ _ENGINE_STEPS = {"engine": "the engines against each other on the engine SDOF",
 def step_name(key: str) -> str:
     """A comparison of the tolerance file, its ``key`` (``beam``, ``engines.chain``), in
     plain words."""
-    from ..rungs import RungKind
-
     section, _, kind = key.rpartition(".")
     if section == "engines":
         return _ENGINE_STEPS.get(kind, f"the engines against each other ({kind})")

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..runs import OK
+from ..sweep.run import SweepSpec, run_sweeps
 
 #: Contact durations scanned (s): 0.2 ms (a hard impactor) to 50 ms (half the trunk's
 #: quarter period; a very soft pad), 14 points, log-spaced.
@@ -23,8 +24,6 @@ HEADLINE_METRICS = ("x_max", "energy_delivered", "crown_peak_acceleration")
 def scan_sweep(scenario, out, durations=DURATIONS):
     """The scan of one scenario as a sweep (:class:`compare.sweep.run.SweepSpec`) into
     ``out``: ``contact_duration`` over ``durations`` on the soft and beam rungs."""
-    from ..sweep.run import SweepSpec
-
     return SweepSpec(scenario, ["contact_duration=" + ",".join(repr(float(d))
                                                                for d in durations)],
                      Path(out), ("soft", "beam"), identify=False)
@@ -35,8 +34,6 @@ def contact_scan(scenario, out, durations=DURATIONS, metrics=HEADLINE_METRICS,
     """Run (or resume) the scan of ``scenario`` over the contact ``durations`` (s) into the
     directory ``out`` on ``workers`` processes (``progress``: a bar on stderr) and read its
     ``metrics`` against ``tolerance`` (:func:`scan_result`)."""
-    from ..sweep.run import run_sweeps
-
     (res,) = run_sweeps([scan_sweep(scenario, out, durations)], workers=workers,
                         progress=progress)
     return scan_result(res.table, durations, metrics, tolerance)

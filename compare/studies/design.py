@@ -18,7 +18,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from treeimpact.analytic.contact.soft import simulate_soft
+from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.two_body import two_body_model
+
+from .small_e import at_restitution, errors_of_run
 
 
 class Scale(enum.Enum):
@@ -136,12 +143,6 @@ def one_dof_gaps(scenario) -> dict:
     :data:`E_FLOOR` below it), the answer table's rule: (continuum - 1-DOF) / |1-DOF| with the
     paper's Newton model, or the soft 1-DOF with the same pad where Newton has no value
     (the crown's acceleration). Relative, by quantity name."""
-    from treeimpact.analytic.contact.soft import simulate_soft
-    from treeimpact.analytic.continuum.beam_impact import simulate_beam
-    from treeimpact.analytic.impact.simulate import simulate
-
-    from .small_e import at_restitution
-
     s = at_restitution(scenario, max(scenario.contact.restitution, E_FLOOR))
     newton = simulate(s, samples=2).metrics
     beam = simulate_beam(s).metrics
@@ -162,8 +163,6 @@ def design_cell(result, scenario, record=None) -> dict:
     """The sweep analysis: a cell's numbers (``design.NAME``, relative) at the exact 1-DOF
     run ``result`` of ``scenario`` (the point applied): :func:`one_dof_gaps` and the small-e
     errors of compare.studies.small_e.errors_of_run; ``record`` is not read."""
-    from .small_e import errors_of_run
-
     errors = errors_of_run(result, scenario, continuum=False)
     out = {f"design.{k}": v for k, v in one_dof_gaps(scenario).items()}
     for name, q in QUANTITIES.items():
@@ -179,8 +178,8 @@ def operating_point(scenario) -> dict:
     """The tree ``scenario``'s own value of every input (:data:`INPUTS` units): a/l, m/M_T (M_T of eq 7),
     the pad's contact duration (s; from its stiffness on the 1-DOF pair if the file gives
     that) and e."""
-    from treeimpact.analytic.model.two_body import two_body_model
-
+    # lazy: +62 ms at import otherwise (treeimpact.compare.sweep.grid),
+    # which this module's other callers do not need
     from ..sweep.grid import derived_ratios
 
     c = scenario.contact
@@ -222,6 +221,8 @@ def check_grid_specs(specs, flag: str = "--grid") -> None:
     """ParameterError (one line naming ``flag`` and the spec as typed) for one of the
     ``specs`` (``--grid`` specs) of a design input with values outside its allowed range,
     or an axis that is not a design input."""
+    # lazy: +62 ms at import otherwise (treeimpact.compare.sweep.grid),
+    # which this module's other callers do not need
     from ..sweep.grid import parse_axis
 
     for spec in specs:
@@ -239,6 +240,8 @@ def check_grid_specs(specs, flag: str = "--grid") -> None:
 def design_spec(scenario, specs, out):
     """A sweep (compare.sweep.run.SweepSpec) of :func:`design_cell` over the ``--grid``
     ``specs`` on ``scenario`` into ``out``."""
+    # lazy: +59 ms at import otherwise (treeimpact.compare.sweep.run),
+    # which this module's other callers do not need
     from ..sweep.run import SweepSpec
 
     return SweepSpec(scenario, list(specs), Path(out), ("analytic",), identify=True,

@@ -11,6 +11,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from treeimpact.analytic.continuum.beam_impact import simulate_beam
+
+from ..backends import get_backend
+from ..pool import process_map
+from ..runs import OK, attempt
+from ..sweep.apply import apply_point
+from ..verdicts import load_tolerances
 from .design import INPUTS
 from .design_words import along, shown
 
@@ -58,13 +65,6 @@ def spot_check(item) -> dict:
     """One cell, ``item`` = (scenario, point): the continuum's metrics and each engine
     rung's relative difference from them, its tolerance and verdict, or why it has none
     ({"point", "beam", "rungs": {label: {metric: {rel, tolerance, within}} | {error}}})."""
-    from treeimpact.analytic.continuum.beam_impact import simulate_beam
-
-    from ..backends import get_backend
-    from ..runs import OK, attempt
-    from ..sweep.apply import apply_point
-    from ..verdicts import load_tolerances
-
     scenario, point = item
     s, _ = apply_point(scenario, point)
     beam = simulate_beam(s).metrics
@@ -111,8 +111,6 @@ def spot_checks(scenario, x, y, z, pair, here: dict, tol: float, workers=None) -
     """The spot checks of one map (:func:`spot_points` of ``z`` over ``x``, ``y``, ``pair``
     at ``here`` and ``tol``) on the tree ``scenario``, run on compare.pool's ``workers``:
     {"cells": [...], "sentence": str}."""
-    from ..pool import process_map
-
     points = spot_points(x, y, z, pair, here, tol)
     checks = process_map(spot_check, [(scenario, p) for p in points], workers=workers)
     return {"cells": checks, "sentence": spot_sentence(checks, pair),

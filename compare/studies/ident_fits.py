@@ -5,6 +5,11 @@ the record at all. SI units; docs/identification.md."""
 
 from __future__ import annotations
 
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.identify.procedure import pendulum_test_of
+from treeimpact.analytic.model.parameters import Pendulum
+from treeimpact.analytic.model.two_body import two_body_model
+
 from .ident_records import sampled_record
 
 #: Sampling of the records handed to the full-record fit (Hz), and the rest prepended (s) so
@@ -22,10 +27,6 @@ def fit_tasks(ladder) -> list[tuple]:
     :func:`fit_one`: (rung id, t (s), x (m) sampled at FIT_RATE with FIT_NOISE, the pendulum
     test, the true M_T (kg), K_T (N/m), C_T (N s/m) of the two-body model, eqs 7-11); none
     when the ladder's impactor is not a pendulum."""
-    from treeimpact.analytic.identify.procedure import pendulum_test_of
-    from treeimpact.analytic.model.parameters import Pendulum
-    from treeimpact.analytic.model.two_body import two_body_model
-
     scen = ladder.scenario
     if not isinstance(scen.impactor, Pendulum):
         return []
@@ -41,7 +42,8 @@ def fit_one(task: tuple) -> dict:
     """The exact 1-DOF model fitted to one rung's whole record (a :func:`fit_tasks` task): the
     1-DOF properties that best explain it, their errors against the model's truth, and
     whether the 1-DOF model explains the record at all (analytic.identify.record_fit)."""
-    from treeimpact.analytic.errors import ParameterError
+    # lazy: +679 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
     from treeimpact.analytic.identify.record_fit import Record, fit_record
 
     rung, t, x, test, truth = task

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from treeimpact.compare.figure_text import save_figure
+
 from .ident_records import NOISE, PARAMETERS, RATE
 
 
@@ -17,8 +19,12 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
     crown ratio, one row of panels per rung; cells print the value, grey cells say why
     there is none. ``rows``: the study's cases (compare.studies.ident_records); returns
     ``path``, the PNG written."""
+    # lazy: +288 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.figure import Figure
 
+    # lazy: +51 ms at import otherwise (treeimpact.compare.sweep.map_cells),
+    # which this module's other callers do not need
     from treeimpact.compare.sweep.map_cells import (
         DEFAULT_TOLERANCE,
         _norm,
@@ -51,7 +57,6 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
                                  f"saturates at +-{scale['vmax']:.0%}")
     fig.suptitle(f"Identification error, {label}: {RATE / 1e3:g} kHz records with "
                  f"{100 * NOISE:g} % noise", fontsize=10)
-    from treeimpact.compare.figure_text import save_figure
 
     save_figure(fig, path, 100)
     return path
@@ -73,6 +78,8 @@ def _panel(ax, rows: list[dict], method: str, k: str, es: list, cs: list, scale:
     """One rung's panel of parameter ``k``: the errors over e (``es``) x crown ratio
     (``cs``) on the study's colour scale, each cell's value or why it has none; returns
     the mesh (for the colour bar)."""
+    # lazy: +51 ms at import otherwise (treeimpact.compare.sweep.map_cells),
+    # which this module's other callers do not need
     from treeimpact.compare.sweep.map_cells import _ink
 
     Z = np.full((len(cs), len(es)), np.nan)

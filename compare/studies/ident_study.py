@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from treeimpact.compare.sweep.run import SweepSpec, run_sweeps
+
 from .ident_maps import identification_error_map
 from .ident_records import ANALYSIS, NOISE, PARAMETERS, RATE, case_row
 
@@ -56,8 +58,6 @@ def study_sweeps(out, scenario: str = "central-leader", *, restitutions=RESTITUT
     and the sampling grid (rate x noise x ``sampling_seeds`` on ``sampling_rungs``' records);
     an empty tuple leaves its sweep out. Each runs
     :func:`.ident_records.record_identification` on its records."""
-    from treeimpact.compare.sweep.run import SweepSpec
-
     base = Path(out) / "identification"
     specs = {}
     if rungs:
@@ -91,8 +91,6 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
     ``restitutions``, ``crown_ratios``, ``rungs``, ``sampling_rungs``, ``engine_rungs`` and
     ``sampling_seeds`` as :func:`study_sweeps` takes them. ``progress``: as the sweeps'
     (None: a bar on a terminal, nothing elsewhere; False: nothing)."""
-    from treeimpact.compare.sweep.run import run_sweeps
-
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     specs = study_sweeps(out, scenario, restitutions=restitutions, crown_ratios=crown_ratios,

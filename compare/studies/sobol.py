@@ -23,7 +23,9 @@ import warnings
 
 import numpy as np
 
-from .sensitivity import ANSWER, CONF_LEVEL, INPUTS, design_rows, problem
+from treeimpact.analytic.errors import ParameterError
+
+from .sensitivity import ANSWER, CONF_LEVEL, INPUTS, design_rows, design_sweep, problem
 
 #: The seed of the scrambled Sobol sequence and of SALib's bootstrap.
 SEED = 20261128
@@ -42,9 +44,10 @@ def sobol_design(n: int, names=None, seed: int = SEED, spec: dict | None = None)
     n x (inputs + 2) rows, each base sample's block (A, the inputs' AB rows, B) after the
     other, so its first n/2 blocks are the design of n/2. ParameterError naming ``sobol``
     unless n is a power of two (a Sobol sequence is balanced only at those)."""
+    # lazy: +250 ms at import otherwise (scipy, pandas, SALib, numpy, pyarrow),
+    # which this module's other callers do not need
     from SALib.sample import sobol
 
-    from treeimpact.analytic.errors import ParameterError
 
     if n < 1 or n & (n - 1):
         raise ParameterError(f"sobol: N = {n}, allowed a power of two (1, 2, 4, ... 4096)")
@@ -58,6 +61,8 @@ def sobol_indices(names, y, spec: dict | None = None) -> dict | None:
     {S1, S1_conf, ST, ST_conf} (conf: the half-width of the CONF_LEVEL interval from
     RESAMPLES seeded bootstrap resamples); None when ``y`` has no spread (no variance to
     share)."""
+    # lazy: +267 ms at import otherwise (scipy, pandas, SALib, numpy, pyarrow),
+    # which this module's other callers do not need
     from SALib.analyze import sobol
 
     y = np.asarray(y, dtype=float)
@@ -222,6 +227,4 @@ def sobol_sweep(scenario, out, n: int, seed: int = SEED):
     """The Sobol study of one tree (``scenario``) as a sweep into ``out``: the design of
     :func:`sobol_design` (``n``, ``seed``) over its free inputs as ``input.*`` axes, the
     answer's gaps (compare.studies.sensitivity.answer_under) at each point."""
-    from .sensitivity import design_sweep
-
     return design_sweep(scenario, out, lambda names: sobol_design(n, names, seed))

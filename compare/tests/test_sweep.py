@@ -569,12 +569,12 @@ def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
 def test_interrupted_sweep_command_says_how_to_resume_and_exits_130(tmp_path, capsys,
                                                                      monkeypatch):
     from treeimpact.compare.cli import main
-    from treeimpact.compare.sweep import run
+    from treeimpact.compare.commands import sweep
 
     def interrupted(*args, **kw):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(run, "run_sweep", interrupted)
+    monkeypatch.setattr(sweep, "run_sweep", interrupted)  # the name the command calls
     rc = main(["sweep", "--grid", "restitution=0.1", "--backend", "analytic", "--out",
                str(tmp_path)])
     err = capsys.readouterr().err.strip()

@@ -10,17 +10,42 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ..studies.design import (DIAMETER_FACTORS, HELD, INPUTS, LEVELS, PAIRS, QUANTITIES, Kind,
-                              check_grid_specs, check_ranges, design_cell, design_spec,
-                              map_of, operating_point, pair_grid)
-from ..studies.design_words import (along, nearest_within, sentence_along, sentence_at_point,
-                                    sentence_nearest, shown)
+from treeimpact.analytic.model.scenario import shipped_scenarios
+
+from ..runs import resolve_scenario
+from ..studies.design import (
+    DIAMETER_FACTORS,
+    HELD,
+    INPUTS,
+    LEVELS,
+    PAIRS,
+    QUANTITIES,
+    Kind,
+    check_grid_specs,
+    check_ranges,
+    design_cell,
+    design_spec,
+    map_of,
+    operating_point,
+    pair_grid,
+)
+from ..studies.design_words import (
+    along,
+    nearest_within,
+    sentence_along,
+    sentence_at_point,
+    sentence_nearest,
+    shown,
+)
+from ..studies.small_e import exact_run
 from ..sweep.design_maps import Axis, Point, draw_pair
+from ..sweep.journal import make_out
 from ..sweep.run import run_sweeps
 from .presets import Preset, register
 
@@ -58,8 +83,6 @@ def _clean(obj):
 def tree_cell(scen) -> dict:
     """The cell at the tree ``scen`` itself (its own a/l, m/M_T, pad and e), computed directly:
     {quantity: relative gap or error}."""
-    from ..studies.small_e import exact_run
-
     run, s = exact_run(scen, scen.contact.restitution)
     return {k.split(".", 1)[1]: v for k, v in design_cell(run, s).items()}
 
@@ -126,8 +149,6 @@ def _cost(results, wall_s: float, workers) -> dict:
     """What the maps cost: cells (this run's and all), the sweeps' ``wall_s`` (s) on
     ``workers`` processes, and per cell computed by this run of ``results`` the wall time
     times the workers (CPU-seconds a cell, every rung and the pool included)."""
-    import os
-
     n = workers if workers else (os.cpu_count() or 1) if workers is None else 1
     cells = sum(len(r.table) for r in results)
     made = sum(r.rows_written for r in results)  # this run's; the rest found done
@@ -145,11 +166,6 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
     inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
     ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``engines``: the
     engines' spot checks too (compare.studies.design_engines)."""
-    from treeimpact.analytic.model.scenario import shipped_scenarios
-
-    from ..runs import resolve_scenario
-    from ..sweep.journal import make_out
-
     ranges = dict(ranges or {})
     check_ranges(ranges)
     if grid:
@@ -200,6 +216,8 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
 def write_design(out, data: dict) -> dict:
     """Write design.json, design.md and design.html of the study ``data`` into ``out``;
     returns the paths."""
+    # lazy: +105 ms at import otherwise (jinja2, numpy),
+    # which this module's other callers do not need
     from treeimpact.compare.report.base import environment
 
     out = Path(out)

@@ -6,6 +6,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from treeimpact.analytic.model.scenario import shipped_scenarios
+from treeimpact.compare.runs import resolve_scenario
+from treeimpact.compare.studies.sensitivity import (
+    analyse,
+    free_inputs,
+    inputs_of,
+    measured_inputs,
+    sensitivity_sweep,
+)
+from treeimpact.compare.studies.sobol import analyse_sobol, sobol_sweep
+
+from ..sweep.maps import sensitivity_figure
 from ..sweep.run import run_sweeps
 
 
@@ -17,11 +29,6 @@ def sensitivity_specs(out, trajectories: int, *, crossings: bool = False,
     power of two; 0: none) the Sobol design (compare.studies.sobol) into
     ``out/sensitivity-sobol/``: {trees, specs (Morris, then Sobol), trajectories,
     crossings, sobol}."""
-    from treeimpact.analytic.model.scenario import shipped_scenarios
-    from treeimpact.compare.runs import resolve_scenario
-    from treeimpact.compare.studies.sensitivity import sensitivity_sweep
-    from treeimpact.compare.studies.sobol import sobol_sweep
-
     scens = [resolve_scenario(s) for s in (scenarios or shipped_scenarios())]
     specs = [sensitivity_sweep(s, Path(out) / "sensitivity" / s.name, trajectories,
                                crossings=crossings) for s in scens]
@@ -36,16 +43,6 @@ def sensitivity_result(out, sens: dict, done: list) -> dict:
     """The analysis of the finished sweeps ``done`` of :func:`sensitivity_specs` ``sens``
     and its figure (written into ``out``): {trajectories, crossings, trees: {name:
     analysis}, figure}."""
-    from treeimpact.compare.studies.sensitivity import (
-        analyse,
-        free_inputs,
-        inputs_of,
-        measured_inputs,
-    )
-    from treeimpact.compare.studies.sobol import analyse_sobol
-
-    from ..sweep.maps import sensitivity_figure
-
     trees = {}
     count = len(sens["trees"])
     for i, s in enumerate(sens["trees"]):

@@ -12,11 +12,21 @@ from pathlib import Path
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.backends import ENGINES
 from treeimpact.compare.provenance import provenance
+from treeimpact.compare.report.base import environment
 from treeimpact.compare.rungs import RungKind
 from treeimpact.compare.runs import OK
+from treeimpact.compare.studies.ident_study import (
+    ENGINE_CROWN_RATIOS,
+    ENGINE_RESTITUTIONS,
+    NOISE,
+    RATE,
+    RUNGS,
+    SAMPLING_E,
+)
 
-from ..sweep.maps import DEFAULT_TOLERANCE, identification_maps, validity_maps
+from ..studies.speed import speed_curves, speed_sweep
 from ..sweep.journal import JOURNAL, TABLE, make_out, read_file, read_table
+from ..sweep.maps import DEFAULT_TOLERANCE, identification_maps, point_text, validity_maps
 from ..sweep.run import SweepSpec, run_sweep, run_sweeps
 from .presets import PRESETS, Preset, get_preset  # noqa: F401 - the study's presets, re-exported
 from .sensitivity_study import sensitivity_result, sensitivity_specs
@@ -77,7 +87,6 @@ def _validity_study(out, p: Preset, *, scenario, backends, workers, scheduler, p
                         retry_failed=retry_failed)
         sweeps["engines"] = eng.out
         done.append(eng)
-    from ..studies.speed import speed_curves, speed_sweep
 
     speed = None
     if p.speed and engines:
@@ -104,6 +113,8 @@ def _validity_study(out, p: Preset, *, scenario, backends, workers, scheduler, p
 
 
 def _combined_table(out: Path, sweeps: dict, speed: dict | None):
+    # lazy: +216 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     frames = []
@@ -127,8 +138,6 @@ def _combined_table(out: Path, sweeps: dict, speed: dict | None):
 def _fmt_point(point) -> str:
     """A grid point as 'name = value unit, ...' in the maps' display units (a contact
     duration in ms; the table stores the point as JSON pairs in SI)."""
-    from ..sweep.maps import point_text
-
     try:
         pairs = json.loads(point) if isinstance(point, str) else point
         return point_text(pairs)
@@ -259,8 +268,6 @@ def render_study(summary: dict, fmt: str, *, level: int = 1, image=None) -> str:
     the report's
     templates; ``level``: the title's heading level; ``image(name)``: a figure's link (the
     study's own directory by default)."""
-    from treeimpact.compare.report.base import environment
-
     template = "study_body.md.j2" if fmt == "md" else "study_page.html.j2"
     return environment().get_template(template).render(s=summary, level=level,
                                                        image=image or (lambda name: name))
@@ -304,15 +311,6 @@ def _presentation(summary, validity, ident, curves) -> dict:
 
 def _ident_validation_text(iv) -> dict:
     """The identification validation's texts and table rows (compare.studies.ident_study)."""
-    from treeimpact.compare.studies.ident_study import (
-        ENGINE_CROWN_RATIOS,
-        ENGINE_RESTITUTIONS,
-        NOISE,
-        RATE,
-        RUNGS,
-        SAMPLING_E,
-    )
-
     engines = [r for r in iv["summary"] if r not in RUNGS]
     corner = (f" (and of the {', '.join(engines)} hinged chain at e = "
               f"{', '.join(f'{e:g}' for e in ENGINE_RESTITUTIONS)} x crown ratio "

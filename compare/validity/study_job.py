@@ -7,15 +7,20 @@ notes: docs/report.md."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import threading
 import time
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.model.scenario import shipped_scenarios
+from treeimpact.analytic.model.scenario_toml import scenario_toml
 
 from ..exits import ExitCode
 from ..pool import POLL_S, check_stop
+from ..progress import RECORD, RELAY_ENV, Relay
 from .study import PRESETS
 
 #: Seconds a stopped study has to end its workers after SIGTERM before it is killed.
@@ -53,10 +58,6 @@ class StudyJob:
     def _source(self, scenario) -> str:
         """A scenario as the child's command line names it: a shipped name, an absolute
         path, or a file written for it from a Scenario object."""
-        from treeimpact.analytic.model.parameters import Scenario
-        from treeimpact.analytic.model.scenario import shipped_scenarios
-        from treeimpact.analytic.model.scenario_toml import scenario_toml
-
         if isinstance(scenario, Scenario):
             folder = self.out / "scenarios"
             folder.mkdir(parents=True, exist_ok=True)
@@ -69,10 +70,6 @@ class StudyJob:
     def start(self) -> "StudyJob":
         """Start the child process (``treeimpact sweep --preset``), its output relayed by a
         thread; returns the job."""
-        import os
-
-        from ..progress import RELAY_ENV
-
         self._t0 = time.perf_counter()
         env = os.environ | {RELAY_ENV: self.name}  # its progress as records for this display
         self._proc = subprocess.Popen(self.argv, stdout=subprocess.PIPE, env=env,
@@ -82,8 +79,6 @@ class StudyJob:
         return self
 
     def _pass_on(self) -> None:
-        from ..progress import RECORD, Relay
-
         relay = Relay(self.name)
         try:
             for line in self._proc.stdout:
