@@ -114,8 +114,8 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
     if intervals and intervals[0][1] < r.t.size - 1:  # released within the record
         i0, i1 = intervals[0]
         out["first_contact_duration"] = _release_time(r.t, r.force, i0, i1) - float(r.t[i0])
-    if intervals and intervals[-1][1] < r.t.size - 1:
-        after = intervals[-1][1] + 1
+    after = _released(r.force, intervals[-1][1] + 1) if intervals else None
+    if after is not None:
         rebound = float(r.pendulum_energy[after])
         dissipated = r.contact_loss(float(r.t[after]))
         spring = impactor_stiffness * float(np.trapezoid(r.y[:after + 1], r.t[:after + 1]))
@@ -158,6 +158,16 @@ def contact_intervals(force: np.ndarray, threshold: float) -> list[tuple[int, in
     if on[-1]:
         ends.append(on.size - 1)
     return list(zip(starts, ends))
+
+
+def _released(force: np.ndarray, start: int) -> int | None:
+    """The first sample from ``start`` on with no contact force: where the pad has let go
+    (a contact interval ends below its threshold, where a damped pad may still push a
+    little and hold a compression its dashpot balances: the elastic energy of that
+    compression never returns to the bodies, so the loss is read after the release);
+    None when the force never reaches 0 within the record."""
+    free = np.flatnonzero(np.asarray(force[start:]) <= 0.0)
+    return int(start + free[0]) if free.size and start + free[0] < force.size - 1 else None
 
 
 def _release_time(t: np.ndarray, force: np.ndarray, i0: int, i1: int) -> float:
