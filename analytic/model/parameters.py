@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 
 from treeimpact.analytic.errors import ParameterError
 
+from .registry import PARAMETERS
+
 #: A scenario's name: it becomes part of file names (the scenario's, figures, sweeps).
 _NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9 ._-]{0,63}")
 
@@ -26,29 +28,9 @@ STANDARD_GRAVITY = 9.81  # m/s^2, the value the paper uses (after eq 48)
 #: Physical plausibility limits (SI) of every field: what an orchard tree, a harvester's
 #: pendulum or billet, and a contact pad can be, with generous margins (README table).
 #: Beyond them the models leave their assumptions (small deflections, a beam) or the
-#: numbers leave what double precision and a bounded run can resolve.
-LIMITS = {
-    "trunk.length": (0.1, 30.0, "m"),
-    "trunk.clamp_height": (0.01, 30.0, "m"),
-    "trunk.diameter": (0.005, 3.0, "m"),
-    "trunk.density": (100.0, 2000.0, "kg/m^3"),
-    "trunk.youngs_modulus": (1e7, 1e11, "Pa"),
-    "trunk.clamp_mass": (0.0, 1000.0, "kg"),
-    "trunk.crown_mass": (0.0, 1e4, "kg"),
-    "trunk.damping": (0.0, 1e6, "N s/m^2"),
-    "trunk.base_stiffness": (10.0, math.inf, "N m/rad"),
-    "trunk.shear_modulus": (1e6, math.inf, "Pa"),
-    "trunk.shear_coefficient": (0.1, 1.0, "1"),
-    "impactor.mass": (0.1, 1e4, "kg"),
-    "impactor.equivalent_length": (0.05, 30.0, "m"),
-    "impactor.release_angle_deg": (0.01, 180.0, "deg"),
-    "impactor.gravity": (1.0, 30.0, "m/s^2"),
-    "impactor.impact_speed": (0.01, 50.0, "m/s"),
-    "contact.restitution": (0.0, 1.0, "1"),
-    "contact.stiffness": (1e2, 1e12, "N/m"),
-    "contact.duration": (1e-6, 0.1, "s"),
-    "t_end": (1e-4, 10.0, "s"),
-}
+#: numbers leave what double precision and a bounded run can resolve. A view of the
+#: registry (:mod:`.registry`): dotted path -> (low, high, unit).
+LIMITS = {p.path: (p.low, p.high, p.unit) for p in PARAMETERS if p.path is not None}
 
 
 #: Default E / G of the trunk's wood (Timoshenko beam theory only): the USDA Wood Handbook

@@ -1,0 +1,188 @@
+"""The parameter registry: one frozen :class:`Parameter` per physical input of a scenario
+(its name, symbol, unit, allowed range, label, scenario path and how it is applied), so the
+limits, sweeps, maps, studies and figures read one table (issue 42 item 1;
+docs/parameters.md).
+
+Units are SI in one vocabulary: "1" for a dimensionless number. The ranges of the scenario
+fields are their plausibility limits (what an orchard tree, a harvester's pendulum and a
+pad can be; :data:`~treeimpact.analytic.model.parameters.LIMITS` is a view of them). A
+derived input (a ratio, a study's reading) has no path of its own: a ratio names the field
+it solves (``sets``; :mod:`.ratios` applies it). ``design`` holds the design study's map range and reasons where the
+parameter is one of its designer's choices.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from treeimpact.analytic.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class DesignRange:
+    """A design input's map range [low, high] (``log``: spaced on a log scale), the range
+    the design study admits (``allowed``) and why (issue 43; compare.studies.design)."""
+
+    low: float
+    high: float
+    allowed: tuple
+    log: bool
+    why: str
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One physical input.
+
+    Attributes:
+        name: its one spelling in code, JSON and flags (``contact_duration``).
+        symbol: the paper's symbol (``tau_c``), as text.
+        unit: SI unit, "1" for a dimensionless number.
+        low, high: the allowed range, in ``unit`` (high may be inf).
+        label: a figure's or table's words for it, without the unit.
+        path: the dotted scenario field it sets (``contact.duration``), None if derived.
+        sweep: the name a sweep axis (``--grid``) and a map go by.
+        shown: (factor, unit) of its display unit (a duration read in ms).
+        apply: (scenario, value) -> scenario with it set, a pure function; None for a
+            ratio (:mod:`.ratios` applies it: it reads M_T, above this floor) and for a
+            reading that no single field sets (K_T, M_T, C_T).
+        sets: the dotted field a ratio solves (``a_over_l`` sets ``trunk.clamp_height``).
+        design: the design study's range and reasons, or None.
+    """
+
+    name: str
+    symbol: str
+    unit: str
+    low: float
+    high: float
+    label: str
+    path: str | None = None
+    sweep: str | None = None
+    shown: tuple = (1.0, "")
+    apply: Callable | None = None
+    design: DesignRange | None = None
+    sets: str | None = None
+
+    @property
+    def shown_unit(self) -> str:
+        """The unit a figure or text reads it in (its own unit unless ``shown`` says)."""
+        return self.shown[1] or self.unit
+
+
+def set_field(scenario, path: str, value):
+    """``scenario`` with the dotted field ``path`` set to ``value`` (dataclasses.replace);
+    a contact's stiffness and duration exclude each other (setting one clears the other).
+    ParameterError if the scenario's part has no such field."""
+    if "." not in path:
+        return dataclasses.replace(scenario, **{path: value})
+    section, field = path.split(".")
+    part = getattr(scenario, section)
+    changes = {field: value}
+    if section == "impactor" and field == "release_angle_deg":
+        if not hasattr(part, "release_angle_deg"):
+            raise ParameterError(f"{path}: the scenario's impactor is a "
+                                 f"{type(part).__name__.lower()}, which has no release angle")
+    elif field not in {f.name for f in dataclasses.fields(part)}:
+        raise ParameterError(f"{path}: the scenario's {section} is a "
+                             f"{type(part).__name__.lower()}, which has no field {field!r}")
+    if section == "contact" and field == "stiffness":
+        changes["duration"] = None  # stiffness and duration are exclusive (analytic.Contact)
+    elif section == "contact" and field == "duration":
+        changes["stiffness"] = None
+    return dataclasses.replace(scenario, **{section: dataclasses.replace(part, **changes)})
+
+
+def _setter(path: str) -> Callable:
+    return lambda scenario, value: set_field(scenario, path, value)
+
+
+def _field(name, symbol, unit, low, high, label, path, sweep=None, shown=(1.0, ""),
+           design=None) -> Parameter:
+    """A parameter that one scenario field holds (swept by its path unless ``sweep``)."""
+    return Parameter(name, symbol, unit, low, high, label, path, sweep or path, shown,
+                     _setter(path), design)
+
+
+_INF = math.inf
+
+#: Why the design study maps each designer's choice over its range (compare.studies.design).
+_DESIGN = {
+    "a_over_l": DesignRange(
+        0.1, 0.6, (0.05, 1.0), False,
+        "a shaker clamps between knee height and the first scaffold: 0.1-0.6 of the "
+        "crown's height l on orchard trees (the shipped trees clamp at 0.315 m of 1 m)"),
+    "mass_ratio": DesignRange(
+        0.2, 5.0, (0.05, 20.0), True,
+        "a light billet (a fifth of the tree's M_T) to a heavy pendulum (5 M_T); the "
+        "paper's pendulum is 1.2 M_T on central-leader"),
+    "contact_duration": DesignRange(
+        2e-4, 5e-2, (1e-5, 0.1), True,
+        "a hard impactor (0.2 ms, the shipped 0.5 ms) to a thick rubber pad (50 ms), the "
+        "report's contact scan's range"),
+    "restitution": DesignRange(
+        0.0, 0.9, (0.0, 0.95), False,
+        "a dead pad (0) to a bouncy one (0.9); the paper assumes e small, the shipped 0.1"),
+}
+
+#: Every physical input, scenario fields first (in LIMITS' order), then derived ones.
+PARAMETERS = (
+    _field("length", "l", "m", 0.1, 30.0, "trunk length", "trunk.length"),
+    _field("clamp_height", "a", "m", 0.01, 30.0, "clamp height", "trunk.clamp_height"),
+    _field("diameter", "d", "m", 0.005, 3.0, "trunk diameter", "trunk.diameter"),
+    _field("density", "rho", "kg/m^3", 100.0, 2000.0, "wood density", "trunk.density"),
+    _field("youngs_modulus", "E", "Pa", 1e7, 1e11, "Young's modulus", "trunk.youngs_modulus"),
+    _field("clamp_mass", "m_c", "kg", 0.0, 1000.0, "clamp mass", "trunk.clamp_mass"),
+    _field("crown_mass", "m_f", "kg", 0.0, 1e4, "crown mass", "trunk.crown_mass"),
+    _field("damping", "C", "N s/m^2", 0.0, 1e6, "distributed damping", "trunk.damping"),
+    _field("base_stiffness", "k_theta", "N m/rad", 10.0, _INF, "root stiffness",
+           "trunk.base_stiffness"),
+    _field("shear_modulus", "G", "Pa", 1e6, _INF, "shear modulus", "trunk.shear_modulus"),
+    _field("shear_coefficient", "kappa", "1", 0.1, 1.0, "shear coefficient",
+           "trunk.shear_coefficient"),
+    _field("impactor_mass", "m", "kg", 0.1, 1e4, "impactor mass", "impactor.mass"),
+    _field("equivalent_length", "l_e", "m", 0.05, 30.0, "pendulum length",
+           "impactor.equivalent_length"),
+    _field("release_angle_deg", "theta_r", "deg", 0.01, 180.0, "release angle",
+           "impactor.release_angle_deg"),
+    _field("gravity", "g", "m/s^2", 1.0, 30.0, "gravity", "impactor.gravity"),
+    _field("impact_speed", "u_1", "m/s", 0.01, 50.0, "impact speed", "impactor.impact_speed"),
+    _field("restitution", "e", "1", 0.0, 1.0, "restitution", "contact.restitution",
+           "restitution", design=_DESIGN["restitution"]),
+    _field("contact_stiffness", "k_c", "N/m", 1e2, 1e12, "pad stiffness", "contact.stiffness",
+           "contact_stiffness"),
+    _field("contact_duration", "tau_c", "s", 1e-6, 0.1, "contact duration",
+           "contact.duration", "contact_duration", (1e3, "ms"), _DESIGN["contact_duration"]),
+    _field("t_end", "t_end", "s", 1e-4, 10.0, "simulated time", "t_end"),
+    Parameter("a_over_l", "a / l", "1", 0.0, _INF, "clamp height a / l", None, "a_over_l",
+              design=_DESIGN["a_over_l"], sets="trunk.clamp_height"),
+    Parameter("crown_ratio", "m_f / m_trunk", "1", 0.0, _INF, "crown mass / trunk mass",
+              None, "crown_ratio", sets="trunk.crown_mass"),
+    Parameter("mass_ratio", "m / M_T", "1", 0.0, _INF, "mass ratio m / M_T", None,
+              "mass_ratio", design=_DESIGN["mass_ratio"], sets="impactor.mass"),
+    Parameter("dynamic_mass", "M_T", "kg", 0.0, _INF, "dynamic mass (eq 7)"),
+    Parameter("equivalent_stiffness", "K_T", "N/m", 0.0, _INF, "equivalent stiffness (eq 8)"),
+    Parameter("equivalent_damping", "C_T", "N s/m", 0.0, _INF, "equivalent damping (eq 10)"),
+    Parameter("e_over_g", "E / G", "1", 0.0, 20.0, "E / G (shear)"),
+    Parameter("log10_pad_duration", "log10 tau_c", "log10 s", math.log10(2e-4),
+              math.log10(2e-2), "pad contact duration"),
+    Parameter("root_share", "root share", "1", 0.0, 0.9, "root compliance"),
+)
+
+#: name -> Parameter.
+BY_NAME = {p.name: p for p in PARAMETERS}
+#: dotted scenario path -> Parameter, for the parameters one field holds.
+BY_PATH = {p.path: p for p in PARAMETERS if p.path is not None}
+#: sweep axis name -> Parameter.
+BY_SWEEP = {p.sweep: p for p in PARAMETERS if p.sweep is not None}
+
+
+def parameter(name: str) -> Parameter:
+    """The :class:`Parameter` a name, a path or a sweep name means; ParameterError naming
+    the allowed names otherwise."""
+    for table in (BY_NAME, BY_PATH, BY_SWEEP):
+        if name in table:
+            return table[name]
+    raise ParameterError(f"{name!r}: not a parameter; allowed: {', '.join(BY_NAME)}")

@@ -1,0 +1,110 @@
+"""The parameter registry (analytic.model.registry): its paths exist, its units speak one
+vocabulary, LIMITS is a view of it, its apply functions set what they say (closed forms),
+and the places that name a physical input spell it as the registry does."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model import registry
+from treeimpact.analytic.model.parameters import LIMITS, Contact, Pendulum, Trunk
+from treeimpact.analytic.model.ratios import RATIOS, apply_input
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.scenario import load_scenario
+
+#: The units the registry may use: SI, "1" for dimensionless (never "-" or "").
+UNITS = {"m", "kg", "kg/m^3", "Pa", "N s/m^2", "N m/rad", "1", "deg", "m/s^2", "m/s", "N/m",
+         "s", "N s/m", "log10 s"}
+
+
+def _central():
+    return load_scenario("central-leader")
+
+
+def test_names_paths_and_sweeps_are_unique():
+    for key in ("name", "path", "sweep"):
+        seen = [getattr(p, key) for p in registry.PARAMETERS if getattr(p, key) is not None]
+        assert len(seen) == len(set(seen)), key
+
+
+def test_units_one_vocabulary():
+    assert {p.unit for p in registry.PARAMETERS} <= UNITS
+    assert all(p.low <= p.high for p in registry.PARAMETERS)
+
+
+def test_every_path_is_a_field_of_its_part():
+    parts = {"trunk": {Trunk}, "impactor": {Pendulum}, "contact": {Contact}}
+    for p in registry.PARAMETERS:
+        if p.path is None or "." not in p.path:
+            continue
+        section, field = p.path.split(".")
+        names = set().union(*({f.name for f in dataclasses.fields(c)} for c in parts[section]))
+        assert field in names or hasattr(Pendulum, field), p.path
+
+
+def test_limits_is_the_registry_view():
+    assert LIMITS == {p.path: (p.low, p.high, p.unit) for p in registry.PARAMETERS if p.path}
+    # the values LIMITS had before the registry (spot checks of each section)
+    assert LIMITS["contact.restitution"] == (0.0, 1.0, "1")
+    assert LIMITS["trunk.base_stiffness"] == (10.0, math.inf, "N m/rad")
+    assert LIMITS["t_end"] == (1e-4, 10.0, "s")
+
+
+def test_field_apply_sets_only_its_field():
+    s = _central()
+    for p in registry.PARAMETERS:
+        if p.path is None or p.path in ("impactor.impact_speed", "impactor.release_angle_deg",
+                                        "contact.stiffness", "contact.duration"):
+            continue  # the exclusive pairs are checked below
+        section, _, field = p.path.rpartition(".")
+        now = getattr(getattr(s, section) if section else s, field)
+        # 1 % off the file's value (keeps a <= l), the low end where the file has none or inf
+        value = p.low if now is None or math.isinf(now) else 1.01 * now
+        out = p.apply(s, value)
+        assert getattr(getattr(out, section) if section else out, field) == value, p.name
+
+
+def test_contact_stiffness_and_duration_exclude_each_other():
+    s = _central()
+    out = registry.BY_NAME["contact_stiffness"].apply(s, 1e5)
+    assert (out.contact.stiffness, out.contact.duration) == (1e5, None)
+    out = registry.BY_NAME["contact_duration"].apply(s, 2e-3)
+    assert (out.contact.stiffness, out.contact.duration) == (None, 2e-3)
+
+
+def test_ratio_apply_closed_forms():
+    s = _central()
+    t = s.trunk
+    assert apply_input(s, "a_over_l", 0.25).trunk.clamp_height == 0.25 * t.length
+    assert apply_input(s, "crown_ratio", 2.0).trunk.crown_mass == 2.0 * t.trunk_mass
+    out = apply_input(s, "mass_ratio", 1.5)
+    # m / M_T read back from the new scenario; M_T does not depend on m (eq 7)
+    assert out.impactor.mass / reduce_trunk(out.trunk).dynamic_mass == pytest.approx(1.5, rel=1e-15)  # one rounding
+
+
+def test_ratios_are_the_sweeps_derived_ratios():
+    from treeimpact.compare.sweep.grid import DERIVED_RATIOS
+
+    assert set(RATIOS) == set(DERIVED_RATIOS)
+    for name, (target, _) in DERIVED_RATIOS.items():
+        assert registry.BY_NAME[name].sets == target
+
+
+def test_design_ranges_inside_allowed_and_limits():
+    for p in registry.PARAMETERS:
+        if p.design is None:
+            continue
+        lo, hi = p.design.allowed
+        assert lo <= p.design.low < p.design.high <= hi, p.name
+        assert p.low <= lo and hi <= p.high, p.name
+
+
+def test_lookup_by_name_path_or_sweep():
+    assert registry.parameter("contact.duration") is registry.BY_NAME["contact_duration"]
+    assert registry.parameter("trunk.crown_mass") is registry.BY_NAME["crown_mass"]
+    with pytest.raises(ParameterError, match="not a parameter"):
+        registry.parameter("stiffness")
