@@ -50,6 +50,7 @@ class Parameter:
             ratio (:mod:`.ratios` applies it: it reads M_T, above this floor) and for a
             reading that no single field sets (K_T, M_T, C_T).
         sets: the dotted field a ratio solves (``a_over_l`` sets ``trunk.clamp_height``).
+        text: what a map's axis and a study's text call it, if not its symbol.
         design: the design study's range and reasons, or None.
     """
 
@@ -65,6 +66,12 @@ class Parameter:
     apply: Callable | None = None
     design: DesignRange | None = None
     sets: str | None = None
+    text: str = ""
+
+    @property
+    def axis(self) -> str:
+        """What a map's axis and a study's text call it: ``text``, else the symbol."""
+        return self.text or self.symbol
 
     @property
     def shown_unit(self) -> str:
@@ -100,10 +107,10 @@ def _setter(path: str) -> Callable:
 
 
 def _field(name, symbol, unit, low, high, label, path, sweep=None, shown=(1.0, ""),
-           design=None) -> Parameter:
+           design=None, text="") -> Parameter:
     """A parameter that one scenario field holds (swept by its path unless ``sweep``)."""
     return Parameter(name, symbol, unit, low, high, label, path, sweep or path, shown,
-                     _setter(path), design)
+                     _setter(path), design, text=text)
 
 
 _INF = math.inf
@@ -149,12 +156,13 @@ PARAMETERS = (
            "impactor.release_angle_deg"),
     _field("gravity", "g", "m/s^2", 1.0, 30.0, "gravity", "impactor.gravity"),
     _field("impact_speed", "u_1", "m/s", 0.01, 50.0, "impact speed", "impactor.impact_speed"),
-    _field("restitution", "e", "1", 0.0, 1.0, "restitution", "contact.restitution",
+    _field("restitution", "e", "1", 0.0, 1.0, "pad restitution", "contact.restitution",
            "restitution", design=_DESIGN["restitution"]),
     _field("contact_stiffness", "k_c", "N/m", 1e2, 1e12, "pad stiffness", "contact.stiffness",
            "contact_stiffness"),
     _field("contact_duration", "tau_c", "s", 1e-6, 0.1, "contact duration",
-           "contact.duration", "contact_duration", (1e3, "ms"), _DESIGN["contact_duration"]),
+           "contact.duration", "contact_duration", (1e3, "ms"), _DESIGN["contact_duration"],
+           "contact duration"),
     _field("t_end", "t_end", "s", 1e-4, 10.0, "simulated time", "t_end"),
     Parameter("a_over_l", "a / l", "1", 0.0, _INF, "clamp height a / l", None, "a_over_l",
               design=_DESIGN["a_over_l"], sets="trunk.clamp_height"),

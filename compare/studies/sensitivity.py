@@ -18,29 +18,39 @@ from pathlib import Path
 
 import numpy as np
 
+from treeimpact.analytic.model.registry import BY_NAME
+
 from ..runs import OK
 
-#: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it).
+
+def _unit(name: str) -> str:
+    """The registry's unit of the input ``name`` (analytic.model.registry)."""
+    return BY_NAME[name].unit
+
+
+#: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it);
+#: names and units are the registry's.
 INPUTS = {
-    "clamp_mass": (1.0, 16.0, "kg",
+    "clamp_mass": (1.0, 16.0, _unit("clamp_mass"),
                    "the harvester's clamp: not weighed (the shipped 4 kg chosen)",
                    "weigh the clamp and the trunk section it grips"),
-    "e_over_g": (0.0, 20.0, "1",
+    "e_over_g": (0.0, 20.0, _unit("e_over_g"),
                  ("E / G of the trunk: 0 is the paper's Euler-Bernoulli beam; green hardwood "
                   "10-20 (Wood Handbook)"),
                  "a static push test at two heights, or the shear modulus of a core sample"),
-    "log10_pad_duration": (math.log10(2e-4), math.log10(2e-2), "log10 s",
+    "log10_pad_duration": (math.log10(2e-4), math.log10(2e-2), _unit("log10_pad_duration"),
                            ("the pad's stiffness as its 1-DOF collision time: a hard impactor "
                             "(0.2 ms) to a padded one (20 ms)"),
                            "the contact force of one strike (a load cell at the pad)"),
-    "restitution": (0.05, 0.5, "1", "the pad's e: not measured (the paper: small)",
+    "restitution": (0.05, 0.5, _unit("restitution"),
+                    "the pad's e: not measured (the paper: small)",
                     "the pendulum's rebound off a rigid stop (a drop test of the pad)"),
-    "root_share": (0.0, 0.9, "1",
+    "root_share": (0.0, 0.9, _unit("root_share"),
                    ("the root's share of the static flexibility at the clamp: 0 reads Table "
                     "1's K_T by eq 47 (a rigid clamp, E 8.9e8 / 1.3e9 Pa), 0.9 the printed E "
                     "(8.9e9 / 12.6e9 Pa) with a compliant root"),
                    "a static push test measuring the root's rotation"),
-    "density": (500.0, 1100.0, "kg/m^3",
+    "density": (500.0, 1100.0, _unit("density"),
                 ("green wood: the trunk's share of M_T (the crown mass follows from the "
                  "measured M_T)"), "weigh a trunk section"),
 }
@@ -59,10 +69,10 @@ CONF_LEVEL = 0.95
 DURATIONS = tuple(float(d) for d in np.geomspace(2e-4, 5e-2, 8))
 #: The scenario field that fixes each input when the file says it was measured
 #: (``[calibration] measured``, analytic.model.scenario.MEASURABLE).
-FIELDS = {"clamp_mass": ("trunk.clamp_mass",), "e_over_g": ("trunk.shear_modulus",),
+FIELDS = {"clamp_mass": (BY_NAME["clamp_mass"].path,), "e_over_g": ("trunk.shear_modulus",),
           "log10_pad_duration": ("contact.duration", "contact.stiffness"),
-          "restitution": ("contact.restitution",), "root_share": ("trunk.base_stiffness",),
-          "density": ("trunk.density",)}
+          "restitution": (BY_NAME["restitution"].path,), "root_share": ("trunk.base_stiffness",),
+          "density": (BY_NAME["density"].path,)}
 
 
 def measured_inputs(scenario) -> tuple[str, ...]:

@@ -15,48 +15,26 @@ themselves, so a point outside a parameter's range raises the parameter's one-li
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.model.ratios import apply_ratio
+from treeimpact.analytic.model.registry import set_field
 
 from .grid import DERIVED_RATIOS, OPTION, SCENARIO, resolve_parameter
 
 
 def _set(scenario: Scenario, target: str, value) -> Scenario:
-    if "." not in target:
-        return dataclasses.replace(scenario, **{target: value})
-    section, field = target.split(".")
-    part = getattr(scenario, section)
-    changes = {field: value}
-    if section == "impactor" and field == "release_angle_deg":
-        if not hasattr(part, "release_angle_deg"):
-            raise ParameterError(f"{target}: the scenario's impactor is a "
-                                 f"{type(part).__name__.lower()}, which has no release angle")
-    elif field not in {f.name for f in dataclasses.fields(part)}:
-        raise ParameterError(f"{target}: the scenario's {section} is a "
-                             f"{type(part).__name__.lower()}, which has no field {field!r}")
-    if section == "contact" and field == "stiffness":
-        changes["duration"] = None  # stiffness and duration are exclusive (analytic.Contact)
-    elif section == "contact" and field == "duration":
-        changes["stiffness"] = None
-    return dataclasses.replace(scenario, **{section: dataclasses.replace(part, **changes)})
+    """The registry's :func:`~treeimpact.analytic.model.registry.set_field`."""
+    return set_field(scenario, target, value)
 
 
 def _ratio(scenario: Scenario, name: str, ratio: float) -> Scenario:
-    from treeimpact.analytic.model.reduction import reduce_trunk
-
-    t = scenario.trunk
-    if name == "a_over_l":
-        value = ratio * t.length
-    elif name == "crown_ratio":
-        value = ratio * t.trunk_mass
-    elif name == "mass_ratio":
-        value = ratio * reduce_trunk(t).dynamic_mass
-    else:  # pragma: no cover - resolve_parameter admits only DERIVED_RATIOS
+    """The registry's ratio ``name`` applied (analytic.model.ratios)."""
+    if name not in DERIVED_RATIOS:  # pragma: no cover - resolve_parameter admits only these
         raise ParameterError(f"--grid {name!r}: unknown ratio")
-    return _set(scenario, DERIVED_RATIOS[name][0], value)
+    return apply_ratio(scenario, name, ratio)
 
 
 def apply_point(scenario: Scenario, point: dict) -> tuple[Scenario, dict]:

@@ -17,6 +17,7 @@ import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Billet, Contact, Pendulum, Scenario, Trunk
+from treeimpact.analytic.model.registry import BY_NAME, PARAMETERS
 
 #: Bounds of a grid: values per axis and points in all (the --preset full study has 540).
 MAX_AXIS_VALUES = 1000
@@ -42,19 +43,16 @@ RECORD_FIELDS = {"rate": (float, 0.0, False, "Hz"), "noise": (float, 0.0, True, 
                  "seed": (int, 0, True, "")}
 
 #: Short names of scenario fields: the spelling every table, CLI flag and JSON key uses
-#: (an axis given by its dotted field is stored under its short name).
-ALIASES = {
-    "restitution": "contact.restitution",
-    "contact_stiffness": "contact.stiffness",
-    "contact_duration": "contact.duration",
-}
+#: (an axis given by its dotted field is stored under its short name); the registry's sweep
+#: names (analytic.model.registry).
+ALIASES = {p.sweep: p.path for p in PARAMETERS if p.path is not None and p.sweep != p.path}
 SHORT_NAMES = {target: name for name, target in ALIASES.items()}
 
 #: Derived ratios: (underlying dotted parameter, meaning); applied in this order.
 DERIVED_RATIOS = {
-    "a_over_l": ("trunk.clamp_height", "a / l: clamp (impact) height over trunk length"),
-    "crown_ratio": ("trunk.crown_mass", "m_f / m_trunk: crown mass over trunk mass rho A l"),
-    "mass_ratio": ("impactor.mass", "m / M_T: impactor mass over the dynamic mass (eq 7)"),
+    "a_over_l": (BY_NAME["a_over_l"].sets, "a / l: clamp (impact) height over trunk length"),
+    "crown_ratio": (BY_NAME["crown_ratio"].sets, "m_f / m_trunk: crown mass over trunk mass rho A l"),
+    "mass_ratio": (BY_NAME["mass_ratio"].sets, "m / M_T: impactor mass over the dynamic mass (eq 7)"),
 }
 
 

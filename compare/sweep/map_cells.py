@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from treeimpact.analytic.model.registry import PARAMETERS
 from treeimpact.compare.rungs import RungKind
 from treeimpact.compare.verdicts import validity_tolerance
 
@@ -39,20 +40,19 @@ def _tolerance_of(tolerance, metric: str) -> float:
     return float(DEFAULT_TOLERANCE if tolerance is None else tolerance)
 
 
-#: How a swept parameter reads on a map and in the study's text: (name, display scale, unit);
-#: a contact duration is swept in s and read in ms, as the report's text gives it.
-_AXES = {"restitution": ("e", 1.0, "1"), "segments": ("segments", 1.0, ""),
-         "trunk.crown_mass": ("m_f", 1.0, "kg"), "impactor.mass": ("m", 1.0, "kg"),
-         "dt": ("dt", 1.0, "s"), "contact_stiffness": ("k_c", 1.0, "N/m"),
-         "trunk.clamp_height": ("a", 1.0, "m"), "t_end": ("t_end", 1.0, "s"),
-         "contact_duration": ("contact duration", 1e3, "ms"), "a_over_l": ("a / l", 1.0, ""),
-         "crown_ratio": ("m_f / m_trunk", 1.0, ""), "mass_ratio": ("m / M_T", 1.0, "")}
+#: How a swept parameter reads on a map and in the study's text: (name, display scale, unit),
+#: from the registry (analytic.model.registry): a contact duration is swept in s and read in
+#: ms, as the report's text gives it; engine options (segments, dt) are not physical inputs.
+_AXES = {p.sweep: (p.axis, p.shown[0], p.shown_unit) for p in PARAMETERS
+         if p.sweep is not None} | {"segments": ("segments", 1.0, ""), "dt": ("dt", 1.0, "s")}
+#: The units a figure's label leaves out: a dimensionless number's.
+_NO_UNIT = ("", "1")
 
 
 def _label(name: str) -> str:
     """A swept parameter's axis label with its display unit: 'contact duration (ms)'."""
     text, _, unit = _AXES.get(name, (name, 1.0, ""))
-    return f"{text} ({unit})" if unit else text
+    return f"{text} ({unit})" if unit not in _NO_UNIT else text
 
 
 def _shown(name: str, value) -> float:
@@ -67,7 +67,7 @@ def point_text(pairs) -> str:
     for k, v in pairs:
         text, _, unit = _AXES.get(k, (k, 1.0, ""))
         if isinstance(v, (int, float)) and not isinstance(v, bool):
-            shown = f"{_shown(k, v):.3g}" + (f" {unit}" if unit not in ("", "1") else "")
+            shown = f"{_shown(k, v):.3g}" + (f" {unit}" if unit not in _NO_UNIT else "")
         else:
             shown = str(v)
         out.append(f"{text} = {shown}")

@@ -6,11 +6,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from treeimpact.analytic.model.registry import BY_NAME
 
-#: Short labels of the sensitivity study's inputs and outputs on its figure.
-INPUT_LABELS = {"clamp_mass": "clamp\nmass", "e_over_g": "E / G\n(shear)",
-                 "log10_pad_duration": "pad\nstiffness", "restitution": "pad e",
-                 "root_share": "root\ncompliance", "density": "wood\ndensity"}
+
+#: Short labels of the sensitivity study's inputs and outputs on its figure: an input's is
+#: the registry's label on two lines (analytic.model.registry).
+INPUT_LABELS = {n: "\n".join(BY_NAME[n].label.rsplit(" ", 1))
+                for n in ("clamp_mass", "e_over_g", "log10_pad_duration", "restitution",
+                          "root_share", "density")}
 OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
                   "gap.crown_peak": "crown peak gap",
                   "gap.crown_peak_acceleration": "crown accel. gap",
