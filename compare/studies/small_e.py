@@ -226,10 +226,11 @@ def small_e_sweep(scenario, out):
     into ``out``: the exact solver at every e of :func:`grid_of`, :func:`errors_at_run` on
     each."""
     from ..runs import resolve_scenario
+    from ..sweep.grid import Grid, value_axis
     from ..sweep.run import SweepSpec
 
     scen = resolve_scenario(scenario)
-    return SweepSpec(scen, ["restitution=" + ",".join(repr(e) for e in grid_of(scen))],
+    return SweepSpec(scen, Grid((value_axis("restitution", grid_of(scen)),)),
                      Path(out), ("analytic",), identify=True,
                      analysis="treeimpact.compare.studies.small_e:errors_at_run")
 

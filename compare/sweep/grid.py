@@ -16,7 +16,8 @@ from enum import StrEnum
 import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.parameters import Billet, Contact, Pendulum, Scenario, Trunk
+from treeimpact.analytic.model.parameters import (Billet, Contact, Pendulum, Scenario, Trunk,
+                                                  check_range)
 from treeimpact.analytic.model.registry import BY_NAME, PARAMETERS
 
 #: Bounds of a grid: values per axis and points in all (the --preset full study has 540).
@@ -346,6 +347,16 @@ class Design(Grid):
     def specs(self) -> list[str]:
         """One line describing the design (its size and names)."""
         return [f"design of {len(self.design)} points over {', '.join(self.names)}"]
+
+
+def value_axis(name: str, values) -> Axis:
+    """An :class:`Axis` of the scenario input ``name`` (a registry sweep name) over the
+    numbers ``values``, given as numbers (no spec text to parse): what a study that varies
+    an input passes. ParameterError for an unknown name, a non-finite or repeated value."""
+    values = tuple(check_range(f"{name}", v) for v in values)
+    if len(set(values)) != len(values):
+        raise ParameterError(f"{name}: repeated values {values}")
+    return Axis(resolve_parameter(name), values)
 
 
 def parse_grid(specs, flag: str = "--grid") -> Grid:
