@@ -108,3 +108,59 @@ def test_lookup_by_name_path_or_sweep():
     assert registry.parameter("trunk.crown_mass") is registry.BY_NAME["crown_mass"]
     with pytest.raises(ParameterError, match="not a parameter"):
         registry.parameter("stiffness")
+
+
+def _scenario_options():
+    """(option name, Option) of every backend option that overrides a scenario input."""
+    from treeimpact.analytic.model import options
+    from treeimpact.compare.backends import BACKENDS
+
+    shared = {id(o) for o in (options.RESTITUTION, options.T_END, options.CONTACT_STIFFNESS,
+                              options.CONTACT_DURATION)}
+    out = []
+    for backend in BACKENDS.values():
+        try:
+            table = backend.options()
+        except ParameterError:  # a backend not installed here
+            continue
+        out += [(n, o) for n, o in table.items() if id(o) in shared]
+    return out
+
+
+def test_every_place_spells_inputs_as_the_registry():
+    """CLI options, sweep axes, map axes, the sensitivity and design studies' inputs: each
+    physical input under the registry's name and in its unit."""
+    from treeimpact.compare.studies import design, sensitivity
+    from treeimpact.compare.sweep.grid import ALIASES
+    from treeimpact.compare.sweep.map_cells import _AXES
+
+    found = _scenario_options()
+    assert {n for n, _ in found} == {"restitution", "t_end", "contact_stiffness",
+                                     "contact_duration"}
+    for name, option in found:  # the CLI flag --NAME and the sweep axis NAME
+        p = registry.BY_SWEEP[name]
+        assert (option.unit, option.low) == (p.unit, p.low), name
+    for short, path in ALIASES.items():
+        assert registry.BY_SWEEP[short].path == path
+    for name, (_, factor, unit) in _AXES.items():
+        if name in ("segments", "dt"):  # engine options, not physical inputs
+            continue
+        p = registry.BY_SWEEP[name]
+        assert (factor, unit) == (p.shown[0], p.shown_unit), name
+    for name, row in sensitivity.INPUTS.items():
+        assert row[2] == registry.BY_NAME[name].unit, name
+    for name, fields in sensitivity.FIELDS.items():
+        assert all(f in registry.BY_PATH for f in fields), name
+    for name, inp in design.INPUTS.items():
+        p = registry.BY_NAME[name]
+        assert (inp.unit, inp.low, inp.high, inp.allowed) == (
+            p.unit, p.design.low, p.design.high, p.design.allowed), name
+
+
+def test_report_input_keys_are_registry_names():
+    """The JSON keys the report writes for the sensitivity study's inputs are registry
+    names (compare.report.base reads their units and labels by these keys)."""
+    from treeimpact.compare.sweep.sensitivity_figure import INPUT_LABELS
+
+    assert set(INPUT_LABELS) <= set(registry.BY_NAME)
+    assert INPUT_LABELS["log10_pad_duration"] == "pad contact\nduration"  # not 'stiffness'

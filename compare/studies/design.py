@@ -24,6 +24,7 @@ from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.two_body import two_body_model
+from treeimpact.analytic.model.registry import BY_NAME
 
 from .small_e import at_restitution, errors_of_run
 
@@ -73,24 +74,22 @@ class Input:
                                  f"allowed {a:g} <= low < high <= {b:g} {self.unit}")
 
 
-#: The designer's choices, the sweep's names (compare.sweep.grid).
-INPUTS = {
-    "a_over_l": Input(
-        "a_over_l", "1", 0.1, 0.6, (0.05, 1.0), "clamp height a/l",
-        "a shaker clamps between knee height and the first scaffold: 0.1-0.6 of the "
-        "crown's height l on orchard trees (the shipped trees clamp at 0.315 m of 1 m)"),
-    "mass_ratio": Input(
-        "mass_ratio", "1", 0.2, 5.0, (0.05, 20.0), "mass ratio m/M_T",
-        "a light billet (a fifth of the tree's M_T) to a heavy pendulum (5 M_T); the "
-        "paper's pendulum is 1.2 M_T on central-leader", Scale.LOG),
-    "contact_duration": Input(
-        "contact_duration", "s", 2e-4, 5e-2, (1e-5, 0.1), "contact duration",
-        "a hard impactor (0.2 ms, the shipped 0.5 ms) to a thick rubber pad (50 ms), the "
-        "report's contact scan's range", Scale.LOG, 1e3, "ms"),
-    "restitution": Input(
-        "restitution", "1", 0.0, 0.9, (0.0, 0.95), "restitution e",
-        "a dead pad (0) to a bouncy one (0.9); the paper assumes e small, the shipped 0.1"),
-}
+#: Each design input's label in the study's titles and text.
+_LABELS = {"a_over_l": "clamp height a/l", "mass_ratio": "mass ratio m/M_T",
+           "contact_duration": "contact duration", "restitution": "restitution e"}
+
+
+def _input(name: str) -> Input:
+    """The design input ``name`` as the registry declares it (its unit, map range, allowed
+    range, reasons, scale and display unit; analytic.model.registry)."""
+    p = BY_NAME[name]
+    d = p.design
+    return Input(name, p.unit, d.low, d.high, d.allowed, _LABELS[name], d.why,
+                 Scale.LOG if d.log else Scale.LINEAR, p.shown[0], p.shown[1])
+
+
+#: The designer's choices, the sweep's names (compare.sweep.grid), from the registry.
+INPUTS = {name: _input(name) for name in _LABELS}
 #: What the map does not vary: the tree as its scenario file gives it.
 HELD = ("the trunk's length, diameter, wood (E, density), damping, root spring, clamp mass "
         "and crown mass; the release (impact speed u1 from the pendulum's l_e and angle); "
