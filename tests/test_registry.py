@@ -164,3 +164,10 @@ def test_report_input_keys_are_registry_names():
 
     assert set(INPUT_LABELS) <= set(registry.BY_NAME)
     assert INPUT_LABELS["log10_pad_duration"] == "pad contact\nduration"  # not 'stiffness'
+
+
+def test_the_docs_table_is_the_registry_s():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "parameters.md").read_text()
+    assert registry.registry_table() in page

@@ -194,3 +194,19 @@ def parameter(name: str) -> Parameter:
         if name in table:
             return table[name]
     raise ParameterError(f"{name!r}: not a parameter; allowed: {', '.join(BY_NAME)}")
+
+
+def _cell(x: float) -> str:
+    return "inf" if math.isinf(x) else f"{x:g}"
+
+
+def registry_table() -> str:
+    """The registry as a Markdown table (docs/parameters.md holds it): name, symbol, unit,
+    range, label, scenario path (or the field a ratio sets) and sweep name."""
+    rows = ["| name | symbol | unit | range | label | sets | sweep |",
+            "|---|---|---|---|---|---|---|"]
+    for p in PARAMETERS:
+        sets = f"`{p.path}`" if p.path else (f"`{p.sets}` (ratio)" if p.sets else "a reading")
+        rows.append(f"| `{p.name}` | {p.symbol} | {p.unit} | [{_cell(p.low)}, {_cell(p.high)}] "
+                    f"| {p.label} | {sets} | {f'`{p.sweep}`' if p.sweep else ''} |")
+    return "\n".join(rows) + "\n"
