@@ -149,7 +149,7 @@ def options_text(options: dict, units: dict | None = None, sep: str = ", ") -> s
 
 
 def input_name(key: str) -> str:
-    """An unmeasured input of the sensitivity study in words ('pad stiffness' for
+    """An unmeasured input of the sensitivity study in words ('pad contact duration' for
     log10_pad_duration), as its figure labels it; the key if unknown."""
     return INPUT_LABELS.get(key, key).replace("\n", " ")
 
