@@ -3,7 +3,7 @@ words, range, unit and meaning), so the command line, the sweeps' grids and the 
 read one table, the backend's ``OPTIONS`` (option name -> :class:`Option`).
 
 The options every backend shares override a scenario field for one run and take its
-plausibility range (:data:`~treeimpact.analytic.model.parameters.LIMITS`).
+plausibility range, unit and meaning from the registry (:mod:`.registry`).
 """
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
 
-from .parameters import LIMITS, check_range
+from .parameters import check_range
+from .registry import BY_PATH
 
 
 @dataclass(frozen=True)
@@ -60,17 +61,15 @@ def _span(option: Option) -> str:
     return f"{'(' if option.low_open else '['}{low}, {high}]"
 
 
-def scenario_option(field: str, help: str) -> Option:
-    """An option that overrides the scenario field ``field`` (dotted, a key of LIMITS) for
-    one run, with that field's range and unit; ``help``: its one-line description."""
-    low, high, unit = LIMITS[field]
-    return Option(float, help, unit, low, None if math.isinf(high) else high)
+def scenario_option(field: str) -> Option:
+    """An option that overrides the scenario field ``field`` (dotted, a registry path) for
+    one run, with the registry's range, unit and meaning (its help)."""
+    p = BY_PATH[field]
+    return Option(float, p.meaning, p.unit, p.low, None if math.isinf(p.high) else p.high)
 
 
 #: The options that override the scenario for one run (every backend takes some of them).
-RESTITUTION = scenario_option("contact.restitution", "restitution e of the contact (eq 21)")
-T_END = scenario_option("t_end", "simulated time")
-CONTACT_STIFFNESS = scenario_option("contact.stiffness", "the pad's stiffness k_c")
-CONTACT_DURATION = scenario_option(
-    "contact.duration", "the pad, as the undamped collision time pi sqrt(mu / k_c) of the "
-    "1-DOF pair")
+RESTITUTION = scenario_option("contact.restitution")
+T_END = scenario_option("t_end")
+CONTACT_STIFFNESS = scenario_option("contact.stiffness")
+CONTACT_DURATION = scenario_option("contact.duration")

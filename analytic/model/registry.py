@@ -51,6 +51,7 @@ class Parameter:
             reading that no single field sets (K_T, M_T, C_T).
         sets: the dotted field a ratio solves (``a_over_l`` sets ``trunk.clamp_height``).
         text: what a map's axis and a study's text call it, if not its symbol.
+        meaning: one line on what it is (a command-line option's help), or "".
         design: the design study's range and reasons, or None.
     """
 
@@ -67,6 +68,7 @@ class Parameter:
     design: DesignRange | None = None
     sets: str | None = None
     text: str = ""
+    meaning: str = ""
 
     @property
     def axis(self) -> str:
@@ -107,10 +109,10 @@ def _setter(path: str) -> Callable:
 
 
 def _field(name, symbol, unit, low, high, label, path, sweep=None, shown=(1.0, ""),
-           design=None, text="") -> Parameter:
+           design=None, text="", meaning="") -> Parameter:
     """A parameter that one scenario field holds (swept by its path unless ``sweep``)."""
     return Parameter(name, symbol, unit, low, high, label, path, sweep or path, shown,
-                     _setter(path), design, text=text)
+                     _setter(path), design, text=text, meaning=meaning)
 
 
 _INF = math.inf
@@ -157,13 +159,16 @@ PARAMETERS = (
     _field("gravity", "g", "m/s^2", 1.0, 30.0, "gravity", "impactor.gravity"),
     _field("impact_speed", "u_1", "m/s", 0.01, 50.0, "impact speed", "impactor.impact_speed"),
     _field("restitution", "e", "1", 0.0, 1.0, "pad restitution", "contact.restitution",
-           "restitution", design=_DESIGN["restitution"]),
+           "restitution", design=_DESIGN["restitution"],
+           meaning="restitution e of the contact (eq 21)"),
     _field("contact_stiffness", "k_c", "N/m", 1e2, 1e12, "pad stiffness", "contact.stiffness",
-           "contact_stiffness"),
+           "contact_stiffness", meaning="the pad's stiffness k_c"),
     _field("contact_duration", "tau_c", "s", 1e-6, 0.1, "contact duration",
            "contact.duration", "contact_duration", (1e3, "ms"), _DESIGN["contact_duration"],
-           "contact duration"),
-    _field("t_end", "t_end", "s", 1e-4, 10.0, "simulated time", "t_end"),
+           "contact duration", meaning="the pad, as the undamped collision time "
+           "pi sqrt(mu / k_c) of the 1-DOF pair"),
+    _field("t_end", "t_end", "s", 1e-4, 10.0, "simulated time", "t_end",
+           meaning="simulated time"),
     Parameter("a_over_l", "a / l", "1", 0.0, _INF, "clamp height a / l", None, "a_over_l",
               design=_DESIGN["a_over_l"], sets="trunk.clamp_height"),
     Parameter("crown_ratio", "m_f / m_trunk", "1", 0.0, _INF, "crown mass / trunk mass",
