@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from treeimpact.analytic.identify.conclusion import Conclusion
 from treeimpact.analytic.identify.diagnosis import Diagnosis, DiagnosisKind  # noqa: F401 (public)
+from treeimpact.analytic.identify.intervals import UNITS as FIT_UNITS
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS, Trajectory
 
@@ -254,11 +255,8 @@ class Estimate:
     unit: str
 
 
-#: The units of the record fit's quantities (SI).
-ESTIMATE_UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "1",
-                  "pair_damping_ratio": "1", "restitution": "1", "E": "Pa",
-                  "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m",
-                  "x_drift": "m/s", "x_drift2": "m/s^2", "y_offset": "m"}
+#: The units of the record fit's quantities (SI): analytic.identify.intervals.UNITS.
+ESTIMATE_UNITS = FIT_UNITS
 
 
 @dataclass(frozen=True)

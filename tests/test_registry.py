@@ -171,3 +171,20 @@ def test_the_docs_table_is_the_registry_s():
 
     page = (Path(__file__).resolve().parents[1] / "docs" / "parameters.md").read_text()
     assert registry.registry_table() in page
+
+
+def test_unit_tables_agree_with_the_registry():
+    """Every unit table that names a registry quantity (by name or symbol: K_T, M_T, C_T,
+    E, restitution) gives the registry's unit, and "1" (never "-") for a dimensionless one."""
+    from treeimpact.analytic.identify.intervals import UNITS as FIT
+    from treeimpact.compare.api_results import ESTIMATE_UNITS
+    from treeimpact.compare.commands.simulate import MODEL_UNITS
+    from treeimpact.compare.report.paper import UNITS as PAPER
+
+    for table in (FIT, ESTIMATE_UNITS, MODEL_UNITS, PAPER):
+        assert "-" not in table.values()
+        for key, unit in table.items():
+            if key in registry.BY_NAME or key in registry.BY_SYMBOL:
+                assert unit == registry.units_of(key)[key], key
+    with pytest.raises(KeyError):
+        registry.units_of("k_t")

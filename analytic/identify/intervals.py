@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 
+from treeimpact.analytic.model.registry import units_of
+
 from .fit_parameters import E_MAX, ParameterSet, Slot
 from .fitter import Fit, Fitter, Problem
 from .one_impact import RIDGE, on_ridge
@@ -26,8 +28,8 @@ DAMPING_RATIO_FORMULAS = {
 #: Every quantity a fit reports (SI; y_offset only with a pendulum record), and their units.
 QUANTITIES = ("M_T", "K_T", "C_T", *DAMPING_RATIOS, "restitution", "E", "omega_1", "V_1",
               "t0", "x_offset", "x_drift", "x_drift2")
-UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
-         "pair_damping_ratio": "-", "restitution": "-", "E": "Pa", "omega_1": "rad/s",
+UNITS = {**units_of("M_T", "K_T", "C_T"), "trunk_damping_ratio": "1",
+         "pair_damping_ratio": "1", **units_of("restitution", "E"), "omega_1": "rad/s",
          "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s", "x_drift2": "m/s^2",
          "y_offset": "m"}
 #: The quantities that are positive by nature (intervals in their logarithm).

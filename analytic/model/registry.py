@@ -190,6 +190,23 @@ BY_NAME = {p.name: p for p in PARAMETERS}
 BY_PATH = {p.path: p for p in PARAMETERS if p.path is not None}
 #: sweep axis name -> Parameter.
 BY_SWEEP = {p.sweep: p for p in PARAMETERS if p.sweep is not None}
+#: the paper's symbol -> Parameter (M_T, K_T, C_T, E, ...).
+BY_SYMBOL = {p.symbol: p for p in PARAMETERS}
+
+
+def units_of(*keys: str) -> dict:
+    """{key: the registry's unit} for keys that are a parameter's name, path, sweep name or
+    symbol (``"K_T"`` -> ``"N/m"``): what a unit table takes from the registry. KeyError
+    for a key that is none of these."""
+    out = {}
+    for key in keys:
+        for table in (BY_NAME, BY_PATH, BY_SWEEP, BY_SYMBOL):
+            if key in table:
+                out[key] = table[key].unit
+                break
+        else:
+            raise KeyError(f"{key!r}: not a parameter of the registry")
+    return out
 
 
 def parameter(name: str) -> Parameter:

@@ -24,7 +24,7 @@ from treeimpact.compare.figure_text import save_figure
 from treeimpact.compare.provenance import provenance
 
 from ..exits import ExitCode
-from ._common import number
+from ._common import number, unit_text
 
 NAME = "identify"
 #: Removed spellings -> their names now (compare.names).
@@ -32,10 +32,6 @@ RENAMED = {"release_angle": "release_angle_deg"}
 HELP = ("tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test record, with 95 %% "
         "intervals")
 
-UNITS = {"M_T": "kg", "K_T": "N/m", "C_T": "N s/m", "trunk_damping_ratio": "-",
-         "pair_damping_ratio": "-", "restitution": "-", "E": "Pa",
-         "omega_1": "rad/s", "V_1": "m/s", "t0": "s", "x_offset": "m", "x_drift": "m/s",
-         "x_drift2": "m/s^2", "y_offset": "m"}
 
 
 def add_arguments(sp: argparse.ArgumentParser) -> None:
@@ -231,7 +227,7 @@ def _print_values(fit, reading: dict) -> None:
         vtext = f"{v:>13.5g}" if fit.determined[k] else f"{'not fixed':>13}"
         itext = (f"{fit.held[k]:>13}{'':>13}" if k in fit.held
                  else f"{lo:>13.5g}{hi:>13.5g}")
-        print(f"  {k:<20}{vtext}{itext}  {UNITS[k]:<6}{ptext:>19}")
+        print(f"  {k:<20}{vtext}{itext}  {unit_text(UNITS[k]):<6}{ptext:>19}")
     for name, formula in DAMPING_RATIO_FORMULAS.items():
         print(f"  {name} = {formula}")
     if fit.note:

@@ -8,6 +8,7 @@ import json
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import METRIC_UNITS
+from treeimpact.analytic.model.registry import units_of
 from treeimpact.compare.backends import BACKENDS, get_backend
 from treeimpact.compare.recording import DEFAULTS, REST, check_sampling, sample
 
@@ -43,7 +44,8 @@ def add_arguments(sp) -> None:
 
 
 #: Units of the ``model`` keys every backend reports (README); others print without one.
-MODEL_UNITS = {"M_T": "kg", "C_T": "N s/m", "K_T": "N/m", "m": "kg", "k": "N/m", "restitution": "1",
+MODEL_UNITS = {**units_of("M_T", "C_T", "K_T"), "m": "kg", "k": "N/m",
+               **units_of("restitution"),
                "u1": "m/s", "dt": "s", "contact_stiffness": "N/m", "contact_damping": "N s/m",
                "engine_contact_stiffness": "N/m", "engine_contact_damping": "N s/m",
                "effective_mass": "kg",

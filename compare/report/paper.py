@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from treeimpact.analytic.results import to_jsonable
+from treeimpact.analytic.model.registry import units_of
 
 from .base import Section
 
-UNITS = {"u1": "m/s", "V": "m/s", "x0": "m", "T0": "s", "A_x": "m s", "M_T": "kg",
-         "K_T": "N/m", "E": "Pa", "b": "1/s", "omega_n": "rad/s", "xi": "1",
+UNITS = {"u1": "m/s", "V": "m/s", "x0": "m", "T0": "s", "A_x": "m s", **units_of("M_T"),
+         **units_of("K_T", "E"), "b": "1/s", "omega_n": "rad/s", "xi": "1",
          "energy_loss_pct": "%"}
 
 
