@@ -213,7 +213,8 @@ class ContactSide:
             res["achieved"][self.achieved_key]
 
     def collision_at(self, law: dict, mu: float, m1: float, m2: float, dt: float):
-        """:attr:`collision`, None also where the engine refuses the setting."""
+        """:attr:`collision` for ``law`` on the reduced mass ``mu`` (kg) of bodies of ``m1``
+        and ``m2`` kg at ``dt`` (s); None also where the engine refuses the setting."""
         try:
             return self.collision(law, mu, m1, m2, dt)
         except ParameterError:
