@@ -295,9 +295,11 @@ def engine_registered(engine: Engine):
         unregister_engine(engine.name)
 
 
-def engines() -> tuple:
-    """The names of the engines registered now, in registration order."""
-    return tuple(ENGINE_REGISTRY)
+def engines(*, contact: bool = False) -> tuple:
+    """The names of the engines registered now, in registration order (``contact``: only
+    those that give contact settings, ``treeimpact contact``'s)."""
+    return tuple(name for name, e in ENGINE_REGISTRY.items()
+                 if not contact or e.contact is not None)
 
 
 register_engine(Engine(

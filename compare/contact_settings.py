@@ -15,6 +15,7 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import check_range
 
 from .backends import ENGINE_REGISTRY, quiet_stdout
+from .backends import engines as registered_engines
 from .contact_engines import SPEED
 
 #: Fewest steps of the target collision the command accepts (0.5e5 steps per collision at
@@ -22,7 +23,7 @@ from .contact_engines import SPEED
 MAX_STEPS_PER_COLLISION = 50_000
 #: The registered engines that give contact settings (their registration's ``contact``),
 #: in the order they print.
-ENGINES = tuple(name for name, e in ENGINE_REGISTRY.items() if e.contact is not None)
+ENGINES = registered_engines(contact=True)
 #: Allowed ranges (SI): a milligram to a thousand tonnes, the pad's stiffness and damping,
 #: the touch duration; beyond them the arithmetic leaves double precision.
 MASS_RANGE = (1e-6, 1e9)
@@ -180,7 +181,7 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
                      touch_duration=None, contact_stiffness=None, contact_damping=None,
                      dt=None, engines=ENGINES) -> dict:
     """Everything ``treeimpact contact`` prints (its JSON): ``inputs``, ``target``
-    (:func:`target_law`) and, for each of ``engines`` ("mujoco", "bullet"), its settings
+    (:func:`target_law`) and, for each of ``engines`` (:data:`ENGINES`), its settings
     and simulated collisions or ``{"error", "largest_dt"}`` when it cannot hold ``dt``, with
     ``holds_target`` (within :data:`HOLD_TOLERANCE`) and, where not, ``what_holds``
     (each engine's part from its registration's ContactSide, compare.backends.Engine).

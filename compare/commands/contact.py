@@ -12,7 +12,7 @@ import math
 from treeimpact.analytic.errors import NotAchieved, ParameterError
 
 from ..backends import ENGINE_REGISTRY
-from ..contact_settings import ENGINES as CONTACT_ENGINES
+from ..backends import engines as registered_engines
 from ..exits import ExitCode
 from ._common import number
 
@@ -24,7 +24,8 @@ RENAMED = {"duration": "touch_duration", "stiffness": "contact_stiffness",
            "damping": "contact_damping"}
 #: --engine's words -> the engines they ask for: each registered engine that gives contact
 #: settings (compare.backends.ENGINE_REGISTRY), and "both" for all of them.
-ENGINE_CHOICES = {**{e: (e,) for e in CONTACT_ENGINES}, "both": CONTACT_ENGINES}
+ENGINE_CHOICES = {**{e: (e,) for e in registered_engines(contact=True)},
+                  "both": registered_engines(contact=True)}
 
 
 def add_arguments(sp) -> None:
