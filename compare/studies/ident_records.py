@@ -35,13 +35,13 @@ class Case:
 
 
 def _scenario(case: Case):
+    """The case's scenario: its e and crown ratio applied by the registry
+    (analytic.model.ratios.apply_input)."""
+    from treeimpact.analytic.model.ratios import apply_input
     from treeimpact.compare.runs import resolve_scenario
-    from treeimpact.compare.sweep.apply import apply_point
 
-    scen, _ = apply_point(resolve_scenario(case.scenario),
-                          {"contact.restitution": case.restitution,
-                           "crown_ratio": case.crown_ratio})
-    return scen
+    scen = apply_input(resolve_scenario(case.scenario), "restitution", case.restitution)
+    return apply_input(scen, "crown_ratio", case.crown_ratio)
 
 
 def sampled_record(trajectory, rate: float = RATE, noise: float = NOISE, seed: int = 0, *,
