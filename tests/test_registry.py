@@ -188,3 +188,18 @@ def test_unit_tables_agree_with_the_registry():
                 assert unit == registry.units_of(key)[key], key
     with pytest.raises(KeyError):
         registry.units_of("k_t")
+
+
+def test_small_e_sweep_passes_values_not_text():
+    """The small-e sweep's grid holds the e values themselves (issue 42 item 3), the same
+    grid the spec text it used to write parsed to; a bad value is refused."""
+    from treeimpact.analytic.errors import ParameterError
+    from treeimpact.compare.studies.small_e import grid_of, small_e_sweep
+    from treeimpact.compare.sweep.grid import parse_grid, value_axis
+
+    s = _central()
+    grid = small_e_sweep(s, "unused").grid
+    assert grid.axes[0].values == grid_of(s)
+    assert grid == parse_grid(["restitution=" + ",".join(repr(e) for e in grid_of(s))])
+    with pytest.raises(ParameterError):
+        value_axis("restitution", (0.1, float("nan")))

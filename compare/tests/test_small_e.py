@@ -262,18 +262,3 @@ def test_the_trunk_decides_the_heavy_crown_s_gaps_only_at_small_e():
     assert holds_text(x) == f"0: +43 % at e = 0; moves > 5 points from e = {bracket_text((lo, hi))}"
     text = in_short([], {"realistic-crown": ans})["small_e"]
     assert "beyond that e moves them too" in text and f"x_max up to e = {lo:.2f}" in text
-
-
-def test_small_e_sweep_passes_values_not_text():
-    """The small-e sweep's grid holds the e values themselves (issue 42 item 3), the same
-    grid the spec text it used to write parsed to; a bad value is refused."""
-    from treeimpact.analytic.errors import ParameterError
-    from treeimpact.compare.studies.small_e import grid_of, small_e_sweep
-    from treeimpact.compare.sweep.grid import parse_grid, value_axis
-
-    s = load_scenario("central-leader")
-    grid = small_e_sweep(s, "unused").grid
-    assert grid.axes[0].values == grid_of(s)
-    assert grid == parse_grid(["restitution=" + ",".join(repr(e) for e in grid_of(s))])
-    with pytest.raises(ParameterError):
-        value_axis("restitution", (0.1, float("nan")))
