@@ -38,6 +38,8 @@ import _results  # noqa: E402
 SLICE = ("a_over_l=0.1:0.6:4", "mass_ratio=0.2,0.6,1.7,5", "contact_duration=2e-4,1e-3,1e-2,5e-2",
          "restitution=0:0.9:4")
 FULL_GRID_CELLS = 10 * 8 * 8 * 10
+#: The metrics the spot checks compare (compare.studies.design_engines.METRICS).
+METRICS = ("x_max", "energy_delivered", "crown_peak_acceleration")
 
 
 def _pair_map(workers: int, folder: Path) -> float:
@@ -101,7 +103,29 @@ def _spot_numbers(spot: dict) -> dict:
                     key = f"spot.worst_pct.{label.replace(' ', '_')}.{metric}"
                     worst[key] = max(worst.get(key, 0.0), abs(100.0 * g["rel"]))
     out |= {"spot.comparisons": total, "spot.within": within}
-    return out | {k: round(v, 2) for k, v in worst.items()}
+    return out | {k: round(v, 2) for k, v in worst.items()} | _corner_numbers(spot["cells"])
+
+
+def _corner_numbers(cells: list) -> dict:
+    """Two corners in numbers (%): the hard pad at the low clamp (each metric's [low, high]
+    over the engine trunks) and the long pad at the high clamp (each trunk's difference on
+    the energy delivered, and the largest |difference| there over trunks and metrics)."""
+    a = [c["point"]["a_over_l"] for c in cells]
+    pad = [c["point"]["contact_duration"] for c in cells]
+    out = {}
+    for name, at in (("hard_low", (min(a), min(pad))), ("long_high", (max(a), max(pad)))):
+        cell = next(c for c in cells
+                    if (c["point"]["a_over_l"], c["point"]["contact_duration"]) == at)
+        rungs = {k: g for k, g in cell["rungs"].items() if "error" not in g}
+        for m in METRICS:
+            rel = [100.0 * g[m]["rel"] for g in rungs.values()]
+            out[f"spot.{name}.pct.{m}"] = [round(min(rel), 2), round(max(rel), 2)]
+            for label, g in rungs.items():
+                out[f"spot.{name}.{label.replace(' ', '_')}.pct.{m}"] = round(
+                    100.0 * g[m]["rel"], 2)
+        out[f"spot.{name}.max_abs_pct"] = round(max(
+            abs(100.0 * g[m]["rel"]) for g in rungs.values() for m in METRICS), 2)
+    return out
 
 
 def main(argv=None) -> int:
