@@ -102,14 +102,16 @@ def test_durations(log: Path) -> dict:
     """A pytest durations log (``--durations=0`` lines, or one ``SECONDSs WHEN NODEID`` line
     per phase): seconds in total, per file, and in the engine files (:data:`ENGINE_FILES`)."""
     per_file: dict = defaultdict(float)
+    calls = 0
     for line in log.read_text().splitlines():
         m = _LINE.match(line.strip())
         if m:
             per_file[m.group(3)] += float(m.group(1))
+            calls += m.group(2) == "call"
     total = sum(per_file.values())
     engine = sum(s for f, s in per_file.items() if any(e in f for e in ENGINE_FILES))
     top = dict(sorted(per_file.items(), key=lambda kv: -kv[1])[:15])
-    return {"total_s": total, "engine_files_s": engine, "files": len(per_file),
+    return {"total_s": total, "engine_files_s": engine, "files": len(per_file), "tests": calls,
             "top_files_s": {k: round(v, 1) for k, v in top.items()}}
 
 
@@ -157,13 +159,19 @@ def collect_s(root: Path) -> float:
     return time.perf_counter() - t0
 
 
-def floors(folder: Path, durations: Path | None, root: Path) -> tuple[dict, dict]:
-    """floors.json's numbers and details: the report's parts and floor, and the suite's."""
+def floors(folder: Path, durations: Path | None, root: Path,
+           report_cpu_s: float | None = None) -> tuple[dict, dict]:
+    """floors.json's numbers and details: the report's parts and floor, and the suite's.
+    ``report_cpu_s``: the CPU seconds (user + sys) of the command that wrote ``folder``."""
     numbers, details = _report_numbers(folder)
+    if report_cpu_s is not None:
+        numbers["report.cpu_s"] = round(report_cpu_s, 1)
+        numbers["report.cpu_floor_s"] = round(report_cpu_s / CORES, 1)
     if durations is not None:
         t = test_durations(durations)
         numbers |= {"test.suite_s": round(t["total_s"], 1),
                     "test.engine_files_s": round(t["engine_files_s"], 1),
+                    "test.tests_timed": t["tests"],
                     "test.collect_s": round(collect_s(root), 1),
                     "test.goal_s": TEST_GOAL_S}
         details["test"] = t

@@ -55,12 +55,15 @@ def main(argv=None) -> int:
                    "make report folder instead of running the commands")
     p.add_argument("--durations", metavar="LOG", help="with --floors: a pytest "
                    "--durations=0 log of the suite")
+    p.add_argument("--report-cpu", type=float, metavar="S", help="with --floors: the CPU "
+                   "seconds (user + sys) of the make report that wrote the folder")
     args = p.parse_args(argv)
     if args.floors:
         import _floors
 
         numbers, details = _floors.floors(Path(args.floors),
-                                          Path(args.durations) if args.durations else None, ROOT)
+                                          Path(args.durations) if args.durations else None, ROOT,
+                                          args.report_cpu)
         _results.write("floors", numbers, details, started_load=_results.load_average(),
                        out=Path(args.out) if args.out else None)
         return 0
