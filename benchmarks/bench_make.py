@@ -61,10 +61,11 @@ def main(argv=None) -> int:
     if args.floors:
         import _floors
 
+        start_load = _results.load_average()
         numbers, details = _floors.floors(Path(args.floors),
                                           Path(args.durations) if args.durations else None, ROOT,
                                           args.report_cpu)
-        _results.write("floors", numbers, details, started_load=_results.load_average(),
+        _results.write("floors", numbers, details, started_load=start_load,
                        out=Path(args.out) if args.out else None)
         return 0
     start_load = _results.load_average()
