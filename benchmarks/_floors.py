@@ -167,11 +167,14 @@ def floors(folder: Path, durations: Path | None, root: Path,
     if report_cpu_s is not None:
         numbers["report.cpu_s"] = round(report_cpu_s, 1)
         numbers["report.cpu_floor_s"] = round(report_cpu_s / CORES, 1)
+        numbers["report.non_engine_cpu_s"] = round(
+            report_cpu_s - numbers["report.engine_cpu_s"] - numbers["report.study_engine_cpu_s"], 1)
     if durations is not None:
         t = test_durations(durations)
         numbers |= {"test.suite_s": round(t["total_s"], 1),
                     "test.engine_files_s": round(t["engine_files_s"], 1),
                     "test.tests_timed": t["tests"],
+                    "test.engine_files_pct": round(100 * t["engine_files_s"] / t["total_s"]),
                     "test.collect_s": round(collect_s(root), 1),
                     "test.goal_s": TEST_GOAL_S}
         details["test"] = t
