@@ -1,6 +1,9 @@
-"""The registry of simulation backends: the only place that names the engines.
+"""The registry of simulation backends and engines: the only place that names the engines.
 
-Each entry maps a backend name to ``module:function`` for ``simulate(scenario, **options)``
+An engine is one folder (its package) plus one :func:`register_engine` call here (its
+:class:`Engine`: backend, label, folder, distributions, contact settings); the ladder, the
+pool, the report, ``treeimpact contact``, the provenance and the layer test read it
+(docs/engines.md, "Adding an engine"). Each backend entry maps a backend name to ``module:function`` for ``simulate(scenario, **options)``
 (returning :class:`analytic.results.SimulationResult`) and, where the backend has its own
 trunk, ``modes(scenario, **options)``. Options a backend does not take are refused with a
 one-line error instead of being ignored.
@@ -223,22 +226,103 @@ BACKENDS = {
                     "treeimpact.analytic.continuum.beam_impact:modes",
                     "continuum Euler-Bernoulli trunk with the same pad, exact between contact "
                     "switches", run_cost=((None, 0.6),)),
-    "mujoco": Backend("mujoco", "treeimpact.mujoco_models:simulate",
-                      "treeimpact.mujoco_models:modes",
-                      "MuJoCo (MJCF) slide-joint or hinged-segment trunk", engine=True,
-                      run_cost=(("sdof", 0.05), ("chain", 0.5), ("flex", 0.5)),
-                      variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4")),
-                      shades=("#1f77b4", "#4f9fd6", "#8cc3ea", "#0b3d75")),
-    "bullet": Backend("bullet", "treeimpact.bullet_models:simulate",
-                      "treeimpact.bullet_models:modes",
-                      "PyBullet prismatic or hinged-link trunk", engine=True,
-                      run_cost=(("sdof", 0.15), ("chain", 2.5)),
-                      variants=("contact", ("soft", "newton")),
-                      shades=("#d95f02", "#f28e2b", "#f7b76d")),
 }
 
-#: The physics engines, in the order the ladder and the studies show them.
-ENGINES = tuple(name for name, b in BACKENDS.items() if b.engine)
+
+@dataclass(frozen=True)
+class Engine:
+    """A physics engine's one registration: everything the rest of compare knows about it.
+
+    ``backend``: its :class:`Backend` (simulate/modes refs, run_cost, variants, shades;
+    registered with ``engine=True``); ``label``: its name as printed ("MuJoCo");
+    ``folder``: its source folder, installed as ``treeimpact.<folder>`` (pyproject.toml's
+    package list must name it: tests/test_layers.py fails otherwise); ``package``: the
+    distribution name the provenance reports its version under, read from the first
+    installed of ``distributions``; ``contact``: ``module:NAME`` of its
+    :class:`compare.contact_engines.ContactSide` (``treeimpact contact``), or None: the
+    engine gives no contact settings. docs/engines.md, "Adding an engine"."""
+
+    backend: Backend
+    label: str
+    folder: str
+    package: str
+    distributions: tuple = ()
+    contact: str | None = None
+
+    @property
+    def name(self) -> str:
+        """The engine's backend name (``--backend``, the rung ids)."""
+        return self.backend.name
+
+    def contact_side(self):
+        """The engine's ContactSide (loaded from :attr:`contact`), or None."""
+        return None if self.contact is None else self.backend._load(self.contact)
+
+
+#: The registered engines, name -> :class:`Engine`, in the order the ladder shows them.
+ENGINE_REGISTRY: dict = {}
+
+
+def register_engine(engine: Engine) -> Engine:
+    """Register ``engine`` (its backend joins :data:`BACKENDS` as an engine); a name already
+    taken is refused (ParameterError). Returns ``engine``."""
+    import dataclasses
+
+    if engine.name in BACKENDS:
+        raise ParameterError(f"backend {engine.name!r} is already registered")
+    BACKENDS[engine.name] = dataclasses.replace(engine.backend, engine=True)
+    ENGINE_REGISTRY[engine.name] = engine
+    return engine
+
+
+def unregister_engine(name: str) -> None:
+    """Undo :func:`register_engine` for the engine called ``name``."""
+    engine = ENGINE_REGISTRY.pop(name)
+    del BACKENDS[name]
+    b = engine.backend
+    for ref in (b.simulate_ref, b.modes_ref, engine.contact,
+                b.options_ref or b.simulate_ref.split(":")[0] + ":OPTIONS"):
+        _LOADED.pop(ref, None)  # what it loaded goes with it
+
+
+@contextmanager
+def engine_registered(engine: Engine):
+    """``engine`` registered for the duration of the block, then unregistered."""
+    register_engine(engine)
+    try:
+        yield engine
+    finally:
+        unregister_engine(engine.name)
+
+
+def engines(*, contact: bool = False) -> tuple:
+    """The names of the engines registered now, in registration order (``contact``: only
+    those that give contact settings, ``treeimpact contact``'s)."""
+    return tuple(name for name, e in ENGINE_REGISTRY.items()
+                 if not contact or e.contact is not None)
+
+
+register_engine(Engine(
+    Backend("mujoco", "treeimpact.mujoco_models:simulate", "treeimpact.mujoco_models:modes",
+            "MuJoCo (MJCF) slide-joint or hinged-segment trunk",
+            run_cost=(("sdof", 0.05), ("chain", 0.5), ("flex", 0.5)),
+            variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4")),
+            shades=("#1f77b4", "#4f9fd6", "#8cc3ea", "#0b3d75")),
+    label="MuJoCo", folder="mujoco_models", package="mujoco",
+    # MuJoCo's physics comes as mujoco-core (pyproject.toml); mujoco only adds a viewer
+    distributions=("mujoco-core", "mujoco"),
+    contact="treeimpact.compare.contact_engines:MUJOCO"))
+register_engine(Engine(
+    Backend("bullet", "treeimpact.bullet_models:simulate", "treeimpact.bullet_models:modes",
+            "PyBullet prismatic or hinged-link trunk",
+            run_cost=(("sdof", 0.15), ("chain", 2.5)), variants=("contact", ("soft", "newton")),
+            shades=("#d95f02", "#f28e2b", "#f7b76d")),
+    label="Bullet", folder="bullet_models", package="pybullet", distributions=("pybullet",),
+    contact="treeimpact.compare.contact_engines:BULLET"))
+
+#: The shipped engines, in the order the ladder and the studies show them (an engine
+#: registered later, e.g. by a test, is in :func:`engines` and :data:`ENGINE_REGISTRY`).
+ENGINES = engines()
 
 
 def get_backend(name: str) -> Backend:

@@ -7,8 +7,12 @@ SI units; docs/contact-settings.md."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
+
+from . import contact_text
 
 SPEED = 1.0  # m/s: approach speed of the simulated collision (the law is linear: any speed)
 
@@ -156,33 +160,68 @@ def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     return out
 
 
-def collision_at(engine: str, law: dict, mu: float, m1: float, m2: float, dt: float):
-    """The collision (FreeCollision) that ``engine``'s corrected setting for ``law`` gives
-    at ``dt`` (s) between bodies of ``m1`` and ``m2`` kg (reduced mass ``mu``), as
-    ``achieved`` of :func:`mujoco_settings` (direct solref) and :func:`bullet_settings`;
-    None where the engine cannot hold the step. What the search for a target that holds
-    runs (compare.contact_settings.what_holds)."""
-    k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
-    try:
-        if engine == "mujoco":
-            from treeimpact import mujoco_models as mc
+def mujoco_collision(law: dict, mu: float, m1: float, m2: float, dt: float):
+    """The collision (FreeCollision) MuJoCo's corrected setting for ``law`` gives at ``dt``
+    (s) between bodies of ``m1`` and ``m2`` kg (reduced mass ``mu``), as ``achieved`` of
+    :func:`mujoco_settings` (direct solref); None where MuJoCo cannot hold the step."""
+    from treeimpact import mujoco_models as mc
 
-            if dt >= 2.0 / math.sqrt(k / mu):
-                return None
-            eng = mc.engine_law(k, e, mu, dt)
-            S = mc.effective_denominator(1.0 / mu, 1.0 / mu)
-            solref = mc.solref_for_law(eng.stiffness, eng.damping, S)
-            solimp = [mc.IMPEDANCE, mc.IMPEDANCE, *mc.SOLIMP_TAIL]
-            return mc.two_body_collision(mc.two_body_mjcf(m1, m2, dt, solref, solimp), SPEED)
-        from treeimpact import bullet_models as bc
-
-        if dt > bc.largest_time_step(k, c, mu):
-            return None
-        ks, ds = bc.bullet_contact(k, c, mu, dt).per_body
-        return bc.two_body_collision(m1, m2, dt, ks, ds, SPEED)
-    except ParameterError:
+    k, e = law["contact_stiffness"], law["restitution"]
+    if dt >= 2.0 / math.sqrt(k / mu):
         return None
+    eng = mc.engine_law(k, e, mu, dt)
+    S = mc.effective_denominator(1.0 / mu, 1.0 / mu)
+    solref = mc.solref_for_law(eng.stiffness, eng.damping, S)
+    solimp = [mc.IMPEDANCE, mc.IMPEDANCE, *mc.SOLIMP_TAIL]
+    return mc.two_body_collision(mc.two_body_mjcf(m1, m2, dt, solref, solimp), SPEED)
 
 
-#: engine name -> its settings function (compare.contact_settings.ENGINES).
-ENGINE_SETTINGS = {"mujoco": mujoco_settings, "bullet": bullet_settings}
+def bullet_collision(law: dict, mu: float, m1: float, m2: float, dt: float):
+    """The collision (FreeCollision) Bullet's setting for ``law`` gives at ``dt`` (s)
+    between bodies of ``m1`` and ``m2`` kg (reduced mass ``mu``), as ``achieved`` of
+    :func:`bullet_settings`; None where Bullet cannot hold the step."""
+    from treeimpact import bullet_models as bc
+
+    k, c = law["contact_stiffness"], law["contact_damping"]
+    if dt > bc.largest_time_step(k, c, mu):
+        return None
+    ks, ds = bc.bullet_contact(k, c, mu, dt).per_body
+    return bc.two_body_collision(m1, m2, dt, ks, ds, SPEED)
+
+
+@dataclass(frozen=True)
+class ContactSide:
+    """What ``treeimpact contact`` asks of one engine (its registration's ``contact``):
+    ``settings(law, mu, m1, m2, dt)``, its settings and collisions as a dict (or
+    ``{"error", "largest_dt"}``); ``collision(law, mu, m1, m2, dt)``, the corrected
+    setting's FreeCollision or None (what the search for a target that holds runs);
+    ``achieved_key``: where in ``settings``' ``achieved`` the corrected setting's collision
+    is (None: ``achieved`` itself); ``describe(settings)`` prints the settings to paste;
+    ``rows(settings)``, the collision table's (label, at dt, at dt/2, at 2 dt);
+    ``phases(settings)``, the (label, phase spread) rows (None: no such rows)."""
+
+    settings: Callable
+    collision: Callable
+    achieved_key: str | None
+    describe: Callable
+    rows: Callable
+    phases: Callable | None = None
+
+    def achieved(self, res: dict) -> dict:
+        """The corrected setting's collision (JSON) in ``res``, what :attr:`settings` gave."""
+        return res["achieved"] if self.achieved_key is None else \
+            res["achieved"][self.achieved_key]
+
+    def collision_at(self, law: dict, mu: float, m1: float, m2: float, dt: float):
+        """:attr:`collision` for ``law`` on the reduced mass ``mu`` (kg) of bodies of ``m1``
+        and ``m2`` kg at ``dt`` (s); None also where the engine refuses the setting."""
+        try:
+            return self.collision(law, mu, m1, m2, dt)
+        except ParameterError:
+            return None
+
+
+MUJOCO = ContactSide(mujoco_settings, mujoco_collision, "solref", contact_text.print_mujoco,
+                     contact_text.mujoco_rows, contact_text.mujoco_phases)
+BULLET = ContactSide(bullet_settings, bullet_collision, None, contact_text.print_bullet,
+                     contact_text.bullet_rows)

@@ -14,13 +14,16 @@ import math
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import check_range
 
-from .contact_engines import ENGINE_SETTINGS, SPEED
+from .backends import ENGINE_REGISTRY, quiet_stdout
+from .backends import engines as registered_engines
+from .contact_engines import SPEED
 
 #: Fewest steps of the target collision the command accepts (0.5e5 steps per collision at
 #: most keep the two simulations under a second).
 MAX_STEPS_PER_COLLISION = 50_000
-#: The engines, in the order they print.
-ENGINES = ("mujoco", "bullet")
+#: The registered engines that give contact settings (their registration's ``contact``),
+#: in the order they print.
+ENGINES = registered_engines(contact=True)
 #: Allowed ranges (SI): a milligram to a thousand tonnes, the pad's stiffness and damping,
 #: the touch duration; beyond them the arithmetic leaves double precision.
 MASS_RANGE = (1e-6, 1e9)
@@ -125,9 +128,7 @@ def miss(achieved: dict, law: dict) -> float:
 
 
 def _holds(engine, law, mu, m1, m2, dt) -> bool:
-    from .contact_engines import collision_at
-
-    c = collision_at(engine, law, mu, m1, m2, dt)
+    c = ENGINE_REGISTRY[engine].contact_side().collision_at(law, mu, m1, m2, dt)
     return c is not None and miss(c.to_json(), law) <= HOLD_TOLERANCE
 
 
@@ -170,7 +171,7 @@ def _check_held(out: dict, law: dict, mu, m1, m2, dt, engines) -> None:
         res = out[engine]
         if "error" in res:
             continue
-        achieved = res["achieved"]["solref"] if engine == "mujoco" else res["achieved"]
+        achieved = ENGINE_REGISTRY[engine].contact_side().achieved(res)
         res["holds_target"] = bool(miss(achieved, law) <= HOLD_TOLERANCE)
         if not res["holds_target"]:
             res["what_holds"] = what_holds(engine, law, mu, m1, m2, dt)
@@ -180,15 +181,14 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
                      touch_duration=None, contact_stiffness=None, contact_damping=None,
                      dt=None, engines=ENGINES) -> dict:
     """Everything ``treeimpact contact`` prints (its JSON): ``inputs``, ``target``
-    (:func:`target_law`) and, for each of ``engines`` ("mujoco", "bullet"), its settings
+    (:func:`target_law`) and, for each of ``engines`` (:data:`ENGINES`), its settings
     and simulated collisions or ``{"error", "largest_dt"}`` when it cannot hold ``dt``, with
-    ``holds_target`` (within :data:`HOLD_TOLERANCE`) and, where not, ``what_holds``.
+    ``holds_target`` (within :data:`HOLD_TOLERANCE`) and, where not, ``what_holds``
+    (each engine's part from its registration's ContactSide, compare.backends.Engine).
     The masses: ``mass`` and ``other_mass`` (None: fixed) or ``effective_mass`` alone
     (:func:`masses`); the collision: ``restitution`` with ``touch_duration``, or
     ``contact_stiffness`` with ``contact_damping`` (:func:`target_law`). Arguments are SI
     (kg, s, N/m, N s/m). Raises ParameterError for bad input."""
-    from treeimpact.compare.backends import quiet_stdout
-
     m1, m2 = masses(mass, other_mass, effective_mass)
     mu = m1 if math.isinf(m2) else m1 * m2 / (m1 + m2)
     law = target_law(mu, restitution=restitution, touch_duration=touch_duration,
@@ -199,7 +199,7 @@ def contact_settings(*, mass=None, other_mass=None, effective_mass=None, restitu
            "target": law}
     with quiet_stdout():  # PyBullet prints on import; --json keeps stdout for JSON
         for engine in engines:
-            out[engine] = ENGINE_SETTINGS[engine](law, mu, m1, m2, dt)
+            out[engine] = ENGINE_REGISTRY[engine].contact_side().settings(law, mu, m1, m2, dt)
         _check_held(out, law, mu, m1, m2, dt, engines)
     return out
 

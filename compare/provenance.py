@@ -15,8 +15,12 @@ import subprocess
 from importlib import metadata
 from pathlib import Path
 
-#: The packages whose versions decide the numbers.
-PACKAGES = ("treeimpact", "numpy", "scipy", "mujoco", "pybullet", "pandas")
+from .backends import ENGINE_REGISTRY
+
+#: The packages whose versions decide the numbers: the registered engines' (their
+#: registration's ``package``, compare.backends.ENGINE_REGISTRY) among the libraries'.
+PACKAGES = ("treeimpact", "numpy", "scipy", *(e.package for e in ENGINE_REGISTRY.values()),
+            "pandas")
 #: The model-dict keys that are numerical settings of a run (docs/cli.md lists them).
 SETTINGS = ("dt", "integrator", "solref", "solimp", "contact", "calibration", "elements",
             "segments", "trunk", "pendulum", "trunk_damping_model", "contact_stiffness",
@@ -24,9 +28,10 @@ SETTINGS = ("dt", "integrator", "solref", "solimp", "contact", "calibration", "e
             "touch_duration", "samples")
 
 
-#: The distributions a package's version is read from, the first installed: MuJoCo's
-#: physics comes as mujoco-core (pyproject.toml), the mujoco package only adds a viewer.
-DISTRIBUTIONS = {"mujoco": ("mujoco-core", "mujoco")}
+#: The distributions a package's version is read from, the first installed (an engine's
+#: registration's ``distributions``; a package not named here: its own name).
+DISTRIBUTIONS = {e.package: e.distributions for e in ENGINE_REGISTRY.values()
+                 if e.distributions}
 
 
 def _version(name: str) -> str | None:

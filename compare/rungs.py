@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 
-from .backends import BACKENDS, ENGINES
+from .backends import BACKENDS, ENGINE_REGISTRY, ENGINES
 
 #: Sampling (s) of the exact solution for the figures and the identification: 20 us, the
 #: record spacing at which analytic.identify.procedure's tests recover b and omega_n.
@@ -128,7 +128,7 @@ class Rung:
     @property
     def engine(self) -> str | None:
         """The engine backend this rung runs, or None (an analytic rung)."""
-        return self.backend if self.backend in ENGINES else None
+        return self.backend if self.backend in ENGINE_REGISTRY else None
 
 
 def rung_table(engines=ENGINES, *, segments: int | None = None,

@@ -6,8 +6,11 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+from treeimpact.compare.backends import ENGINE_REGISTRY
+
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("analytic", "mujoco_models", "bullet_models", "compare")
+#: The source folders: the engines' from their registrations.
+PACKAGES = ("analytic", *(e.folder for e in ENGINE_REGISTRY.values()), "compare")
 #: The most lines a function may span, its signature and docstring included.
 MAX_LINES = 60
 

@@ -15,11 +15,15 @@ from pathlib import Path
 
 import pytest
 
+from treeimpact.compare.backends import ENGINE_REGISTRY
+
 ROOT = Path(__file__).resolve().parents[1]
+#: The engines' source folders, from their registrations (compare.backends.ENGINE_REGISTRY).
+ENGINES = tuple(e.folder for e in ENGINE_REGISTRY.values())
 #: Source folder -> its dotted name once installed.
 FOLDERS = {"treeimpact": "treeimpact", "analytic": "treeimpact.analytic",
-           "mujoco_models": "treeimpact.mujoco_models",
-           "bullet_models": "treeimpact.bullet_models", "compare": "treeimpact.compare"}
+           **{folder: f"treeimpact.{folder}" for folder in ENGINES},
+           "compare": "treeimpact.compare"}
 #: analytic's floors, bottom first: a module imports only its own floor or lower ones.
 ANALYTIC_FLOORS = ("threads", "errors", "budget", "results", "model", "records", "impact",
                    "contact", "continuum", "identify", "engine", "paper")
@@ -29,10 +33,12 @@ ANALYTIC_FLOORS = ("threads", "errors", "budget", "results", "model", "records",
 COMPARE_FLOORS = (
     # 1 what a run is: the backends by name, one run record, findings and verdicts, the
     # rung table, the pool, the exit codes, figure titles that fit
+    # and the engines' contact settings (the engine registry names them)
     ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "findings",
-     "verdicts", "rungs", "exits", "figure_text"),
-    # 2 one scenario, one record, one contact: the ladder and the identification
-    ("identification", "ladder", "mechanism", "contact_engines", "contact_settings"),
+     "verdicts", "rungs", "exits", "figure_text", "contact_text", "contact_engines",
+     "contact_settings"),
+    # 2 one scenario, one record: the ladder and the identification
+    ("identification", "ladder", "mechanism"),
     # 3 the sweep machinery: grid, plan, run, journal, maps
     ("sweep",),
     # 4 the studies built on sweeps: contact scan, small e, sensitivity, identification, speed
@@ -44,7 +50,6 @@ COMPARE_FLOORS = (
     # 7 the interface: the public API and the command line
     ("api_results", "api", "process", "cli", "commands"),
 )
-ENGINES = ("mujoco_models", "bullet_models")
 
 
 def _modules() -> dict[str, Path]:
@@ -404,6 +409,16 @@ def test_pyproject_maps_every_package_folder_under_treeimpact():
     assert config["package-data"]["treeimpact.analytic.model"] == ["scenarios/*.toml"]
 
 
+def test_every_package_folder_is_registered():
+    """Each top-level folder holding an __init__.py is one of :data:`FOLDERS` (an engine's
+    through its registration, compare.backends.register_engine), tooling aside: an engine
+    folder not registered, or registered but not in pyproject.toml's package list (the test
+    above), fails here (docs/engines.md, "Adding an engine")."""
+    tooling = {"tests", "benchmarks", "examples"}
+    found = {p.parent.name for p in ROOT.glob("*/__init__.py")} - tooling
+    assert found == set(FOLDERS)
+
+
 #: The package data the wheel carries: source folder -> patterns of files in it.
 PACKAGE_DATA = {"analytic/model": ["scenarios/*.toml"], "compare": ["tolerances.toml"],
                 "compare/report": ["templates/*.j2", "data/*.json"],
@@ -520,7 +535,7 @@ def test_installed_the_project_is_one_top_level_package(tmp_path):
     code = ("import importlib, json\n"
             "import treeimpact.analytic.impact.solver, treeimpact.compare.cli\n"
             "out = {}\n"
-            "for name in ('analytic', 'compare', 'mujoco_models', 'bullet_models'):\n"
+            f"for name in {tuple(f for f in FOLDERS if f != 'treeimpact')!r}:\n"
             "    try:\n"
             "        importlib.import_module(name)\n"
             "        out[name] = 'importable'\n"

@@ -11,6 +11,8 @@ import math
 
 from treeimpact.analytic.errors import NotAchieved, ParameterError
 
+from ..backends import ENGINE_REGISTRY
+from ..backends import engines as registered_engines
 from ..exits import ExitCode
 from ._common import number
 
@@ -20,8 +22,10 @@ HELP = ("MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a targ
 #: Removed spellings -> their names now (compare.names).
 RENAMED = {"duration": "touch_duration", "stiffness": "contact_stiffness",
            "damping": "contact_damping"}
-#: --engine's words -> the engines they ask for.
-ENGINE_CHOICES = {"mujoco": ("mujoco",), "bullet": ("bullet",), "both": ("mujoco", "bullet")}
+#: --engine's words -> the engines they ask for: each registered engine that gives contact
+#: settings (compare.backends.ENGINE_REGISTRY), and "both" for all of them.
+ENGINE_CHOICES = {**{e: (e,) for e in registered_engines(contact=True)},
+                  "both": registered_engines(contact=True)}
 
 
 def add_arguments(sp) -> None:
@@ -76,19 +80,15 @@ def run(args) -> int:
     return ExitCode.OK
 
 
-#: The engines' names as printed.
-ENGINE_NAMES = {"mujoco": "MuJoCo", "bullet": "Bullet"}
-
-
 def not_held_text(res: dict, engine: str) -> str:
     """One line: what ``engine``'s setting achieved against the target of ``res`` (what
     :func:`contact_settings` returns) and what would hold the target (its ``what_holds``)."""
     from treeimpact.compare.contact_settings import HOLD_TOLERANCE
 
     law, dt, r = res["target"], res["inputs"]["dt"], res[engine]
-    got = r["achieved"]["solref"] if engine == "mujoco" else r["achieved"]
+    got = ENGINE_REGISTRY[engine].contact_side().achieved(r)
     e, t = got["restitution"], got["touch_duration"]
-    text = (f"{ENGINE_NAMES[engine]}'s setting gives e {e:.4g} and a touch duration of "
+    text = (f"{ENGINE_REGISTRY[engine].label}'s setting gives e {e:.4g} and a touch duration of "
             f"{1e3 * t:.4g} ms ({t / law['touch_duration'] - 1:+.2%}) for the e "
             f"{law['restitution']:g}, {1e3 * law['touch_duration']:g} ms asked at --dt "
             f"{dt:g} s, beyond {HOLD_TOLERANCE:.0%}")
@@ -102,10 +102,6 @@ def not_held_text(res: dict, engine: str) -> str:
         ways.append(f"the {1e3 * law['touch_duration']:g} ms touch needs --dt <= "
                     f"{holds['largest_dt']:.3g} s")
     return text + (": " + ", or ".join(ways) if ways else "")
-
-
-def _fmt(v: float) -> str:
-    return f"{v:.10g}"
 
 
 def _row(name, achieved, law) -> str:
@@ -141,51 +137,10 @@ def _header(res: dict) -> None:
     print()
 
 
-def _print_mujoco(mj: dict) -> None:
-    print("MuJoCo (Euler; the pair's force is (k' delta + b' delta') / S, S = 1 / reduced mass)")
-    print(f"  solref (direct: -k' -b')      {' '.join(_fmt(v) for v in mj['solref'])}")
-    print(f"  solref (timeconst dampratio)  {' '.join(_fmt(v) for v in mj['solref_timeconst'])}"
-          + ("   needs <flag refsafe=\"disable\"/>" if mj["refsafe_disable_needed"] else ""))
-    print(f"  solimp                        {' '.join(_fmt(v) for v in mj['solimp'])}")
-    if mj["solimp_timeconst"] != mj["solimp"]:
-        print(f"  solimp (with timeconst)       "
-              f"{' '.join(_fmt(v) for v in mj['solimp_timeconst'])}"
-              "   (MuJoCo caps 1/(d timeconst dampratio)^2 at 1e15)")
-    print(f"  MJCF ({' and '.join(mj['geoms'])} are placeholders: your two geoms' names):")
-    for line in mj["mjcf"].splitlines():
-        print(f"    {line}")
-    print()
-
-
-def _print_bullet(bl: dict) -> None:
-    print("Bullet (each of the two links; they combine to k in series, c in sum)")
-    print(f"  changeDynamics(contactStiffness={_fmt(bl['contactStiffness'])}, "
-          f"contactDamping={_fmt(bl['contactDamping'])}, "
-          + ", ".join(f"{k}={v:g}" for k, v in bl["link"].items()) + ")")
-    print("  setPhysicsEngineParameter(" + ", ".join(f"{k}={v:g}" for k, v in
-                                                  bl["world"].items()) + ")")
-    print(f"  start the bodies {bl['start']}")
-    print()
-
-
 def _collision_rows(res: dict, engines) -> list:
     """(label, achieved at dt, at dt/2, at 2 dt) of every setting printed."""
-    rows = []
-    if "mujoco" in engines and "error" not in res["mujoco"]:
-        mj = res["mujoco"]
-        for label, key in (("MuJoCo solref (direct)", "solref"),
-                           ("MuJoCo solref (timeconst)", "solref_timeconst")):
-            rows.append((label, mj["achieved"][key], mj["at_half_dt"][key],
-                         mj["at_double_dt"][key]))
-        rows.append(("MuJoCo naive solref", mj["naive"], mj["at_half_dt"]["naive"],
-                     mj["at_double_dt"]["naive"]))
-    if "bullet" in engines and "error" not in res["bullet"]:
-        bl = res["bullet"]
-        rows.append(("Bullet contactStiffness/Damping", bl["achieved"],
-                     bl["at_half_dt"]["settings"], bl["at_double_dt"]["settings"]))
-        rows.append(("Bullet naive", bl["naive"], bl["at_half_dt"]["naive"],
-                     bl["at_double_dt"]["naive"]))
-    return rows
+    return [row for e in engines if "error" not in res[e]
+            for row in ENGINE_REGISTRY[e].contact_side().rows(res[e])]
 
 
 def print_settings(res: dict, engines) -> None:
@@ -193,12 +148,11 @@ def print_settings(res: dict, engines) -> None:
     ``engines`` named: the target, each engine's settings (or why it cannot hold the step),
     then each setting's simulated collision at dt and kept at dt/2 and 2 dt."""
     _header(res)
-    printers = {"mujoco": _print_mujoco, "bullet": _print_bullet}
     for engine in engines:
         if "error" in res[engine]:
             print(f"{res[engine]['error']}\n")
         else:
-            printers[engine](res[engine])
+            ENGINE_REGISTRY[engine].contact_side().describe(res[engine])
     law = res["target"]
     speed = res["inputs"]["approach_speed"]
     print(f"Simulated two-body collision at {speed:g} m/s, achieved against the target (naive: "
@@ -216,8 +170,10 @@ def print_settings(res: dict, engines) -> None:
 def _print_phases(res: dict, engines) -> None:
     """How e and the touch duration move with where in a step the first touch falls."""
     rows = []
-    if "mujoco" in engines and "error" not in res["mujoco"]:
-        rows.append(("MuJoCo solref (direct)", res["mujoco"]["phase_spread"]))
+    for e in engines:
+        side = ENGINE_REGISTRY[e].contact_side()
+        if side.phases is not None and "error" not in res[e]:
+            rows += side.phases(res[e])
     if not rows:
         return
     print(f"Where in a step the first touch falls ({rows[0][1]['phases']} fractions of a "

@@ -1,0 +1,116 @@
+"""What the design study costs and what its engine spot checks say (issue 43, items 3-4; a
+benchmark, not a test: nothing is asserted).
+
+Run: ``.venv/bin/python benchmarks/bench_design.py [--workers 2] [--skip-engines]``. In one
+run, on central-leader, each into a temporary folder removed afterwards:
+
+1. one 30 x 30 map of one pair (a/l x m/M_T, 900 cells): its wall time on ``--workers``;
+2. the whole study (three 30 x 30 maps and 5 trunk diameters): its wall time and CPU-seconds
+   a cell (wall x workers / cells, every rung and the pool included);
+3. a 4 x 4 x 4 x 4 slice of the four-input grid (a/l, m/M_T, pad, e over their map ranges)
+   beside the finished maps: CPU-seconds a cell; the docs' 10 x 8 x 8 x 10 grid (6400
+   cells) then costs cells x that, on 2 workers and, estimated by the same arithmetic
+   (no 16-core machine here), on 16;
+4. the engines' spot checks (``design_map(engines=True)``: MuJoCo's and Bullet's chains and
+   MuJoCo's flex rod at the a/l x pad map's corners and the cells nearest its 5 % line):
+   comparisons within their tolerances, and each engine trunk's worst relative difference
+   on x_max and the energy delivered (%).
+
+Writes ``benchmarks/results/design.json`` (docs/design-map.md quotes it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results  # noqa: E402
+
+#: The slice of the four-input grid timed, and the full grid docs/design-map.md gives.
+SLICE = ("a_over_l=0.1:0.6:4", "mass_ratio=0.2,0.6,1.7,5", "contact_duration=2e-4,1e-3,1e-2,5e-2",
+         "restitution=0:0.9:4")
+FULL_GRID_CELLS = 10 * 8 * 8 * 10
+
+
+def _pair_map(workers: int, folder: Path) -> float:
+    """Wall time (s) of one 30 x 30 a/l x m/M_T map on ``workers`` processes."""
+    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.studies.design import PAIRS, design_spec, pair_grid
+    from treeimpact.compare.sweep.run import run_sweeps
+
+    scen = resolve_scenario("central-leader")
+    t0 = time.perf_counter()
+    run_sweeps([design_spec(scen, pair_grid(scen, PAIRS[0], 30), folder)], workers=workers,
+               progress=False)
+    return time.perf_counter() - t0
+
+
+def _spot_numbers(spot: dict) -> dict:
+    """The spot checks' counts and each engine trunk's worst difference (%) by metric."""
+    out = {"spot.cells": len(spot["cells"])}
+    within = total = 0
+    worst: dict = {}
+    for cell in spot["cells"]:
+        for label, got in cell["rungs"].items():
+            for metric, g in got.items():
+                if isinstance(g, dict):
+                    total += 1
+                    within += bool(g["within"])
+                    key = f"spot.worst_pct.{label.replace(' ', '_')}.{metric}"
+                    worst[key] = max(worst.get(key, 0.0), abs(100.0 * g["rel"]))
+    out |= {"spot.comparisons": total, "spot.within": within}
+    return out | {k: round(v, 2) for k, v in worst.items()}
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--skip-engines", action="store_true", help="no spot checks")
+    p.add_argument("--out", help="results file (default benchmarks/results/design.json)")
+    args = p.parse_args(argv)
+    from treeimpact.compare.validity.design_study import run_design_study
+
+    start_load = _results.load_average()
+    numbers, details = {}, {"slice": SLICE, "workers": args.workers}
+    with tempfile.TemporaryDirectory(prefix="bench-design-") as tmp:
+        numbers["pair_map_s"] = round(_pair_map(args.workers, Path(tmp) / "pair"), 1)
+        paths = run_design_study(Path(tmp) / "study", workers=args.workers, progress=False)
+        cost = json.loads(paths["json"].read_text())["cost"]
+        numbers |= {"study_s": round(cost["wall_s"], 1), "study_cells": cost["cells"],
+                    "cpu_s_per_cell": round(cost["cpu_s_per_cell"], 4)}
+        t0 = time.perf_counter()
+        paths = run_design_study(Path(tmp) / "study", workers=args.workers, grid=list(SLICE),
+                                 progress=False)
+        grid = json.loads(paths["json"].read_text())
+        slice_s = time.perf_counter() - t0
+        cells = grid["grid"]["cells"]
+        per_cell = slice_s * args.workers / cells
+        numbers |= {"slice_cells": cells, "slice_s": round(slice_s, 1),
+                    "slice_cpu_s_per_cell": round(per_cell, 4),
+                    "full_grid_cells": FULL_GRID_CELLS,
+                    "full_grid_cpu_minutes": round(FULL_GRID_CELLS * per_cell / 60, 1),
+                    "full_grid_minutes_2_workers": round(FULL_GRID_CELLS * per_cell / 2 / 60, 1),
+                    "full_grid_minutes_16_workers_estimated": round(
+                        FULL_GRID_CELLS * per_cell / 16 / 60, 1)}
+        if not args.skip_engines:
+            t0 = time.perf_counter()
+            paths = run_design_study(Path(tmp) / "study", workers=args.workers, engines=True,
+                                     progress=False)
+            spot = json.loads(paths["json"].read_text())["spot_checks"]
+            numbers |= _spot_numbers(spot) | {"spot_s": round(time.perf_counter() - t0, 1)}
+            details["spot_sentence"] = spot["sentence"]
+            details["spot_cells"] = spot["cells"]
+    for k, v in sorted(numbers.items()):
+        print(f"  {k}: {v}")
+    _results.write("design", numbers, details, started_load=start_load,
+                   out=Path(args.out) if args.out else None)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
