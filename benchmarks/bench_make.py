@@ -14,6 +14,11 @@ run, one after the other, from the repository:
 Writes ``benchmarks/results/make.json`` (the README quotes it); every temporary folder is
 removed. The load average before and after is recorded: on a shared machine the times
 grow with it.
+
+``--floors REPORT_DIR [--durations LOG]`` runs neither command: it reads a finished ``make
+report`` folder and the log of ``pytest tests compare --durations=0`` (the suite's
+environment) and writes ``benchmarks/results/floors.json``, what each part costs against
+what the physics needs (``_floors.py``; docs/report.md, "The floor").
 """
 
 from __future__ import annotations
@@ -46,7 +51,23 @@ def main(argv=None) -> int:
     p.add_argument("--install", action="store_true", help="also time a fresh install")
     p.add_argument("--skip-test", action="store_true", help="do not time make test")
     p.add_argument("--out", help="results file (default benchmarks/results/make.json)")
+    p.add_argument("--floors", metavar="REPORT_DIR", help="write floors.json from a finished "
+                   "make report folder instead of running the commands")
+    p.add_argument("--durations", metavar="LOG", help="with --floors: a pytest "
+                   "--durations=0 log of the suite")
+    p.add_argument("--report-cpu", type=float, metavar="S", help="with --floors: the CPU "
+                   "seconds (user + sys) of the make report that wrote the folder")
     args = p.parse_args(argv)
+    if args.floors:
+        import _floors
+
+        start_load = _results.load_average()
+        numbers, details = _floors.floors(Path(args.floors),
+                                          Path(args.durations) if args.durations else None, ROOT,
+                                          args.report_cpu)
+        _results.write("floors", numbers, details, started_load=start_load,
+                       out=Path(args.out) if args.out else None)
+        return 0
     start_load = _results.load_average()
     numbers, details = {}, {}
     with tempfile.TemporaryDirectory(prefix="bench-make-") as tmp:
