@@ -11,14 +11,18 @@ one-line error instead of being ignored.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import inspect
 import os
 import sys
+import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
+
+from .names import did_you_mean
 
 
 @contextmanager
@@ -47,8 +51,6 @@ def worded_c_output(source: str, why: str = ""):
     warning, ``treeimpact: warning: SOURCE: line (WHY)`` (``source``: the library's name;
     ``why``: why its lines do not matter, or ""), with its count when repeated (a line
     already starting with ``treeimpact:`` passes as it is)."""
-    import tempfile
-
     try:
         sys.stdout.flush()
         sys.stderr.flush()
@@ -154,8 +156,7 @@ class Backend:
         Option; one the backend does not take is refused), checked before anyone reports it
         (a diverged run raises :class:`analytic.errors.SimulationDiverged`: never numbers),
         its ``scenario`` the scenario as run (:func:`scenario_as_run`)."""
-        import dataclasses
-
+        # lazy: +95 ms at import otherwise (numpy), which this module's other callers do not need
         from treeimpact.analytic.results import check_plausible
 
         func = self._load(self.simulate_ref)
@@ -179,8 +180,6 @@ class Backend:
     def _checked(self, options: dict, table: dict, accepted: set) -> dict:
         """``options`` with each value checked by its Option (one line naming the flag);
         an option ``accepted`` does not hold is refused, naming what the backend takes."""
-        from .names import did_you_mean
-
         out = {}
         for key, value in options.items():
             if key not in accepted:
@@ -197,8 +196,6 @@ def scenario_as_run(scenario, options: dict):
     """``scenario`` with the run options that override its fields applied: restitution
     (contact.restitution), t_end, contact_stiffness (contact.stiffness, the duration then
     unset) and contact_duration (contact.duration, the stiffness then unset)."""
-    import dataclasses
-
     contact = scenario.contact
     if options.get("restitution") is not None:
         contact = dataclasses.replace(contact, restitution=options["restitution"])
@@ -266,8 +263,6 @@ ENGINE_REGISTRY: dict = {}
 def register_engine(engine: Engine) -> Engine:
     """Register ``engine`` (its backend joins :data:`BACKENDS` as an engine); a name already
     taken is refused (ParameterError). Returns ``engine``."""
-    import dataclasses
-
     if engine.name in BACKENDS:
         raise ParameterError(f"backend {engine.name!r} is already registered")
     BACKENDS[engine.name] = dataclasses.replace(engine.backend, engine=True)

@@ -10,6 +10,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from treeimpact import bullet_models as bc
+from treeimpact import mujoco_models as mc
 from treeimpact.analytic.errors import ParameterError
 
 from . import contact_text
@@ -79,8 +81,6 @@ def mujoco_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     2 dt), beside the naive (uncorrected) solref's, and the direct solref's
     ``phase_spread`` (:func:`phase_spread`); or ``{"error", "largest_dt"}`` beyond Euler's
     omega dt < 2."""
-    from treeimpact import mujoco_models as mc
-
     k, c, e = law["contact_stiffness"], law["contact_damping"], law["restitution"]
     top = 2.0 / math.sqrt(k / mu)
     if dt >= top:
@@ -129,8 +129,6 @@ def bullet_settings(law: dict, mu: float, m1: float, m2: float, dt: float) -> di
     collision in Bullet between bodies of ``m1`` and ``m2`` kg (at dt, dt/2 and 2 dt)
     beside the naive settings'; or ``{"error", "largest_dt"}`` when its implicit step
     alone damps more than e allows."""
-    from treeimpact import bullet_models as bc
-
     k, c = law["contact_stiffness"], law["contact_damping"]
     limit = bc.largest_time_step(k, c, mu)
     if dt > limit:
@@ -164,8 +162,6 @@ def mujoco_collision(law: dict, mu: float, m1: float, m2: float, dt: float):
     """The collision (FreeCollision) MuJoCo's corrected setting for ``law`` gives at ``dt``
     (s) between bodies of ``m1`` and ``m2`` kg (reduced mass ``mu``), as ``achieved`` of
     :func:`mujoco_settings` (direct solref); None where MuJoCo cannot hold the step."""
-    from treeimpact import mujoco_models as mc
-
     k, e = law["contact_stiffness"], law["restitution"]
     if dt >= 2.0 / math.sqrt(k / mu):
         return None
@@ -180,8 +176,6 @@ def bullet_collision(law: dict, mu: float, m1: float, m2: float, dt: float):
     """The collision (FreeCollision) Bullet's setting for ``law`` gives at ``dt`` (s)
     between bodies of ``m1`` and ``m2`` kg (reduced mass ``mu``), as ``achieved`` of
     :func:`bullet_settings`; None where Bullet cannot hold the step."""
-    from treeimpact import bullet_models as bc
-
     k, c = law["contact_stiffness"], law["contact_damping"]
     if dt > bc.largest_time_step(k, c, mu):
         return None

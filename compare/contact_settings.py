@@ -11,11 +11,17 @@ from __future__ import annotations
 
 import math
 
+from treeimpact.analytic.contact.law import (
+    damping_ratio_for_restitution,
+    release_time,
+    restitution_for_damping_ratio,
+)
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import check_range
 
-from .backends import ENGINE_REGISTRY, quiet_stdout
+from .backends import ENGINE_REGISTRY
 from .backends import engines as registered_engines
+from .backends import quiet_stdout
 from .contact_engines import SPEED
 
 #: Fewest steps of the target collision the command accepts (0.5e5 steps per collision at
@@ -52,8 +58,6 @@ def masses(mass, other_mass, effective_mass) -> tuple[float, float]:
 
 
 def _law_from_stiffness(mu, stiffness, damping) -> tuple:
-    from treeimpact.analytic.contact.law import release_time, restitution_for_damping_ratio
-
     if stiffness is None or damping is None:
         raise ParameterError("--restitution and --touch-duration, or --contact-stiffness and "
                              "--contact-damping: required")
@@ -74,8 +78,6 @@ def target_law(mu: float, *, restitution=None, touch_duration=None, contact_stif
     (s, first touch to release), ``contact_stiffness`` k_c (N/m), ``contact_damping`` c_c
     (N s/m), ``damping_ratio`` zeta and ``contact_duration``, the undamped pi sqrt(mu / k_c)
     (s). Raises ParameterError naming the flag that is missing or out of range."""
-    from treeimpact.analytic.contact.law import damping_ratio_for_restitution, release_time
-
     if restitution is not None or touch_duration is not None:
         if contact_stiffness is not None or contact_damping is not None:
             raise ParameterError("--contact-stiffness/--contact-damping: give them instead of "

@@ -28,7 +28,10 @@ class TreePhysics:
     def of(cls, scenario: Scenario) -> TreePhysics:
         """The quantities of ``scenario`` (a few ms: the reduction of eqs 7-8 and the
         continuum's mass matrix at the clamp)."""
+        # lazy: +130 ms at import otherwise (numpy), which this module's other callers do not need
         from treeimpact.analytic.continuum.beam_impact import beam_impact_model
+
+        # lazy: +54 ms at import otherwise (numpy), which this module's other callers do not need
         from treeimpact.analytic.model.reduction import crown_factor, reduce_trunk
 
         m = scenario.impactor.mass

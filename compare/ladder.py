@@ -9,20 +9,27 @@ import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
+from treeimpact.analytic.continuum.chain import default_segments
 from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
 from .backends import ENGINES
 from .findings import TreePhysics
-from .identification import IDENT_METRICS, IDENT_UNITS, RungIdentification, rung_identification
+from .identification import (
+    IDENT_METRICS,
+    IDENT_UNITS,
+    RungIdentification,
+    rung_identification,
+    rung_truth,
+)
+from .rungs import rung_table  # (ANALYTIC_SAMPLE_STEP, Rung: public here too)
 from .rungs import (  # noqa: F401
     ANALYTIC_SAMPLE_STEP,
     ENGINE_KINDS,
     Rung,
     RungKind,
     analytic_samples,
-    rung_table,  # (ANALYTIC_SAMPLE_STEP, Rung: public here too)
 )
 from .runs import SKIPPED, Run, RunCache, Status, resolve_scenario
 from .verdicts import Check, Verdict, _f, judge, load_tolerances, relative_step
@@ -55,7 +62,6 @@ def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
     first two frequencies)."""
     if segments is not None:
         return int(segments)
-    from treeimpact.analytic.continuum.chain import default_segments
 
     return default_segments(scenario.trunk)
 
@@ -305,8 +311,6 @@ def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
     """Run (or fetch from ``cache``) every rung of one scenario and assemble the ladder:
     the rungs of ``engines``, the chain of ``segments`` (None: the default), judged against
     ``tolerances`` (None: compare/tolerances.toml)."""
-    from .identification import rung_truth
-
     scen = resolve_scenario(scenario)
     cache = RunCache() if cache is None else cache
     tol = load_tolerances() if tolerances is None else tolerances

@@ -7,11 +7,19 @@ ends a loop at its next look at STOP. Design notes: docs/sweeps.md.
 
 from __future__ import annotations
 
+import importlib.util
+import multiprocessing
 import os
+import signal
 import threading
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from functools import partial
 
+from treeimpact.analytic.budget import VARIABLES
 from treeimpact.analytic.errors import ParameterError, one_line
+from treeimpact.analytic.threads import blas_limit, limit_process
 
 #: Seconds to wait for a Dask scheduler (and its first worker) before it is refused.
 SCHEDULER_TIMEOUT_S = 10
@@ -96,11 +104,6 @@ def ignore_sigint(environment: dict | None = None) -> None:
     run budgets (``environment``: analytic.budget.VARIABLES as set when the pool started) hold
     in the worker too: a forkserver started earlier has the environment of its own start.
     The worker runs with the library's one BLAS thread (analytic.threads.limit_process)."""
-    import os
-    import signal
-
-    from treeimpact.analytic.threads import limit_process
-
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     limit_process()
@@ -112,10 +115,6 @@ def ignore_sigint(environment: dict | None = None) -> None:
 
 
 def _budget_environment() -> dict:
-    import os
-
-    from treeimpact.analytic.budget import VARIABLES
-
     return {name: os.environ.get(name) for name in VARIABLES.values()}
 
 
@@ -129,8 +128,6 @@ def _end_workers(pool) -> None:
     thread, within about 2 * END_WORKERS_S: SIGTERM, then SIGKILL for a worker that lives on
     (one forked by the ``fork`` start method carries this process's handlers until its
     initializer runs, and a SIGTERM landing there only sets its STOP)."""
-    import time
-
     procs = [p for p in list((getattr(pool, "_processes", None) or {}).values())
              if p.is_alive()]
     for proc in procs:
@@ -166,8 +163,6 @@ def preload_in_workers(*names: str) -> None:
 
 def _found(name: str) -> str:
     """``name`` if it names a module (found, not imported), else ImportError naming it."""
-    import importlib.util
-
     if importlib.util.find_spec(name) is None:  # a missing parent package raises here
         raise ImportError(f"preload_in_workers: no module named {name!r}", name=name)
     return name
@@ -183,9 +178,6 @@ def _forkserver_preload(modules=()) -> list[str]:
 
 
 def _executor(workers: int, start_method: str | None, preload=()):
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
     ctx = multiprocessing.get_context(start_method) if start_method else None
     if start_method == "forkserver":  # read when this process's forkserver starts
         ctx.set_forkserver_preload(_forkserver_preload(preload))
@@ -222,7 +214,6 @@ def _run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client,
                 start_method: str | None, preload) -> int:
     if client is not None:
         return _run_dask(fn, chunks, client, on_result, on_died)
-    from concurrent.futures.process import BrokenProcessPool
 
     ran = 0
     pending = list(chunks)
@@ -279,8 +270,6 @@ def _run_chunks(fn, chunks: list, *, workers: int, on_result, on_died, client,
 
 def _as_completed(futures):
     """The futures as they finish, looking at STOP every POLL_S s while none does."""
-    from concurrent.futures import FIRST_COMPLETED, wait
-
     pending = set(futures)
     while pending:
         done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
@@ -290,6 +279,8 @@ def _as_completed(futures):
 
 def connect(scheduler):
     """(Dask client, whether this call opened it): ``scheduler`` is an address or a Client."""
+    # lazy: +482 ms at import otherwise (dask, distributed, jinja2, numpy),
+    # which this module's other callers do not need
     from distributed import Client
 
     if isinstance(scheduler, Client):
@@ -325,14 +316,17 @@ def _blas_limited_call(fn, chunk):
     """``fn(chunk)`` on a Dask worker with the library's one BLAS thread, the worker's own
     setting back after it (a Dask worker is the user's process, its threads share the
     limit: analytic.threads)."""
-    from treeimpact.analytic.threads import blas_limit
-
     with blas_limit():
         return fn(chunk)
 
 
 def _run_dask(fn, chunks, client, on_result, on_died) -> int:
+    # lazy: +482 ms at import otherwise (dask, distributed, jinja2, numpy),
+    # which this module's other callers do not need
     from distributed import as_completed
+
+    # lazy: +402 ms at import otherwise (dask, distributed, jinja2, numpy),
+    # which this module's other callers do not need
     from distributed.scheduler import KilledWorker
 
     ran = 0

@@ -12,6 +12,8 @@ import sys
 import threading
 import time
 
+from tqdm import tqdm
+
 #: The environment variable a parent sets for a child job: the job's name. The child then
 #: writes its progress as :data:`RECORD` lines on stderr, for :class:`Relay` to draw.
 RELAY_ENV = "TREEIMPACT_PROGRESS_RELAY"
@@ -40,8 +42,6 @@ class _Job:
         self.drawn = _on_terminal(stream)  # or a stage asked for a bar anywhere
 
     def _draw(self, total, desc, unit, fmt=None):
-        from tqdm import tqdm
-
         if self.bar is not None:
             self.bar.close()
         kw = {"bar_format": fmt} if fmt else {}

@@ -32,7 +32,12 @@ from treeimpact.analytic.errors import (
     one_line,
 )
 from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import SimulationResult
+
+from .backends import BACKENDS, get_backend
+from .pool import process_map
+from .progress import Progress
 
 
 class Status(StrEnum):
@@ -119,7 +124,6 @@ def resolve_scenario(scenario) -> Scenario:
     """A :class:`Scenario` from ``scenario``: a shipped name, a TOML path or a Scenario."""
     if isinstance(scenario, Scenario):
         return scenario
-    from treeimpact.analytic.model.scenario import load_scenario
 
     return load_scenario(scenario)
 
@@ -149,7 +153,6 @@ class RunCache:
         hit = self.runs.get(key)
         if hit is not None:
             return hit
-        from .backends import get_backend
 
         try:
             run = attempt(get_backend(backend), scen, options)
@@ -174,9 +177,6 @@ class RunCache:
             if key not in self.runs and key not in seen:
                 seen.add(key)
                 todo.append((key, scen, backend, dict(options)))
-        from .backends import BACKENDS
-        from .pool import process_map
-        from .progress import Progress
 
         # slowest first; a backend not in the registry is a run that records its own skip
         todo.sort(key=lambda t: -(BACKENDS[t[2]].cost(t[3]) if t[2] in BACKENDS else 0.0))

@@ -10,6 +10,7 @@ import json
 import math
 
 from treeimpact.analytic.errors import NotAchieved, ParameterError
+from treeimpact.compare.contact_settings import HOLD_TOLERANCE, contact_settings
 
 from ..backends import ENGINE_REGISTRY
 from ..backends import engines as registered_engines
@@ -58,8 +59,6 @@ def run(args) -> int:
     engine that gives settings holds the target within 10 %; NotAchieved (exit 4, after
     the output) naming what was achieved and what would hold it when one does not;
     ParameterError (exit 2) with each engine's reason when no engine holds the step."""
-    from treeimpact.compare.contact_settings import contact_settings
-
     engines = ENGINE_CHOICES[args.engine]
     res = contact_settings(mass=args.mass, other_mass=args.other_mass,
                            effective_mass=args.effective_mass, restitution=args.restitution,
@@ -83,8 +82,6 @@ def run(args) -> int:
 def not_held_text(res: dict, engine: str) -> str:
     """One line: what ``engine``'s setting achieved against the target of ``res`` (what
     :func:`contact_settings` returns) and what would hold the target (its ``what_holds``)."""
-    from treeimpact.compare.contact_settings import HOLD_TOLERANCE
-
     law, dt, r = res["target"], res["inputs"]["dt"], res[engine]
     got = ENGINE_REGISTRY[engine].contact_side().achieved(r)
     e, t = got["restitution"], got["touch_duration"]

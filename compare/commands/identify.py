@@ -15,6 +15,7 @@ import numpy as np
 
 from treeimpact.analytic.errors import NotAchieved, ParameterError
 from treeimpact.analytic.identify.fit_parameters import Slot
+from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS, UNITS
 from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
 from treeimpact.analytic.identify.procedure import READINGS, identify_from_record
 from treeimpact.analytic.model.parameters import LIMITS, Pendulum, check_range
@@ -213,8 +214,6 @@ def _print_values(fit, reading: dict) -> None:
     """The table of the fit's values and intervals beside the paper's procedure's (a value
     the record does not determine "not fixed", its range; a held one "given" or "held at
     0"), the damping ratios' formulas, what is not fixed, the residual."""
-    from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS, UNITS
-
     if not fit.explained:
         print("  the 1-DOF model does NOT explain this record: the numbers below are the "
               "model's best fit, NOT the tree's properties")

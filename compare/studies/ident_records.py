@@ -11,6 +11,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.identify.procedure import (
+    identify_from_record,
+    pendulum_test_of,
+    truth_of,
+)
+from treeimpact.analytic.model.ratios import apply_input
+from treeimpact.compare.backends import get_backend
+from treeimpact.compare.runs import resolve_scenario
+
 from ..runs import FAILED, OK
 
 RATE = 5e3  # Hz: a common displacement-transducer rate
@@ -37,9 +47,6 @@ class Case:
 def _scenario(case: Case):
     """The case's scenario: its e and crown ratio applied by the registry
     (analytic.model.ratios.apply_input)."""
-    from treeimpact.analytic.model.ratios import apply_input
-    from treeimpact.compare.runs import resolve_scenario
-
     scen = apply_input(resolve_scenario(case.scenario), "restitution", case.restitution)
     return apply_input(scen, "crown_ratio", case.crown_ratio)
 
@@ -81,12 +88,8 @@ def record_identification(result, scenario, record: dict) -> dict:
     fraction of the peak, seed), identified by the full-record fit and by the paper's
     procedure; errors (1) against the ``scenario``'s SDOF truth as flat columns
     (:data:`RECORD_COLUMNS`). Never raises: a failing method is its column's text."""
-    from treeimpact.analytic.errors import ParameterError
-    from treeimpact.analytic.identify.procedure import (
-        identify_from_record,
-        pendulum_test_of,
-        truth_of,
-    )
+    # lazy: +665 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
     from treeimpact.analytic.identify.record_fit import Record, fit_record
 
     rate, noise = record.get("rate", RATE), record.get("noise", NOISE)
@@ -147,6 +150,8 @@ def _flat(nested: dict) -> dict:
 
 def _missing(v) -> bool:
     """An empty cell of a sweep table (None, NaN or pandas' NA)."""
+    # lazy: +216 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     return v is None or (not isinstance(v, str) and bool(pd.isna(v)))
@@ -184,8 +189,6 @@ def case_row(row: dict) -> dict:
 def identify_case(case: Case) -> dict:
     """Simulate, sample, identify both ways (:func:`record_identification`); never raises
     (errors are the outcome). The case as the study's rows hold it."""
-    from treeimpact.compare.backends import get_backend
-
     row = {"scenario": case.scenario, "restitution": case.restitution,
            "crown_ratio": case.crown_ratio, "target": case.rung, "record.rate": case.rate,
            "record.noise": case.noise, "record.seed": case.seed}

@@ -18,9 +18,21 @@ from pathlib import Path
 
 import numpy as np
 
+from treeimpact.analytic.contact.soft import simulate_soft
+from treeimpact.analytic.continuum.beam_impact import simulate_beam
+from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.calibration import MeasuredTree, calibrate_trunk
+from treeimpact.analytic.model.parameters import Contact
+from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.registry import BY_NAME
+from treeimpact.analytic.model.scenario import measured_fields
+from treeimpact.analytic.model.two_body import two_body_model
 
-from ..runs import OK
+from ..runs import OK, resolve_scenario
+from ..sweep.grid import Design
+from ..sweep.run import SweepSpec
+from ..verdicts import validity_tolerance
+from .contact_scan import shortest_within
 
 
 def _unit(name: str) -> str:
@@ -78,8 +90,6 @@ FIELDS = {"clamp_mass": (BY_NAME["clamp_mass"].path,), "e_over_g": ("trunk.shear
 def measured_inputs(scenario) -> tuple[str, ...]:
     """The inputs of :data:`INPUTS` the scenario's file says were measured (held at the
     file's values by the study)."""
-    from treeimpact.analytic.model.scenario import measured_fields
-
     fields = set(measured_fields(scenario))
     return tuple(n for n, f in FIELDS.items() if fields & set(f))
 
@@ -95,9 +105,6 @@ def inputs_of(scenario) -> dict:
     shear modulus (0 without one), the pad's 1-DOF collision time from its stiffness when
     the file gives that, the root's share of the static flexibility at the clamp from the
     trunk's E I and the reduced K_T (eq 8)."""
-    from treeimpact.analytic.model.reduction import reduce_trunk
-    from treeimpact.analytic.model.two_body import two_body_model
-
     t, c = scenario.trunk, scenario.contact
     g = t.shear_modulus
     duration = c.duration
@@ -123,10 +130,6 @@ def vary(scenario, p: dict):
     tree: M_T, K_T and C_T kept (the crown, root spring and damping recalibrated, eqs 7, 8,
     10), E from the root's share of K_T's flexibility, G = E / (E/G), the pad's duration and
     e. Returns (scenario, the beam backend's beam theory)."""
-    from treeimpact.analytic.model.calibration import MeasuredTree, calibrate_trunk
-    from treeimpact.analytic.model.parameters import Contact
-    from treeimpact.analytic.model.reduction import reduce_trunk
-
     trunk = scenario.trunk
     tree = reduce_trunk(trunk)
     m = scenario.impactor.mass
@@ -153,10 +156,6 @@ def _answer(scen, theory: str) -> dict:
     """The answer table's gaps at one varied scenario: the continuum against the paper's
     model, or the soft 1-DOF with the same pad where Newton's impulses have none (force,
     acceleration)."""
-    from treeimpact.analytic.contact.soft import simulate_soft
-    from treeimpact.analytic.continuum.beam_impact import simulate_beam
-    from treeimpact.analytic.impact.simulate import simulate
-
     newton = simulate(scen, samples=2).metrics
     soft = simulate_soft(scen).metrics
     beam = simulate_beam(scen, beam_theory=theory).metrics
@@ -179,12 +178,6 @@ def answer_and_crossings(result, scenario, params: dict) -> dict:
     durations: the shortest of :data:`DURATIONS` (s) from which every longer pad keeps the
     continuum within the validity tolerance of the soft 1-DOF model with the same pad (inf:
     none up to the longest)."""
-    from treeimpact.analytic.contact.soft import simulate_soft
-    from treeimpact.analytic.continuum.beam_impact import simulate_beam
-
-    from .contact_scan import shortest_within
-    from ..verdicts import validity_tolerance
-
     scen, theory = vary(scenario, inputs_of(scenario) | dict(params))
     out = _answer(scen, theory)
     gaps = {m: [] for m in CROSSING}
@@ -208,6 +201,8 @@ ANALYSES = {False: "treeimpact.compare.studies.sensitivity:answer_under",
 def design(trajectories: int, seed: int = SEED, names=None) -> np.ndarray:
     """The Morris design: ``trajectories`` x (inputs + 1) points over :data:`INPUTS` (only
     ``names`` when given), trajectory after trajectory, from the random ``seed``."""
+    # lazy: +285 ms at import otherwise (scipy, pandas, SALib, numpy, pyarrow),
+    # which this module's other callers do not need
     from SALib.sample import morris
 
     return morris.sample(problem(names), trajectories, num_levels=LEVELS, seed=seed)
@@ -227,10 +222,6 @@ def design_sweep(scenario, out, make_design, *, crossings: bool = False):
     """A design over one tree's free inputs (:func:`free_inputs` of ``scenario``) as a sweep
     into ``out``: ``make_design(names)``'s rows as ``input.*`` axes, :func:`answer_under`
     (with ``crossings``, :func:`answer_and_crossings`) at each point."""
-    from ..runs import resolve_scenario
-    from ..sweep.grid import Design
-    from ..sweep.run import SweepSpec
-
     scen = resolve_scenario(scenario)
     names = free_inputs(scen)
     X = make_design(names)
@@ -243,6 +234,8 @@ def _morris(names, X, y) -> dict:
     """SALib's Morris analysis of ``y`` on the design ``X``: per input its mu, mu_star,
     sigma and mu_star_conf (SALib's keys; the interval's half-width at CONF_LEVEL from
     RESAMPLES bootstrap resamples, seeded)."""
+    # lazy: +242 ms at import otherwise (scipy, pandas, SALib, numpy, pyarrow),
+    # which this module's other callers do not need
     from SALib.analyze import morris
 
     with warnings.catch_warnings():  # one trajectory: sigma is undefined (NaN), fine

@@ -16,7 +16,15 @@ import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..runs import OK
+from treeimpact.analytic.continuum.beam_impact import simulate_beam
+from treeimpact.analytic.impact.simulate import simulate
+
+from ..identification import IDENT_METRICS, identify_rung
+from ..rungs import analytic_samples
+from ..runs import OK, resolve_scenario
+from ..sweep.grid import Grid, value_axis
+from ..sweep.run import SweepSpec
+from ..verdicts import validity_tolerance
 from .small_e_curves import (  # noqa: F401 (the curves' reading, re-exported)
     MONOTONE_SLACK,
     RESOLUTION,
@@ -116,10 +124,6 @@ def area_error(result) -> float:
 def exact_run(scenario, e: float):
     """(the exact 1-DOF solver's run at ``e`` with the record the paper's procedure reads,
     the scenario at ``e``)."""
-    from treeimpact.analytic.impact.simulate import simulate
-
-    from ..rungs import analytic_samples
-
     s = at_restitution(scenario, e)
     return simulate(s, samples=analytic_samples(s.t_end)), s
 
@@ -128,9 +132,6 @@ def continuum_gaps(scenario, e: float, newton=None) -> dict:
     """The 1-DOF assumption of ``scenario`` at ``e`` (read at :data:`E_FLOOR` below it): the
     continuum trunk's gap to the 1-DOF model on x_max and the energy delivered, the same pad;
     ``newton``: the exact run's metrics at ``e`` when already made."""
-    from treeimpact.analytic.continuum.beam_impact import simulate_beam
-    from treeimpact.analytic.impact.simulate import simulate
-
     s = at_restitution(scenario, max(e, E_FLOOR))
     if newton is None or e < E_FLOOR:
         newton = simulate(s, samples=2).metrics
@@ -178,8 +179,6 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
     identification sweep's ``id.*``, ``truth.*``, ``id_error`` and ``T0`` columns (the
     scenario section's table of the identification against e); the continuum's gaps only
     with ``continuum``."""
-    from ..identification import IDENT_METRICS, identify_rung
-
     e = scenario.contact.restitution
     errors = energy_errors(result)
     floor = result if e >= E_FLOOR else exact_run(scenario, E_FLOOR)[0]
@@ -225,10 +224,6 @@ def small_e_sweep(scenario, out):
     (:class:`compare.sweep.run.SweepSpec`)
     into ``out``: the exact solver at every e of :func:`grid_of`, :func:`errors_at_run` on
     each."""
-    from ..runs import resolve_scenario
-    from ..sweep.grid import Grid, value_axis
-    from ..sweep.run import SweepSpec
-
     scen = resolve_scenario(scenario)
     return SweepSpec(scen, Grid((value_axis("restitution", grid_of(scen)),)),
                      Path(out), ("analytic",), identify=True,
@@ -239,9 +234,10 @@ def small_e_table(scenario, grid=E_GRID):
     """The table :func:`small_e_sweep` writes, computed in this process (no sweep
     directory): one row per e of :func:`grid_of` ``scenario`` and ``grid`` (a pandas
     DataFrame)."""
+    # lazy: +200 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
-    from ..runs import resolve_scenario
 
     scen = resolve_scenario(scenario)
     rows = []
@@ -284,8 +280,6 @@ def small_e_answer(scenario, table, tolerance: float | None = None) -> dict:
     error_at_zero, verdict, label, what}; errors relative (NaN where none, with its
     reason), e in 1. The crossings are bisected here (the exact solver, and the continuum
     for the 1-DOF gaps, at a few more e)."""
-    from ..verdicts import validity_tolerance
-
     tol = validity_tolerance() if tolerance is None else tolerance
     rows = sorted(table.to_dict("records"), key=lambda r: float(r["restitution"]))
     exact, split = _Exact(scenario), k_t_split(scenario)
@@ -356,8 +350,6 @@ def k_t_split(scenario) -> dict:
     true omega_n, xi and M_T: the reading alone, -xi^2 omega_n^2 (M_T + m) / K_T;
     ``total``, the paper's reading on the fit (the curve's e = 0 point). NaN where the
     procedure refuses the record."""
-    from ..identification import identify_rung
-
     run, s = exact_run(scenario, 0.0)
     ident = identify_rung(run, s)
     truth = ident.truth

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from treeimpact.analytic.results import METRIC_KEYS
+
 # the ladder's metrics, so a study and the report speak of the same things
 from treeimpact.compare.ladder import LADDER_METRICS
 from treeimpact.compare.runs import OK
@@ -31,6 +33,8 @@ def discrepancies(df, metrics=LADDER_METRICS):
     Columns: point, target, backend, kind, metric, value, analytic, rel, step, dominant
     (kind of the largest step), plus the swept parameters of the point.
     """
+    # lazy: +201 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     ok = df[df["status"] == OK]
@@ -86,8 +90,6 @@ _NON_AXIS = {"scenario", "point", "target", "backend", "kind", "previous", "stat
 def axis_names(df) -> list[str]:
     """The swept parameters of a sweep table ``df`` (columns between the base and metric
     columns)."""
-    from treeimpact.analytic.results import METRIC_KEYS
-
     return [c for c in df.columns if c not in _NON_AXIS and c not in METRIC_KEYS
             and not c.startswith(("model.", "id.", "truth.")) and c != "id_error"]
 
@@ -121,6 +123,8 @@ def relevant_axes(df, target: str, axes: list[str]) -> list[str]:
 def identification_errors(df):
     """Long table of identification errors of the sweep table ``df``: point, target,
     parameter, identified, truth, rel."""
+    # lazy: +201 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     ok = df[df["status"] == OK]

@@ -7,6 +7,7 @@ Design notes and measured figures: docs/sweeps.md.
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import os
@@ -16,6 +17,7 @@ from dataclasses import dataclass, field
 from treeimpact.analytic.errors import one_line
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS
+from treeimpact.compare.identification import identify_rung
 from treeimpact.compare.runs import DIVERGED, FAILED, OK, attempt
 
 #: The model quantities of a run kept as the table's ``model.*`` columns (SI; the run's
@@ -32,8 +34,6 @@ def load_analysis(ref: str):
     """The analysis function ``ref`` names (``module:function``, the module imported):
     ``fn(result, scenario, record) -> {column: value}`` with its ``columns`` (a tuple) as an
     attribute."""
-    import importlib
-
     module, name = ref.split(":")
     return getattr(importlib.import_module(module), name)
 
@@ -57,8 +57,6 @@ class Task:
 def _identify(result, scenario: Scenario) -> dict:
     """The paper's procedure on the run's record (compare.identification.identify_rung) as the
     sweep's id.* and truth.* columns, or id_error."""
-    from treeimpact.compare.identification import identify_rung
-
     ident = identify_rung(result, scenario)
     out = {f"truth.{k}": v for k, v in ident.truth.items()}
     if not ident.ok:

@@ -16,9 +16,17 @@ from enum import StrEnum
 import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.parameters import (Billet, Contact, Pendulum, Scenario, Trunk,
-                                                  check_range)
+from treeimpact.analytic.model.parameters import (
+    Billet,
+    Contact,
+    Pendulum,
+    Scenario,
+    Trunk,
+    check_range,
+)
+from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.registry import BY_NAME, PARAMETERS
+from treeimpact.compare.backends import BACKENDS
 
 #: Bounds of a grid: values per axis and points in all (the --preset full study has 540).
 MAX_AXIS_VALUES = 1000
@@ -61,8 +69,6 @@ def backend_option(name: str):
     """The :class:`~treeimpact.analytic.model.options.Option` that a backend's OPTIONS give
     ``name`` (the first backend that has it; they share one definition), or None: an option
     axis takes its type, range and words from there."""
-    from treeimpact.compare.backends import BACKENDS
-
     for backend in BACKENDS.values():
         try:
             option = backend.options().get(name)
@@ -387,8 +393,6 @@ def point_from_key(key: str) -> dict:
 
 def derived_ratios(scenario: Scenario) -> dict:
     """The derived ratios of a scenario: a_over_l, crown_ratio, mass_ratio (see module doc)."""
-    from treeimpact.analytic.model.reduction import reduce_trunk
-
     t = scenario.trunk
     return {"a_over_l": t.clamp_height / t.length,
             "crown_ratio": t.crown_mass / t.trunk_mass,

@@ -6,7 +6,10 @@ Design notes: docs/sweeps.md.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
+
+from treeimpact.compare.figure_text import save_figure
 
 from .discrepancy import identification_errors, numeric_axes
 from .execute import IDENT_KEYS
@@ -24,7 +27,6 @@ from .map_cells import (
     colour_scale,
 )
 
-
 _E_NAMES = ("restitution",)
 _CROWN_NAMES = ("crown_ratio", "trunk.crown_mass")
 #: The parameters the identification maps draw: E is K_T a^3 / (3 I) (eq 47) with a and I
@@ -35,8 +37,6 @@ MAPPED_IDENT_KEYS = ("M_T", "K_T", "pair_damping_ratio")
 def _why_not_identified(sub) -> str:
     """The cells of one identification map without a value, counted by their reason (the
     last clause of the procedure's message), for the caption."""
-    import re
-
     errors = sub.loc[sub["rel"].isna(), "id_error"] if "id_error" in sub else []
     counts: dict = {}
     for text in errors:
@@ -135,7 +135,6 @@ def _draw_target(dt, target: str, axis_pair: tuple, keys: list[str], scale: dict
         _percent_colorbar(cb, scale, "(identified - true) / true (%)\n"
                                      f"saturates at +-{scale['vmax']:.0%}")
     fig.suptitle(f"Identification (eqs 39-48) on the {target} record", fontsize=10)
-    from treeimpact.compare.figure_text import save_figure
 
     save_figure(fig, path, 110)
 

