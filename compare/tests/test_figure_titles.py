@@ -63,6 +63,9 @@ def drawn(tmp_path_factory):
     mp = pytest.MonkeyPatch()
     mp.setattr(figure_text, "save_figure", keep)
     mp.setattr(report_figures, "save_figure", keep)
+    from treeimpact.compare.sweep import sensitivity_figure as sens_module
+
+    mp.setattr(sens_module, "save_figure", keep)  # each module's own name for it
     try:
         scen = load_scenario("central-leader")
         (e_sweep,) = run_sweeps([small_e_sweep(scen, tmp)], workers=0)

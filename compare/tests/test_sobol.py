@@ -249,10 +249,10 @@ def test_the_first_screen_sentence_is_generated_by_the_rule():
     row = _study_row(outputs)
     said = row["measure_first"]["said"]
     assert said == ("x_max: unsettled between root compliance (ST 0.50 +- 0.01) and E / G "
-                    "(shear) (ST 0.45 +- 0.01); the energy delivered: pad stiffness (ST 0.90 "
+                    "(shear) (ST 0.45 +- 0.01); the energy delivered: pad contact duration (ST 0.90 "
                     "+- 0.01), by " + INPUTS["log10_pad_duration"][4] + ".")
     assert row["sobol"]["outputs"]["gap.energy_delivered"]["text"] == \
-        "decided by pad stiffness"
+        "decided by pad contact duration"
     assert row["measure_first"]["sentence"] == f"t: {said}"
     short = in_short_text([row])
     assert "N = 64, 512 evaluations per tree" in short and short.endswith(said)
