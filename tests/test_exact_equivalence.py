@@ -74,13 +74,16 @@ RELEASE_READ = ("energy_delivered", "contact_dissipation", "rebound_energy", "im
 def _reading_shift(res) -> dict:
     """What the later reading adds to each :data:`RELEASE_READ` metric of ``res`` (its own
     record's energies and motion between the two samples; {} when they coincide)."""
-    from treeimpact.analytic.records import contact_intervals
+    import inspect
+
+    from treeimpact.analytic.records import _released, contact_intervals, metrics_from_record
 
     r = res.record
     if r is None:
         return {}
-    old = contact_intervals(r.force, 1e-6 * float(r.force.max()))[-1][1] + 1
-    new = old + int(np.flatnonzero(r.force[old:] <= 0.0)[0])
+    threshold = inspect.signature(metrics_from_record).parameters["force_threshold"].default
+    old = contact_intervals(r.force, threshold * float(r.force.max()))[-1][1] + 1
+    new = _released(r.force, old)  # the reading metrics_from_record makes now
     if new == old:
         return {}
     m, k = res.model["m"], res.model["k"]
