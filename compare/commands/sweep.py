@@ -180,9 +180,6 @@ def _run(args) -> int:
         if options:
             raise ParameterError("--option: not used with --preset (the preset fixes the "
                                  "engines' options); run a plain sweep instead")
-        from treeimpact.compare.backends import BACKENDS
-        from treeimpact.compare.validity.presets import PRESETS
-
         typed = args.backend != ",".join(BACKENDS)  # the default: the preset's own
         own_run = PRESETS[args.preset].run is not None  # a study of another kind
         paths = run_study(args.out, args.preset, scenario=args.scenario,
