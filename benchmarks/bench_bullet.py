@@ -106,7 +106,7 @@ def engine_spring_rate(setup, pd_client) -> tuple[float, tuple]:
     p.resetJointState(world.pendulum, 0, 0.0, setup.model.impact_speed, physicsClientId=cid)
     model = setup.model
     if setup.trunk == "sdof":
-        trunk_gains = [(model.stiffness, model.damping)]
+        trunk_gains = [(model.equivalent_stiffness, model.equivalent_damping)]
     else:
         trunk_gains = [(k, 0.0) for k in np.diag(setup.matrices[1])]
     controllers = [(world.trunk, j, g) for j, g in zip(world.trunk_joints, trunk_gains)]

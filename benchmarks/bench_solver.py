@@ -79,7 +79,7 @@ def _reference(model, t_end, stop, rtol):
     and their round-off floors (s, s, m/s)."""
     atol = tuple(a * rtol / 1e-12 for a in _DEFAULT_ATOL)
     ref = solve_ivp_impacts(model, t_end, rtol=rtol, atol=atol, stop_at_separation=stop)
-    M, C, K = model.dynamic_mass, model.damping, model.stiffness
+    M, C, K = model.dynamic_mass, model.equivalent_damping, model.equivalent_stiffness
     m, k, e = model.impactor_mass, model.impactor_stiffness, model.restitution
     if any(u - U <= 0.0 for _, U, u, _, _ in ref["impacts"]):
         raise RuntimeError("reference: a spurious (separating) impact; gamma_tol too small")
@@ -285,10 +285,12 @@ def _floor(names) -> dict:
     for name in names:
         scenario = load_scenario(name)
         model = two_body_model(scenario)
-        oscs = {Oscillator.from_mck(model.dynamic_mass, model.damping, model.stiffness),
+        oscs = {Oscillator.from_mck(model.dynamic_mass, model.equivalent_damping,
+                                    model.equivalent_stiffness),
                 Oscillator.from_mck(model.impactor_mass, 0.0, model.impactor_stiffness),
-                Oscillator.from_mck(model.dynamic_mass + model.impactor_mass, model.damping,
-                                    model.stiffness + model.impactor_stiffness)}
+                Oscillator.from_mck(model.dynamic_mass + model.impactor_mass,
+                                    model.equivalent_damping,
+                                    model.equivalent_stiffness + model.impactor_stiffness)}
         counts = {"scalar_advance": 0, "_bounds5": 0}
         saved = {}
         for osc in oscs:
@@ -302,7 +304,8 @@ def _floor(names) -> dict:
         finally:
             for (osc, attr), fn in saved.items():
                 osc.__dict__[attr] = fn
-        tree = Oscillator.from_mck(model.dynamic_mass, model.damping, model.stiffness)
+        tree = Oscillator.from_mck(model.dynamic_mass, model.equivalent_damping,
+                                   model.equivalent_stiffness)
         adv, bnd = tree.scalar_advance, tree._bounds5
         t_adv = cost_us(lambda: adv(1e-3, 1e-3, 0.5))
         t_bnd = cost_us(lambda: bnd(1e-3, 0.5))

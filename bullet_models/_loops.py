@@ -59,7 +59,7 @@ def _loop_sdof(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
     """
     p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
     model = setup.model
-    K, C, kp = model.stiffness, model.damping, model.impactor_stiffness
+    K, C, kp = model.equivalent_stiffness, model.equivalent_damping, model.impactor_stiffness
     mgl = m * g * le if full else 0.0
     gjs, sjm, step, gcp = (p.getJointState, p.setJointMotorControl2, p.stepSimulation,
                            p.getContactPoints)

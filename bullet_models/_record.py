@@ -46,8 +46,8 @@ def _record(setup, rec: dict, t_shift: float, e0: float, inertia) -> ImpactRecor
         d_power = rec["damping_power"]
     else:
         trunk_kin = 0.5 * model.dynamic_mass * vx * vx
-        trunk_pot = 0.5 * model.stiffness * x * x
-        d_power = model.damping * vx[:-1] * 0.5 * (vx[:-1] + vx[1:])
+        trunk_pot = 0.5 * model.equivalent_stiffness * x * x
+        d_power = model.equivalent_damping * vx[:-1] * 0.5 * (vx[:-1] + vx[1:])
     force = rec["force"]
     rel = vy - vx
     c_power = force[:-1] * 0.5 * (rel[:-1] + rel[1:])

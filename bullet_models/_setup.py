@@ -186,7 +186,7 @@ def _newton_contact(model: TwoBodyModel, bodies: _Bodies, contact_stiffness, dt)
         raise ParameterError("--contact-stiffness: only for --contact soft")
     m = model.impactor_mass
     w = bodies.omega_max if bodies.omega_max is not None else math.sqrt(
-        (model.stiffness + model.impactor_stiffness) / min(model.dynamic_mass, m))
+        (model.equivalent_stiffness + model.impactor_stiffness) / min(model.dynamic_mass, m))
     reason = "given"
     if dt is None:
         dt = choose_time_step(DEFAULT_CONTACT_DURATION, bodies.omega_max,

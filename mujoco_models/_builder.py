@@ -145,8 +145,8 @@ def _add_sdof(spec: mujoco.MjSpec, tree, clamp_height: float, r: float) -> str:
     j.name = "trunk_x"
     j.type = mujoco.mjtJoint.mjJNT_SLIDE
     j.axis = [1.0, 0.0, 0.0]
-    j.stiffness[0] = tree.stiffness
-    j.damping[0] = tree.damping
+    j.stiffness[0] = tree.equivalent_stiffness
+    j.damping[0] = tree.equivalent_damping
     _geom(body, "trunk_pad", mujoco.mjtGeom.mjGEOM_SPHERE, [r], rgba=WOOD)
     _site(body, "impact_point", (0.0, 0.0, 0.0), 0.2 * r)
     return "trunk"

@@ -116,7 +116,7 @@ def _two_body_restitution(e, dt_fraction=50):
     # a free collision: no trunk spring or damping
     import dataclasses
 
-    free = dataclasses.replace(setup.model, stiffness=1e-12, damping=0.0)
+    free = dataclasses.replace(setup.model, equivalent_stiffness=1e-12, equivalent_damping=0.0)
     setup = dataclasses.replace(setup, model=free)
     from treeimpact.bullet_models._runner import run
 

@@ -42,8 +42,8 @@ def test_calibrated_trunk_reduces_to_the_measured_properties():
     trunk = calibrate_trunk(chosen, measured, impactor_mass=100.0)
     sdof = reduce_trunk(trunk)  # the forward reduction, eqs 7, 8, 10
     assert sdof.dynamic_mass == pytest.approx(150.0, rel=1e-12)
-    assert sdof.stiffness == pytest.approx(9e5, rel=1e-12)
-    assert sdof.damping == pytest.approx(2 * 25.0 * (150.0 + 100.0), rel=1e-12)  # eq 34
+    assert sdof.equivalent_stiffness == pytest.approx(9e5, rel=1e-12)
+    assert sdof.equivalent_damping == pytest.approx(2 * 25.0 * (150.0 + 100.0), rel=1e-12)  # eq 34
 
 
 def test_stiffness_at_the_rigid_clamp_needs_no_root_spring():
@@ -105,8 +105,8 @@ def test_scenario_command_writes_a_file_that_simulates_like_the_shipped_tree(tmp
     assert written.notes["calibrated"].startswith("m_f from M_T = 110 kg")
     sdof, ref = reduce_trunk(written.trunk), reduce_trunk(shipped.trunk)
     assert sdof.dynamic_mass == pytest.approx(ref.dynamic_mass, rel=1e-8)
-    assert sdof.stiffness == pytest.approx(ref.stiffness, rel=1e-8)
-    assert sdof.damping == pytest.approx(ref.damping, rel=1e-8)
+    assert sdof.equivalent_stiffness == pytest.approx(ref.equivalent_stiffness, rel=1e-8)
+    assert sdof.equivalent_damping == pytest.approx(ref.equivalent_damping, rel=1e-8)
 
 
 @pytest.mark.parametrize("extra, words", [

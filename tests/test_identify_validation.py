@@ -48,7 +48,8 @@ def test_the_integrator_agrees_with_the_exact_solver():
     from treeimpact.analytic.model.two_body import TwoBodyModel
 
     for tree in mr.TREES.values():
-        model = TwoBodyModel(dynamic_mass=tree.M_T, damping=tree.C_T, stiffness=tree.K_T,
+        model = TwoBodyModel(dynamic_mass=tree.M_T, equivalent_damping=tree.C_T,
+                             equivalent_stiffness=tree.K_T,
                              impactor_mass=tree.m, impactor_stiffness=tree.k,
                              impact_speed=tree.u1, restitution=tree.restitution)
         s = np.linspace(0.0, tree.duration, 5001)

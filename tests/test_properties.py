@@ -19,8 +19,8 @@ from treeimpact.analytic.model.two_body import TwoBodyModel
 models = st.builds(
     TwoBodyModel,
     dynamic_mass=st.floats(5.0, 2000.0),
-    damping=st.floats(0.0, 1e5),
-    stiffness=st.floats(1e4, 1e8),
+    equivalent_damping=st.floats(0.0, 1e5),
+    equivalent_stiffness=st.floats(1e4, 1e8),
     impactor_mass=st.floats(1.0, 500.0),
     impactor_stiffness=st.one_of(st.just(0.0), st.floats(1.0, 1e4)),
     impact_speed=st.floats(0.1, 10.0),
@@ -31,7 +31,7 @@ models = st.builds(
 # the trunk's damping alone, its relative velocity falling only as 1 / n: the exact solver
 # refuses it (one-line error naming the restitution) instead of looping or truncating.
 ELASTIC_OVERDAMPED = TwoBodyModel(
-    dynamic_mass=5.0, damping=52971.65217941432, stiffness=10000.0,
+    dynamic_mass=5.0, equivalent_damping=52971.65217941432, equivalent_stiffness=10000.0,
     impactor_mass=469.3527616896069, impactor_stiffness=0.0, impact_speed=1.0, restitution=1.0)
 
 
@@ -40,7 +40,8 @@ ELASTIC_OVERDAMPED = TwoBodyModel(
 # read as a second-order zero it made the search return an immediate re-contact, again
 # and again (a hang). A separation starts the free flight with a third-order zero.
 LIGHT_OVERDAMPED = TwoBodyModel(
-    dynamic_mass=5.0, damping=90147.34109509406, stiffness=10000.0, impactor_mass=1.0,
+    dynamic_mass=5.0, equivalent_damping=90147.34109509406, equivalent_stiffness=10000.0,
+    impactor_mass=1.0,
     impactor_stiffness=8429.71100390023, impact_speed=5.0, restitution=0.005)
 
 
@@ -113,8 +114,8 @@ def test_phase_integrals_in_closed_form_match_quadrature(model, t_end):
         x1, vx1, y1, vy1 = sol._scalar_state(ph.t1)
         together = ph.kind == "together"
         mass = model.dynamic_mass + (model.impactor_mass if together else 0.0)
-        stiff = model.stiffness + (model.impactor_stiffness if together else 0.0)
-        beta, w2 = 0.5 * model.damping / mass, stiff / mass
+        stiff = model.equivalent_stiffness + (model.impactor_stiffness if together else 0.0)
+        beta, w2 = 0.5 * model.equivalent_damping / mass, stiff / mass
         # round-off of each closed form: its terms (end points) times a few eps
         floor = {"x": (abs(ph.vx0) + abs(vx1) + 2 * beta * (abs(ph.x0) + abs(x1))) / w2,
                  "y": abs(ph.y0) * s + abs(ph.vy0) * s * s,

@@ -56,7 +56,8 @@ def test_fit_recovers_the_tree_within_2_percent_and_its_intervals_cover_the_trut
     for seed in range(trials):
         model, record, test = synthetic(e, seed)
         fit = fit_record(record, test)
-        truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping}
+        truth = {"M_T": model.dynamic_mass, "K_T": model.equivalent_stiffness,
+                 "C_T": model.equivalent_damping}
         for k, v in truth.items():
             assert abs(fit.values[k] / v - 1.0) < 0.02, (k, seed, fit.values[k], v)
             lo, hi = fit.intervals[k]
@@ -98,12 +99,13 @@ def test_a_one_impact_record_fixes_omega_xi_and_v1_and_gives_m_and_e_as_ranges()
     assert fit.explained
     assert not any(fit.determined[k] for k in ("M_T", "K_T", "C_T", "restitution", "E"))
     assert all(math.isnan(fit.values[k]) for k in ("M_T", "K_T", "restitution"))
-    omega = math.sqrt(model.stiffness / model.dynamic_mass)
+    omega = math.sqrt(model.equivalent_stiffness / model.dynamic_mass)
     m, u = model.impactor_mass, model.impact_speed
     v1 = m * (1.0 + model.restitution) * u / (model.dynamic_mass + m)
     for k, v in (("omega_1", omega), ("V_1", v1)):
         assert fit.determined[k] and abs(fit.values[k] / v - 1.0) < 0.01, (k, fit.values[k], v)
-    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness), ("restitution", 0.3)):
+    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.equivalent_stiffness),
+                 ("restitution", 0.3)):
         lo, hi = fit.intervals[k]
         assert lo <= v <= hi, (k, lo, v, hi)
     e_low, e_high = fit.intervals["restitution"]
@@ -134,8 +136,8 @@ def test_a_known_restitution_fixes_the_one_impact_record_within_2_percent(seed):
     assert fit.note == "" and fit.values["restitution"] == 0.3
     assert fit.intervals["restitution"] == (0.3, 0.3) and fit.held["restitution"] == "given"
     assert fit.determined["restitution"]
-    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness),
-                 ("C_T", model.damping)):
+    for k, v in (("M_T", model.dynamic_mass), ("K_T", model.equivalent_stiffness),
+                 ("C_T", model.equivalent_damping)):
         assert abs(fit.values[k] / v - 1.0) < 0.02, (k, fit.values[k], v)
 
 
@@ -149,8 +151,8 @@ def test_the_pendulum_s_record_fixes_the_one_impact_record_within_2_percent():
         model, record, test = synthetic(0.3, seed, pendulum=True, **HEAVY)
         fit = fit_record(record, test)
         assert fit.note == "" and all(fit.determined.values())
-        for k, v in (("M_T", model.dynamic_mass), ("K_T", model.stiffness),
-                     ("C_T", model.damping), ("restitution", 0.3)):
+        for k, v in (("M_T", model.dynamic_mass), ("K_T", model.equivalent_stiffness),
+                     ("C_T", model.equivalent_damping), ("restitution", 0.3)):
             assert abs(fit.values[k] / v - 1.0) < 0.02, (k, seed, fit.values[k], v)
             lo, hi = fit.intervals[k]
             covered[k] += lo <= v <= hi

@@ -58,8 +58,8 @@ def test_lagrangian_reduction_matches_symbolic_derivation(case):
     M_T, C_T, K_T = symbolic_reduction(math.isfinite(t.base_stiffness))
     red = reduce_trunk(t)
     assert red.dynamic_mass == pytest.approx(_subs(M_T, t), rel=1e-12)
-    assert red.damping == pytest.approx(_subs(C_T, t), rel=1e-12)
-    assert red.stiffness == pytest.approx(_subs(K_T, t), rel=1e-12)
+    assert red.equivalent_damping == pytest.approx(_subs(C_T, t), rel=1e-12)
+    assert red.equivalent_stiffness == pytest.approx(_subs(K_T, t), rel=1e-12)
 
 
 def test_printed_eq7_dynamic_mass_equals_derivation():
@@ -76,21 +76,21 @@ def test_printed_eq10_damping_is_half_the_derivation():
     printed = C * l / 2 * ((3 * l * (l - a) + a ** 2) / (4 * a ** 2) - (a / l) / 70)
     assert sp.simplify(C_T / printed) == 2  # recorded in analytic.paper.reproduction.DISCREPANCIES
     t = TRUNKS["rigid-clamp"]
-    assert reduce_trunk(t).damping == pytest.approx(2 * printed_damping(t), rel=1e-12)
+    assert reduce_trunk(t).equivalent_damping == pytest.approx(2 * printed_damping(t), rel=1e-12)
 
 
 def test_eq8_stiffness_is_3EI_over_a_cubed():
     _, _, K_T = symbolic_reduction(False)
     assert sp.simplify(K_T - 3 * E * I / a ** 3) == 0
     t = TRUNKS["rigid-clamp"]
-    assert reduce_trunk(t).stiffness == pytest.approx(printed_stiffness(t), rel=1e-13)
+    assert reduce_trunk(t).equivalent_stiffness == pytest.approx(printed_stiffness(t), rel=1e-13)
 
 
 def test_base_spring_stiffness_is_series_of_bending_and_rotation():
     t = TRUNKS["base-spring"]
     expected = 1.0 / (t.clamp_height ** 3 / (3 * t.bending_stiffness)
                       + t.clamp_height ** 2 / t.base_stiffness)
-    assert reduce_trunk(t).stiffness == pytest.approx(expected, rel=1e-13)
+    assert reduce_trunk(t).equivalent_stiffness == pytest.approx(expected, rel=1e-13)
 
 
 def test_static_mode_shape_is_one_at_the_clamp_and_continuous():
@@ -120,4 +120,4 @@ def test_shipped_scenarios_reduce_to_table_1():
     for name, (mt, kt) in {"open-center": (87.0, 1.2e6), "central-leader": (110.0, 1.5e6)}.items():
         red = reduce_trunk(load_scenario(name).trunk)
         assert red.dynamic_mass == pytest.approx(mt, rel=1e-6)  # calibrated to Table 1
-        assert red.stiffness == pytest.approx(kt, rel=1e-6)
+        assert red.equivalent_stiffness == pytest.approx(kt, rel=1e-6)

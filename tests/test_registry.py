@@ -18,7 +18,7 @@ from treeimpact.analytic.model.scenario import load_scenario
 
 #: The units the registry may use: SI, "1" for dimensionless (never "-" or "").
 UNITS = {"m", "kg", "kg/m^3", "Pa", "N s/m^2", "N m/rad", "1", "deg", "m/s^2", "m/s", "N/m",
-         "s", "N s/m", "log10 s"}
+         "s", "N s/m", "log10 s", "1/s"}
 
 
 def _central():
@@ -155,6 +155,28 @@ def test_every_place_spells_inputs_as_the_registry():
         p = registry.BY_NAME[name]
         assert (inp.unit, inp.low, inp.high, inp.allowed) == (
             p.unit, p.design.low, p.design.high, p.design.allowed), name
+
+
+def test_model_fields_are_registry_names():
+    """The reduced model's fields (TreeSDOF, TwoBodyModel, MeasuredTree) are spelled as the
+    registry names their quantities (K_T is ``equivalent_stiffness`` everywhere in code, not
+    ``stiffness``), and their comments give the registry's symbol and unit."""
+    import inspect
+
+    from treeimpact.analytic.model.calibration import MeasuredTree
+    from treeimpact.analytic.model.reduction import TreeSDOF
+    from treeimpact.analytic.model.two_body import TwoBodyModel
+
+    for cls in (TreeSDOF, TwoBodyModel, MeasuredTree):
+        source = inspect.getsource(cls)
+        for f in dataclasses.fields(cls):
+            p = registry.BY_NAME[f.name]  # KeyError: a field the registry does not name
+            line = next(ln for ln in source.splitlines()
+                        if ln.strip().startswith(f"{f.name}: float"))
+            comment = line.split("#", 1)[1]
+            assert comment.split(",")[0].split(":")[0].split(" = ")[0].strip() == p.symbol, (
+                cls.__name__, f.name)
+            assert p.unit in comment or p.unit == "1", (cls.__name__, f.name)
 
 
 def test_report_input_keys_are_registry_names():

@@ -75,7 +75,8 @@ def test_soft_contact_rejects_restitution_without_finite_damping(bad):
 def test_simulated_free_collision_gives_target_restitution(e):
     # two free bodies (no damping, a trunk spring 1e-9 of the contact's): the simulated
     # collision of soft_record must return exactly the e the mapping was built for
-    model = TwoBodyModel(dynamic_mass=87.0, damping=0.0, stiffness=1e-3, impactor_mass=132.4,
+    model = TwoBodyModel(dynamic_mass=87.0, equivalent_damping=0.0, equivalent_stiffness=1e-3,
+                         impactor_mass=132.4,
                          impactor_stiffness=0.0, impact_speed=2.5, restitution=e)
     k, c = contact_law(model, duration=5e-4)
     rec = soft_record(model, k, c, t_end=1e-3, dt_sample=1e-6)
@@ -95,7 +96,8 @@ def test_trunk_damping_during_the_first_collision_shifts_the_apparent_restitutio
     rec = simulate_soft(scenario, restitution=0.9, t_end=0.002).record
     after = contact_intervals(rec.force, 0.0)[0][1] + 1
     measured = -(rec.vy[after] - rec.vx[after]) / model.impact_speed
-    bound = (model.damping * rec.x[after] + model.stiffness * rec.x[after] * rec.t[after]) * (
+    bound = (model.equivalent_damping * rec.x[after]
+             + model.equivalent_stiffness * rec.x[after] * rec.t[after]) * (
         1 / model.dynamic_mass) / model.impact_speed
     assert 0 < 0.9 - measured < bound
 

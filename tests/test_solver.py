@@ -20,7 +20,8 @@ def paper_model(e=0.1, name="open-center"):
 
 
 def billet_model(e):
-    return TwoBodyModel(dynamic_mass=87.0, damping=12000.0, stiffness=1.2e6, impactor_mass=132.4,
+    return TwoBodyModel(dynamic_mass=87.0, equivalent_damping=12000.0, equivalent_stiffness=1.2e6,
+                        impactor_mass=132.4,
                         impactor_stiffness=0.0, impact_speed=2.0, restitution=e)
 
 
@@ -92,7 +93,7 @@ def test_accumulation_time_converges_geometrically_to_the_tail_closure(e):
     mod = paper_model(e)
     sol = solve_impacts(mod, 0.1)
     tail = sol.tails[0]
-    tree = Oscillator.from_mck(mod.dynamic_mass, mod.damping, mod.stiffness)
+    tree = Oscillator.from_mck(mod.dynamic_mass, mod.equivalent_damping, mod.equivalent_stiffness)
     pend = Oscillator.from_mck(mod.impactor_mass, 0.0, mod.impactor_stiffness)
     errors = []
     for imp in sol.impacts[-6:]:
@@ -323,7 +324,8 @@ def test_sorted_state_is_the_state_and_its_trunk_rows(e, M, phases):
     """ImpactSolution.sorted_state (the record fit's path: trunk rows alone, or all four)
     against state() on shuffled times and the scalar path: the same values at every time,
     phase starts included (a start belongs to the phase it opens)."""
-    model = TwoBodyModel(dynamic_mass=M, damping=30.0, stiffness=2e4, impactor_mass=10.0,
+    model = TwoBodyModel(dynamic_mass=M, equivalent_damping=30.0, equivalent_stiffness=2e4,
+                         impactor_mass=10.0,
                          impactor_stiffness=50.0, impact_speed=1.0, restitution=e)
     sol = solve_impacts(model, 0.5)
     t = np.sort(np.concatenate([np.linspace(0.0, 0.5, 3001), [p.t0 for p in sol.phases]]))

@@ -61,8 +61,9 @@ def sdof_impact_model(model: TwoBodyModel, trunk, k_c: float, c_c: float
     :class:`LinearImpactModel`: the trunk a 1 x 1 mesh (M_T, C_T, K_T, eq 11) whose crown
     moves with the static shape of ``trunk``, phi(l) x."""
     return LinearImpactModel(
-        M=np.array([[model.dynamic_mass]]), D=np.array([[model.damping]]),
-        K=np.array([[model.stiffness]]), clamp=0, crown=0, crown_gain=crown_factor(trunk),
+        M=np.array([[model.dynamic_mass]]), D=np.array([[model.equivalent_damping]]),
+        K=np.array([[model.equivalent_stiffness]]), clamp=0, crown=0,
+        crown_gain=crown_factor(trunk),
         impactor_mass=model.impactor_mass, impactor_stiffness=model.impactor_stiffness,
         impact_speed=model.impact_speed, contact_stiffness=k_c, contact_damping=c_c)
 
@@ -162,7 +163,7 @@ def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sa
 def _soft_rhs(model: TwoBodyModel, k_c: float, c_c: float):
     """The two bodies' equations (eqs 11 and 13) with the pad acting while ``in_contact``;
     the last two states integrate the trunk's damping work and the pad's work (J)."""
-    M, C, K = model.dynamic_mass, model.damping, model.stiffness
+    M, C, K = model.dynamic_mass, model.equivalent_damping, model.equivalent_stiffness
     m, kp = model.impactor_mass, model.impactor_stiffness
 
     def rhs(_t, s, in_contact):

@@ -62,6 +62,6 @@ def sdof_rate(model) -> float:
     :class:`analytic.model.two_body.TwoBodyModel`): the natural
     frequencies sqrt(K_T / M_T) and sqrt(k / m) and the damping rate C_T / M_T (the engines
     step the trunk's damper explicitly, stable for dt < 2 M_T / C_T, as for a frequency)."""
-    return max(math.sqrt(model.stiffness / model.dynamic_mass),
-               model.damping / model.dynamic_mass,
+    return max(math.sqrt(model.equivalent_stiffness / model.dynamic_mass),
+               model.equivalent_damping / model.dynamic_mass,
                math.sqrt(model.impactor_stiffness / model.impactor_mass))

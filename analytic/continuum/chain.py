@@ -237,8 +237,8 @@ def chain_reduced_sdof(chain: HingedChain) -> TreeSDOF:
     """
     M, K, D = chain_matrices(chain)
     u = chain_static_mode(chain)
-    return TreeSDOF(dynamic_mass=float(u @ M @ u), damping=float(u @ D @ u),
-                    stiffness=float(u @ K @ u))
+    return TreeSDOF(dynamic_mass=float(u @ M @ u), equivalent_damping=float(u @ D @ u),
+                    equivalent_stiffness=float(u @ K @ u))
 
 
 def chain_errors(trunk: Trunk, segments: int) -> dict:

@@ -25,6 +25,6 @@ def modes(scenario: Scenario, *, n_modes: int = 3) -> dict:
     rad/s); ``beam``: the reference's static stiffness and lowest ``n_modes`` frequencies
     (:func:`beam_reference`)."""
     tree = reduce_trunk(scenario.trunk)
-    return {"model": {"static_stiffness": tree.stiffness,
-                      "omegas": [math.sqrt(tree.stiffness / tree.dynamic_mass)]},
+    return {"model": {"static_stiffness": tree.equivalent_stiffness,
+                      "omegas": [math.sqrt(tree.equivalent_stiffness / tree.dynamic_mass)]},
             "beam": beam_reference(scenario, n_modes)}

@@ -25,7 +25,8 @@ def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
     e^ln_k_t, C_T = 2 zeta sqrt(K_T M_T) with zeta the trunk's damping ratio."""
     M, K = math.exp(float(p[Slot.LN_M_T])), math.exp(float(p[Slot.LN_K_T]))
     ratio, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])
-    return TwoBodyModel(dynamic_mass=M, damping=2.0 * ratio * math.sqrt(K * M), stiffness=K,
+    return TwoBodyModel(dynamic_mass=M, equivalent_damping=2.0 * ratio * math.sqrt(K * M),
+                        equivalent_stiffness=K,
                         impactor_mass=test.impactor_mass,
                         impactor_stiffness=test.impactor_stiffness,
                         impact_speed=test.impact_speed, restitution=e)

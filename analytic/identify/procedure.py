@@ -303,8 +303,8 @@ def pendulum_test_of(scenario) -> PendulumTest:
 def truth_of(scenario) -> dict:
     """What the procedure should find for a scenario's SDOF model (SI)."""
     mod = two_body_model(scenario)
-    mt, kt, ct, m, k = (mod.dynamic_mass, mod.stiffness, mod.damping, mod.impactor_mass,
-                        mod.impactor_stiffness)
+    mt, kt, ct, m, k = (mod.dynamic_mass, mod.equivalent_stiffness, mod.equivalent_damping,
+                        mod.impactor_mass, mod.impactor_stiffness)
     wn = math.sqrt((kt + k) / (mt + m))
     b = ct / (2 * (mt + m))
     return {"M_T": mt, "K_T": kt, "b": b, "omega_n": wn, "pair_damping_ratio": b / wn,

@@ -71,7 +71,7 @@ def _equations(model: TwoBodyModel):
     """The right-hand sides of ``model``'s free flight (eq 13) and joint motion (eq 34) and
     the terminal events of each: the gap x - y (eq 12) and the contact force N (eq 34)
     falling through zero; state (x, x', y, y')."""
-    M, C, K = model.dynamic_mass, model.damping, model.stiffness
+    M, C, K = model.dynamic_mass, model.equivalent_damping, model.equivalent_stiffness
     m, k = model.impactor_mass, model.impactor_stiffness
 
     def free(_t, s):
@@ -120,7 +120,7 @@ def _contact_skip(model: TwoBodyModel, x: float, V: float, v: float) -> float:
     zero, and within round-off of the positions an event would fire at once. A thousandth
     of the flight 2 gamma / |a_rel| predicted under constant relative acceleration, at most
     1 ns."""
-    M, C, K = model.dynamic_mass, model.damping, model.stiffness
+    M, C, K = model.dynamic_mass, model.equivalent_damping, model.equivalent_stiffness
     m, k = model.impactor_mass, model.impactor_stiffness
     a_rel = (-K * x - C * V) / M + k * x / m
     flight = 2.0 * (V - v) / -a_rel if a_rel < 0 else 1e-6

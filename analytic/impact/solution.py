@@ -53,10 +53,10 @@ class ImpactSolution:
     @_once
     def _osc(self):
         m = self.model
-        return (Oscillator.from_mck(m.dynamic_mass, m.damping, m.stiffness),
+        return (Oscillator.from_mck(m.dynamic_mass, m.equivalent_damping, m.equivalent_stiffness),
                 Oscillator.from_mck(m.impactor_mass, 0.0, m.impactor_stiffness),
-                Oscillator.from_mck(m.dynamic_mass + m.impactor_mass, m.damping,
-                                    m.stiffness + m.impactor_stiffness))
+                Oscillator.from_mck(m.dynamic_mass + m.impactor_mass, m.equivalent_damping,
+                                    m.equivalent_stiffness + m.impactor_stiffness))
 
     def _phase_state(self, ph: Phase, s, pendulum: bool = True):
         """(x, vx, y, vy) of phase ``ph`` at times s (s) after its start; (x, vx) only
@@ -171,10 +171,10 @@ class ImpactSolution:
             ix = -((vx1 - vx0) + 2.0 * osc.beta * (x1 - x0)) / osc.omega_sq
             if together:  # one body: M_T + m on K_T + k, damping C_T; y = x
                 iy = ix
-                mass, stiff = m.dynamic_mass + m.impactor_mass, m.stiffness + (
+                mass, stiff = m.dynamic_mass + m.impactor_mass, m.equivalent_stiffness + (
                     m.impactor_stiffness)
             else:
-                mass, stiff = m.dynamic_mass, m.stiffness
+                mass, stiff = m.dynamic_mass, m.equivalent_stiffness
             idamp = 0.5 * mass * (vx0 ** 2 - vx1 ** 2) + 0.5 * stiff * (x0 ** 2 - x1 ** 2)
         if iy is None and which in (None, "y"):
             if pend.omega_sq > 0.0:  # undamped: y0 sin(w s) / w + 2 v0 sin^2(w s / 2) / w^2
@@ -197,7 +197,7 @@ class ImpactSolution:
             return vals * vals if which == "damping" else vals
 
         val = gauss_legendre_integral(fn, 0.0, t1 - ph.t0, rate)
-        return self.model.damping * val if which == "damping" else val
+        return self.model.equivalent_damping * val if which == "damping" else val
 
     @_once
     def _cumulative(self) -> dict:

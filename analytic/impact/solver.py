@@ -49,10 +49,11 @@ class _Bodies:
         self.model, self.t_end = model, t_end
         self.M, self.m = M, m = model.dynamic_mass, model.impactor_mass
         self.e, self.mu, self.e0 = model.restitution, model.reduced_mass, model.initial_energy
-        self.tree = tree = Oscillator.from_mck(M, model.damping, model.stiffness)
+        self.tree = tree = Oscillator.from_mck(M, model.equivalent_damping,
+                                               model.equivalent_stiffness)
         self.pend = pend = Oscillator.from_mck(m, 0.0, model.impactor_stiffness)
-        self.both = Oscillator.from_mck(M + m, model.damping,
-                                        model.stiffness + model.impactor_stiffness)
+        self.both = Oscillator.from_mck(M + m, model.equivalent_damping,
+                                        model.equivalent_stiffness + model.impactor_stiffness)
         self.rate = max(tree.fastest_rate, pend.fastest_rate, 1e-12)
         self.cx, self.cv = force_coefficients(model)
         self.tail_limit = TAIL_ENERGY_FRACTION * self.e0

@@ -20,8 +20,8 @@ def force_coefficients(model: TwoBodyModel) -> tuple[float, float]:
     N = [m C_T x' + (m K_T - M_T k) x] / (M_T + m); compressive while N > 0.
     """
     M, m = model.dynamic_mass, model.impactor_mass
-    return ((m * model.stiffness - M * model.impactor_stiffness) / (M + m),
-            m * model.damping / (M + m))
+    return ((m * model.equivalent_stiffness - M * model.impactor_stiffness) / (M + m),
+            m * model.equivalent_damping / (M + m))
 
 
 def together_or_part(M: float, m: float, cx: float, cv: float, x: float, vx: float,

@@ -91,11 +91,11 @@ def stiffness_from_regression(*, a1: float, a2: float, x_max: float, tau: float,
         raise ParameterError(f"x_max = {x_max!r} m, tau = {tau!r} s: give omega_n = "
                              f"{omega_n:.4g} rad/s <= b = {b:.4g} 1/s, an overdamped motion "
                              "with no maximum of that kind (eq 37)")
-    k_t = omega_n ** 2 * (dynamic_mass + impactor_mass) - impactor_stiffness
-    if k_t <= 0:
-        raise ParameterError(f"x_max = {x_max!r} m, tau = {tau!r} s: give K_T = {k_t:.4g} N/m "
-                             "<= 0 (eq 46)")
-    return k_t
+    equivalent_stiffness = omega_n ** 2 * (dynamic_mass + impactor_mass) - impactor_stiffness
+    if equivalent_stiffness <= 0:
+        raise ParameterError(f"x_max = {x_max!r} m, tau = {tau!r} s: give K_T = "
+                             f"{equivalent_stiffness:.4g} N/m <= 0 (eq 46)")
+    return equivalent_stiffness
 
 
 def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: float) -> Trunk:
@@ -162,8 +162,9 @@ def with_clamp_mass(trunk: Trunk, clamp_mass: float, *, impactor_mass: float) ->
     before (eqs 7, 8, 10): the unmeasured clamp varied on the same measured tree.
     ``impactor_mass`` (kg) fixes b = C_T / (2 (M_T + m))."""
     tree = reduce_trunk(trunk)
-    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, equivalent_stiffness=tree.stiffness,
-                            damping_rate=tree.damping / (2.0 * (tree.dynamic_mass
-                                                                + impactor_mass)))
+    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass,
+                            equivalent_stiffness=tree.equivalent_stiffness,
+                            damping_rate=tree.equivalent_damping
+                            / (2.0 * (tree.dynamic_mass + impactor_mass)))
     return calibrate_trunk(replace(trunk, clamp_mass=clamp_mass), measured,
                            impactor_mass=impactor_mass)

@@ -105,18 +105,19 @@ class TreeSDOF:
     """The trunk reduced to one degree of freedom at the impact point (eq 11)."""
 
     dynamic_mass: float  # M_T, kg (eq 7)
-    damping: float  # C_T, N s/m (eq 10, derived form)
-    stiffness: float  # K_T, N/m (eq 8)
+    equivalent_damping: float  # C_T, N s/m (eq 10, derived form)
+    equivalent_stiffness: float  # K_T, N/m (eq 8)
 
     @property
     def natural_frequency(self) -> float:
         """omega_1 = sqrt(K_T / M_T), rad/s (eq 14)."""
-        return math.sqrt(self.stiffness / self.dynamic_mass)
+        return math.sqrt(self.equivalent_stiffness / self.dynamic_mass)
 
     @property
     def damping_ratio(self) -> float:
         """xi with 2 xi omega_1 = C_T / M_T (eq 14)."""
-        return self.damping / (2.0 * math.sqrt(self.stiffness * self.dynamic_mass))
+        return self.equivalent_damping / (
+            2.0 * math.sqrt(self.equivalent_stiffness * self.dynamic_mass))
 
 
 def reduce_trunk(trunk: Trunk) -> TreeSDOF:
@@ -131,8 +132,8 @@ def reduce_trunk(trunk: Trunk) -> TreeSDOF:
     dynamic_mass = trunk.density * trunk.area * j + trunk.clamp_mass + trunk.crown_mass * tip ** 2
     return TreeSDOF(
         dynamic_mass=dynamic_mass,
-        damping=trunk.damping * j,
-        stiffness=1.0 / static_flexibility(trunk),
+        equivalent_damping=trunk.damping * j,
+        equivalent_stiffness=1.0 / static_flexibility(trunk),
     )
 
 

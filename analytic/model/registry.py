@@ -178,6 +178,8 @@ PARAMETERS = (
     Parameter("dynamic_mass", "M_T", "kg", 0.0, _INF, "dynamic mass (eq 7)"),
     Parameter("equivalent_stiffness", "K_T", "N/m", 0.0, _INF, "equivalent stiffness (eq 8)"),
     Parameter("equivalent_damping", "C_T", "N s/m", 0.0, _INF, "equivalent damping (eq 10)"),
+    Parameter("damping_rate", "b", "1/s", 0.0, _INF, "damping rate C_T / (2 (M_T + m)) (eq 42)"),
+    Parameter("impactor_stiffness", "k", "N/m", 0.0, _INF, "pendulum stiffness m g / l_e (eq 13)"),
     Parameter("e_over_g", "E / G", "1", 0.0, 20.0, "E / G (shear)"),
     Parameter("log10_pad_duration", "log10 tau_c", "log10 s", math.log10(2e-4),
               math.log10(2e-2), "pad contact duration"),

@@ -20,8 +20,8 @@ class TwoBodyModel:
     """Parameters of eqs 13-35, SI units."""
 
     dynamic_mass: float  # M_T, kg
-    damping: float  # C_T, N s/m
-    stiffness: float  # K_T, N/m
+    equivalent_damping: float  # C_T, N s/m
+    equivalent_stiffness: float  # K_T, N/m
     impactor_mass: float  # m, kg
     impactor_stiffness: float  # k = m g / l_e, N/m (0 for a billet)
     impact_speed: float  # u_1, m/s
@@ -29,8 +29,9 @@ class TwoBodyModel:
 
     def __post_init__(self):
         check_range("model.dynamic_mass", self.dynamic_mass, low=0, low_open=True, unit="kg")
-        check_range("model.damping", self.damping, low=0, unit="N s/m")
-        check_range("model.stiffness", self.stiffness, low=0, low_open=True, unit="N/m")
+        check_range("model.equivalent_damping", self.equivalent_damping, low=0, unit="N s/m")
+        check_range("model.equivalent_stiffness", self.equivalent_stiffness, low=0,
+                    low_open=True, unit="N/m")
         check_range("model.impactor_mass", self.impactor_mass, low=0, low_open=True, unit="kg")
         check_range("model.impactor_stiffness", self.impactor_stiffness, low=0, unit="N/m")
         check_range("model.impact_speed", self.impact_speed, low=0, low_open=True, unit="m/s")
@@ -49,13 +50,13 @@ class TwoBodyModel:
     @property
     def together_frequency(self) -> float:
         """omega_n = sqrt((K_T + k) / (M_T + m)), rad/s (eq 34, eq 46)."""
-        return math.sqrt((self.stiffness + self.impactor_stiffness)
+        return math.sqrt((self.equivalent_stiffness + self.impactor_stiffness)
                          / (self.dynamic_mass + self.impactor_mass))
 
     @property
     def together_decay(self) -> float:
         """b = C_T / (2 (M_T + m)), 1/s (eq 35-36)."""
-        return self.damping / (2.0 * (self.dynamic_mass + self.impactor_mass))
+        return self.equivalent_damping / (2.0 * (self.dynamic_mass + self.impactor_mass))
 
     def kinetic_energy(self, vx, vy):
         """1/2 M_T x'^2 + 1/2 m y'^2, J, at the velocities ``vx`` = x' and ``vy`` = y' (m/s;
@@ -64,7 +65,7 @@ class TwoBodyModel:
 
     def potential_energy(self, x, y):
         """1/2 K_T x^2 + 1/2 k y^2, J: the trunk's and the pendulum's springs (eqs 11, 13)."""
-        return 0.5 * self.stiffness * x ** 2 + 0.5 * self.impactor_stiffness * y ** 2
+        return 0.5 * self.equivalent_stiffness * x ** 2 + 0.5 * self.impactor_stiffness * y ** 2
 
     def pendulum_energy(self, y, vy):
         """The pendulum's own energy 1/2 m y'^2 + 1/2 k y^2, J (linearised, eq 13), at y (m)
@@ -80,7 +81,8 @@ class TwoBodyModel:
     def as_dict(self) -> dict:
         """M_T (kg), C_T (N s/m), K_T (N/m), m (kg), k (N/m), restitution (1) and u1 (m/s):
         the ``model`` keys every backend reports."""
-        return {"M_T": self.dynamic_mass, "C_T": self.damping, "K_T": self.stiffness,
+        return {"M_T": self.dynamic_mass, "C_T": self.equivalent_damping,
+                "K_T": self.equivalent_stiffness,
                 "m": self.impactor_mass, "k": self.impactor_stiffness,
                 "restitution": self.restitution, "u1": self.impact_speed}
 
@@ -97,6 +99,6 @@ def two_body_model(scenario: Scenario, restitution: float | None = None) -> TwoB
         k = 0.0
     else:  # pragma: no cover - Scenario validates the type
         raise TypeError(imp)
-    return TwoBodyModel(dynamic_mass=tree.dynamic_mass, damping=tree.damping,
-                        stiffness=tree.stiffness, impactor_mass=imp.mass,
+    return TwoBodyModel(dynamic_mass=tree.dynamic_mass, equivalent_damping=tree.equivalent_damping,
+                        equivalent_stiffness=tree.equivalent_stiffness, impactor_mass=imp.mass,
                         impactor_stiffness=k, impact_speed=imp.impact_speed, restitution=e)

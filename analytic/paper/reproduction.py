@@ -85,8 +85,10 @@ def table_model(tree: TreeTable, restitution: float) -> TwoBodyModel:
     m), eq 35) and e = ``restitution``."""
     b = -tree.a2 / tree.a1
     k = PENDULUM_MASS * GRAVITY / EQUIVALENT_LENGTH
-    return TwoBodyModel(dynamic_mass=tree.M_T, damping=2.0 * b * (tree.M_T + PENDULUM_MASS),
-                        stiffness=tree.K_T, impactor_mass=PENDULUM_MASS, impactor_stiffness=k,
+    return TwoBodyModel(dynamic_mass=tree.M_T,
+                        equivalent_damping=2.0 * b * (tree.M_T + PENDULUM_MASS),
+                        equivalent_stiffness=tree.K_T, impactor_mass=PENDULUM_MASS,
+                        impactor_stiffness=k,
                         impact_speed=tree.test.impact_speed, restitution=restitution)
 
 

@@ -145,16 +145,16 @@ def build_scenario(args):
         if args.x_max is not None or args.tau is not None:
             raise ParameterError("--equivalent-stiffness: give it or --x-max and --tau, not "
                                  "both")
-        k_t = args.equivalent_stiffness
+        equivalent_stiffness = args.equivalent_stiffness
         given.append("K_T")
     elif None not in (args.x_max, args.tau, args.a1, args.a2):
-        k_t = _stiffness(args, pendulum)
+        equivalent_stiffness = _stiffness(args, pendulum)
         given.append(f"K_T from x_max = {args.x_max:g} m, tau = {args.tau:g} s (eqs 43, 46)")
     else:
         raise ParameterError("--equivalent-stiffness: missing (give K_T in N/m, or --x-max, "
                              "--tau, --a1 and --a2)")
-    measured = MeasuredTree(dynamic_mass=args.dynamic_mass, equivalent_stiffness=k_t,
-                            damping_rate=b)
+    measured = MeasuredTree(dynamic_mass=args.dynamic_mass,
+                            equivalent_stiffness=equivalent_stiffness, damping_rate=b)
     chosen = Trunk(length=_pick(args, "length"), clamp_height=args.clamp_height,
                    diameter=args.diameter, density=_pick(args, "density"),
                    youngs_modulus=args.youngs_modulus, clamp_mass=_pick(args, "clamp_mass"))

@@ -87,7 +87,8 @@ def fit_truth(ladder) -> dict:
     """What the full-record fit is compared with: the ``ladder``'s scenario's M_T (kg), K_T
     (N/m) and C_T (N s/m) of the two-body model (eqs 7-11) and its restitution e (1)."""
     model = two_body_model(ladder.scenario)
-    return {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping,
+    return {"M_T": model.dynamic_mass, "K_T": model.equivalent_stiffness,
+            "C_T": model.equivalent_damping,
             "restitution": ladder.scenario.contact.restitution}
 
 

@@ -31,7 +31,8 @@ def fit_tasks(ladder) -> list[tuple]:
     if not isinstance(scen.impactor, Pendulum):
         return []
     model = two_body_model(scen)
-    truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping}
+    truth = {"M_T": model.dynamic_mass, "K_T": model.equivalent_stiffness,
+             "C_T": model.equivalent_damping}
     test = pendulum_test_of(scen)
     return [(r.rung.id, *sampled_record(r.result.trajectory, FIT_RATE, noise=FIT_NOISE,
                                         rest=FIT_REST), test, truth)

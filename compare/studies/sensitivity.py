@@ -115,7 +115,7 @@ def inputs_of(scenario) -> dict:
     return {"clamp_mass": t.clamp_mass, "density": t.density, "restitution": c.restitution,
             "e_over_g": t.youngs_modulus / g if g is not None and math.isfinite(g) else 0.0,
             "log10_pad_duration": math.log10(duration) if duration else math.nan,
-            "root_share": 1.0 - bending * reduce_trunk(t).stiffness}
+            "root_share": 1.0 - bending * reduce_trunk(t).equivalent_stiffness}
 
 
 def problem(names=None) -> dict:
@@ -133,10 +133,12 @@ def vary(scenario, p: dict):
     trunk = scenario.trunk
     tree = reduce_trunk(trunk)
     m = scenario.impactor.mass
-    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass, equivalent_stiffness=tree.stiffness,
-                            damping_rate=tree.damping / (2.0 * (tree.dynamic_mass + m)))
+    measured = MeasuredTree(dynamic_mass=tree.dynamic_mass,
+                            equivalent_stiffness=tree.equivalent_stiffness,
+                            damping_rate=tree.equivalent_damping / (2.0 * (tree.dynamic_mass + m)))
     a = trunk.clamp_height
-    e_mod = a ** 3 * tree.stiffness / (3.0 * trunk.second_moment * (1.0 - p["root_share"]))
+    e_mod = a ** 3 * tree.equivalent_stiffness / (
+        3.0 * trunk.second_moment * (1.0 - p["root_share"]))
     ratio = p["e_over_g"]
     chosen = replace(trunk, clamp_mass=p["clamp_mass"], density=p["density"],
                      youngs_modulus=e_mod, shear_modulus=e_mod / ratio if ratio > 0 else None)

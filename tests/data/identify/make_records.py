@@ -255,8 +255,8 @@ def beam_record(crown_ratio: float, rate: float, noise: float, seed: int, e: flo
     x = x + noise * float(np.max(np.abs(x))) * rng.standard_normal(t.size)
     mod = two_body_model(scen)
     test = pendulum_test_of(scen)
-    truth = {"M_T": mod.dynamic_mass, "K_T": mod.stiffness, "C_T": mod.damping,
-             "restitution": e}
+    truth = {"M_T": mod.dynamic_mass, "K_T": mod.equivalent_stiffness,
+             "C_T": mod.equivalent_damping, "restitution": e}
     flags = {"mass": test.impactor_mass, "equivalent_length": test.equivalent_length,
              "release_angle_deg": math.degrees(test.release_angle),
              "clamp_height": test.clamp_height, "diameter": test.diameter}
@@ -662,8 +662,8 @@ def accuracy_numbers(seeds: int) -> dict:
             model, record, test = synthetic(e, seed, pendulum=pendulum,
                                             **(HEAVY if heavy else {}))
             fit = fit_record(record, test)
-            truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness, "C_T": model.damping,
-                     "restitution": e}
+            truth = {"M_T": model.dynamic_mass, "K_T": model.equivalent_stiffness,
+                     "C_T": model.equivalent_damping, "restitution": e}
             err = {k: abs(fit.values[k] / truth[k] - 1.0) for k in ("M_T", "K_T", "C_T")}
             within += all(x <= 0.02 for x in err.values())
             explained += fit.explained
@@ -711,8 +711,8 @@ def coverage_numbers(seeds: int, e: float = 0.1) -> dict:
             for seed in range(seeds):
                 model, record, test = synthetic(e, seed, pendulum=pendulum, noise=noise)
                 fit = fit_record(record, test)
-                truth = {"M_T": model.dynamic_mass, "K_T": model.stiffness,
-                         "C_T": model.damping, "restitution": e}
+                truth = {"M_T": model.dynamic_mass, "K_T": model.equivalent_stiffness,
+                         "C_T": model.equivalent_damping, "restitution": e}
                 for k, v in truth.items():
                     covered[k] += fit.intervals[k][0] <= v <= fit.intervals[k][1]
                     fixed[k] += bool(fit.determined[k])
@@ -742,7 +742,8 @@ def check() -> None:
     from treeimpact.analytic.model.two_body import TwoBodyModel
 
     for tree in TREES.values():
-        model = TwoBodyModel(dynamic_mass=tree.M_T, damping=tree.C_T, stiffness=tree.K_T,
+        model = TwoBodyModel(dynamic_mass=tree.M_T, equivalent_damping=tree.C_T,
+                             equivalent_stiffness=tree.K_T,
                              impactor_mass=tree.m, impactor_stiffness=tree.k,
                              impact_speed=tree.u1, restitution=tree.restitution)
         s = np.linspace(0.0, tree.duration, 20001)
