@@ -148,7 +148,11 @@ def test_every_place_spells_inputs_as_the_registry():
         p = registry.BY_SWEEP[name]
         assert (factor, unit) == (p.shown[0], p.shown_unit), name
     for name, row in sensitivity.INPUTS.items():
-        assert row[2] == registry.BY_NAME[name].unit, name
+        p = registry.BY_NAME[name]
+        u = p.unmeasured
+        assert row == (u.low, u.high, p.unit, u.why, u.measure), name
+        assert p.low <= u.low < u.high <= p.high, name  # a study range inside the allowed one
+    assert set(sensitivity.INPUTS) == {p.name for p in registry.PARAMETERS if p.unmeasured}
     for name, fields in sensitivity.FIELDS.items():
         assert all(f in registry.BY_PATH for f in fields), name
     for name, inp in design.INPUTS.items():

@@ -34,6 +34,18 @@ class DesignRange:
 
 
 @dataclass(frozen=True)
+class UnmeasuredRange:
+    """An input nobody measured: the range the sensitivity study varies it over [low, high]
+    (in the parameter's unit), why that range, and the measurement that would fix it
+    (compare.studies.sensitivity; docs/sensitivity.md)."""
+
+    low: float
+    high: float
+    why: str
+    measure: str
+
+
+@dataclass(frozen=True)
 class Parameter:
     """One physical input.
 
@@ -53,6 +65,7 @@ class Parameter:
         text: what a map's axis and a study's text call it, if not its symbol.
         meaning: one line on what it is (a command-line option's help), or "".
         design: the design study's range and reasons, or None.
+        unmeasured: the sensitivity study's range, reason and fixing measurement, or None.
     """
 
     name: str
@@ -69,6 +82,7 @@ class Parameter:
     sets: str | None = None
     text: str = ""
     meaning: str = ""
+    unmeasured: UnmeasuredRange | None = None
 
     @property
     def axis(self) -> str:
@@ -112,7 +126,8 @@ def _field(name, symbol, unit, low, high, label, path, sweep=None, shown=(1.0, "
            design=None, text="", meaning="") -> Parameter:
     """A parameter that one scenario field holds (swept by its path unless ``sweep``)."""
     return Parameter(name, symbol, unit, low, high, label, path, sweep or path, shown,
-                     _setter(path), design, text=text, meaning=meaning)
+                     _setter(path), design, text=text, meaning=meaning,
+                     unmeasured=_UNMEASURED.get(name))
 
 
 _INF = math.inf
@@ -134,6 +149,32 @@ _DESIGN = {
     "restitution": DesignRange(
         0.0, 0.9, (0.0, 0.95), False,
         "a dead pad (0) to a bouncy one (0.9); the paper assumes e small, the shipped 0.1"),
+}
+
+#: The inputs nobody measured, as the sensitivity study varies them (compare.studies.sensitivity).
+_UNMEASURED = {
+    "clamp_mass": UnmeasuredRange(
+        1.0, 16.0, "the harvester's clamp: not weighed (the shipped 4 kg chosen)",
+        "weigh the clamp and the trunk section it grips"),
+    "e_over_g": UnmeasuredRange(
+        0.0, 20.0, ("E / G of the trunk: 0 is the paper's Euler-Bernoulli beam; green "
+                    "hardwood 10-20 (Wood Handbook)"),
+        "a static push test at two heights, or the shear modulus of a core sample"),
+    "log10_pad_duration": UnmeasuredRange(
+        math.log10(2e-4), math.log10(2e-2),
+        "the pad's stiffness as its 1-DOF collision time: a hard impactor (0.2 ms) to a "
+        "padded one (20 ms)", "the contact force of one strike (a load cell at the pad)"),
+    "restitution": UnmeasuredRange(
+        0.05, 0.5, "the pad's e: not measured (the paper: small)",
+        "the pendulum's rebound off a rigid stop (a drop test of the pad)"),
+    "root_share": UnmeasuredRange(
+        0.0, 0.9, ("the root's share of the static flexibility at the clamp: 0 reads Table "
+                   "1's K_T by eq 47 (a rigid clamp, E 8.9e8 / 1.3e9 Pa), 0.9 the printed E "
+                   "(8.9e9 / 12.6e9 Pa) with a compliant root"),
+        "a static push test measuring the root's rotation"),
+    "density": UnmeasuredRange(
+        500.0, 1100.0, ("green wood: the trunk's share of M_T (the crown mass follows from "
+                        "the measured M_T)"), "weigh a trunk section"),
 }
 
 #: Every physical input, scenario fields first (in LIMITS' order), then derived ones.
@@ -180,10 +221,13 @@ PARAMETERS = (
     Parameter("equivalent_damping", "C_T", "N s/m", 0.0, _INF, "equivalent damping (eq 10)"),
     Parameter("damping_rate", "b", "1/s", 0.0, _INF, "damping rate C_T / (2 (M_T + m)) (eq 42)"),
     Parameter("impactor_stiffness", "k", "N/m", 0.0, _INF, "pendulum stiffness m g / l_e (eq 13)"),
-    Parameter("e_over_g", "E / G", "1", 0.0, 20.0, "E / G (shear)"),
+    Parameter("e_over_g", "E / G", "1", 0.0, 20.0, "E / G (shear)",
+              unmeasured=_UNMEASURED["e_over_g"]),
     Parameter("log10_pad_duration", "log10 tau_c", "log10 s", math.log10(2e-4),
-              math.log10(2e-2), "pad contact duration"),
-    Parameter("root_share", "root share", "1", 0.0, 0.9, "root compliance"),
+              math.log10(2e-2), "pad contact duration",
+              unmeasured=_UNMEASURED["log10_pad_duration"]),
+    Parameter("root_share", "root share", "1", 0.0, 0.9, "root compliance",
+              unmeasured=_UNMEASURED["root_share"]),
 )
 
 #: name -> Parameter.

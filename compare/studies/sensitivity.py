@@ -35,37 +35,22 @@ from ..verdicts import validity_tolerance
 from .contact_scan import shortest_within
 
 
-def _unit(name: str) -> str:
-    """The registry's unit of the input ``name`` (analytic.model.registry)."""
-    return BY_NAME[name].unit
+#: The unmeasured inputs, in the order of the Morris design's columns (its seed reads them in
+#: this order): each varied over the registry's ``unmeasured`` range.
+ORDER = ("clamp_mass", "e_over_g", "log10_pad_duration", "restitution", "root_share", "density")
+
+
+def _input(name: str) -> tuple:
+    """(low, high, unit, why the range, the measurement that would fix it) of the input
+    ``name``, as the registry declares it (analytic.model.registry ``unmeasured``)."""
+    p = BY_NAME[name]
+    u = p.unmeasured
+    return (u.low, u.high, p.unit, u.why, u.measure)
 
 
 #: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it);
-#: names and units are the registry's.
-INPUTS = {
-    "clamp_mass": (1.0, 16.0, _unit("clamp_mass"),
-                   "the harvester's clamp: not weighed (the shipped 4 kg chosen)",
-                   "weigh the clamp and the trunk section it grips"),
-    "e_over_g": (0.0, 20.0, _unit("e_over_g"),
-                 ("E / G of the trunk: 0 is the paper's Euler-Bernoulli beam; green hardwood "
-                  "10-20 (Wood Handbook)"),
-                 "a static push test at two heights, or the shear modulus of a core sample"),
-    "log10_pad_duration": (math.log10(2e-4), math.log10(2e-2), _unit("log10_pad_duration"),
-                           ("the pad's stiffness as its 1-DOF collision time: a hard impactor "
-                            "(0.2 ms) to a padded one (20 ms)"),
-                           "the contact force of one strike (a load cell at the pad)"),
-    "restitution": (0.05, 0.5, _unit("restitution"),
-                    "the pad's e: not measured (the paper: small)",
-                    "the pendulum's rebound off a rigid stop (a drop test of the pad)"),
-    "root_share": (0.0, 0.9, _unit("root_share"),
-                   ("the root's share of the static flexibility at the clamp: 0 reads Table "
-                    "1's K_T by eq 47 (a rigid clamp, E 8.9e8 / 1.3e9 Pa), 0.9 the printed E "
-                    "(8.9e9 / 12.6e9 Pa) with a compliant root"),
-                   "a static push test measuring the root's rotation"),
-    "density": (500.0, 1100.0, _unit("density"),
-                ("green wood: the trunk's share of M_T (the crown mass follows from the "
-                 "measured M_T)"), "weigh a trunk section"),
-}
+#: names, units, ranges and reasons are the registry's.
+INPUTS = {name: _input(name) for name in ORDER}
 #: The outputs: the answer table's cells (continuum vs 1-DOF, relative) and the crossing
 #: durations (s) from which the 1-DOF model stays within the validity tolerance.
 ANSWER = ("x_max", "energy_delivered", "crown_peak", "crown_peak_acceleration", "peak_force")
