@@ -12,7 +12,7 @@ from __future__ import annotations
 import difflib
 
 #: The paper's symbols (docs/glossary.md) -> the name of the flag or keyword that sets them.
-SYMBOLS = {"e": "restitution", "m": "mass", "l_e": "equivalent_length",
+SYMBOLS = {"e": "restitution", "m": "impactor_mass", "l_e": "equivalent_length",
            "theta_r": "release_angle_deg", "theta": "release_angle_deg",
            "a": "clamp_height", "d": "diameter", "M_T": "dynamic_mass",
            "K_T": "equivalent_stiffness", "b": "damping_rate", "k_c": "contact_stiffness",

@@ -340,7 +340,8 @@ def test_a_library_warning_during_a_command_is_one_stderr_line(capsys):
     assert warnings.showwarning is before
 
 
-IDENTIFY = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg", "36.39",
+IDENTIFY = ["--impactor-mass", "132.4", "--equivalent-length", "1.51",
+            "--release-angle-deg", "36.39",
             "--clamp-height", "0.315", "--diameter", "0.126"]
 
 
@@ -516,7 +517,7 @@ def test_an_integer_of_400_digits_in_a_scenario_file_is_bad_input(tmp_path, caps
     one_line(capsys, ["simulate", path], 2, "impactor.mass: a number of 401 digits")
 
 
-SCENARIO_FLAGS = {"--clamp-height": "0.315", "--diameter": "0.126", "--mass": "132.4",
+SCENARIO_FLAGS = {"--clamp-height": "0.315", "--diameter": "0.126", "--impactor-mass": "132.4",
                   "--equivalent-length": "1.51", "--release-angle-deg": "36.39",
                   "--youngs-modulus": "9e9", "--dynamic-mass": "110", "--a1": "1.167",
                   "--a2": "-34.817", "--equivalent-stiffness": "1.5e6"}
@@ -529,7 +530,7 @@ def _scenario_argv(**changes) -> list:
 
 @pytest.mark.parametrize("change", [{"equivalent_stiffness": "180"},
                                     {"equivalent_stiffness": "360"},
-                                    {"equivalent_stiffness": "10000"}, {"mass": "10000"}],
+                                    {"equivalent_stiffness": "10000"}, {"impactor_mass": "10000"}],
                          ids=["K_T-180", "K_T-360", "K_T-1e4", "m-1e4"])
 def test_scenario_writes_only_files_that_run(tmp_path, capsys, change):
     """Each exited 0 with t_end = 0.1 s, and `simulate` then refused the file it wrote."""
@@ -566,7 +567,7 @@ def test_a_tree_the_small_deflection_model_cannot_hold_is_outside_validity(capsy
     """A 10,000 kg pendulum at 60 deg on a thin trunk: the analytic x_max 0.344 m exceeds
     a = 0.315 m; was exit 3 "simulation diverged"; now exit 4 worded as the model's
     validity, the clamp height named."""
-    argv = _scenario_argv(diameter="0.05", mass="10000", release_angle_deg="60",
+    argv = _scenario_argv(diameter="0.05", impactor_mass="10000", release_angle_deg="60",
                           dynamic_mass="20", equivalent_stiffness="300")
     i = argv.index("--a1")
     err = one_line(capsys, ["scenario", "t", *argv[:i], *argv[i + 4:], "--damping-rate",
@@ -756,7 +757,7 @@ def test_identify_names_both_columns_of_an_undeclared_ms_mm_record(capsys):
     """t in ms and x in mm, declared as neither: was "implausible in any unit"; now one
     warning line naming both and how to declare them, the record not fitted."""
     spec = ROOT / "tests" / "data" / "identify" / "files" / "undeclared-ms-mm.csv"
-    flags = ["--mass", "100", "--equivalent-length", "1.5", "--release-angle-deg", "35",
+    flags = ["--impactor-mass", "100", "--equivalent-length", "1.5", "--release-angle-deg", "35",
              "--clamp-height", "0.45", "--diameter", "0.15"]  # tree B's pendulum and clamp
     assert main(["identify", str(spec), *flags]) == ExitCode.NOT_ACHIEVED  # was 0
     captured = capsys.readouterr()

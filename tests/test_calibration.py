@@ -91,7 +91,7 @@ def test_scenario_file_round_trips(name):
     assert scenario_from_dict(tomllib.loads(scenario_toml(rigid))) == rigid
 
 
-TEST = ["--clamp-height", "0.315", "--diameter", "0.126", "--mass", "132.4",
+TEST = ["--clamp-height", "0.315", "--diameter", "0.126", "--impactor-mass", "132.4",
         "--equivalent-length", "1.51", "--release-angle-deg", "36.39", "--youngs-modulus", "12.6e9",
         "--dynamic-mass", "110"]
 

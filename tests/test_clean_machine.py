@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PENDULUM = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg", "36.39"]
+PENDULUM = ["--impactor-mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg", "36.39"]
 
 #: (id, argv, what it may leave in the working directory)
 COMMANDS = [

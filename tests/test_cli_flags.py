@@ -58,13 +58,14 @@ def test_a_prefix_of_every_flag_is_refused_and_the_flag_suggested(command, flag,
 
 @pytest.mark.parametrize("argv, words", [
     # the trial of issue 34: each was silently taken as another flag
-    (["identify", "rec.csv", "--mass", "132.4", "--e", "0.1"],
+    (["identify", "rec.csv", "--impactor-mass", "132.4", "--e", "0.1"],
      ["--e: not an option of treeimpact identify", "did you mean --restitution"]),
     (["scenario", "my-tree", "--e", "0.2"], ["did you mean --restitution"]),
     (["scenario", "my-tree", "--damping", "4000"], ["--damping", "--damping-rate"]),
     (["simulate", "open-center", "--backend", "beam", "--e", "3"], ["--elements"]),
     (["simulate", "open-center", "--m", "3"], ["--max-seconds"]),
-    (["identify", "rec.csv", "--m", "3"], ["did you mean --mass"]),
+    (["identify", "rec.csv", "--m", "3"], ["did you mean --impactor-mass"]),
+    (["identify", "rec.csv", "--mass", "3"], ["renamed", "--impactor-mass"]),
     (["simulate", "open-center", "--t-en=0.1"], ["--t-en: not an option", "--t-end"]),
 ])
 def test_the_trial_s_abbreviations_are_refused_with_what_they_may_mean(capsys, argv, words):
@@ -78,3 +79,23 @@ def test_the_trial_s_abbreviations_are_refused_with_what_they_may_mean(capsys, a
 def test_a_negative_number_is_a_value_not_a_flag(capsys):
     assert main(["simulate", "open-center", "--restitution", "-0.5"]) == 2
     assert "--restitution = -0.5 is out of range" in capsys.readouterr().err
+
+
+def test_every_physical_flag_is_spelled_and_explained_as_the_registry_says():
+    """Each command's flag for a physical quantity is ``--NAME`` with NAME the registry's
+    name, and its help opens with the registry's symbol, unit and meaning (issue 42: one
+    name, one place); a removed spelling (``--mass`` for the pendulum's) is refused."""
+    from treeimpact.analytic.model.registry import BY_NAME
+    from treeimpact.compare.commands._common import registry_help
+
+    seen = set()
+    for command, parser in SUBPARSERS.choices.items():
+        for action in parser._actions:
+            if action.dest in BY_NAME and action.option_strings:
+                assert action.option_strings == ["--" + action.dest.replace("_", "-")], (
+                    command, action.option_strings)
+                assert action.help.replace("%%", "%").startswith(registry_help(action.dest)), (
+                    command, action.dest, action.help)
+                seen.add(action.dest)
+    assert {"impactor_mass", "equivalent_stiffness", "restitution", "contact_duration",
+            "clamp_height", "damping_rate", "contact_damping"} <= seen

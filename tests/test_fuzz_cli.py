@@ -105,7 +105,7 @@ def _number(rng: random.Random, typical: float) -> str:
 #: (flag, typical value) of the commands that take numbers without a scenario file.
 CONTACT_FLAGS = (("--mass", 1.0), ("--other-mass", 1.0), ("--restitution", 0.5),
                  ("--touch-duration", 1e-3), ("--dt", 2e-5))
-SCENARIO_FLAGS = (("--clamp-height", 0.315), ("--diameter", 0.126), ("--mass", 132.4),
+SCENARIO_FLAGS = (("--clamp-height", 0.315), ("--diameter", 0.126), ("--impactor-mass", 132.4),
                   ("--equivalent-length", 1.51), ("--release-angle-deg", 36.39),
                   ("--youngs-modulus", 9e9), ("--dynamic-mass", 110.0),
                   ("--equivalent-stiffness", 1.5e6), ("--damping-rate", 30.0))

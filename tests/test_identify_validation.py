@@ -150,7 +150,8 @@ def test_a_unit_mistake_is_named_with_the_unit_it_looks_like(name):
 
 def test_the_cli_warns_of_units_on_one_line_and_in_the_json(capsys):
     flags = META["file_flags"]
-    args = ["identify", str(DATA / "files" / "undeclared-mm.csv"), "--mass", str(flags["mass"]),
+    args = ["identify", str(DATA / "files" / "undeclared-mm.csv"),
+            "--impactor-mass", str(flags["mass"]),
             "--equivalent-length", str(flags["equivalent_length"]), "--release-angle-deg",
             str(flags["release_angle_deg"]), "--clamp-height", str(flags["clamp_height"]),
             "--diameter", str(flags["diameter"])]

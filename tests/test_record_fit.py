@@ -177,7 +177,7 @@ def test_identify_says_what_a_one_impact_record_does_not_fix(tmp_path, capsys):
     assert "--restitution = 1.5" in err and "[0, 1]" in err and err.count("\n") == 1
 
 
-ARGS = ["--mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg", "36.39",
+ARGS = ["--impactor-mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg", "36.39",
         "--clamp-height", "0.315", "--diameter", "0.126"]
 
 
@@ -197,7 +197,7 @@ def test_identify_json_layout_and_plot(tmp_path, capsys):
 
     prov = data["provenance"]  # the record by its bytes, the code, the engines' versions
     assert prov["record"]["sha1"] == hashlib.sha1(path.read_bytes()).hexdigest()
-    assert prov["record"]["samples"] == record.t.size and prov["test"]["mass"] == 132.4
+    assert prov["record"]["samples"] == record.t.size and prov["test"]["impactor_mass"] == 132.4
     assert {"code", "environment"} <= set(prov)
     # the two damping ratios, by name and formula; the paper's xi (b / omega_n) is the pair's
     assert set(data["definitions"]) == {"trunk_damping_ratio", "pair_damping_ratio"}

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from treeimpact.analytic.budget import MAX_SECONDS, VARIABLES
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.registry import BY_NAME
 from treeimpact.compare.backends import BACKENDS
 from treeimpact.compare.verdicts import relative_step
 
@@ -53,8 +54,24 @@ def add_option_flags(parser, names=None) -> None:
         unit = f", {option.unit}" if option.unit not in ("", "1") else ""
         kind = {"type": count} if option.kind is int else {"type": number} \
             if option.choices is None else {"choices": option.choices}
+        text = registry_help(key, ", ".join(takers)) if key in BY_NAME else \
+            f"{option.help}{unit} ({', '.join(takers)})"
         parser.add_argument("--" + key.replace("_", "-"), dest=key, **kind,
-                            help=f"{option.help}{unit} ({', '.join(takers)})".replace("%", "%%"))
+                            help=text.replace("%", "%%"))
+
+
+def add_parameter_flag(parser, name: str, *, note: str = "", **kw) -> None:
+    """``--NAME``, a number, for the registry's parameter ``name`` (analytic.model.registry),
+    its help :func:`registry_help`; ``kw`` (``required``) go to ``add_argument``."""
+    parser.add_argument("--" + name.replace("_", "-"), dest=name, type=number,
+                        help=registry_help(name, note).replace("%", "%%"), **kw)
+
+
+def registry_help(name: str, note: str = "") -> str:
+    """A flag's help for the registry's parameter ``name``: "symbol, unit: meaning" (its
+    label when it has no meaning), then `` (note)``."""
+    p = BY_NAME[name]
+    return f"{p.symbol}, {p.unit}: {p.meaning or p.label}" + (f" ({note})" if note else "")
 
 
 def add_budget_flag(parser) -> None:

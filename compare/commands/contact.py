@@ -15,7 +15,7 @@ from treeimpact.compare.contact_settings import HOLD_TOLERANCE, contact_settings
 from ..backends import ENGINE_REGISTRY
 from ..backends import engines as registered_engines
 from ..exits import ExitCode
-from ._common import number
+from ._common import add_parameter_flag, number
 
 NAME = "contact"
 HELP = ("MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a target e and "
@@ -36,15 +36,13 @@ def add_arguments(sp) -> None:
                     help="mass of body 2, kg (default inf: body 2 fixed)")
     sp.add_argument("--effective-mass", type=number, dest="effective_mass",
                     help="the reduced mass m1 m2 / (m1 + m2), kg, instead of --mass")
-    sp.add_argument("--restitution", type=number, help="target e of one collision (0, 1)")
+    add_parameter_flag(sp, "restitution", note="the target of one collision, in (0, 1)")
     sp.add_argument("--touch-duration", type=number, dest="touch_duration",
                     help="target touch duration, s: first touch to release (not the undamped "
                          "pi sqrt(mu / k_c), which is --contact-duration elsewhere)")
-    sp.add_argument("--contact-stiffness", type=number, dest="contact_stiffness",
-                    help="the pad's stiffness k_c, N/m (with --contact-damping, instead of "
-                         "--restitution and --touch-duration)")
-    sp.add_argument("--contact-damping", type=number, dest="contact_damping",
-                    help="the pad's damping c_c, N s/m")
+    add_parameter_flag(sp, "contact_stiffness", note="with --contact-damping, instead of "
+                                                     "--restitution and --touch-duration")
+    add_parameter_flag(sp, "contact_damping")
     sp.add_argument("--dt", type=number, help="the engines' time step, s (MuJoCo's default "
                                               "is 0.002)")
     sp.add_argument("--engine", choices=tuple(ENGINE_CHOICES), default="both",

@@ -18,18 +18,23 @@ from treeimpact.analytic.identify.fit_parameters import Slot
 from treeimpact.analytic.identify.intervals import DAMPING_RATIO_FORMULAS, UNITS
 from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNITS
 from treeimpact.analytic.identify.procedure import READINGS, identify_from_record
-from treeimpact.analytic.model.parameters import LIMITS, Pendulum, check_range
+from treeimpact.analytic.model.parameters import Pendulum, check_range
+from treeimpact.analytic.model.registry import BY_NAME
 from treeimpact.analytic.results import to_jsonable
 from treeimpact.compare.backends import worded_c_output
 from treeimpact.compare.figure_text import save_figure
 from treeimpact.compare.provenance import provenance
 
 from ..exits import ExitCode
-from ._common import number, unit_text
+from ..names import show
+from ._common import add_parameter_flag, unit_text
 
 NAME = "identify"
 #: Removed spellings -> their names now (compare.names).
-RENAMED = {"release_angle": "release_angle_deg"}
+RENAMED = {"release_angle": "release_angle_deg", "mass": "impactor_mass"}
+#: The pendulum test's flags (registry names, analytic.model.registry): all required.
+TEST_FLAGS = ("impactor_mass", "equivalent_length", "release_angle_deg", "clamp_height",
+              "diameter")
 HELP = ("tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test record, with 95 %% "
         "intervals")
 
@@ -40,16 +45,11 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
     and trunk, the units."""
     sp.add_argument("record", help="CSV with columns t, x (and y, the pendulum's), in any "
                                    "order, units in the header ('t [ms]', 'x (mm)') or below")
-    sp.add_argument("--mass", type=number, required=True, help="pendulum mass m, kg")
-    sp.add_argument("--equivalent-length", type=number, required=True,
-                    help="equivalent length of the pendulum l_e, m")
-    sp.add_argument("--release-angle-deg", type=number, required=True,
-                    help="release angle theta_r, deg")
-    sp.add_argument("--clamp-height", type=number, required=True, help="impact height a, m")
-    sp.add_argument("--diameter", type=number, required=True, help="trunk diameter d, m")
-    sp.add_argument("--restitution", type=number,
-                    help="the pad's restitution e in [0, 1] if known: held fixed in the fit "
-                         "(a record the pendulum leaves after one impact needs it to fix M_T)")
+    for name in TEST_FLAGS:
+        add_parameter_flag(sp, name, required=True)
+    add_parameter_flag(sp, "restitution",
+                       note="if known: held fixed in the fit; a record the pendulum leaves "
+                            "after one impact needs it to fix M_T")
     sp.add_argument("--time-unit", choices=tuple(TIME_UNITS),
                     help="unit of the time column when its header names none (default s)")
     sp.add_argument("--length-unit", choices=tuple(LENGTH_UNITS),
@@ -66,16 +66,10 @@ def _test(args):
     # lazy: +53 ms at import otherwise (numpy), which this module's other callers do not need
     from treeimpact.compare.api import pendulum_test
 
-    for flag, value, field in (("--mass", args.mass, "impactor.mass"),
-                               ("--equivalent-length", args.equivalent_length,
-                                "impactor.equivalent_length"),
-                               ("--release-angle-deg", args.release_angle_deg,
-                                "impactor.release_angle_deg"),
-                               ("--clamp-height", args.clamp_height, "trunk.clamp_height"),
-                               ("--diameter", args.diameter, "trunk.diameter")):
-        low, high, unit = LIMITS[field][:3]  # each flag as typed, before anything is built
-        check_range(flag, value, low=low, high=high, unit=unit)
-    pend = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
+    for name in TEST_FLAGS:  # each flag as typed, before anything is built
+        p = BY_NAME[name]
+        check_range(show(name), getattr(args, name), low=p.low, high=p.high, unit=p.unit)
+    pend = Pendulum(mass=args.impactor_mass, equivalent_length=args.equivalent_length,
                     release_angle_deg=args.release_angle_deg)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, low=0.0, high=1.0)
@@ -124,8 +118,7 @@ def _provenance(args, record) -> dict:
     """Where the result came from: the code and environment, the record file (name, size,
     SHA-1 of its bytes, samples, units read) and the test's flags as given."""
     data = Path(args.record).read_bytes()
-    test = {k: getattr(args, k) for k in ("mass", "equivalent_length", "release_angle_deg",
-                                           "clamp_height", "diameter", "restitution")}
+    test = {k: getattr(args, k) for k in (*TEST_FLAGS, "restitution")}
     return provenance(record={"file": str(args.record), "bytes": len(data),
                               "sha1": hashlib.sha1(data).hexdigest(),
                               "samples": int(record.t.size), "time_unit": record.time_unit,

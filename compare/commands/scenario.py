@@ -28,15 +28,18 @@ from treeimpact.analytic.model.parameters import (
     check_range,
 )
 from treeimpact.analytic.model.scenario_toml import scenario_toml
+from treeimpact.analytic.model.registry import BY_NAME
 from treeimpact.compare.backends import get_backend
 
 from ..exits import ExitCode
-from ._common import number
+from ..names import show
+from ._common import add_parameter_flag, number
 
 NAME = "scenario"
 HELP = "write a scenario file for your own tree from measured M_T, K_T, b"
 #: Removed spellings -> their names now (compare.names).
-RENAMED = {"stiffness": "equivalent_stiffness", "release_angle": "release_angle_deg"}
+RENAMED = {"stiffness": "equivalent_stiffness", "release_angle": "release_angle_deg",
+           "mass": "impactor_mass"}
 
 #: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml).
 DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
@@ -48,36 +51,22 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
     (measured), the choices."""
     sp.add_argument("name", help="the scenario's name (also the file name with --out DIR)")
     g = sp.add_argument_group("the test (given)")
-    g.add_argument("--clamp-height", type=number, required=True, help="a, m: impact height")
-    g.add_argument("--diameter", type=number, required=True, help="d, m: trunk diameter")
-    g.add_argument("--mass", type=number, required=True, help="m, kg: pendulum mass")
-    g.add_argument("--equivalent-length", type=number, required=True,
-                   help="l_e, m: equivalent length of the pendulum")
-    g.add_argument("--release-angle-deg", type=number, required=True,
-                   help="theta_r, deg: release angle of the pendulum")
+    for name in ("clamp_height", "diameter", "impactor_mass", "equivalent_length",
+                 "release_angle_deg"):
+        add_parameter_flag(g, name, required=True)
     m = sp.add_argument_group("the tree (measured)")
-    m.add_argument("--dynamic-mass", type=number, required=True, help="M_T, kg")
-    m.add_argument("--equivalent-stiffness", type=number,
-                   help="K_T, N/m: the tree's equivalent spring stiffness at the clamp (or "
-                        "--x-max and --tau)")
-    m.add_argument("--damping-rate", type=number, help="b, 1/s (or --a1 and --a2)")
+    add_parameter_flag(m, "dynamic_mass", required=True)
+    add_parameter_flag(m, "equivalent_stiffness", note="or --x-max and --tau")
+    add_parameter_flag(m, "damping_rate", note="or --a1 and --a2")
     m.add_argument("--a1", type=number, help="regression a1 = V, m/s (eq 40)")
     m.add_argument("--a2", type=number, help="regression a2, m/s^2 (eq 40)")
     m.add_argument("--x-max", type=number, help="largest displacement, m (eq 38)")
     m.add_argument("--tau", type=number, help="time of x_max from the extrapolated origin, s")
     c = sp.add_argument_group("chosen (defaults: the shipped trees' choices)")
-    c.add_argument("--youngs-modulus", type=number, required=True,
-                   help="E, Pa (Table 1 gives 8.9e9 and 12.6e9 for its two trees)")
-    c.add_argument("--length", type=number, help=f"l, m (default {DEFAULTS['length']})")
-    c.add_argument("--density", type=number,
-                   help=f"rho, kg/m^3 (default {DEFAULTS['density']})")
-    c.add_argument("--clamp-mass", type=number,
-                   help=f"m_c, kg (default {DEFAULTS['clamp_mass']})")
-    c.add_argument("--restitution", type=number,
-                   help=f"e, 1 (default {DEFAULTS['restitution']})")
-    c.add_argument("--contact-duration", type=number,
-                   help=f"s, soft-contact models (default {DEFAULTS['contact_duration']})")
-    c.add_argument("--t-end", type=number, help=f"s (default {DEFAULTS['t_end']})")
+    add_parameter_flag(c, "youngs_modulus", required=True,
+                       note="Table 1 gives 8.9e9 and 12.6e9 for its two trees")
+    for name, value in DEFAULTS.items():
+        add_parameter_flag(c, name, note=f"default {value:g}")
     sp.add_argument("--out", help="write the file here (a directory: NAME.toml in it); "
                                   "default: print it")
 
@@ -110,7 +99,7 @@ def _stiffness(args, pendulum) -> float:
     try:
         return stiffness_from_regression(
             a1=args.a1, a2=args.a2, x_max=args.x_max, tau=args.tau,
-            dynamic_mass=args.dynamic_mass, impactor_mass=args.mass,
+            dynamic_mass=args.dynamic_mass, impactor_mass=args.impactor_mass,
             impactor_stiffness=pendulum.stiffness)
     except OverflowError:
         b = -args.a2 / args.a1
@@ -127,7 +116,7 @@ def _pick(args, key):
 
 def build_scenario(args):
     """The calibrated :class:`Scenario` of the command's parsed arguments ``args``."""
-    pendulum = Pendulum(mass=args.mass, equivalent_length=args.equivalent_length,
+    pendulum = Pendulum(mass=args.impactor_mass, equivalent_length=args.equivalent_length,
                         release_angle_deg=args.release_angle_deg)
     check_regression(args)
     given = ["a", "d", "theta_r", "m", "l_e", "M_T"]
@@ -158,7 +147,7 @@ def build_scenario(args):
     chosen = Trunk(length=_pick(args, "length"), clamp_height=args.clamp_height,
                    diameter=args.diameter, density=_pick(args, "density"),
                    youngs_modulus=args.youngs_modulus, clamp_mass=_pick(args, "clamp_mass"))
-    trunk = calibrate_trunk(chosen, measured, impactor_mass=args.mass)
+    trunk = calibrate_trunk(chosen, measured, impactor_mass=args.impactor_mass)
     chosen_names = [f"{sym} = {_pick(args, k):g} {unit}" for sym, k, unit in (
         ("l", "length", "m"), ("rho", "density", "kg/m^3"), ("m_c", "clamp_mass", "kg"))]
     notes = calibration_notes(measured, given=", ".join(given),
@@ -173,15 +162,11 @@ def build_scenario(args):
 
 
 #: The model fields the command's flags set -> the flag (an error names what was typed).
-FLAGS = {"impactor.mass": "--mass", "impactor.equivalent_length": "--equivalent-length",
-         "impactor.release_angle_deg": "--release-angle-deg",
-         "trunk.clamp_height": "--clamp-height", "trunk.diameter": "--diameter",
-         "trunk.length": "--length", "trunk.density": "--density",
-         "trunk.youngs_modulus": "--youngs-modulus", "trunk.clamp_mass": "--clamp-mass",
-         "contact.restitution": "--restitution", "contact.duration": "--contact-duration",
-         "t_end": "--t-end", "dynamic_mass": "--dynamic-mass",
-         "equivalent_stiffness": "--equivalent-stiffness", "damping_rate": "--damping-rate",
-         "a1": "--a1", "a2": "--a2", "x_max": "--x-max", "tau": "--tau"}
+FLAGS = {**{BY_NAME[n].path or n: show(n) for n in (
+    "impactor_mass", "equivalent_length", "release_angle_deg", "clamp_height", "diameter",
+    "length", "density", "youngs_modulus", "clamp_mass", "restitution", "contact_duration",
+    "t_end", "dynamic_mass", "equivalent_stiffness", "damping_rate")},
+         **{n: show(n) for n in REGRESSION_RANGES}}
 
 
 def _as_flags(exc: ParameterError) -> ParameterError:

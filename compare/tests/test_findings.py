@@ -58,7 +58,7 @@ def test_a_users_tree_shows_the_findings_of_its_physics(tmp_path, capsys):
     continuum has two, is the light-clamp finding out of its band (-16 % against the -32 %
     measured on open-center): flagged, with the cause named."""
     assert main(["scenario", "my-tree", "--clamp-height", "0.315", "--diameter", "0.126",
-                 "--mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg",
+                 "--impactor-mass", "132.4", "--equivalent-length", "1.51", "--release-angle-deg",
                  "36.39", "--youngs-modulus", "9e9", "--dynamic-mass", "110",
                  "--equivalent-stiffness", "1.5e6", "--a1", "1.167", "--a2", "-34.817",
                  "--out", str(tmp_path)]) == 0
