@@ -331,6 +331,7 @@ def peak_times(t, x, within: float = PEAK_AMBIGUITY) -> list[float]:
     """Times (s) of the local maxima of x(t) within ``within`` of its largest (prominence at
     least 2 % of the largest, so ripple on one peak is not a second one). More than one: the
     time of the maximum is not a robust quantity (which peak wins flips with small changes)."""
+    # lazy: +706 ms at import otherwise (scipy.signal)
     from scipy.signal import find_peaks
 
     t, x = np.asarray(t, float), np.asarray(x, float)

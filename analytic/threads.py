@@ -44,6 +44,7 @@ def blas_libraries() -> list:
     its OpenBLAS loads with it."""
     global _libraries
     if _libraries is None:
+        # lazy: the libraries are loaded only when the thread limit is first applied
         import numpy  # noqa: F401 - loads numpy's BLAS
         import scipy.linalg  # noqa: F401 - loads scipy's own BLAS
         from threadpoolctl import ThreadpoolController

@@ -13,6 +13,8 @@ energy ledger),
 them to ``bullet_models/models``).
 """
 
+from importlib import import_module
+
 from .options import OPTIONS
 
 #: The engine interface (treeimpact.analytic.engine.interface.Engine), loaded on first use:
@@ -31,11 +33,10 @@ __all__ = ["OPTIONS", *_RUNNER, *_CONTACT]
 
 def __getattr__(name: str):
     if name in _RUNNER:
+        # lazy face: +326 ms at import otherwise (pybullet and the runner)
         from . import _runner
 
         return getattr(_runner, name)
     if name in _CONTACT:
-        from importlib import import_module
-
         return getattr(import_module(f"{__name__}.{_CONTACT[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

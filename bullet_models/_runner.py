@@ -7,7 +7,9 @@ The setup: :mod:`._setup`; the world: :mod:`._world`; the stepping: :mod:`._loop
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import math
+import multiprocessing as mp
 import os
 import time
 
@@ -126,8 +128,6 @@ def simulate_batch(scenarios, *, max_workers=None, **options) -> list:
     Returns, in order, a SimulationResult or the SimulationDiverged of each scenario;
     bad options raise ParameterError before any process starts.
     """
-    import concurrent.futures as cf
-    import multiprocessing as mp
 
     scenarios = list(scenarios)
     for s in scenarios:  # validate everything here, with one-line errors

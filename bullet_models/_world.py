@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import tempfile
 from dataclasses import dataclass
 
@@ -26,7 +27,6 @@ _CLIENT = {"id": None}
 
 def _import_pybullet():
     """``import pybullet`` without its build-time banner on stderr (CLI: one-line errors)."""
-    import sys
 
     if "pybullet" in sys.modules:
         return sys.modules["pybullet"]
@@ -35,10 +35,12 @@ def _import_pybullet():
         saved = os.dup(2)
         devnull = os.open(os.devnull, os.O_WRONLY)
     except (OSError, ValueError):  # no real stderr (captured): nothing to keep clean
+        # lazy: pybullet prints a build banner on stderr at import; imported here, once
         import pybullet
         return pybullet
     try:
         os.dup2(devnull, 2)
+        # lazy: pybullet prints a build banner on stderr at import; imported here, once
         import pybullet
     finally:
         os.dup2(saved, 2)

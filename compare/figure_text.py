@@ -19,6 +19,8 @@ def renderer_of(fig):
     """The renderer of the figure ``fig`` (an Agg canvas attached to a bare ``Figure``
     first)."""
     if not hasattr(fig.canvas, "get_renderer"):
+        # lazy: +430 ms at import otherwise (matplotlib's Agg backend), which only a drawn
+        # figure needs
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         FigureCanvasAgg(fig)

@@ -133,8 +133,6 @@ def write(line: str, stream=None) -> None:
     """``line`` on stderr (``stream``), above the jobs' lines when they are drawn."""
     stream = stream or sys.stderr
     if any(job.bar is not None for job in _JOBS.values()):
-        from tqdm import tqdm
-
         with _LOCK:
             tqdm.write(line.rstrip("\n"), file=stream)
     else:

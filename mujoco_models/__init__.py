@@ -33,10 +33,13 @@ __all__ = ["OPTIONS", *_RUNNER, *_CONTACT]
 
 def __getattr__(name: str):
     if name in _RUNNER or name in _CONTACT:
-        from . import _runner  # from the first use on, MuJoCo's warnings go to stderr
+        # lazy face: +478 ms at import otherwise (MuJoCo and the runner); from the first
+        # use on, MuJoCo's warnings go to stderr
+        from . import _runner
 
         if name in _RUNNER:
             return getattr(_runner, name)
+        # lazy face: +377 ms at import otherwise (the contact law's MuJoCo side)
         from . import _contact
 
         return getattr(_contact, name)

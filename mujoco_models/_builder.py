@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+import scipy.linalg
 
 from treeimpact.analytic.continuum.chain import HingedChain, chain_matrices
 from treeimpact.analytic.errors import ParameterError
@@ -46,7 +47,6 @@ class TrunkSpec:
 
 def joint_damping(chain: HingedChain) -> np.ndarray:
     """Hinge dampers beta k_j (N m s/rad): the first mode keeps the damping of D (docstring)."""
-    import scipy.linalg
 
     M, K, D = chain_matrices(chain)
     _, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, 0])

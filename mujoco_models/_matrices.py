@@ -48,6 +48,7 @@ def flex_trunk_matrices(mjmodel: mujoco.MjModel, rod: _flex.FlexTrunk
 
 def highest_frequency(M: np.ndarray, K: np.ndarray) -> float:
     """Largest omega (rad/s) of K v = omega^2 M v."""
+    # lazy: +118 ms at import otherwise (scipy.linalg)
     import scipy.linalg
 
     w2 = scipy.linalg.eigh(K, M, eigvals_only=True)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+import scipy.linalg
 
 from treeimpact.analytic.continuum.modes import beam_reference
 from treeimpact.analytic.engine.interface import chain_modes, check_choice
@@ -41,7 +42,6 @@ def modes(scenario: Scenario, *, trunk="chain", segments=None, n_modes: int = 3)
 def flex_modes(scenario: Scenario, m: mujoco.MjModel, rod: _flex.FlexTrunk, n_modes) -> dict:
     """The flex trunk's static stiffness at a, 1 / (K^-1)_aa (N/m), and its lowest
     frequencies, eig(K, M) (rad/s), beside the beam's."""
-    import scipy.linalg
 
     M, K = flex_trunk_matrices(m, rod)
     n = len(K)

@@ -3,8 +3,11 @@
 
 from __future__ import annotations
 
+import copy
 import math
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import mujoco
@@ -58,8 +61,6 @@ def _rollout(models, states, nsteps, nthread, tick=lambda n: None):
     :data:`CHUNK_SECONDS` with its own MjData, the solver's warm start carried from chunk to
     chunk (bitwise the steps of one call), on up to ``nthread`` threads (MuJoCo's rollout
     releases the GIL); ``tick(n)`` after every n steps."""
-    import threading
-    from concurrent.futures import ThreadPoolExecutor
 
 
     chunk = max(1000, int(CHUNK_SECONDS / step_cost(models[0]).seconds))
@@ -132,8 +133,6 @@ def _plan(setup) -> _Plan:
 
 
 def _swing_models(plans):
-    import copy
-
     out = []
     for p in plans:
         m = copy.deepcopy(p.setup.mjmodel)

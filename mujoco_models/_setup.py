@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+import scipy.linalg
 
 from treeimpact.analytic.budget import check_work
 from treeimpact.analytic.contact.law import (
@@ -22,7 +23,7 @@ from treeimpact.analytic.contact.law import (
     release_time,
 )
 from treeimpact.analytic.contact.timestep import check_time_step, choose_time_step, sdof_rate
-from treeimpact.analytic.continuum.chain import default_segments
+from treeimpact.analytic.continuum.chain import chain_matrices, default_segments, lateral_jacobian
 from treeimpact.analytic.engine.interface import (
     EngineSetup,
     check_choice,
@@ -43,7 +44,7 @@ from ._matrices import (
     highest_frequency,
 )
 from ._record import _damping_matrices, _rest_potential
-from ._rollout import _initial_qpos_qvel, _state, step_cost
+from ._rollout import _initial_qpos_qvel, _state, step_cost, step_cost_of
 from ._warnings import compile_spec, mujoco_warnings
 from .options import INTEGRATORS, TRUNKS
 
@@ -160,11 +161,8 @@ def _check_work_before_building(model, scenario, chain, k: float, c: float, t_en
     segments): the pad's touch on the chain's effective mass at the clamp and its highest
     mode set the step as :func:`_make_setup` does, one degree of freedom per segment and
     the pendulum's the cost."""
-    import scipy.linalg
 
-    from treeimpact.analytic.continuum.chain import chain_matrices, lateral_jacobian
 
-    from ._rollout import step_cost_of
 
     M, K, _ = chain_matrices(chain)
     ja = lateral_jacobian(chain, scenario.trunk.clamp_height)[0]
@@ -276,7 +274,6 @@ def _fit_contact(m1: mujoco.MjModel, model: TwoBodyModel, tspec, k: float, c_pad
 
 def _check_rk4_damping(mjmodel: mujoco.MjModel, dt: float) -> None:
     """Refuse a dt at which RK4's explicit dampers are unstable (module docstring)."""
-    import scipy.linalg
 
     C = sum(_damping_matrices(mjmodel))
     rate = float(np.max(scipy.linalg.eigvalsh(C, _mass_matrix_at_rest(mjmodel))))

@@ -16,6 +16,8 @@ from dataclasses import replace
 import numpy as np
 
 from treeimpact.analytic.budget import StepCost, check_work
+from treeimpact.analytic.contact.exact_record import record as full_record
+from treeimpact.analytic.contact.exact_solve import deferred_record, solve
 from treeimpact.analytic.contact.law import (
     CALIBRATION,
     CALIBRATIONS,
@@ -25,8 +27,6 @@ from treeimpact.analytic.contact.law import (
     effective_damping,
     pad_fields,
 )
-from treeimpact.analytic.contact.exact_record import record as full_record
-from treeimpact.analytic.contact.exact_solve import deferred_record, solve
 from treeimpact.analytic.contact.linear_model import LinearImpactModel
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.options import (
@@ -179,6 +179,7 @@ def modes(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS, n_modes: int 
     stiffness at a, N/m; the lowest ``n_modes`` frequencies, rad/s); ``beam``: the
     160-element reference of :func:`analytic.continuum.modes.beam_reference`, both in
     ``beam_theory``."""
+    # lazy: +269 ms at import otherwise (scipy.linalg)
     import scipy.linalg
 
     model, _ = beam_impact_model(scenario, elements=elements, beam_theory=beam_theory)

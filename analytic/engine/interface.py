@@ -181,6 +181,7 @@ def trunk_chain(scenario: Scenario, trunk: str, segments, *, engine: str = "the 
 def swing_time(pendulum: Pendulum) -> float:
     """Exact time (s) of the full pendulum's swing from rest at theta_r to the bottom:
     K(sin(theta_r / 2)) sqrt(l_e / g)."""
+    # lazy: +251 ms at import otherwise (scipy.special)
     from scipy.special import ellipk
 
     s = math.sin(pendulum.release_angle_rad / 2.0)
@@ -235,6 +236,7 @@ def chain_modes(scenario: Scenario, mass_matrix: np.ndarray, hinge_stiffness: np
     stiffness K_a = 1 / (J K^-1 J^T) (N/m), the lowest ``n_modes`` omega^2 = eig(K, M)
     (rad/s); ``beam``: the continuous beam of ``scenario``
     (:func:`analytic.continuum.modes.beam_reference`)."""
+    # lazy: +193 ms at import otherwise (scipy.linalg)
     import scipy.linalg
 
     kd = np.asarray(hinge_stiffness, dtype=float)

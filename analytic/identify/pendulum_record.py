@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+import warnings
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -253,12 +254,12 @@ def _split(line: str, sep: str) -> list[str]:
 
 def _table(lines: list[str], sep: str, width: int, name: str, numbers: list[int]) -> list:
     """The columns (lists of str) of the data lines, by pandas' C reader."""
+    # lazy: +345 ms at import otherwise (pandas)
     import pandas as pd
 
     if not lines:
         return [[] for _ in range(width)]
     text = "\n".join(" ".join(ln.split()) if sep == " " else ln for ln in lines)
-    import warnings
 
     try:
         with warnings.catch_warnings():  # a row wider than the header: dropped data, refused

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
 from numpy.polynomial import Polynomial
 
 from .parameters import Trunk
@@ -36,8 +37,6 @@ class StaticModeShape:
     length: float
 
     def __call__(self, x):
-        import numpy as np
-
         x = np.asarray(x, dtype=float)
         return np.where(x <= self.clamp_height, self.inner(x), self.outer(x))
 

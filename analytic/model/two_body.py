@@ -9,7 +9,7 @@ pendulum may not pass the trunk (gap x - y >= 0).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from .parameters import Billet, Pendulum, Scenario, check_range
 from .reduction import reduce_trunk
@@ -74,7 +74,6 @@ class TwoBodyModel:
 
     def with_restitution(self, e: float) -> "TwoBodyModel":
         """This model with the restitution ``e`` (1, eq 21)."""
-        from dataclasses import replace
 
         return replace(self, restitution=e)
 

@@ -10,6 +10,7 @@ import json
 import math
 
 from treeimpact.analytic.errors import NotAchieved, ParameterError
+from treeimpact.analytic.results import to_jsonable
 from treeimpact.compare.contact_settings import HOLD_TOLERANCE, contact_settings
 
 from ..backends import ENGINE_REGISTRY
@@ -66,8 +67,6 @@ def run(args) -> int:
     if all("error" in res[e] for e in engines):
         raise ParameterError("; ".join(res[e]["error"] for e in engines))
     if args.json:
-        from treeimpact.analytic.results import to_jsonable
-
         print(json.dumps(to_jsonable(res), indent=2))
     else:
         print_settings(res, engines)

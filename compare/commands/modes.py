@@ -8,6 +8,7 @@ import json
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import to_jsonable
 from treeimpact.compare.backends import BACKENDS, get_backend
+from treeimpact.compare.provenance import provenance
 
 from ..exits import ExitCode
 from ._common import add_option_flags, fmt, options_of, relative_text
@@ -38,8 +39,6 @@ def run(args) -> int:
     opts = options_of(args, MODES_OPTIONS)
     res = backend.modes(scenario, **opts)
     if args.json:
-        from treeimpact.compare.provenance import provenance
-
         res = res | {"provenance": provenance(scenario, backend=args.backend, options=opts)}
         print(json.dumps(to_jsonable(res), indent=2))
         return ExitCode.OK

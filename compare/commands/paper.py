@@ -9,6 +9,7 @@ import json
 import math
 
 from treeimpact.analytic.results import to_jsonable
+from treeimpact.compare.provenance import provenance
 
 from ..exits import ExitCode
 from ._common import fmt
@@ -96,12 +97,12 @@ def run(args) -> int:
 
     res = reproduce()
     if getattr(args, "fit_contact", False):
+        # lazy: +425 ms at import otherwise (the engines' contact fit), which only --fit-contact
+        # needs
         from treeimpact.analytic.paper.contact_fit import fit_paper_trees
 
         res["contact_fit"] = fit_paper_trees()
     if args.json:
-        from treeimpact.compare.provenance import provenance
-
         print(json.dumps(to_jsonable(res | {"provenance": provenance()}), indent=2))
         return ExitCode.OK
     if "contact_fit" in res:

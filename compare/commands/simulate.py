@@ -6,10 +6,11 @@ from __future__ import annotations
 import json
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.analytic.results import METRIC_UNITS
 from treeimpact.analytic.model.registry import units_of
+from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.results import METRIC_UNITS, to_jsonable
 from treeimpact.compare.backends import BACKENDS, get_backend
+from treeimpact.compare.provenance import provenance
 from treeimpact.compare.recording import DEFAULTS, REST, check_sampling, sample
 
 from ..exits import ExitCode
@@ -97,9 +98,6 @@ def run(args) -> int:
     result = backend.simulate(scenario, **opts)
     written = write_record(args, scenario, result) if args.record else None
     if args.json:
-        from treeimpact.analytic.results import to_jsonable
-        from treeimpact.compare.provenance import provenance
-
         out = result.to_json() | {"provenance": provenance(scenario, result, options=opts)}
         print(json.dumps(to_jsonable(out), indent=2))
         return ExitCode.OK

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..runs import OK
 from ..sweep.run import SweepSpec, run_sweeps
+from ..verdicts import validity_tolerance
 
 #: Contact durations scanned (s): 0.2 ms (a hard impactor) to 50 ms (half the trunk's
 #: quarter period; a very soft pad), 14 points, log-spaced.
@@ -49,8 +50,6 @@ def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
     sweep table, for the scanned ``durations`` (s) and ``metrics``. ``tolerance``: default
     the studies' criterion (compare.verdicts.validity_tolerance)."""
     if tolerance is None:
-        from ..verdicts import validity_tolerance
-
         tolerance = validity_tolerance()
     rows = {(r["target"], float(r["contact_duration"])): r
             for r in table.to_dict("records")}

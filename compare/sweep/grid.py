@@ -10,7 +10,7 @@ import itertools
 import json
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
 
 import numpy as np
@@ -261,8 +261,6 @@ def parse_axis(spec: str, flag: str = "--grid") -> Axis:
     if option is not None:  # its words, integers and range, from the backends' OPTIONS
         label = f"{flag} {spec!r}: {param.name}"
         if param.name == "segments":  # a sweep's segments = 1 is the SDOF trunk (run.py)
-            from dataclasses import replace
-
             option = replace(option, low=1)
         values = [option.check(param.name, v, label=label) for v in values]
     if param.kind == RECORD:

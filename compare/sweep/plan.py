@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError, one_line
 from treeimpact.analytic.model.parameters import Scenario
-from treeimpact.compare.backends import get_backend
+from treeimpact.compare.backends import BACKENDS, get_backend
 from treeimpact.compare.rungs import RungKind, analytic_samples, rung_table
 from treeimpact.compare.runs import INVALID, options_key, scenario_key
 
@@ -56,8 +56,6 @@ def check_backends(backends) -> list[str]:
         try:
             get_backend(b)
         except ParameterError:
-            from treeimpact.compare.backends import BACKENDS
-
             raise ParameterError(f"--backend {b!r}: allowed {', '.join(BACKENDS)} "
                                  f"(comma-separated)") from None
         if b not in out:

@@ -35,6 +35,7 @@ from ..studies.design import (
     operating_point,
     pair_grid,
 )
+from ..studies.design_engines import spot_checks
 from ..studies.design_words import (
     along,
     nearest_within,
@@ -202,8 +203,6 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
             "cost": _cost(results, maps_wall, workers),
             "wall_s": time.perf_counter() - t0}
     if engines:
-        from ..studies.design_engines import spot_checks
-
         p = pairs[1]
         data["spot_checks"] = spot_checks(scen, p["x"], p["y"], p["maps"]["x_max"],
                                           tuple(p["pair"]), here, LEVELS[0], workers=workers)

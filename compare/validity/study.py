@@ -22,6 +22,7 @@ from treeimpact.compare.studies.ident_study import (
     RATE,
     RUNGS,
     SAMPLING_E,
+    run_identification_study,
 )
 
 from ..studies.speed import speed_curves, speed_sweep
@@ -95,8 +96,6 @@ def _validity_study(out, p: Preset, *, scenario, backends, workers, scheduler, p
         speed["curves"] = speed_curves(speed, out)
     ident_study = None
     if p.identification:
-        from treeimpact.compare.studies.ident_study import run_identification_study
-
         ident_study = run_identification_study(
             out, scen, workers=workers, progress=progress,
             sampling_rungs=p.ident_sampling_rungs, engine_rungs=p.ident_engine_rungs,
