@@ -27,8 +27,8 @@ from treeimpact.analytic.model.parameters import (
     Trunk,
     check_range,
 )
-from treeimpact.analytic.model.scenario_toml import scenario_toml
 from treeimpact.analytic.model.registry import BY_NAME
+from treeimpact.analytic.model.scenario_toml import scenario_toml
 from treeimpact.compare.backends import get_backend
 
 from ..exits import ExitCode

@@ -128,7 +128,7 @@ def _report_sweeps(scens: list, out_dir, sink, progress: bool) -> tuple[dict, di
 
     # lazy: +291 ms at import otherwise (matplotlib, numpy),
     # which this module's other callers do not need
-    from .figures import contact_scan_figure
+    from .summary_figures import contact_scan_figure
 
     with _sweep_dir(out_dir) as folder:  # the tables are read before a temporary one goes
         specs = [scan_sweep(s, folder / f"contact-scan-{s.name}") for s in scens] + [

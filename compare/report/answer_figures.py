@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .figures import _legend_right, plt
+from .figures import legend_right, plt
 
 #: Line styles of the approximations (compare.studies.small_e.APPROXIMATIONS), in its order.
 _STYLES = {"eq57_energy_loss": ("o-", "tab:red"),
@@ -57,7 +57,7 @@ def small_e_figure(trees: dict, tolerance: float):
         ax.set_ylim(-110, 500)
         ax.set(title=name, xlabel="coefficient of restitution e (1)", xlim=(-0.02, 0.92))
     axes[0][0].set_ylabel("error against the exact result (%)")
-    _legend_right(axes[0][-1])
+    legend_right(axes[0][-1])
     fig.suptitle(f"Does 'e is small' hold? Grey band +-{tol:.0f} %; a tick on its edge: the "
                  "largest e up to which a line stays inside; dashed: the 1-DOF trunk's own "
                  "gap, which e does not remove", fontsize=10)

@@ -18,7 +18,7 @@ from ..rungs import RungKind
 from ..runs import OK, SKIPPED
 from ..studies.ident_fits import fit_one, fit_tasks
 from ..verdicts import Verdict
-from . import figures
+from . import figures, summary_figures
 from .base import Section, tidy
 
 
@@ -206,7 +206,7 @@ class ScenarioSection(Section):
                    for rid, v in self.ledgers.items() if v is not None}
         if ledgers:
             e0 = next(iter(ledgers.values()))["initial"]
-            drawn["energy"] = figures.energy_figure(ledgers, e0, L.name)
+            drawn["energy"] = summary_figures.energy_figure(ledgers, e0, L.name)
         self.figures = {name: sink(fig, f"{L.name}-{name}") for name, fig in drawn.items()}
 
     def _verdicts(self) -> dict:

@@ -11,6 +11,7 @@ import pytest
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare import figure_text
 from treeimpact.compare.report import figures as report_figures
+from treeimpact.compare.report.summary_figures import contact_scan_figure
 from treeimpact.compare.runs import RunCache
 
 SCAN = {"durations": [2e-4, 5e-4, 2e-3, 1e-2, 5e-2], "gaps": {
@@ -74,8 +75,7 @@ def drawn(tmp_path_factory):
         answer = small_e_answer(scen, e_sweep.table)
         for names in (["my-tree"], ["open-center", "central-leader", "realistic-crown"]):
             files(small_e_figure({n: answer for n in names}, 0.05), f"small-e-{len(names)}")
-            files(report_figures.contact_scan_figure({n: SCAN for n in names},
-                                                     {n: 5e-4 for n in names}),
+            files(contact_scan_figure({n: SCAN for n in names}, {n: 5e-4 for n in names}),
                   f"contact-scan-{len(names)}")
             sensitivity_figure({n: _morris(n) for n in names}, tmp / f"sens-{len(names)}.png")
     finally:

@@ -112,7 +112,7 @@ def test_every_axis_has_a_unit(tmp_path):
     """Every figure of a scenario's section and the answer's (the small-e curves, the
     contact scan)."""
     from treeimpact.compare.report.answer_figures import small_e_figure
-    from treeimpact.compare.report.figures import contact_scan_figure
+    from treeimpact.compare.report.summary_figures import contact_scan_figure
     from treeimpact.compare.report.scenario import ScenarioSection
     from treeimpact.compare.studies.small_e import small_e_answer, small_e_sweep
     from treeimpact.compare.sweep.run import run_sweeps
