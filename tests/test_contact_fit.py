@@ -80,7 +80,7 @@ def test_the_clamp_mass_moves_on_the_same_measured_tree():
         t = with_clamp_mass(scen.trunk, m_c, impactor_mass=scen.impactor.mass)
         got = reduce_trunk(t)
         assert t.clamp_mass == m_c
-        for field in ("dynamic_mass", "stiffness", "damping"):
+        for field in ("dynamic_mass", "equivalent_stiffness", "equivalent_damping"):
             assert getattr(got, field) == pytest.approx(getattr(ref, field), rel=1e-12)
     assert set(MODELS["beam-clamp"][1]) == {"contact_duration", "restitution", "clamp_mass"}
 
