@@ -151,7 +151,8 @@ _DESIGN = {
         "a dead pad (0) to a bouncy one (0.9); the paper assumes e small, the shipped 0.1"),
 }
 
-#: The inputs nobody measured, as the sensitivity study varies them (compare.studies.sensitivity).
+#: The inputs nobody measured, as the sensitivity study varies them
+#: (compare.studies.sensitivity).
 _UNMEASURED = {
     "clamp_mass": UnmeasuredRange(
         1.0, 16.0, "the harvester's clamp: not weighed (the shipped 4 kg chosen)",
@@ -228,9 +229,11 @@ PARAMETERS = (
     Parameter("equivalent_stiffness", "K_T", "N/m", 0.0, _INF, "equivalent stiffness (eq 8)",
               meaning="the tree's equivalent spring stiffness at the clamp (eq 8)"),
     Parameter("equivalent_damping", "C_T", "N s/m", 0.0, _INF, "equivalent damping (eq 10)"),
-    Parameter("damping_rate", "b", "1/s", 0.0, _INF, "damping rate C_T / (2 (M_T + m)) (eq 42)",
+    Parameter("damping_rate", "b", "1/s", 0.0, _INF,
+              "damping rate C_T / (2 (M_T + m)) (eq 42)",
               meaning="the moving-together motion's decay rate C_T / (2 (M_T + m)) (eq 42)"),
-    Parameter("impactor_stiffness", "k", "N/m", 0.0, _INF, "pendulum stiffness m g / l_e (eq 13)"),
+    Parameter("impactor_stiffness", "k", "N/m", 0.0, _INF,
+              "pendulum stiffness m g / l_e (eq 13)"),
     Parameter("contact_damping", "c_c", "N s/m", 0.0, _INF, "pad damping",
               meaning="the pad's damping c_c (set by e on a scenario)"),
     Parameter("e_over_g", "E / G", "1", 0.0, 20.0, "E / G (shear)",

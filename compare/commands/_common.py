@@ -12,6 +12,7 @@ from treeimpact.analytic.budget import MAX_SECONDS, VARIABLES
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.registry import BY_NAME
 from treeimpact.compare.backends import BACKENDS
+from treeimpact.compare.names import show
 from treeimpact.compare.verdicts import relative_step
 
 
@@ -63,7 +64,7 @@ def add_option_flags(parser, names=None) -> None:
 def add_parameter_flag(parser, name: str, *, note: str = "", **kw) -> None:
     """``--NAME``, a number, for the registry's parameter ``name`` (analytic.model.registry),
     its help :func:`registry_help`; ``kw`` (``required``) go to ``add_argument``."""
-    parser.add_argument("--" + name.replace("_", "-"), dest=name, type=number,
+    parser.add_argument(show(name), dest=name, type=number,
                         help=registry_help(name, note).replace("%", "%%"), **kw)
 
 
