@@ -11,6 +11,7 @@ no numbers to report raises :class:`treeimpact.SimulationDiverged`.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import re
 from pathlib import Path
@@ -32,9 +33,12 @@ from .api_results import (
 )
 from .backends import BACKENDS, ENGINES, get_backend, scenario_as_run
 from .ladder import build_ladder
+from .names import did_you_mean
 from .recording import check_sampling, sample
 from .runs import resolve_scenario
 from .sweep.run import run_sweep
+from .tree_scenario import TreeInputs
+from .tree_scenario import tree_scenario as build_tree_scenario
 
 #: The backends a sweep runs when none are given: all of them (the command line's too).
 SWEEP_BACKENDS = tuple(BACKENDS)
@@ -224,6 +228,38 @@ def record_from_simulation(simulation: Simulation, *, rate_hz: float = 5000.0,
     check_sampling(rate_hz, noise, seed, names=("rate_hz", "noise", "seed"))
     t, x = sample(simulation.result, rate_hz, noise, seed)
     return Record(t=t, x=x, source=f"{simulation.scenario.name} ({simulation.backend})")
+
+
+@_api
+def tree_scenario(name: str, **measured) -> Scenario:
+    """A scenario for your own tree from what you measured (the ``scenario`` command's).
+
+    Args:
+        name: the scenario's name.
+        **measured: the test (``clamp_height`` a, m; ``diameter`` d, m; ``impactor_mass``
+            m, kg; ``equivalent_length`` l_e, m; ``release_angle_deg`` theta_r, deg), the
+            tree (``dynamic_mass`` M_T, kg; ``equivalent_stiffness`` K_T, N/m, or ``x_max``
+            m and ``tau`` s with ``a1`` m/s and ``a2`` m/s^2, the regression of Figs 4-5;
+            ``damping_rate`` b, 1/s, or ``a1`` and ``a2``) and the choices
+            (``youngs_modulus`` E, Pa, required; ``length``, ``density``, ``clamp_mass``,
+            ``restitution``, ``contact_duration``, ``t_end``: the shipped trees' when
+            left out), as :class:`compare.tree_scenario.TreeInputs` names them.
+
+    Returns:
+        :class:`Scenario`: the trunk calibrated to M_T, K_T and b (eqs 7, 8, 42), its notes
+        saying what was given, chosen and calibrated, its t_end one the analytic model's
+        x_max and separation fit in.
+
+    Raises:
+        ParameterError: an unknown, missing, contradictory or out-of-range input, named.
+        OutsideValidity: a tree whose analytic x_max lies beyond the clamp height.
+    """
+    known = {f.name for f in dataclasses.fields(TreeInputs)} - {"name"}
+    unknown = sorted(set(measured) - known)
+    if unknown:
+        raise ParameterError(f"{unknown[0]}: not an input of tree_scenario"
+                             f"{did_you_mean(unknown[0], known, style='keyword')}")
+    return build_tree_scenario(TreeInputs(name=name, **measured))
 
 
 def pendulum_test(test, clamp_height, diameter):

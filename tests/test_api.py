@@ -127,6 +127,28 @@ def test_the_release_angle_is_in_degrees_everywhere():
         ti.Pendulum(mass=132.4, equivalent_length=1.51, release_angle=0.635)
 
 
+#: README's own tree (the ``scenario`` command's example), as the API's keywords.
+MY_TREE = dict(clamp_height=0.315, diameter=0.126, impactor_mass=132.4, equivalent_length=1.51,
+               release_angle_deg=36.39, youngs_modulus=9e9, dynamic_mass=110.0,
+               equivalent_stiffness=1.5e6, damping_rate=29.835)
+
+
+def test_tree_scenario_is_the_scenario_command_s(tmp_path, capsys):
+    """The API's tree_scenario and ``treeimpact scenario`` with the same inputs give the
+    same file (one builder, compare.tree_scenario), and it reduces to the M_T, K_T given."""
+    from treeimpact.analytic.model.reduction import reduce_trunk
+    from treeimpact.compare.cli import main
+
+    argv = ["scenario", "my-tree", *[a for k, v in MY_TREE.items()
+                                     for a in (f"--{k.replace('_', '-')}", repr(v))]]
+    assert main(argv) == 0
+    scen = ti.tree_scenario("my-tree", **MY_TREE)
+    assert capsys.readouterr().out == ti.scenario_toml(scen)
+    red = reduce_trunk(scen.trunk)
+    assert red.dynamic_mass == pytest.approx(110.0, rel=1e-12)  # calibrated exactly (eq 7)
+    assert red.equivalent_stiffness == pytest.approx(1.5e6, rel=1e-12)  # (eq 8)
+
+
 @pytest.mark.parametrize("call, words", [
     (lambda: ti.simulate("open-center", backend="beam", element=8),
      ["element: not an option of backend 'beam'", "did you mean elements?"]),
@@ -137,6 +159,12 @@ def test_the_release_angle_is_in_degrees_everywhere():
      ["rate_hz = 1 Hz is out of range"]),
     (lambda: ti.identify("no-such.csv", ti.load_scenario("open-center").impactor),
      ["clamp_height: required with a Pendulum"]),
+    (lambda: ti.tree_scenario("t", **{**MY_TREE, "damping_rate": None}),
+     ["damping_rate: missing (give b in 1/s, or a1 and a2)"]),
+    (lambda: ti.tree_scenario("t", **MY_TREE, dampin_rate=3.0),
+     ["dampin_rate: not an input of tree_scenario", "did you mean damping_rate?"]),
+    (lambda: ti.tree_scenario("t", **{**MY_TREE, "x_max": 0.01}),
+     ["equivalent_stiffness: give it or x_max and tau, not both"]),
 ])
 def test_errors_from_the_api_name_keyword_arguments_not_flags(call, words):
     with pytest.raises(ti.ParameterError) as info:

@@ -30,6 +30,7 @@ _EXPORTS = {
     "shipped_scenarios": "treeimpact.analytic.model.scenario",
     "scenario_toml": "treeimpact.analytic.model.scenario_toml",
     "MeasuredTree": "treeimpact.analytic.model.calibration",
+    "tree_scenario": "treeimpact.compare.api",
     "calibrate_trunk": "treeimpact.analytic.model.calibration",
     # runs, ladders, sweeps, identification, the report
     "simulate": "treeimpact.compare.api",

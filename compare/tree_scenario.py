@@ -1,0 +1,208 @@
+"""A scenario for a user's own tree from measured quantities (the ``scenario`` command and
+:func:`compare.api.tree_scenario` both build it here).
+
+The measured M_T, K_T and b (or the regression a1, a2, x_max, tau of Figs 4-5) and the
+chosen l, rho, E, m_c become a trunk by :func:`analytic.model.calibration.calibrate_trunk`;
+the scenario's notes record which values were given, chosen and calibrated, as the shipped
+files do, and its t_end is one its analytic run can report. Errors name the command's flags
+(the API names them as its keywords). SI units.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.calibration import (
+    MeasuredTree,
+    calibrate_trunk,
+    calibration_notes,
+    damping_rate_from_regression,
+    stiffness_from_regression,
+)
+from treeimpact.analytic.model.parameters import (
+    LIMITS,
+    Contact,
+    Pendulum,
+    Scenario,
+    Trunk,
+    check_range,
+)
+from treeimpact.analytic.model.registry import BY_NAME
+
+from .backends import get_backend
+from .names import show
+
+#: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml).
+DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
+            "contact_duration": 5e-4, "t_end": 0.1}
+
+
+@dataclass(frozen=True)
+class TreeInputs:
+    """What a user's tree scenario is built from (registry names, SI units): the test
+    (given), the tree (measured: M_T, and K_T or x_max and tau, and b or a1 and a2, the
+    regression of Figs 4-5), and the choices (None: :data:`DEFAULTS`)."""
+
+    name: str
+    clamp_height: float  # a, m
+    diameter: float  # d, m
+    impactor_mass: float  # m, kg
+    equivalent_length: float  # l_e, m
+    release_angle_deg: float  # theta_r, deg
+    dynamic_mass: float  # M_T, kg
+    youngs_modulus: float  # E, Pa
+    equivalent_stiffness: float | None = None  # K_T, N/m
+    damping_rate: float | None = None  # b, 1/s
+    a1: float | None = None  # regression a1 = V, m/s (eq 40)
+    a2: float | None = None  # regression a2, m/s^2 (eq 40)
+    x_max: float | None = None  # largest displacement, m (eq 38)
+    tau: float | None = None  # time of x_max from the extrapolated origin, s
+    length: float | None = None  # l, m
+    density: float | None = None  # rho, kg/m^3
+    clamp_mass: float | None = None  # m_c, kg
+    restitution: float | None = None  # e, 1
+    contact_duration: float | None = None  # tau_c, s
+    t_end: float | None = None  # s
+
+
+def tree_scenario(inputs: TreeInputs) -> Scenario:
+    """The calibrated :class:`Scenario` of ``inputs`` with a t_end its run can report
+    (:func:`fit_t_end`). ParameterError naming the flag (``--damping-rate``) of a missing,
+    contradictory or out-of-range input; OutsideValidity for a tree whose analytic x_max
+    lies beyond the clamp height."""
+    try:
+        return fit_t_end(build_scenario(inputs), given=inputs.t_end is not None)
+    except ParameterError as exc:
+        raise _as_flags(exc) from None
+
+
+#: Allowed ranges of the regression's inputs (Figs 4-5), SI: a1 = V up to 100 m/s (a pendulum
+#: of the allowed l_e and theta_r is far slower), a2 down to -1e6 m/s^2, x_max up to the
+#: clamp height a (the small-deflection trunk of eq 1 cannot move further), tau up to the
+#: longest run, 10 s; beyond them e^(b tau) and b leave double precision.
+REGRESSION_RANGES = {"a1": (0.0, 100.0, "m/s"), "a2": (-1e6, 0.0, "m/s^2"),
+                     "x_max": (0.0, None, "m"), "tau": (0.0, 10.0, "s")}
+
+
+def check_regression(inputs: TreeInputs) -> None:
+    """--a1, --a2, --x-max and --tau of ``inputs`` (those given) in
+    :data:`REGRESSION_RANGES` (x_max at most --clamp-height), one line naming the flag."""
+    for key, (low, high, unit) in REGRESSION_RANGES.items():
+        value = getattr(inputs, key)
+        if value is None:
+            continue
+        if key == "x_max":
+            high = check_range("--clamp-height", inputs.clamp_height, low=0.0, low_open=True,
+                               unit="m")
+        check_range(f"--{key.replace('_', '-')}", value, low=low, high=high, unit=unit,
+                    low_open=key != "a2")
+
+
+def _stiffness(inputs: TreeInputs, pendulum) -> float:
+    """K_T (N/m) from --a1, --a2, --x-max, --tau (eqs 43, 46); an e^(b tau) beyond double
+    precision is the overdamped motion it means (omega_n = 0 <= b), one line."""
+    try:
+        return stiffness_from_regression(
+            a1=inputs.a1, a2=inputs.a2, x_max=inputs.x_max, tau=inputs.tau,
+            dynamic_mass=inputs.dynamic_mass, impactor_mass=inputs.impactor_mass,
+            impactor_stiffness=pendulum.stiffness)
+    except OverflowError:
+        b = -inputs.a2 / inputs.a1
+        raise ParameterError(f"--a1 = {inputs.a1:g} m/s, --a2 = {inputs.a2:g} m/s^2, --tau = "
+                             f"{inputs.tau:g} s: b tau = {b * inputs.tau:.4g}, so omega_n = a1 / "
+                             "(x_max e^(b tau)) is 0 <= b: an overdamped motion with no "
+                             "maximum of that kind (eqs 37, 43)") from None
+
+
+def _pick(inputs: TreeInputs, key: str):
+    v = getattr(inputs, key)
+    return DEFAULTS[key] if v is None else v
+
+
+def build_scenario(inputs: TreeInputs) -> Scenario:
+    """The calibrated :class:`Scenario` of ``inputs``, its t_end as given or the default."""
+    pendulum = Pendulum(mass=inputs.impactor_mass, equivalent_length=inputs.equivalent_length,
+                        release_angle_deg=inputs.release_angle_deg)
+    check_regression(inputs)
+    given = ["a", "d", "theta_r", "m", "l_e", "M_T"]
+    if inputs.damping_rate is not None:
+        if inputs.a1 is not None or inputs.a2 is not None:
+            raise ParameterError("--damping-rate: give it or --a1 and --a2, not both")
+        b = inputs.damping_rate
+        given.append("b")
+    elif inputs.a1 is not None and inputs.a2 is not None:
+        b = damping_rate_from_regression(inputs.a1, inputs.a2)
+        given.append(f"b = -a2/a1 (eq 42) from a1 = {inputs.a1:g} m/s, a2 = {inputs.a2:g} m/s^2")
+    else:
+        raise ParameterError("--damping-rate: missing (give b in 1/s, or --a1 and --a2)")
+    if inputs.equivalent_stiffness is not None:
+        if inputs.x_max is not None or inputs.tau is not None:
+            raise ParameterError("--equivalent-stiffness: give it or --x-max and --tau, not "
+                                 "both")
+        equivalent_stiffness = inputs.equivalent_stiffness
+        given.append("K_T")
+    elif None not in (inputs.x_max, inputs.tau, inputs.a1, inputs.a2):
+        equivalent_stiffness = _stiffness(inputs, pendulum)
+        given.append(f"K_T from x_max = {inputs.x_max:g} m, tau = {inputs.tau:g} s (eqs 43, 46)")
+    else:
+        raise ParameterError("--equivalent-stiffness: missing (give K_T in N/m, or --x-max, "
+                             "--tau, --a1 and --a2)")
+    measured = MeasuredTree(dynamic_mass=inputs.dynamic_mass,
+                            equivalent_stiffness=equivalent_stiffness, damping_rate=b)
+    chosen = Trunk(length=_pick(inputs, "length"), clamp_height=inputs.clamp_height,
+                   diameter=inputs.diameter, density=_pick(inputs, "density"),
+                   youngs_modulus=inputs.youngs_modulus, clamp_mass=_pick(inputs, "clamp_mass"))
+    trunk = calibrate_trunk(chosen, measured, impactor_mass=inputs.impactor_mass)
+    chosen_names = [f"{sym} = {_pick(inputs, k):g} {unit}" for sym, k, unit in (
+        ("l", "length", "m"), ("rho", "density", "kg/m^3"), ("m_c", "clamp_mass", "kg"))]
+    notes = calibration_notes(measured, given=", ".join(given),
+                              chosen=", ".join([f"E = {inputs.youngs_modulus:g} Pa",
+                                                *chosen_names]))
+    notes["restitution"] = f"e = {_pick(inputs, 'restitution'):g} chosen"
+    contact = Contact(restitution=_pick(inputs, "restitution"),
+                      duration=_pick(inputs, "contact_duration"))
+    return Scenario(name=inputs.name, trunk=trunk, impactor=pendulum, contact=contact,
+                    t_end=_pick(inputs, "t_end"),
+                    description=f"{inputs.name}: calibrated by treeimpact scenario", notes=notes)
+
+
+#: The model fields the command's flags set -> the flag (an error names what was typed).
+FLAGS = {**{BY_NAME[n].path or n: show(n) for n in (
+    "impactor_mass", "equivalent_length", "release_angle_deg", "clamp_height", "diameter",
+    "length", "density", "youngs_modulus", "clamp_mass", "restitution", "contact_duration",
+    "t_end", "dynamic_mass", "equivalent_stiffness", "damping_rate")},
+         **{n: show(n) for n in REGRESSION_RANGES}}
+
+
+def _as_flags(exc: ParameterError) -> ParameterError:
+    """``exc`` with the model field it starts with named as the flag that set it."""
+    text = str(exc)
+    for field, flag in sorted(FLAGS.items(), key=lambda kv: -len(kv[0])):
+        if text.startswith(field) and text[len(field):len(field) + 1] in (" ", ":"):
+            return ParameterError(flag + text[len(field):])
+    return exc
+
+
+def fit_t_end(scenario, given: bool):
+    """``scenario`` with a t_end (s) its run can report: the analytic model's x_max and the
+    separation inside it. A ``given`` t_end is kept or refused (naming --t-end); the default
+    is doubled until the run fits, up to the limit of t_end (10 s), else refused."""
+    analytic = get_backend("analytic")
+    t_end = scenario.t_end
+    while True:
+        try:
+            analytic.simulate(dataclasses.replace(scenario, t_end=t_end))
+            if t_end == scenario.t_end:
+                return scenario
+            notes = {**scenario.notes, "t_end": (
+                f"t_end = {t_end:g} s: {scenario.t_end:g} s doubled until the analytic "
+                "model's x_max and separation lie inside the run")}
+            return dataclasses.replace(scenario, t_end=t_end, notes=notes)
+        except ParameterError as exc:
+            if given or not str(exc).startswith("--t-end") or 2 * t_end > LIMITS["t_end"][1]:
+                raise ParameterError(f"{exc} (the tree written would not run: the longest "
+                                     f"allowed is {LIMITS['t_end'][1]:g} s)" if not given
+                                     else str(exc)) from None
+            t_end *= 2.0
