@@ -73,8 +73,65 @@ def pytest_configure(config):
     faulthandler.dump_traceback_later(limit, exit=True, file=os.dup(2))
 
 
+#: The ``xdist_group`` of every test that uses a session fixture of the project's
+#: (compare/tests/conftest.py's ``run_cache`` and ``ladder_of``: every shipped tree's ladder
+#: runs, about a minute of engine runs on a process pool): under `make test`'s ``--dist
+#: loadgroup`` they all run on one worker, so those runs are made once, not once per worker.
+SESSION_GROUP = "session-runs"
+
+
+def _shared_fixtures(item) -> set[str]:
+    """The scopes ("session", "module", ...) of the wider-than-a-test fixtures ``item`` uses
+    that the project's own files define (pytest's, e.g. tmp_path_factory, left out). Reads
+    pytest's ``_fixtureinfo`` (pytest 8-9); without it, none (no groups: the same tests run,
+    a module fixture only made once per worker)."""
+    info = getattr(item, "_fixtureinfo", None)
+    scopes = set()
+    for defs in getattr(info, "name2fixturedefs", {}).values():
+        for fd in defs:
+            scope = getattr(fd, "scope", "function")
+            if scope == "function":
+                continue
+            source = Path(getattr(fd.func, "__code__", None) and fd.func.__code__.co_filename
+                          or "").resolve()
+            if path_under(source, ("tests", "compare")):
+                scopes.add(scope)
+    return scopes
+
+
+def path_under(path: Path, folders) -> bool:
+    """Whether ``path`` is in one of the repository's top-level ``folders``."""
+    return path.is_relative_to(_ROOT) and path.relative_to(_ROOT).parts[:1] in [
+        (f,) for f in folders]
+
+
+def xdist_groups(items) -> dict:
+    """Test file (relative path) -> its ``xdist_group``: :data:`SESSION_GROUP` for a file with
+    a test that uses a project session fixture, the file itself for one with a test that uses
+    a project module (or class) fixture (made once: the file stays on one worker); files of
+    neither are left out (their tests spread over the workers one by one). Per file, not per
+    test, so that every test of a file shares its module fixtures' single copy."""
+    groups: dict = {}
+    for item in items:
+        scopes = _shared_fixtures(item)
+        rel = Path(item.path).resolve().relative_to(_ROOT).as_posix()
+        if "session" in scopes:
+            groups[rel] = SESSION_GROUP
+        elif scopes and groups.get(rel) != SESSION_GROUP:
+            groups[rel] = rel
+    return groups
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own hook reads the xdist_group marks
 def pytest_collection_modifyitems(config, items):
+    """Mark the tests of :data:`NUMERICS` ``numerics`` and give every test of a file with
+    shared fixtures its ``xdist_group`` (:func:`xdist_groups`; used by ``--dist loadgroup``
+    only)."""
+    groups = xdist_groups(items)
     for item in items:
         path = Path(item.path).resolve()
-        if path.is_relative_to(_ROOT) and path.relative_to(_ROOT).as_posix() in NUMERICS:
+        rel = path.relative_to(_ROOT).as_posix() if path.is_relative_to(_ROOT) else None
+        if rel in NUMERICS:
             item.add_marker(pytest.mark.numerics)
+        if rel in groups:
+            item.add_marker(pytest.mark.xdist_group(groups[rel]))
