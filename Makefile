@@ -48,9 +48,10 @@ report: $(STAMP)
 # (tests/blas_kernels.py picks them). Nothing pins a kernel outside these runs.
 # The main suite runs on pytest-xdist, one worker per core the process may use (WORKERS;
 # `make test WORKERS=0` runs it serially in one process): serial, one core sat idle for its
-# ~6 minutes (benchmarks/results/floors.json). --dist loadgroup keeps each file whose tests
-# share a module fixture on one worker, and every test of the session's ladder runs on one
-# (conftest.py xdist_groups): made once, not once per worker; the rest spread test by test.
+# ~6 minutes (benchmarks/results/floors.json). --dist loadgroup (conftest.py's scheduler:
+# SESSION_FILES, MODULE_FIXTURE_FILES) keeps each file whose tests share a module fixture on
+# one worker, and every test of the session's ladder runs on one: each made once, not once
+# per worker, the largest group first; the other tests spread one by one.
 # The two kernel passes (one process each) start first, beside it, under `nice`: they take
 # what the suite's workers leave idle (its start, the waits of its signal and time-out
 # tests, its last file) and cost its timing-sensitive tests little; a pass's full output is
