@@ -45,30 +45,39 @@ report: $(STAMP)
 
 # The whole suite on this machine's BLAS kernel, then the tests marked numerics (BLAS
 # round-off: conftest.py NUMERICS) under two other machines' OpenBLAS kernels
-# (tests/blas_kernels.py picks them), the two passes side by side (one per core); a pass's
-# full output is shown when it fails. Nothing pins a kernel outside these runs.
+# (tests/blas_kernels.py picks them). Nothing pins a kernel outside these runs.
+# The main suite runs on pytest-xdist, one worker per core the process may use (WORKERS;
+# `make test WORKERS=0` runs it serially in one process): serial, one core sat idle for its
+# ~6 minutes (benchmarks/results/floors.json). --dist loadgroup (conftest.py's scheduler:
+# SESSION_FILES, MODULE_FIXTURE_FILES) keeps each file whose tests share a module fixture on
+# one worker, and every test of the session's ladder runs on one: each made once, not once
+# per worker, the largest group first; the other tests spread one by one.
+# The two kernel passes (one process each) start first, beside it, under `nice`: they take
+# what the suite's workers leave idle (its start, the waits of its signal and time-out
+# tests, its last file) and cost its timing-sensitive tests little; a pass's full output is
+# shown when it fails, and make test fails when any of the three does.
 # THREADS: the tests call the library below its public entry points, where its own thread
 # limit (analytic/threads.py) is not applied, and compare round-off-level numbers made with
 # one thread (a threaded OpenBLAS may split a sum across threads, another round-off):
 # the variables hold them at one thread from the interpreter's start (conftest.py sets the
-# same defaults for a bare pytest).
+# same defaults for a bare pytest). TESTS: the folders or files to run (all by default).
 THREADS := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
+WORKERS ?= $(shell $(PYTHON) -c 'import os; print(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count())')
+TESTS   ?= tests compare
 test: $(STAMP)
-	$(THREADS) $(BIN)/python -m pytest tests compare
-	@kernels="$$($(BIN)/python tests/blas_kernels.py)"; \
-	if [ -z "$$kernels" ]; then \
-		echo "numerics under other kernels: skipped (numpy's BLAS is not OpenBLAS on x86-64)"; \
-		exit 0; fi; \
-	logs=$$(mktemp -d); \
+	@kernels="$$($(BIN)/python tests/blas_kernels.py)"; logs=$$(mktemp -d); pids=; \
+	trap 'kill $$pids 2>/dev/null; rm -rf $$logs' EXIT; trap 'exit 130' INT TERM; \
 	for k in $$kernels; do \
-		(OPENBLAS_CORETYPE=$$k $(THREADS) $(BIN)/python -m pytest -q -m numerics \
-			-p no:cacheprovider tests compare > $$logs/$$k.log 2>&1; echo $$? > $$logs/$$k.rc) & \
-	done; wait; status=0; \
-	for k in $$kernels; do \
-		if [ "$$(cat $$logs/$$k.rc)" = 0 ]; then \
-			echo "numerics under OPENBLAS_CORETYPE=$$k: $$(tail -n 1 $$logs/$$k.log)"; \
+		OPENBLAS_CORETYPE=$$k $(THREADS) nice -n 10 $(BIN)/python -m pytest -q -m numerics \
+			-p no:cacheprovider $(TESTS) > $$logs/$$k.log 2>&1 & pids="$$pids $$!"; \
+	done; \
+	$(THREADS) $(BIN)/python -m pytest -n $(WORKERS) --dist loadgroup $(TESTS); status=$$?; \
+	[ -n "$$kernels" ] || echo "numerics under other kernels: skipped (numpy's BLAS is not OpenBLAS on x86-64)"; \
+	set -- $$pids; for k in $$kernels; do \
+		if wait $$1; then echo "numerics under OPENBLAS_CORETYPE=$$k: $$(tail -n 1 $$logs/$$k.log)"; \
 		else cat $$logs/$$k.log; echo "numerics under OPENBLAS_CORETYPE=$$k failed"; status=1; fi; \
-	done; rm -rf $$logs; exit $$status
+		shift; \
+	done; pids=; exit $$status
 
 # Each writes benchmarks/results/NAME.json (those the docs quote timings from, see
 # docs/benchmarks.md); bench_make, bench_presets and bench_kernels run on their own

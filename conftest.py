@@ -73,8 +73,105 @@ def pytest_configure(config):
     faulthandler.dump_traceback_later(limit, exit=True, file=os.dup(2))
 
 
-def pytest_collection_modifyitems(config, items):
+#: `make test`'s scheduling units (``--dist loadgroup``, :func:`pytest_xdist_make_scheduler`):
+#: every test of one of these files runs on the same worker, so what its tests share is made
+#: once, not once per worker; the tests of the other files spread over the workers one by one.
+#: :data:`SESSION_FILES`: the files whose tests use compare/tests/conftest.py's session runs
+#: (``run_cache``, ``ladder_of``: every shipped tree's ladder, about a minute of engine runs),
+#: one group. :data:`MODULE_FIXTURE_FILES`: the files with a module fixture (the
+#: identification validation's fits, a written report, ...), a group each. A static list,
+#: since xdist's controller schedules before any worker has collected; the collection checks
+#: it against the fixtures the tests use (:func:`check_groups`).
+SESSION_GROUP = "session-runs"
+SESSION_FILES = frozenset({
+    "compare/tests/test_cross_checks.py", "compare/tests/test_ladder.py",
+    "compare/tests/test_mechanism.py", "compare/tests/test_report.py",
+    "compare/tests/test_small_e.py",
+})
+MODULE_FIXTURE_FILES = frozenset({
+    "compare/tests/test_figure_titles.py", "compare/tests/test_sobol_cross.py",
+    "compare/tests/test_sort_keys.py", "tests/test_bullet_models.py",
+    "tests/test_contact_cmd.py", "tests/test_doc_numbers.py",
+    "tests/test_identify_procedure_events.py", "tests/test_identify_validation.py",
+    "tests/test_layers.py", "tests/test_mujoco_flex.py", "tests/test_mujoco_models.py",
+    "tests/test_paper.py",
+})
+
+
+def group_of(rel: str) -> str | None:
+    """The scheduling group of the test file ``rel`` (a path from the repository's root):
+    :data:`SESSION_GROUP`, the file itself, or None (its tests scheduled one by one)."""
+    if rel in SESSION_FILES:
+        return SESSION_GROUP
+    return rel if rel in MODULE_FIXTURE_FILES else None
+
+
+def _shared_scopes(item) -> set[str]:
+    """The scopes ("session", "module", ...) of the wider-than-a-test fixtures ``item`` uses
+    that the project's test folders define (pytest's own, e.g. tmp_path_factory, left out).
+    Reads pytest's ``_fixtureinfo`` (pytest 8-9); without it, none."""
+    info = getattr(item, "_fixtureinfo", None)
+    scopes = set()
+    for defs in getattr(info, "name2fixturedefs", {}).values():
+        for fd in defs:
+            code = getattr(fd.func, "__code__", None)
+            if fd.scope != "function" and code is not None and _relative(
+                    Path(code.co_filename)).startswith(("tests/", "compare/")):
+                scopes.add(fd.scope)
+    return scopes
+
+
+def _relative(path: Path) -> str:
+    """``path`` from the repository's root ("" outside it)."""
+    path = Path(path).resolve()
+    return path.relative_to(_ROOT).as_posix() if path.is_relative_to(_ROOT) else ""
+
+
+def check_groups(items) -> list[str]:
+    """The files whose tests share a fixture their :func:`group_of` does not keep on one
+    worker (a session fixture outside :data:`SESSION_FILES`, a module one in neither list)."""
+    stale = set()
     for item in items:
-        path = Path(item.path).resolve()
-        if path.is_relative_to(_ROOT) and path.relative_to(_ROOT).as_posix() in NUMERICS:
+        scopes, rel = _shared_scopes(item), _relative(item.path)
+        if "session" in scopes and group_of(rel) != SESSION_GROUP or scopes and not group_of(rel):
+            stale.add(rel)
+    return sorted(stale)
+
+
+_STALE = pytest.StashKey[frozenset]()
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark the tests of :data:`NUMERICS` ``numerics``; note the files whose shared fixtures
+    the scheduling groups miss (:func:`check_groups`), whose tests then fail at setup."""
+    config.stash[_STALE] = frozenset(check_groups(items))
+    for item in items:
+        if _relative(item.path) in NUMERICS:
             item.add_marker(pytest.mark.numerics)
+
+
+def pytest_runtest_setup(item):
+    """Fail a test of a file :func:`check_groups` found missing from the groups (a failure,
+    not a collection error, so that it reads the same under xdist's workers)."""
+    rel = _relative(item.path)
+    if rel in item.config.stash.get(_STALE, frozenset()):
+        pytest.fail(f"conftest.py: add {rel} to SESSION_FILES (it uses a session fixture of "
+                    "compare/tests/conftest.py) or MODULE_FIXTURE_FILES (a module fixture): "
+                    "make test's scheduler keeps its tests on one worker", pytrace=False)
+
+
+@pytest.hookimpl(tryfirst=True, optionalhook=True)  # before xdist's own; only with xdist
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup``'s scheduler with :func:`group_of`'s groups: xdist 3.8 reads its
+    ``xdist_group`` marks from node ids that pytest 9.2 no longer lets it rename
+    (pytest-xdist issue 1386), so the groups come from the file's path. The largest group
+    (most tests) is sent first; other options: xdist's own scheduler."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadGroupScheduling
+
+    class FileGroups(LoadGroupScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return group_of(nodeid.split("::", 1)[0]) or super()._split_scope(nodeid)
+
+    return FileGroups(config, log)

@@ -15,6 +15,12 @@ Writes ``benchmarks/results/make.json`` (the README quotes it); every temporary 
 removed. The load average before and after is recorded: on a shared machine the times
 grow with it.
 
+``--against REV [--rounds N]`` times only ``make test``: as REV's Makefile runs it (that
+Makefile, ``make -f``, on today's tree and tests: e.g. 25cfad1, the serial suite) against
+today's, alternately (old, new, old, new, ...), N rounds; writes
+``benchmarks/results/make_test.json``: each side's median wall time and CPU time (its
+processes' user + sys), the ratio, and every run's load average at its start.
+
 ``--floors REPORT_DIR [--durations LOG]`` runs neither command: it reads a finished ``make
 report`` folder and the log of ``pytest tests compare --durations=0`` (the suite's
 environment) and writes ``benchmarks/results/floors.json``, what each part costs against
@@ -46,6 +52,52 @@ def _timed(cmd: list[str], env=None) -> tuple[float, str]:
     return wall, proc.stdout + proc.stderr
 
 
+def _cpu_children() -> float:
+    """CPU seconds (user + sys) of this process's finished children so far."""
+    import resource
+
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+def _make_test(makefile: Path | None) -> dict:
+    """One ``make test`` (``makefile``: ``make -f`` it instead of the repository's): wall and
+    CPU time (s), the load average at its start, exit code and pytest's summary lines."""
+    cmd = ["make"] + (["-f", str(makefile)] if makefile else []) + ["test"]
+    load, cpu = _results.load_average(), _cpu_children()
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    log = proc.stdout + proc.stderr
+    return {"wall_s": round(wall, 1), "cpu_s": round(_cpu_children() - cpu, 1),
+            "load_start": load, "rc": proc.returncode,
+            "summary": re.findall(r"(?:=+ )?(\d+ (?:passed|failed).*) in [\d.]+s", log)}
+
+
+def against(rev: str, rounds: int) -> tuple[dict, dict]:
+    """``make test`` as ``rev``'s Makefile runs it against today's, alternately, ``rounds``
+    times each: (numbers, details) for :func:`_results.write` (medians, ratio old / new)."""
+    import statistics
+
+    runs: dict = {"old": [], "new": []}
+    with tempfile.TemporaryDirectory(prefix="bench-make-") as tmp:
+        old = Path(tmp) / "Makefile"
+        old.write_text(subprocess.run(["git", "show", f"{rev}:Makefile"], cwd=ROOT, check=True,
+                                      capture_output=True, text=True).stdout)
+        for _ in range(rounds):
+            for side, makefile in (("old", old), ("new", None)):
+                runs[side].append(_make_test(makefile))
+                print(side, runs[side][-1], flush=True)
+    numbers = {}
+    for side, rs in runs.items():
+        numbers[f"test_s.{side}"] = round(statistics.median(r["wall_s"] for r in rs), 1)
+        numbers[f"test_cpu_s.{side}"] = round(statistics.median(r["cpu_s"] for r in rs), 1)
+        numbers[f"test_s.{side}_range"] = _results.span(r["wall_s"] for r in rs)
+    numbers["test_s.ratio"] = round(numbers["test_s.old"] / numbers["test_s.new"], 2)
+    numbers["test.failed_runs"] = sum(r["rc"] != 0 for rs in runs.values() for r in rs)
+    return numbers, {"against": rev, "rounds": rounds, "runs": runs}
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--install", action="store_true", help="also time a fresh install")
@@ -57,7 +109,16 @@ def main(argv=None) -> int:
                    "--durations=0 log of the suite")
     p.add_argument("--report-cpu", type=float, metavar="S", help="with --floors: the CPU "
                    "seconds (user + sys) of the make report that wrote the folder")
+    p.add_argument("--against", metavar="REV", help="time only make test: REV's Makefile "
+                   "against today's, alternately (writes make_test.json)")
+    p.add_argument("--rounds", type=int, default=2, help="with --against: runs per side")
     args = p.parse_args(argv)
+    if args.against:
+        start_load = _results.load_average()
+        numbers, details = against(args.against, args.rounds)
+        _results.write("make_test", numbers, details, started_load=start_load,
+                       out=Path(args.out) if args.out else None)
+        return 0
     if args.floors:
         import _floors
 
