@@ -93,22 +93,6 @@ def fit_titles(fig, dpi: float | None = None) -> None:
 
 def save_figure(fig, path, dpi: float, **kwargs) -> None:
     """``fig.savefig(path, dpi=dpi, **kwargs)`` with its titles fitted first
-    (:func:`fit_titles`). The two layouts savefig makes (one in a draw with no output, one
-    in the draw it writes) are made here by :func:`lay_out` and the figure written with
-    its layout engine set aside (restored after): the same layouts from the same state,
-    the same bytes, one pass over every artist fewer (docs/benchmarks.md)."""
-    from matplotlib import rc_context  # matplotlib is loaded: ``fig`` is its Figure
-
+    (:func:`fit_titles`)."""
     fit_titles(fig, dpi)
-    engine = fig.get_layout_engine()
-    if engine is None:
-        fig.savefig(path, dpi=dpi, **kwargs)
-        return
-    lay_out(fig)  # savefig's, in its draw with no output
-    lay_out(fig)  # savefig's, in the draw it writes
-    with rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
-        fig.set_layout_engine(None)  # None (not "none"): savefig then makes no layout draw
-    try:
-        fig.savefig(path, dpi=dpi, **kwargs)
-    finally:
-        fig.set_layout_engine(engine)
+    fig.savefig(path, dpi=dpi, **kwargs)
