@@ -65,6 +65,21 @@ def _wrap(text, room: float, renderer) -> bool:
     return True
 
 
+def lay_out(fig) -> None:
+    """Lay the figure ``fig`` out as its draw does first (its layout engine, constrained
+    layout here, when it has axes and one), without drawing its artists: the axes' widths
+    a title is fitted to are all :func:`fit_titles` reads. A draw with no output
+    (``Figure.draw_without_rendering``) did the same layout plus a pass over every artist;
+    the written PNG files are the same bytes (docs/benchmarks.md, "make report's
+    floor")."""
+    engine = fig.get_layout_engine()
+    if fig.axes and engine is not None:
+        try:
+            engine.execute(fig)
+        except ValueError:  # as Figure.draw: a layout that cannot be made is skipped
+            pass
+
+
 def fit_titles(fig, dpi: float | None = None) -> None:
     """Wrap every title of ``fig`` (at ``dpi``, default the figure's) that is wider than its
     room, laying the figure out again after each round of changes."""
@@ -72,7 +87,7 @@ def fit_titles(fig, dpi: float | None = None) -> None:
         fig.set_dpi(dpi)
     renderer = renderer_of(fig)
     for _ in range(ROUNDS):
-        fig.draw_without_rendering()  # lays the figure out: the axes' final widths
+        lay_out(fig)  # the axes' final widths
         changed = [_wrap(text, room, renderer) for text, room in titles(fig)]
         if not any(changed):
             return

@@ -74,9 +74,15 @@ def table_differences(before: Path, after: Path) -> list:
     out = []
     for column in a.columns:
         for row, (x, y) in enumerate(zip(a[column], b[column])):
-            if not (x == y or (pd.isna(x) and pd.isna(y))):
+            if not (_missing(x) and _missing(y)) and (_missing(x) or _missing(y)
+                                                       or not x == y):
                 out.append(f"row {row} {column}: {x!r} before, {y!r} after")
     return out
+
+
+def _missing(value) -> bool:
+    """Whether a cell is missing (NaN, None or pandas' NA, whose ``==`` is not a bool)."""
+    return pd.api.types.is_scalar(value) and bool(pd.isna(value))
 
 
 def _canonical(table: pd.DataFrame) -> pd.DataFrame:

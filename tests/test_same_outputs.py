@@ -35,3 +35,19 @@ def test_one_ulp_a_figure_byte_and_a_missing_file_are_differences(tmp_path):
     assert "fig.png: bytes differ" in found and "extra.json: only after" in found
     assert same_outputs.main([str(a), str(b)]) == 1
     assert same_outputs.main([str(a)]) == 2
+
+
+def test_a_missing_string_cell_is_compared(tmp_path):
+    """A Parquet string column with pandas' NA (a sweep's ``error`` of a run that passed):
+    missing in both is the same, missing in one is a difference, not a TypeError."""
+    def table(name, errors):
+        path = tmp_path / name
+        path.mkdir()
+        pd.DataFrame({"point": ["p1", "p2"], "error": pd.array(errors, dtype="string")}
+                     ).to_parquet(path / "results.parquet", index=False)
+        return path
+
+    a = table("a", [None, "diverged"])
+    assert same_outputs.compare(a, table("b", [None, "diverged"])) == []
+    found = same_outputs.compare(a, table("c", ["failed", "diverged"]))
+    assert [line.split(":")[0] for line in found] == ["results.parquet"]
