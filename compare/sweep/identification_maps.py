@@ -36,15 +36,19 @@ MAPPED_IDENT_KEYS = ("M_T", "K_T", "pair_damping_ratio")
 
 def _why_not_identified(sub) -> str:
     """The cells of one identification map without a value, counted by their reason (the
-    last clause of the procedure's message), for the caption."""
+    last clause of the procedure's message, without its numbers and the parenthesised
+    details that carry them), most frequent first, then alphabetically: the same caption
+    whatever order the sweep's rows finished in."""
     errors = sub.loc[sub["rel"].isna(), "id_error"] if "id_error" in sub else []
     counts: dict = {}
     for text in errors:
         if isinstance(text, str) and text:  # the clause without its numbers: one reason
+            clause = re.sub(r"\s*\([^()]*\d[^()]*\)", "", text.rsplit(": ", 1)[-1].strip())
             key = re.sub(r"\s*=\s*[-+]?[\d.]+(?:e[-+]?\d+)?(?:\s*(?:m/s|1/s|rad/s|m|s))?",
-                         "", text.rsplit(": ", 1)[-1].strip())
+                         "", clause)
             counts[key] = counts.get(key, 0) + 1
-    return "; ".join(f"{why} ({n})" for why, n in sorted(counts.items(), key=lambda kv: -kv[1]))
+    return "; ".join(f"{why} ({n})" for why, n in sorted(counts.items(),
+                                                          key=lambda kv: (-kv[1], kv[0])))
 
 
 def identification_maps(df, figdir, *, prefix: str = "identification",

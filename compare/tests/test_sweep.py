@@ -674,3 +674,20 @@ def test_every_map_of_a_study_shares_one_colour_scale_and_letters_only_where_sho
     rel = write_study(tmp_path / "rel", {"validity": res.out}, value="rel")
     letters = json.loads(rel["json"].read_text())["rung_letters"]
     assert [x["letter"] for x in letters] == ["C"]  # soft vs analytic: the contact model
+
+
+def test_the_identification_caption_counts_reasons_whatever_the_rows_order():
+    """Cells whose procedure stopped for one reason count as one reason, whatever numbers
+    its message carries, and the caption does not follow the order the sweep's workers
+    finished in (it did: two runs of one study wrote two captions)."""
+    from treeimpact.compare.sweep.identification_maps import _why_not_identified
+
+    stop = ("identification: the bodies do not move together before x_max (the pendulum "
+            "is {} mm off the trunk on the way to the peak, above 0.113 mm)")
+    rows = [{"rel": math.nan, "id_error": stop.format(d)} for d in (0.117, 4.91, 2.14)]
+    rows += [{"rel": math.nan, "id_error": "identification: eqs 42-43's x0 does not hold"}] * 3
+    rows += [{"rel": 0.01, "id_error": None}]
+    forward = _why_not_identified(pd.DataFrame(rows))
+    assert forward == _why_not_identified(pd.DataFrame(rows[::-1]))
+    assert forward == ("eqs 42-43's x0 does not hold (3); "
+                       "the bodies do not move together before x_max (3)")
