@@ -73,9 +73,9 @@ PRESETS = {
         # engines' chains of every tree: its record fits), the lightest and heaviest crown
         # ratios, no sampling grid (the full preset's; docs/identification.md)
         help="default (contact duration x crown ratio on the analytic, soft and beam "
-             "backends, engines on 2 x 2 points) takes about 100 s on 2 cores beside make "
+             "backends, engines on 2 x 2 points) takes about 80 s on 2 cores beside make "
              "report's own runs (less alone)",
-        expected="about 100 s with 2 workers beside make report's own runs and the design "
+        expected="about 80 s with 2 workers beside make report's own runs and the design "
                  "map (less alone): 8 contact durations x 6 crown ratios on the analytic, soft and beam backends, "
                  "the engines' chains on 2 x 2 of them, the identification validation "
                  "(4 e x 2 crown ratios x 3 rungs) and the sensitivity study (30 Morris "
