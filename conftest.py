@@ -89,7 +89,8 @@ SESSION_FILES = frozenset({
     "compare/tests/test_small_e.py",
 })
 MODULE_FIXTURE_FILES = frozenset({
-    "compare/tests/test_figure_titles.py", "compare/tests/test_sobol_cross.py",
+    "compare/tests/test_figure_passes.py", "compare/tests/test_figure_titles.py",
+    "compare/tests/test_sobol_cross.py",
     "compare/tests/test_sort_keys.py", "tests/test_bullet_models.py",
     "tests/test_contact_cmd.py", "tests/test_doc_numbers.py",
     "tests/test_identify_procedure_events.py", "tests/test_identify_validation.py",
