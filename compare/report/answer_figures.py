@@ -55,7 +55,7 @@ def small_e_figure(trees: dict, tolerance: float):
         ticks = [-100, -30, -10, -5, 0, 5, 10, 30, 100, 300]
         ax.set_yticks(ticks, [f"{t:+d}" if t else "0" for t in ticks])
         ax.set_ylim(-110, 500)
-        ax.set(title=name, xlabel="coefficient of restitution e", xlim=(-0.02, 0.92))
+        ax.set(title=name, xlabel="coefficient of restitution e (1)", xlim=(-0.02, 0.92))
     axes[0][0].set_ylabel("error against the exact result (%)")
     legend_right(axes[0][-1])
     fig.suptitle(f"Does 'e is small' hold? Grey band +-{tol:.0f} %; a tick on its edge: the "
