@@ -169,10 +169,10 @@ def build_scenario(inputs: TreeInputs) -> Scenario:
 
 
 #: The model fields the command's flags set -> the flag (an error names what was typed).
-FLAGS = {**{BY_NAME[n].path or n: show(n) for n in (
-    "impactor_mass", "equivalent_length", "release_angle_deg", "clamp_height", "diameter",
-    "length", "density", "youngs_modulus", "clamp_mass", "restitution", "contact_duration",
-    "t_end", "dynamic_mass", "equivalent_stiffness", "damping_rate")},
+#: (Read from :class:`TreeInputs`: each registry quantity by its scenario path, or its name
+#: for a reading; the regression's inputs by their names.)
+FLAGS = {**{BY_NAME[f.name].path or f.name: show(f.name)
+            for f in dataclasses.fields(TreeInputs) if f.name in BY_NAME},
          **{n: show(n) for n in REGRESSION_RANGES}}
 
 
