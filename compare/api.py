@@ -37,6 +37,7 @@ from .names import did_you_mean
 from .recording import check_sampling, sample
 from .runs import resolve_scenario
 from .sweep.run import run_sweep
+from .tree_scenario import RENAMED as TREE_RENAMED
 from .tree_scenario import TreeInputs
 from .tree_scenario import tree_scenario as build_tree_scenario
 
@@ -258,7 +259,7 @@ def tree_scenario(name: str, **measured) -> Scenario:
     unknown = sorted(set(measured) - known)
     if unknown:
         raise ParameterError(f"{unknown[0]}: not an input of tree_scenario"
-                             f"{did_you_mean(unknown[0], known, style='keyword')}")
+                             f"{did_you_mean(unknown[0], known, TREE_RENAMED, style='keyword')}")
     return build_tree_scenario(TreeInputs(name=name, **measured))
 
 

@@ -34,6 +34,11 @@ from treeimpact.analytic.model.registry import BY_NAME
 from .backends import get_backend
 from .names import show
 
+#: Removed spellings of the inputs -> their names now (compare.names.did_you_mean): the
+#: ``scenario`` command's flags and :func:`treeimpact.tree_scenario`'s keywords both refuse
+#: them with the new name.
+RENAMED = {"stiffness": "equivalent_stiffness", "release_angle": "release_angle_deg",
+           "mass": "impactor_mass"}
 #: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml).
 DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
             "contact_duration": 5e-4, "t_end": 0.1}

@@ -163,6 +163,9 @@ def test_tree_scenario_is_the_scenario_command_s(tmp_path, capsys):
      ["damping_rate: missing (give b in 1/s, or a1 and a2)"]),
     (lambda: ti.tree_scenario("t", **MY_TREE, dampin_rate=3.0),
      ["dampin_rate: not an input of tree_scenario", "did you mean damping_rate?"]),
+    (lambda: ti.tree_scenario("t", **{k: v for k, v in MY_TREE.items()
+                                      if k != "impactor_mass"}, mass=20.0),
+     ["mass: not an input of tree_scenario", "mass was renamed: did you mean impactor_mass?"]),
     (lambda: ti.tree_scenario("t", **{**MY_TREE, "x_max": 0.01}),
      ["equivalent_stiffness: give it or x_max and tau, not both"]),
 ])

@@ -17,13 +17,13 @@ from treeimpact.analytic.model.scenario_toml import scenario_toml
 
 from ..exits import ExitCode
 from ..tree_scenario import DEFAULTS, TreeInputs, tree_scenario
+from ..tree_scenario import RENAMED as TREE_RENAMED
 from ._common import add_parameter_flag, number
 
 NAME = "scenario"
 HELP = "write a scenario file for your own tree from measured M_T, K_T, b"
-#: Removed spellings -> their names now (compare.names).
-RENAMED = {"stiffness": "equivalent_stiffness", "release_angle": "release_angle_deg",
-           "mass": "impactor_mass"}
+#: Removed spellings -> their names now (compare.cli reads a command's RENAMED): the builder's.
+RENAMED = TREE_RENAMED
 
 
 def add_arguments(sp: argparse.ArgumentParser) -> None:
