@@ -29,6 +29,7 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
         DEFAULT_TOLERANCE,
         _norm,
         _percent_colorbar,
+        axis_label,
         colour_scale,
     )
 
@@ -48,9 +49,9 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
                         norm)
             ax.set_title(f"{rung}: {k}", fontsize=10)
             if i == len(rungs) - 1:
-                ax.set_xlabel("restitution e", fontsize=9)
+                ax.set_xlabel(axis_label("restitution"), fontsize=9)
             if j == 0:
-                ax.set_ylabel("crown ratio m_f / m_trunk", fontsize=9)
+                ax.set_ylabel(axis_label("crown_ratio"), fontsize=9)
     label = "full-record fit" if method == "fit" else "paper's procedure (eqs 39-48)"
     cb = fig.colorbar(im, ax=axes, shrink=0.6, extend="both")
     _percent_colorbar(cb, scale, "(identified - true) / true (%)\n"

@@ -50,9 +50,19 @@ _NO_UNIT = ("", "1")
 
 
 def _label(name: str) -> str:
-    """A swept parameter's axis label with its display unit: 'contact duration (ms)'."""
+    """A swept parameter as a caption's prose names it, with its display unit if it has
+    one: 'contact duration (ms)', 'e'."""
     text, _, unit = _AXES.get(name, (name, 1.0, ""))
     return f"{text} ({unit})" if unit not in _NO_UNIT else text
+
+
+def axis_label(name: str) -> str:
+    """A swept parameter's figure axis: its words and display unit, '(1)' for a
+    dimensionless number ('e (1)', 'contact duration (ms)'), as every axis of the report's
+    and the studies' figures states its unit; an engine option without a unit (segments)
+    is its name."""
+    text, _, unit = _AXES.get(name, (name, 1.0, ""))
+    return f"{text} ({unit})" if unit else text
 
 
 def _shown(name: str, value) -> float:
@@ -158,8 +168,8 @@ def _heat(ax, cell, a, b, value_col, tol, title, letters=None, vmax=None, annota
     ax.set_xticks(range(len(xs)), xt, fontsize=9,
                   rotation=45 if len(xs) > 6 and max(map(len, xt)) > 5 else 0)
     ax.set_yticks(range(len(ys)), [f"{_shown(b, v):.3g}" for v in ys], fontsize=9)
-    ax.set_xlabel(_label(a), fontsize=10)
-    ax.set_ylabel(_label(b), fontsize=10)
+    ax.set_xlabel(axis_label(a), fontsize=10)
+    ax.set_ylabel(axis_label(b), fontsize=10)
     ax.set_title(title, fontsize=10)
     ax.grid(False)
     return im
@@ -219,7 +229,7 @@ def _line(ax, sub, a, value_col, tol, title):
     ax.axhspan(-100 * tol, 100 * tol, color="0.9", zorder=0)
     ax.plot(sub[a].map(lambda v: _shown(a, v)), 100 * sub[value_col], "o-", ms=3)
     ax.axhline(0.0, color="0.5", lw=0.5)
-    ax.set_xlabel(_label(a), fontsize=9)
+    ax.set_xlabel(axis_label(a), fontsize=9)
     ax.set_ylabel("relative (%)", fontsize=9)
     ax.set_title(title, fontsize=9)
     ax.tick_params(labelsize=8)

@@ -653,7 +653,23 @@ def test_map_labels_fit_their_cells_and_ticks_read_in_the_texts_units():
             assert box.width < width and box.height < height, (t.get_text(), box, width)
         assert [lbl.get_text() for lbl in ax.get_xticklabels()][:2] == ["0.2", "0.386"]
         assert ax.get_xlabel() == "contact duration (ms)"
+        assert ax.get_ylabel() == "m_f / m_trunk (1)"  # a dimensionless axis states "(1)"
     assert {lbl.get_text() for lbl in cb.ax.get_yticklabels()} >= {"+100 %", "0", "-10 %"}
+
+
+def test_every_map_axis_of_a_registry_input_states_its_display_unit():
+    """A study map's axis reads as the report's figures do (compare/tests/test_report.py
+    test_every_axis_has_a_unit): the registry's words and display unit, "(1)" for a
+    dimensionless number; a caption's prose leaves "(1)" out."""
+    from treeimpact.analytic.model.registry import PARAMETERS
+    from treeimpact.compare.sweep.map_cells import _label, axis_label
+
+    swept = [p for p in PARAMETERS if p.sweep is not None]
+    assert {"restitution", "crown_ratio", "contact_duration"} <= {p.sweep for p in swept}
+    for p in swept:
+        assert axis_label(p.sweep) == f"{p.axis} ({p.shown_unit})", p.name
+        assert _label(p.sweep).endswith(")") == (p.shown_unit != "1"), p.name
+    assert axis_label("restitution") == "e (1)" and _label("restitution") == "e"
 
 
 def test_every_map_of_a_study_shares_one_colour_scale_and_letters_only_where_shown(tmp_path):
