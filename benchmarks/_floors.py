@@ -7,8 +7,8 @@ backend, the sections' wall times, the design map's analysis (design.json ``cost
 engine kind's CPU time per step is measured here, one run of it in a fresh process
 (``time.process_time``, so the machine's load leaves it nearly alone): the physics' floor is
 the steps the runs took at their stable step times that, over the machine's 2 cores. From a
-pytest ``--durations=0`` log of the suite: seconds per test file and in total (the suite
-runs serially: pytest-xdist is not in requirements.lock).
+pytest ``--durations=0`` log of the suite: seconds per test file and in total, the tests' own
+time summed over pytest-xdist's workers (the suite's CPU in tests, not its wall time).
 """
 
 from __future__ import annotations

@@ -21,6 +21,12 @@ today's, alternately (old, new, old, new, ...), N rounds; writes
 ``benchmarks/results/make_test.json``: each side's median wall time and CPU time (its
 processes' user + sys), the ratio, and every run's load average at its start.
 
+``--parts`` runs make report's three parts one after the other, each alone (``treeimpact
+report``; ``sweep --preset default``; ``sweep --preset design``), then ``make report``: the
+wall time and the CPU of each as the machine's busy time (/proc/stat, which sees the process
+pools' workers), less the background measured just before; writes
+``benchmarks/results/report_parts.json``.
+
 ``--floors REPORT_DIR [--durations LOG]`` runs neither command: it reads a finished ``make
 report`` folder and the log of ``pytest tests compare --durations=0`` (the suite's
 environment) and writes ``benchmarks/results/floors.json``, what each part costs against
@@ -58,6 +64,59 @@ def _cpu_children() -> float:
 
     ru = resource.getrusage(resource.RUSAGE_CHILDREN)
     return ru.ru_utime + ru.ru_stime
+
+
+def _machine_busy_s() -> float:
+    """CPU seconds the whole machine has been busy since boot (/proc/stat: user, nice,
+    system, irq, softirq, steal). A command's CPU is its difference over the command on a
+    quiet machine: it counts every process of the command, also the process pools'
+    workers forked by multiprocessing's forkserver, whose CPU ``RUSAGE_CHILDREN`` never
+    sees (the forkserver is not waited for)."""
+    fields = Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]
+    user, nice, system, _idle, _iowait, irq, softirq, steal = map(int, fields[:8])
+    return (user + nice + system + irq + softirq + steal) / os.sysconf("SC_CLK_TCK")
+
+
+def _busy_timed(cmd: list[str]) -> tuple[float, float, float, str]:
+    """(wall s, machine-busy CPU s, the machine's busy CPU s over the same time before it
+    (what other processes spend: subtract it, or distrust the figure when it is large), log)
+    of ``cmd`` run from the repository."""
+    idle0 = _machine_busy_s()
+    time.sleep(IDLE_PROBE_S)
+    background = (_machine_busy_s() - idle0) / IDLE_PROBE_S
+    busy0 = _machine_busy_s()
+    wall, log = _timed(cmd)
+    return wall, _machine_busy_s() - busy0, background * wall, log
+
+
+#: Seconds the machine's background CPU is sampled before a command (:func:`_busy_timed`).
+IDLE_PROBE_S = 5.0
+#: make report's parts, each run alone by ``--parts``: the report's own runs, sweeps, fits and
+#: figures; the default study; the design map (make report runs the three side by side).
+PARTS = {"report": ["report"], "study default": ["sweep", "--preset", "default"],
+         "study design": ["sweep", "--preset", "design"]}
+
+
+def parts() -> tuple[dict, dict]:
+    """make report's three parts run one after the other, each alone: wall and
+    machine-busy CPU (s), background CPU over the same time; and make report itself."""
+    numbers, details = {}, {}
+    with tempfile.TemporaryDirectory(prefix="bench-make-") as tmp:
+        for name, args in PARTS.items():
+            cmd = [str(ROOT / ".venv" / "bin" / "treeimpact"), *args, "--out", f"{tmp}/{name}"]
+            wall, cpu, bg, log = _busy_timed(cmd)
+            key = name.replace(" ", "_")
+            numbers |= {f"parts.{key}.wall_s": round(wall, 1),
+                        f"parts.{key}.cpu_s": round(cpu - bg, 1)}
+            details[name] = {"background_cpu_s": round(bg, 1), "tail": log[-200:]}
+        wall, cpu, bg, log = _busy_timed(["make", "report", f"OUT={tmp}/make-report"])
+        numbers |= {"parts.make_report.wall_s": round(wall, 1),
+                    "parts.make_report.cpu_s": round(cpu - bg, 1)}
+        details["make report"] = {"background_cpu_s": round(bg, 1), "tail": log[-200:]}
+    own = sum(v for k, v in numbers.items() if k.endswith(".cpu_s") and "make_report" not in k)
+    numbers["parts.sum_cpu_s"] = round(own, 1)
+    numbers["parts.cpu_floor_s"] = round(own / len(os.sched_getaffinity(0)), 1)  # every core busy throughout
+    return numbers, details
 
 
 def _make_test(makefile: Path | None) -> dict:
@@ -112,7 +171,16 @@ def main(argv=None) -> int:
     p.add_argument("--against", metavar="REV", help="time only make test: REV's Makefile "
                    "against today's, alternately (writes make_test.json)")
     p.add_argument("--rounds", type=int, default=2, help="with --against: runs per side")
+    p.add_argument("--parts", action="store_true", help="time make report's three parts "
+                   "alone and make report, with the machine's busy CPU (writes "
+                   "report_parts.json)")
     args = p.parse_args(argv)
+    if args.parts:
+        start_load = _results.load_average()
+        numbers, details = parts()
+        _results.write("report_parts", numbers, details, started_load=start_load,
+                       out=Path(args.out) if args.out else None)
+        return 0
     if args.against:
         start_load = _results.load_average()
         numbers, details = against(args.against, args.rounds)
