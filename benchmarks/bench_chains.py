@@ -140,10 +140,13 @@ def main(argv=None) -> int:
     p.add_argument("--rev", default="ee677a4", help="the baseline commit (default ee677a4)")
     p.add_argument("--rounds", type=int, default=3)
     p.add_argument("--cases", choices=("report", "preset", "all"), default="all")
+    p.add_argument("--engines", default="mujoco,bullet",
+                   help="the engines whose cases run (comma-separated; default both)")
     p.add_argument("--out", help="results file (default benchmarks/results/chains.json)")
     args = p.parse_args(argv)
-    cases = {"report": REPORT_CASES, "preset": PRESET_CASES,
-             "all": REPORT_CASES + PRESET_CASES}[args.cases]
+    cases = [c for c in {"report": REPORT_CASES, "preset": PRESET_CASES,
+                         "all": REPORT_CASES + PRESET_CASES}[args.cases]
+             if c[1] in args.engines.split(",")]
     start_load = _results.load_average()
     code = SNIPPET % json.dumps(cases)
     with _baseline.baseline_tree(args.rev) as old:
@@ -166,7 +169,7 @@ def main(argv=None) -> int:
             "changes": _changes(o[0]["metrics"], n[0]["metrics"], o[0]["metrics"])})
     numbers = summarise(details)
     _results.write("chains", numbers, {"rev": args.rev, "rounds": args.rounds,
-                                       "cases": details}, started_load=start_load,
+                                       "engines": args.engines, "cases": details}, started_load=start_load,
                    out=Path(args.out) if args.out else None)
     return 0
 
