@@ -145,6 +145,10 @@ def summarise(details: list) -> dict:
 
 #: The floors (``--floors``): steps timed from the touch in each variant, and rounds.
 FLOOR_STEPS, FLOOR_ROUNDS = 20000, 15
+#: The floors' chains: each tree at its report N (both engines), and the full preset's
+#: 32-segment chain (MuJoCo only; the spans over the trees leave it out).
+FLOOR_CASES = (("central-leader", 12), ("open-center", 10), ("realistic-crown", 12),
+               ("central-leader", 32))
 
 
 def _mujoco_floor_models(scen: str, segments: int) -> tuple:
@@ -221,7 +225,7 @@ def _bullet_floor(scen: str, segments: int, variant: str) -> float:
 
 
 def floors() -> dict:
-    """Per tree (its report N, the linear pendulum), the wall per step (us, median of
+    """Per case of :data:`FLOOR_CASES` (the linear pendulum), the wall per step (us, median of
     :data:`FLOOR_ROUNDS` alternating rounds of :data:`FLOOR_STEPS` steps from the touch) of
     the bare engine step with nothing of ours around it and of the runner's own step:
     MuJoCo's ``mujoco.rollout`` of the runner's model, of the 24-tendon model and without
@@ -233,18 +237,21 @@ def floors() -> dict:
     from mujoco import rollout
 
     numbers: dict = {}
-    for scen, n in (("central-leader", 12), ("open-center", 10), ("realistic-crown", 12)):
+    for scen, n in FLOOR_CASES:
         plan, models = _mujoco_floor_models(scen, n)
-        times: dict = {k: [] for k in [*models, "bullet_bare", "bullet_loop",
-                                       "bullet_loop_no_query"]}
+        bullet = n < 32  # the 32-segment chain: MuJoCo's tendons only (Bullet's are long)
+        times: dict = {k: [] for k in [*models, *(("bullet_bare", "bullet_loop",
+                                                   "bullet_loop_no_query") if bullet else ())]}
         for _ in range(FLOOR_ROUNDS):
             for k, m in models.items():
                 d = mujoco.MjData(m)
                 t0 = time.perf_counter()
                 rollout.rollout(m, d, plan.state0[None], nstep=FLOOR_STEPS)
                 times[k].append(time.perf_counter() - t0)
-            for v in ("bare", "loop", "loop_no_query"):
+            for v in ("bare", "loop", "loop_no_query") if bullet else ():
                 times[f"bullet_{v}"].append(_bullet_floor(scen, n, v))
+        if n >= 32:
+            scen = f"{scen}-{n}"
         us = {k: 1e6 * statistics.median(v) / FLOOR_STEPS for k, v in times.items()}
         for k, v in us.items():
             numbers[f"floor.{scen}.{k}_step_us"] = round(v, 2)
@@ -254,14 +261,14 @@ def floors() -> dict:
 
         numbers[f"floor.{scen}.mujoco_24_tendons_ratio"] = paired("mujoco_bare",
                                                                   "mujoco_bare_24_tendons")
-        for k in ("bullet_bare", "bullet_loop_no_query"):
+        for k in ("bullet_bare", "bullet_loop_no_query") if bullet else ():
             numbers[f"floor.{scen}.{k}_ratio"] = paired(k, "bullet_loop")
         print(scen, " ".join(f"{k} {v:.2f} us" for k, v in us.items()))
     for k in ("mujoco_24_tendons_ratio", "bullet_bare_ratio", "bullet_loop_no_query_ratio",
               "mujoco_bare_step_us", "mujoco_bare_no_contact_step_us", "bullet_bare_step_us",
               "bullet_loop_step_us"):
         numbers[f"floor.{k}"] = _results.span(v for key, v in numbers.items()
-                                              if key.endswith("." + k))
+                                              if key.endswith("." + k) and "-32." not in key)
     return numbers
 
 
