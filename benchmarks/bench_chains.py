@@ -15,7 +15,15 @@ default segments: MuJoCo's chain with the linear and the full pendulum and its e
 rod, Bullet's chain with both pendulums); ``preset``, the full preset's 32-segment chains
 (central-leader, the linear pendulum, each engine), whose step the chain's highest mode
 sets. What set each new run's step (contact, highest mode, Bullet's implicit contact) is in
-the file's details. Writes ``benchmarks/results/chains.json`` (docs/engines.md quotes it).
+the file's details. ``--engines mujoco`` (or ``bullet``) runs one engine's cases. Writes
+``benchmarks/results/chains.json`` or ``--out`` (docs/engines.md quotes
+``chain_steps.json``: ``--rev 50f1faa --cases report --out ...``).
+
+``--floors`` measures today's code only, in this process: per tree the bare engine step
+with nothing of ours around it against the runner's step (MuJoCo: ``mujoco.rollout`` of
+the runner's model, of 50f1faa's 24-tendon model and with the contact off; Bullet: bare
+``stepSimulation``, the runner's loop, the loop without its contact query), medians of
+alternating rounds (docs/engines.md quotes ``chain_floors.json``).
 """
 
 from __future__ import annotations
@@ -135,15 +143,154 @@ def summarise(details: list) -> dict:
     return numbers
 
 
+#: The floors (``--floors``): steps timed from the touch in each variant, and rounds.
+FLOOR_STEPS, FLOOR_ROUNDS = 20000, 15
+#: The floors' chains: each tree at its report N (both engines), and the full preset's
+#: 32-segment chain (MuJoCo only; the spans over the trees leave it out).
+FLOOR_CASES = (("central-leader", 12), ("open-center", 10), ("realistic-crown", 12),
+               ("central-leader", 32))
+
+
+def _mujoco_floor_models(scen: str, segments: int) -> tuple:
+    """(plan, {variant: MjModel}) of the scenario's MuJoCo chain (linear pendulum): the
+    runner's model, the same with today's 24 per-damping-point tendons (50f1faa's
+    builder) and with the contact disabled."""
+    import copy
+
+    import mujoco
+    import numpy as np
+
+    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.mujoco_models import _builder
+    from treeimpact.mujoco_models._rollout import _plan
+    from treeimpact.mujoco_models._runner import make_setup
+
+    def per_point(spec, chain):  # 50f1faa's _add_dampers: one tendon per damping point
+        z = np.asarray(chain.boundaries)
+        for p, (zp, cp) in enumerate(zip(chain.damping_heights, chain.damping_coefficients)):
+            ten = spec.add_tendon()
+            ten.name = f"damper_{p}"
+            ten.damping[0] = float(cp)
+            for j in range(chain.segments):
+                if z[j] < zp:
+                    ten.wrap_joint(f"hinge_{j}", float(zp - z[j]))
+
+    s = resolve_scenario(scen)
+    setup = make_setup(s, trunk="chain", segments=segments)
+    fewest, _builder._add_dampers = _builder._add_dampers, per_point
+    try:  # another t_end: not the cached setup
+        old = make_setup(s, trunk="chain", segments=segments, t_end=s.t_end * (1 + 1e-9))
+    finally:
+        _builder._add_dampers = fewest
+    off = copy.deepcopy(setup.mjmodel)
+    off.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    return _plan(setup), {"mujoco_bare": setup.mjmodel, "mujoco_bare_24_tendons":
+                          old.mjmodel, "mujoco_bare_no_contact": off}
+
+
+def _bullet_floor(scen: str, segments: int, variant: str) -> float:
+    """Seconds of :data:`FLOOR_STEPS` Bullet chain steps from the touch (linear pendulum):
+    ``bare`` stepSimulation alone, ``loop`` the runner's loop, ``loop_no_query`` the loop
+    without its contact query."""
+    import time
+
+    from treeimpact.bullet_models import _loops
+    from treeimpact.bullet_models._runner import build_world, make_setup
+    from treeimpact.compare.runs import resolve_scenario
+
+    class NoQuery:  # the client with an empty contact query
+        def __init__(self, p):
+            self._p = p
+
+        def __getattr__(self, name):
+            return getattr(self._p, name)
+
+        def getContactPoints(self, *args):  # noqa: N802 - PyBullet's name
+            return ()
+
+    setup = make_setup(resolve_scenario(scen), trunk="chain", segments=segments)
+    world = build_world(setup)
+    p, cid = world.p, world.cid
+    p.resetJointState(world.pendulum, 0, 0.0, setup.model.impact_speed, physicsClientId=cid)
+    t0 = time.perf_counter()
+    if variant == "bare":
+        for _ in range(FLOOR_STEPS):
+            p.stepSimulation(cid)
+    else:
+        if variant == "loop_no_query":
+            world.p = NoQuery(p)
+        _loops._loop_chain(world, setup, FLOOR_STEPS, False, None, None,
+                           setup.model.impactor_mass)
+    return time.perf_counter() - t0
+
+
+def floors() -> dict:
+    """Per case of :data:`FLOOR_CASES` (the linear pendulum), the wall per step (us, median of
+    :data:`FLOOR_ROUNDS` alternating rounds of :data:`FLOOR_STEPS` steps from the touch) of
+    the bare engine step with nothing of ours around it and of the runner's own step:
+    MuJoCo's ``mujoco.rollout`` of the runner's model, of the 24-tendon model and without
+    the contact; Bullet's bare ``stepSimulation``, the runner's loop and the loop without
+    its contact query; with the ratios (the median of the rounds' ratios)."""
+    import time
+
+    import mujoco
+    from mujoco import rollout
+
+    numbers: dict = {}
+    for scen, n in FLOOR_CASES:
+        plan, models = _mujoco_floor_models(scen, n)
+        bullet = n < 32  # the 32-segment chain: MuJoCo's tendons only (Bullet's are long)
+        times: dict = {k: [] for k in [*models, *(("bullet_bare", "bullet_loop",
+                                                   "bullet_loop_no_query") if bullet else ())]}
+        for _ in range(FLOOR_ROUNDS):
+            for k, m in models.items():
+                d = mujoco.MjData(m)
+                t0 = time.perf_counter()
+                rollout.rollout(m, d, plan.state0[None], nstep=FLOOR_STEPS)
+                times[k].append(time.perf_counter() - t0)
+            for v in ("bare", "loop", "loop_no_query") if bullet else ():
+                times[f"bullet_{v}"].append(_bullet_floor(scen, n, v))
+        if n >= 32:
+            scen = f"{scen}-{n}"
+        us = {k: 1e6 * statistics.median(v) / FLOOR_STEPS for k, v in times.items()}
+        for k, v in us.items():
+            numbers[f"floor.{scen}.{k}_step_us"] = round(v, 2)
+
+        def paired(a, b):  # the median of the rounds' ratios: a load change hits both
+            return round(statistics.median(x / y for x, y in zip(times[a], times[b])), 3)
+
+        numbers[f"floor.{scen}.mujoco_24_tendons_ratio"] = paired("mujoco_bare",
+                                                                  "mujoco_bare_24_tendons")
+        for k in ("bullet_bare", "bullet_loop_no_query") if bullet else ():
+            numbers[f"floor.{scen}.{k}_ratio"] = paired(k, "bullet_loop")
+        print(scen, " ".join(f"{k} {v:.2f} us" for k, v in us.items()))
+    for k in ("mujoco_24_tendons_ratio", "bullet_bare_ratio", "bullet_loop_no_query_ratio",
+              "mujoco_bare_step_us", "mujoco_bare_no_contact_step_us", "bullet_bare_step_us",
+              "bullet_loop_step_us"):
+        numbers[f"floor.{k}"] = _results.span(v for key, v in numbers.items()
+                                              if key.endswith("." + k) and "-32." not in key)
+    return numbers
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rev", default="ee677a4", help="the baseline commit (default ee677a4)")
     p.add_argument("--rounds", type=int, default=3)
     p.add_argument("--cases", choices=("report", "preset", "all"), default="all")
+    p.add_argument("--engines", default="mujoco,bullet",
+                   help="the engines whose cases run (comma-separated; default both)")
+    p.add_argument("--floors", action="store_true",
+                   help="measure the engines' floors (today's code, in this process) instead")
     p.add_argument("--out", help="results file (default benchmarks/results/chains.json)")
     args = p.parse_args(argv)
-    cases = {"report": REPORT_CASES, "preset": PRESET_CASES,
-             "all": REPORT_CASES + PRESET_CASES}[args.cases]
+    if args.floors:
+        start_load = _results.load_average()
+        _results.write("chains", floors(), {"steps": FLOOR_STEPS, "rounds": FLOOR_ROUNDS},
+                       started_load=start_load, out=Path(args.out) if args.out else None)
+        return 0
+    cases = [c for c in {"report": REPORT_CASES, "preset": PRESET_CASES,
+                         "all": REPORT_CASES + PRESET_CASES}[args.cases]
+             if c[1] in args.engines.split(",")]
     start_load = _results.load_average()
     code = SNIPPET % json.dumps(cases)
     with _baseline.baseline_tree(args.rev) as old:
@@ -166,7 +313,7 @@ def main(argv=None) -> int:
             "changes": _changes(o[0]["metrics"], n[0]["metrics"], o[0]["metrics"])})
     numbers = summarise(details)
     _results.write("chains", numbers, {"rev": args.rev, "rounds": args.rounds,
-                                       "cases": details}, started_load=start_load,
+                                       "engines": args.engines, "cases": details}, started_load=start_load,
                    out=Path(args.out) if args.out else None)
     return 0
 

@@ -187,16 +187,41 @@ def _add_segment(parent, chain, j: int, r: float, damp):
 
 
 def _add_dampers(spec: mujoco.MjSpec, chain) -> None:
-    """The trunk's distributed damping as tendons: one per damping height, wrapping every
-    hinge below it with the lever arm to it."""
-    z = np.asarray(chain.boundaries)
-    for p, (zp, cp) in enumerate(zip(chain.damping_heights, chain.damping_coefficients)):
+    """The trunk's distributed damping D (eq 9 at the damping points, N m s/rad) as the
+    fewest fixed tendons: D = L diag(d) L^T (L unit lower triangular, d > 0; from D's
+    Cholesky factor), tendon ``damper_i`` of length sum_{j >= i} L_ji theta_j and damping
+    d_i, so the generalised damping force is -D theta' (to round-off). One tendon per hinge
+    instead of one per damping point (24 for 12 segments): MuJoCo's cost per step grows with
+    the tendons (docs/engines.md, "What an engine run costs")."""
+    L, d = damping_factors(damping_point_matrix(chain))
+    n = chain.segments
+    for i in range(n):
         ten = spec.add_tendon()
-        ten.name = f"damper_{p}"
-        ten.damping[0] = float(cp)
-        for j in range(chain.segments):
-            if z[j] < zp:
-                ten.wrap_joint(f"hinge_{j}", float(zp - z[j]))
+        ten.name = f"damper_{i}"
+        ten.damping[0] = float(d[i])
+        for j in range(i, n):
+            if L[j, i] != 0.0:
+                ten.wrap_joint(f"hinge_{j}", float(L[j, i]))
+
+
+def damping_point_matrix(chain) -> np.ndarray:
+    """D = sum_p c_p J_p^T J_p over the damping points p (N m s/rad): J_p[j] = z_p - z_j
+    for the hinges j below the point (its linearised lateral displacement per hinge
+    angle), c_p = C h / 2; ``analytic.continuum.chain.chain_matrices``' D to round-off."""
+    z = np.asarray(chain.boundaries)[:chain.segments]
+    D = np.zeros((chain.segments, chain.segments))
+    for zp, cp in zip(chain.damping_heights, chain.damping_coefficients):
+        a = np.where(z < zp, zp - z, 0.0)
+        D += float(cp) * np.outer(a, a)
+    return D
+
+
+def damping_factors(D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(L, d) with D = L diag(d) L^T, L unit lower triangular, d > 0 (from the Cholesky
+    factor of the positive definite D; raises numpy's LinAlgError otherwise)."""
+    C = np.linalg.cholesky(D)
+    s = np.diag(C).copy()
+    return C / s, s * s
 
 
 def add_pendulum(spec: mujoco.MjSpec, impactor, kind: str, clamp_height: float,
