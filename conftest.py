@@ -266,20 +266,20 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.numerics)
     if {item.path for item in items} == {*_ROOT.glob("tests/test_*.py"),
                                           *_ROOT.glob("compare/tests/test_*.py")}:
-        config.stash[_NUMERICS_COUNT] = sum(
-            1 for item in items if item.get_closest_marker("numerics"))
+        config.stash[_WHOLE] = items[:]
 
 
-_NUMERICS_COUNT = pytest.StashKey[int]()
+_WHOLE = pytest.StashKey[list]()
 
 
 @pytest.fixture
-def numerics_collected(request) -> int | None:
-    """The tests marked ``numerics`` among those this session collected, when it collected
-    every test file of tests/ and compare/tests/ (`make test`'s run and each of its workers:
-    what ``pytest --collect-only -m numerics tests compare`` counts, counted before any
-    ``-k``/``-m`` deselection); else None."""
-    return request.config.stash.get(_NUMERICS_COUNT, None)
+def whole_suite(request) -> list | None:
+    """Every test this session collected, when it collected every test file of tests/ and
+    compare/tests/ (`make test`'s run and each of its workers; taken before any ``-k``/``-m``
+    deselection, the ``numerics`` marks set): what ``pytest --collect-only tests compare``
+    collects, so a test that asks what the suite holds needs no second collection; else
+    None."""
+    return request.config.stash.get(_WHOLE, None)
 
 
 def _check_lists(item):
