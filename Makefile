@@ -45,7 +45,10 @@ report: $(STAMP)
 
 # The whole suite on this machine's BLAS kernel, then the tests marked numerics (BLAS
 # round-off: conftest.py NUMERICS) under two other machines' OpenBLAS kernels
-# (tests/blas_kernels.py picks them). Nothing pins a kernel outside these runs.
+# (tests/blas_kernels.py picks them). Nothing pins a kernel outside these runs. The kernel
+# passes collect only the NUMERICS files among TESTS (conftest.numerics_files; no other file
+# may hold the mark): collecting the whole suite to deselect all but these cost each pass
+# about 5 CPU-seconds of imports.
 # The main suite runs on pytest-xdist, one worker per core the process may use (WORKERS;
 # `make test WORKERS=0` runs it serially in one process): serial, one core sat idle for its
 # ~6 minutes (benchmarks/results/floors.json). --dist loadgroup (conftest.py's scheduler:
@@ -66,13 +69,15 @@ WORKERS ?= $(shell $(PYTHON) -c 'import os; print(len(os.sched_getaffinity(0)) i
 TESTS   ?= tests compare
 test: $(STAMP)
 	@kernels="$$($(BIN)/python tests/blas_kernels.py)"; logs=$$(mktemp -d); pids=; \
+	files="$$($(BIN)/python -c 'import sys, conftest; print(*conftest.numerics_files(sys.argv[1:]))' $(TESTS))"; \
+	[ -n "$$files" ] || kernels=; \
 	trap 'kill $$pids 2>/dev/null; rm -rf $$logs' EXIT; trap 'exit 130' INT TERM; \
 	for k in $$kernels; do \
 		OPENBLAS_CORETYPE=$$k $(THREADS) nice -n 10 $(BIN)/python -m pytest -q -m numerics \
-			-p no:cacheprovider $(TESTS) > $$logs/$$k.log 2>&1 & pids="$$pids $$!"; \
+			-p no:cacheprovider $$files > $$logs/$$k.log 2>&1 & pids="$$pids $$!"; \
 	done; \
 	$(THREADS) $(BIN)/python -m pytest -n $(WORKERS) --dist loadgroup $(TESTS); status=$$?; \
-	[ -n "$$kernels" ] || echo "numerics under other kernels: skipped (numpy's BLAS is not OpenBLAS on x86-64)"; \
+	[ -n "$$kernels" ] || echo "numerics under other kernels: skipped (numpy's BLAS is not OpenBLAS on x86-64, or TESTS holds no NUMERICS file)"; \
 	set -- $$pids; for k in $$kernels; do \
 		if wait $$1; then echo "numerics under OPENBLAS_CORETYPE=$$k: $$(tail -n 1 $$logs/$$k.log)"; \
 		else cat $$logs/$$k.log; echo "numerics under OPENBLAS_CORETYPE=$$k failed"; status=1; fi; \

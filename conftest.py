@@ -12,8 +12,10 @@ The tests whose numbers depend on BLAS and LAPACK round-off are marked ``numeric
 (tests/blas_kernels.py; docs/reproducibility.md).
 """
 
+import functools
 import importlib.abc
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -43,17 +45,27 @@ _FOLDERS = ("analytic", "compare", "mujoco_models", "bullet_models")
 sys.meta_path.insert(0, _NoBareNames())
 
 
-#: Test files marked ``numerics``: eigen-decompositions, matrix exponentials and linear
-#: solves whose round-off moves with the BLAS kernel, feeding chattering contacts or the
-#: numbers the docs print (beam and its impact, the whole event, the hinged chain, the
-#: modes and Timoshenko's beam, the exact solver and the soft contact, the reduction, the
-#: record fit, the engines' modes and generated model files, the numbers checks).
+#: The test files whose tests are ``numerics``: the rule is that a test is ``numerics`` when
+#: a number it checks passes through LAPACK or BLAS (numpy.linalg, scipy.linalg and
+#: scipy.optimize, the exact solvers' eigen-decompositions, matrix exponentials and linear
+#: solves, the fits' least squares), where another kernel's round-off could move it: the beam
+#: and its impact, the whole event, the hinged chain, the modes and Timoshenko's beam, the
+#: exact solver and the soft contact, the record fit, the engines' modes, the numbers checks,
+#: the exact rungs' equivalence with the baseline (not the reduction's symbolic algebra nor
+#: the generated files' text: no linear algebra). Each of their tests is,
+#: except those marked ``blas_free`` (:data:`BLAS_FREE`: they check text, interfaces or an
+#: engine's own arithmetic; :func:`pytest_runtest_call` fails one that reaches the linear
+#: algebra). No test outside these files may carry the mark (:func:`check_numerics`): the
+#: kernel passes collect these files only (:func:`numerics_files`, the Makefile's ``test``).
 NUMERICS = frozenset({
     "tests/test_beam.py", "tests/test_beam_impact.py", "tests/test_whole_event.py",
     "tests/test_chain.py", "tests/test_timoshenko.py", "tests/test_solver.py",
-    "tests/test_soft_contact.py", "tests/test_reduction.py", "tests/test_record_fit.py",
-    "tests/test_engine.py", "tests/test_generated_files.py", "tests/test_doc_numbers.py",
+    "tests/test_soft_contact.py", "tests/test_record_fit.py",
+    "tests/test_engine.py", "tests/test_doc_numbers.py", "tests/test_exact_equivalence.py",
 })
+#: The mark of a test in a :data:`NUMERICS` file that checks no number through the linear
+#: algebra, so gains nothing from a rerun under another kernel.
+BLAS_FREE = "blas_free"
 _ROOT = Path(__file__).resolve().parent
 
 
@@ -71,6 +83,107 @@ def pytest_configure(config):
 
     limit = float(os.environ.get("TREEIMPACT_TEST_LIMIT_S", TEST_LIMIT_S))
     faulthandler.dump_traceback_later(limit, exit=True, file=os.dup(2))
+    config.addinivalue_line("markers", f"{BLAS_FREE}: a test of a NUMERICS file that checks "
+                            "no number through LAPACK/BLAS (conftest.py), not rerun under "
+                            "other kernels")
+
+
+def numerics_files(paths=("tests", "compare")) -> list[str]:
+    """The :data:`NUMERICS` files (or node ids ``file::test`` of them) among ``paths``
+    (folders, files or node ids from the repository's root, as `make test`'s ``TESTS``):
+    what the kernel passes collect, so that they import no other test module."""
+    out = []
+    for rel in sorted(NUMERICS):
+        for given in paths:
+            path, sep, test = given.partition("::")
+            p = _relative(_ROOT / path)  # "" outside the repository
+            if p == rel and sep:
+                out.append(f"{rel}::{test}")
+            elif p == rel or p == "." or p and rel.startswith(p + "/"):
+                out.append(rel)
+                break
+    return out
+
+
+def check_numerics(items) -> list[str]:
+    """The files outside :data:`NUMERICS` that hold a test marked ``numerics`` or
+    ``blas_free`` (the kernel passes would not collect the one; the other means nothing)."""
+    return sorted({_relative(i.path) for i in items if _relative(i.path) not in NUMERICS
+                   and (i.get_closest_marker("numerics") or i.get_closest_marker(BLAS_FREE))})
+
+
+#: A matrix product in a module's source (``A @ B``, matmul, einsum, dot): numpy's ``@`` is
+#: an operator no profile hook sees, so entering such a module counts as reaching BLAS.
+_PRODUCT = re.compile(r"[\w)\]] @ [\w(\[]|matmul|einsum|\.dot\(")
+
+
+@functools.cache
+def _linalg_roots() -> tuple[str, ...]:
+    """Where :func:`_linalg_probe` counts an entry as linear algebra: the folders of
+    numpy.linalg, scipy.linalg, scipy.optimize and scipy.sparse.linalg, and the project's
+    modules whose source holds a matrix product (:data:`_PRODUCT`)."""
+    import numpy.linalg
+    import scipy.linalg
+    import scipy.optimize
+    import scipy.sparse.linalg
+
+    folders = [os.path.dirname(m.__file__) + os.sep for m in (
+        numpy.linalg, scipy.linalg, scipy.optimize, scipy.sparse.linalg)]
+    modules = [str(f) for folder in _FOLDERS for f in (_ROOT / folder).rglob("*.py")
+               if "tests" not in f.parts and _PRODUCT.search(f.read_text())]
+    return (*folders, *modules)
+
+
+def _linalg_probe(reached: list, roots: tuple[str, ...]):
+    """A :func:`sys.setprofile` function that appends to ``reached`` each entry into the
+    linear algebra: a Python function of a file under ``roots`` (:func:`_linalg_roots`), or
+    numpy's ``dot``, ``vdot`` or ``inner``."""
+    def probe(frame, event, arg):
+        if event == "call" and frame.f_code.co_filename.startswith(roots):
+            reached.append(f"{frame.f_code.co_filename}:{frame.f_code.co_name}")
+        elif event == "c_call" and getattr(arg, "__name__", "") in ("dot", "vdot", "inner"):
+            reached.append(f"numpy {arg.__name__}")
+    return probe
+
+
+_REACHED = pytest.StashKey[list]()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_setup(item):
+    """:func:`_check_lists`; the setup of a ``blas_free`` test (its function fixtures) under
+    :func:`_linalg_probe`."""
+    _check_lists(item)
+    if item.get_closest_marker(BLAS_FREE) is None:
+        return (yield)
+    item.stash[_REACHED] = []
+    previous = sys.getprofile()
+    sys.setprofile(_linalg_probe(item.stash[_REACHED], _linalg_roots()))
+    try:
+        return (yield)
+    finally:
+        sys.setprofile(previous)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_call(item):
+    """Run a ``blas_free`` test under :func:`_linalg_probe`: fail it when its setup or call
+    reached the linear algebra, or when it uses a module or session fixture (made once, not
+    seen again): it would then belong to the kernel passes (remove its mark)."""
+    if item.get_closest_marker(BLAS_FREE) is None:
+        return (yield)
+    reached = item.stash.setdefault(_REACHED, [])
+    previous = sys.getprofile()
+    sys.setprofile(_linalg_probe(reached, _linalg_roots()))
+    try:
+        result = yield
+    finally:
+        sys.setprofile(previous)
+    if reached or _shared_scopes(item):
+        pytest.fail(f"marked {BLAS_FREE} but reached the linear algebra "
+                    f"({(reached or ['a shared fixture'])[0]}, {len(reached)} calls): "
+                    "conftest.py's rule makes it numerics", pytrace=False)
+    return result
 
 
 #: `make test`'s scheduling units (``--dist loadgroup``, :func:`pytest_xdist_make_scheduler`):
@@ -140,21 +253,44 @@ def check_groups(items) -> list[str]:
 
 
 _STALE = pytest.StashKey[frozenset]()
+_STRAY = pytest.StashKey[frozenset]()
 
 
 def pytest_collection_modifyitems(config, items):
     """Mark the tests of :data:`NUMERICS` ``numerics``; note the files whose shared fixtures
     the scheduling groups miss (:func:`check_groups`), whose tests then fail at setup."""
+    config.stash[_STRAY] = frozenset(check_numerics(items))
     config.stash[_STALE] = frozenset(check_groups(items))
     for item in items:
-        if _relative(item.path) in NUMERICS:
+        if _relative(item.path) in NUMERICS and item.get_closest_marker(BLAS_FREE) is None:
             item.add_marker(pytest.mark.numerics)
+    if {item.path for item in items} == {*_ROOT.glob("tests/test_*.py"),
+                                          *_ROOT.glob("compare/tests/test_*.py")}:
+        config.stash[_WHOLE] = items[:]
 
 
-def pytest_runtest_setup(item):
-    """Fail a test of a file :func:`check_groups` found missing from the groups (a failure,
-    not a collection error, so that it reads the same under xdist's workers)."""
+_WHOLE = pytest.StashKey[list]()
+
+
+@pytest.fixture
+def whole_suite(request) -> list | None:
+    """Every test this session collected, when it collected every test file of tests/ and
+    compare/tests/ (`make test`'s run and each of its workers; taken before any ``-k``/``-m``
+    deselection, the ``numerics`` marks set): what ``pytest --collect-only tests compare``
+    collects, so a test that asks what the suite holds needs no second collection; else
+    None."""
+    return request.config.stash.get(_WHOLE, None)
+
+
+def _check_lists(item):
+    """Fail a test of a file :func:`check_groups` found missing from the groups or
+    :func:`check_numerics` outside NUMERICS (a failure, not a collection error, so that it
+    reads the same under xdist's workers)."""
     rel = _relative(item.path)
+    if rel in item.config.stash.get(_STRAY, frozenset()):
+        pytest.fail(f"conftest.py: {rel} holds a test marked numerics or {BLAS_FREE}; add "
+                    "the file to NUMERICS (the kernel passes collect its files only)",
+                    pytrace=False)
     if rel in item.config.stash.get(_STALE, frozenset()):
         pytest.fail(f"conftest.py: add {rel} to SESSION_FILES (it uses a session fixture of "
                     "compare/tests/conftest.py) or MODULE_FIXTURE_FILES (a module fixture): "

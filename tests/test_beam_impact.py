@@ -371,6 +371,7 @@ def test_effective_calibration_gives_e_on_the_clamps_effective_mass():
     ({"elements": 1}, "--elements"), ({"elements": 2.5}, "--elements"),
     ({"calibration": "mass"}, "--calibration"), ({"t_end": -1.0}, "--t-end"),
     ({"method": "euler"}, "--method")])
+@pytest.mark.blas_free
 def test_bad_options_are_one_line_errors(options, field):
     with pytest.raises(ParameterError, match=field):
         simulate_beam(load_scenario("open-center"), **options)

@@ -26,16 +26,19 @@ from tests import docnumbers as docs
 from tests.docnumbers import marks
 
 
+@pytest.mark.blas_free
 def test_every_quoted_number_is_its_source_s():
     problems = docs.check_marks()
     assert not problems, "\n".join(problems)
 
 
+@pytest.mark.blas_free
 def test_every_generated_block_is_its_source_s():
     problems = docs.check_blocks()
     assert not problems, "\n".join(problems)
 
 
+@pytest.mark.blas_free
 def test_the_pages_mark_their_numbers():
     marks = {p.name: len(docs.quoted(p.read_text())) for p in docs.PAGES}
     assert marks["README.md"] >= 20, marks
@@ -151,16 +154,19 @@ def test_the_contact_scan_s_crossings_hold_now():
 @pytest.mark.parametrize("text, tokens", [
     ("57-213", ["57", "213"]), ("-12..-14", ["-12", "-14"]), ("9, 21 and 33", ["9", "21", "33"]),
     ("+8.5 / +17.8 / +45.6", ["+8.5", "+17.8", "+45.6"]), ("1.2e-5", ["1.2e-5"])])
+@pytest.mark.blas_free
 def test_a_quoted_list_is_read_number_by_number(text, tokens):
     assert marks._tokens(text) == tokens
 
 
 @pytest.mark.parametrize("token, half", [("8.5", 0.05), ("130", 0.5), ("1.2e-5", 5e-7),
                                          ("+0.35", 0.005)])
+@pytest.mark.blas_free
 def test_a_number_is_as_exact_as_its_printed_digits(token, half):
     assert marks._half_unit(token) == pytest.approx(half)
 
 
+@pytest.mark.blas_free
 def test_a_mark_fails_when_its_number_drifts(tmp_path):
     page = tmp_path / "page.md"
     page.write_text("off by 57-213 %<!-- check: a --> and +8.6 %<!-- check: b --> (x),\n"
@@ -188,6 +194,7 @@ def _about(text, pattern):
     return float(m.group(1))
 
 
+@pytest.mark.blas_free
 def test_the_presets_quote_their_measured_cost():
     """What `sweep --preset` and its --help promise is what the benchmarks measured (the
     default study in `make report`, results/make.json; the full grid extrapolated from its
@@ -207,6 +214,7 @@ def test_the_presets_quote_their_measured_cost():
         assert _about(text, "min") == pytest.approx(full["full.minutes_2_workers"], rel=0.25)
 
 
+@pytest.mark.blas_free
 def test_the_figures_the_pages_show_are_the_copies_recorded_with_the_numbers():
     """The README's picture "is a copy" of the report's contact scan (issue 34: it was an
     older drawing): the file is the one `python -m tests.docnumbers numbers` copied

@@ -53,6 +53,7 @@ def test_chain_modes_match_the_analytic_chain():
         chain_modes(scen, M, np.diag(K), J, 11)
 
 
+@pytest.mark.blas_free
 def test_energy_check_refuses_growth_and_non_finite_energy():
     check_energy("x", np.array([1.0, 1.04]), 1.0, 1e-4)  # within 5 %
     for mech in ([1.0, 1.06], [1.0, math.nan]):
@@ -60,6 +61,7 @@ def test_energy_check_refuses_growth_and_non_finite_energy():
             check_energy("x", np.array(mech), 1.0, 1e-4)
 
 
+@pytest.mark.blas_free
 def test_swing_time_is_the_small_angle_quarter_period_in_the_limit():
     from dataclasses import replace
 

@@ -23,9 +23,6 @@ from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.sweep.apply import apply_point
 
-# the sample grid's values come through BLAS (the observables' products)
-pytestmark = pytest.mark.numerics
-
 HERE = Path(__file__).parent
 FIXTURE = json.loads((HERE / "data" / "exact_metrics.json").read_text())
 
@@ -125,6 +122,7 @@ def test_metrics_match_the_baseline(index):
 
 
 @pytest.mark.parametrize("kernel", sorted(FIXTURE["kernels"]))
+@pytest.mark.blas_free
 def test_the_fixture_covers_every_axis(kernel):
     """Each kernel's fixture holds the shipped scenarios on all three rungs and 50 sweep
     points that each move all five axes (a stale or truncated file would pass vacuously)."""

@@ -231,6 +231,7 @@ def test_identify_json_layout_and_plot(tmp_path, capsys):
     ("t,x\n" + "".join(f"{i * 1e-3},0.002\n" for i in range(30)), "holds no impact"),
     ("t,x\n0,abc\n", "not a number"),
 ])
+@pytest.mark.blas_free
 def test_bad_records_are_one_line_and_exit_2(tmp_path, capsys, text, words):
     path = tmp_path / "rec.csv"
     path.write_text(text)
@@ -239,6 +240,7 @@ def test_bad_records_are_one_line_and_exit_2(tmp_path, capsys, text, words):
     assert words in err and err.count("\n") == 1, err
 
 
+@pytest.mark.blas_free
 def test_record_checks_name_the_row():
     t = np.linspace(0.0, 0.1, 50)
     with pytest.raises(ParameterError, match="row 12"):
@@ -291,6 +293,7 @@ def test_a_held_restitution_is_its_own_interval_and_determined_means_narrower_th
      "row 13 has no value in column 'x'"),
     ("t,x,t\n0,0,0\n", [], "has 2 column(s) t"),
 ])
+@pytest.mark.blas_free
 def test_bad_headers_and_cells_are_one_line_and_exit_2(tmp_path, capsys, text, flags, words):
     """Units and headers: an unknown unit, a flag that contradicts the header, no header, a
     missing cell (its row as in the file, after a comment line), a column twice."""

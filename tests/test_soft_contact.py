@@ -45,6 +45,7 @@ def test_restitution_closed_form_matches_integrated_collision(zeta):
                                                                 abs=1e-9)
 
 
+@pytest.mark.blas_free
 def test_restitution_limits_elastic_critical_and_overdamped_asymptote():
     assert restitution_for_damping_ratio(0.0) == pytest.approx(1.0, abs=1e-15)
     assert restitution_for_damping_ratio(1.0) == pytest.approx(math.exp(-2.0), rel=1e-14)
@@ -52,6 +53,7 @@ def test_restitution_limits_elastic_critical_and_overdamped_asymptote():
     assert restitution_for_damping_ratio(z) * 4.0 * z * z == pytest.approx(1.0, rel=1e-3)
 
 
+@pytest.mark.blas_free
 def test_releasing_at_zero_force_loses_less_than_a_pulling_dashpot():
     # the classical law keeps the dashpot until the overlap closes: its pulling tail dissipates
     for zeta in (0.1, 0.4, 0.8):
@@ -66,6 +68,7 @@ def test_damping_ratio_inverse_round_trip(e):
 
 
 @pytest.mark.parametrize("bad", [0.0, -0.1, 1.2, math.nan])
+@pytest.mark.blas_free
 def test_soft_contact_rejects_restitution_without_finite_damping(bad):
     with pytest.raises(ParameterError, match="restitution"):
         damping_ratio_for_restitution(bad)
@@ -155,11 +158,13 @@ def _record(force, t=None):
                         pendulum_energy=z)
 
 
+@pytest.mark.blas_free
 def test_contact_intervals_are_maximal_runs_above_threshold():
     f = [5.0, 3.0, 0.0, 0.0, 2.0, 0.0, 1.0, 1.0]
     assert contact_intervals(np.array(f), 0.5) == [(0, 1), (4, 4), (6, 7)]
 
 
+@pytest.mark.blas_free
 def test_the_loss_is_read_where_the_pad_has_let_go():
     """A damped pad at the end of its contact: its force falls below the contacts'
     threshold (1e-6 of the peak) a sample before it reaches 0, while the record still holds
@@ -189,6 +194,7 @@ def test_the_loss_is_read_where_the_pad_has_let_go():
     assert math.isnan(still["energy_delivered"])  # never let go within the record
 
 
+@pytest.mark.blas_free
 def test_record_rejects_mismatched_shapes_and_unordered_times():
     with pytest.raises(ParameterError, match="record.t"):
         _record([1.0, 0.0, 0.0], t=np.array([0.0, 0.0, 1.0]))
@@ -199,12 +205,14 @@ def test_record_rejects_mismatched_shapes_and_unordered_times():
                      pendulum_energy=z)
 
 
+@pytest.mark.blas_free
 def test_record_without_contact_is_refused():
     with pytest.raises(ParameterError, match="no contact"):
         metrics_from_record(_record([0.0, 0.0, 0.0]), impact_speed=1.0, initial_energy=1.0,
                             collision_duration=1e-3, impactor_mass=1.0, dynamic_mass=1.0)
 
 
+@pytest.mark.blas_free
 def test_time_step_rule_resolves_contact_and_trunk_mode():
     assert choose_time_step(5e-4) == pytest.approx(1e-5)
     assert choose_time_step(5e-4, highest_frequency=2 * math.pi * 1e4) == pytest.approx(5e-6)
@@ -212,6 +220,7 @@ def test_time_step_rule_resolves_contact_and_trunk_mode():
 
 
 @pytest.mark.parametrize("dt", [4e-4, -1e-5, math.nan])
+@pytest.mark.blas_free
 def test_time_step_too_large_or_invalid_is_refused(dt):
     with pytest.raises(ParameterError, match="dt = "):
         check_time_step(dt, 5e-4)

@@ -167,6 +167,7 @@ def test_first_zero_never_skips_two_closely_spaced_zeros():
     assert root == pytest.approx(math.pi - 2e-5, abs=2e-11)
 
 
+@pytest.mark.blas_free
 def test_first_zero_reports_no_zero_for_a_near_miss():
     f = lambda t: math.cos(t) + 1 + 1e-12  # noqa: E731
     df = lambda t: -math.sin(t)  # noqa: E731
@@ -198,6 +199,7 @@ def test_state_outside_the_solution_is_refused():
         sol.state([0.06])
 
 
+@pytest.mark.blas_free
 def test_first_zero_newton_certificate_picks_the_first_of_two_close_zeros():
     # f = t (r1 - t)(r2 - t): a flight whose gap would close twice, 1e-3 apart in 1e-3
     r1, r2 = 1e-3, 1.001e-3
@@ -265,6 +267,7 @@ def test_solution_pickles_after_a_solve_for_process_pools():
     assert np.array_equal(sol.state([0.001, 0.02]), sol2.state([0.001, 0.02]))
 
 
+@pytest.mark.blas_free
 def test_a_root_search_the_bounds_cannot_certify_ends_in_one_line():
     """f hugging zero from above (never certified at these bounds): a bounded number of
     bisections, then a one-line divergence, never a hang (issue 12)."""

@@ -256,6 +256,7 @@ def test_euler_bernoulli_stays_the_default_and_ignores_g():
     np.testing.assert_equal(default, with_g)
 
 
+@pytest.mark.blas_free
 def test_g_and_kappa_are_optional_scenario_keys():
     """The shipped files have neither (defaults: E / 13, Cowper's kappa at nu = 0.4); given,
     they are read, written and read back."""
@@ -281,12 +282,14 @@ def test_g_and_kappa_are_optional_scenario_keys():
                                "[0.1, 1]"),
     ("shear_coefficient", math.nan, "trunk.shear_coefficient"),
 ])
+@pytest.mark.blas_free
 def test_bad_g_or_kappa_is_a_one_line_error(field, value, words):
     with pytest.raises(ParameterError) as err:
         dataclasses.replace(load_scenario("central-leader").trunk, **{field: value})
     assert words in str(err.value) and "\n" not in str(err.value)
 
 
+@pytest.mark.blas_free
 def test_a_bad_beam_theory_is_a_one_line_error():
     with pytest.raises(ParameterError, match="--beam-theory = 'rayleigh': allowed "
                                              "euler-bernoulli, timoshenko"):

@@ -157,6 +157,7 @@ def test_a_record_still_in_contact_has_no_whole_event_energies():
 
 
 @pytest.mark.parametrize("grid", ["even", "uneven", "short"])
+@pytest.mark.blas_free
 def test_window_means_are_numpys_interpolation_bitwise(grid):
     """The window means (peak force, crown acceleration) skip np.interp's search on an even
     grid: the same numbers bit for bit as (np.interp(t + w, t, C) - C) / w over the
