@@ -3,10 +3,11 @@ given scenarios, with finished studies and optionally a study run beside it."""
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
-from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.errors import NotAchieved, ParameterError
 from treeimpact.analytic.model.scenario import load_scenario
 
 from ..exits import ExitCode
@@ -38,7 +39,8 @@ def add_arguments(sp) -> None:
 
 def run(args) -> int:
     """Write the report for the parsed command line ``args`` and print the written paths;
-    exit code 0."""
+    exit code 0, or NotAchieved (exit 4, after the paths) when a scenario's ladder gives no
+    1-DOF answer (its paper's-model or continuum rung failed: the pages say why)."""
     # lazy: +94 ms at import otherwise (jinja2, numpy),
     # which this module's other callers do not need
     from treeimpact.compare.report import write_report
@@ -67,6 +69,11 @@ def run(args) -> int:
             job.stop()
     for kind, path in paths.items():
         print(f"{kind}: {path}")
+    unanswered = [a for a in json.loads(paths["json"].read_text())["answer"]["one_dof"]
+                  if not a["available"]]
+    if unanswered:  # the pages say why; the exit code and stderr say that it is so
+        raise NotAchieved("the report is written, without a 1-DOF answer for " + "; ".join(
+            f"{a['scenario']} ({a['why']})" for a in unanswered))
     return ExitCode.OK
 
 

@@ -39,7 +39,7 @@ def one_dof_answer(scen_sections) -> list[dict]:
         ref = L.rungs[0]
         soft = [r for r in L.rungs if r.rung.kind == RungKind.CONTACT and r.ok]
         if not chains or not ref.ok:
-            out.append({"scenario": L.name, "available": False})
+            out.append({"scenario": L.name, "available": False, "why": _why_no_answer(L)})
             continue
         rows = {}
         for m, label, scale, unit in ANSWER_METRICS:
@@ -189,6 +189,14 @@ def _steady(trees: dict, tol: float) -> str:
             "value) for " + ", ".join(parts) + ", and beyond that e moves them too")
 
 
+def _why_no_answer(ladder) -> str:
+    """Why ``ladder`` gives no 1-DOF answer: its failed reference (the paper's model) and
+    continuum rungs with their reasons, '<rung>: <reason>' joined by '; '."""
+    needed = [r for r in ladder.rungs if r is ladder.rungs[0] or r.rung.kind == RungKind.BEAM]
+    failed = [f"{r.rung.id}: {r.reason or 'failed'}" for r in needed if not r.ok]
+    return "; ".join(failed) or "no continuum rung was run"
+
+
 def in_short(one_dof: list[dict], trees: dict) -> dict:
     """Both halves of the answer in a sentence each (plain text), from the answer rows
     ``one_dof`` (:func:`one_dof_answer`) and the small-e answers per tree ``trees``:
@@ -205,6 +213,11 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
             f"the paper's 1-DOF model is {_range(gaps['x_max'], _pct, '..')} % off the "
             f"continuum trunk on x_max and {_range(gaps['energy_delivered'], _pct, '..')} % "
             f"on the energy delivered ({100 * tol:.0f} % counts as good enough).")
+    missing = [a for a in one_dof if not a.get("available")]
+    if missing:
+        none = "; ".join(f"{a['scenario']} ({a['why']})" for a in missing)
+        out["one_dof"] = (out.get("one_dof", "The 1-DOF trunk:") +
+                          f" No answer for {none}.")
     if trees:
         held, off, trunk = [], [], []
         first = next(iter(trees.values()))

@@ -588,3 +588,43 @@ def test_answer_cells_sort_by_their_own_number(report):
         assert float(sort) == pytest.approx(m["rel"], rel=1e-12)
         assert float(shown.replace("%", "")) == pytest.approx(100 * m["rel"], abs=0.5)
     assert "td.dataset.sort" in html  # the sorter reads it
+
+
+def test_a_tree_without_a_1_dof_answer_is_said_so_not_a_crash(tmp_path):
+    """open-center stopped at 30 ms, inside its moving-together phase: the paper's model and
+    the soft SDOF refuse the run (energy_delivered needs the last separation). The report
+    is still written; its first screen, answer table and JSON say there is no 1-DOF answer
+    for the tree and why (the page crashed on a missing sentence before)."""
+    import dataclasses
+
+    scen = dataclasses.replace(load_scenario("open-center"), t_end=0.03)
+    paths = write_report(tmp_path, scenarios=[scen], runs=RunCache(),
+                         engines=("no-such-engine",), segments=4)
+    data = json.loads(paths["json"].read_text())
+    (row,) = data["answer"]["one_dof"]
+    assert row["available"] is False and row["why"].startswith("analytic: --t-end = 0.03 s")
+    assert "No answer for open-center (analytic: --t-end" in data["answer"]["in_short"]["one_dof"]
+    assert "| open-center | no answer: analytic: --t-end" in paths["md"].read_text()
+    assert "no answer: analytic: --t-end" in paths["html"].read_text()
+
+
+def test_the_report_command_exits_4_when_a_tree_has_no_1_dof_answer(tmp_path, monkeypatch,
+                                                                    capsys):
+    """The pages are written and listed on stdout; stderr says which tree has no 1-DOF
+    answer and why, and the exit code is 4 (ran, could not do what was asked)."""
+    import treeimpact.compare.report as report_module
+    from treeimpact.compare.cli import main
+
+    def written(out, **_):
+        page = tmp_path / "report.json"
+        page.write_text(json.dumps({"answer": {"one_dof": [
+            {"scenario": "open-center", "available": False, "why": "analytic: too short"},
+            {"scenario": "central-leader", "available": True}]}}))
+        return {"json": page}
+
+    monkeypatch.setattr(report_module, "write_report", written)
+    assert main(["report", "--out", str(tmp_path), "--scenario", "open-center"]) == 4
+    out, err = capsys.readouterr()
+    assert out.strip() == f"json: {tmp_path / 'report.json'}"
+    assert err.strip().endswith("without a 1-DOF answer for open-center (analytic: too short)")
+    assert "central-leader" not in err
