@@ -33,9 +33,12 @@ class PhaseEnds:
     def add(self, t: float, kind: ContactPhase, w, s: float, a, u) -> None:
         """Record a phase: start ``t`` (s), ``kind``, coefficients ``w`` at its start,
         duration ``s`` (s), ``a`` = exp(lambda s) w and the state ``u`` at its end."""
-        for name, value in (("t", t), ("kind", kind), ("w", w), ("s", s), ("a", a),
-                            ("u", u)):
-            getattr(self, name).append(value)
+        self.t.append(t)
+        self.kind.append(kind)
+        self.w.append(w)
+        self.s.append(s)
+        self.a.append(a)
+        self.u.append(u)
 
 
 @dataclass(frozen=True)

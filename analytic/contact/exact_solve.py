@@ -32,6 +32,8 @@ from .phases import ContactPhase, Signal, bracket, check_switches, switch
 #: half the time of 16384, benchmarks/bench_exact.py).
 _BLOCK_ELEMENTS = 2 ** 13
 _EPS = float(np.finfo(float).eps)
+#: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it).
+_PARTS_KEPT = 4
 
 
 class _State:
@@ -44,31 +46,15 @@ class _State:
         M, C, K, g = matrices(model, contact)
         self.modal = modal = decomposed(M, C, K)
         self.contact = contact
-        damping, pad = work_forms(model, modal, contact, g)
-        works = [damping] + ([pad] if contact else [])
-        # the works' integrals: H_int stacked (damping; and the pad's, in contact)
-        self.H_int = np.stack([f.H_int for f in works])
-        self.H_lin = np.stack([f.H_lin for f in works])
-        self.secular = bool(np.any(self.H_lin))  # undamped pairs: the free pendulum's
-        k_c, c_c = model.contact_stiffness, model.contact_damping
-        kept = modal.kept
-        self.lam = modal.lam[kept]
-        rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
-        # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
-        # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
-        self.rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
-        self.rows_conj = self.rows.T.conj().copy()  # 8 x m: see _scan
-        # delta and the law F = k_c delta + c_c delta', and their slopes
-        delta, rate = self.rows[:, Observable.DELTA], self.rows[:, Observable.DELTA_RATE]
-        law = np.stack([delta, k_c * delta + c_c * rate])
-        self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
+        (self.H_int, self.H_lin, self.secular, self.rows, self.rows_conj, self.law,
+         self.gd) = _fixed_parts(model, modal, contact, g)
+        self.lam = modal.lam[modal.kept]
         self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
         # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
         # step^b of each block's length b (32, 256, ..., block), a block's base to the next
         # (in this thread's scratch memory, see _scratch; released by :meth:`done`)
         self.steps_ri, self.jumps = _powers(np.exp(self.lam * h), self.block, contact)
-        self.gd = modal.displacement_row(g)
-        self.k_c = k_c
+        self.k_c = model.contact_stiffness
 
     def done(self) -> None:
         """Drop the powers (the solve is over: their scratch memory serves the next)."""
@@ -95,6 +81,44 @@ class _State:
         pot = 0.5 * (u[:, :N] * u[:, :N]).sum(axis=1)
         pad = 0.5 * self.k_c * (u @ self.gd) ** 2 if self.contact else np.zeros(len(u))
         return kin, pot - pad, pad
+
+
+def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) -> tuple:
+    """What a :class:`_State` reads that is fixed by its decomposition ``modal`` and the
+    model's pad, damping and observed points (delta = ``g`` . q): the works' integrals H_int
+    and H_lin (stacked: damping; and the pad's, in contact), whether H_lin is non-zero, the
+    observation rows over the kept modes (m x 8, complex) and their conjugate transpose,
+    the law's rows (m x 4: delta, F, their slopes) and delta's row over u. Kept on
+    ``modal`` (read-only arrays) for the next solve with the same inputs: the same
+    arithmetic, so the same numbers."""
+    k_c, c_c = model.contact_stiffness, model.contact_damping
+    key = (contact, k_c, c_c, model.D.tobytes(), g.tobytes(), model.clamp, model.crown,
+           model.crown_gain, model.dofs)
+    cache = modal.__dict__.setdefault("_state_parts", {})
+    parts = cache.get(key)
+    if parts is not None:
+        return parts
+    damping, pad = work_forms(model, modal, contact, g)
+    works = [damping] + ([pad] if contact else [])
+    H_int = np.stack([f.H_int for f in works])
+    H_lin = np.stack([f.H_lin for f in works])
+    kept = modal.kept
+    rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
+    # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
+    # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
+    rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
+    rows_conj = rows.T.conj().copy()  # 8 x m: see _scan
+    # delta and the law F = k_c delta + c_c delta', and their slopes
+    delta, rate = rows[:, Observable.DELTA], rows[:, Observable.DELTA_RATE]
+    law = np.stack([delta, k_c * delta + c_c * rate])
+    law = np.concatenate([law, law * modal.lam[kept]]).T.copy()  # m x 4
+    gd = modal.displacement_row(g)
+    for a in (H_int, H_lin, rows, rows_conj, law, gd):
+        a.setflags(write=False)
+    parts = cache[key] = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd)
+    while len(cache) > _PARTS_KEPT:  # a sweep over the pad meets one free state many times
+        cache.pop(next(iter(cache)), None)
+    return parts
 
 
 def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -200,19 +224,20 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     max(0, F) of the law F computed for the switch (0 apart)."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
     t_grid, n_t = grid.t, grid.t.size
-    j0 = int(np.searchsorted(t_grid, t, side="left"))
+    j0 = int(t_grid.searchsorted(t))
     if j0 >= n_t:
         return None
     j, block = j0, 32
     base = np.exp(st.lam * (t_grid[j0] - t)) * wk
-    touching = kind.touching
+    touching, free = kind.touching, kind is ContactPhase.FREE
     while j < n_t:
         jj = min(n_t, j + block)
         ob = np.matmul((st.rows_conj * base.conj()).view(float), st.steps_ri[:, :jj - j],
                        out=grid.obs[:, j:jj])
         d = ob[Observable.DELTA]
-        f = k_c * d + c_c * ob[Observable.DELTA_RATE]
-        ended = kind.has_ended(d, f)
+        # apart, the law is read at the switch only (the same float arithmetic there)
+        f = k_c * d + c_c * ob[Observable.DELTA_RATE] if not free else None
+        ended = d > 0.0 if free else kind.has_ended(d, f)
         if j == j0 and t_grid[j0] == t:
             ended[0] = False  # the phase's own start
         k = int(ended.argmax())
@@ -224,8 +249,10 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
                 d_lo, r_lo = grid.obs[Observable.DELTA:Observable.DELTA_RATE + 1,
                                       j + k - 1].tolist()
                 lo_values = (d_lo, k_c * d_lo + c_c * r_lo)
-            return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, float(d[k]),
-                           float(f[k]), lo_values)
+            d_hi = float(d[k])
+            f_hi = k_c * d_hi + c_c * float(ob[Observable.DELTA_RATE, k]) if free else float(f[k])
+            return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, d_hi, f_hi,
+                           lo_values)
         _write(grid, j, f, jj - j, touching)
         if jj < n_t:
             base = base * st.jumps[block]
