@@ -32,6 +32,7 @@ from .phases import ContactPhase, Signal, bracket, check_switches, switch
 #: half the time of 16384, benchmarks/bench_exact.py).
 _BLOCK_ELEMENTS = 2 ** 13
 _EPS = float(np.finfo(float).eps)
+_DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
 #: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it).
 _PARTS_KEPT = 4
 
@@ -53,12 +54,13 @@ class _State:
         # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
         # step^b of each block's length b (32, 256, ..., block), a block's base to the next
         # (in this thread's scratch memory, see _scratch; released by :meth:`done`)
-        self.steps_ri, self.jumps = _powers(np.exp(self.lam * h), self.block, contact)
+        self.steps_ri, jumps = _powers(np.exp(self.lam * h), self.block, contact)
+        self.jumps_conj = {b: v.conj() for b, v in jumps.items()}
         self.k_c = model.contact_stiffness
 
     def done(self) -> None:
         """Drop the powers (the solve is over: their scratch memory serves the next)."""
-        self.steps_ri = self.jumps = None
+        self.steps_ri = self.jumps_conj = None
 
     def works(self, w: np.ndarray, s: np.ndarray, a: np.ndarray | None = None
               ) -> np.ndarray:
@@ -221,53 +223,53 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
     one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
     powers (2m x block), half the flops of the complex product's real part. The force is
-    max(0, F) of the law F computed for the switch (0 apart)."""
+    max(0, F) of the law F computed for the switch (0 apart); :meth:`ContactPhase.has_ended`
+    written out (the same comparisons)."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
-    t_grid, n_t = grid.t, grid.t.size
+    t_grid, n_t, obs, force = grid.t, grid.t.size, grid.obs, grid.force
     j0 = int(t_grid.searchsorted(t))
     if j0 >= n_t:
         return None
     j, block = j0, 32
-    base = np.exp(st.lam * (t_grid[j0] - t)) * wk
-    touching, free = kind.touching, kind is ContactPhase.FREE
+    # conj(exp(lambda s) wk), as the product reads it (conj of a product: exact)
+    base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
+    rows_conj, steps_ri, jumps_conj = st.rows_conj, st.steps_ri, st.jumps_conj
+    contact, free = kind is ContactPhase.CONTACT, kind is ContactPhase.FREE
     while j < n_t:
         jj = min(n_t, j + block)
-        ob = np.matmul((st.rows_conj * base.conj()).view(float), st.steps_ri[:, :jj - j],
-                       out=grid.obs[:, j:jj])
-        d = ob[Observable.DELTA]
-        # apart, the law is read at the switch only (the same float arithmetic there)
-        f = k_c * d + c_c * ob[Observable.DELTA_RATE] if not free else None
-        ended = d > 0.0 if free else kind.has_ended(d, f)
+        ob = np.matmul((rows_conj * base).view(float), steps_ri[:, :jj - j],
+                       out=obs[:, j:jj])
+        d = ob[_DELTA]
+        if free:  # apart, the law is read at the switch only (the same arithmetic there)
+            f, ended = None, d > 0.0
+        else:
+            f = k_c * d + c_c * ob[_RATE]
+            ended = f <= 0.0 if contact else (f > 0.0) | (d < 0.0)
         if j == j0 and t_grid[j0] == t:
             ended[0] = False  # the phase's own start
         k = int(ended.argmax())
         if ended[k]:
-            _write(grid, j, f, k, touching)
+            if contact:
+                np.maximum(0.0, f[:k], out=force[j:j + k])
+            else:
+                force[j:j + k] = 0.0
             s_lo = max(float(t_grid[j + k - 1]) - t, 0.0) if j + k > j0 else 0.0
             lo_values = None
             if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
-                d_lo, r_lo = grid.obs[Observable.DELTA:Observable.DELTA_RATE + 1,
-                                      j + k - 1].tolist()
+                d_lo, r_lo = obs[_DELTA:_RATE + 1, j + k - 1].tolist()
                 lo_values = (d_lo, k_c * d_lo + c_c * r_lo)
-            d_hi = float(d[k])
-            f_hi = k_c * d_hi + c_c * float(ob[Observable.DELTA_RATE, k]) if free else float(f[k])
+            d_hi, r_hi = ob[_DELTA:_RATE + 1, k].tolist()
+            f_hi = k_c * d_hi + c_c * r_hi if free else float(f[k])
             return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, d_hi, f_hi,
                            lo_values)
-        _write(grid, j, f, jj - j, touching)
+        if contact:
+            np.maximum(0.0, f, out=force[j:jj])
+        else:
+            force[j:jj] = 0.0
         if jj < n_t:
-            base = base * st.jumps[block]
+            base = base * jumps_conj[block]
         j, block = jj, min(8 * block, st.block)
     return None
-
-
-def _write(grid: _Grid, j: int, law: np.ndarray, k: int, touching: bool) -> None:
-    """The force of the first ``k`` samples of a block from sample ``j`` (the ``law`` F,
-    the observables written by the product itself) into the grid: max(0, F) in contact,
-    else 0 (the samples after a switch are written again by the next phase)."""
-    if touching:
-        np.maximum(0.0, law[:k], out=grid.force[j:j + k])
-    else:
-        grid.force[j:j + k] = 0.0
 
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
