@@ -123,6 +123,17 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     return parts
 
 
+def _transfer(modal, other) -> np.ndarray:
+    """:meth:`.modal.Modal.transfer` from ``other`` to ``modal``, kept on ``modal`` for
+    the next solve with the same ``other`` (the same object; read-only)."""
+    kept = modal.__dict__.get("_transfer")
+    if kept is None or kept[0] is not other:
+        P = modal.transfer(other)
+        P.setflags(write=False)
+        kept = modal.__dict__["_transfer"] = (other, P)
+    return kept[1]
+
+
 def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
     """w_p^T H_f w_p for each form H_f of the stack H (forms x n x n) and each row w_p of
     w (phases x n): (forms, phases)."""
@@ -196,8 +207,8 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     steps = int(math.ceil(t_end / dt_sample - 1e-9))
     t_grid = np.linspace(0.0, t_end, steps + 1)
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
-    to_state = {True: states[True].modal.transfer(states[False].modal),
-                False: states[False].modal.transfer(states[True].modal)}
+    to_state = {True: _transfer(states[True].modal, states[False].modal),
+                False: _transfer(states[False].modal, states[True].modal)}
     grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.empty(t_grid.size))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
