@@ -2,15 +2,21 @@
 floor (issue 39, item 2).
 
 A run is ``treeimpact.simulate(name, backend=...)`` with the default options (0.1 s, 100
-samples a free collision): the ``beam`` backend at 12 and 48 elements and the ``soft``
-SDOF, on the shipped trees. benchmarks/_baseline.py lays the baseline out beside today's
+samples a free collision): the ``beam`` backend at 12 and 48 elements, the ``soft`` SDOF
+and the Newton model (``analytic``), on the shipped trees. benchmarks/_baseline.py lays the baseline out beside today's
 package; each round runs a fresh child process per side, the sides alternating, and each
 child times ``--repeats`` runs after one warm-up (imports), the decompositions' cache
 (:func:`analytic.contact.modal.decomposed`) cleared before each ("cold": every run
 decomposes both contact states, as the first run of a tree does; "warm": the cache kept, as
-a sweep over the pad meets its free state again). Medians over the rounds' medians; ratio
-old / new; the metrics' largest relative difference (ledger_residual, round-off itself, left
-out).
+a sweep over the pad meets its free state again: the decompositions, their fixed parts and
+the thread's last power tables are kept). Medians over the rounds' medians; ratios
+old / new, cold and warm; the metrics' largest relative difference (ledger_residual,
+round-off itself, left out).
+
+Same numbers: before the timing, each side runs :data:`GRID` (50 sweep points of
+central-leader on the Newton model, the soft SDOF and the 12-element beam) once; every
+metric must be within :data:`MAX_REL` of the baseline's (the exit status says), and the
+points bit for bit are counted.
 
 The floor: what the exact solution cannot skip, timed here in the same child: the two
 contact states' eigen-decompositions (numpy eig of the 2N x 2N matrix B, ~10 (2N)^3 flops,
@@ -272,22 +278,27 @@ def _grid_report(grid: dict) -> dict:
 
 
 def _report(sides: dict, cases) -> tuple[dict, bool]:
-    """Print and return the medians, ratios, floors and metric differences (the Newton
+    """Print and return the medians (cold and warm), ratios, floors and metric differences (the Newton
     model has no floor estimated: its columns are left out)."""
     floor = sides["new"][0]["floor"]
     numbers, ok = {}, True
-    print(f"{'case':<28}{'old ms':>9}{'new ms':>9}{'warm ms':>9}{'ratio':>7}{'solver fl':>10}"
-          f"{'floor ms':>10}{'new/floor':>10}{'us/phase':>9}{'max rel':>10}")
+    print(f"{'case':<28}{'old ms':>9}{'new ms':>9}{'ratio':>7}{'old warm':>9}{'warm ms':>9}"
+          f"{'ratio':>7}{'solver fl':>10}{'floor ms':>10}{'new/floor':>10}{'us/phase':>9}"
+          f"{'max rel':>10}")
     for key in (k for k in sides["new"][0] if k != "floor"):
         old = statistics.median(r[key]["cold"] for r in sides["old"]) * 1e3
         new = statistics.median(r[key]["cold"] for r in sides["new"]) * 1e3
         warm = statistics.median(r[key]["warm"] for r in sides["new"]) * 1e3
+        old_warm = statistics.median(r[key]["warm"] for r in sides["old"]) * 1e3
         rel = _max_rel(sides["old"][0][key]["metrics"], sides["new"][0][key]["metrics"])
         ok &= rel <= MAX_REL
         numbers |= {f"old_ms.{key}": round(old, 2), f"new_ms.{key}": round(new, 2),
                     f"warm_ms.{key}": round(warm, 2), f"ratio.{key}": round(old / new, 2),
+                    f"old_warm_ms.{key}": round(old_warm, 2),
+                    f"warm_ratio.{key}": round(old_warm / warm, 2),
                     f"metrics_max_rel.{key}": rel}
-        line = f"{key:<28}{old:>9.2f}{new:>9.2f}{warm:>9.2f}{old / new:>7.2f}"
+        line = (f"{key:<28}{old:>9.2f}{new:>9.2f}{old / new:>7.2f}{old_warm:>9.2f}{warm:>9.2f}"
+                f"{old_warm / warm:>7.2f}")
         if key in floor:
             fl, sf = floor[key]["total"] * 1e3, floor[key]["solver"] * 1e3
             per_phase = (new - fl) * 1e3 / floor[key]["phases"]  # us above the floor a phase
@@ -300,8 +311,8 @@ def _report(sides: dict, cases) -> tuple[dict, bool]:
             line += f"{'-':>10}{'-':>10}{'-':>10}{'-':>9}"
         print(f"{line}{rel:>10.1e}")
     for label, _, _ in cases:
-        for what in ("old_ms", "new_ms", "warm_ms", "ratio", "floor_ms", "solver_floor_ms",
-                     "over_floor", "above_floor_us_per_phase"):
+        for what in ("old_ms", "new_ms", "warm_ms", "ratio", "old_warm_ms", "warm_ratio",
+                     "floor_ms", "solver_floor_ms", "over_floor", "above_floor_us_per_phase"):
             values = [v for k, v in numbers.items() if k.startswith(f"{what}.{label}.")]
             if values:
                 numbers[f"{what}.{label}"] = _results.span(values)
