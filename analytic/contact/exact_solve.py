@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import threading
+import weakref
 from dataclasses import dataclass
 from functools import partial
 
@@ -33,8 +34,12 @@ from .phases import ContactPhase, Signal, bracket, check_switches, switch
 _BLOCK_ELEMENTS = 2 ** 13
 _EPS = float(np.finfo(float).eps)
 _DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
-#: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it).
+#: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it), for states of
+#: at most _PARTS_MAX_COORDS energy coordinates (12 elements: 56): a 48-element state's
+#: forms hold ~4 MB, and keeping them did not speed its warm run (medians 29.7 kept, 23.1
+#: not, interleaved in one process on the loaded machine).
 _PARTS_KEPT = 4
+_PARTS_MAX_COORDS = 64
 
 
 class _State:
@@ -90,7 +95,7 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     model's pad, damping and observed points (delta = ``g`` . q): the works' integrals H_int
     and H_lin (stacked: damping; and the pad's, in contact), whether H_lin is non-zero, the
     observation rows over the kept modes (m x 8, complex) and their conjugate transpose,
-    the law's rows (m x 4: delta, F, their slopes) and delta's row over u. Kept on
+    the law's rows (m x 4: delta, F, their slopes) and delta's row over u. Kept on a small
     ``modal`` (read-only arrays) for the next solve with the same inputs: the same
     arithmetic, so the same numbers."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
@@ -117,20 +122,24 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     gd = modal.displacement_row(g)
     for a in (H_int, H_lin, rows, rows_conj, law, gd):
         a.setflags(write=False)
-    parts = cache[key] = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd)
-    while len(cache) > _PARTS_KEPT:  # a sweep over the pad meets one free state many times
-        cache.pop(next(iter(cache)), None)
+    parts = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd)
+    if 2 * modal.N <= _PARTS_MAX_COORDS:
+        cache[key] = parts
+        while len(cache) > _PARTS_KEPT:  # a sweep over the pad meets one free state often
+            cache.pop(next(iter(cache)), None)
     return parts
 
 
 def _transfer(modal, other) -> np.ndarray:
     """:meth:`.modal.Modal.transfer` from ``other`` to ``modal``, kept on ``modal`` for
-    the next solve with the same ``other`` (the same object; read-only)."""
+    the next solve with the same ``other`` (the same live object; read-only)."""
     kept = modal.__dict__.get("_transfer")
-    if kept is None or kept[0] is not other:
+    if kept is None or kept[0]() is not other:
         P = modal.transfer(other)
         P.setflags(write=False)
-        kept = modal.__dict__["_transfer"] = (other, P)
+        # a weak reference: the two states holding each other would outlive the
+        # decompositions' cache until a garbage collection (their memory not reused)
+        kept = modal.__dict__["_transfer"] = (weakref.ref(other), P)
     return kept[1]
 
 
@@ -144,11 +153,12 @@ def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict
     """step^i, i = 0..count, by doubling (round-off log2(count) eps), as the interleaved
     (Re, Im) rows of each step (2m x (count + 1), in the scratch memory ``slot``); and
     {b: conj(step^b)} for the block lengths b = 32, 256, ... (x 8), count. The slot's last
-    table is taken again when the same decomposition ``owner`` (the same object: a new one
-    after :func:`.modal.clear_cache`) asks for the same steps and count: the same numbers."""
+    table is taken again when the same decomposition ``owner`` (the same live object: a new
+    one after :func:`.modal.clear_cache`) asks for the same steps and count: the same
+    numbers."""
     tag = (step.tobytes(), count)
     kept = _SCRATCH.__dict__.setdefault("tables", {}).pop(slot, None)  # refilled below
-    if kept is not None and kept[0] is owner and kept[1] == tag:
+    if kept is not None and kept[0]() is owner and kept[1] == tag:
         _SCRATCH.tables[slot] = kept
         return kept[2], kept[3]
     m = len(step)
@@ -170,7 +180,8 @@ def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict
     while b < count:
         jumps[b], b = steps[:, b].conj(), 8 * b
     ri = ri.reshape(2 * m, count + 1)
-    _SCRATCH.tables[slot] = (owner, tag, ri, jumps)
+    # the owner weakly: a table must not keep a dropped decomposition's memory from reuse
+    _SCRATCH.tables[slot] = (weakref.ref(owner), tag, ri, jumps)
     return ri, jumps
 
 
