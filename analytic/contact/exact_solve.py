@@ -344,7 +344,7 @@ def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = No
     """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi
     (``f_lo`` at lo, if known): a phase that starts on its own boundary (value 0 at lo) is
     bracketed from just after its start; then Newton's steps inside the shrinking bracket
-    (bisection otherwise), to 1e-15 s or a step too small to move s."""
+    (bisection otherwise), to 1e-15 s."""
     if f_lo is not None and f_lo * f_hi <= 0 and f_lo != 0.0:
         found = lo, f_lo  # what bracket() returns for a sign change at lo
     else:
@@ -363,8 +363,6 @@ def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = No
         else:
             hi = s
         nxt = s - f / slope if slope != 0.0 else 0.5 * (lo + hi)
-        if nxt == s:  # a step below s's last digit: s is the root (bisecting from the
-            return s  # bracket's end it now is took 25-30 more evaluations to come back)
         if not lo < nxt < hi:
             nxt = 0.5 * (lo + hi)
         if abs(nxt - s) <= tol or hi - lo <= tol:
