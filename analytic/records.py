@@ -6,7 +6,7 @@ Design notes and measured figures: docs/ladder.md.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -30,42 +30,66 @@ def with_static_shape_crown(record: "ImpactRecord", trunk) -> "ImpactRecord":
     return replace(record, crown=crown, crown_velocity=velocity)
 
 
-def window_means(t: np.ndarray, cumulative: np.ndarray, window: float) -> np.ndarray:
+def window_means(t: np.ndarray, cumulative: np.ndarray, window: float, plan=None
+                 ) -> np.ndarray:
     """(C(t + window) - C(t)) / window at every sample with t + window inside the record (C
     the ``cumulative`` array at the increasing times t, s): the
     mean over ``window`` (s) of the quantity whose running integral is C (a velocity gives
     the mean acceleration, the force's running impulse the mean force). Empty if the record
-    is shorter than the window."""
+    is shorter than the window. ``plan``: :func:`shift_plan` of (t, window) if known (what
+    depends on the grid alone, shared by the means of one record)."""
     t, c = np.asarray(t, dtype=float), np.asarray(cumulative, dtype=float)
     if not (window > 0 and t[-1] - t[0] > window):
         return np.array([])
-    inside = int(np.searchsorted(t, t[-1] - window, side="right"))  # t <= t[-1] - window
-    ahead = _interp_shifted(t, c, inside, window)
-    ahead -= c[:inside]
+    plan = shift_plan(t, window) if plan is None else plan
+    ahead = _interp_shifted(t, c, plan)
+    ahead -= c[:plan.n]
     ahead /= window
     return ahead
 
 
-def _interp_shifted(t: np.ndarray, c: np.ndarray, n: int, shift: float) -> np.ndarray:
-    """np.interp(t[:n] + shift, t, c), bitwise, for increasing t: when every x_i = t_i +
-    shift lies strictly inside the same interval (t_(i+q), t_(i+q+1)) (an even grid),
-    numpy's own formula (c_(j+1) - c_j) / (t_(j+1) - t_j) (x - t_j) + c_j on slices,
-    without its search; else (or on a non-finite value) np.interp itself."""
+@dataclass(frozen=True)
+class ShiftPlan:
+    """What np.interp(t[:n] + shift, t, c) needs of the grid t alone (:func:`shift_plan`):
+    n, the points x, the offset q of their intervals (None: not one offset for all, or out
+    of the grid) and, with q, the intervals' widths and x's place in them (s)."""
+
+    n: int
+    x: np.ndarray
+    q: int | None
+    width: np.ndarray | None = None
+    into: np.ndarray | None = None
+
+
+def shift_plan(t: np.ndarray, shift: float) -> ShiftPlan:
+    """The :class:`ShiftPlan` of increasing times t (s) shifted by ``shift`` (s, > 0, less
+    than the record): the samples with t + shift inside the record."""
+    n = int(np.searchsorted(t, t[-1] - shift, side="right"))  # t <= t[-1] - shift
     x = t[:n] + shift
     q = int(np.searchsorted(t, x[0], side="right")) - 1
     if not 0 <= q < t.size - n:
-        return np.interp(x, t, c)
+        return ShiftPlan(n, x, None)
     t_lo, t_hi = t[q:q + n], t[q + 1:q + 1 + n]
     if not (np.all(t_lo < x) and np.all(x < t_hi)):
-        return np.interp(x, t, c)
+        return ShiftPlan(n, x, None)
+    return ShiftPlan(n, x, q, np.subtract(t_hi, t_lo), np.subtract(x, t_lo))
+
+
+def _interp_shifted(t: np.ndarray, c: np.ndarray, plan: ShiftPlan) -> np.ndarray:
+    """np.interp(t[:n] + shift, t, c), bitwise, for increasing t (``plan``: the grid's
+    :class:`ShiftPlan`): when every x_i = t_i + shift lies strictly inside the same interval
+    (t_(i+q), t_(i+q+1)) (an even grid), numpy's own formula
+    (c_(j+1) - c_j) / (t_(j+1) - t_j) (x - t_j) + c_j on slices, without its search; else
+    (or on a non-finite value) np.interp itself."""
+    n, q = plan.n, plan.q
+    if q is None:
+        return np.interp(plan.x, t, c)
     c_lo = c[q:q + n]
     slope = np.subtract(c[q + 1:q + 1 + n], c_lo)
-    x_lo = np.subtract(t_hi, t_lo)
-    slope /= x_lo
-    np.subtract(x, t_lo, out=x_lo)  # x - t_j
-    x_lo *= slope
-    x_lo += c_lo
-    return x_lo if np.all(np.isfinite(x_lo)) else np.interp(x, t, c)
+    slope /= plan.width
+    out = np.multiply(plan.into, slope, out=slope)  # (x - t_j) slope
+    out += c_lo
+    return out if np.all(np.isfinite(out)) else np.interp(plan.x, t, c)
 
 
 def _running_integral(t: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -82,7 +106,8 @@ def _running_integral(t: np.ndarray, f: np.ndarray) -> np.ndarray:
 
 
 def _peak(values: np.ndarray) -> float:
-    return float(np.max(np.abs(values))) if values.size else math.nan
+    """max |values| (NaN if empty or any is), without forming |values|."""
+    return max(float(values.max()), -float(values.min())) if values.size else math.nan
 
 
 def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy: float, *,
@@ -105,9 +130,13 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
     step and the mesh; the means over t_c converge."""
     r = record
     nan = math.nan
+    t = np.asarray(r.t, dtype=float)
+    # the grid's part of the window means, shared by the force's and the crown's
+    plan = (shift_plan(t, collision_duration)
+            if collision_duration > 0 and t[-1] - t[0] > collision_duration else None)
     out = {"energy_delivered": nan, "contact_dissipation": nan, "rebound_energy": nan,
            "impulse": nan, "peak_force": _peak(window_means(
-               r.t, _running_integral(r.t, r.force), collision_duration)),
+               t, _running_integral(t, r.force), collision_duration, plan)),
            "contact_episodes": len(intervals), "first_contact_duration": nan,
            "crown_peak": nan,
            "crown_peak_acceleration": nan}
@@ -123,10 +152,10 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
                    contact_dissipation=dissipated, rebound_energy=rebound,
                    impulse=impactor_mass * (impact_speed - float(r.vy[after])) - spring)
     if r.crown is not None:
-        out["crown_peak"] = float(np.max(np.abs(r.crown)))
+        out["crown_peak"] = _peak(r.crown)
     if r.crown_velocity is not None:
-        out["crown_peak_acceleration"] = _peak(window_means(r.t, r.crown_velocity,
-                                                            collision_duration))
+        out["crown_peak_acceleration"] = _peak(window_means(t, r.crown_velocity,
+                                                            collision_duration, plan))
     return out
 
 

@@ -1,16 +1,22 @@
-"""Benchmark: the exact linear rungs, today's code against the baseline (ee677a4), and their
+"""Benchmark: the exact linear rungs, today's code against the baseline (50f1faa), and their
 floor (issue 39, item 2).
 
 A run is ``treeimpact.simulate(name, backend=...)`` with the default options (0.1 s, 100
-samples a free collision): the ``beam`` backend at 12 and 48 elements and the ``soft``
-SDOF, on the shipped trees. benchmarks/_baseline.py lays the baseline out beside today's
+samples a free collision): the ``beam`` backend at 12 and 48 elements, the ``soft`` SDOF
+and the Newton model (``analytic``), on the shipped trees. benchmarks/_baseline.py lays the baseline out beside today's
 package; each round runs a fresh child process per side, the sides alternating, and each
 child times ``--repeats`` runs after one warm-up (imports), the decompositions' cache
 (:func:`analytic.contact.modal.decomposed`) cleared before each ("cold": every run
 decomposes both contact states, as the first run of a tree does; "warm": the cache kept, as
-a sweep over the pad meets its free state again). Medians over the rounds' medians; ratio
-old / new; the metrics' largest relative difference (ledger_residual, round-off itself, left
-out).
+a sweep over the pad meets its free state again: the decompositions, their fixed parts and
+the thread's last power tables are kept). Medians over the rounds' medians; ratios
+old / new, cold and warm; the metrics' largest relative difference (ledger_residual,
+round-off itself, left out).
+
+Same numbers: before the timing, each side runs :data:`GRID` (50 sweep points of
+central-leader on the Newton model, the soft SDOF and the 12-element beam) once; every
+metric must be within :data:`MAX_REL` of the baseline's (the exit status says), and the
+points bit for bit are counted.
 
 The floor: what the exact solution cannot skip, timed here in the same child: the two
 contact states' eigen-decompositions (numpy eig of the 2N x 2N matrix B, ~10 (2N)^3 flops,
@@ -26,7 +32,7 @@ glibc's malloc settings reach both sides' children through the environment
 (``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=268435456 ... --out
 exact-malloc``: fresh pages' faults measured apart, docs/beam-impact.md).
 
-    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev ee677a4] [--out NAME]
+    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev 50f1faa] [--out NAME]
 """
 
 from __future__ import annotations
@@ -41,11 +47,36 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _baseline  # noqa: E402
 import _results  # noqa: E402
 
-BASELINE = "ee677a4"
+BASELINE = "50f1faa"
 #: (label, backend, options) of the runs timed.
 CASES = (("beam-12", "beam", {"elements": 12}), ("beam-48", "beam", {"elements": 48}),
-         ("soft", "soft", {}))
-TARGET_MS = {"beam-12": 5.0, "beam-48": 100.0, "soft": 1.0}
+         ("soft", "soft", {}), ("analytic", "analytic", {}))
+TARGET_MS = {"beam-12": 5.0, "beam-48": 100.0, "soft": 1.0, "analytic": 0.3}
+#: The equivalence grid (not timed): central-leader at contact duration (s) x crown ratio
+#: (crown mass / trunk mass) x e, 5 x 5 x 2 = 50 sweep points, each on the Newton model,
+#: the soft SDOF and the 12-element beam; every metric within 1e-9 of the baseline's.
+GRID = {"contact_duration": (2e-4, 5e-4, 1e-3, 2e-3, 4e-3),
+        "crown_ratio": (0.0, 0.25, 0.5, 1.0, 2.0), "restitution": (0.1, 0.6)}
+GRID_BACKENDS = (("analytic", {}), ("soft", {}), ("beam", {"elements": 12}))
+#: Largest relative difference of a metric allowed against the baseline (issue 39 item 2).
+MAX_REL = 1e-9
+
+GRID_SNIPPET = r"""
+import itertools, json
+from dataclasses import replace
+import treeimpact
+GRID, BACKENDS = %(grid)r, %(backends)r
+base = treeimpact.load_scenario("central-leader")
+out = {}
+for dur, ratio, e in itertools.product(*GRID.values()):
+    scen = replace(base, trunk=replace(base.trunk, crown_mass=ratio * base.trunk.trunk_mass),
+                   contact=replace(base.contact, duration=dur, restitution=e))
+    for backend, options in BACKENDS:
+        res = treeimpact.simulate(scen, backend=backend, **options)
+        out[f"{backend}.{dur:g}.{ratio:g}.{e:g}"] = {
+            k: float(v) for k, v in dict(res.metrics.__dict__).items()}
+print(json.dumps(out))
+"""
 
 SNIPPET = r"""
 import json, statistics, time
@@ -138,6 +169,8 @@ def measure_floor(cases, repeats: int) -> dict:
 
     out = {}
     for label, backend, options in cases:
+        if backend == "analytic":  # no linear solution: its floor is not estimated here
+            continue
         for name in shipped_scenarios():
             scen, sdof, model, dt, run = _linear_model(name, backend, options)
             Bs = []
@@ -194,8 +227,11 @@ def main() -> int:
     start_load = _results.load_average()
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
     env["PYTHONPATH"] = os.pathsep.join([_floor_module(), env.get("PYTHONPATH", "")])
-    sides = {}
+    sides, grid = {}, {}
     with _baseline.baseline_tree(args.rev) as site:
+        code = GRID_SNIPPET % {"grid": GRID, "backends": GRID_BACKENDS}
+        for side in ("old", "new"):
+            grid[side] = _baseline.run_snippet(code, site if side == "old" else None, env)
         for r in range(args.rounds):
             for side in (("old", "new") if r % 2 == 0 else ("new", "old")):
                 code = SNIPPET % {"cases": cases, "repeats": args.repeats,
@@ -204,6 +240,9 @@ def main() -> int:
                 sides.setdefault(side, []).append(
                     _baseline.run_snippet(code, site if side == "old" else None, env))
     numbers, ok = _report(sides, cases)
+    grid_numbers = _grid_report(grid)
+    numbers |= grid_numbers
+    ok &= all(v <= MAX_REL for v in grid_numbers.values())
     name = args.out or ("exact" if len(cases) == len(CASES) else "exact-partial")
     malloc = {k: v for k, v in os.environ.items() if k.startswith("MALLOC_")}
     _results.write(name, numbers, {"rounds": args.rounds, "repeats": args.repeats,
@@ -213,36 +252,70 @@ def main() -> int:
     return 0 if ok else 1
 
 
+def _max_rel(old: dict, new: dict) -> float:
+    """The largest relative difference of a metric between two runs' metrics (the ledger's
+    residual, round-off itself, left out; equal values, NaN with NaN, differ by 0)."""
+    rel = 0.0
+    for k, vo in old.items():
+        vn = new[k]
+        if k == "ledger_residual" or vo == vn or (vo != vo and vn != vn):
+            continue
+        rel = max(rel, abs(vn - vo) / abs(vo) if vo else float("inf"))
+    return rel
+
+
+def _grid_report(grid: dict) -> dict:
+    """Print and return the grid's largest relative metric difference per backend, and how
+    many of its points are bit for bit the baseline's."""
+    numbers = {}
+    for backend, _ in GRID_BACKENDS:
+        keys = [k for k in grid["old"] if k.startswith(backend + ".")]
+        rels = [_max_rel(grid["old"][k], grid["new"][k]) for k in keys]
+        numbers[f"grid_max_rel.{backend}"] = max(rels)
+        print(f"grid {backend:<9} {len(keys)} points: max rel {max(rels):.1e}, "
+              f"{sum(r == 0.0 for r in rels)} bit for bit")
+    return numbers
+
+
 def _report(sides: dict, cases) -> tuple[dict, bool]:
-    """Print and return the medians, ratios, floors and metric differences."""
+    """Print and return the medians (cold and warm), ratios, floors and metric differences (the Newton
+    model has no floor estimated: its columns are left out)."""
     floor = sides["new"][0]["floor"]
     numbers, ok = {}, True
-    print(f"{'case':<28}{'old ms':>9}{'new ms':>9}{'warm ms':>9}{'ratio':>7}{'solver fl':>10}"
-          f"{'floor ms':>10}{'new/floor':>10}{'us/phase':>9}{'max rel':>10}")
+    print(f"{'case':<28}{'old ms':>9}{'new ms':>9}{'ratio':>7}{'old warm':>9}{'warm ms':>9}"
+          f"{'ratio':>7}{'solver fl':>10}{'floor ms':>10}{'new/floor':>10}{'us/phase':>9}"
+          f"{'max rel':>10}")
     for key in (k for k in sides["new"][0] if k != "floor"):
         old = statistics.median(r[key]["cold"] for r in sides["old"]) * 1e3
         new = statistics.median(r[key]["cold"] for r in sides["new"]) * 1e3
         warm = statistics.median(r[key]["warm"] for r in sides["new"]) * 1e3
-        fl, sf = floor[key]["total"] * 1e3, floor[key]["solver"] * 1e3
-        per_phase = (new - fl) * 1e3 / floor[key]["phases"]  # us above the floor a phase
-        mo, mn = sides["old"][0][key]["metrics"], sides["new"][0][key]["metrics"]
-        rel = max((abs(mn[k] / mo[k] - 1) for k in mo
-                   if k != "ledger_residual" and mo[k] and mo[k] == mo[k]), default=0.0)
-        ok &= rel <= 1e-9
-        print(f"{key:<28}{old:>9.2f}{new:>9.2f}{warm:>9.2f}{old / new:>7.2f}{sf:>10.2f}{fl:>10.2f}"
-              f"{new / fl:>10.2f}{per_phase:>9.0f}{rel:>10.1e}")
+        old_warm = statistics.median(r[key]["warm"] for r in sides["old"]) * 1e3
+        rel = _max_rel(sides["old"][0][key]["metrics"], sides["new"][0][key]["metrics"])
+        ok &= rel <= MAX_REL
         numbers |= {f"old_ms.{key}": round(old, 2), f"new_ms.{key}": round(new, 2),
                     f"warm_ms.{key}": round(warm, 2), f"ratio.{key}": round(old / new, 2),
-                    f"floor_ms.{key}": round(fl, 2), f"solver_floor_ms.{key}": round(sf, 2),
-                    f"over_floor.{key}": round(new / fl, 2),
-                    f"phases.{key}": floor[key]["phases"],
-                    f"above_floor_us_per_phase.{key}": round(per_phase),
+                    f"old_warm_ms.{key}": round(old_warm, 2),
+                    f"warm_ratio.{key}": round(old_warm / warm, 2),
                     f"metrics_max_rel.{key}": rel}
+        line = (f"{key:<28}{old:>9.2f}{new:>9.2f}{old / new:>7.2f}{old_warm:>9.2f}{warm:>9.2f}"
+                f"{old_warm / warm:>7.2f}")
+        if key in floor:
+            fl, sf = floor[key]["total"] * 1e3, floor[key]["solver"] * 1e3
+            per_phase = (new - fl) * 1e3 / floor[key]["phases"]  # us above the floor a phase
+            numbers |= {f"floor_ms.{key}": round(fl, 2), f"solver_floor_ms.{key}": round(sf, 2),
+                        f"over_floor.{key}": round(new / fl, 2),
+                        f"phases.{key}": floor[key]["phases"],
+                        f"above_floor_us_per_phase.{key}": round(per_phase)}
+            line += f"{sf:>10.2f}{fl:>10.2f}{new / fl:>10.2f}{per_phase:>9.0f}"
+        else:
+            line += f"{'-':>10}{'-':>10}{'-':>10}{'-':>9}"
+        print(f"{line}{rel:>10.1e}")
     for label, _, _ in cases:
-        for what in ("old_ms", "new_ms", "warm_ms", "ratio", "floor_ms", "solver_floor_ms",
-                     "over_floor", "above_floor_us_per_phase"):
-            numbers[f"{what}.{label}"] = _results.span(
-                v for k, v in numbers.items() if k.startswith(f"{what}.{label}."))
+        for what in ("old_ms", "new_ms", "warm_ms", "ratio", "old_warm_ms", "warm_ratio",
+                     "floor_ms", "solver_floor_ms", "over_floor", "above_floor_us_per_phase"):
+            values = [v for k, v in numbers.items() if k.startswith(f"{what}.{label}.")]
+            if values:
+                numbers[f"{what}.{label}"] = _results.span(values)
     print("targets (ms, cold): " + ", ".join(f"{k} <= {v:g}" for k, v in TARGET_MS.items()))
     return numbers, ok
 

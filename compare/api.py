@@ -21,6 +21,7 @@ from treeimpact.analytic.identify.pendulum_record import Record
 from treeimpact.analytic.identify.pendulum_record import read_record as read
 from treeimpact.analytic.identify.procedure import PendulumTest
 from treeimpact.analytic.model.parameters import LIMITS, Pendulum, Scenario, check_range
+from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.analytic.threads import enter_limit, exit_limit
 
 from .api_results import (
@@ -98,9 +99,28 @@ def simulate(scenario, backend: str = "analytic", **options) -> Simulation:
             out of its range, or a run beyond the budget (TREEIMPACT_MAX_STEPS, ...).
         SimulationDiverged: the run has no physical numbers to report.
     """
-    scen = resolve_scenario(scenario)
+    scen = _resolve_name(scenario) if isinstance(scenario, str) else resolve_scenario(scenario)
     result = get_backend(backend).simulate(scen, **options)
     return simulation_of(result, scenario_as_run(scen, options))
+
+
+@functools.lru_cache(maxsize=32)
+def _shipped(name: str) -> Scenario:
+    """The shipped scenario ``name`` (:func:`resolve_scenario`), kept for the next call:
+    package data, read and validated once a process (~0.15 ms a run otherwise, a tenth of
+    the soft SDOF's, benchmarks/bench_exact.py). Scenarios are frozen, so sharing is safe."""
+    return resolve_scenario(name)
+
+
+def _resolve_name(name: str) -> Scenario:
+    """The scenario named ``name``: a shipped one from :func:`_shipped`, else read."""
+    return _shipped(name) if name in _shipped_names() else resolve_scenario(name)
+
+
+@functools.lru_cache(maxsize=1)
+def _shipped_names() -> frozenset:
+    """The shipped scenarios' names (package data: listed once a process)."""
+    return frozenset(shipped_scenarios())
 
 
 @_api

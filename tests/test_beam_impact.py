@@ -10,9 +10,9 @@ from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.contact.law import collision_duration, restitution_for_damping_ratio
 from treeimpact.analytic.contact.exact_record import record
-from treeimpact.analytic.contact.exact_solve import solve
+from treeimpact.analytic.contact.exact_solve import _fixed_parts, solve
 from treeimpact.analytic.contact.linear_model import initial_state, matrices, system
-from treeimpact.analytic.contact.modal import Modal
+from treeimpact.analytic.contact.modal import Modal, decomposed
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam import (
     beam_matrices,
@@ -309,6 +309,29 @@ def test_the_methods_give_the_same_metrics(name, options):
         else:
             # the same samples and switches: round-off only (8e-13 measured)
             assert fast[key] == pytest.approx(value, rel=1e-9, nan_ok=True)
+
+
+@pytest.mark.parametrize("backend", ["beam", "soft"])
+def test_a_solve_with_kept_parts_is_a_fresh_one_bit_for_bit(backend):
+    """The decompositions and each state's fixed parts (forms, rows: exact_solve's
+    _fixed_parts) are kept for the next solve: a warm solve writes the same samples, force
+    and switches as a cold one, bit for bit, and the kept arrays are read-only."""
+    from treeimpact.analytic.contact.modal import clear_cache
+
+    scenario = load_scenario("central-leader")
+    run = simulate_beam if backend == "beam" else simulate_soft
+    clear_cache()
+    cold = run(scenario)
+    warm = run(scenario)
+    for key in ("t", "x", "vx", "y", "vy", "force"):
+        assert np.array_equal(getattr(cold.trajectory, key), getattr(warm.trajectory, key))
+    assert cold.metrics == warm.metrics or all(
+        a == b or (a != a and b != b) for a, b in zip(cold.metrics.values(),
+                                                      warm.metrics.values()))
+    model, _ = beam_impact_model(scenario)
+    parts = _fixed_parts(model, decomposed(*matrices(model, True)[:3]), True,
+                         matrices(model, True)[3])
+    assert all(not p.flags.writeable for p in parts if isinstance(p, np.ndarray))
 
 
 def test_the_exact_methods_record_is_sampled_when_first_read():

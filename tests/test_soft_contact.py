@@ -67,6 +67,19 @@ def test_damping_ratio_inverse_round_trip(e):
         e, rel=1e-12)
 
 
+def test_damping_ratio_is_kept_bit_for_bit():
+    """Each e's damping ratio is solved once a process (law._damping_ratio's cache): the
+    kept value is the solver's own, bit for bit, and an int e is the float's."""
+    from treeimpact.analytic.contact import law
+
+    for e in (0.1, 0.37, 1, 0.999):
+        law._damping_ratio.cache_clear()
+        fresh = damping_ratio_for_restitution(e)
+        assert damping_ratio_for_restitution(e) == fresh  # the kept one
+        law._damping_ratio.cache_clear()
+        assert law._damping_ratio.__wrapped__(float(e)) == fresh
+
+
 @pytest.mark.parametrize("bad", [0.0, -0.1, 1.2, math.nan])
 @pytest.mark.blas_free
 def test_soft_contact_rejects_restitution_without_finite_damping(bad):

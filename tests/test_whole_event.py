@@ -164,7 +164,7 @@ def test_window_means_are_numpys_interpolation_bitwise(grid):
     samples with t + w inside, on a linspace grid (whose round-off could put a shifted
     sample on another interval), an uneven one (np.interp itself) and a window of a
     whole number of samples (shifted samples on the nodes)."""
-    from treeimpact.analytic.records import window_means
+    from treeimpact.analytic.records import shift_plan, window_means
 
     rng = np.random.default_rng(7)
     for _ in range(20):
@@ -176,3 +176,7 @@ def test_window_means_are_numpys_interpolation_bitwise(grid):
         inside = t <= t[-1] - w
         want = (np.interp(t[inside] + w, t, c) - c[inside]) / w
         assert np.array_equal(window_means(t, c, w), want)
+        # the grid's part formed once and shared (whole_event_metrics): the same numbers
+        plan = shift_plan(t, w)
+        for other in (c, np.sin(c)):
+            assert np.array_equal(window_means(t, other, w, plan), window_means(t, other, w))

@@ -33,9 +33,12 @@ class PhaseEnds:
     def add(self, t: float, kind: ContactPhase, w, s: float, a, u) -> None:
         """Record a phase: start ``t`` (s), ``kind``, coefficients ``w`` at its start,
         duration ``s`` (s), ``a`` = exp(lambda s) w and the state ``u`` at its end."""
-        for name, value in (("t", t), ("kind", kind), ("w", w), ("s", s), ("a", a),
-                            ("u", u)):
-            getattr(self, name).append(value)
+        self.t.append(t)
+        self.kind.append(kind)
+        self.w.append(w)
+        self.s.append(s)
+        self.a.append(a)
+        self.u.append(u)
 
 
 @dataclass(frozen=True)
@@ -73,13 +76,14 @@ def ledger_solution(model: LinearImpactModel, states: dict, ends: PhaseEnds, t_e
     state."""
     P = len(ends.t)
     works, energy = np.zeros((P, 2)), np.zeros(P)
+    touching = np.array([k.touching for k in ends.kind])
+    W, A, U, S = np.array(ends.w), np.array(ends.a), np.array(ends.u), np.array(ends.s)
     for contact, st in states.items():
-        idx = [p for p in range(P) if ends.kind[p].touching == contact]
-        if not idx:
+        idx = np.flatnonzero(touching == contact)
+        if not idx.size:
             continue
-        W, A = np.array([ends.w[p] for p in idx]), np.array([ends.a[p] for p in idx])
-        works[idx, :1 + contact] = st.works(W, np.array([ends.s[p] for p in idx]), A).T
-        kin, pot, _ = st.energies(np.array([ends.u[p] for p in idx]))
+        works[idx, :1 + contact] = st.works(W[idx], S[idx], A[idx]).T
+        kin, pot, _ = st.energies(U[idx])
         energy[idx] = kin + pot
     if not np.all(np.isfinite(energy)):
         p = int(np.argmin(np.isfinite(energy)))

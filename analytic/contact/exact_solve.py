@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import threading
+import weakref
 from dataclasses import dataclass
 from functools import partial
 
@@ -32,6 +33,13 @@ from .phases import ContactPhase, Signal, bracket, check_switches, switch
 #: half the time of 16384, benchmarks/bench_exact.py).
 _BLOCK_ELEMENTS = 2 ** 13
 _EPS = float(np.finfo(float).eps)
+_DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
+#: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it), for states of
+#: at most _PARTS_MAX_COORDS energy coordinates (12 elements: 56): a 48-element state's
+#: forms hold ~4 MB, and keeping them did not speed its warm run (medians 29.7 kept, 23.1
+#: not, interleaved in one process on the loaded machine).
+_PARTS_KEPT = 4
+_PARTS_MAX_COORDS = 64
 
 
 class _State:
@@ -44,35 +52,20 @@ class _State:
         M, C, K, g = matrices(model, contact)
         self.modal = modal = decomposed(M, C, K)
         self.contact = contact
-        damping, pad = work_forms(model, modal, contact, g)
-        works = [damping] + ([pad] if contact else [])
-        # the works' integrals: H_int stacked (damping; and the pad's, in contact)
-        self.H_int = np.stack([f.H_int for f in works])
-        self.H_lin = np.stack([f.H_lin for f in works])
-        self.secular = bool(np.any(self.H_lin))  # undamped pairs: the free pendulum's
-        k_c, c_c = model.contact_stiffness, model.contact_damping
-        kept = modal.kept
-        self.lam = modal.lam[kept]
-        rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
-        # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
-        # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
-        self.rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
-        self.rows_conj = self.rows.T.conj().copy()  # 8 x m: see _scan
-        # delta and the law F = k_c delta + c_c delta', and their slopes
-        delta, rate = self.rows[:, Observable.DELTA], self.rows[:, Observable.DELTA_RATE]
-        law = np.stack([delta, k_c * delta + c_c * rate])
-        self.law = np.concatenate([law, law * self.lam]).T.copy()  # m x 4
+        (self.H_int, self.H_lin, self.secular, self.rows, self.rows_conj, self.law,
+         self.gd) = _fixed_parts(model, modal, contact, g)
+        self.lam = modal.lam[modal.kept]
         self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
         # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
         # step^b of each block's length b (32, 256, ..., block), a block's base to the next
         # (in this thread's scratch memory, see _scratch; released by :meth:`done`)
-        self.steps_ri, self.jumps = _powers(np.exp(self.lam * h), self.block, contact)
-        self.gd = modal.displacement_row(g)
-        self.k_c = k_c
+        self.steps_ri, self.jumps_conj = _powers(np.exp(self.lam * h), self.block, contact,
+                                                 modal)
+        self.k_c = model.contact_stiffness
 
     def done(self) -> None:
         """Drop the powers (the solve is over: their scratch memory serves the next)."""
-        self.steps_ri = self.jumps = None
+        self.steps_ri = self.jumps_conj = None
 
     def works(self, w: np.ndarray, s: np.ndarray, a: np.ndarray | None = None
               ) -> np.ndarray:
@@ -97,16 +90,77 @@ class _State:
         return kin, pot - pad, pad
 
 
+def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) -> tuple:
+    """What a :class:`_State` reads that is fixed by its decomposition ``modal`` and the
+    model's pad, damping and observed points (delta = ``g`` . q): the works' integrals H_int
+    and H_lin (stacked: damping; and the pad's, in contact), whether H_lin is non-zero, the
+    observation rows over the kept modes (m x 8, complex) and their conjugate transpose,
+    the law's rows (m x 4: delta, F, their slopes) and delta's row over u. Kept on a small
+    ``modal`` (read-only arrays) for the next solve with the same inputs: the same
+    arithmetic, so the same numbers."""
+    k_c, c_c = model.contact_stiffness, model.contact_damping
+    key = (contact, k_c, c_c, model.D.tobytes(), g.tobytes(), model.clamp, model.crown,
+           model.crown_gain, model.dofs)
+    cache = modal.__dict__.setdefault("_state_parts", {})
+    parts = cache.get(key)
+    if parts is not None:
+        return parts
+    damping, pad = work_forms(model, modal, contact, g)
+    works = [damping] + ([pad] if contact else [])
+    H_int = np.stack([f.H_int for f in works])
+    H_lin = np.stack([f.H_lin for f in works])
+    kept = modal.kept
+    rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
+    # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
+    # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
+    rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
+    rows_conj = rows.T.conj().copy()  # 8 x m: see _scan
+    # delta and the law F = k_c delta + c_c delta', and their slopes
+    delta, rate = rows[:, Observable.DELTA], rows[:, Observable.DELTA_RATE]
+    law = np.stack([delta, k_c * delta + c_c * rate])
+    law = np.concatenate([law, law * modal.lam[kept]]).T.copy()  # m x 4
+    gd = modal.displacement_row(g)
+    for a in (H_int, H_lin, rows, rows_conj, law, gd):
+        a.setflags(write=False)
+    parts = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd)
+    if 2 * modal.N <= _PARTS_MAX_COORDS:
+        cache[key] = parts
+        while len(cache) > _PARTS_KEPT:  # a sweep over the pad meets one free state often
+            cache.pop(next(iter(cache)), None)
+    return parts
+
+
+def _transfer(modal, other) -> np.ndarray:
+    """:meth:`.modal.Modal.transfer` from ``other`` to ``modal``, kept on ``modal`` for
+    the next solve with the same ``other`` (the same live object; read-only)."""
+    kept = modal.__dict__.get("_transfer")
+    if kept is None or kept[0]() is not other:
+        P = modal.transfer(other)
+        P.setflags(write=False)
+        # a weak reference: the two states holding each other would outlive the
+        # decompositions' cache until a garbage collection (their memory not reused)
+        kept = modal.__dict__["_transfer"] = (weakref.ref(other), P)
+    return kept[1]
+
+
 def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
     """w_p^T H_f w_p for each form H_f of the stack H (forms x n x n) and each row w_p of
     w (phases x n): (forms, phases)."""
     return ((H @ w.T) * w.T).sum(axis=1)
 
 
-def _powers(step: np.ndarray, count: int, slot) -> tuple[np.ndarray, dict]:
+def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict]:
     """step^i, i = 0..count, by doubling (round-off log2(count) eps), as the interleaved
     (Re, Im) rows of each step (2m x (count + 1), in the scratch memory ``slot``); and
-    {b: step^b} for the block lengths b = 32, 256, ... (x 8), count."""
+    {b: conj(step^b)} for the block lengths b = 32, 256, ... (x 8), count. The slot's last
+    table is taken again when the same decomposition ``owner`` (the same live object: a new
+    one after :func:`.modal.clear_cache`) asks for the same steps and count: the same
+    numbers."""
+    tag = (step.tobytes(), count)
+    kept = _SCRATCH.__dict__.setdefault("tables", {}).pop(slot, None)  # refilled below
+    if kept is not None and kept[0]() is owner and kept[1] == tag:
+        _SCRATCH.tables[slot] = kept
+        return kept[2], kept[3]
     m = len(step)
     steps = _scratch("powers", (m, count + 1), complex)
     steps[:, 0], steps[:, 1] = 1.0, step
@@ -122,10 +176,13 @@ def _powers(step: np.ndarray, count: int, slot) -> tuple[np.ndarray, dict]:
         n += k
     ri = _scratch(("rows", slot), (m, 2, count + 1), float)
     ri[:, 0], ri[:, 1] = steps.real, steps.imag
-    jumps, b = {count: steps[:, count].copy()}, 32
+    jumps, b = {count: steps[:, count].conj()}, 32
     while b < count:
-        jumps[b], b = steps[:, b].copy(), 8 * b
-    return ri.reshape(2 * m, count + 1), jumps
+        jumps[b], b = steps[:, b].conj(), 8 * b
+    ri = ri.reshape(2 * m, count + 1)
+    # the owner weakly: a table must not keep a dropped decomposition's memory from reuse
+    _SCRATCH.tables[slot] = (weakref.ref(owner), tag, ri, jumps)
+    return ri, jumps
 
 
 #: Per thread, arrays that outlive one solve to serve the next (:func:`_scratch`).
@@ -161,8 +218,8 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     steps = int(math.ceil(t_end / dt_sample - 1e-9))
     t_grid = np.linspace(0.0, t_end, steps + 1)
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
-    to_state = {True: states[True].modal.transfer(states[False].modal),
-                False: states[False].modal.transfer(states[True].modal)}
+    to_state = {True: _transfer(states[True].modal, states[False].modal),
+                False: _transfer(states[False].modal, states[True].modal)}
     grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.empty(t_grid.size))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
@@ -197,50 +254,53 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
     one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
     powers (2m x block), half the flops of the complex product's real part. The force is
-    max(0, F) of the law F computed for the switch (0 apart)."""
+    max(0, F) of the law F computed for the switch (0 apart); :meth:`ContactPhase.has_ended`
+    written out (the same comparisons)."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
-    t_grid, n_t = grid.t, grid.t.size
-    j0 = int(np.searchsorted(t_grid, t, side="left"))
+    t_grid, n_t, obs, force = grid.t, grid.t.size, grid.obs, grid.force
+    j0 = int(t_grid.searchsorted(t))
     if j0 >= n_t:
         return None
     j, block = j0, 32
-    base = np.exp(st.lam * (t_grid[j0] - t)) * wk
-    touching = kind.touching
+    # conj(exp(lambda s) wk), as the product reads it (conj of a product: exact)
+    base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
+    rows_conj, steps_ri, jumps_conj = st.rows_conj, st.steps_ri, st.jumps_conj
+    contact, free = kind is ContactPhase.CONTACT, kind is ContactPhase.FREE
     while j < n_t:
         jj = min(n_t, j + block)
-        ob = np.matmul((st.rows_conj * base.conj()).view(float), st.steps_ri[:, :jj - j],
-                       out=grid.obs[:, j:jj])
-        d = ob[Observable.DELTA]
-        f = k_c * d + c_c * ob[Observable.DELTA_RATE]
-        ended = kind.has_ended(d, f)
+        ob = np.matmul((rows_conj * base).view(float), steps_ri[:, :jj - j],
+                       out=obs[:, j:jj])
+        d = ob[_DELTA]
+        if free:  # apart, the law is read at the switch only (the same arithmetic there)
+            f, ended = None, d > 0.0
+        else:
+            f = k_c * d + c_c * ob[_RATE]
+            ended = f <= 0.0 if contact else (f > 0.0) | (d < 0.0)
         if j == j0 and t_grid[j0] == t:
             ended[0] = False  # the phase's own start
         k = int(ended.argmax())
         if ended[k]:
-            _write(grid, j, f, k, touching)
+            if contact:
+                np.maximum(0.0, f[:k], out=force[j:j + k])
+            else:
+                force[j:j + k] = 0.0
             s_lo = max(float(t_grid[j + k - 1]) - t, 0.0) if j + k > j0 else 0.0
             lo_values = None
             if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
-                d_lo, r_lo = grid.obs[Observable.DELTA:Observable.DELTA_RATE + 1,
-                                      j + k - 1].tolist()
+                d_lo, r_lo = obs[_DELTA:_RATE + 1, j + k - 1].tolist()
                 lo_values = (d_lo, k_c * d_lo + c_c * r_lo)
-            return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, float(d[k]),
-                           float(f[k]), lo_values)
-        _write(grid, j, f, jj - j, touching)
+            d_hi, r_hi = ob[_DELTA:_RATE + 1, k].tolist()
+            f_hi = k_c * d_hi + c_c * r_hi if free else float(f[k])
+            return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, d_hi, f_hi,
+                           lo_values)
+        if contact:
+            np.maximum(0.0, f, out=force[j:jj])
+        else:
+            force[j:jj] = 0.0
         if jj < n_t:
-            base = base * st.jumps[block]
+            base = base * jumps_conj[block]
         j, block = jj, min(8 * block, st.block)
     return None
-
-
-def _write(grid: _Grid, j: int, law: np.ndarray, k: int, touching: bool) -> None:
-    """The force of the first ``k`` samples of a block from sample ``j`` (the ``law`` F,
-    the observables written by the product itself) into the grid: max(0, F) in contact,
-    else 0 (the samples after a switch are written again by the next phase)."""
-    if touching:
-        np.maximum(0.0, law[:k], out=grid.force[j:j + k])
-    else:
-        grid.force[j:j + k] = 0.0
 
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:

@@ -5,6 +5,7 @@ Design notes and measured figures: docs/contact-law.md.
 
 from __future__ import annotations
 
+import functools
 import math
 
 from treeimpact.analytic.errors import ParameterError
@@ -47,13 +48,20 @@ MIN_SOFT_RESTITUTION = 1e-4
 
 
 def damping_ratio_for_restitution(e: float) -> float:
-    """Inverse of :func:`restitution_for_damping_ratio` for 0 < e <= 1."""
+    """Inverse of :func:`restitution_for_damping_ratio` for 0 < e <= 1 (each e solved once
+    a process: a run asks for its e two to three times, ~0.1 ms each by brentq)."""
     if isinstance(e, bool) or not isinstance(e, (int, float)) or not (
             MIN_SOFT_RESTITUTION <= e <= 1.0):
         raise ParameterError(
             f"contact.restitution = {e!r} is out of range for a soft contact: allowed "
             f"[{MIN_SOFT_RESTITUTION:g}, 1] (e = 0 needs infinite damping; e ~ 1 / (4 zeta^2) "
             "when overdamped, so 1e-4 already needs a damping ratio of 50)")
+    return _damping_ratio(float(e))
+
+
+@functools.lru_cache(maxsize=256)
+def _damping_ratio(e: float) -> float:
+    """:func:`damping_ratio_for_restitution` of a checked e (a pure function of e: kept)."""
     if e == 1.0:
         return 0.0
     hi = 1.0

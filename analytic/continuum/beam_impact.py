@@ -11,6 +11,7 @@ docs/beam-impact.md.
 from __future__ import annotations
 
 import enum
+import functools
 from dataclasses import replace
 
 import numpy as np
@@ -107,7 +108,7 @@ def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     sdof = two_body_model(scenario, restitution)
     k_c, c_c = contact_law(sdof, scenario.contact, stiffness=contact_stiffness,
                            duration=duration)
-    M, D, K, nodes, keep = beam_matrices(scenario.trunk, int(elements), beam_theory)
+    M, D, K, nodes, keep = _mesh_matrices(scenario.trunk, int(elements), beam_theory)
     trunk = scenario.trunk
     model = LinearImpactModel(
         M=M, D=D, K=K, clamp=deflection_dof(nodes, keep, trunk.clamp_height),
@@ -119,6 +120,17 @@ def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
         c_c = effective_damping(k_c, sdof.restitution, mu)
         model = replace(model, contact_damping=c_c)
     return model, sdof
+
+
+@functools.lru_cache(maxsize=16)
+def _mesh_matrices(trunk, elements: int, beam_theory: str) -> tuple:
+    """:func:`beam_matrices` of a (frozen, hashable) trunk, kept for the next model of the
+    same mesh (a run builds one, ~0.2 ms; a sweep over the pad meets it again), its arrays
+    read-only: the same numbers."""
+    out = beam_matrices(trunk, elements, beam_theory)
+    for a in out:
+        a.setflags(write=False)
+    return out
 
 
 def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
