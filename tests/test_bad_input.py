@@ -264,8 +264,11 @@ def test_a_stop_signal_ends_the_report_with_one_line_and_no_orphans(tmp_path, ho
     """`treeimpact report` stopped while its runs are on the pool: exit 130, one line on
     stderr, no traceback, no report page written, and no worker left behind."""
     out = tmp_path / "rep"
+    # SIGINT at its default action whatever the test run's (a background job's is ignored,
+    # and the report rightly keeps an inherited ignore: test_signals)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "treeimpact.compare.cli", "report", "--out", str(out)],
+        [sys.executable, "-c", SIGINT_DEFAULT, "-m", "treeimpact.compare.cli", "report",
+         "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
     while not _children(proc.pid) and time.monotonic() < deadline:
