@@ -167,7 +167,7 @@ def main(argv=None) -> int:
     p.add_argument("--durations", metavar="LOG", help="with --floors: a pytest "
                    "--durations=0 log of the suite")
     p.add_argument("--report-cpu", type=float, metavar="S", help="with --floors: the CPU "
-                   "seconds (user + sys) of the make report that wrote the folder")
+                   "seconds of make report (default: report_parts.json's, from --parts)")
     p.add_argument("--against", metavar="REV", help="time only make test: REV's Makefile "
                    "against today's, alternately (writes make_test.json)")
     p.add_argument("--rounds", type=int, default=2, help="with --against: runs per side")
@@ -191,9 +191,13 @@ def main(argv=None) -> int:
         import _floors
 
         start_load = _results.load_average()
+        cpu = args.report_cpu
+        if cpu is None:  # make report's CPU as --parts measured it (the machine's busy time)
+            parts_file = ROOT / "benchmarks" / "results" / "report_parts.json"
+            cpu = json.loads(parts_file.read_text())["numbers"]["parts.make_report.cpu_s"]
         numbers, details = _floors.floors(Path(args.floors),
                                           Path(args.durations) if args.durations else None, ROOT,
-                                          args.report_cpu)
+                                          cpu)
         _results.write("floors", numbers, details, started_load=start_load,
                        out=Path(args.out) if args.out else None)
         return 0

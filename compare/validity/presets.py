@@ -89,9 +89,9 @@ PRESETS = {
         ident_engine_rungs=ENGINES, sensitivity=60, sensitivity_crossings=True,
         sobol=4096,  # 32768 evaluations per tree, about 7 CPU-minutes each
         help="full (restitution=0:0.9:10, segments=1,2,4,8,16,32, crown_ratio=0:4:9) about "
-             "1.4 CPU-hours, 41 min with 2 workers",
-        expected="about 1.4 CPU-hours: 41 minutes with 2 workers, 5 on 16 (measured on a "
-                 "slice of the preset, 61 s of runs per (e, crown) pair: "
+             "1.0 CPU-hours, 30 min with 2 workers",
+        expected="about 1.0 CPU-hours: 30 minutes with 2 workers, 4 on 16 (measured on a "
+                 "slice of the preset, 45 s of runs per (e, crown) pair: "
                  "benchmarks/bench_presets.py), and about 0.4 CPU-hours more for its Sobol "
                  "design (3 trees x 32768 evaluations of 13 ms); resumable"),
 }
