@@ -11,6 +11,9 @@ run, one after the other, from the repository:
    (``report.json``), which run side by side (``treeimpact report --with-study``);
 3. ``make test``: its wall time and the test count.
 
+Each command's CPU is the machine's busy time over it less the background sampled just
+before (:func:`_busy_timed`), and ``make test``'s floor that CPU over the cores.
+
 Writes ``benchmarks/results/make.json`` (the README quotes it); every temporary folder is
 removed. The load average before and after is recorded: on a shared machine the times
 grow with it.
@@ -210,7 +213,8 @@ def main(argv=None) -> int:
             wall, log = _timed(["make", f"VENV={venv}", f"{venv}/.installed"], env)
             numbers["install_s"] = round(wall, 1)
             details["install_tail"] = log[-500:]
-        wall, log = _timed(["make", "report", f"OUT={tmp}/report"])
+        wall, cpu, bg, log = _busy_timed(["make", "report", f"OUT={tmp}/report"])
+        numbers["report_cpu_s"] = round(cpu - bg, 1)  # every process's, less the background
         study = json.loads((Path(tmp) / "report" / "study" / "study.json").read_text())
         page = json.loads((Path(tmp) / "report" / "report.json").read_text())
         numbers["report_s"] = round(wall, 1)
@@ -220,7 +224,9 @@ def main(argv=None) -> int:
             numbers[f"report.study_run_s.{backend}"] = float(f"{t['mean_wall_s']:.3g}")
         details["report_tail"] = log[-300:]
     if not args.skip_test:
-        wall, log = _timed(["make", "test"])
+        wall, cpu, bg, log = _busy_timed(["make", "test"])
+        numbers["test_cpu_s"] = round(cpu - bg, 1)
+        numbers["test_cpu_floor_s"] = round((cpu - bg) / len(os.sched_getaffinity(0)), 1)
         summary = re.findall(r"=+ (.*(?:passed|failed).*) in [\d.]+s", log)
         numbers["test_s"] = round(wall, 1)
         details["test_summary"] = summary[-1] if summary else log[-300:]
