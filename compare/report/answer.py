@@ -219,31 +219,59 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
         out["one_dof"] = (out.get("one_dof", "The 1-DOF trunk:") +
                           f" No answer for {none}.")
     if trees:
-        held, off, trunk = [], [], []
-        first = next(iter(trees.values()))
-        for name in first:
-            answers = [t[name] for t in trees.values()]
-            label = first[name]["label"].split(": ", 1)[-1]  # "1-DOF trunk: x_max" -> x_max
-            zeros = [a["error_at_zero"] for a in answers]
-            if all(a["bracket"] is None and a["holds_up_to_e"] == 0.0 for a in answers):
-                part = (f"{label} {_range(zeros, _pct, '..')} %"
-                        if all(z is not None and math.isfinite(z) for z in zeros)
-                        else f"{label} (no value at e = 0 for every tree)")
-                (trunk if first[name].get("model") == "continuum" else off).append(part)
-            else:
-                ups = [a["holds_up_to_e"] for a in answers]
-                notes = [f"not monotone on {tree}" for tree, t in trees.items()
-                         if not t[name].get("monotone", True)] + [
-                    f"counting a second strike on {tree}" for tree, t in trees.items()
-                    if t[name].get("second_strike_from") is not None]
-                held.append(f"{_range(ups, _inner)} for {label}"
-                            + (f" ({'; '.join(notes)})" if notes else ""))
+        out["small_e"] = _small_e_sentence(trees, tol)
+    return out
+
+
+def _small_e_sentence(trees: dict, tol: float) -> str:
+    """The small-e half in one sentence (:func:`in_short`): up to which e each consequence
+    holds, which are off already at e = 0 (not small-e effects), which have no value at
+    e = 0 on any tree (no verdict) and which none at any e (no answer: not an effect)."""
+    held, off, trunk, none, unset = [], [], [], [], []
+    first = next(iter(trees.values()))
+    for name in first:
+        answers = [t[name] for t in trees.values()]
+        label = first[name]["label"].split(": ", 1)[-1]  # "1-DOF trunk: x_max" -> x_max
+        zeros = [a["error_at_zero"] for a in answers]
+        if not any(_finite(v) for a in answers for v in a["errors"]):
+            none.append(label)
+        elif all(a["bracket"] is None and a["holds_up_to_e"] == 0.0 for a in answers):
+            if not any(map(_finite, zeros)):  # neither held nor off: nothing at e = 0
+                unset.append(label)
+                continue
+            part = (f"{label} {_range(zeros, _pct, '..')} %" if all(map(_finite, zeros))
+                    else f"{label} (no value at e = 0 for every tree)")
+            (trunk if first[name].get("model") == "continuum" else off).append(part)
+        else:
+            held.append(_held_part(trees, name, answers, label))
+    text = ""
+    if held or off or trunk:
         text = (f"Small e: each consequence stays within {100 * tol:.0f} % of the exact result "
                 + ("up to e = " + ", ".join(held) if held else "at no e") + ".")
-        if off:
-            text += (" Off already at e = 0, so not small-e effects: " + ", ".join(off) + ".")
-        if trunk:
-            text += (" Nor does e make the 1-DOF trunk's gaps: " + ", ".join(trunk)
-                     + " already at e = 0" + _steady(trees, tol) + ".")
-        out["small_e"] = text
-    return out
+    if off:
+        text += " Off already at e = 0, so not small-e effects: " + ", ".join(off) + "."
+    if trunk:
+        text += (" Nor does e make the 1-DOF trunk's gaps: " + ", ".join(trunk)
+                 + " already at e = 0" + _steady(trees, tol) + ".")
+    if unset:
+        text += ((" " if text else "Small e: ") + "No verdict on " + ", ".join(unset)
+                 + ": no value at e = 0 on any tree (the table has the e that have one).")
+    if none:
+        text += ((" " if text else "Small e: ") + "No answer for " + ", ".join(none)
+                 + ": no value at any e of any tree (the runs' reasons are in the table).")
+    return text
+
+
+def _finite(v) -> bool:
+    return v is not None and math.isfinite(v)
+
+
+def _held_part(trees: dict, name: str, answers: list, label: str) -> str:
+    """'0.1..0.3 for LABEL (notes)': the e up to which consequence ``name`` holds on each
+    tree, with its trees where it is not monotone or counts a second strike."""
+    ups = [a["holds_up_to_e"] for a in answers]
+    notes = [f"not monotone on {tree}" for tree, t in trees.items()
+             if not t[name].get("monotone", True)] + [
+        f"counting a second strike on {tree}" for tree, t in trees.items()
+        if t[name].get("second_strike_from") is not None]
+    return f"{_range(ups, _inner)} for {label}" + (f" ({'; '.join(notes)})" if notes else "")

@@ -594,7 +594,8 @@ def test_a_tree_without_a_1_dof_answer_is_said_so_not_a_crash(tmp_path):
     """open-center stopped at 30 ms, inside its moving-together phase: the paper's model and
     the soft SDOF refuse the run (energy_delivered needs the last separation). The report
     is still written; its first screen, answer table and JSON say there is no 1-DOF answer
-    for the tree and why (the page crashed on a missing sentence before)."""
+    for the tree and why (the page crashed on a missing sentence before), and the small-e
+    sentence gives no verdict where no e = 0 value exists (it said "off already at e = 0")."""
     import dataclasses
 
     scen = dataclasses.replace(load_scenario("open-center"), t_end=0.03)
@@ -606,6 +607,10 @@ def test_a_tree_without_a_1_dof_answer_is_said_so_not_a_crash(tmp_path):
     assert "No answer for open-center (analytic: --t-end" in data["answer"]["in_short"]["one_dof"]
     assert "| open-center | no answer: analytic: --t-end" in paths["md"].read_text()
     assert "no answer: analytic: --t-end" in paths["html"].read_text()
+    # the small-e half: nothing at e = 0 is no verdict, not "off already at e = 0"
+    small = data["answer"]["in_short"]["small_e"]
+    assert "Off already" not in small and "at no e" not in small, small
+    assert "No verdict on eq 57 energy loss" in small and "No answer for identified M_T" in small
 
 
 def test_the_report_command_exits_4_when_a_tree_has_no_1_dof_answer(tmp_path, monkeypatch,
