@@ -69,7 +69,8 @@ def _why(r: dict, method: str, k: str) -> str:
         return "not fixed"
     if r.get(f"{method}_not_fixed"):
         known = r.get("fit_known_e", {}).get(k, math.nan)
-        return f"one impact:\nrange;\ne given\n{known:+.1%}"
+        return ("one impact:\nrange;\ne given\n" + (f"{known:+.1%}" if math.isfinite(known)
+                                                     else "no value"))
     return "not\nidentifiable" if "not identifiable" in str(
         r.get(f"{method}_error", r.get("error", ""))) else "failed"
 

@@ -172,3 +172,13 @@ def test_full_preset_validates_identification_on_every_rung():
     rates = parse_grid(sampling.grid).axis("record.rate").values
     assert set(rates) == set(SAMPLING_RATES) == {1e3, 5e3, 2e4}
     assert min(SAMPLING_NOISES) == 0.005 and max(SAMPLING_NOISES) == 0.02
+
+
+def test_a_grey_cell_without_a_known_e_value_says_so_not_nan():
+    """A one-impact case whose fit with the pad's e given has no value for a parameter (the
+    beam's b at crown ratio 4 in make report's study) reads "no value", not "+nan%"."""
+    from treeimpact.compare.studies.ident_maps import _why
+
+    case = {"fit_not_fixed": True, "fit_known_e": {"b": math.nan, "M_T": 0.209}}
+    assert _why(case, "fit", "b").endswith("e given\nno value")
+    assert _why(case, "fit", "M_T").endswith("e given\n+20.9%")
