@@ -118,7 +118,8 @@ def parts() -> tuple[dict, dict]:
         details["make report"] = {"background_cpu_s": round(bg, 1), "tail": log[-200:]}
     own = sum(v for k, v in numbers.items() if k.endswith(".cpu_s") and "make_report" not in k)
     numbers["parts.sum_cpu_s"] = round(own, 1)
-    numbers["parts.cpu_floor_s"] = round(own / len(os.sched_getaffinity(0)), 1)  # every core busy throughout
+    # the floor: every core busy throughout
+    numbers["parts.cpu_floor_s"] = round(own / len(os.sched_getaffinity(0)), 1)
     return numbers, details
 
 
