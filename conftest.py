@@ -14,6 +14,7 @@ The tests whose numbers depend on BLAS and LAPACK round-off are marked ``numeric
 
 import functools
 import importlib.abc
+import inspect
 import os
 import re
 import sys
@@ -136,11 +137,15 @@ def _linalg_roots() -> tuple[str, ...]:
 
 def _linalg_probe(reached: list, roots: tuple[str, ...]):
     """A :func:`sys.setprofile` function that appends to ``reached`` each entry into the
-    linear algebra: a Python function of a file under ``roots`` (:func:`_linalg_roots`), or
-    numpy's ``dot``, ``vdot`` or ``inner``."""
+    linear algebra: a Python function of a file under ``roots`` (:func:`_linalg_roots`; not
+    the module or class bodies an import runs), or numpy's ``dot``, ``vdot`` or ``inner``."""
     def probe(frame, event, arg):
-        if event == "call" and frame.f_code.co_filename.startswith(roots):
-            reached.append(f"{frame.f_code.co_filename}:{frame.f_code.co_name}")
+        code = frame.f_code
+        if (event == "call" and code.co_flags & inspect.CO_OPTIMIZED
+                and code.co_filename.startswith(roots)):  # a function, not an import's
+            # module or class body (a test imports such a module on its own, not so when
+            # an earlier test of its worker did: the outcome followed the order)
+            reached.append(f"{code.co_filename}:{code.co_name}")
         elif event == "c_call" and getattr(arg, "__name__", "") in ("dot", "vdot", "inner"):
             reached.append(f"numpy {arg.__name__}")
     return probe
