@@ -187,13 +187,14 @@ def _add_segment(parent, chain, j: int, r: float, damp):
 
 
 def _add_dampers(spec: mujoco.MjSpec, chain) -> None:
-    """The trunk's distributed damping D (eq 9 at the damping points, N m s/rad) as the
+    """The trunk's distributed damping D (the chain model's, eq 9 at the damping points,
+    N m s/rad: analytic.continuum.chain.chain_matrices) as the
     fewest fixed tendons: D = L diag(d) L^T (L unit lower triangular, d > 0; from D's
     Cholesky factor), tendon ``damper_i`` of length sum_{j >= i} L_ji theta_j and damping
     d_i, so the generalised damping force is -D theta' (to round-off). One tendon per hinge
     instead of one per damping point (24 for 12 segments): MuJoCo's cost per step grows with
     the tendons (docs/engines.md, "What an engine run costs")."""
-    L, d = damping_factors(damping_point_matrix(chain))
+    L, d = damping_factors(chain_matrices(chain)[2])
     n = chain.segments
     for i in range(n):
         ten = spec.add_tendon()
@@ -202,18 +203,6 @@ def _add_dampers(spec: mujoco.MjSpec, chain) -> None:
         for j in range(i, n):
             if L[j, i] != 0.0:
                 ten.wrap_joint(f"hinge_{j}", float(L[j, i]))
-
-
-def damping_point_matrix(chain) -> np.ndarray:
-    """D = sum_p c_p J_p^T J_p over the damping points p (N m s/rad): J_p[j] = z_p - z_j
-    for the hinges j below the point (its linearised lateral displacement per hinge
-    angle), c_p = C h / 2; ``analytic.continuum.chain.chain_matrices``' D to round-off."""
-    z = np.asarray(chain.boundaries)[:chain.segments]
-    D = np.zeros((chain.segments, chain.segments))
-    for zp, cp in zip(chain.damping_heights, chain.damping_coefficients):
-        a = np.where(z < zp, zp - z, 0.0)
-        D += float(cp) * np.outer(a, a)
-    return D
 
 
 def damping_factors(D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -182,18 +182,20 @@ def test_chain_damping_is_one_tendon_per_hinge_carrying_d(central, segments):
     """The distributed damping D (sum over the damping points) in N tendons, D = L diag(d)
     L^T with L unit lower triangular and d > 0 (the Cholesky factor of the positive
     definite D), the same D as the chain model's and as the per-point sum."""
-    from treeimpact.mujoco_models._builder import damping_factors, damping_point_matrix
+    from treeimpact.mujoco_models._builder import damping_factors
 
     chain = hinged_chain(central.trunk, segments)
     Dl = chain_matrices(chain)[2]
-    D = damping_point_matrix(chain)
+    z = np.asarray(chain.boundaries)[:segments]  # per damping point: c_p J_p^T J_p
+    arms = [np.where(z < zp, zp - z, 0.0) for zp in chain.damping_heights]
+    D = sum(c * np.outer(a, a) for a, c in zip(arms, chain.damping_coefficients))
     scale = np.abs(Dl).max()
     np.testing.assert_allclose(D, Dl, rtol=0, atol=1e-14 * scale)  # round-off of two sums
-    L, d = damping_factors(D)
+    L, d = damping_factors(Dl)
     assert np.all(d > 0.0)
     np.testing.assert_array_equal(np.diag(L), 1.0)
     assert not np.triu(L, 1).any()
-    np.testing.assert_allclose((L * d) @ L.T, D, rtol=0, atol=1e-14 * scale)  # Cholesky
+    np.testing.assert_allclose((L * d) @ L.T, Dl, rtol=0, atol=1e-14 * scale)  # Cholesky
     m = make_setup(central, trunk="chain", segments=segments, t_end=1e-3).mjmodel  # budget
     assert m.ntendon == segments  # was 2 N, one per damping point
     Dm = _damping_matrices(m)[0][:segments, :segments]
