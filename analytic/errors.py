@@ -31,3 +31,9 @@ class OutsideValidity(NotAchieved, SimulationDiverged):
     a SimulationDiverged for the callers that only ask whether a run has numbers to report
     (a fit's trial point, a sweep's row); the command line words it as outside the model's
     validity (exit 4), never as diverged."""
+
+
+class ImplausibleInput(UserWarning):
+    """An input inside its allowed range but outside what fruit trees, harvesters and pads
+    show (a release angle typed in radians, a diameter in centimetres): the run goes on,
+    and the message is one line naming the field, its plausible range and its source."""

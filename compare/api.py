@@ -21,6 +21,7 @@ from treeimpact.analytic.identify.pendulum_record import Record
 from treeimpact.analytic.identify.pendulum_record import read_record as read
 from treeimpact.analytic.identify.procedure import PendulumTest
 from treeimpact.analytic.model.parameters import LIMITS, Pendulum, Scenario, check_range
+from treeimpact.analytic.model.plausible import implausible_values, warn_implausible
 from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.analytic.threads import enter_limit, exit_limit
 
@@ -304,6 +305,11 @@ def pendulum_test(test, clamp_height, diameter):
             raise ParameterError(f"{name}: required with a Pendulum (m)")
         low, high, unit = LIMITS[f"trunk.{name}"]
         check_range(name, value, low=low, high=high, unit=unit)
+    if not isinstance(test, Scenario):  # a scenario warned where it was read
+        warn_implausible(implausible_values({
+            "impactor.mass": pend.mass, "impactor.equivalent_length": pend.equivalent_length,
+            "impactor.release_angle_deg": pend.release_angle_deg, "impactor.gravity":
+            pend.gravity, "trunk.clamp_height": clamp_height, "trunk.diameter": diameter}))
     return PendulumTest(impactor_mass=pend.mass, equivalent_length=pend.equivalent_length,
                         release_angle=pend.release_angle_rad, clamp_height=clamp_height,
                         diameter=diameter, gravity=pend.gravity)

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from treeimpact.analytic import budget
 from treeimpact.analytic.errors import (
+    ImplausibleInput,
     NotAchieved,
     OutsideValidity,
     ParameterError,
@@ -224,5 +225,8 @@ def one_line_warning(message, category, filename, lineno, file=None, line=None) 
     ``filename``:``lineno`` on ``file`` (default stderr); ``line`` is not shown."""
     text = " ".join(str(message).split())
     where = f"{Path(filename).name}:{lineno}"
-    print(f"treeimpact: warning: {text} ({category.__name__}, {where})",
-          file=file if file is not None else sys.stderr)
+    if issubclass(category, ImplausibleInput):  # ours, written for the user as it stands
+        line = f"treeimpact: warning: {text}"
+    else:
+        line = f"treeimpact: warning: {text} ({category.__name__}, {where})"
+    print(line, file=file if file is not None else sys.stderr)

@@ -29,6 +29,7 @@ from treeimpact.analytic.model.parameters import (
     Trunk,
     check_range,
 )
+from treeimpact.analytic.model.plausible import implausible, warn_implausible
 from treeimpact.analytic.model.registry import BY_NAME
 
 from .backends import get_backend
@@ -76,11 +77,14 @@ def tree_scenario(inputs: TreeInputs) -> Scenario:
     """The calibrated :class:`Scenario` of ``inputs`` with a t_end its run can report
     (:func:`fit_t_end`). ParameterError naming the flag (``--damping-rate``) of a missing,
     contradictory or out-of-range input; OutsideValidity for a tree whose analytic x_max
-    lies beyond the clamp height."""
+    lies beyond the clamp height. An input outside what trees and harvesters show warns
+    (ImplausibleInput, one line each)."""
     try:
-        return fit_t_end(build_scenario(inputs), given=inputs.t_end is not None)
+        scenario = fit_t_end(build_scenario(inputs), given=inputs.t_end is not None)
     except ParameterError as exc:
         raise _as_flags(exc) from None
+    warn_implausible(implausible(scenario))
+    return scenario
 
 
 #: Allowed ranges of the regression's inputs (Figs 4-5), SI: a1 = V up to 100 m/s (a pendulum

@@ -46,6 +46,17 @@ class UnmeasuredRange:
 
 
 @dataclass(frozen=True)
+class Plausible:
+    """What fruit trees, harvesters and pads show of an input, [low, high] in the
+    parameter's unit, and where that range comes from: a value inside the allowed range
+    but outside this one is run and warned about (:mod:`.plausible`)."""
+
+    low: float
+    high: float
+    source: str
+
+
+@dataclass(frozen=True)
 class Parameter:
     """One physical input.
 
@@ -66,6 +77,7 @@ class Parameter:
         meaning: one line on what it is (a command-line option's help), or "".
         design: the design study's range and reasons, or None.
         unmeasured: the sensitivity study's range, reason and fixing measurement, or None.
+        plausible: what trees, harvesters and pads show (a warning beyond it), or None.
     """
 
     name: str
@@ -83,6 +95,7 @@ class Parameter:
     text: str = ""
     meaning: str = ""
     unmeasured: UnmeasuredRange | None = None
+    plausible: Plausible | None = None
 
     @property
     def axis(self) -> str:
@@ -127,7 +140,7 @@ def _field(name, symbol, unit, low, high, label, path, sweep=None, shown=(1.0, "
     """A parameter that one scenario field holds (swept by its path unless ``sweep``)."""
     return Parameter(name, symbol, unit, low, high, label, path, sweep or path, shown,
                      _setter(path), design, text=text, meaning=meaning,
-                     unmeasured=_UNMEASURED.get(name))
+                     unmeasured=_UNMEASURED.get(name), plausible=_PLAUSIBLE.get(name))
 
 
 _INF = math.inf
@@ -176,6 +189,32 @@ _UNMEASURED = {
     "density": UnmeasuredRange(
         500.0, 1100.0, ("green wood: the trunk's share of M_T (the crown mass follows from "
                         "the measured M_T)"), "weigh a trunk section"),
+}
+
+#: What orchard trees, harvesters and pads show of the scenario's fields (wider than the
+#: shipped trees, narrower than the allowed range): beyond it a value is run and warned
+#: about, since it is more often a slip of unit (radians for degrees, cm for m) than a tree.
+_PLAUSIBLE = {
+    "length": Plausible(0.3, 6.0, "a fruit tree's crown height; the paper's trees 0.75-1 m"),
+    "clamp_height": Plausible(0.1, 2.0, "harvesters clamp between knee height and the first "
+                              "scaffold; the paper's 0.315-0.354 m"),
+    "diameter": Plausible(0.02, 0.5, "fruit-tree trunks at the clamp; the paper's "
+                          "0.126-0.142 m"),
+    "density": Plausible(300.0, 1300.0, "green wood, USDA Wood Handbook"),
+    "youngs_modulus": Plausible(1e8, 3e10, "wood along the grain, green to dry, Wood "
+                                "Handbook; the paper's eq 47 reading 8.9e8-1.3e9 Pa"),
+    "impactor_mass": Plausible(1.0, 1000.0, "harvesters' pendulums and billets; the paper's "
+                               "pendulum 132.4 kg"),
+    "equivalent_length": Plausible(0.2, 5.0, "a harvester's pendulum arm; the paper's "
+                                   "1.51 m"),
+    "release_angle_deg": Plausible(2.0, 90.0, "a pendulum test's release; the paper's "
+                                   "33.76-36.39 deg"),
+    "gravity": Plausible(9.76, 9.84, "the Earth's surface, 9.78 at the equator to 9.83 at "
+                         "the poles"),
+    "impact_speed": Plausible(0.1, 10.0, "a pendulum or a billet at the clamp; the paper's "
+                              "2.3-2.5 m/s"),
+    "contact_duration": Plausible(1e-4, 0.05, "a hard impactor (0.1 ms) to a thick rubber "
+                                  "pad (50 ms)"),
 }
 
 #: Every physical input, scenario fields first (in LIMITS' order), then derived ones.
@@ -285,11 +324,14 @@ def _cell(x: float) -> str:
 
 def registry_table() -> str:
     """The registry as a Markdown table (docs/parameters.md holds it): name, symbol, unit,
-    range, label, scenario path (or the field a ratio sets) and sweep name."""
-    rows = ["| name | symbol | unit | range | label | sets | sweep |",
-            "|---|---|---|---|---|---|---|"]
+    range, plausible range with its source, label, scenario path (or the field a ratio sets)
+    and sweep name."""
+    rows = ["| name | symbol | unit | range | plausible (warned beyond) | label | sets | sweep |",
+            "|---|---|---|---|---|---|---|---|"]
     for p in PARAMETERS:
         sets = f"`{p.path}`" if p.path else (f"`{p.sets}` (ratio)" if p.sets else "a reading")
+        seen = (f"[{_cell(p.plausible.low)}, {_cell(p.plausible.high)}]: {p.plausible.source}"
+                if p.plausible else "")
         rows.append(f"| `{p.name}` | {p.symbol} | {p.unit} | [{_cell(p.low)}, {_cell(p.high)}] "
-                    f"| {p.label} | {sets} | {f'`{p.sweep}`' if p.sweep else ''} |")
+                    f"| {seen} | {p.label} | {sets} | {f'`{p.sweep}`' if p.sweep else ''} |")
     return "\n".join(rows) + "\n"

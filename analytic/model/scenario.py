@@ -30,6 +30,7 @@ from pathlib import Path
 from treeimpact.analytic.errors import ParameterError
 
 from .parameters import Billet, Contact, Pendulum, Scenario, Trunk, check_limit
+from .plausible import implausible, warn_implausible
 
 _TRUNK_KEYS = {"length", "clamp_height", "diameter", "density", "youngs_modulus", "clamp_mass",
                "crown_mass", "damping", "base_stiffness", "shear_modulus", "shear_coefficient"}
@@ -188,7 +189,8 @@ def load_scenario(source: str | Path) -> Scenario:
             the path of a TOML file.
 
     Returns:
-        Scenario: validated against :data:`LIMITS`.
+        Scenario: validated against :data:`LIMITS`; an input outside what trees and
+        harvesters show warns (:class:`~analytic.errors.ImplausibleInput`, one line each).
 
     Raises:
         ParameterError: an unknown name, an unreadable or malformed file, a missing or
@@ -217,6 +219,7 @@ def load_scenario(source: str | Path) -> Scenario:
             f"scenario {str(source)!r}: no such file or shipped scenario "
             f"(shipped: {', '.join(shipped_scenarios())})")
     scenario = _parsed(raw, default, str(source))
+    warn_implausible(implausible(scenario))
     return replace(scenario, notes=copy.deepcopy(scenario.notes))  # a caller's own notes
 
 

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from treeimpact.analytic.model.plausible import implausible
 from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.results import to_jsonable
 
@@ -255,6 +256,7 @@ class ScenarioSection(Section):
             "problems": problems, "not_compared": not_compared_lines(L.not_compared()),
             "unit_of": unit_of, "meaning_of": meaning_of,
             "metrics": ALL_METRICS, "OK": OK,
+            "implausible": [i.text for i in implausible(L.scenario)],
         }
 
     def _fit_rows(self) -> list[dict]:
@@ -282,4 +284,5 @@ class ScenarioSection(Section):
         out["identification_vs_e"] = to_jsonable(self.sweep)
         out["record_fits"] = to_jsonable(self.fits)
         out["mechanism"] = to_jsonable(self.mechanism)
+        out["implausible_inputs"] = [i.text for i in implausible(self.ladder.scenario)]
         return out
