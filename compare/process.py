@@ -29,6 +29,7 @@ from treeimpact.analytic.errors import (
     SimulationDiverged,
     one_line,
 )
+from treeimpact.analytic.model.plausible import RUN_AS_GIVEN
 
 from .exits import ExitCode
 from .pool import STOP
@@ -36,10 +37,26 @@ from .progress import Progress, end_open_bars
 from .progress import finish as finish_progress
 
 
-def _error(text: str) -> None:
-    """``text`` as one stderr line, on a line of its own (a progress bar drawn is ended)."""
+#: The running command's implausible inputs (ImplausibleInput warnings, each once): printed
+#: as warning lines when it returns, or added to its one error line when it is refused.
+_NOTES: list = []
+
+
+def _error(text: str, notes: bool = True) -> None:
+    """``text`` as one stderr line, on a line of its own (a progress bar drawn is ended),
+    with the command's implausible inputs (:data:`_NOTES`) added to it when ``notes``: the
+    slip that may explain a refusal stays on the refusal's one line."""
     end_open_bars()
-    print(f"treeimpact: {text}", file=sys.stderr)
+    said = "".join(f" (note: {n.removesuffix(RUN_AS_GIVEN)})" for n in _NOTES) if notes else ""
+    _NOTES.clear()
+    print(f"treeimpact: {text}{said}", file=sys.stderr)
+
+
+def _warn_notes() -> None:
+    """The command's implausible inputs as one warning line each (:data:`_NOTES`)."""
+    for note in _NOTES:
+        print(f"treeimpact: warning: {note}", file=sys.stderr)
+    _NOTES.clear()
 
 
 def run_command(command, args) -> int:
@@ -51,6 +68,7 @@ def run_command(command, args) -> int:
     Once the command has returned or raised, a stop signal only marks it interrupted (its
     one line is printed whole, never cut by a second KeyboardInterrupt)."""
     _COMMAND["ended"] = False
+    _NOTES.clear()
     try:
         try:
             code = command(args)
@@ -61,10 +79,11 @@ def run_command(command, args) -> int:
             raise KeyboardInterrupt
         if code == ExitCode.INTERRUPTED:  # the command said so itself (a sweep's own line)
             _forget_unhandled_interrupt()
+        _warn_notes()
         return code
     except KeyboardInterrupt:
         _forget_unhandled_interrupt()
-        _error("interrupted (Ctrl-C or SIGTERM); nothing more was written")
+        _error("interrupted (Ctrl-C or SIGTERM); nothing more was written", notes=False)
         return ExitCode.INTERRUPTED
     except ParameterError as exc:
         _error(f"error: {exc}")
@@ -222,11 +241,13 @@ def restore_budget(restore: dict) -> None:
 def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """A Python warning (numpy's, an engine's) as one stderr line, not a source excerpt:
     ``warnings.showwarning``'s signature; the ``message``, its ``category``'s name and
-    ``filename``:``lineno`` on ``file`` (default stderr); ``line`` is not shown."""
+    ``filename``:``lineno`` on ``file`` (default stderr); ``line`` is not shown. An
+    ImplausibleInput is kept in :data:`_NOTES` for :func:`run_command`'s last lines."""
     text = " ".join(str(message).split())
     where = f"{Path(filename).name}:{lineno}"
-    if issubclass(category, ImplausibleInput):  # ours, written for the user as it stands
-        line = f"treeimpact: warning: {text}"
-    else:
-        line = f"treeimpact: warning: {text} ({category.__name__}, {where})"
-    print(line, file=file if file is not None else sys.stderr)
+    if issubclass(category, ImplausibleInput):  # ours: kept for the command's last lines
+        if text not in _NOTES:
+            _NOTES.append(text)
+        return
+    print(f"treeimpact: warning: {text} ({category.__name__}, {where})",
+          file=file if file is not None else sys.stderr)

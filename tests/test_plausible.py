@@ -111,4 +111,19 @@ def test_the_cli_runs_the_slip_and_warns_in_one_line_each(tmp_path):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1
     assert lines[0].startswith("treeimpact: warning: impactor.release_angle_deg = 0.635 deg")
+    assert lines[0].endswith("; run as given")
     assert "ImplausibleInput" not in lines[0] and ".py:" not in lines[0]
+
+
+def test_a_refusal_keeps_its_one_line_and_carries_the_slip_that_may_explain_it(tmp_path):
+    """The same file on the soft rung with a 1 us pad (beyond the run's budget): exit 2,
+    one stderr line, the refusal first and the implausible input as its note (not 'run as
+    given': it was not run)."""
+    path = _edited(tmp_path, "release_angle_deg", "release_angle_deg = 0.635")
+    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", "simulate",
+                           str(path), "--backend", "soft", "--contact-duration", "1e-6"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("treeimpact: error: ")
+    assert "(note: impactor.release_angle_deg = 0.635 deg" in proc.stderr
+    assert "run as given" not in proc.stderr

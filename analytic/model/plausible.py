@@ -28,6 +28,10 @@ _SLIPS = {
 }
 
 
+#: What a warning adds to :attr:`Implausible.text`: the run goes on with the value typed.
+RUN_AS_GIVEN = "; run as given"
+
+
 @dataclass(frozen=True)
 class Implausible:
     """One input outside its plausible range.
@@ -52,7 +56,7 @@ class Implausible:
         p, u = self.plausible, f" {self.unit}" if self.unit != "1" else ""
         slip = f"; {self.slip}" if self.slip else ""
         return (f"{self.path} = {self.value:g}{u} is outside what fruit trees and harvesters "
-                f"show, {p.low:g}-{p.high:g}{u} ({p.source}){slip}; run as given")
+                f"show, {p.low:g}-{p.high:g}{u} ({p.source}){slip}")
 
 
 def _slip(value: float, unit: str, plausible: Plausible) -> str:
@@ -102,4 +106,4 @@ def warn_implausible(found) -> None:
     :class:`Implausible`): where an input enters (a scenario file read, a tree built from
     its measurements, a pendulum test typed)."""
     for item in found:
-        warnings.warn(item.text, ImplausibleInput, stacklevel=3)
+        warnings.warn(item.text + RUN_AS_GIVEN, ImplausibleInput, stacklevel=3)
