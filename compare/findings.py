@@ -49,6 +49,25 @@ def _reduced(a: float, b: float) -> float:
 QUANTITIES = tuple(f.name for f in fields(TreePhysics))
 
 
+def cause_text(finding: dict, physics: TreePhysics) -> str:
+    """A finding's ``cause`` in words with this tree's own quantities: its placeholders
+    ({restitution}, {loss_ratio}, {crown_factor} of ``physics``, and {one_clamp_collision} =
+    1 / loss_ratio - 1, one collision on the clamp against eq 56's loss on M_T) filled."""
+    values = {q: getattr(physics, q) for q in QUANTITIES}
+    values["one_clamp_collision"] = 1.0 / physics.loss_ratio - 1.0
+    return finding["cause"].format(**values)
+
+
+def validate_cause(where: str, finding: dict) -> None:
+    """``finding["cause"]`` fills from a tree's quantities alone (:func:`cause_text`):
+    ParameterError naming ``where`` and the placeholder otherwise."""
+    try:
+        cause_text(finding, TreePhysics(restitution=0.1, loss_ratio=10.0, crown_factor=2.0))
+    except (KeyError, ValueError, IndexError) as exc:
+        raise ParameterError(f"{where}.cause: {exc!r} is not a tree's quantity (allowed: "
+                             f"{', '.join(QUANTITIES)}, one_clamp_collision)") from None
+
+
 #: What a refusal's ``when`` reads: the Newton record's x0 / x_max.
 REFUSAL_QUANTITIES = ("x0_share",)
 

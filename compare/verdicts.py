@@ -16,7 +16,14 @@ from pathlib import Path
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import finite_number, to_jsonable
 
-from .findings import REFUSAL_QUANTITIES, TreePhysics, finding_for, validate_when
+from .findings import (
+    REFUSAL_QUANTITIES,
+    TreePhysics,
+    cause_text,
+    finding_for,
+    validate_cause,
+    validate_when,
+)
 
 TOLERANCES_PATH = Path(__file__).with_name("tolerances.toml")
 
@@ -99,13 +106,14 @@ def _validate(data: dict, path: str) -> None:
     for kind, entry in data.get("ledger", {}).items():
         need_reason(f"ledger.{kind}", entry)
     for i, f in enumerate(data.get("finding", [])):
-        for key in ("name", "metric", "band", "reason", "kinds", "when"):
+        for key in ("name", "metric", "band", "cause", "reason", "kinds", "when"):
             if key not in f:
                 raise ParameterError(f"{path}: finding[{i}].{key}: missing")
         if "scenario" in f:
             raise ParameterError(f"{path}: finding[{i}].scenario: a finding is recognised "
                                  "from its physical cause (when), never from a tree's name")
         validate_when(f"{path}: finding[{i}]", f["when"])
+        validate_cause(f"{path}: finding[{i}]", f)
         lo, hi = f["band"]
         if not lo < hi:
             raise ParameterError(f"{path}: finding[{i}].band: need lo < hi")
@@ -164,7 +172,8 @@ def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: st
 
     Returns:
         The :class:`Check`: the relative difference, the tolerance, the verdict and the
-        reason (a recorded finding's band and reason where one applies).
+        reason (a recorded finding's band and its cause in this tree's quantities where one
+        applies, :func:`compare.findings.cause_text`).
     """
     rel = relative_step(value, reference_value)
     finding = finding_for(tol, physics, kind, metric, rung)
@@ -172,7 +181,7 @@ def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: st
     reason = entry["reason"] if entry else "no tolerance entry"
     if finding is not None:
         band = tuple(finding["band"])
-        reason = finding["reason"]
+        reason = cause_text(finding, physics)  # this tree's numbers only
         if not math.isfinite(rel):
             verdict = Verdict.NOT_AVAILABLE
         elif tolerance is not None and abs(rel) <= tolerance:

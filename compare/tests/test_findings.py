@@ -90,3 +90,27 @@ def test_a_finding_needs_its_cause():
     at_clamp = dataclasses.replace(physics, crown_factor=1.0)
     assert finding_for(TOL, at_clamp, "beam", "crown_peak", "beam") is None
     assert finding_for(TOL, physics, "beam", "crown_peak", "beam") is not None
+
+
+def test_a_findings_verdict_quotes_its_own_trees_numbers_and_no_other_trees():
+    """Issue 50 item 3: a finding's reason on a tree is its ``cause`` filled with that
+    tree's quantities (loss_ratio, crown_factor, e); the shipped trees' measurements (the
+    band's evidence, ``reason``) are never in it. Checked on a made-up tree's physics: every
+    number in the text is one of its own or a rule's threshold (2, 1, 0.02, eq numbers)."""
+    import re
+
+    from treeimpact.compare.findings import TreePhysics, cause_text
+    from treeimpact.compare.verdicts import judge, load_tolerances
+
+    tol = load_tolerances()
+    physics = TreePhysics(restitution=0.37, loss_ratio=3.21, crown_factor=1.57)
+    own = {"0.37", "3.2", "1.57", f"{100 * (1 / 3.21 - 1):+.0f}%"}
+    rules = {"2", "1", "0.02", "44", "56", "1 / loss_ratio - 1"}
+    for f in tol["finding"]:
+        text = cause_text(f, physics)
+        assert text != f["reason"] and "measured" not in text, f["name"]
+        numbers = set(re.findall(r"[+-]?\d+(?:\.\d+)?%?", text))
+        assert numbers <= own | rules | {"-1"}, (f["name"], numbers - own - rules)
+        check = judge("user-tree", "beam-12", f["kinds"][0], f["metric"], 1.5, "soft", 1.0,
+                      {"rel": 0.05, "reason": "x"}, tol, physics)
+        assert check.finding == f["name"] and check.reason == text

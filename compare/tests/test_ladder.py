@@ -181,8 +181,9 @@ def test_verdicts():
     assert _check(math.nan, 1.0, entry).verdict == "n/a"
     f = {"name": "light clamp", "kinds": ["trunk"], "metric": "V",
          "when": {"loss_ratio_above": 2.0, "restitution_below": 0.5}, "band": [0.2, 0.5],
-         "reason": "finding"}
+         "cause": "finding at loss_ratio {loss_ratio:g}", "reason": "the evidence"}
     assert _check(1.3, 1.0, entry, findings=[f]).verdict == "finding"
+    assert _check(1.3, 1.0, entry, findings=[f]).reason == "finding at loss_ratio 12"
     assert _check(1.03, 1.0, entry, findings=[f]).verdict == "finding-lost"  # hidden
     assert _check(1.7, 1.0, entry, findings=[f]).verdict == "out-of-band"
     # the cause absent (a clamp as heavy as M_T; e above the rule's): judged as any step
@@ -217,12 +218,20 @@ def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
         assert "scenario" not in f and f["when"], f["name"]
     head = '[identification_reported]\nreason = "reported"\n'
     bad.write_text(head + '[[finding]]\nname = "n"\nscenario = "open-center"\nkinds = ["beam"]\n'
-                   'metric = "x_max"\nwhen = {}\nband = [0.1, 0.2]\nreason = "r"\n')
+                   'metric = "x_max"\nwhen = {}\nband = [0.1, 0.2]\ncause = "c"\nreason = "r"\n')
     with pytest.raises(ParameterError, match="never from a tree's name"):
         load_tolerances(bad)
     bad.write_text(head + '[[finding]]\nname = "n"\nkinds = ["beam"]\nmetric = "x_max"\n'
-                   'when = { tree_above = 1 }\nband = [0.1, 0.2]\nreason = "r"\n')
+                   'when = { tree_above = 1 }\nband = [0.1, 0.2]\ncause = "c"\nreason = "r"\n')
     with pytest.raises(ParameterError, match="quantities"):
+        load_tolerances(bad)
+    bad.write_text(head + '[[finding]]\nname = "n"\nkinds = ["beam"]\nmetric = "x_max"\n'
+                   'when = {}\nband = [0.1, 0.2]\nreason = "r"\n')
+    with pytest.raises(ParameterError, match="cause: missing"):
+        load_tolerances(bad)
+    bad.write_text(head + '[[finding]]\nname = "n"\nkinds = ["beam"]\nmetric = "x_max"\n'
+                   'when = {}\nband = [0.1, 0.2]\ncause = "at {x_max_shipped}"\nreason = "r"\n')
+    with pytest.raises(ParameterError, match="not a tree's quantity"):
         load_tolerances(bad)
     bad.write_text('[identification_reported]\nreason = "reported"\n[identification_refused]\n'
                    'x = { match = "refused", reason = "a refusal without its words" }\n')
