@@ -86,8 +86,9 @@ def test_elastic_chatter_on_an_overdamped_trunk_is_refused_in_one_line(monkeypat
     1 / n (0.59 m/s after the first impact, 1.1e-5 m/s after the 100,000th). Flights last
     about 2 gamma / |a_rel|, so time grows as ln n: all 100,000 impacts fall within the
     first 3.25 ms (0.67 ms a decade), whatever t_end, and the solver resolves each one
-    (a Newton impact and a certified free-flight search, ~35 us) up to MAX_CHATTER_IMPACTS
-    before it refuses. A shorter t_end would not help (the cap comes at 3.25 ms).
+    (a Newton impact and a certified free-flight search, 35 us at load 6 on 2 cores, 85-110
+    us at load 13) up to MAX_CHATTER_IMPACTS before it refuses. A shorter t_end would not
+    help (the cap comes at 3.25 ms).
 
     Checked here with the cap at 1000 (the same code path, the same refusal: the 1000th
     impact comes at 1.9 ms, the chatter still holding far more than the tail's 1e-13 of
