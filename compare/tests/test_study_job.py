@@ -110,7 +110,7 @@ def test_a_command_and_its_group_signalled_as_timeout_does_end_with_the_study(tm
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert code == 130, proc.stderr.read()
-    deadline = time.monotonic() + 10  # a hang guard: the group's last exits take well under 1 s
+    deadline = time.monotonic() + 60  # a hang guard, not a speed check: one left fails
     while _alive_in_group(proc.pid):  # the study and every worker end too
         assert time.monotonic() < deadline, _alive_in_group(proc.pid)
         time.sleep(0.2)
