@@ -88,7 +88,7 @@ test: $(STAMP)
 # docs/benchmarks.md); bench_make, bench_presets and bench_kernels run on their own
 # (minutes).
 benchmark: $(STAMP)
-	for b in solver threads beam mujoco bullet sweep report identify trunks; do \
+	for b in solver threads beam mujoco bullet sweep report identify trunks help chatter; do \
 		OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_$$b.py || exit 1; \
 	done
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/bench_beam.py --elements 48 --repeats 5

@@ -16,8 +16,7 @@ import sys
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.threads import blas_limit
 
-from .commands import COMMANDS
-from .commands._common import backend_options  # noqa: F401 - docs/cli.md names it here
+from .commands import COMMANDS, HELP
 from .names import did_you_mean
 from .process import command_environment, run_command, stop_signals
 from .progress import set_job
@@ -60,7 +59,7 @@ def refuse_unknown_flags(parser: argparse.ArgumentParser, argv: list) -> None:
     subcommand of ``parser``) does not have (a prefix, a removed spelling, a paper symbol),
     with what it may have meant."""
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    command = next((t for t in argv if not t.startswith("-")), None)
+    command = named_command(argv)
     if command not in sub.choices:
         return  # argparse names the missing or unknown command
     sp = sub.choices[command]
@@ -78,16 +77,26 @@ def refuse_unknown_flags(parser: argparse.ArgumentParser, argv: list) -> None:
                                  f"never abbreviated){hint}")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``treeimpact`` parser: one subparser per module of compare.commands."""
+def named_command(argv: list) -> str | None:
+    """The command ``argv`` names (its first word that is no flag; ``treeimpact`` itself
+    has no option taking a value), or None."""
+    return next((t for t in argv if not t.startswith("-")), None)
+
+
+def build_parser(command: str | None = None, *, every: bool = True) -> argparse.ArgumentParser:
+    """The ``treeimpact`` parser: one subparser per command of compare.commands (its help
+    from :data:`~treeimpact.compare.commands.HELP`), each with its arguments; with
+    ``every=False`` only ``command``'s (its module alone imported: ``treeimpact --help``
+    imports no command's module, none of numpy, scipy or the engines)."""
     p = _TopParser(prog="treeimpact", description="The fruit-tree trunk impact model of the paper "
                 "and its cross-checks against MuJoCo and PyBullet (SI units; exit codes: 0 "
                 "success, 2 bad input, 3 the simulation diverged, 4 ran but not as asked or outside "
                 "the model's validity).")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for module in COMMANDS.values():
-        sp = sub.add_parser(module.NAME, help=module.HELP)
-        module.add_arguments(sp)
+    for name, text in HELP.items():
+        sp = sub.add_parser(name, help=text)
+        if every or name == command:
+            COMMANDS[name].add_arguments(sp)
     return p
 
 
@@ -95,7 +104,8 @@ def main(argv=None) -> int:
     """Run ``treeimpact`` with ``argv`` (default: sys.argv[1:]), every command with one BLAS
     thread (analytic.threads; the caller's setting back on return); returns the exit code."""
     def command(_):
-        args = build_parser().parse_args(argv)
+        words = sys.argv[1:] if argv is None else list(argv)
+        args = build_parser(named_command(words), every=False).parse_args(words)
         set_job(args.command)
         with command_environment(getattr(args, "max_seconds", None)), blas_limit():
             return COMMANDS[args.command].run(args)

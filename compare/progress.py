@@ -12,8 +12,6 @@ import sys
 import threading
 import time
 
-from tqdm import tqdm
-
 #: The environment variable a parent sets for a child job: the job's name. The child then
 #: writes its progress as :data:`RECORD` lines on stderr, for :class:`Relay` to draw.
 RELAY_ENV = "TREEIMPACT_PROGRESS_RELAY"
@@ -45,6 +43,10 @@ class _Job:
         if self.bar is not None:
             self.bar.close()
         kw = {"bar_format": fmt} if fmt else {}
+        # lazy: +128 ms at import otherwise (tqdm; load 13 on 2 cores), which only a drawn bar
+        # needs: every command imports this module, `treeimpact --help` draws none
+        from tqdm import tqdm
+
         self.bar = tqdm(total=total, desc=desc, unit=unit, file=self.stream, **kw)
 
     def refresh(self, stage=None, closed: bool = False) -> None:
@@ -133,6 +135,9 @@ def write(line: str, stream=None) -> None:
     """``line`` on stderr (``stream``), above the jobs' lines when they are drawn."""
     stream = stream or sys.stderr
     if any(job.bar is not None for job in _JOBS.values()):
+        # lazy: a bar is drawn (above), so tqdm is imported already
+        from tqdm import tqdm
+
         with _LOCK:
             tqdm.write(line.rstrip("\n"), file=stream)
     else:

@@ -122,9 +122,9 @@ def test_a_run_beyond_its_budget_is_refused_up_front_with_its_estimate(argv, wor
     long = tmp_path / "long.toml"  # central-leader's trunk 30 m long
     long.write_text(re.sub(r"^length = .*$", "length = 30.0", (
         ROOT / "analytic" / "model" / "scenarios" / "central-leader.toml").read_text(), flags=re.MULTILINE))
-    start = time.monotonic()
+    # refused up front: check_work raises before the first step (an admitted run would end
+    # with exit 0 after hours, not exit 2 with the estimate); no wall clock read
     one_line(capsys, [a.format(long=long) for a in argv], 2, *words)
-    assert time.monotonic() - start < 60  # seconds of set-up (the chain's search), not hours
 
 
 def test_max_seconds_admits_a_run_and_long_runs_tell_their_progress(capsys, monkeypatch):
@@ -230,7 +230,7 @@ def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
          "restitution=0.1:0.9:300", "--grid", "crown_ratio=0,1,2", "--backend",
          "analytic,soft", "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 60  # a hang guard, not a speed check
     while not (out / "results.csv").exists() and time.monotonic() < deadline:
         time.sleep(0.1)  # running: its journal exists
     proc.send_signal(signal.SIGTERM)
@@ -270,7 +270,7 @@ def test_a_stop_signal_ends_the_report_with_one_line_and_no_orphans(tmp_path, ho
         [sys.executable, "-c", SIGINT_DEFAULT, "-m", "treeimpact.compare.cli", "report",
          "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 60  # a hang guard, not a speed check
     while not _children(proc.pid) and time.monotonic() < deadline:
         time.sleep(0.05)  # its pool has started
     time.sleep(1.0)
@@ -393,8 +393,8 @@ def test_identify_json_stdout_holds_only_json_when_lapack_complains(tmp_path, ca
 #: the record fits run on a pool. Measured here: 0.1, 5, 9 and 16 s into a 60 s report.
 SIGINT_MOMENTS = [("command", 0.0), ("command", 1.0), ("pool", 0.0), ("pool", 1.0),
                   ("sweeps", 0.2), ("figures", 0.2)]
-#: Seconds for the awaited event (a loaded machine) and for the exit after the SIGINT
-#: (a pool's workers are ended within 2 * pool.END_WORKERS_S).
+#: Hang guards, not speed checks: seconds for the awaited event (a loaded machine) and for
+#: the exit after the SIGINT (a pool's workers are ended within 2 * pool.END_WORKERS_S).
 AWAIT_S, EXIT_S = 120, 30
 
 
@@ -439,7 +439,7 @@ def test_ctrl_c_ends_the_report_with_exit_130_at_any_moment(tmp_path, awaited, d
                               daemon=True)
     reader.start()
     try:
-        deadline = time.monotonic() + AWAIT_S
+        deadline = time.monotonic() + AWAIT_S  # a hang guard, not a speed check
         while proc.poll() is None and time.monotonic() < deadline and not _reached(
                 awaited, out, proc.pid):
             time.sleep(0.02)
@@ -457,7 +457,9 @@ def test_ctrl_c_ends_the_report_with_exit_130_at_any_moment(tmp_path, awaited, d
         assert proc.returncode == 130, err[-500:]
         assert "Traceback" not in err and "Exception ignored" not in err, err[-800:]
         assert err.strip().splitlines()[-1].startswith("treeimpact: interrupted"), err[-300:]
-        deadline = time.monotonic() + 5  # a resource tracker ends at its pipe's EOF
+        # a resource tracker ends at its pipe's EOF; a hang guard, not a speed check: a
+        # process still there after 60 s is left behind
+        deadline = time.monotonic() + 60
         while _group(proc.pid) and time.monotonic() < deadline:
             time.sleep(0.05)
         assert not _group(proc.pid), "processes left behind"

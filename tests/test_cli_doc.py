@@ -87,7 +87,7 @@ def test_no_section_shows_a_flag_its_command_does_not_have(command):
 
 
 def test_every_grid_name_of_the_sweep_is_listed():
-    from treeimpact.compare.cli import backend_options
+    from treeimpact.compare.commands._common import backend_options
     from treeimpact.compare.sweep.grid import ALIASES, DERIVED_RATIOS, RECORD_FIELDS
 
     section = _sections()["sweep"]

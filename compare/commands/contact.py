@@ -19,8 +19,6 @@ from ..exits import ExitCode
 from ._common import add_parameter_flag, number
 
 NAME = "contact"
-HELP = ("MuJoCo's solref/solimp and Bullet's contactStiffness/Damping for a target e and "
-        "touch duration, checked in each engine")
 #: Removed spellings -> their names now (compare.names).
 RENAMED = {"duration": "touch_duration", "stiffness": "contact_stiffness",
            "damping": "contact_damping"}

@@ -35,8 +35,6 @@ RENAMED = {"release_angle": "release_angle_deg", "mass": "impactor_mass"}
 #: The pendulum test's flags (registry names, analytic.model.registry): all required.
 TEST_FLAGS = ("impactor_mass", "equivalent_length", "release_angle_deg", "clamp_height",
               "diameter")
-HELP = ("tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test record, with 95 %% "
-        "intervals")
 
 
 

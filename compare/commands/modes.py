@@ -14,7 +14,6 @@ from ..exits import ExitCode
 from ._common import add_option_flags, fmt, options_of, relative_text
 
 NAME = "modes"
-HELP = "static stiffness at a and natural frequencies"
 
 #: The options of ``treeimpact modes`` (the backends' modes() take these of their OPTIONS).
 MODES_OPTIONS = ("segments", "elements", "beam_theory", "trunk")

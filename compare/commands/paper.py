@@ -15,7 +15,6 @@ from ..exits import ExitCode
 from ._common import fmt
 
 NAME = "paper"
-HELP = "reproduce Table 1 and list the paper's discrepancies"
 
 
 def add_arguments(sp) -> None:

@@ -14,7 +14,6 @@ from ..exits import ExitCode
 from ._common import add_budget_flag, writable_dir
 
 NAME = "report"
-HELP = "write the discrepancy report (html, md, json)"
 #: The ``treeimpact`` program as a child process runs it: ``--with-study``'s study is its
 #: ``sweep --preset`` (compare.validity.study_job.StudyJob), beside the report.
 PROGRAM = (sys.executable, "-m", "treeimpact.compare.cli")

@@ -21,7 +21,6 @@ from ..tree_scenario import RENAMED as TREE_RENAMED
 from ._common import add_parameter_flag, number
 
 NAME = "scenario"
-HELP = "write a scenario file for your own tree from measured M_T, K_T, b"
 #: Removed spellings -> their names now (compare.cli reads a command's RENAMED): the builder's.
 RENAMED = TREE_RENAMED
 

@@ -27,7 +27,6 @@ from ._common import (
 )
 
 NAME = "simulate"
-HELP = "simulate one scenario"
 #: Removed spellings -> their names now (compare.names).
 RENAMED = {"damping": "trunk_damping_model", "release_angle": "release_angle_deg"}
 

@@ -33,7 +33,6 @@ from ..sweep.run import run_sweep
 from ._common import add_budget_flag
 
 NAME = "sweep"
-HELP = "run a parameter sweep: validity maps and studies"
 
 OPTION_FORM = "[BACKEND.]NAME=VALUE, e.g. trunk=sdof or mujoco.integrator=RK4"
 

@@ -72,12 +72,16 @@ def test_an_unknown_preset_is_refused_before_anything_runs(tmp_path, capsys):
 
 
 def test_stopping_the_report_ends_the_study(tmp_path):
+    """stop() ends the study by its SIGTERM (returncode -15), not by waiting out its 60 s
+    (returncode 0); no wall clock read (a stop that waited would take the 60 s: the hang
+    guard)."""
+    import signal
+
     job = StudyJob("default", tmp_path / "study", PROGRAM)
     job.argv = [sys.executable, "-c", "import time; time.sleep(60)"]
     job.start()
-    t0 = time.perf_counter()
     job.stop()
-    assert job._proc.poll() is not None and time.perf_counter() - t0 < 5
+    assert job._proc.poll() == -signal.SIGTERM
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
@@ -92,7 +96,7 @@ def test_a_command_and_its_group_signalled_as_timeout_does_end_with_the_study(tm
                              "--out", str(tmp_path), "--with-study", "default"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 60  # a hang guard, not a speed check
     while not (tmp_path / "study" / "sweep.json").exists() and \
             not list((tmp_path / "study").glob("*/sweep.json")):
         assert time.monotonic() < deadline and proc.poll() is None, "the study never started"
@@ -106,7 +110,7 @@ def test_a_command_and_its_group_signalled_as_timeout_does_end_with_the_study(tm
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert code == 130, proc.stderr.read()
-    deadline = time.monotonic() + 10
+    deadline = time.monotonic() + 60  # a hang guard, not a speed check: one left fails
     while _alive_in_group(proc.pid):  # the study and every worker end too
         assert time.monotonic() < deadline, _alive_in_group(proc.pid)
         time.sleep(0.2)
