@@ -95,7 +95,7 @@ def two_body_model(scenario: Scenario, restitution: float | None = None) -> TwoB
     if isinstance(imp, Pendulum):
         k = imp.stiffness
     elif isinstance(imp, Billet):
-        k = 0.0
+        k = imp.stiffness
     else:  # pragma: no cover - Scenario validates the type
         raise TypeError(imp)
     return TwoBodyModel(dynamic_mass=tree.dynamic_mass, equivalent_damping=tree.equivalent_damping,
