@@ -272,9 +272,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
     rows_conj, steps_ri, jumps_conj = st.rows_conj, st.steps_ri, st.jumps_conj
     contact, free = kind is ContactPhase.CONTACT, kind is ContactPhase.FREE
-    # a rigid mode's flight (a free billet): the observables' rates, added as rate * s
-    rate = None if st.drift_rows is None else (st.drift_rows @ wk).real
-    flight = (0.0, 0.0) if rate is None else (rate[_DELTA], k_c * rate[_DELTA] + c_c * rate[_RATE])
+    rate, flight = _flight(st, wk, k_c, c_c)
     while j < n_t:
         jj = min(n_t, j + block)
         ob = np.matmul((rows_conj * base).view(float), steps_ri[:, :jj - j],
@@ -312,6 +310,16 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
             base = base * jumps_conj[block]
         j, block = jj, min(8 * block, st.block)
     return None
+
+
+def _flight(st: _State, wk: np.ndarray, k_c: float, c_c: float):
+    """(rates, flight) of a rigid mode's flight (a free billet) in the phase started with
+    modal coefficients ``wk``: the 8 observables' rates Re(rows G V w) (m/s, m/s^2; added
+    as rate * s) and those of delta and of the law (m/s, N/s); (None, (0, 0)) without one."""
+    if st.drift_rows is None:
+        return None, (0.0, 0.0)
+    rate = (st.drift_rows @ wk).real
+    return rate, (rate[_DELTA], k_c * rate[_DELTA] + c_c * rate[_RATE])
 
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
