@@ -226,3 +226,14 @@ def test_a_spring_billet_round_trips_through_its_file():
 
     again = scenario_from_dict(tomllib.loads(text))
     assert again.impactor == scenario.impactor
+
+
+@pytest.mark.parametrize("stiffness", [0.0, 2000.0])
+def test_mujoco_s_billet_carries_its_spring(stiffness):
+    """MuJoCo's slide joint gets the billet's k (it had 0 whatever the file said)."""
+    mujoco = pytest.importorskip("mujoco")
+    from treeimpact.mujoco_models._setup import make_setup
+
+    m = make_setup(_billet(stiffness), trunk="sdof").mjmodel
+    joint = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "pendulum_x")
+    assert m.jnt_stiffness[joint] == stiffness  # copied, not computed
