@@ -63,6 +63,7 @@ NUMERICS = frozenset({
     "tests/test_chain.py", "tests/test_timoshenko.py", "tests/test_solver.py",
     "tests/test_soft_contact.py", "tests/test_record_fit.py",
     "tests/test_engine.py", "tests/test_doc_numbers.py", "tests/test_exact_equivalence.py",
+    "tests/test_billet_rungs.py",
 })
 #: The mark of a test in a :data:`NUMERICS` file that checks no number through the linear
 #: algebra, so gains nothing from a rerun under another kernel.

@@ -163,7 +163,7 @@ def model_metrics(record: "ImpactRecord", model, impactor, *, collision_duration
                   initial_energy: float | None = None) -> dict:
     """:func:`metrics_from_record` of ``record`` with the two-body ``model``'s u1, m, M_T
     and initial energy (J; ``initial_energy`` overrides it, e.g. an engine's own), the
-    ``impactor``'s l_e and g (a billet has neither: theta_b is NaN) and the
+    ``impactor``'s l_e, g and spring k (a billet has no l_e or g: theta_b is NaN) and the
     ``collision_duration`` (s) impacts are told apart by."""
     return metrics_from_record(
         record, impact_speed=model.impact_speed,
@@ -171,7 +171,7 @@ def model_metrics(record: "ImpactRecord", model, impactor, *, collision_duration
         collision_duration=collision_duration, impactor_mass=model.impactor_mass,
         dynamic_mass=model.dynamic_mass,
         equivalent_length=getattr(impactor, "equivalent_length", None),
-        gravity=getattr(impactor, "gravity", 9.81))
+        gravity=getattr(impactor, "gravity", 9.81), impactor_stiffness=impactor.stiffness)
 
 
 def contact_intervals(force: np.ndarray, threshold: float) -> list[tuple[int, int]]:
@@ -224,13 +224,14 @@ def _integral_to(t: np.ndarray, f: np.ndarray, t_stop: float) -> float:
 def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_energy: float,
                         collision_duration: float, impactor_mass: float, dynamic_mass: float,
                         equivalent_length: float | None = None, gravity: float = 9.81,
-                        force_threshold: float = 1e-6, persist_factor: float = 3.0,
+                        impactor_stiffness: float | None = None, force_threshold: float = 1e-6, persist_factor: float = 3.0,
                         common_velocity_tolerance: float = 1e-3) -> dict:
     """The metrics of :data:`METRIC_KEYS` from a record, by the rule of the module docstring.
 
     ``dynamic_mass`` (M_T, kg) only enters the e = 0 loss of eq 57,
-    0.5 m u1^2 M_T / (M_T + m); ``equivalent_length`` (m) gives theta_b (NaN for a billet).
-    ``record`` is an :class:`ImpactRecord` or anything with its motion arrays (t, x, vx, y,
+    0.5 m u1^2 M_T / (M_T + m); ``equivalent_length`` (m) gives theta_b (NaN for a billet);
+    ``impactor_stiffness`` k (N/m) the impulse's spring term (None: m g / l_e, or 0 without
+    l_e). ``record`` is an :class:`ImpactRecord` or anything with its motion arrays (t, x, vx, y,
     vy, force, pendulum_energy, crown, crown_velocity) and its two energy reads,
     ``contact_loss(t)`` and ``ledger_residual(initial_energy)``: an exact solver gives those
     in closed form instead of from sampled energies (analytic.continuum.beam_impact).
@@ -273,7 +274,8 @@ def metrics_from_record(record: ImpactRecord, *, impact_speed: float, initial_en
         **whole_event_metrics(
             r, intervals, initial_energy, impactor_mass=m, impact_speed=impact_speed,
             collision_duration=collision_duration,
-            impactor_stiffness=0.0 if equivalent_length is None
+            impactor_stiffness=impactor_stiffness if impactor_stiffness is not None
+            else 0.0 if equivalent_length is None
             else pendulum_stiffness(m, gravity, equivalent_length)),
     }
     assert tuple(metrics) == METRIC_KEYS

@@ -287,7 +287,7 @@ def build_spec(name: str, trunk: TrunkSpec, scenario: Scenario, pendulum: str, d
                  integrator=integrator)
     root = add_trunk(spec, trunk, tr.clamp_height, tr.diameter)
     if isinstance(imp, Billet):
-        imp = _BilletAsSpring(imp.mass)
+        imp = _BilletAsSpring(imp.mass, imp.stiffness)
     add_pendulum(spec, imp, pendulum, tr.clamp_height, tr.diameter)
     pair = add_contact_and_sensors(spec, solref, root)
     return spec, pair

@@ -399,13 +399,3 @@ def test_bad_options_are_one_line_errors(options, field):
     with pytest.raises(ParameterError, match=field):
         simulate_beam(load_scenario("open-center"), **options)
 
-
-def test_a_billet_is_refused_not_diverged():
-    """A free billet's flight (y'' = 0) is a Jordan block: no eigen-decomposition, so the
-    exact solution would be garbage (ledger 1.0 before this check); refused in one line."""
-    from treeimpact.analytic.model.parameters import Billet
-
-    base = load_scenario("central-leader")
-    billet = dataclasses.replace(base, impactor=Billet(mass=50.0, impact_speed=3.0))
-    with pytest.raises(ParameterError, match="impactor.type = 'billet'"):
-        simulate_beam(billet)

@@ -53,7 +53,7 @@ class _State:
         self.modal = modal = decomposed(M, C, K)
         self.contact = contact
         (self.H_int, self.H_lin, self.secular, self.rows, self.rows_conj, self.law,
-         self.gd) = _fixed_parts(model, modal, contact, g)
+         self.gd, self.drift_rows) = _fixed_parts(model, modal, contact, g)
         self.lam = modal.lam[modal.kept]
         self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
         # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
@@ -85,7 +85,8 @@ class _State:
         over the phases."""
         N = self.modal.N
         kin = 0.5 * (u[:, N:] * u[:, N:]).sum(axis=1)
-        pot = 0.5 * (u[:, :N] * u[:, :N]).sum(axis=1)
+        du = u[:, :N] * self.modal.elastic  # a rigid mode's coordinate has no spring
+        pot = 0.5 * (du * du).sum(axis=1)
         pad = 0.5 * self.k_c * (u @ self.gd) ** 2 if self.contact else np.zeros(len(u))
         return kin, pot - pad, pad
 
@@ -95,7 +96,9 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     model's pad, damping and observed points (delta = ``g`` . q): the works' integrals H_int
     and H_lin (stacked: damping; and the pad's, in contact), whether H_lin is non-zero, the
     observation rows over the kept modes (m x 8, complex) and their conjugate transpose,
-    the law's rows (m x 4: delta, F, their slopes) and delta's row over u. Kept on a small
+    the law's rows (m x 4: delta, F, their slopes), delta's row over u and the observation
+    rows of a rigid mode's flight over the kept modes (8 x m: the observables' rates
+    Re(rows G V w), or None without a rigid mode). Kept on a small
     ``modal`` (read-only arrays) for the next solve with the same inputs: the same
     arithmetic, so the same numbers."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
@@ -120,9 +123,12 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     law = np.stack([delta, k_c * delta + c_c * rate])
     law = np.concatenate([law, law * modal.lam[kept]]).T.copy()  # m x 4
     gd = modal.displacement_row(g)
-    for a in (H_int, H_lin, rows, rows_conj, law, gd):
+    drift = None
+    if modal.drift is not None:  # the flight s G u(0) of a rigid mode, over the kept modes
+        drift = (observation_rows(model, modal, g) @ modal.drift)[:, kept].copy()
+    for a in (H_int, H_lin, rows, rows_conj, law, gd) + ((drift,) if drift is not None else ()):
         a.setflags(write=False)
-    parts = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd)
+    parts = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd, drift)
     if 2 * modal.N <= _PARTS_MAX_COORDS:
         cache[key] = parts
         while len(cache) > _PARTS_KEPT:  # a sweep over the pad meets one free state often
@@ -230,7 +236,7 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
         end = _scan(model, st, kind, grid, t, w[st.modal.kept])
         end_s, nxt = end if end is not None else (t_end - t, None)
         a = np.exp(st.modal.lam * end_s) * w
-        u = (st.modal.Vu @ a).real
+        u = st.modal.advanced(w, a, end_s)
         ends.add(t, kind, w, end_s, a, u)
         if nxt is None:
             break
@@ -266,10 +272,13 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
     rows_conj, steps_ri, jumps_conj = st.rows_conj, st.steps_ri, st.jumps_conj
     contact, free = kind is ContactPhase.CONTACT, kind is ContactPhase.FREE
+    rate, flight = _flight(st, wk, k_c, c_c)
     while j < n_t:
         jj = min(n_t, j + block)
         ob = np.matmul((rows_conj * base).view(float), steps_ri[:, :jj - j],
                        out=obs[:, j:jj])
+        if rate is not None:
+            ob += np.outer(rate, t_grid[j:jj] - t)
         d = ob[_DELTA]
         if free:  # apart, the law is read at the switch only (the same arithmetic there)
             f, ended = None, d > 0.0
@@ -292,7 +301,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
             d_hi, r_hi = ob[_DELTA:_RATE + 1, k].tolist()
             f_hi = k_c * d_hi + c_c * r_hi if free else float(f[k])
             return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, d_hi, f_hi,
-                           lo_values)
+                           lo_values, flight)
         if contact:
             np.maximum(0.0, f, out=force[j:jj])
         else:
@@ -301,6 +310,16 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
             base = base * jumps_conj[block]
         j, block = jj, min(8 * block, st.block)
     return None
+
+
+def _flight(st: _State, wk: np.ndarray, k_c: float, c_c: float):
+    """(rates, flight) of a rigid mode's flight (a free billet) in the phase started with
+    modal coefficients ``wk``: the 8 observables' rates Re(rows G V w) (m/s, m/s^2; added
+    as rate * s) and those of delta and of the law (m/s, N/s); (None, (0, 0)) without one."""
+    if st.drift_rows is None:
+        return None, (0.0, 0.0)
+    rate = (st.drift_rows @ wk).real
+    return rate, (rate[_DELTA], k_c * rate[_DELTA] + c_c * rate[_RATE])
 
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
@@ -312,22 +331,25 @@ def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> 
 
 
 def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
-            d_hi: float, f_hi: float, lo_values: tuple | None):
+            d_hi: float, f_hi: float, lo_values: tuple | None,
+            flight: tuple[float, float] = (0.0, 0.0)):
     """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]
     (:func:`.phases.switch`), each root by Newton's method on the exact solution's delta
     and law with their slopes; ``lo_values``: (delta, law) at s_lo from the samples, or
-    None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`)."""
+    None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`);
+    ``flight``: the rates (m/s, N/s) a rigid mode's flight adds to delta and the law."""
     lam = st.lam
     c = wk[:, None] * st.law  # m x 4: (delta, F, delta', F') = Re(exp(lambda s) @ c)
     exp, dot = np.exp, np.dot
+    d_rate, f_rate = float(flight[0]), float(flight[1])
 
     def delta(s):
         v = dot(exp(lam * s), c).real.tolist()
-        return v[0], v[2]
+        return v[0] + d_rate * s, v[2] + d_rate
 
     def law(s):
         v = dot(exp(lam * s), c).real.tolist()
-        return v[1], v[3]
+        return v[1] + f_rate * s, v[3] + f_rate
 
     d_lo, f_lo = lo_values if lo_values is not None else (None, None)
 

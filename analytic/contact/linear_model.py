@@ -23,7 +23,7 @@ class LinearImpactModel:
     clamp: int  # dof of the deflection at a
     crown: int  # dof of the deflection at l
     impactor_mass: float  # m, kg
-    impactor_stiffness: float  # k = m g / l_e, N/m (eq 13)
+    impactor_stiffness: float  # k = m g / l_e, N/m (eq 13; a billet: its own, 0 when free)
     impact_speed: float  # u_1, m/s (eq 48)
     contact_stiffness: float  # k_c, N/m
     contact_damping: float  # c_c, N s/m

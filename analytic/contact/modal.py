@@ -15,7 +15,7 @@ from functools import cached_property
 
 import numpy as np
 
-from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.errors import SimulationDiverged
 
 from .linear_model import LinearImpactModel
 
@@ -32,6 +32,13 @@ class Modal:
     have 3e7-1e9: their round-off changed the chattering sequence, docs/beam-impact.md).
     B = V diag(lambda) V^-1 and u(s) = V (exp(lambda s) w), w = V^-1 u(0).
 
+    A rigid-body mode (om = 0: a free billet apart from the trunk, its own coordinate
+    uncoupled, no spring; :attr:`rigid`) keeps (eta, eta') as its two coordinates, since
+    om eta would lose eta: its block of B is G = [[0, 1], [0, 0]] (eta'' = 0), nilpotent and
+    not diagonalisable. Its two coordinates get lambda = 0 and unit eigenvectors and the
+    flight is added in closed form: u(s) = V (exp(lambda s) w) + s G u(0), i.e.
+    eta(s) = eta(0) + s eta'(0), eta'(s) = eta'(0) (:attr:`drift` = G V, so G u(0) = drift w).
+
     For the raw state z = (q, q') = T u: ``V = T Vu`` and ``W = Vu^-1 T^-1`` (the
     ``exact-full`` loop's interface). The kept half of the spectrum (Im lambda >= 0; a
     conjugate pair counted twice through ``weight``) serves the ``exact`` method.
@@ -40,21 +47,28 @@ class Modal:
     def __init__(self, M: np.ndarray, C: np.ndarray, K: np.ndarray):
         N = len(M)
         om2, Phi = _undamped_modes(M, C, K)
-        if np.any(om2 <= 0.0):  # the trunk is clamped: only a free billet has no spring
-            raise ParameterError("impactor.type = 'billet': the exact linear solver needs a "
-                                 "pendulum (a free billet's flight, y'' = 0, has no "
-                                 "eigen-decomposition)")
-        om = np.sqrt(om2)
+        rigid = _rigid_modes(om2, M, C, K)
+        om = np.sqrt(np.where(rigid, 0.0, om2))
         B = np.zeros((2 * N, 2 * N))
         B[:N, N:] = np.diag(om)
         B[N:, :N] = -np.diag(om)
         B[N:, N:] = -(Phi.T @ C @ Phi)
-        lam, Vu = np.linalg.eig(B)
+        lam, Vu = _eigen(B, np.concatenate([rigid, rigid]))
         Wu = np.linalg.inv(Vu)
         if not (np.all(np.isfinite(Wu)) and np.all(np.isfinite(lam))):
             raise SimulationDiverged("beam: the state matrix could not be diagonalised")
         self.N, self.M, self.Phi, self.om = N, M, Phi, om
+        self.rigid = rigid
+        #: the displacement coordinate per unit eta: om (an elastic mode) or 1 (rigid)
+        self.scale = np.where(rigid, 1.0, om)
+        #: 1 on the elastic modes' displacement coordinates, 0 on a rigid mode's (no spring)
+        self.elastic = np.where(rigid, 0.0, 1.0)
         self.lam, self.Vu, self.Wu = lam, Vu, Wu
+        self.drift = None  # G V over the modes, or None: no rigid mode
+        if rigid.any():
+            G = np.zeros((2 * N, 2 * N))
+            G[np.flatnonzero(rigid), N + np.flatnonzero(rigid)] = 1.0  # eta' drives eta
+            self.drift = G @ Vu
         self.kept = np.flatnonzero(lam.imag >= 0.0)
         self.weight = np.where(lam.imag[self.kept] > 0.0, 2.0, 1.0)  # Re(V w) over the pairs
 
@@ -63,16 +77,16 @@ class Modal:
         """z = (q, q') = T u."""
         N = self.N
         T = np.zeros((2 * N, 2 * N))
-        T[:N, :N], T[N:, N:] = self.Phi / self.om, self.Phi
+        T[:N, :N], T[N:, N:] = self.Phi / self.scale, self.Phi
         return T
 
     @cached_property
     def Tinv(self) -> np.ndarray:
-        """u = T^-1 z: T^-1 = diag(om Phi^T M, Phi^T M)."""
+        """u = T^-1 z: T^-1 = diag(om Phi^T M, Phi^T M) (1 for om on a rigid mode)."""
         N = self.N
         PtM = self.Phi.T @ self.M
         Tinv = np.zeros((2 * N, 2 * N))
-        Tinv[:N, :N], Tinv[N:, N:] = self.om[:, None] * PtM, PtM
+        Tinv[:N, :N], Tinv[N:, N:] = self.scale[:, None] * PtM, PtM
         return Tinv
 
     @cached_property
@@ -87,11 +101,12 @@ class Modal:
 
     def transfer(self, other: Modal) -> np.ndarray:
         """The matrix taking ``other``'s energy coordinates to this one's (the same q, q'):
-        T^-1 T_other = diag(om X / om_other, X), X = Phi^T M Phi_other."""
+        T^-1 T_other = diag(om X / om_other, X), X = Phi^T M Phi_other (1 for om on a rigid
+        mode)."""
         N = self.N
         X = self.Phi.T @ self.M @ other.Phi
         P = np.zeros((2 * N, 2 * N))
-        P[:N, :N], P[N:, N:] = self.om[:, None] * X / other.om[None, :], X
+        P[:N, :N], P[N:, N:] = self.scale[:, None] * X / other.scale[None, :], X
         return P
 
     @property
@@ -101,7 +116,7 @@ class Modal:
 
     def displacement_row(self, r: np.ndarray) -> np.ndarray:
         """The row of u giving r . q (r over the N coordinates)."""
-        return np.concatenate([(self.Phi.T @ r) / self.om, np.zeros(self.N)])
+        return np.concatenate([(self.Phi.T @ r) / self.scale, np.zeros(self.N)])
 
     def velocity_row(self, r: np.ndarray) -> np.ndarray:
         """The row of u giving r . q'."""
@@ -116,12 +131,26 @@ class Modal:
         """Observables ``rows @ u(s)`` for rows over u (r x len(s)) of the solution with
         modal coefficients ``w`` at s = 0; ``U``: :meth:`modal` of (w, s) if known."""
         U = self.modal(w, s) if U is None else U
-        return (U @ (rows @ self.Vu).T).real.T
+        out = (U @ (rows @ self.Vu).T).real.T
+        if self.drift is not None:  # the rigid modes' flight, s G u(0)
+            out = out + np.outer((rows @ self.drift @ w).real, s)
+        return out
 
     def state(self, w: np.ndarray, s: float) -> np.ndarray:
         """The raw state z = (q, q') at ``s`` (s) of the solution with modal coefficients
         ``w`` at s = 0."""
-        return (self.V @ (np.exp(self.lam * s) * w)).real
+        z = (self.V @ (np.exp(self.lam * s) * w)).real
+        if self.drift is not None:  # the rigid modes' flight, s G u(0)
+            z = z + s * (self.T @ (self.drift @ w).real)
+        return z
+
+    def advanced(self, w: np.ndarray, a: np.ndarray, s: float) -> np.ndarray:
+        """The state u at ``s`` (s) of the solution with modal coefficients ``w`` at s = 0,
+        ``a`` = exp(lambda s) w: Re(V a), plus s G u(0) for a rigid mode's flight."""
+        u = (self.Vu @ a).real
+        if self.drift is not None:
+            u = u + s * (self.drift @ w).real
+        return u
 
     def quadratic(self, Q: np.ndarray) -> Quadratic:
         """The quadratic form u^T Q u (Q over u) on this solution."""
@@ -175,10 +204,45 @@ def _undamped_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray
     return np.append(om2_t, K[-1, -1] / M[-1, -1]), Phi
 
 
+def _rigid_modes(om2: np.ndarray, M: np.ndarray, C: np.ndarray, K: np.ndarray
+                 ) -> np.ndarray:
+    """Which modes of :func:`_undamped_modes` are rigid-body modes (om^2 = 0): the last
+    coordinate's own mode when it is uncoupled and has neither spring nor damper (a free
+    billet apart from the trunk, y'' = 0). Any other mode of om^2 <= 0 (a trunk without
+    support) raises SimulationDiverged."""
+    rigid = np.zeros(len(om2), dtype=bool)
+    last = len(M) - 1
+    uncoupled = not (np.any(K[last, :last]) or np.any(M[last, :last]) or np.any(C[last, :last]))
+    if uncoupled and K[last, last] == 0.0 and C[last, last] == 0.0:
+        rigid[last] = True
+    if np.any(om2[~rigid] <= 0.0):
+        raise SimulationDiverged("beam: a mode of the linear model has no stiffness (om^2 "
+                                 "<= 0) and is not a free billet's flight")
+    return rigid
+
+
+def _eigen(B: np.ndarray, rigid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lambda, V): B = V diag(lambda) V^-1 over the coordinates not ``rigid``; the rigid
+    modes' coordinates (their rows and columns of B zero but G's, :class:`Modal`) get
+    lambda = 0 and unit vectors. Without rigid modes, numpy's eig of B itself."""
+    if not rigid.any():
+        return np.linalg.eig(B)
+    keep = np.flatnonzero(~rigid)
+    lam_k, V_k = np.linalg.eig(B[np.ix_(keep, keep)])
+    lam = np.zeros(len(B), dtype=complex)
+    V = np.zeros(B.shape, dtype=complex)
+    lam[keep] = lam_k
+    V[np.ix_(keep, keep)] = V_k
+    V[np.flatnonzero(rigid), np.flatnonzero(rigid)] = 1.0
+    return lam, V
+
+
 class Quadratic:
     """u(s)^T Q u(s) and its integral from 0 to s, in closed form on a :class:`Modal`:
     int_0^s u^T Q u = sum_ij H_ij w_i w_j (exp((lambda_i + lambda_j) s) - 1) / (lambda_i +
     lambda_j), H = V^T Q V; pairs with lambda_i + lambda_j = 0 (undamped) integrate to s.
+    On a state with a rigid mode the forms do not read its displacement coordinate (Q G = 0:
+    the kinetic energy, the elastic without it, the damping), so its flight adds nothing.
     ``modal``: the solution; ``Q``: the form over u (or None and ``H``, V^T Q V, given)."""
 
     def __init__(self, modal: Modal, Q: np.ndarray | None, H: np.ndarray | None = None):
@@ -228,7 +292,7 @@ def ledger_forms(model: LinearImpactModel, modal: Modal, contact: bool,
     kin = np.zeros((2 * N, 2 * N))
     kin[N:, N:] = 0.5 * np.eye(N)
     pot = np.zeros((2 * N, 2 * N))
-    pot[:N, :N] = 0.5 * np.eye(N)
+    pot[:N, :N] = 0.5 * np.diag(modal.elastic)  # a rigid mode's coordinate has no spring
     gd, gv = modal.displacement_row(g), modal.velocity_row(g)
     damp = np.zeros((2 * N, 2 * N))
     Dfull = np.zeros((N, N))

@@ -38,7 +38,7 @@ class SoftMethod(enum.StrEnum):
     #: a 1 x 1 mesh; the record's energies when first read)
     EXACT = "exact"
     #: by DOP853 with event location (the original implementation, the tests' reference:
-    #: the same metrics to 1e-8; a billet's free flight always goes this way)
+    #: the same metrics to 1e-8)
     ODE = "ode"
 
 
@@ -91,8 +91,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     t_col = collision_duration(model, k_c, c_c)
     dt = t_col / samples_per_collision
     check_work(t_end, dt, SAMPLE_COST)
-    if method is SoftMethod.ODE or model.impactor_stiffness == 0.0:  # a billet: no pendulum's mode
-        # (its free flight, y'' = 0, is a Jordan block the exact solver does not take)
+    if method is SoftMethod.ODE:
         rec = with_static_shape_crown(soft_record(model, k_c, c_c, t_end, dt_sample=dt),
                                       scenario.trunk)
         samples, trajectory = rec, rec.trajectory()

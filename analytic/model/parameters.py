@@ -240,23 +240,30 @@ class Pendulum:
 
 @dataclass(frozen=True)
 class Billet:
-    """Unrestrained mass (the paper's spring-loaded billet) striking at ``impact_speed``: no
-    spring, omega_2 = 0. Validated on construction (ParameterError).
+    """A mass striking at ``impact_speed`` (the paper's spring-loaded billet): unrestrained
+    (``stiffness`` 0, omega_2 = 0, "substituted as zero" after Table 1) or held by a spring
+    k at its rest position where it first touches (m y'' + k y = -F, eq 13 with k for
+    m g / l_e). Validated on construction (ParameterError).
 
     Attributes:
         mass: m, kg.
         impact_speed: u_1, m/s.
+        stiffness: k, the billet's spring, N/m (0: a free billet).
     """
 
     mass: float  # m, kg
     impact_speed: float  # u_1, m/s
+    stiffness: float = 0.0  # k, N/m
 
     def __post_init__(self):
         check_limit("impactor.mass", self.mass)
         check_limit("impactor.impact_speed", self.impact_speed)
+        check_limit("impactor.stiffness", self.stiffness)
 
-    stiffness = 0.0
-    natural_frequency = 0.0
+    @property
+    def natural_frequency(self) -> float:
+        """omega_2 = sqrt(k / m), rad/s (0 for a free billet)."""
+        return math.sqrt(self.stiffness / self.mass)
 
 
 @dataclass(frozen=True)
@@ -337,7 +344,8 @@ class Scenario:
             impactor.update(type="pendulum", equivalent_length=imp.equivalent_length,
                             release_angle_deg=imp.release_angle_deg, gravity=imp.gravity)
         else:
-            impactor.update(type="billet", impact_speed=imp.impact_speed)
+            impactor.update(type="billet", impact_speed=imp.impact_speed,
+                            stiffness=imp.stiffness)
         return {
             "name": self.name,
             "t_end": self.t_end,

@@ -246,6 +246,9 @@ PARAMETERS = (
            "impactor.release_angle_deg", meaning="the pendulum's release angle"),
     _field("gravity", "g", "m/s^2", 1.0, 30.0, "gravity", "impactor.gravity"),
     _field("impact_speed", "u_1", "m/s", 0.01, 50.0, "impact speed", "impactor.impact_speed"),
+    _field("impactor_stiffness", "k", "N/m", 0.0, 1e9, "impactor spring",
+           "impactor.stiffness", meaning="the impactor's spring k: a billet's as given (0: "
+           "a free billet), a pendulum's m g / l_e (eq 13)"),
     _field("restitution", "e", "1", 0.0, 1.0, "pad restitution", "contact.restitution",
            "restitution", design=_DESIGN["restitution"],
            meaning="restitution e of the contact (eq 21)"),
@@ -271,8 +274,6 @@ PARAMETERS = (
     Parameter("damping_rate", "b", "1/s", 0.0, _INF,
               "damping rate C_T / (2 (M_T + m)) (eq 42)",
               meaning="the moving-together motion's decay rate C_T / (2 (M_T + m)) (eq 42)"),
-    Parameter("impactor_stiffness", "k", "N/m", 0.0, _INF,
-              "pendulum stiffness m g / l_e (eq 13)"),
     Parameter("contact_damping", "c_c", "N s/m", 0.0, _INF, "pad damping",
               meaning="the pad's damping c_c (set by e on a scenario)"),
     Parameter("e_over_g", "E / G", "1", 0.0, 20.0, "E / G (shear)",

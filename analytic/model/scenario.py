@@ -8,7 +8,7 @@ Layout of a scenario file (SI units; angles in degrees where the key says ``_deg
                   clamp_mass, crown_mass, damping, base_stiffness (inf: a rigid clamp),
                   shear_modulus?, shear_coefficient? (Timoshenko theory; default E / 13, 0.894)
     [impactor]    type = "pendulum": mass, equivalent_length, release_angle_deg, gravity?
-                  type = "billet":   mass, impact_speed
+                  type = "billet":   mass, impact_speed, stiffness? (N/m; 0: free)
     [contact]     restitution, stiffness? | duration?
     [calibration] free text: which values are calibrated and from what; and
                   measured = ["trunk.clamp_mass", ...]: the fields of :data:`MEASURABLE`
@@ -39,7 +39,7 @@ _TRUNK_REQUIRED = {"length", "clamp_height", "diameter", "density", "youngs_modu
 #: values that are given have been checked: what is wrong comes before what is missing.
 _TRUNK_REQUIRED_LATER = ("clamp_mass", "crown_mass", "damping", "base_stiffness")
 _PENDULUM_KEYS = {"type", "mass", "equivalent_length", "release_angle_deg", "gravity"}
-_BILLET_KEYS = {"type", "mass", "impact_speed"}
+_BILLET_KEYS = {"type", "mass", "impact_speed", "stiffness"}
 _CONTACT_KEYS = {"restitution", "stiffness", "duration"}
 _TOP_KEYS = {"name", "description", "t_end", "trunk", "impactor", "contact", "calibration"}
 
@@ -128,7 +128,9 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
     elif kind == "billet":
         _keys(imp_t, "impactor", _BILLET_KEYS, {"mass", "impact_speed"})
         impactor = Billet(mass=_number(imp_t, "impactor", "mass"),
-                          impact_speed=_number(imp_t, "impactor", "impact_speed"))
+                          impact_speed=_number(imp_t, "impactor", "impact_speed"),
+                          stiffness=_number(imp_t, "impactor", "stiffness")
+                          if "stiffness" in imp_t else 0.0)
     else:
         raise ParameterError(f"impactor.type = {kind!r}: allowed 'pendulum' or 'billet'")
 

@@ -1,9 +1,9 @@
 """The two-body impact model of Fig 3: SDOF trunk (eq 11) struck by a linearised pendulum.
 
 Tree: M_T x'' + C_T x' + K_T x = F (eq 11); pendulum (or billet): m y'' + k y = -F with
-k = m g / l_e (eq 13; k = 0 for a billet). Both start at rest position 0, the pendulum
-moving at u_1 (eq 48) and touching the trunk at t = 0. Contact means x = y; the
-pendulum may not pass the trunk (gap x - y >= 0).
+k = m g / l_e (eq 13; a billet: its own spring, k = 0 when free). Both start at rest
+position 0, the pendulum moving at u_1 (eq 48) and touching the trunk at t = 0. Contact
+means x = y; the pendulum may not pass the trunk (gap x - y >= 0).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ class TwoBodyModel:
     equivalent_damping: float  # C_T, N s/m
     equivalent_stiffness: float  # K_T, N/m
     impactor_mass: float  # m, kg
-    impactor_stiffness: float  # k = m g / l_e, N/m (0 for a billet)
+    impactor_stiffness: float  # k = m g / l_e, N/m (a billet: its own, 0 when free)
     impact_speed: float  # u_1, m/s
     restitution: float  # e
 
@@ -95,7 +95,7 @@ def two_body_model(scenario: Scenario, restitution: float | None = None) -> TwoB
     if isinstance(imp, Pendulum):
         k = imp.stiffness
     elif isinstance(imp, Billet):
-        k = 0.0
+        k = imp.stiffness
     else:  # pragma: no cover - Scenario validates the type
         raise TypeError(imp)
     return TwoBodyModel(dynamic_mass=tree.dynamic_mass, equivalent_damping=tree.equivalent_damping,
