@@ -103,6 +103,19 @@ def build_parser(command: str | None = None, *, every: bool = True) -> argparse.
 def main(argv=None) -> int:
     """Run ``treeimpact`` with ``argv`` (default: sys.argv[1:]), every command with one BLAS
     thread (analytic.threads; the caller's setting back on return); returns the exit code."""
+    return _run(argv, ending=False)
+
+
+def entry() -> int:
+    """The process's command line (the ``treeimpact`` script, ``python -m
+    treeimpact.compare.cli``): :func:`main` of sys.argv[1:], after which Ctrl-C and SIGTERM
+    are ignored while the interpreter ends (compare.process.stop_signals' ``ending``): a
+    signal that comes once the outcome is decided leaves it as it is (docs/cli.md)."""
+    return _run(None, ending=True)
+
+
+def _run(argv, ending: bool) -> int:
+    """:func:`main` of ``argv``; ``ending``: as compare.process.stop_signals'."""
     def command(_):
         words = sys.argv[1:] if argv is None else list(argv)
         args = build_parser(named_command(words), every=False).parse_args(words)
@@ -110,9 +123,9 @@ def main(argv=None) -> int:
         with command_environment(getattr(args, "max_seconds", None)), blas_limit():
             return COMMANDS[args.command].run(args)
 
-    with stop_signals():
+    with stop_signals(ending):
         return run_command(command, None)
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    sys.exit(entry())

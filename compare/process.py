@@ -139,13 +139,17 @@ def _on_stop_signal(signum, frame) -> None:
 
 
 @contextmanager
-def stop_signals():
+def stop_signals(ending: bool = False):
     """Ctrl-C (SIGINT) and SIGTERM end the command alike: a stop request that a pool's loop
     answers at its next look, or at once outside one (compare.pool.on_stop_signal); an
     interrupt that lands where Python can only print it (a weakref callback, a __del__) is
     delivered again, not lost (:func:`_unraisable`). A SIGINT this process inherited as
     ignored (a background job of a shell without job control: Ctrl-C is for the foreground
-    job) stays ignored. Restored afterwards (main() may be called from Python)."""
+    job) stays ignored. Restored afterwards (main() may be called from Python); with
+    ``ending`` (the process's own command line, which ends next) ignored afterwards instead:
+    the outcome is decided, and a signal in the interpreter's last ~0.2 s (its teardown
+    puts the default action back) would end the process by the signal, without its line
+    and its exit code."""
     STOP.clear()
     signals = [signal.SIGTERM]
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
@@ -160,7 +164,7 @@ def stop_signals():
             thread.join(timeout=10 * REDELIVER_AFTER_S)
         sys.unraisablehook = hook
         for s, handler in previous.items():
-            signal.signal(s, handler)
+            signal.signal(s, signal.SIG_IGN if ending else handler)
 
 
 #: Seconds after which a lost interrupt is delivered again (the hook returns in microseconds).

@@ -405,7 +405,7 @@ def _reached(awaited: str, out: Path, pid: int) -> bool:
         return bool(_children(pid))
     if awaited == "sweeps":
         return any((out / "sweeps").glob("*/sweep.json"))
-    return (out / "figures" / "small-e.png").exists()
+    return any(out.glob(".report-new-*/figures/small-e.png"))  # drawn into the new set
 
 
 def _group(pgid: int) -> list[int]:

@@ -54,6 +54,7 @@ from .base import environment
 from .design_answer import design_answer
 from .design_answer import in_short_text as design_in_short
 from .measure import in_short_text, with_sobol
+from .pageset import clear_leftovers, staged, swap_in
 from .paper import PaperSection
 from .runlog import RunsSection
 from .sort_keys import add_sort_keys
@@ -67,11 +68,13 @@ SWEEPS = "sweeps"
 
 
 def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, segments=None,
-                   out_dir=None, progress: bool = False, study_jobs=()) -> dict:
+                   out_dir=None, figure_dir=None, progress: bool = False,
+                   study_jobs=()) -> dict:
     """The report's sections (not yet rendered) and the wall time each took (s), for the
     ``scenarios``, ``study_dirs``, ``runs``, ``engines`` and ``segments`` of
-    :func:`write_report`; figures
-    are written to ``out_dir/figures`` (none without ``out_dir``); ``progress``: runs and
+    :func:`write_report`; figures are written to ``figure_dir`` (default
+    ``out_dir/figures``; none without either), the pages linking them as ``figures/`` of
+    the page's folder ``out_dir``; ``progress``: runs and
     sections reported on stderr as they finish; ``study_jobs``: studies running beside the
     report (compare.validity.study_job.StudyJob), each a section once it ends."""
     # lazy: +291 ms at import otherwise (matplotlib, numpy),
@@ -84,7 +87,9 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     preload_in_workers("treeimpact.compare.studies.ident_fits",
                        "treeimpact.analytic.identify.record_fit")
     cache = RunCache() if runs is None else runs
-    sink = FigureFiles(Path(out_dir) / "figures") if out_dir is not None else None
+    if figure_dir is None and out_dir is not None:
+        figure_dir = Path(out_dir) / "figures"
+    sink = FigureFiles(figure_dir) if figure_dir is not None else None
     names = list(shipped_scenarios()) if not scenarios else list(scenarios)
     scens = [resolve_scenario(s) for s in names]
     wall = {}
@@ -234,32 +239,49 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
     ``segments`` (hinged trunk) go to the ladder; ``progress``; ``study_jobs``: studies
     running beside the report (compare.validity.study_job.StudyJob), included when they end.
     Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
-    ``out_dir/figures``.
+    ``out_dir/figures``. The pages and figures are one set (:mod:`.pageset`): written into a
+    temporary folder inside ``out_dir`` and swapped into place together, so an interrupt or
+    a failure leaves the earlier report's set as it was.
     """
     t_start = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    for old in (out / "figures").glob("*.png"):  # figures of an earlier report
-        old.unlink()
+    clear_leftovers(out)
     shutil.rmtree(out / SWEEPS, ignore_errors=True)  # its sweeps: rows of older code
-    sections = build_sections(scenarios, study_dirs, runs, out_dir=out, **options)
+    with staged(out) as stage:
+        sections = build_sections(scenarios, study_dirs, runs, out_dir=out,
+                                  figure_dir=stage / "figures", **options)
+        _write_pages(stage, sections, t_start)
+        placed = swap_in(stage, out)
+    return {fmt: placed[f"report.{fmt}"] for fmt in ("html", "md", "json")}
+
+
+def _write_pages(folder: Path, sections: dict, t_start: float) -> None:
+    """report.html, report.md and report.json of the built ``sections`` into ``folder``;
+    ``t_start``: when the report began (time.perf_counter, s), for its total wall time."""
     ordered = [sections["paper"], *sections["scenarios"], sections["trunks"],
                *sections["studies"], sections["runs"]]
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     summary = _page_summary(sections)
-    small_e = sections["small_e"]
     env = environment()
-    paths = {}
-    for fmt, name in (("html", "report.html"), ("md", "report.md")):
+    for fmt in ("html", "md"):
         parts = [(s, s.render(fmt)) for s in ordered]
         page = env.get_template(f"report.{fmt}.j2").render(
             sections=ordered, parts=parts, generated=stamp, summary=summary)
         if fmt == "html":  # every numeric cell its number in SI for the sorter
             page = add_sort_keys(page)
-        paths[fmt] = out / name
-        paths[fmt].write_text(page, encoding="utf-8")
+        (folder / f"report.{fmt}").write_text(page, encoding="utf-8")
     sections["runs"].wall_s["total"] = time.perf_counter() - t_start
-    data = {
+    data = _report_data(sections, summary, stamp)
+    (folder / "report.json").write_text(json.dumps(to_jsonable(data), indent=1),
+                                        encoding="utf-8")
+
+
+def _report_data(sections: dict, summary: dict, stamp: str) -> dict:
+    """report.json's content: the built ``sections`` with the page's ``summary``
+    (:func:`_page_summary`), generated at ``stamp``."""
+    small_e = sections["small_e"]
+    return {
         "generated": stamp,
         "provenance": provenance(scenarios={s.ladder.name: scenario_digest(s.ladder.scenario)
                                             for s in sections["scenarios"]}),
@@ -278,9 +300,6 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         "studies": [s.to_json() for s in sections["studies"]],
         "runs": sections["runs"].to_json(),
     }
-    paths["json"] = out / "report.json"
-    paths["json"].write_text(json.dumps(to_jsonable(data), indent=1), encoding="utf-8")
-    return paths
 
 
 #: How many of the largest discrepancies the summary lists, whatever their verdict.
