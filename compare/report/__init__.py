@@ -29,6 +29,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from treeimpact.analytic.model.plausible import implausible
 from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.analytic.results import to_jsonable
 
@@ -226,6 +227,8 @@ def _page_summary(sections: dict) -> dict:
     summary["design"] = design_answer(sections["studies"])
     if summary["design"]:
         summary["in_short"]["design"] = design_in_short(summary["design"])
+    summary["implausible"] = {s.ladder.name: found for s in sections["scenarios"]
+                              if (found := [i.text for i in implausible(s.ladder.scenario)])}
     return summary
 
 
