@@ -236,15 +236,31 @@ def check_grid_specs(specs, flag: str = "--grid") -> None:
                                  f"allowed {a:g}-{b:g} {INPUTS[axis.name].unit}")
 
 
-def design_spec(scenario, specs, out):
+def check_operating_point(scenario, label: str) -> None:
+    """ParameterError (one line naming ``label``, what the user typed for the tree) when the
+    tree ``scenario``'s own value of a design input (:func:`operating_point`) lies outside
+    the range the study admits: its maps hold that input at the tree's value."""
+    here = operating_point(scenario)
+    for name, inp in INPUTS.items():
+        a, b = inp.allowed
+        if not (math.isfinite(here[name]) and a <= here[name] <= b):
+            unit = f" {inp.unit}" if inp.unit != "1" else ""
+            raise ParameterError(
+                f"{label}: the tree's own {inp.label} = {here[name]:.4g}{unit} lies outside "
+                f"the design study's allowed {a:g} to {b:g}{unit} (its maps hold it at the "
+                "tree's value); a tree within it")
+
+
+def design_spec(scenario, specs, out, label: str | None = None):
     """A sweep (compare.sweep.run.SweepSpec) of :func:`design_cell` over the ``--grid``
-    ``specs`` on ``scenario`` into ``out``."""
+    ``specs`` on ``scenario`` into ``out``; ``label``: what a refusal of the grid names (a
+    map's grid the study made; None: the specs, as typed)."""
     # lazy: +59 ms at import otherwise (treeimpact.compare.sweep.run),
     # which this module's other callers do not need
     from ..sweep.run import SweepSpec
 
     return SweepSpec(scenario, list(specs), Path(out), ("analytic",), identify=True,
-                     analysis="treeimpact.compare.studies.design:design_cell")
+                     analysis="treeimpact.compare.studies.design:design_cell", label=label)
 
 
 def map_of(table, pair, quantity: str):
