@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import enum
 import math
+import numbers
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -206,14 +208,25 @@ def pair_grid(scenario, pair, count: int, ranges: dict | None = None) -> list[st
     return specs
 
 
-def check_ranges(ranges: dict, flag: str = "ranges") -> None:
-    """ParameterError (one line naming ``flag``) for an unknown input or a range outside its
-    allowed one; ``ranges``: {name: (low, high)}."""
-    for name, (low, high) in ranges.items():
+def check_ranges(ranges, flag: str = "ranges") -> None:
+    """ParameterError (one line naming ``flag``) for ``ranges`` that are not a mapping
+    {name: (low, high)}, an unknown input, a range that is not two numbers, or one outside
+    its allowed range."""
+    if not isinstance(ranges, Mapping):
+        raise ParameterError(f"{flag}: expected {{input: (low, high)}}, a dict, got a "
+                             f"{type(ranges).__name__}; inputs {', '.join(INPUTS)}")
+    for name, pair in ranges.items():
         if name not in INPUTS:
             raise ParameterError(f"{flag}: {name!r} is not a design input; allowed "
                                  f"{', '.join(INPUTS)}")
-        INPUTS[name].check(float(low), float(high), flag)
+        a, b = INPUTS[name].allowed
+        if isinstance(pair, (str, bytes)) or not isinstance(pair, Sequence) or len(pair) != 2 \
+                or not all(isinstance(v, numbers.Real) and not isinstance(v, bool)
+                           for v in pair):
+            unit = "" if INPUTS[name].unit == "1" else f" {INPUTS[name].unit}"
+            raise ParameterError(f"{flag}: {name} = {pair!r}; expected (low, high), two "
+                                 f"numbers with {a:g} <= low < high <= {b:g}{unit}")
+        INPUTS[name].check(float(pair[0]), float(pair[1]), flag)
 
 
 def check_grid_specs(specs, flag: str = "--grid") -> None:

@@ -224,8 +224,8 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
     inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
     ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``engines``: the
     engines' spot checks too (compare.studies.design_engines)."""
+    check_ranges({} if ranges is None else ranges)
     ranges = dict(ranges or {})
-    check_ranges(ranges)
     if grid:
         check_grid_specs(grid)
     t0 = time.perf_counter()
