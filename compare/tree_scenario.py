@@ -84,8 +84,8 @@ def _range_of(key: str) -> tuple:
 
 
 def check_keywords(name, measured: dict) -> None:
-    """The keywords of :func:`treeimpact.tree_scenario` checked where they enter, one line
-    naming the keyword as typed: ``name`` a text (TypeError otherwise), every required input
+    """The keywords ``measured`` ({keyword: value}) of :func:`treeimpact.tree_scenario`
+    checked where they enter, one line naming the keyword as typed: ``name`` a text (TypeError otherwise), every required input
     given (ParameterError naming the first missing and every required one), every input
     given a real number (TypeError: a bool, a text or a list is not one) within the
     registry's declared range (ParameterError; analytic.model.registry). None means left

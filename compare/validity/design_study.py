@@ -125,8 +125,9 @@ def _map_specs(out: Path, scen, count: int, ranges: dict, grid, typed: str) -> l
 
 
 def check_cells_ran(results, out) -> None:
-    """NotAchieved (one line: the cells, their outcomes and the first reason) when no cell
-    of the study's sweeps ``results`` has numbers: nothing to map or to put in words."""
+    """NotAchieved (one line: the cells, their outcomes, the first reason and the study's
+    folder ``out``, where the rows are kept) when no cell of the study's sweeps ``results``
+    has numbers: nothing to map or to put in words."""
     tables = [r.table for r in results if len(r.table)]
     if any((t["status"] == "ok").any() for t in tables):
         return
