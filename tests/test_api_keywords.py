@@ -31,6 +31,15 @@ def _tree(**changes):
     return {**TREE, **changes}
 
 
+def _elastic():
+    """central-leader with an elastic pad, e = 1: a tree the Newton model runs."""
+    import dataclasses
+
+    scen = ti.load_scenario("central-leader")
+    return dataclasses.replace(scen, contact=dataclasses.replace(scen.contact,
+                                                                 restitution=1.0))
+
+
 #: (keyword as typed, call, allowed error types).
 TREE_CASES = [
     ("dynamic_mass", lambda: ti.tree_scenario("t", **_without("dynamic_mass")),
@@ -65,6 +74,9 @@ DESIGN_CASES = [
                                                             release_angle_deg=36.39)),
      TypeError),
     ("scenario", lambda out: ti.design_map(out, 5), TypeError),
+    # e = 1 lies outside the study's allowed 0-0.95: refused by the tree's own value
+    ("scenario", lambda out: ti.design_map(out, _elastic(), count=2, workers=0),
+     ti.ParameterError),
     ("engines", lambda out: ti.design_map(out, engines="no"), TypeError),
     ("out", lambda out: ti.design_map(3), TypeError),
     ("count", lambda out: ti.design_map(out, count=2.0), ti.ParameterError),
