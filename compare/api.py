@@ -414,23 +414,10 @@ def design_map(out, scenario=SWEEP_SCENARIO, *, count: int = 30, ranges: dict | 
     # which this module's other callers do not need
     from .validity.design_study import run_design_study
 
-    _check_design_keywords(out, scenario, engines)
     if not isinstance(count, int) or isinstance(count, bool) or not 2 <= count <= 200:
         raise ParameterError(f"count = {count!r}: allowed an integer from 2 to 200")
     return run_design_study(out, scenario, count=count, ranges=ranges, workers=workers,
                             scheduler=scheduler, progress=False, engines=engines)
-
-
-def _check_design_keywords(out, scenario, engines) -> None:
-    """TypeError naming the keyword of :func:`design_map` given a value of the wrong type:
-    ``out`` a path, ``scenario`` a Scenario, name or path, ``engines`` True or False."""
-    if not isinstance(out, (str, Path)):
-        raise TypeError(f"out: expected a directory (str or pathlib.Path), got {out!r}")
-    if not isinstance(scenario, (Scenario, str, Path)):
-        raise TypeError(f"scenario: expected a Scenario, a shipped scenario's name or a TOML "
-                        f"path, got {scenario!r} ({type(scenario).__name__})")
-    if not isinstance(engines, bool):
-        raise TypeError(f"engines: expected True or False, got {engines!r}")
 
 
 __all__ = ["backends", "design_map", "identify", "ladder", "modes", "read_record",

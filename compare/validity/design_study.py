@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from treeimpact.analytic.errors import NotAchieved, ParameterError, SimulationDiverged, one_line
+from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.analytic.results import check_plausible
 
@@ -215,6 +216,19 @@ def _cost(results, wall_s: float, workers) -> dict:
             "cpu_s_per_cell": wall_s * n / made if made else None}
 
 
+def check_keywords(out, scenario, engines) -> None:
+    """TypeError naming the keyword of :func:`run_design_study` (and the API's design_map)
+    given a value of the wrong type: ``out`` a path, ``scenario`` a Scenario, name or
+    path, ``engines`` True or False."""
+    if not isinstance(out, (str, Path)):
+        raise TypeError(f"out: expected a directory (str or pathlib.Path), got {out!r}")
+    if not isinstance(scenario, (Scenario, str, Path)):
+        raise TypeError(f"scenario: expected a Scenario, a shipped scenario's name or a TOML "
+                        f"path, got {scenario!r} ({type(scenario).__name__})")
+    if not isinstance(engines, bool):
+        raise TypeError(f"engines: expected True or False, got {engines!r}")
+
+
 def run_design_study(out, scenario="central-leader", *, count: int = COUNT, ranges=None,
                      workers=None, scheduler=None, progress=None, grid=None,
                      retry_failed: bool = False, engines: bool = False) -> dict:
@@ -225,6 +239,7 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
     inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
     ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``engines``: the
     engines' spot checks too (compare.studies.design_engines)."""
+    check_keywords(out, scenario, engines)
     check_ranges({} if ranges is None else ranges)
     ranges = dict(ranges or {})
     if grid:
