@@ -40,7 +40,7 @@ from .recording import check_sampling, sample
 from .runs import resolve_scenario
 from .sweep.run import run_sweep
 from .tree_scenario import RENAMED as TREE_RENAMED
-from .tree_scenario import TreeInputs
+from .tree_scenario import TreeInputs, check_keywords
 from .tree_scenario import tree_scenario as build_tree_scenario
 
 #: The backends a sweep runs when none are given: all of them (the command line's too).
@@ -274,6 +274,7 @@ def tree_scenario(name: str, **measured) -> Scenario:
 
     Raises:
         ParameterError: an unknown, missing, contradictory or out-of-range input, named.
+        TypeError: an input that is not a number (a bool, a text), or a name not a text.
         OutsideValidity: a tree whose analytic x_max lies beyond the clamp height.
     """
     known = {f.name for f in dataclasses.fields(TreeInputs)} - {"name"}
@@ -281,7 +282,9 @@ def tree_scenario(name: str, **measured) -> Scenario:
     if unknown:
         raise ParameterError(f"{unknown[0]}: not an input of tree_scenario"
                              f"{did_you_mean(unknown[0], known, TREE_RENAMED, style='keyword')}")
-    return build_tree_scenario(TreeInputs(name=name, **measured))
+    check_keywords(name, measured)
+    return build_tree_scenario(TreeInputs(name=name, **{k: float(v) for k, v in
+                                                        measured.items() if v is not None}))
 
 
 def pendulum_test(test, clamp_height, diameter):
@@ -407,8 +410,11 @@ def design_map(out, scenario=SWEEP_SCENARIO, *, count: int = 30, ranges: dict | 
         every map's numbers and the sentences read off them.
 
     Raises:
-        ParameterError: a range outside an input's allowed one, an unknown input, a count
-            below 2.
+        ParameterError: a range outside an input's allowed one or not (low, high), an
+            unknown input, a count below 2, a tree whose own a/l, m/M_T, pad or e lies
+            outside the study's allowed range.
+        TypeError: an ``out``, ``scenario`` or ``engines`` of the wrong type.
+        NotAchieved: no cell of the maps has numbers (nothing is written but the rows).
     """
     # lazy: +80 ms at import otherwise (treeimpact.compare.validity.design_study),
     # which this module's other callers do not need
@@ -417,7 +423,7 @@ def design_map(out, scenario=SWEEP_SCENARIO, *, count: int = 30, ranges: dict | 
     if not isinstance(count, int) or isinstance(count, bool) or not 2 <= count <= 200:
         raise ParameterError(f"count = {count!r}: allowed an integer from 2 to 200")
     return run_design_study(out, scenario, count=count, ranges=ranges, workers=workers,
-                            scheduler=scheduler, progress=False, engines=bool(engines))
+                            scheduler=scheduler, progress=False, engines=engines)
 
 
 __all__ = ["backends", "design_map", "identify", "ladder", "modes", "read_record",

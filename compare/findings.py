@@ -15,6 +15,11 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Scenario
 
 
+#: The e at which :meth:`TreePhysics.of` builds the beam model for its effective mass (which
+#: the pad does not change): one every pad law takes.
+PAD_E = 0.5
+
+
 @dataclass(frozen=True)
 class TreePhysics:
     """The quantities a finding's ``when`` conditions read (each a ``<field>_above`` or
@@ -36,7 +41,9 @@ class TreePhysics:
 
         m = scenario.impactor.mass
         m_t = reduce_trunk(scenario.trunk).dynamic_mass
-        m_c = beam_impact_model(scenario)[0].effective_mass
+        # the beam's effective mass at the clamp: its mesh's, whatever the pad; built at an e
+        # the soft pad law takes (e = 0, valid for the Newton model, needs infinite damping)
+        m_c = beam_impact_model(scenario, restitution=PAD_E)[0].effective_mass
         return cls(restitution=float(scenario.contact.restitution),
                    loss_ratio=_reduced(m, m_t) / _reduced(m, m_c),
                    crown_factor=float(crown_factor(scenario.trunk)))

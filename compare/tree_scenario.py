@@ -11,6 +11,8 @@ files do, and its t_end is one its analytic run can report. Errors name the comm
 from __future__ import annotations
 
 import dataclasses
+import math
+import numbers
 from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
@@ -71,6 +73,42 @@ class TreeInputs:
     restitution: float | None = None  # e, 1
     contact_duration: float | None = None  # tau_c, s
     t_end: float | None = None  # s
+
+
+def _range_of(key: str) -> tuple:
+    """(low, high or None, unit) of the input ``key``: the registry's declared range (a
+    regression input's, :data:`REGRESSION_RANGES`)."""
+    if key in REGRESSION_RANGES:
+        return REGRESSION_RANGES[key]
+    p = BY_NAME[key]
+    return p.low, None if math.isinf(p.high) else p.high, p.unit
+
+
+def check_keywords(name, measured: dict) -> None:
+    """The keywords ``measured`` ({keyword: value}) of :func:`treeimpact.tree_scenario`
+    checked where they enter, one line naming the keyword as typed: ``name`` a text (TypeError otherwise), every required input
+    given (ParameterError naming the first missing and every required one), every input
+    given a real number (TypeError: a bool, a text or a list is not one) within the
+    registry's declared range (ParameterError; analytic.model.registry). None means left
+    out. Unknown keywords are the caller's to refuse (with what they may have meant)."""
+    if not isinstance(name, str) or not name.strip():
+        raise TypeError(f"name: expected the scenario's name, a non-empty str, got {name!r}")
+    fields = dataclasses.fields(TreeInputs)
+    required = [f.name for f in fields if f.default is dataclasses.MISSING and f.name != "name"]
+    missing = [k for k in required if measured.get(k) is None]
+    if missing:
+        unit = _range_of(missing[0])[2]
+        what = "a number" if unit == "1" else f"a number in {unit}"
+        raise ParameterError(f"{missing[0]}: missing ({what}); required: "
+                             f"{', '.join(required)}")
+    for key, value in measured.items():
+        if value is None:
+            continue
+        low, high, unit = _range_of(key)
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            what = "a number" if unit == "1" else f"a number in {unit}"
+            raise TypeError(f"{key}: expected {what}, got {value!r} ({type(value).__name__})")
+        check_range(key, float(value), low=low, high=high, unit="" if unit == "1" else unit)
 
 
 def tree_scenario(inputs: TreeInputs) -> Scenario:

@@ -163,6 +163,17 @@ def run(args) -> int:
     return ExitCode.INTERRUPTED
 
 
+def _refuse_fixed_by_preset(args) -> None:
+    """ParameterError naming ``--ladder`` or ``--no-identify`` given with ``--preset``: a
+    preset fixes its rungs and its identification (its study, and the resume of it from the
+    same --out, runs what the preset says), so neither flag could change what runs."""
+    for flag, given in (("--ladder", args.ladder), ("--no-identify", not args.identify)):
+        if given:
+            raise ParameterError(f"{flag}: not used with --preset {args.preset} (the preset "
+                                 "fixes its rungs and its identification, and resuming it "
+                                 "runs the same study); run a plain sweep (--grid) instead")
+
+
 def _run(args) -> int:
     t_start = time.perf_counter()
     # lazy: +112 ms at import otherwise (jinja2, numpy),
@@ -179,6 +190,7 @@ def _run(args) -> int:
         if options:
             raise ParameterError("--option: not used with --preset (the preset fixes the "
                                  "engines' options); run a plain sweep instead")
+        _refuse_fixed_by_preset(args)
         typed = args.backend != ",".join(BACKENDS)  # the default: the preset's own
         own_run = PRESETS[args.preset].run is not None  # a study of another kind
         paths = run_study(args.out, args.preset, scenario=args.scenario,

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import enum
 import math
+import numbers
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -206,14 +208,25 @@ def pair_grid(scenario, pair, count: int, ranges: dict | None = None) -> list[st
     return specs
 
 
-def check_ranges(ranges: dict, flag: str = "ranges") -> None:
-    """ParameterError (one line naming ``flag``) for an unknown input or a range outside its
-    allowed one; ``ranges``: {name: (low, high)}."""
-    for name, (low, high) in ranges.items():
+def check_ranges(ranges, flag: str = "ranges") -> None:
+    """ParameterError (one line naming ``flag``) for ``ranges`` that are not a mapping
+    {name: (low, high)}, an unknown input, a range that is not two numbers, or one outside
+    its allowed range."""
+    if not isinstance(ranges, Mapping):
+        raise ParameterError(f"{flag}: expected {{input: (low, high)}}, a dict, got a "
+                             f"{type(ranges).__name__}; inputs {', '.join(INPUTS)}")
+    for name, pair in ranges.items():
         if name not in INPUTS:
             raise ParameterError(f"{flag}: {name!r} is not a design input; allowed "
                                  f"{', '.join(INPUTS)}")
-        INPUTS[name].check(float(low), float(high), flag)
+        a, b = INPUTS[name].allowed
+        if isinstance(pair, (str, bytes)) or not isinstance(pair, Sequence) or len(pair) != 2 \
+                or not all(isinstance(v, numbers.Real) and not isinstance(v, bool)
+                           for v in pair):
+            unit = "" if INPUTS[name].unit == "1" else f" {INPUTS[name].unit}"
+            raise ParameterError(f"{flag}: {name} = {pair!r}; expected (low, high), two "
+                                 f"numbers with {a:g} <= low < high <= {b:g}{unit}")
+        INPUTS[name].check(float(pair[0]), float(pair[1]), flag)
 
 
 def check_grid_specs(specs, flag: str = "--grid") -> None:
@@ -236,15 +249,31 @@ def check_grid_specs(specs, flag: str = "--grid") -> None:
                                  f"allowed {a:g}-{b:g} {INPUTS[axis.name].unit}")
 
 
-def design_spec(scenario, specs, out):
+def check_operating_point(scenario, label: str) -> None:
+    """ParameterError (one line naming ``label``, what the user typed for the tree) when the
+    tree ``scenario``'s own value of a design input (:func:`operating_point`) lies outside
+    the range the study admits: its maps hold that input at the tree's value."""
+    here = operating_point(scenario)
+    for name, inp in INPUTS.items():
+        a, b = inp.allowed
+        if not (math.isfinite(here[name]) and a <= here[name] <= b):
+            unit = f" {inp.unit}" if inp.unit != "1" else ""
+            raise ParameterError(
+                f"{label}: the tree's own {inp.label} = {here[name]:.4g}{unit} lies outside "
+                f"the design study's allowed {a:g} to {b:g}{unit} (its maps hold it at the "
+                "tree's value); a tree within it")
+
+
+def design_spec(scenario, specs, out, label: str | None = None):
     """A sweep (compare.sweep.run.SweepSpec) of :func:`design_cell` over the ``--grid``
-    ``specs`` on ``scenario`` into ``out``."""
+    ``specs`` on ``scenario`` into ``out``; ``label``: what a refusal of the grid names (a
+    map's grid the study made; None: the specs, as typed)."""
     # lazy: +59 ms at import otherwise (treeimpact.compare.sweep.run),
     # which this module's other callers do not need
     from ..sweep.run import SweepSpec
 
     return SweepSpec(scenario, list(specs), Path(out), ("analytic",), identify=True,
-                     analysis="treeimpact.compare.studies.design:design_cell")
+                     analysis="treeimpact.compare.studies.design:design_cell", label=label)
 
 
 def map_of(table, pair, quantity: str):

@@ -107,16 +107,20 @@ def along(x, y, z, pair, here: dict, tol: float) -> tuple:
     return [(back(a), back(b)) for a, b in found], line
 
 
-def sentence_at_point(here: dict, cell: dict, quantities) -> str:
+def sentence_at_point(here: dict, cell: dict, quantities, problem: str | None = None) -> str:
     """Rule 1 as a sentence at the operating point ``here`` ({input: value}) whose
     ``cell`` ({quantity: relative gap}) is graded on the ``quantities``: 'Clamping at a/l =
     A with m/M_T = B, a C ms pad and e = E, the 1-DOF model is within 5 % on x_max and off by
-    +60 % on energy delivered.'"""
+    +60 % on energy delivered.' A cell that has no numbers (``problem``, its reason) is said
+    to have none, with the reason, and graded on nothing."""
+    where = (f"Clamping at a/l = {shown('a_over_l', here['a_over_l'])} with m/M_T = "
+             f"{shown('mass_ratio', here['mass_ratio'])}, a "
+             f"{shown('contact_duration', here['contact_duration'])} pad and e = "
+             f"{shown('restitution', here['restitution'])}")
+    if problem is not None:
+        return f"{where}, the tree's own cell has no numbers: {problem.rstrip('.')}."
     parts = [f"{grade(cell.get(q, math.nan))} on {QUANTITIES[q].label}" for q in quantities]
-    return (f"Clamping at a/l = {shown('a_over_l', here['a_over_l'])} with m/M_T = "
-            f"{shown('mass_ratio', here['mass_ratio'])}, a "
-            f"{shown('contact_duration', here['contact_duration'])} pad and e = "
-            f"{shown('restitution', here['restitution'])}, the 1-DOF model is "
+    return (f"{where}, the 1-DOF model is "
             + ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1] + ".")
 
 
@@ -124,10 +128,18 @@ def sentence_along(x, y, z, pair, here: dict, quantity: str, tol: float) -> str:
     """Rule 2 as a sentence, :func:`along` on the map ``z`` over ``x`` and ``y`` (the
     inputs ``pair``) at ``here`` for ``quantity`` within ``tol``: 'At m/M_T = 1.2, x_max is
     within 5 % for a/l from 0.2 to 0.6.'"""
-    found, _ = along(x, y, z, pair, here, tol)
-    text = intervals_text(pair[0], found, float(min(x)), float(max(x)))
-    return (f"At {INPUTS[pair[1]].label} = {shown(pair[1], here[pair[1]])}, "
-            f"{QUANTITIES[quantity].label} is within {100 * tol:.0f} % {text}.")
+    found, line = along(x, y, z, pair, here, tol)
+    at = f"At {INPUTS[pair[1]].label} = {shown(pair[1], here[pair[1]])}"
+    have = np.asarray(x, dtype=float)[np.isfinite(line)]
+    if not len(have):  # no cell of the line has a number: nothing to read off it
+        return (f"{at}, no cell along {INPUTS[pair[0]].label} has a number for "
+                f"{QUANTITIES[quantity].label}.")
+    text = intervals_text(pair[0], found, float(min(have)), float(max(have)))
+    missing = len(line) - len(have)
+    whole = not found or text.startswith("over the whole map")
+    # "at no" and "over the whole map" speak of every cell: say which had numbers
+    gaps = f" ({missing} of its {len(line)} cells have no number)" if missing and whole else ""
+    return f"{at}, {QUANTITIES[quantity].label} is within {100 * tol:.0f} % {text}{gaps}."
 
 
 def nearest_within(x, y, maps: dict, tols: dict, pair, here: dict):
@@ -159,6 +171,12 @@ def sentence_nearest(x, y, maps: dict, tols: dict, pair, here: dict) -> str:
     what = " and ".join(f"within {100 * t:.0f} % on {QUANTITIES[q].label}"
                         for q, t in tols.items())
     found = nearest_within(x, y, maps, tols, pair, here)
+    computed = np.ones((len(y), len(x)), dtype=bool)
+    for q in tols:
+        computed &= np.isfinite(np.asarray(maps[q], dtype=float))
+    if not computed.any():  # no cell to say "no cell within" of
+        return (f"No cell of the {INPUTS[pair[0]].label} x {INPUTS[pair[1]].label} map has "
+                f"numbers for {' and '.join(QUANTITIES[q].label for q in tols)}.")
     if found is None:
         return (f"No cell of the {INPUTS[pair[0]].label} x {INPUTS[pair[1]].label} map has "
                 f"the 1-DOF model {what}.")

@@ -212,9 +212,13 @@ def _range_values(body: str, spec: str, flag: str) -> list:
     if count < 1 or count > MAX_AXIS_VALUES:
         raise ParameterError(f"{flag} {spec!r}: COUNT = {count}: allowed 1 to "
                              f"{MAX_AXIS_VALUES}; expected {GRID_FORM}")
-    if count == 1 and start != stop:
-        raise ParameterError(f"{flag} {spec!r}: COUNT = 1 needs START = STOP; "
-                             f"expected {GRID_FORM}")
+    if start == stop:  # no interval: one value is a list of one (NAME=V)
+        raise ParameterError(f"{flag} {spec!r}: START = STOP = {parts[0]}: an empty range; "
+                             f"allowed START != STOP with COUNT >= 2, or one value as "
+                             f"{spec.split('=')[0].strip()}={parts[0]}")
+    if count == 1:
+        raise ParameterError(f"{flag} {spec!r}: COUNT = 1: a range needs COUNT >= 2 (both "
+                             f"ends); expected {GRID_FORM}")
     # 12 significant digits: 0.3, not 0.30000000000000004 (linspace's rounding)
     return [float(f"{v:.12g}") for v in np.linspace(start, stop, count)]
 

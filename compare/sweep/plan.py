@@ -188,13 +188,15 @@ def _trunk_options(opts: dict, accepted: set) -> dict:
     return opts
 
 
-def check_grid(scenario: Scenario, grid: Grid, targets: list[Target]) -> list[tuple]:
+def check_grid(scenario: Scenario, grid: Grid, targets: list[Target],
+               label: str | None = None) -> list[tuple]:
     """Refuse, before anything runs, what no point of ``grid`` applied to ``scenario`` could
     run on the ``targets`` (one-line ParameterError naming the ``--grid`` spec): an engine
     option that no backend of the sweep takes, and an axis value outside its parameter's
     range at every point (``restitution=2``). A point that is invalid only in combination
     with other axes (a clamp height above one of the swept lengths) is kept: it becomes an
-    ``invalid`` row and the sweep goes on. Returns :func:`apply_points` of the grid, for
+    ``invalid`` row and the sweep goes on; ``label``: what the message names instead of the
+    spec (a grid a study made, not one typed). Returns :func:`apply_points` of the grid, for
     :func:`plan`."""
     accepted = set().union(*(_accepted(t.backend) for t in targets))
     for ax in grid.axes:
@@ -212,8 +214,8 @@ def check_grid(scenario: Scenario, grid: Grid, targets: list[Target]) -> list[tu
         for v in ax.values:
             errs = [e for (point, _), e in zip(applied, errors) if point[ax.name] == v]
             if all(errs):
-                raise ParameterError(f"--grid {ax.spec()!r}: {errs[0]} (at every point of "
-                                     f"the grid)")
+                where = label or f"--grid {ax.spec()!r}"
+                raise ParameterError(f"{where}: {errs[0]} (at every point of the grid)")
     return applied
 
 

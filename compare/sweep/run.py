@@ -69,7 +69,9 @@ class SweepSpec:
     """One sweep of :func:`run_sweeps`: ``scenario`` (a Scenario, shipped name or TOML path)
     over ``grid`` (a :class:`Grid` or ``--grid`` specs) on ``backends`` into the directory
     ``out``; ``analysis``: ``module:function`` run on each result instead of the standard
-    metrics (:func:`load_analysis`), its record parameters from ``record.*`` axes."""
+    metrics (:func:`load_analysis`), its record parameters from ``record.*`` axes;
+    ``label``: what a refusal of its grid names instead of the ``--grid`` spec (a grid a
+    study made, which nobody typed)."""
 
     scenario: object
     grid: object
@@ -79,6 +81,7 @@ class SweepSpec:
     options: dict | None = None
     identify: bool = True
     analysis: str | None = None
+    label: str | None = None
 
 
 def run_sweep(scenario, grid, out, *, backends=("analytic",), ladder: bool = False,
@@ -146,7 +149,7 @@ def run_sweeps(specs, *, workers: int | None = None, scheduler=None,
                                  "read by an analysis (the identification and sensitivity "
                                  "studies), not by a plain sweep")
         parts.append(_Part(scen, grid, targets, Path(spec.out), spec.identify, spec.analysis,
-                           check_grid(scen, grid, targets)))
+                           check_grid(scen, grid, targets, label=spec.label)))
     client, own_client = connect(scheduler) if scheduler is not None else (None, False)
     try:
         return _sweep(parts, workers=workers, client=client, retry_failed=retry_failed,

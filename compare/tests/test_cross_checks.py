@@ -121,6 +121,9 @@ def test_identification_against_truth(ladder_of, scenario, rung, metric):
     require_run(ladder, rung.id)
     ident = ladder[rung.id].identification
     share = ladder.value(rung.id, "x0") / ladder.value(rung.id, "x_max")
+    if share != share and not ident.ok:  # no x0: the procedure's steps do not apply here
+        pytest.skip(f"{ladder.name} {rung.id}: the bodies never move together on this tree, "
+                    f"so the paper's procedure (eqs 36-46) does not apply: {ident.reason}")
     expected = [e for e in TOL.get("identification_refused", {}).values()
                 if documented_refusal(TOL, e["match"], share) is e]
     if expected:

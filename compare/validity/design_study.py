@@ -16,7 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
+from treeimpact.analytic.errors import NotAchieved, ParameterError, SimulationDiverged, one_line
+from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.scenario import shipped_scenarios
+from treeimpact.analytic.results import check_plausible
 
 from ..runs import resolve_scenario
 from ..studies.design import (
@@ -28,6 +31,7 @@ from ..studies.design import (
     QUANTITIES,
     Kind,
     check_grid_specs,
+    check_operating_point,
     check_ranges,
     design_cell,
     design_spec,
@@ -81,11 +85,66 @@ def _clean(obj):
     return obj.item() if hasattr(obj, "item") else obj
 
 
-def tree_cell(scen) -> dict:
+def tree_cell(scen) -> tuple:
     """The cell at the tree ``scen`` itself (its own a/l, m/M_T, pad and e), computed directly:
-    {quantity: relative gap or error}."""
+    ({quantity: relative gap or error}, None), or ({quantity: NaN}, the one-line reason)
+    when its exact run has no numbers to report (a t_end too short for the impact: the
+    check a map's cell passes, analytic.results.check_plausible)."""
     run, s = exact_run(scen, scen.contact.restitution)
-    return {k.split(".", 1)[1]: v for k, v in design_cell(run, s).items()}
+    try:
+        check_plausible(run)
+    except (ParameterError, SimulationDiverged) as exc:
+        return {q: math.nan for q in QUANTITIES}, one_line(exc)
+    return {k.split(".", 1)[1]: v for k, v in design_cell(run, s).items()}, None
+
+
+def _typed(scenario, scen) -> str:
+    """The tree as a refusal names it: ``--scenario`` and what was given (a name or path;
+    a Scenario by its name; the API names the keyword)."""
+    return f"--scenario {str(scenario) if isinstance(scenario, (str, Path)) else scen.name!r}"
+
+
+def _map_specs(out: Path, scen, count: int, ranges: dict, grid, typed: str) -> list:
+    """The study's sweeps: one map per pair, the family of trunk diameters and the
+    user's ``grid`` (if any); the study's own grids named in refusals as the map of
+    ``typed`` (the tree as given), not as specs nobody typed."""
+    here = operating_point(scen)
+    specs = []
+    for p in PAIRS:
+        held = ", ".join(f"{INPUTS[n].label} {shown(n, here[n])}" for n in INPUTS if n not in p)
+        specs.append(design_spec(scen, pair_grid(scen, p, count, ranges), out / _name(p),
+                                 label=f"{typed} (its {INPUTS[p[0]].label} x "
+                                       f"{INPUTS[p[1]].label} map at the tree's {held})"))
+    d = scen.trunk.diameter
+    specs.append(design_spec(scen, ["trunk.diameter=" + ",".join(
+        repr(float(f"{d * f:.6g}")) for f in DIAMETER_FACTORS)], out / "diameter",
+        label=f"{typed} (its family of trunk diameters "
+              f"{', '.join(f'{f:g}' for f in DIAMETER_FACTORS)} d)"))
+    if grid:
+        specs.append(design_spec(scen, grid, out / "grid"))
+    return specs
+
+
+def check_cells_ran(results, out) -> None:
+    """NotAchieved (one line: the cells, their outcomes, the first reason and the study's
+    folder ``out``, where the rows are kept) when no cell of the study's sweeps ``results``
+    has numbers: nothing to map or to put in words."""
+    tables = [r.table for r in results if len(r.table)]
+    if any((t["status"] == "ok").any() for t in tables):
+        return
+    counts: dict = {}
+    reasons = []
+    for t in tables:
+        for status, n in t["status"].value_counts().items():
+            counts[status] = counts.get(status, 0) + int(n)
+        # the scenario's t_end, not a flag of this command
+        reasons += [str(e).replace("--t-end", "t_end") for e in t["error"]
+                    if isinstance(e, str) and e]
+    n = sum(counts.values())
+    raise NotAchieved(f"design: no cell of the maps has numbers ({n} cells: "
+                      + ", ".join(f"{v} {k}" for k, v in sorted(counts.items()))
+                      + (f"; the first: {reasons[0]}" if reasons else "")
+                      + f"); no map or sentence written, the rows kept in {out}")
 
 
 def _points(scen, pair, shipped) -> list:
@@ -157,6 +216,19 @@ def _cost(results, wall_s: float, workers) -> dict:
             "cpu_s_per_cell": wall_s * n / made if made else None}
 
 
+def check_keywords(out, scenario, engines) -> None:
+    """TypeError naming the keyword of :func:`run_design_study` (and the API's design_map)
+    given a value of the wrong type: ``out`` a path, ``scenario`` a Scenario, name or
+    path, ``engines`` True or False."""
+    if not isinstance(out, (str, Path)):
+        raise TypeError(f"out: expected a directory (str or pathlib.Path), got {out!r}")
+    if not isinstance(scenario, (Scenario, str, Path)):
+        raise TypeError(f"scenario: expected a Scenario, a shipped scenario's name or a TOML "
+                        f"path, got {scenario!r} ({type(scenario).__name__})")
+    if not isinstance(engines, bool):
+        raise TypeError(f"engines: expected True or False, got {engines!r}")
+
+
 def run_design_study(out, scenario="central-leader", *, count: int = COUNT, ranges=None,
                      workers=None, scheduler=None, progress=None, grid=None,
                      retry_failed: bool = False, engines: bool = False) -> dict:
@@ -167,26 +239,23 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
     inputs (the four-input grid), its cost recorded; ``workers``, ``scheduler``,
     ``progress``, ``retry_failed`` as compare.sweep.run.run_sweeps; ``engines``: the
     engines' spot checks too (compare.studies.design_engines)."""
+    check_keywords(out, scenario, engines)
+    check_ranges({} if ranges is None else ranges)
     ranges = dict(ranges or {})
-    check_ranges(ranges)
     if grid:
         check_grid_specs(grid)
     t0 = time.perf_counter()
-    out = make_out(out)
     scen = resolve_scenario(scenario)
-    specs = [design_spec(scen, pair_grid(scen, p, count, ranges), out / _name(p))
-             for p in PAIRS]
-    d = scen.trunk.diameter
-    specs.append(design_spec(scen, ["trunk.diameter=" + ",".join(
-        repr(float(f"{d * f:.6g}")) for f in DIAMETER_FACTORS)], out / "diameter"))
-    if grid:
-        specs.append(design_spec(scen, grid, out / "grid"))
+    check_operating_point(scen, _typed(scenario, scen))
+    out = make_out(out)
+    specs = _map_specs(out, scen, count, ranges, grid, _typed(scenario, scen))
     results = run_sweeps(specs, workers=workers, scheduler=scheduler, progress=progress,
                          retry_failed=retry_failed)
+    check_cells_ran(results, out)
     maps_wall = time.perf_counter() - t0
     shipped = {n: resolve_scenario(n) for n in shipped_scenarios()}
     pairs = [_pair_part(out, scen, p, r.table, shipped) for p, r in zip(PAIRS, results)]
-    cell = tree_cell(scen)
+    cell, problem = tree_cell(scen)
     here = operating_point(scen)
     data = {"title": f"Design map: {scen.name}", "tree": scen.name,
             "operating_point": here, "cell": cell, "levels": list(LEVELS),
@@ -197,7 +266,7 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
             "quantities": {q: {"label": v.label, "kind": v.kind.value}
                            for q, v in QUANTITIES.items()},
             "at_point": sentence_at_point(here, cell, ("x_max", "energy_delivered",
-                                                      "crown_peak_acceleration")),
+                                                      "crown_peak_acceleration"), problem),
             "shipped": {n: operating_point(s) for n, s in shipped.items()},
             "pairs": pairs, "family": _family(results[len(PAIRS)].table),
             "cost": _cost(results, maps_wall, workers),
