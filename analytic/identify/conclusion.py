@@ -20,7 +20,7 @@ class Conclusion:
         qualifiers: the kinds an explained record is explained with (drift, outliers,
             one-impact), a tuple of ``DiagnosisKind``.
         fitted: False when the record was not fitted at all (numbers that look like another
-            unit), bool.
+            unit, or no impact in it: the tree's free vibration), bool.
     """
 
     explained: bool
@@ -32,6 +32,8 @@ class Conclusion:
         if self.explained:
             extra = ", ".join(k.value for k in self.qualifiers)
             return "explained" + (f" ({extra})" if extra else "")
+        if not self.fitted and self.reason is DiagnosisKind.FREE_VIBRATION:
+            return "no impact in this record (free-vibration): not fitted"
         if not self.fitted:
             return f"NOT explained ({self.reason.value}): not fitted; declare the units"
         if self.reason is None:  # pragma: no cover - a refusing kind is always there
@@ -52,6 +54,6 @@ def conclude(explained: bool, diagnoses) -> Conclusion:
 
 
 def not_fitted(diagnosis: Diagnosis) -> Conclusion:
-    """The conclusion of a record not fitted (its numbers look like another unit), for the
-    reason its ``diagnosis`` gives."""
+    """The conclusion of a record not fitted (its numbers look like another unit, or it holds
+    no impact), for the reason its ``diagnosis`` gives."""
     return Conclusion(False, reason=diagnosis.kind, fitted=False)

@@ -51,6 +51,7 @@ class DiagnosisKind(Enum):
     TRUNCATED = "truncated"  # too little ring-down to fix the damping
     OPTIMISER = "optimiser"  # a parameter at the end of its range, no convergence
     UNITS = "units"  # numbers that look like another unit: not fitted
+    FREE_VIBRATION = "free-vibration"  # the tree's own vibration, no impact: not fitted
     SECOND_MODE = "second-mode"  # the residual has a mode of its own
     MISFIT = "misfit"  # the residual is not noise
 
@@ -59,7 +60,7 @@ class DiagnosisKind(Enum):
 
 
 #: The kinds that make a record NOT explained, in the order a conclusion names them.
-REFUSING = (DiagnosisKind.UNITS, DiagnosisKind.NO_IMPACT, DiagnosisKind.OPTIMISER,
+REFUSING = (DiagnosisKind.UNITS, DiagnosisKind.FREE_VIBRATION, DiagnosisKind.NO_IMPACT, DiagnosisKind.OPTIMISER,
             DiagnosisKind.TRUNCATED, DiagnosisKind.SECOND_MODE, DiagnosisKind.MISFIT)
 #: The kinds an explained record's conclusion names beside "explained".
 QUALIFYING = (DiagnosisKind.DRIFT, DiagnosisKind.OUTLIERS, DiagnosisKind.ONE_IMPACT)

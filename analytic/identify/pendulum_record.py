@@ -39,6 +39,7 @@ class Record:
         y: the pendulum's displacement in the trunk's frame (y = x in contact), m, or None.
         time_unit: the unit the times were given in (converted to s here).
         length_unit: the unit the displacements were given in (converted to m here).
+        y_unit: the unit of y where its header names another (None: ``length_unit``).
         rows: each sample's line in its file (for messages), or None.
         warnings: one line each (columns ignored, times made relative).
         t_start: the first time as given, s.
@@ -54,6 +55,7 @@ class Record:
     warnings: tuple = ()
     t_start: float = 0.0
     source: str = field(default="", compare=False)
+    y_unit: str | None = None  # the unit y was given in (None: length_unit's)
 
     def row(self, i: int) -> int:
         """The file line of sample i (its position + 2 for a record without a file)."""
@@ -151,7 +153,7 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
             raise ParameterError(f"record {name!r}: column {cells[keys.index(key)].strip()!r}"
                                  f" never changes: {what}")
     return Record(t, x, y, time_unit=units["t"], length_unit=units["x"], rows=rows,
-                  warnings=tuple(warnings), t_start=t_start, source=name)
+                  warnings=tuple(warnings), t_start=t_start, source=name, y_unit=units["y"])
 
 
 def _lines(path: Path) -> list:

@@ -166,3 +166,58 @@ def _unit_line(changed: list, units: dict, declared: dict, facts: str) -> str:
     noun = "it: a header" if len(changed) == 1 else "them: headers"
     return (f"{looks}, not {not_}: {facts} are implausible, in {read} they are not "
             f"(declare {noun} {headers} or {flags})")
+
+
+def pendulum_unit_suspicion(x: np.ndarray, y: np.ndarray | None, chord: float,
+                            length_unit: str = "m", approach: float = 0.0) -> list[str]:
+    """One line when the pendulum's column ``y`` (m as declared, the trunk's ``x`` m beside
+    it) looks like another unit than ``length_unit``, else []: the pendulum swings within
+    its release chord ``chord`` = 2 l_e sin(theta_0 / 2) (m) of the contact, the trunk by
+    its own span in the trunk's frame, so y spans at most 2 chord + x's span; it spans at
+    least its ``approach`` (m) before the contact (u_1 sin(w_2 s) / w_2 over the rest
+    recorded, eq 13: at least u_1 T_rest / pi, a half of it for noise, from the caller) and
+    1e-3 of x's span (in contact y = x, eq 12; a factor of 1000: a unit's). The unit named
+    is the one that brings y within both (the likeliest: nearest x's span)."""
+    if y is None:
+        return []
+    span_x, span_y = float(np.ptp(median3(x))), float(np.ptp(median3(y)))
+    high, low = 2.0 * chord + span_x, max(1e-3 * span_x, approach)
+    if low <= span_y <= high:
+        return []
+    declared = LENGTH_UNITS[length_unit]
+    fits = [(abs(math.log(span_y * f / declared / max(span_x, 1e-300))), u)
+            for u, f in LENGTH_UNITS.items()
+            if u != length_unit and low <= span_y * f / declared <= high]
+    facts = (f"y spans {span_y:.3g} m where the trunk's x spans {span_x:.3g} m and the "
+             f"pendulum swings within {chord:.3g} m of the contact")
+    if not fits:
+        return [f"the pendulum's column y is implausible in any unit ({facts}); check its "
+                "unit and that it is the pendulum's displacement"]
+    unit = min(fits)[1]
+    return [f"y looks like {unit}, not {length_unit}: {facts}, implausible; in {unit} it is "
+            f"not (declare it: a header 'y ({unit})')"]
+
+
+#: Consecutive sample steps whose median is compared with the block's before: a column whose
+#: unit changes part-way has its steps change by the units' factor (1e3 from s to ms) over
+#: every block after that row; a gap (a few lost samples) moves a block's median not at all.
+STEP_BLOCK = 12
+#: A block's median step this many times the block's before (or below its inverse) is
+#: another unit, not a logger's jitter (a few per cent) or a rate changed by a factor < 10.
+STEP_FACTOR = 10.0
+
+
+def mixed_time_unit(t: np.ndarray) -> int | None:
+    """The first sample (its index) in the other unit where a block of STEP_BLOCK steps of
+    the times ``t`` (s) has a median step STEP_FACTOR or more off the previous block's (a
+    time column in two units: s, then ms), or None."""
+    steps = np.diff(np.asarray(t, float))
+    blocks = [float(np.median(steps[i:i + STEP_BLOCK]))
+              for i in range(0, steps.size - STEP_BLOCK + 1, STEP_BLOCK)]
+    for k in range(1, len(blocks)):
+        ref = blocks[k - 1]
+        if not ref / STEP_FACTOR < blocks[k] < ref * STEP_FACTOR:
+            span = steps[(k - 1) * STEP_BLOCK:(k + 1) * STEP_BLOCK]
+            off = np.flatnonzero(~((span > ref / STEP_FACTOR) & (span < ref * STEP_FACTOR)))
+            return (k - 1) * STEP_BLOCK + int(off[0]) + 1
+    return None

@@ -36,6 +36,7 @@ from .diagnosis import Diagnosis, DiagnosisKind
 from .fit_model import drift_at, model_motion, model_x  # noqa: F401 - model_x: public
 from .fit_parameters import DRIFTS, MODEL_SLOTS, Slot
 from .fitter import Fitter
+from .free_vibration import no_impact
 from .intervals import (  # noqa: F401 - DAMPING_RATIO_FORMULAS, log_interval: public
     DAMPING_RATIO_FORMULAS,
     QUANTITIES,
@@ -59,7 +60,14 @@ from .noise import (
 from .pendulum_record import Record, read_record  # noqa: F401 - read_record: public here
 from .procedure import PendulumTest
 from .profile import CHI2_95, find_ridge
-from .record_features import Features, features, unit_suspicions
+from .record_features import (
+    STEP_BLOCK,
+    Features,
+    features,
+    mixed_time_unit,
+    pendulum_unit_suspicion,
+    unit_suspicions,
+)
 from .staging import OUTLIER_Z, Staged, on_fit_clock, sensor_separable, stage
 
 
@@ -124,7 +132,8 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     within the 95 % threshold up to a one-impact model (the pendulum leaving: M_T and e on
     a ridge) fixes omega_1, the trunk's damping ratio and V_1 but not M_T and e apart: then
     M_T, K_T, C_T, E and e are ranges (:mod:`analytic.identify.one_impact`). A record whose
-    numbers look like another unit than ``record.time_unit``/``record.length_unit`` is not
+    numbers look like another unit than ``record.time_unit``/``record.length_unit``, or that
+    holds no impact (the tree's free vibration, :func:`free_vibration.no_impact`), is not
     fitted."""
     if restitution is not None:
         check_range("restitution", restitution, low=0.0, high=1.0)
@@ -132,11 +141,15 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
     t, x, y = record.t - t_shift, record.x, record.y  # the fit's clock: 0 at the first sample
     feat = features(t, x)
     warnings = list(getattr(record, "warnings", ()))
-    units = unit_suspicions(feat, test.impact_speed, getattr(record, "time_unit", "s"),
-                            getattr(record, "length_unit", "m"), test.impactor_mass)
+    units = _unit_lines(record, feat, test)
     if units:  # no tree's values to find: said so at once (a fit of a record 1000 x too
         # long or too large is slow and meaningless)
-        return _unit_result(record, feat, units, warnings + units)
+        return _not_fitted_result(record, feat, Diagnosis(DiagnosisKind.UNITS, units[0]),
+                                  warnings + units)
+    free = no_impact(t, x, feat, RESOLUTION * max(feat.span, 1e-300))
+    if free:  # the tree's own vibration: no impact to fit (a fit would explain it as one)
+        return _not_fitted_result(record, feat, Diagnosis(DiagnosisKind.FREE_VIBRATION, free),
+                                  warnings)
     rest = rest_noise(t, x, feat.t_contact)
     fitter = Fitter(t, x, y, test, restitution is not None,
                     separable=sensor_separable(t, feat, rest[1]))
@@ -165,6 +178,28 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
         noise=judged.noise, noise_source=judged.source, misfit_ratio=judged.ratio,
         flagged=staged.flagged, warnings=tuple(warnings), starts=fitter.fits,
         runs=fitter.runs)
+
+
+def _unit_lines(record: Record, feat: Features, test: PendulumTest) -> list[str]:
+    """One line per column whose numbers contradict its declared unit: t and x
+    (:func:`record_features.unit_suspicions`), t's step changing part-way (a column in two
+    units), the pendulum's y (:func:`record_features.pendulum_unit_suspicion`)."""
+    length_unit = getattr(record, "length_unit", "m")
+    mixed = mixed_time_unit(record.t)
+    if mixed is not None:  # the other checks read the record's time scale: said alone
+        steps = np.diff(record.t)
+        before = float(np.median(steps[max(mixed - 1 - STEP_BLOCK, 0):max(mixed - 1, 1)]))
+        after = float(np.median(steps[mixed:mixed + STEP_BLOCK]))
+        return [f"t's step changes from {before:.3g} s to {after:.3g} s at row "
+                f"{record.row(mixed)} (a factor {max(after / before, before / after):.3g}): "
+                "the column holds two units; one unit per column"]
+    found = unit_suspicions(feat, test.impact_speed, getattr(record, "time_unit", "s"),
+                            length_unit, test.impactor_mass)
+    chord = test.impact_speed / math.sqrt(test.omega2_sq)  # 2 l_e sin(theta_0 / 2)
+    approach = test.impact_speed * min(feat.t_contact - float(record.t[0]),
+                                       1.0 / math.sqrt(test.omega2_sq)) / math.pi
+    y_unit = getattr(record, "y_unit", None) or length_unit
+    return found + pendulum_unit_suspicion(record.x, record.y, chord, y_unit, approach)
 
 
 def _residuals(staged: Staged, test: PendulumTest, rest: tuple, floor: float):
@@ -251,7 +286,9 @@ def at_range_end(p, params) -> set:
         q = params[slot]
         if q.frozen:
             continue
-        tol = AT_BOUND * q.scale
+        # t0 within a sample of its range's end, as optimiser_trouble reads it: a contact the
+        # record does not show (its scale is the sample interval)
+        tol = q.scale if slot == Slot.T0 else AT_BOUND * q.scale
         low = p[slot] <= q.low + tol and not (slot == Slot.RESTITUTION and q.low == 0.0)
         if low or p[slot] >= q.high - tol:
             out.update(names)
@@ -330,12 +367,12 @@ def _fit_findings(staged: Staged, test: PendulumTest, judged: NoiseJudgement, fi
         dx.drift(p, cov, t, t + t_shift, judged.noise, feat.span)]
 
 
-def _unit_result(record: Record, feat: Features, units: list, warnings: list) -> FitResult:
-    """The result for a record whose numbers look like another unit: no values (NaN),
-    not explained, the suspicion as its diagnosis."""
+def _not_fitted_result(record: Record, feat: Features, found: Diagnosis,
+                       warnings: list) -> FitResult:
+    """The result for a record not fitted (its numbers look like another unit, or it holds
+    no impact): no values (NaN), not explained, the reason (``found``) its diagnosis."""
     names = QUANTITIES + (("y_offset",) if record.y is not None else ())
     nan = math.nan
-    found = Diagnosis(DiagnosisKind.UNITS, units[0])
     return FitResult(
         values=dict.fromkeys(names, nan), intervals=dict.fromkeys(names, (nan, nan)),
         residual_rms=nan, peak=feat.span, explained=False,

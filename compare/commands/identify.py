@@ -127,7 +127,8 @@ def _provenance(args, record) -> dict:
 def run(args) -> int:
     """Fit the record of the parsed command line ``args`` and print the result (text or
     ``--json``); exit code 0 (explained or not, the verdict says), or NotAchieved (exit 4,
-    after the output) for a record not fitted, its one line naming the unit flags to pass."""
+    after the output) for a record not fitted, its one line saying why: the unit flags to
+    pass, or no impact in the record (the tree's free vibration)."""
     # lazy: +616 ms at import otherwise (scipy, numpy),
     # which this module's other callers do not need
     from treeimpact.analytic.identify.record_fit import fit_record, read_record
@@ -164,8 +165,9 @@ def run(args) -> int:
 
 
 def _not_fitted(fit):
-    """A NotAchieved for a record that was not fitted (its numbers look like another unit),
-    its diagnosis as the message (the unit flags to pass), or None for a fitted one."""
+    """A NotAchieved for a record that was not fitted (its numbers look like another unit, or
+    it holds no impact), its diagnosis as the message (the unit flags to pass, or why it is
+    the tree's free vibration), or None for a fitted one."""
     if fit.conclusion.fitted:
         return None
     why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
