@@ -7,8 +7,12 @@ on the backend.
 
 from __future__ import annotations
 
+import dataclasses
+import enum
+import json
 import math
 from dataclasses import dataclass, field
+from pathlib import PurePath
 
 import numpy as np
 
@@ -306,15 +310,49 @@ def finite_number(v) -> bool:
 
 
 def to_jsonable(obj):
-    """JSON-safe copy of ``obj``'s dicts, lists and numbers: NaN and inf become None (JSON
-    has neither), numpy scalars become Python numbers."""
+    """JSON-safe copy of ``obj``, the one converter every JSON writer uses (through
+    :func:`json_text`): dicts (keys as text), lists, tuples and arrays as lists; Python and
+    numpy booleans, integers and floats as Python's; NaN and inf as None (strict JSON has
+    neither); an enum as its value, a dataclass as its fields, a path as its text. Raises
+    TypeError naming the type of anything else."""
+    if isinstance(obj, (str, type(None))) and not isinstance(obj, enum.Enum):
+        return obj
     if isinstance(obj, dict):
-        return {k: to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
+        return {_json_key(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, np.ndarray)):
         return [to_jsonable(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
+    return _json_scalar(obj)
+
+
+def _json_scalar(obj):
+    """The JSON form of one non-container value (:func:`to_jsonable`)."""
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, enum.Enum):
+        return to_jsonable(obj.value)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
         f = float(obj)
         return f if math.isfinite(f) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return to_jsonable({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
+    if isinstance(obj, PurePath):
+        return str(obj)
+    raise TypeError(f"{type(obj).__name__} has no JSON form (analytic.results.to_jsonable)")
+
+
+def _json_key(key) -> str:
+    """A dict key as JSON text: a string as it is, an enum by its value, a number or
+    boolean as JSON writes it."""
+    if isinstance(key, str) and not isinstance(key, enum.Enum):
+        return key
+    value = _json_scalar(key)
+    return value if isinstance(value, str) else json.dumps(value)
+
+
+def json_text(obj, **options) -> str:
+    """``obj`` as strict JSON text (:func:`to_jsonable`, then ``json.dumps`` with
+    ``allow_nan=False``: never a NaN or Infinity token); ``options`` are json.dumps's
+    (indent, sort_keys, separators)."""
+    return json.dumps(to_jsonable(obj), allow_nan=False, **options)

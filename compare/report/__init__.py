@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
-import json
 import math
 import shutil
 import tempfile
@@ -30,7 +29,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from treeimpact.analytic.model.scenario import shipped_scenarios
-from treeimpact.analytic.results import to_jsonable
+from treeimpact.analytic.results import json_text
 
 from ..ladder import build_ladder, prefetch_ladders
 from ..pool import check_stop, preload_in_workers, process_map
@@ -279,7 +278,7 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
         "runs": sections["runs"].to_json(),
     }
     paths["json"] = out / "report.json"
-    paths["json"].write_text(json.dumps(to_jsonable(data), indent=1), encoding="utf-8")
+    paths["json"].write_text(json_text(data, indent=1), encoding="utf-8")
     return paths
 
 
