@@ -194,3 +194,20 @@ def test_identify_json_on_a_simulated_record(tmp_path, capsys):
 def test_every_json_command_writes_strict_json(argv, capsys):
     data = _cli_json(capsys, argv)
     assert isinstance(data, dict) and data
+
+
+def test_the_sweep_journal_takes_numpy_scalars(tmp_path):
+    """The CSV writer of the sweeps (compare.sweep.journal.Journal): numpy's scalars as
+    their Python values (a float32 NaN empty as a float's, not "nan"), read back as
+    written."""
+    import csv
+
+    from treeimpact.compare.sweep.journal import Journal
+
+    journal = Journal(tmp_path / "j.csv", ["b", "i", "f", "nan", "g"])
+    journal.append([{"b": np.bool_(True), "i": np.int64(3), "f": np.float64(0.1),
+                     "nan": np.float32("nan"), "g": np.float32(0.5)}])
+    journal.close()
+    with open(tmp_path / "j.csv", newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows == [["b", "i", "f", "nan", "g"], ["True", "3", "0.1", "", "0.5"]]

@@ -97,8 +97,12 @@ class Journal:
 
 
 def _cell(v):
+    """One journal cell's text: None and NaN empty, a float by its repr (exact), a text on
+    one line; a numpy scalar as its Python value (a float32 NaN was written "nan")."""
     if v is None:
         return ""
+    if hasattr(v, "item") and not isinstance(v, str):  # numpy's bool_, integer, floating
+        v = v.item()
     if isinstance(v, float):
         return "" if math.isnan(v) else repr(v)
     if isinstance(v, str):
