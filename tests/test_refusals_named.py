@@ -191,3 +191,12 @@ def test_a_run_too_short_for_its_event_is_bad_input_naming_t_end(options):
     named the scenario's t_end (0.1 s), not the one typed."""
     err = refused("simulate", "central-leader", *options, "--t-end", "1e-4")
     assert "--t-end = 0.0001 s is too short for this run" in err and "a longer --t-end" in err
+
+
+def test_a_damping_rate_from_the_regression_names_a1_and_a2():
+    """b = -a2/a1 beyond its range named --damping-rate, which was not typed; now the
+    regression's flags lead the line, with b's range."""
+    err = refused("scenario", "t", *TREE, "--dynamic-mass", "110", "--a1", "100",
+                  "--a2=-1e6", "--equivalent-stiffness", "1.5e6")
+    assert err.startswith("treeimpact: error: --a1 = 100 m/s, --a2 = -1e+06 m/s^2 give b")
+    assert "--damping-rate" not in err and re.search(r"allowed \[0, \S+\] 1/s", err), err
