@@ -59,31 +59,85 @@ class StepCost:
     what: str = ""
 
 
-def check_work(t_end: float, dt: float, cost: StepCost | float) -> int:
+@dataclass(frozen=True)
+class Knob:
+    """The input a run's step follows (its step dt grows with it, as a contact's with its
+    duration): a refusal names it as typed (``label``, e.g. ``contact.duration`` or
+    ``--contact-duration``) with its ``value`` and ``unit`` and the smallest value whose
+    run fits the budget, found through ``dt_of`` (value -> dt, s), at most ``high``."""
+
+    label: str
+    value: float
+    unit: str
+    dt_of: Callable[[float], float]
+    high: float
+
+
+def check_work(t_end: float, dt: float, cost: StepCost | float, knob: Knob | None = None
+               ) -> int:
     """The steps of a run (t_end / dt), or a one-line ParameterError with the estimate when
     its steps, memory or wall time exceed the budget (module docstring). ``cost``: the
-    backend's :class:`StepCost`, or bytes per step alone (no time estimate)."""
+    backend's :class:`StepCost`, or bytes per step alone (no time estimate); ``knob``: the
+    input dt follows, named in the refusal with the value that fits."""
     cost = cost if isinstance(cost, StepCost) else StepCost(0.0, float(cost))
-    max_steps = budget(VARIABLES["steps"], MAX_STEPS)
-    max_bytes = budget(VARIABLES["bytes"], MAX_BYTES)
-    max_seconds = budget(VARIABLES["seconds"], MAX_SECONDS)
+    limits = {"steps": budget(VARIABLES["steps"], MAX_STEPS),
+              "bytes": budget(VARIABLES["bytes"], MAX_BYTES),
+              "seconds": budget(VARIABLES["seconds"], MAX_SECONDS)}
     steps = math.ceil(t_end / dt)
-    need, seconds = steps * cost.bytes, steps * cost.seconds
-    over = [f"{steps:.3g} steps > {max_steps:.3g} ({VARIABLES['steps']})"] if (
-        steps > max_steps) else []
-    if need > max_bytes:
-        over.append(f"{need / 1e9:.3g} GB > {max_bytes / 1e9:.3g} GB ({VARIABLES['bytes']})")
-    if seconds > max_seconds:
-        over.append(f"~{_duration(seconds)} > {max_seconds:.3g} s (--max-seconds, "
-                    f"{VARIABLES['seconds']})")
+    over = _over(steps, cost, limits)
     if over:
         per = f" of ~{_duration(cost.seconds)}" if cost.seconds else ""
         what = f" ({cost.what})" if cost.what else ""
-        raise ParameterError(
-            f"the run is beyond its budget: {steps:.3g} steps (t_end {t_end:.3g} s / dt "
-            f"{dt:.3g} s){per}{what}: {'; '.join(over)}. A shorter --t-end, a coarser trunk "
-            "or a softer contact; or raise the budget named")
+        text = (f"the run is beyond its budget: {steps:.3g} steps (t_end {t_end:.3g} s / dt "
+                f"{dt:.3g} s){per}{what}: {'; '.join(over)}")
+        if knob is None:
+            raise ParameterError(f"{text}. A shorter --t-end, a coarser trunk or a softer "
+                                 "contact; or raise the budget named")
+        raise ParameterError(f"{knob.label} = {knob.value:g} {knob.unit}: {text}; "
+                             f"{_knob_range(knob, t_end, _fitting_steps(cost, limits))}, "
+                             "or a shorter --t-end, or raise the budget named")
     return steps
+
+
+def _over(steps: int, cost: StepCost, limits: dict) -> list[str]:
+    """The budgets (``limits`` by kind) ``steps`` of ``cost`` exceed, one text each."""
+    over = [f"{steps:.3g} steps > {limits['steps']:.3g} ({VARIABLES['steps']})"] if (
+        steps > limits["steps"]) else []
+    if steps * cost.bytes > limits["bytes"]:
+        over.append(f"{steps * cost.bytes / 1e9:.3g} GB > {limits['bytes'] / 1e9:.3g} GB "
+                    f"({VARIABLES['bytes']})")
+    if steps * cost.seconds > limits["seconds"]:
+        over.append(f"~{_duration(steps * cost.seconds)} > {limits['seconds']:.3g} s "
+                    f"(--max-seconds, {VARIABLES['seconds']})")
+    return over
+
+
+def _fitting_steps(cost: StepCost, limits: dict) -> int:
+    """The most steps of ``cost`` within every budget of ``limits``."""
+    n = limits["steps"]
+    if cost.bytes > 0:
+        n = min(n, limits["bytes"] / cost.bytes)
+    if cost.seconds > 0:
+        n = min(n, limits["seconds"] / cost.seconds)
+    return math.floor(n)
+
+
+def _knob_range(knob: Knob, t_end: float, n_fit: int) -> str:
+    """'allowed LABEL >= V UNIT at this t_end': V the smallest value of ``knob`` (3
+    digits, rounded up) whose run of ``t_end`` s takes at most ``n_fit`` steps (dt about
+    proportional to it: rescaled until it fits), or that none up to ``knob.high`` does."""
+    v = knob.value
+    for _ in range(50):
+        steps = math.ceil(t_end / knob.dt_of(v))
+        if steps <= n_fit or v >= knob.high:
+            break
+        v = min(knob.high, v * steps / max(n_fit, 1) * (1.0 + 1e-9))
+    shown = float(f"{v:.3g}")
+    if shown < v:  # rounded up: a larger value has a larger step, it fits too
+        shown = float(f"{shown + 10.0 ** (math.floor(math.log10(v)) - 2):.3g}")
+    if math.ceil(t_end / knob.dt_of(min(shown, knob.high))) > n_fit:
+        return f"no {knob.label} up to its largest allowed {knob.high:g} {knob.unit} fits"
+    return f"allowed {knob.label} >= {shown:g} {knob.unit} at this t_end"
 
 
 def _duration(seconds: float) -> str:

@@ -7,8 +7,12 @@ on the backend.
 
 from __future__ import annotations
 
+import dataclasses
+import enum
+import json
 import math
 from dataclasses import dataclass, field
+from pathlib import PurePath
 
 import numpy as np
 
@@ -204,12 +208,13 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
       dissipation each in [-tol, 1 + tol] x 0.5 m u_1^2 (tol: :data:`LEDGER_DIVERGED`), and
       no negative dissipation beyond the run's own ledger error (a contact cannot create
       energy);
-    * times within the run: T0, t_xmax, t_sep and the first contact in [0, t_end].
+    * times within the run: T0, t_xmax, t_sep and the first contact in [0, its end].
 
     A run that passes them with x_max beyond the clamp height a raises
     :class:`OutsideValidity` instead (the small-deflection beam of eq 1 cannot move further
-    than a: the model's validity failed, not the solver); a run cut short by t_end a
-    ParameterError naming --t-end."""
+    than a: the model's validity failed, not the solver); a run cut short by t_end
+    (an event at or after t_end, inside what the engine simulated) a ParameterError naming
+    --t-end."""
     m = result.metrics
     model, scen = result.model or {}, result.scenario or {}
     a = (scen.get("trunk") or {}).get("clamp_height", math.inf)
@@ -223,8 +228,8 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
         problem = (f"energy ledger residual {ledger!r} of the input energy (allowed up to "
                    f"{LEDGER_DIVERGED:g})")
     else:
-        problem = _energy_problem(m, model, ledger) or _time_problem(m, scen.get("t_end"),
-                                                                     model.get("dt"))
+        problem = _energy_problem(m, model, ledger) or _time_problem(
+            m, scen.get("t_end"), model.get("dt"), _record_end(result))
     if problem is not None:
         raise SimulationDiverged(f"{result.backend}: {problem}")
     if x_max > a:  # a sound run (ledger and energies hold) that the beam cannot represent
@@ -232,7 +237,7 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
             f"{result.backend}: x_max = {x_max:.4g} m beyond the clamp height a = {a:g} m: "
             "the small-deflection trunk of eq 1 cannot move that far (a stiffer or heavier "
             "tree, or a lighter or slower pendulum, stays within it)")
-    short = _truncation_problem(m, scen.get("t_end"))
+    short = _truncation_problem(m, scen.get("t_end"), model.get("dt"))
     if short is not None:
         raise ParameterError(f"--t-end = {scen['t_end']:.4g} s is too short for this run "
                              f"({result.backend}): {short}: a longer --t-end")
@@ -243,12 +248,16 @@ def check_plausible(result: SimulationResult) -> SimulationResult:
 AT_THE_END = 1e-3
 
 
-def _truncation_problem(m: dict, t_end) -> str | None:
-    """What a run cut short by t_end cannot report, or None: x_max still rising at the end
-    (its peak lies beyond), or the bodies still in contact (the energies need the last
+def _truncation_problem(m: dict, t_end, dt=None) -> str | None:
+    """What a run cut short by t_end cannot report, or None: a time after t_end
+    (:func:`_beyond_end`; ``dt`` the run's step, s), x_max still rising at the end (its
+    peak lies beyond), or the bodies still in contact (the energies need the last
     separation)."""
     if not finite_number(t_end):
         return None
+    beyond = _beyond_end(m, t_end, dt)
+    if beyond is not None:
+        return beyond
     t_xmax = m.get("t_xmax")
     if finite_number(t_xmax) and t_xmax >= t_end * (1.0 - AT_THE_END):
         return f"the trunk is still moving out at the end (t_xmax = {t_xmax:.4g} s)"
@@ -280,21 +289,54 @@ def _energy_problem(m: dict, model: dict, ledger: float) -> str | None:
 TIME_SLACK = 0.01
 """Times may pass t_end by this fraction of it, or by two time steps where that is more: an
 engine's last step ends past t_end by up to one step and its t = 0, the touch, lies inside a
-step (MuJoCo's SDOF at dt = 5.9 us over a 0.2 ms run: 3 %); a gross error is far beyond. A peak in that last step is
-the run's end, a t_end too short (:func:`_truncation_problem`), not a divergence."""
+step (MuJoCo's SDOF at dt = 5.9 us over a 0.2 ms run: 3 %); a gross error is far beyond.
+A time past t_end inside what an engine simulated (MuJoCo's full pendulum runs past it), or
+a peak in the last step, is the run's end: a t_end too short (:func:`_truncation_problem`),
+not a divergence."""
 
 
-def _time_problem(m: dict, t_end, dt=None) -> str | None:
-    """A time outside [0, t_end] (beyond :data:`TIME_SLACK` of it or two steps ``dt``, s,
-    whichever is more), or None."""
+#: The metrics that are times after the first touch (s), each inside [0, t_end].
+TIME_KEYS = ("T0", "t_xmax", "t_sep", "first_contact_duration")
+
+
+def _time_problem(m: dict, t_end, dt=None, span=None) -> str | None:
+    """A time before the first touch or after the run's ``span`` (s: the end of what was
+    simulated after the touch, default ``t_end``; beyond :func:`_slack`), or None."""
     if not finite_number(t_end):
         return None
-    slack = max(TIME_SLACK * t_end, 2.0 * dt if finite_number(dt) and dt > 0 else 0.0)
-    for key in ("T0", "t_xmax", "t_sep", "first_contact_duration"):
+    end = max(t_end, span if finite_number(span) else t_end) + _slack(t_end, dt)
+    for key in TIME_KEYS:
         v = m.get(key)
-        if finite_number(v) and not 0.0 <= v <= t_end + slack:
+        if finite_number(v) and not 0.0 <= v <= end:
             return (f"{key} = {v:.4g} s outside the run [0, t_end = {t_end:.4g}] s (a longer "
                     "--t-end: the peak or the separation lies beyond it)")
+    return None
+
+
+def _slack(t_end: float, dt=None) -> float:
+    """How far (s) a time may pass t_end: :data:`TIME_SLACK` of it or two steps ``dt``."""
+    return max(TIME_SLACK * t_end, 2.0 * dt if finite_number(dt) and dt > 0 else 0.0)
+
+
+def _record_end(result) -> float | None:
+    """The last time of ``result``'s record (s after the touch) when it is sampled already
+    (an engine's: MuJoCo's full pendulum simulates past t_end), else None (never sampled
+    here: a deferred record stays unpaid)."""
+    record = result.record
+    if record is None or "t" not in record.__dict__ or not len(record.t):
+        return None
+    return float(record.t[-1])
+
+
+def _beyond_end(m: dict, t_end, dt=None) -> str | None:
+    """A time after ``t_end`` (beyond :data:`TIME_SLACK` of it or two steps ``dt``, s,
+    whichever is more: an engine that simulates past t_end, as MuJoCo's full pendulum's
+    swing does, found its event there), or None: a t_end too short for the event."""
+    slack = _slack(t_end, dt)
+    for key in TIME_KEYS:
+        v = m.get(key)
+        if finite_number(v) and v > t_end + slack:
+            return f"{key} = {v:.4g} s lies after t_end"
     return None
 
 
@@ -306,15 +348,49 @@ def finite_number(v) -> bool:
 
 
 def to_jsonable(obj):
-    """JSON-safe copy of ``obj``'s dicts, lists and numbers: NaN and inf become None (JSON
-    has neither), numpy scalars become Python numbers."""
+    """JSON-safe copy of ``obj``, the one converter every JSON writer uses (through
+    :func:`json_text`): dicts (keys as text), lists, tuples and arrays as lists; Python and
+    numpy booleans, integers and floats as Python's; NaN and inf as None (strict JSON has
+    neither); an enum as its value, a dataclass as its fields, a path as its text. Raises
+    TypeError naming the type of anything else."""
+    if isinstance(obj, (str, type(None))) and not isinstance(obj, enum.Enum):
+        return obj
     if isinstance(obj, dict):
-        return {k: to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
+        return {_json_key(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, np.ndarray)):
         return [to_jsonable(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
+    return _json_scalar(obj)
+
+
+def _json_scalar(obj):
+    """The JSON form of one non-container value (:func:`to_jsonable`)."""
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, enum.Enum):
+        return to_jsonable(obj.value)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
         f = float(obj)
         return f if math.isfinite(f) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return to_jsonable({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
+    if isinstance(obj, PurePath):
+        return str(obj)
+    raise TypeError(f"{type(obj).__name__} has no JSON form (analytic.results.to_jsonable)")
+
+
+def _json_key(key) -> str:
+    """A dict key as JSON text: a string as it is, an enum by its value, a number or
+    boolean as JSON writes it."""
+    if isinstance(key, str) and not isinstance(key, enum.Enum):
+        return key
+    value = _json_scalar(key)
+    return value if isinstance(value, str) else json.dumps(value)
+
+
+def json_text(obj, **options) -> str:
+    """``obj`` as strict JSON text (:func:`to_jsonable`, then ``json.dumps`` with
+    ``allow_nan=False``: never a NaN or Infinity token); ``options`` are json.dumps's
+    (indent, sort_keys, separators)."""
+    return json.dumps(to_jsonable(obj), allow_nan=False, **options)

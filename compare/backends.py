@@ -178,18 +178,25 @@ class Backend:
         return func(scenario, **self._checked(options, self.options(), accepted))
 
     def _checked(self, options: dict, table: dict, accepted: set) -> dict:
-        """``options`` with each value checked by its Option (one line naming the flag);
-        an option ``accepted`` does not hold is refused, naming what the backend takes."""
-        out = {}
+        """``options`` with each value checked by its Option; an option ``accepted`` does
+        not hold is refused, naming what the backend takes. Every refused option is named
+        in the one line (``; ``-joined), each with its allowed values or range."""
+        out, refused = {}, []
         for key, value in options.items():
             if key not in accepted:
                 known = [k for k in sorted(accepted) if k not in table or table[k].cli]
                 shown = ", ".join("--" + k.replace("_", "-") for k in known)
-                raise ParameterError(f"--{key.replace('_', '-')}: not an option of backend "
-                                     f"{self.name!r} (its options: {shown or 'none'})"
-                                     f"{did_you_mean(key, known)}")
-            out[key] = table[key].check(key, value) if key in table and value is not None \
-                else value
+                refused.append(f"--{key.replace('_', '-')}: not an option of backend "
+                               f"{self.name!r} (its options: {shown or 'none'})"
+                               f"{did_you_mean(key, known)}")
+                continue
+            try:
+                out[key] = table[key].check(key, value) if key in table and value is not None \
+                    else value
+            except ParameterError as exc:
+                refused.append(str(exc))
+        if refused:
+            raise ParameterError("; ".join(refused))
         return out
 
 def scenario_as_run(scenario, options: dict):

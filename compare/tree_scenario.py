@@ -168,6 +168,19 @@ def _pick(inputs: TreeInputs, key: str):
     return DEFAULTS[key] if v is None else v
 
 
+def _as_typed(exc: ParameterError, inputs: TreeInputs) -> ParameterError:
+    """``exc`` (calibrate_trunk's, naming b or K_T) led by the flags typed when the
+    quantity came from the regression (b from --a1 and --a2, K_T from --x-max and --tau)."""
+    text = str(exc)
+    if text.startswith("damping_rate") and inputs.damping_rate is None:
+        return ParameterError(f"--a1 = {inputs.a1:g} m/s, --a2 = {inputs.a2:g} m/s^2 give "
+                              f"b = -a2/a1 (eq 42): {text}")
+    if text.startswith("equivalent_stiffness") and inputs.equivalent_stiffness is None:
+        return ParameterError(f"--x-max = {inputs.x_max:g} m, --tau = {inputs.tau:g} s give "
+                              f"K_T (eqs 43, 46): {text}")
+    return exc
+
+
 def build_scenario(inputs: TreeInputs) -> Scenario:
     """The calibrated :class:`Scenario` of ``inputs``, its t_end as given or the default."""
     pendulum = Pendulum(mass=inputs.impactor_mass, equivalent_length=inputs.equivalent_length,
@@ -201,7 +214,10 @@ def build_scenario(inputs: TreeInputs) -> Scenario:
     chosen = Trunk(length=_pick(inputs, "length"), clamp_height=inputs.clamp_height,
                    diameter=inputs.diameter, density=_pick(inputs, "density"),
                    youngs_modulus=inputs.youngs_modulus, clamp_mass=_pick(inputs, "clamp_mass"))
-    trunk = calibrate_trunk(chosen, measured, impactor_mass=inputs.impactor_mass)
+    try:
+        trunk = calibrate_trunk(chosen, measured, impactor_mass=inputs.impactor_mass)
+    except ParameterError as exc:
+        raise _as_typed(exc, inputs) from None
     chosen_names = [f"{sym} = {_pick(inputs, k):g} {unit}" for sym, k, unit in (
         ("l", "length", "m"), ("rho", "density", "kg/m^3"), ("m_c", "clamp_mass", "kg"))]
     notes = calibration_notes(measured, given=", ".join(given),

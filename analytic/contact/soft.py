@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from treeimpact.analytic.budget import StepCost, check_work
+from treeimpact.analytic.budget import Knob, StepCost, check_work
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.options import (
     CONTACT_DURATION,
@@ -19,7 +19,8 @@ from treeimpact.analytic.model.options import (
     T_END,
     Option,
 )
-from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.model.parameters import DEFAULT_CONTACT_DURATION, Scenario
+from treeimpact.analytic.model.registry import BY_PATH
 from treeimpact.analytic.model.reduction import crown_factor
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import model_metrics, with_static_shape_crown
@@ -69,6 +70,23 @@ def sdof_impact_model(model: TwoBodyModel, trunk, k_c: float, c_c: float
         impact_speed=model.impact_speed, contact_stiffness=k_c, contact_damping=c_c)
 
 
+def _duration_knob(model: TwoBodyModel, contact, stiffness, duration, samples: int
+                   ) -> Knob | None:
+    """The pad's duration as the budget's :class:`~analytic.budget.Knob` (the record's step
+    is the collision's time over ``samples``): ``--contact-duration`` when given, else the
+    scenario's ``contact.duration`` (or its default); None for a pad set by its stiffness."""
+    if stiffness is not None or (duration is None and contact.stiffness is not None):
+        return None
+    label = "--contact-duration" if duration is not None else "contact.duration"
+    value = duration if duration is not None else (
+        contact.duration if contact.duration is not None else DEFAULT_CONTACT_DURATION)
+
+    def dt_of(tau: float) -> float:
+        return collision_duration(model, *contact_law(model, duration=tau)) / samples
+
+    return Knob(label, value, "s", dt_of, BY_PATH["contact.duration"].high)
+
+
 def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
                   contact_stiffness: float | None = None,
                   contact_duration: float | None = None,
@@ -90,7 +108,8 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
                            duration=contact_duration)
     t_col = collision_duration(model, k_c, c_c)
     dt = t_col / samples_per_collision
-    check_work(t_end, dt, SAMPLE_COST)
+    check_work(t_end, dt, SAMPLE_COST, _duration_knob(
+        model, scenario.contact, contact_stiffness, contact_duration, samples_per_collision))
     if method is SoftMethod.ODE:
         rec = with_static_shape_crown(soft_record(model, k_c, c_c, t_end, dt_sample=dt),
                                       scenario.trunk)

@@ -179,6 +179,7 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                                1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass))}
     scen = scenario.to_dict()
     scen["contact"]["restitution"] = sdof.restitution
+    scen["t_end"] = t_end  # the run's, as the engines record it (a --t-end's refusal names it)
     return SimulationResult(
         backend="beam", metrics=metrics, model=model_dict, scenario=scen,
         trajectory=trajectory, record=record, collision_duration=t_col,

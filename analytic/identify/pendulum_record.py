@@ -26,6 +26,11 @@ NAMES = {"t": ("t", "time"), "x": ("x", "trunk", "displacement", "x_trunk"),
 TIME_UNITS = {"s": 0, "ms": -3, "us": -6}
 LENGTH_UNITS = {"m": 0, "cm": -2, "mm": -3, "um": -6}
 _MICRO = {"µs": "us", "μs": "us", "µm": "um", "μm": "um", "sec": "s", "msec": "ms"}
+#: The largest |value| of a column (SI) and its unit: no pendulum test comes near in any unit
+#: the reader knows (a 30 m displacement read as um is 3e7; a 1e6-sample record's span in
+#: us read as s ~1e7 s, an epoch clock in s 1.7e9 s), and the record's arithmetic (squares,
+#: differences, sums over MAX_SAMPLES) stays far from overflow below it.
+MAGNITUDE = {"t": (1e12, "s"), "x": (1e9, "m"), "y": (1e9, "m")}
 COMMENT = ("#", "%", "//")  # a line starting with one of these (after blanks) is a comment
 
 
@@ -61,6 +66,17 @@ class Record:
         """The file line of sample i (its position + 2 for a record without a file)."""
         return int(self.rows[i]) if self.rows is not None else i + 2
 
+    def _check_magnitude(self, where: str, name: str, v: np.ndarray) -> None:
+        """ParameterError naming column ``name`` and the first row of ``v`` beyond
+        :data:`MAGNITUDE` (checked before any arithmetic on the record: 1.7e308 overflowed
+        in the record's own checks and printed numpy's warnings)."""
+        limit, unit = MAGNITUDE[name]
+        big = np.flatnonzero(np.abs(v) > limit)
+        if big.size:
+            i = int(big[0])
+            raise ParameterError(f"{where}: {name} = {v[i]:.3g} {unit} at row {self.row(i)} is "
+                                 f"out of range: allowed |{name}| <= {limit:g} {unit}")
+
     def __post_init__(self):
         t, x = np.asarray(self.t, float), np.asarray(self.x, float)
         where = f"record {self.source!r}" if self.source else "record"
@@ -74,14 +90,15 @@ class Record:
             if bad.size:
                 raise ParameterError(f"{where}: {name} is not a finite number at row "
                                      f"{self.row(int(bad[0]))}")
+            self._check_magnitude(where, name, v)
         steps = np.diff(t)
         if np.any(steps <= 0):
             i = int(np.flatnonzero(steps <= 0)[0]) + 1
             raise ParameterError(f"{where}: time t does not increase at row {self.row(i)} "
                                  "(sorted, without repeats, is required)")
-        if not np.max(x) - np.min(x) > 0:
+        if not np.max(x) > np.min(x):  # compared, not subtracted: no overflow
             raise ParameterError(f"{where}: x never changes: the record holds no impact")
-        if self.y is not None and not np.ptp(np.asarray(self.y, float)) > 0:
+        if self.y is not None and not np.max(self.y) > np.min(self.y):
             raise ParameterError(f"{where}: y never changes: the pendulum's column holds no "
                                  "motion (leave it out, or record the pendulum)")
 
@@ -147,7 +164,7 @@ def read_record(path, *, time_unit: str | None = None, length_unit: str | None =
         [float(v.scaleb(power[key])) if power[key] else v for v in values[key]], float)
         for key in ("x", "y"))
     for key, v in (("x", x), ("y", y)):  # the column as typed in the message
-        if v is not None and v.size and np.all(np.isfinite(v)) and not np.ptp(v) > 0:
+        if v is not None and v.size and np.all(np.isfinite(v)) and not np.max(v) > np.min(v):
             what = ("the record holds no impact" if key == "x" else "the pendulum's column "
                     "holds no motion (leave it out, or record the pendulum)")
             raise ParameterError(f"record {name!r}: column {cells[keys.index(key)].strip()!r}"

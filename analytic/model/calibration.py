@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 
 from treeimpact.analytic.errors import ParameterError
 
-from .parameters import Trunk
+from .parameters import LIMITS, Trunk
 from .reduction import reduce_trunk, static_mode_shape
 
 
@@ -118,27 +118,58 @@ def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: flo
     """
     a = chosen.clamp_height
     rigid = a ** 3 / (3.0 * chosen.bending_stiffness)  # m/N: flexibility of the rigid clamp
-    flexibility = 1.0 / measured.equivalent_stiffness
-    if flexibility < rigid * (1.0 - 1e-12):
-        raise ParameterError(
-            f"equivalent_stiffness = {measured.equivalent_stiffness:.6g} N/m: above the "
-            "rigid-clamp trunk's "
-            f"3 E I / a^3 = {1.0 / rigid:.6g} N/m (eq 8); allowed (0, {1.0 / rigid:.6g}] N/m "
-            "for this E, d and a (a stiffer tree needs a larger E)")
-    base = math.inf if flexibility <= rigid else a ** 2 / (flexibility - rigid)
+    base = _base_stiffness(measured.equivalent_stiffness, a, rigid)
     trunk = replace(chosen, base_stiffness=base, crown_mass=0.0, damping=0.0)
     shape = static_mode_shape(trunk)
     j = shape.square_integral()
     tip = float(shape.outer(trunk.length))
     own = reduce_trunk(trunk).dynamic_mass  # rho A J + m_c: the trunk without its crown
     crown = (measured.dynamic_mass - own) / tip ** 2
-    if crown < 0:
+    high = own + LIMITS["trunk.crown_mass"][1] * tip ** 2
+    if not 0.0 <= crown <= LIMITS["trunk.crown_mass"][1]:
         raise ParameterError(
-            f"dynamic_mass = {measured.dynamic_mass:.6g} kg: below the bare trunk's "
-            f"{own:.6g} kg (rho A J + m_c, eq 7); allowed [{own:.6g}, inf) kg for this "
-            "l, d, rho and m_c (lower the density or the clamp mass)")
+            f"dynamic_mass = {measured.dynamic_mass:.6g} kg: "
+            + (f"below the bare trunk's {own:.6g} kg (rho A J + m_c, eq 7)" if crown < 0 else
+               f"needs a crown mass of {crown:.6g} kg, above the "
+               f"{LIMITS['trunk.crown_mass'][1]:g} kg allowed (eq 7)")
+            + f"; allowed [{own:.6g}, {high:.6g}] kg for this l, d, rho and m_c")
     c_t = 2.0 * measured.damping_rate * (measured.dynamic_mass + impactor_mass)
+    _check_damping(measured.damping_rate, c_t / j, measured.dynamic_mass + impactor_mass, j)
     return replace(trunk, crown_mass=crown, damping=c_t / j)
+
+
+def _base_stiffness(k_t: float, a: float, rigid: float) -> float:
+    """The root spring (N m/rad) that makes the trunk's clamp stiffness ``k_t`` (N/m, eq 8:
+    1/K_T = a^3 / (3 E I) + a^2 / k_r, ``rigid`` the first term, m/N, at clamp height
+    ``a``, m); ParameterError naming equivalent_stiffness and its allowed range (k_r
+    within trunk.base_stiffness's) when there is none."""
+    k_low = LIMITS["trunk.base_stiffness"][0]
+    low, high = 1.0 / (rigid + a ** 2 / k_low), 1.0 / rigid
+    flexibility = 1.0 / k_t
+    if flexibility < rigid * (1.0 - 1e-12):
+        raise ParameterError(
+            f"equivalent_stiffness = {k_t:.6g} N/m: above the rigid-clamp trunk's "
+            f"3 E I / a^3 = {high:.6g} N/m (eq 8); allowed [{low:.6g}, {high:.6g}] N/m "
+            "for this E, d and a (a stiffer tree needs a larger E)")
+    base = math.inf if flexibility <= rigid else a ** 2 / (flexibility - rigid)
+    if base < k_low:
+        raise ParameterError(
+            f"equivalent_stiffness = {k_t:.6g} N/m: needs a root spring of {base:.6g} N m/rad, "
+            f"below the {k_low:g} N m/rad allowed (eq 8); allowed [{low:.6g}, {high:.6g}] N/m "
+            "for this E, d and a")
+    return base
+
+
+def _check_damping(b: float, damping: float, masses: float, j: float) -> None:
+    """ParameterError naming damping_rate ``b`` (1/s) and its allowed range when the
+    distributed ``damping`` C = 2 b (M_T + m) / J (N s/m^2, eq 10; ``masses`` = M_T + m, kg,
+    ``j`` the mode shape's square integral, m) lies beyond trunk.damping's range."""
+    high = LIMITS["trunk.damping"][1]
+    if damping > high:
+        raise ParameterError(
+            f"damping_rate = {b:.6g} 1/s: needs a trunk damping of {damping:.6g} N s/m^2, "
+            f"above the {high:g} N s/m^2 allowed (eq 10); allowed [0, {high * j / (2 * masses):.6g}]"
+            " 1/s for this M_T, m and trunk")
 
 
 def calibration_notes(measured: MeasuredTree, *, given: str, chosen: str) -> dict:

@@ -6,11 +6,10 @@ design notes: docs/contact-settings.md.
 
 from __future__ import annotations
 
-import json
 import math
 
 from treeimpact.analytic.errors import NotAchieved, ParameterError
-from treeimpact.analytic.results import to_jsonable
+from treeimpact.analytic.results import json_text
 from treeimpact.compare.contact_settings import HOLD_TOLERANCE, contact_settings
 
 from ..backends import ENGINE_REGISTRY
@@ -65,7 +64,7 @@ def run(args) -> int:
     if all("error" in res[e] for e in engines):
         raise ParameterError("; ".join(res[e]["error"] for e in engines))
     if args.json:
-        print(json.dumps(to_jsonable(res), indent=2))
+        print(json_text(res, indent=2))
     else:
         print_settings(res, engines)
     missed = [not_held_text(res, e) for e in engines if res[e].get("holds_target") is False]

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-import json
 import math
 import sys
 from pathlib import Path
@@ -20,7 +19,7 @@ from treeimpact.analytic.identify.pendulum_record import LENGTH_UNITS, TIME_UNIT
 from treeimpact.analytic.identify.procedure import READINGS, identify_from_record
 from treeimpact.analytic.model.parameters import Pendulum, check_range
 from treeimpact.analytic.model.registry import BY_NAME
-from treeimpact.analytic.results import to_jsonable
+from treeimpact.analytic.results import json_text
 from treeimpact.compare.backends import worded_c_output
 from treeimpact.compare.figure_text import save_figure
 from treeimpact.compare.provenance import provenance
@@ -147,7 +146,7 @@ def run(args) -> int:
             _plot(args.plot, record, fit, paper, test)
     refusal = _not_fitted(fit)
     if args.json:
-        print(json.dumps(to_jsonable(_json(args, record, fit, paper)), indent=2))
+        print(json_text(_json(args, record, fit, paper), indent=2))
         if refusal:
             raise refusal
         return ExitCode.OK

@@ -3,10 +3,9 @@ natural frequencies (rad/s) of a backend's trunk beside the continuous beam's.""
 
 from __future__ import annotations
 
-import json
 
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.analytic.results import to_jsonable
+from treeimpact.analytic.results import json_text
 from treeimpact.compare.backends import BACKENDS, get_backend
 from treeimpact.compare.provenance import provenance
 
@@ -39,7 +38,7 @@ def run(args) -> int:
     res = backend.modes(scenario, **opts)
     if args.json:
         res = res | {"provenance": provenance(scenario, backend=args.backend, options=opts)}
-        print(json.dumps(to_jsonable(res), indent=2))
+        print(json_text(res, indent=2))
         return ExitCode.OK
     model, beam = res["model"], res["beam"]
     theory = "Timoshenko" if getattr(args, "beam_theory", None) == "timoshenko" \

@@ -5,10 +5,9 @@ measured number (SI units)."""
 
 from __future__ import annotations
 
-import json
 import math
 
-from treeimpact.analytic.results import to_jsonable
+from treeimpact.analytic.results import json_text
 from treeimpact.compare.provenance import provenance
 
 from ..exits import ExitCode
@@ -102,7 +101,7 @@ def run(args) -> int:
 
         res["contact_fit"] = fit_paper_trees()
     if args.json:
-        print(json.dumps(to_jsonable(res | {"provenance": provenance()}), indent=2))
+        print(json_text(res | {"provenance": provenance()}, indent=2))
         return ExitCode.OK
     if "contact_fit" in res:
         _print_contact_fit(res["contact_fit"])

@@ -3,12 +3,11 @@ paper's model (or as JSON), optionally written as a pendulum-test record (SI uni
 
 from __future__ import annotations
 
-import json
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.registry import units_of
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.analytic.results import METRIC_UNITS, to_jsonable
+from treeimpact.analytic.results import METRIC_UNITS, json_text
 from treeimpact.compare.backends import BACKENDS, get_backend
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.recording import DEFAULTS, REST, check_sampling, sample
@@ -98,7 +97,7 @@ def run(args) -> int:
     written = write_record(args, scenario, result) if args.record else None
     if args.json:
         out = result.to_json() | {"provenance": provenance(scenario, result, options=opts)}
-        print(json.dumps(to_jsonable(out), indent=2))
+        print(json_text(out, indent=2))
         return ExitCode.OK
     reference = None
     if args.backend != "analytic":  # the paper's model beside it (a few ms)

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
-import json
 import math
 import shutil
 import tempfile
@@ -31,7 +30,7 @@ from pathlib import Path
 
 from treeimpact.analytic.model.plausible import implausible
 from treeimpact.analytic.model.scenario import shipped_scenarios
-from treeimpact.analytic.results import to_jsonable
+from treeimpact.analytic.results import json_text
 
 from ..ladder import build_ladder, prefetch_ladders
 from ..pool import check_stop, preload_in_workers, process_map
@@ -276,8 +275,7 @@ def _write_pages(folder: Path, sections: dict, t_start: float) -> None:
         (folder / f"report.{fmt}").write_text(page, encoding="utf-8")
     sections["runs"].wall_s["total"] = time.perf_counter() - t_start
     data = _report_data(sections, summary, stamp)
-    (folder / "report.json").write_text(json.dumps(to_jsonable(data), indent=1),
-                                        encoding="utf-8")
+    (folder / "report.json").write_text(json_text(data, indent=1), encoding="utf-8")
 
 
 def _report_data(sections: dict, summary: dict, stamp: str) -> dict:

@@ -10,12 +10,12 @@ record fits :mod:`.ident_fits`."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from treeimpact.analytic.results import json_text
 from treeimpact.compare.sweep.run import SweepSpec, run_sweeps
 
 from .ident_maps import identification_error_map
@@ -108,7 +108,7 @@ def run_identification_study(out, scenario: str = "central-leader", *, workers=N
     figures = [identification_error_map(mapped, method, out / f"ident-{method}.png")
                for method in METHODS] if mapped else []
     sampling_summary = summarise_sampling(rows["sampling"]) if rows.get("sampling") else []
-    (out / "ident-study.json").write_text(json.dumps(
+    (out / "ident-study.json").write_text(json_text(
         {"scenario": scenario, "rate_hz": RATE, "noise": NOISE,
          "sweeps": {name: str(res.out.relative_to(out)) for name, res in results.items()},
          "summary": summary, "sampling": sampling_summary}, indent=1))

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Scenario
-from treeimpact.analytic.results import METRIC_KEYS
+from treeimpact.analytic.results import METRIC_KEYS, json_text
 from treeimpact.compare.runs import OK
 
 from .execute import IDENT_KEYS, MODEL_KEYS, load_analysis
@@ -97,8 +97,12 @@ class Journal:
 
 
 def _cell(v):
+    """One journal cell's text: None and NaN empty, a float by its repr (exact), a text on
+    one line; a numpy scalar as its Python value (a float32 NaN was written "nan")."""
     if v is None:
         return ""
+    if hasattr(v, "item") and not isinstance(v, str):  # numpy's bool_, integer, floating
+        v = v.item()
     if isinstance(v, float):
         return "" if math.isnan(v) else repr(v)
     if isinstance(v, str):
@@ -185,7 +189,7 @@ def check_spec(out: Path, spec: dict) -> None:
         raise ParameterError(f"--out {str(out)!r}: {SPEC} is not the spec a sweep writes; "
                              "move it away or use a new --out")
     for key in ("scenario", "axes", "identify", "analysis"):
-        if json.dumps(old.get(key), sort_keys=True) != json.dumps(spec[key], sort_keys=True):
+        if json_text(old.get(key), sort_keys=True) != json_text(spec[key], sort_keys=True):
             raise ParameterError(f"--out {out}: holds a sweep with another {key} "
                                  f"({SPEC}); use a new --out to start a different sweep")
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 import os
 import time
 from dataclasses import dataclass, field
@@ -15,6 +14,7 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Scenario
+from treeimpact.analytic.results import json_text
 from treeimpact.compare.pool import check_stop, check_workers, connect, dask_workers, run_chunks
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.runs import resolve_scenario
@@ -165,9 +165,9 @@ def _open(part: _Part, index: int, retry_failed: bool) -> None:
     part.out = make_out(part.out)
     spec = spec_of(part.scenario, part.grid, part.identify, part.analysis)
     check_spec(part.out, spec)
-    (part.out / SPEC).write_text(json.dumps(spec | {
+    (part.out / SPEC).write_text(json_text(spec | {
         "targets": [dataclasses.asdict(t) for t in part.targets],
-        "provenance": provenance(part.scenario)}, indent=2, default=str))
+        "provenance": provenance(part.scenario)}, indent=2))
     journal_path = part.out / JOURNAL
     part.done = finished(journal_path, retry_failed)
     part.tasks, part.immediate = plan(part.scenario, part.grid, part.targets,

@@ -8,18 +8,15 @@ docs/design-map.md."""
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
 from pathlib import Path
 
-import numpy as np
-
 from treeimpact.analytic.errors import NotAchieved, ParameterError, SimulationDiverged, one_line
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.scenario import shipped_scenarios
-from treeimpact.analytic.results import check_plausible
+from treeimpact.analytic.results import check_plausible, json_text, to_jsonable
 
 from ..runs import resolve_scenario
 from ..studies.design import (
@@ -71,18 +68,6 @@ COUNT = 30
 
 def _name(pair) -> str:
     return f"{pair[0]}-{pair[1]}"
-
-
-def _clean(obj):
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    return obj.item() if hasattr(obj, "item") else obj
 
 
 def tree_cell(scen) -> tuple:
@@ -278,7 +263,7 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
     if grid:
         g = results[-1]
         data["grid"] = {"specs": list(grid), "cells": len(g.table)}
-    return write_design(out, _clean(data))
+    return write_design(out, to_jsonable(data))
 
 
 def write_design(out, data: dict) -> dict:
@@ -289,7 +274,7 @@ def write_design(out, data: dict) -> dict:
     from treeimpact.compare.report.base import environment
 
     out = Path(out)
-    (out / "design.json").write_text(json.dumps(data, indent=1), encoding="utf-8")
+    (out / "design.json").write_text(json_text(data, indent=1), encoding="utf-8")
     env = environment()
     md = env.get_template("design_body.md.j2").render(d=data, level=1, image=lambda n: n)
     html = env.get_template("design_page.html.j2").render(d=data, level=1, image=lambda n: n)

@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.results import json_text
 from treeimpact.compare.backends import ENGINES
 from treeimpact.compare.provenance import provenance
 from treeimpact.compare.report.base import environment
@@ -213,7 +214,7 @@ def write_study(out, sweeps: dict, *, speed: dict | None = None, tolerance=None,
             "summary": ident_study["summary"], "sampling": ident_study.get("sampling", []),
             "figures": [f.name for f in ident_study["figures"]]}
     summary.update(_presentation(summary, validity, ident, curves))
-    (out / "study.json").write_text(json.dumps(_jsonable(summary), indent=2))
+    (out / "study.json").write_text(json_text(summary, indent=2))
     (out / "study.md").write_text(render_study(summary, "md"))
     (out / "study.html").write_text(render_study(summary, "html"))
     return {"md": out / "study.md", "html": out / "study.html", "json": out / "study.json",
@@ -355,17 +356,3 @@ def _seeds(iv) -> str:
 
 def _fmt_abs(v) -> str:
     return "n/a" if v is None or v != v else f"{v:.1%}"
-
-
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, float) and obj != obj:
-        return None
-    if isinstance(obj, Path):
-        return str(obj)
-    if hasattr(obj, "item"):
-        return obj.item()
-    return obj
