@@ -115,3 +115,39 @@ def test_records_in_their_declared_units_pass(tmp_path):
                  1e3 * record.y)
     fit = fit_record(read_record(path), test)
     assert fit.explained and DiagnosisKind.UNITS not in fit.diagnosis_kinds()
+
+
+def test_a_length_column_switching_to_mm_halfway_is_refused(tmp_path, capsys):
+    """x in m, then mm from sample 250 (the logger's unit changed): one step of ~1000 x
+    the value, no other step within a twentieth of it, the level after it 1000 x the level
+    before: refused naming the row, exit 4; y the same."""
+    from treeimpact.analytic.identify.record_features import mixed_length_unit
+
+    _, record, test = synthetic(0.1, 0, pendulum=True)
+    x = record.x.copy()
+    x[250:] *= 1e3
+    row, factor = mixed_length_unit(x)
+    assert row == 250 and 500 < factor < 2000  # the level's ratio, a unit factor 1000
+    refused_for_units(fit_record(Record(record.t, x), test), "row 252")
+    path = write(tmp_path / "x-mixed.csv", "t [s],x [m]", record.t, x)
+    assert main(["identify", path, *ARGS]) == ExitCode.NOT_ACHIEVED
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "x's values change by a factor" in err and "row 252" in err
+    y = record.y.copy()
+    k = 50 + int(np.argmax(np.abs(y[50:-50])))  # where it shows (near 0: within the noise)
+    y[k:] *= 1e-2  # cm -> m the other way
+    assert mixed_length_unit(y)[0] == k
+
+
+def test_a_length_column_in_one_unit_is_not_mixed():
+    """A struck trunk's record (its first velocity jump included), one outlier spike of
+    50 x the motion, and the noisy records: no switch found."""
+    from treeimpact.analytic.identify.record_features import mixed_length_unit
+
+    for seed, noise in ((0, 0.0), (1, None), (2, 0.05)):  # clean, the default noise, 5 %
+        _, record, _ = synthetic(0.1, seed, pendulum=True, noise=noise)
+        assert mixed_length_unit(record.x) is None and mixed_length_unit(record.y) is None
+    _, record, _ = synthetic(0.1, 0, noise=0.0)
+    spiked = record.x.copy()
+    spiked[300] += 50 * float(np.ptp(record.x))
+    assert mixed_length_unit(spiked) is None

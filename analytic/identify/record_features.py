@@ -221,3 +221,41 @@ def mixed_time_unit(t: np.ndarray) -> int | None:
             off = np.flatnonzero(~((span > ref / STEP_FACTOR) & (span < ref * STEP_FACTOR)))
             return (k - 1) * STEP_BLOCK + int(off[0]) + 1
     return None
+
+
+#: A step this many times every step of the block on its smaller side (in the unit of the
+#: smaller values) is a discontinuity no motion makes: a struck trunk's steps are V dt and
+#: change smoothly; a spike moves two adjacent steps and not the level.
+JUMP_FACTOR = 20.0
+#: The factors between the length units the reader knows (cm/m, mm/cm, mm/m, um/mm, ...).
+UNIT_FACTORS = tuple(sorted({a / b for a in LENGTH_UNITS.values() for b in LENGTH_UNITS.values()
+                             if a > b}))
+#: The largest steps of a column tried as the switch (a switch near a zero crossing of the
+#: motion is a small jump; the steps in the larger unit's noise can exceed it).
+SWITCH_CANDIDATES = 8
+
+
+def mixed_length_unit(x: np.ndarray) -> tuple[int, float] | None:
+    """(the first sample in the other unit, the factor after / before) where a length column
+    ``x`` switches unit part-way (m, then mm: every value after one row a unit factor
+    larger), else None. At one of the SWITCH_CANDIDATES largest steps, two facts at once:
+    the median |value| of the STEP_BLOCK samples after it is a unit factor (within 2 x) of
+    the block's before (a spike leaves the level), and the step is JUMP_FACTOR times every
+    step of the block on the smaller side (a discontinuity, not the motion). A switch where
+    the values lie within the noise of zero changes nothing the record shows: not found."""
+    x = np.asarray(x, float)
+    steps = np.abs(np.diff(x))
+    for i in np.argsort(steps)[::-1][:SWITCH_CANDIDATES]:
+        i = int(i)
+        if not (i + 1 >= STEP_BLOCK and i + 1 + STEP_BLOCK <= x.size):
+            continue
+        before, after = x[i + 1 - STEP_BLOCK:i + 1], x[i + 1:i + 1 + STEP_BLOCK]
+        low, high = float(np.median(np.abs(before))), float(np.median(np.abs(after)))
+        if low <= 0.0 or high <= 0.0:
+            continue
+        small = before if low < high else after
+        ratio = max(high / low, low / high)
+        if (any(f / 2.0 <= ratio <= 2.0 * f for f in UNIT_FACTORS)
+                and steps[i] > JUMP_FACTOR * float(np.max(np.abs(np.diff(small))))):
+            return i + 1, high / low
+    return None

@@ -61,9 +61,11 @@ from .pendulum_record import Record, read_record  # noqa: F401 - read_record: pu
 from .procedure import PendulumTest
 from .profile import CHI2_95, find_ridge
 from .record_features import (
+    JUMP_FACTOR,
     STEP_BLOCK,
     Features,
     features,
+    mixed_length_unit,
     mixed_time_unit,
     pendulum_unit_suspicion,
     unit_suspicions,
@@ -182,8 +184,9 @@ def fit_record(record: Record, test: PendulumTest, *, start=None,
 
 def _unit_lines(record: Record, feat: Features, test: PendulumTest) -> list[str]:
     """One line per column whose numbers contradict its declared unit: t and x
-    (:func:`record_features.unit_suspicions`), t's step changing part-way (a column in two
-    units), the pendulum's y (:func:`record_features.pendulum_unit_suspicion`)."""
+    (:func:`record_features.unit_suspicions`), t's step or x's or y's level changing part-way
+    by a unit's factor (a column in two units), the pendulum's y
+    (:func:`record_features.pendulum_unit_suspicion`)."""
     length_unit = getattr(record, "length_unit", "m")
     mixed = mixed_time_unit(record.t)
     if mixed is not None:  # the other checks read the record's time scale: said alone
@@ -193,6 +196,14 @@ def _unit_lines(record: Record, feat: Features, test: PendulumTest) -> list[str]
         return [f"t's step changes from {before:.3g} s to {after:.3g} s at row "
                 f"{record.row(mixed)} (a factor {max(after / before, before / after):.3g}): "
                 "the column holds two units; one unit per column"]
+    for name, column in (("x", record.x), ("y", record.y)):
+        switch = None if column is None else mixed_length_unit(column)
+        if switch is not None:  # a column in two units: said alone, as t's
+            row, factor = switch
+            return [f"{name}'s values change by a factor {factor:.3g} at row "
+                    f"{record.row(row)} (from {column[row - 1]:.3g} to {column[row]:.3g} "
+                    f"between two samples, a step {JUMP_FACTOR:g} times any other): the "
+                    "column holds two units; one unit per column"]
     found = unit_suspicions(feat, test.impact_speed, getattr(record, "time_unit", "s"),
                             length_unit, test.impactor_mass)
     chord = test.impact_speed / math.sqrt(test.omega2_sq)  # 2 l_e sin(theta_0 / 2)
