@@ -127,13 +127,41 @@ def reduce_trunk(trunk: Trunk) -> TreeSDOF:
     1/2 (see ``analytic.paper.reproduction.DISCREPANCIES``).
     """
     j = _square_integral(trunk)
-    tip = crown_factor(trunk)
-    dynamic_mass = trunk.density * trunk.area * j + trunk.clamp_mass + trunk.crown_mass * tip ** 2
     return TreeSDOF(
-        dynamic_mass=dynamic_mass,
+        dynamic_mass=mass_parts(trunk).total,
         equivalent_damping=trunk.damping * j,
         equivalent_stiffness=1.0 / static_flexibility(trunk),
     )
+
+
+@dataclass(frozen=True)
+class MassParts:
+    """Where M_T comes from (eq 7): M_T = rho A J + m_c + phi(l)^2 m_f, each part in kg.
+
+    Attributes:
+        trunk: rho A J, the trunk's wood weighted by its static shape squared.
+        clamp: m_c, the clamp at a (phi(a) = 1).
+        crown: phi(l)^2 m_f, the crown weighted by its motion per unit x at a, squared.
+        crown_weight: phi(l)^2 (1): how many times the crown's mass counts.
+    """
+
+    trunk: float
+    clamp: float
+    crown: float
+    crown_weight: float
+
+    @property
+    def total(self) -> float:
+        """M_T, kg (eq 7)."""
+        return self.trunk + self.clamp + self.crown
+
+
+def mass_parts(trunk: Trunk) -> MassParts:
+    """The three parts of ``trunk``'s M_T (eq 7, :func:`reduce_trunk`'s sum), kg."""
+    tip = crown_factor(trunk)
+    return MassParts(trunk=trunk.density * trunk.area * _square_integral(trunk),
+                     clamp=trunk.clamp_mass, crown=trunk.crown_mass * tip ** 2,
+                     crown_weight=tip ** 2)
 
 
 def printed_dynamic_mass(trunk: Trunk) -> float:

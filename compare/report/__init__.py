@@ -29,6 +29,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from treeimpact.analytic.model.plausible import implausible
+from treeimpact.analytic.model.reduction import mass_parts
 from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.analytic.results import json_text
 
@@ -50,7 +51,7 @@ from .answer import (
     small_e_rows,
     with_sensitivity,
 )
-from .base import environment
+from .base import environment, num
 from .design_answer import design_answer
 from .design_answer import in_short_text as design_in_short
 from .measure import in_short_text, with_sobol
@@ -228,7 +229,20 @@ def _page_summary(sections: dict) -> dict:
         summary["in_short"]["design"] = design_in_short(summary["design"])
     summary["implausible"] = {s.ladder.name: found for s in sections["scenarios"]
                               if (found := [i.text for i in implausible(s.ladder.scenario)])}
+    summary["mass_origin"] = {s.ladder.name: mass_origin(s.ladder.scenario.trunk)
+                              for s in sections["scenarios"]}
     return summary
+
+
+def mass_origin(trunk) -> str:
+    """Where ``trunk``'s M_T comes from (eq 7), in one line: its three parts and how many
+    times the crown's mass counts (phi(l)^2, the crown's static motion per unit x at the
+    clamp, squared)."""
+    p = mass_parts(trunk)
+    return (f"M_T = {num(p.total, 3)} kg = {num(p.trunk, 3)} kg of trunk + {num(p.clamp, 3)} kg "
+            f"of clamp + {num(p.crown, 3)} kg of crown ({num(trunk.crown_mass, 3)} kg counted "
+            f"{num(p.crown_weight, 3)} times: the crown moves {num(p.crown_weight ** 0.5, 3)} "
+            "times the clamp in the static shape)")
 
 
 def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -> dict:
