@@ -9,11 +9,9 @@ import tomllib
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from treeimpact.analytic.contact.exact_record import record
 from treeimpact.analytic.contact.exact_solve import solve
-from treeimpact.analytic.contact.linear_model import system
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam_impact import beam_impact_model, simulate_beam
 from treeimpact.analytic.impact.simulate import simulate
@@ -21,6 +19,7 @@ from treeimpact.analytic.model.parameters import Billet, Pendulum
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario, scenario_from_dict
 from treeimpact.analytic.model.scenario_toml import scenario_toml
+from test_beam_impact import _ode_reference  # DOP853 of the same matrices, no modes at all
 
 MASS, SPEED = 40.0, 2.5  # kg, m/s: a light billet on central-leader (m / M_T = 0.36)
 EPS = float(np.finfo(float).eps)
@@ -151,25 +150,6 @@ def test_a_free_billet_flies_linearly_in_time_on_the_record(method):
     assert bend <= 8 * EPS and spread <= 8 * EPS
     # the check can fail: a 2000 N/m spring bends y by (k / m) y dt^2 (1e-9 of |y| here)
     assert min(free_flight_curvature(2000.0)) > 100 * 8 * EPS
-
-
-def _ode_reference(model, t_end, t_eval):
-    """The same matrices integrated by DOP853 with the stateless law F = max(0, k d + c d')
-    for d > 0 (the state matrix of z = (q, q'): no modes, so no rigid mode either)."""
-    A_free, g = system(model, False)
-    A_touch, _ = system(model, True)
-    N = len(g)
-
-    def rhs(_t, z):
-        d, dd = g @ z[:N], g @ z[N:]
-        touching = d > 0 and model.contact_stiffness * d + model.contact_damping * dd > 0
-        return (A_touch if touching else A_free) @ z
-
-    z0 = np.zeros(2 * N)
-    z0[-1] = model.impact_speed
-    sol = solve_ivp(rhs, (0, t_end), z0, method="DOP853", t_eval=t_eval, rtol=1e-11,
-                    atol=1e-14, max_step=2e-6)
-    return sol.y[model.clamp], sol.y[N - 1]
 
 
 @pytest.mark.parametrize("method", ["exact-full", "exact"])
