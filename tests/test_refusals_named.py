@@ -160,18 +160,18 @@ def test_the_soft_contact_s_budget_names_contact_duration_and_the_shortest_that_
     assert re.search(r"allowed contact\.duration >= \S+ s at this t_end", err), err
 
 
-def test_the_duration_the_budget_names_fits_it_and_a_shorter_one_does_not():
+@pytest.mark.parametrize("backend", [["soft"], ["beam"], ["beam", "--calibration", "effective"]])
+def test_the_duration_the_budget_names_fits_it_and_a_shorter_one_does_not(backend):
     """Under a budget of 1e5 steps (cheap runs): the duration named runs, 2 % less (below
-    its 3-digit rounding up, at most 1 %) is refused again."""
+    its 3-digit rounding up, at most 1 %) is refused again; on the beam too, whose
+    effective convention recalibrates c_c and so the collision's time."""
     env = {"TREEIMPACT_MAX_STEPS": "1e5"}
-    err = refused("simulate", "central-leader", "--backend", "soft", "--contact-duration",
-                  "1e-5", env=env)
+    run = ["simulate", "central-leader", "--backend", *backend, "--contact-duration"]
+    err = refused(*run, "1e-5", env=env)
     shortest = float(re.search(r"allowed --contact-duration >= (\S+) s", err).group(1))
-    code, _, err = cli("simulate", "central-leader", "--backend", "soft", "--contact-duration",
-                       repr(shortest), env=env)
+    code, _, err = cli(*run, repr(shortest), env=env)
     assert code == 0, err
-    err = refused("simulate", "central-leader", "--backend", "soft", "--contact-duration",
-                  repr(0.98 * shortest), env=env)
+    err = refused(*run, repr(0.98 * shortest), env=env)
     assert "beyond its budget" in err
 
 

@@ -70,11 +70,14 @@ def sdof_impact_model(model: TwoBodyModel, trunk, k_c: float, c_c: float
         impact_speed=model.impact_speed, contact_stiffness=k_c, contact_damping=c_c)
 
 
-def _duration_knob(model: TwoBodyModel, contact, stiffness, duration, samples: int
-                   ) -> Knob | None:
+def duration_knob(model: TwoBodyModel, contact, stiffness, duration, samples: int,
+                  damping=None) -> Knob | None:
     """The pad's duration as the budget's :class:`~analytic.budget.Knob` (the record's step
     is the collision's time over ``samples``): ``--contact-duration`` when given, else the
-    scenario's ``contact.duration`` (or its default); None for a pad set by its stiffness."""
+    scenario's ``contact.duration`` (or its default); None for a pad set by its stiffness.
+    ``model``: the 1-DOF pair the pad law is solved on; ``damping``: k_c (N/m) -> c_c
+    (N s/m) where the run recalibrates c_c (the beam's effective convention), else the
+    law's own c_c."""
     if stiffness is not None or (duration is None and contact.stiffness is not None):
         return None
     label = "--contact-duration" if duration is not None else "contact.duration"
@@ -82,7 +85,8 @@ def _duration_knob(model: TwoBodyModel, contact, stiffness, duration, samples: i
         contact.duration if contact.duration is not None else DEFAULT_CONTACT_DURATION)
 
     def dt_of(tau: float) -> float:
-        return collision_duration(model, *contact_law(model, duration=tau)) / samples
+        k_c, c_c = contact_law(model, duration=tau)
+        return collision_duration(model, k_c, c_c if damping is None else damping(k_c)) / samples
 
     return Knob(label, value, "s", dt_of, BY_PATH["contact.duration"].high)
 
@@ -108,7 +112,7 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
                            duration=contact_duration)
     t_col = collision_duration(model, k_c, c_c)
     dt = t_col / samples_per_collision
-    check_work(t_end, dt, SAMPLE_COST, _duration_knob(
+    check_work(t_end, dt, SAMPLE_COST, duration_knob(
         model, scenario.contact, contact_stiffness, contact_duration, samples_per_collision))
     if method is SoftMethod.ODE:
         rec = with_static_shape_crown(soft_record(model, k_c, c_c, t_end, dt_sample=dt),

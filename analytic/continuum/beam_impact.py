@@ -29,6 +29,7 @@ from treeimpact.analytic.contact.law import (
     pad_fields,
 )
 from treeimpact.analytic.contact.linear_model import LinearImpactModel
+from treeimpact.analytic.contact.soft import duration_knob
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.options import (
     CONTACT_DURATION,
@@ -116,10 +117,15 @@ def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
         impactor_stiffness=sdof.impactor_stiffness, impact_speed=sdof.impact_speed,
         contact_stiffness=k_c, contact_damping=c_c)
     if calibration == "effective":
-        mu = 1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass)
-        c_c = effective_damping(k_c, sdof.restitution, mu)
-        model = replace(model, contact_damping=c_c)
+        model = replace(model, contact_damping=_effective(model, sdof)(k_c))
     return model, sdof
+
+
+def _effective(model: LinearImpactModel, sdof):
+    """k_c (N/m) -> c_c (N s/m) of the effective convention: e holds for one collision on
+    the clamp's effective mass (the pair's reduced mass with it), not on M_T."""
+    mu = 1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass)
+    return lambda k_c: effective_damping(k_c, sdof.restitution, mu)
 
 
 @functools.lru_cache(maxsize=16)
@@ -158,7 +164,9 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
     t_col = collision_duration(sdof, model.contact_stiffness, model.contact_damping)
 
     dt = t_col / SAMPLES_PER_COLLISION
-    check_work(t_end, dt, SAMPLE_COST)
+    check_work(t_end, dt, SAMPLE_COST, duration_knob(
+        sdof, scenario.contact, contact_stiffness, contact_duration, SAMPLES_PER_COLLISION,
+        _effective(model, sdof) if calibration == "effective" else None))
     t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
     if method is BeamMethod.EXACT_FULL:
         record, crown, switches = full_record(model, t_end, dt)
