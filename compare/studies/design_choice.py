@@ -52,11 +52,11 @@ def designer_choice(scenario, point: dict) -> dict:
                 simulate(run, samples=2).metrics["energy_delivered"])}
 
 
-def choice_text(choice: dict) -> str:
-    """:func:`designer_choice`'s ``choice`` in words: 'For this tree: clamp at 0.341 m, a
-    26.4 kg impactor and a 7.45 ms pad (k_c = 4.1e+05 N/m for these masses); the tree takes
-    12.3 J there (the 1-DOF model 11.1 J).'"""
-    return (f"For this tree: clamp at {choice['clamp_height']:.3g} m, a "
+def choice_text(choice: dict, lead: str = "For this tree") -> str:
+    """:func:`designer_choice`'s ``choice`` in words after ``lead``: 'For this tree: clamp
+    at 0.341 m, a 26.4 kg impactor and a 7.45 ms pad (k_c = 4.1e+05 N/m for these masses);
+    the tree takes 12.3 J there (the 1-DOF model 11.1 J).'"""
+    return (f"{lead}: clamp at {choice['clamp_height']:.3g} m, a "
             f"{choice['impactor_mass']:.3g} kg impactor and a "
             f"{1e3 * choice['contact_duration']:.3g} ms pad (k_c = "
             f"{choice['contact_stiffness']:.3g} N/m for these masses); the tree takes "

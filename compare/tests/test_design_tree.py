@@ -187,8 +187,14 @@ def test_the_study_of_a_tree_unlike_the_shipped_ones(tmp_path, plum):
     designer's units."""
     from treeimpact.compare.validity.design_study import run_design_study
 
-    d = json.loads(run_design_study(tmp_path, plum, count=3, workers=1)["json"].read_text())
+    paths = run_design_study(tmp_path, plum, count=3, workers=1)
+    d = json.loads(paths["json"].read_text())
     here, cell = d["operating_point"], d["cell"]
+    own = d["choice_at_point"]  # the tree as it is, rebuilt from its ratios to 6 digits
+    assert own["clamp_height"] == pytest.approx(plum.trunk.clamp_height, rel=1e-5)
+    assert own["impactor_mass"] == pytest.approx(plum.impactor.mass, rel=1e-5)
+    assert own["contact_duration"] == pytest.approx(plum.contact.duration, rel=1e-5)
+    assert own["text"] in paths["md"].read_text()
     assert d["inputs"]["mass_ratio"]["low"] == pytest.approx(0.05)
     assert d["inputs"]["mass_ratio"]["high"] == pytest.approx(0.3)
     for p in d["pairs"]:

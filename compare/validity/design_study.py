@@ -282,6 +282,10 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
             "pairs": pairs, "family": _family(results[len(PAIRS)].table),
             "cost": _cost(results, maps_wall, workers),
             "wall_s": time.perf_counter() - t0}
+    if problem is None:  # the tree as it is, in the designer's units
+        own = designer_choice(scen, cell_point(here, PAIRS[0], (here[PAIRS[0][0]],
+                                                                here[PAIRS[0][1]])))
+        data["choice_at_point"] = own | {"text": choice_text(own, "The tree as it is")}
     if engines:
         p = pairs[1]
         data["spot_checks"] = spot_checks(scen, p["x"], p["y"], p["maps"]["x_max"],
