@@ -31,6 +31,21 @@ class DesignRange:
     allowed: tuple
     log: bool
     why: str
+    relative: float | None = None
+
+    def span(self, own: float) -> tuple:
+        """The map's range for a tree whose own value is ``own`` (the input's unit): [low,
+        high] when the tree lies in it (the shipped trees' maps), else the tree's own value
+        over ``relative`` to it times ``relative`` ([own / f, own * f]; without a factor the
+        range widened to ``own``), clipped to :attr:`allowed`: the map spans the tree's
+        own operating point (issue 50 item 5)."""
+        if not math.isfinite(own) or self.low <= own <= self.high:
+            return self.low, self.high
+        if self.relative is None:
+            lo, hi = min(self.low, own), max(self.high, own)
+        else:
+            lo, hi = own / self.relative, own * self.relative
+        return max(lo, self.allowed[0]), min(hi, self.allowed[1])
 
 
 @dataclass(frozen=True)
@@ -150,15 +165,15 @@ _DESIGN = {
     "a_over_l": DesignRange(
         0.1, 0.6, (0.05, 1.0), False,
         "a shaker clamps between knee height and the first scaffold: 0.1-0.6 of the "
-        "crown's height l on orchard trees (the shipped trees clamp at 0.315 m of 1 m)"),
+        "crown's height l on orchard trees (the shipped trees clamp at 0.315 m of 1 m)", 2.0),
     "mass_ratio": DesignRange(
         0.2, 5.0, (0.05, 20.0), True,
         "a light billet (a fifth of the tree's M_T) to a heavy pendulum (5 M_T); the "
-        "paper's pendulum is 1.2 M_T on central-leader"),
+        "paper's pendulum is 1.2 M_T on central-leader", 5.0),
     "contact_duration": DesignRange(
         2e-4, 5e-2, (1e-5, 0.1), True,
         "a hard impactor (0.2 ms, the shipped 0.5 ms) to a thick rubber pad (50 ms), the "
-        "report's contact scan's range"),
+        "report's contact scan's range", 10.0),
     "restitution": DesignRange(
         0.0, 0.9, (0.0, 0.95), False,
         "a dead pad (0) to a bouncy one (0.9); the paper assumes e small, the shipped 0.1"),

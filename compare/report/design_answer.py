@@ -22,9 +22,11 @@ def design_answer(studies) -> dict:
     holding a design study (``StudySection.kinds``): the operating point and the gaps
     there (fractions, continuum against the 1-DOF model), the sentence at the point, the
     nearest choice within both targets on each map, every sentence (its text, rule and what
-    it read: the intervals ``within`` along an input, or the cell ``at``), each map's axes,
+    it read: the intervals ``within`` along an input, or the cell ``at``; the nearest
+    choice's ``choice`` in the designer's units, compare.studies.design_choice), each map's axes,
     held inputs, gaps (``maps``, fractions by quantity, one row per y value) and figure
-    (linked from the report's folder)."""
+    (linked from the report's folder), and the tree as it is in the designer's units
+    (``choice_at_point``, None when its own cell has no numbers)."""
     out = {}
     for section in studies:
         d = getattr(section, "kinds", {}).get("design", (None, None))[1]
@@ -38,7 +40,9 @@ def design_answer(studies) -> dict:
         out[d["tree"]] = {
             "operating_point": d["operating_point"], "gaps_at_point": d["cell"],
             "levels": d["levels"], "at_point": d["at_point"],
-            "nearest": {k: {"at": s["at"], "tolerances": s["tolerances"], "text": s["text"]}
+            "choice_at_point": d.get("choice_at_point"),
+            "nearest": {k: {"at": s["at"], "tolerances": s["tolerances"], "text": s["text"],
+                            "choice": s.get("choice")}
                         for k, s in nearest.items() if s is not None},
             "sentences": [{"pair": _key(p["pair"]), **s} for p in d["pairs"]
                           for s in p["sentences"]],

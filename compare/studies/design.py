@@ -62,6 +62,12 @@ class Input:
         v = np.geomspace(lo, hi, count) if self.scale is Scale.LOG else np.linspace(lo, hi, count)
         return tuple(float(f"{x:.4g}") for x in v)
 
+    def span(self, own: float) -> tuple:
+        """The map's range (low, high) for a tree whose own value is ``own``: the
+        registry's rule (analytic.model.registry.DesignRange.span; the default range when
+        the tree lies in it, else one relative to the tree, inside :attr:`allowed`)."""
+        return BY_NAME[self.name].design.span(own)
+
     def coordinate(self, v):
         """``v`` on the axis a map is read on (log10 for a log input)."""
         return np.log10(v) if self.scale is Scale.LOG else np.asarray(v, dtype=float)
@@ -192,16 +198,26 @@ def operating_point(scenario) -> dict:
             "contact_duration": float(duration), "restitution": float(c.restitution)}
 
 
+def map_ranges(scenario, ranges: dict | None = None) -> dict:
+    """{input: (low, high)}: the range each input's map spans for the tree ``scenario``,
+    ``ranges``' where given, else :meth:`Input.span` of the tree's own value (its map
+    spans the tree's operating point)."""
+    ranges = ranges or {}
+    here = operating_point(scenario)
+    return {name: tuple(float(v) for v in ranges[name]) if name in ranges
+            else inp.span(here[name]) for name, inp in INPUTS.items()}
+
+
 def pair_grid(scenario, pair, count: int, ranges: dict | None = None) -> list[str]:
     """The ``--grid`` specs of the map over ``pair`` (two :data:`INPUTS` names), ``count``
-    values each over ``ranges`` ({name: (low, high)}, default the inputs' ranges), the other
-    inputs at the operating point of the tree ``scenario``."""
-    ranges = ranges or {}
+    values each over ``ranges`` ({name: (low, high)}, default :func:`map_ranges`' for the
+    tree), the other inputs at the operating point of the tree ``scenario``."""
+    spans = map_ranges(scenario, ranges)
     here = operating_point(scenario)
     specs = []
     for name in INPUTS:
         if name in pair:
-            vals = INPUTS[name].values(count, *ranges.get(name, (None, None)))
+            vals = INPUTS[name].values(count, *spans[name])
         else:
             vals = (float(f"{here[name]:.6g}"),)
         specs.append(f"{name}=" + ",".join(repr(v) for v in vals))

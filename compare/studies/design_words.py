@@ -54,10 +54,14 @@ def within_intervals(coords, values, tol: float) -> list[tuple]:
 
 def line_at(x, y, z, y_input: str, y_value: float):
     """The map ``z`` (z[j, i] at y[j], x[i]) along x at ``y_value`` of the input
-    ``y_input``: each column interpolated linearly on that input's axis (held at the edge
-    beyond it)."""
+    ``y_input``: each column interpolated linearly on that input's axis; NaN everywhere when
+    ``y_value`` lies outside the map's y (no cell there to read: nothing held at the edge)."""
     inp = INPUTS[y_input]
     cy, at = inp.coordinate(np.asarray(y)), float(inp.coordinate(y_value))
+    slack = 1e-9 * max(1.0, float(np.ptp(cy)))  # the rounding of a value to its grid's digits
+    if not len(cy) or at < cy.min() - slack or at > cy.max() + slack:
+        return np.full(len(x), math.nan)
+    at = min(max(at, cy.min()), cy.max())
     return np.array([np.interp(at, cy, z[:, i]) if np.isfinite(z[:, i]).all() else math.nan
                      for i in range(len(x))])
 
@@ -87,7 +91,7 @@ def intervals_text(name: str, intervals, low: float, high: float) -> str:
     label = INPUTS[name].label
     if not intervals:
         return f"at no {label} from {shown(name, low)} to {shown(name, high)}"
-    if len(intervals) == 1 and math.isclose(intervals[0][0], low, rel_tol=1e-9) \
+    if len(intervals) == 1 and low < high and math.isclose(intervals[0][0], low, rel_tol=1e-9) \
             and math.isclose(intervals[0][1], high, rel_tol=1e-9):
         return f"over the whole map ({label} {shown(name, low)} to {shown(name, high)})"
     parts = [f"from {shown(name, a)} to {shown(name, b)}" if not math.isclose(a, b)
@@ -95,14 +99,31 @@ def intervals_text(name: str, intervals, low: float, high: float) -> str:
     return f"for {label} " + " and ".join(parts)
 
 
-def along(x, y, z, pair, here: dict, tol: float) -> tuple:
+def line_samples(x, line, name: str, here: dict, own: float | None = None) -> tuple:
+    """The samples a reading along the input ``name`` rests on: the map's ``line`` (its
+    values at ``x``) where it has numbers, and the tree's own cell ``own`` (its value of the
+    quantity, computed at the tree, not interpolated) at ``here[name]``, replacing a map
+    sample there; (coordinates on the input's axis, values), sorted."""
+    inp = INPUTS[name]
+    pts = {float(c): float(v) for c, v in zip(inp.coordinate(np.asarray(x, dtype=float)), line)
+           if math.isfinite(v)}
+    if own is not None and math.isfinite(own):
+        at = float(inp.coordinate(here[name]))
+        pts = {c: v for c, v in pts.items() if not math.isclose(c, at, abs_tol=1e-12)}
+        pts[at] = float(own)
+    coords = sorted(pts)
+    return np.array(coords), np.array([pts[c] for c in coords])
+
+
+def along(x, y, z, pair, here: dict, tol: float, own: float | None = None) -> tuple:
     """Rule 2 on one map ``z`` (z[j, i] at ``y[j]``, ``x[i]``): the intervals (input units)
-    of ``pair[0]`` where |z| <= ``tol`` at the operating point's ``here[pair[1]]``; returns
-    (intervals, the line's values)."""
+    of ``pair[0]`` where |z| <= ``tol`` at the operating point's ``here[pair[1]]``, on the
+    map's line and the tree's own cell ``own`` (:func:`line_samples`: the reading agrees
+    with the tree's cell); returns (intervals, the line's values at ``x``)."""
     inp = INPUTS[pair[0]]
     line = line_at(x, y, z, pair[1], here[pair[1]])
-    coords = inp.coordinate(np.asarray(x))
-    found = within_intervals(coords, line, tol)
+    coords, values = line_samples(x, line, pair[0], here, own)
+    found = within_intervals(coords, values, tol)
     back = (lambda c: float(10.0 ** c)) if inp.scale.value == "log" else float
     return [(back(a), back(b)) for a, b in found], line
 
@@ -124,21 +145,25 @@ def sentence_at_point(here: dict, cell: dict, quantities, problem: str | None = 
             + ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1] + ".")
 
 
-def sentence_along(x, y, z, pair, here: dict, quantity: str, tol: float) -> str:
+def sentence_along(x, y, z, pair, here: dict, quantity: str, tol: float,
+                   own: float | None = None) -> str:
     """Rule 2 as a sentence, :func:`along` on the map ``z`` over ``x`` and ``y`` (the
-    inputs ``pair``) at ``here`` for ``quantity`` within ``tol``: 'At m/M_T = 1.2, x_max is
-    within 5 % for a/l from 0.2 to 0.6.'"""
-    found, line = along(x, y, z, pair, here, tol)
+    inputs ``pair``) at ``here`` for ``quantity`` within ``tol``, the tree's own cell
+    ``own`` among its samples: 'At m/M_T = 1.2, x_max is within 5 % for a/l from 0.2 to
+    0.6.'"""
+    found, line = along(x, y, z, pair, here, tol, own)
     at = f"At {INPUTS[pair[1]].label} = {shown(pair[1], here[pair[1]])}"
-    have = np.asarray(x, dtype=float)[np.isfinite(line)]
-    if not len(have):  # no cell of the line has a number: nothing to read off it
+    coords, values = line_samples(x, line, pair[0], here, own)
+    if not len(coords):  # no cell of the line has a number: nothing to read off it
         return (f"{at}, no cell along {INPUTS[pair[0]].label} has a number for "
                 f"{QUANTITIES[quantity].label}.")
-    text = intervals_text(pair[0], found, float(min(have)), float(max(have)))
-    missing = len(line) - len(have)
+    back = (lambda c: float(10.0 ** c)) if INPUTS[pair[0]].scale.value == "log" else float
+    text = intervals_text(pair[0], found, back(coords[0]), back(coords[-1]))
+    missing = int(np.count_nonzero(~np.isfinite(line)))
     whole = not found or text.startswith("over the whole map")
     # "at no" and "over the whole map" speak of every cell: say which had numbers
-    gaps = f" ({missing} of its {len(line)} cells have no number)" if missing and whole else ""
+    gaps = (f" ({missing} of its {len(line)} cells have no number)"
+            if missing and (whole or missing == len(line)) else "")
     return f"{at}, {QUANTITIES[quantity].label} is within {100 * tol:.0f} % {text}{gaps}."
 
 

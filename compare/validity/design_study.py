@@ -33,9 +33,11 @@ from ..studies.design import (
     design_cell,
     design_spec,
     map_of,
+    map_ranges,
     operating_point,
     pair_grid,
 )
+from ..studies.design_choice import cell_point, choice_text, designer_choice
 from ..studies.design_engines import spot_checks
 from ..studies.design_words import (
     along,
@@ -150,26 +152,48 @@ def _axis(name, values) -> Axis:
                 inp.scale.value == "log")
 
 
-def _pair_part(out: Path, scen, pair, table, shipped) -> dict:
-    here = operating_point(scen)
-    maps, sentences = {}, []
-    for q in QUANTITIES:
-        x, y, z = map_of(table, pair, q)
-        maps[q] = z
+def pair_sentences(x, y, maps: dict, pair, here: dict, cell: dict) -> list:
+    """The sentences of the map over ``pair`` (``maps`` {quantity: z, z[j, i] at y[j],
+    x[i]}) at the tree's operating point ``here``: :data:`READINGS` along an input, each
+    resting on the map's line and the tree's own ``cell`` ({quantity: gap}, computed at the
+    tree), and rule 3's nearest choice within :data:`TARGET` on a 1-DOF map; dicts with
+    the text, the rule and what it read."""
+    sentences = []
     for q, tol, first in READINGS[pair]:
+        own = cell.get(q)
         if first:
-            text = sentence_along(x, y, maps[q], pair, here, q, tol)
-            found = along(x, y, maps[q], pair, here, tol)[0]
+            text = sentence_along(x, y, maps[q], pair, here, q, tol, own)
+            found = along(x, y, maps[q], pair, here, tol, own)[0]
         else:
             flip = (pair[1], pair[0])
-            text = sentence_along(y, x, maps[q].T, flip, here, q, tol)
-            found = along(y, x, maps[q].T, flip, here, tol)[0]
+            text = sentence_along(y, x, maps[q].T, flip, here, q, tol, own)
+            found = along(y, x, maps[q].T, flip, here, tol, own)[0]
         sentences.append({"text": text, "rule": "along", "quantity": q, "tolerance": tol,
                           "along": pair[0] if first else pair[1], "within": found})
     if all(QUANTITIES[q].kind is Kind.ONE_DOF for q in PANELS[pair]):
         sentences.append({"text": sentence_nearest(x, y, maps, TARGET, pair, here),
                           "rule": "nearest", "tolerances": TARGET,
                           "at": nearest_within(x, y, maps, TARGET, pair, here)})
+    return sentences
+
+
+def _recommend(scen, sentences: list, pair, here: dict) -> None:
+    """The nearest choice of ``sentences`` (if a cell was found) in the designer's units
+    (compare.studies.design_choice), its ``choice`` and its words added to the sentence."""
+    for s in sentences:
+        if s["rule"] == "nearest" and s["at"] is not None:
+            s["choice"] = designer_choice(scen, cell_point(here, pair, s["at"]))
+            s["text"] += " " + choice_text(s["choice"])
+
+
+def _pair_part(out: Path, scen, pair, table, shipped, cell: dict) -> dict:
+    here = operating_point(scen)
+    maps = {}
+    for q in QUANTITIES:
+        x, y, z = map_of(table, pair, q)
+        maps[q] = z
+    sentences = pair_sentences(x, y, maps, pair, here, cell)
+    _recommend(scen, sentences, pair, here)
     figure = f"design-{_name(pair)}.png"
     what = "1-DOF gaps and small-e errors" if any(
         QUANTITIES[q].kind is Kind.SMALL_E for q in PANELS[pair]) else "1-DOF gaps"
@@ -239,12 +263,14 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
     check_cells_ran(results, out)
     maps_wall = time.perf_counter() - t0
     shipped = {n: resolve_scenario(n) for n in shipped_scenarios()}
-    pairs = [_pair_part(out, scen, p, r.table, shipped) for p, r in zip(PAIRS, results)]
     cell, problem = tree_cell(scen)
+    pairs = [_pair_part(out, scen, p, r.table, shipped, cell)
+             for p, r in zip(PAIRS, results)]
     here = operating_point(scen)
+    spans = map_ranges(scen, ranges)
     data = {"title": f"Design map: {scen.name}", "tree": scen.name,
             "operating_point": here, "cell": cell, "levels": list(LEVELS),
-            "inputs": {n: {"unit": i.unit, "low": i.low, "high": i.high,
+            "inputs": {n: {"unit": i.unit, "low": spans[n][0], "high": spans[n][1],
                            "allowed": list(i.allowed), "label": i.label, "why": i.why,
                            "scale": i.scale.value} for n, i in INPUTS.items()},
             "held": HELD, "count": count, "ranges": ranges,
@@ -256,6 +282,10 @@ def run_design_study(out, scenario="central-leader", *, count: int = COUNT, rang
             "pairs": pairs, "family": _family(results[len(PAIRS)].table),
             "cost": _cost(results, maps_wall, workers),
             "wall_s": time.perf_counter() - t0}
+    if problem is None:  # the tree as it is, in the designer's units
+        own = designer_choice(scen, cell_point(here, PAIRS[0], (here[PAIRS[0][0]],
+                                                                here[PAIRS[0][1]])))
+        data["choice_at_point"] = own | {"text": choice_text(own, "The tree as it is")}
     if engines:
         p = pairs[1]
         data["spot_checks"] = spot_checks(scen, p["x"], p["y"], p["maps"]["x_max"],
