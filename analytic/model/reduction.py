@@ -128,7 +128,7 @@ def reduce_trunk(trunk: Trunk) -> TreeSDOF:
     """
     j = _square_integral(trunk)
     return TreeSDOF(
-        dynamic_mass=mass_parts(trunk).total,
+        dynamic_mass=mass_parts(trunk, j).total,
         equivalent_damping=trunk.damping * j,
         equivalent_stiffness=1.0 / static_flexibility(trunk),
     )
@@ -156,10 +156,12 @@ class MassParts:
         return self.trunk + self.clamp + self.crown
 
 
-def mass_parts(trunk: Trunk) -> MassParts:
-    """The three parts of ``trunk``'s M_T (eq 7, :func:`reduce_trunk`'s sum), kg."""
+def mass_parts(trunk: Trunk, square_integral: float | None = None) -> MassParts:
+    """The three parts of ``trunk``'s M_T (eq 7, :func:`reduce_trunk`'s sum), kg;
+    ``square_integral``: J (m) when the caller has it (None: computed)."""
     tip = crown_factor(trunk)
-    return MassParts(trunk=trunk.density * trunk.area * _square_integral(trunk),
+    j = _square_integral(trunk) if square_integral is None else square_integral
+    return MassParts(trunk=trunk.density * trunk.area * j,
                      clamp=trunk.clamp_mass, crown=trunk.crown_mass * tip ** 2,
                      crown_weight=tip ** 2)
 
