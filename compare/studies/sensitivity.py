@@ -310,7 +310,10 @@ def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
     reason; ``failed``, ``failed_points``); the indices rest on the complete trajectories
     only (``trajectories_used`` of ``trajectories``: a trajectory with a failed point gives
     no exact elementary effect and is dropped whole, never imputed), the lowest and highest
-    on every point that ran (``evaluations``); no indices when no trajectory is complete."""
+    on every point that ran (``evaluations``); no indices when no trajectory is complete.
+    A point that ran without an output's number (NaN) drops its trajectory for that output
+    alone (its ``basis`` counts them as ``non_finite``; ``refused``: the outputs left with
+    none)."""
     names = list(INPUTS) if names is None else list(names)
     X = design(trajectories, seed, names, ranges)
     got, _ = design_rows(table, X, names)
@@ -323,25 +326,34 @@ def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
            "held": dict(held or {}), "trajectories": trajectories, "evaluations": len(ran),
            "conf_level": CONF_LEVEL, "num_resamples": RESAMPLES,
            "trajectories_used": len(kept), **failure_summary(failed, len(X)),
-           "outputs": {}}
+           "outputs": {}, "refused": {}}
     if not failed:
         del out["errors"]
     if not kept:
         return out
     for name in (o for o in OUTPUTS if o in ran[0]):
         y_all = _values(name, ran)
+        y_all = y_all[np.isfinite(y_all)]
         y = _values(name, [got[i] for i in idx])
-        indices = _morris(names, X[idx], y, ranges)
+        whole = [g for j, g in enumerate(kept) if np.all(np.isfinite(y[j * per:(j + 1) * per]))]
+        if not whole:  # a point that ran without this number: its trajectory gives none
+            out["refused"][name] = (f"no complete trajectory has a finite {name} "
+                                    f"({len(kept)} complete, each with a point without it)")
+            continue
+        sel = rows_of(whole, per)
+        y = _values(name, [got[i] for i in sel])
+        indices = _morris(names, X[sel], y, ranges)
         decide, separated = deciding(indices)
         out["outputs"][name] = {
             "low": float(np.min(y_all)), "high": float(np.max(y_all)),
             "evaluations": int(y_all.size),
-            "basis": {"trajectories": len(kept), "of": trajectories, "points": len(idx)},
+            "basis": {"trajectories": len(whole), "of": trajectories, "points": len(sel),
+                      "non_finite": len(kept) - len(whole)},
             "never": int(np.sum(y_all >= math.log10(2.0 * DURATIONS[-1]) - 1e-12))
             if name.startswith("crossing.") else 0,
             "indices": indices, "deciding": decide, "separated": separated,
             "settle": [INPUTS[n][4] for n in decide],
-            "convergence": _convergence(names, X[idx], y, indices, ranges)}
+            "convergence": _convergence(names, X[sel], y, indices, ranges)}
     return out
 
 

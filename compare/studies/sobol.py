@@ -193,7 +193,9 @@ def analyse_sobol(table, n: int, names=None, seed: int = SEED,
     on the complete blocks only, ``blocks_used`` of n (each output's ``basis`` says so; its
     N/2 check on the first half of them), the failed points kept with their reasons
     (compare.studies.study_points), never imputed; no indices when no block is complete.
-    The indices then describe the inputs' box less the failed blocks' points."""
+    The indices then describe the inputs' box less the failed blocks' points. A point that
+    ran without a gap's number (NaN) drops its block for that gap alone (``basis``:
+    ``non_finite``)."""
     names = list(INPUTS) if names is None else list(names)
     spec = problem(names, ranges) if ranges else None
     X = sobol_design(n, names, seed, spec)
@@ -214,13 +216,17 @@ def analyse_sobol(table, n: int, names=None, seed: int = SEED,
     rows = [got[i] for i in idx]
     for key in (f"gap.{m}" for m in ANSWER if f"gap.{m}" in rows[0]):
         y = np.array([float(r[key]) for r in rows])
-        if not np.all(np.isfinite(y)):
+        whole = [g for j, g in enumerate(kept) if np.all(np.isfinite(y[j * size:(j + 1) * size]))]
+        if not whole:  # every complete block has a point without this number
             out["outputs"][key] = {"status": "nothing", "error": "non-finite values"}
             continue
+        sel = rows_of(whole, size)
+        y = np.array([float(got[i][key]) for i in sel])
         with warnings.catch_warnings():  # a constant block of the bootstrap: nan conf, said
             warnings.simplefilter("ignore", RuntimeWarning)
-            out["outputs"][key] = output_entry(names, y, len(kept), spec) | {
-                "basis": {"blocks": len(kept), "of": n, "points": len(idx)}}
+            out["outputs"][key] = output_entry(names, y, len(whole), spec) | {
+                "basis": {"blocks": len(whole), "of": n, "points": len(sel),
+                          "non_finite": len(kept) - len(whole)}}
     out["measure_first"] = measure_first(out["outputs"])
     return out
 

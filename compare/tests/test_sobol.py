@@ -196,8 +196,8 @@ def test_a_missing_point_is_counted_and_its_block_dropped():
     assert out["failed"] == 1 and out["blocks_used"] == 3
     assert out["failed_points"][0]["index"] == 0
     assert out["failed_points"][0]["status"] == "missing"
-    assert out["outputs"]["gap.x_max"]["basis"] == {"blocks": 3, "of": 4,
-                                                    "points": 3 * (len(INPUTS) + 2)}
+    assert out["outputs"]["gap.x_max"]["basis"] == {
+        "blocks": 3, "of": 4, "points": 3 * (len(INPUTS) + 2), "non_finite": 0}
     assert out["outputs"]["gap.x_max"]["status"] == "nothing"  # a constant gap
 
 

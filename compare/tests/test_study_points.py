@@ -86,11 +86,16 @@ def test_morris_drops_a_trajectory_with_a_failed_point_and_says_so():
     point is named with its index, inputs (registry names and units) and reason."""
     names = list(S.INPUTS)
     X = S.design(4)
-    out = S.analyse(_table(X, names, {8, 9}), 4)
+    table = _table(X, names, {8, 9})
+    table.loc[20, "gap.x_max"] = float("nan")  # ran, without this one number
+    out = S.analyse(table, 4)
     assert out["failed"] == 2 and out["trajectories_used"] == 3 and out["points"] == 28
     assert out["evaluations"] == 26
     x = out["outputs"]["gap.x_max"]
-    assert x["basis"] == {"trajectories": 3, "of": 4, "points": 21}
+    assert x["basis"] == {"trajectories": 2, "of": 4, "points": 14, "non_finite": 1}
+    assert x["evaluations"] == 25
+    assert out["outputs"]["gap.energy_delivered"]["basis"] == {
+        "trajectories": 3, "of": 4, "points": 21, "non_finite": 0}
     assert x["indices"]["root_share"]["mu_star"] == pytest.approx(2.0 * 0.9, rel=1e-12)
     assert x["indices"]["restitution"]["mu_star"] == pytest.approx(0.5 * 0.45, rel=1e-12)
     assert x["indices"]["density"]["mu_star"] == pytest.approx(0.0, abs=1e-12)
@@ -113,7 +118,7 @@ def test_sobol_indices_rest_on_the_complete_blocks():
     out = analyse_sobol(_table(X, names, fail), n)
     assert out["failed"] == 32 and out["blocks_used"] == 224
     entry = out["outputs"]["gap.x_max"]
-    assert entry["basis"] == {"blocks": 224, "of": n, "points": 224 * size}
+    assert entry["basis"] == {"blocks": 224, "of": n, "points": 224 * size, "non_finite": 0}
     var = {"root_share": (2.0 * 0.9) ** 2 / 12, "restitution": (0.5 * 0.45) ** 2 / 12}
     total = sum(var.values())
     for name, v in var.items():
