@@ -66,6 +66,9 @@ def _share_range(trunk, low: float, high: float) -> tuple[float, float, str]:
     lo, hi = max(low, bottom), min(high, top)
     if (lo, hi) == (low, high):
         return low, high, ""
+    if not hi > lo:  # no valid range: kept as it is, said so
+        return low, high, (f"no valid range: E = E_0 / (1 - s) with E_0 = {e0:.4g} Pa "
+                           f"(eq 8) leaves {e_low:g}-{e_high:g} Pa for no s in it")
     return lo, hi, (f"E = E_0 / (1 - s) with E_0 = a^3 K_T / (3 I) = {e0:.4g} Pa (eq 8) "
                     f"must lie in {e_low:g}-{e_high:g} Pa and the root spring a^2 K_T / s "
                     f"reach {LIMITS['trunk.base_stiffness'][0]:g} N m/rad")

@@ -61,6 +61,33 @@ def test_each_range_is_valid_for_the_tree_it_is_applied_to():
     assert not any(v["clipped"] for v in S.ranges_of(load_scenario("open-center")).values())
 
 
+@pytest.mark.parametrize("trunk, clipped, refused", [
+    ({"youngs_modulus": 9e10, "base_stiffness": 1e9}, "root_share",
+     "trunk.youngs_modulus = "),  # rule 1: a stiff trunk on a near-rigid root
+    ({"youngs_modulus": 1.5e7}, "e_over_g", "trunk.shear_modulus = "),  # rule 2: soft wood
+])
+def test_the_modulus_rules_narrow_the_range_the_trunk_would_refuse(trunk, clipped, refused):
+    """A tree whose registry corner (root share, E/G at their far ends) the trunk's own
+    checks refuse: the tree's range of that input is narrowed with its rule, and the corners
+    of the narrowed root share x E/G box are trees."""
+    s = load_scenario("open-center")
+    scen = replace(s, name="edge", trunk=replace(s.trunk, **trunk))
+    own = S.inputs_of(scen)
+    ranges = S.ranges_of(scen)
+    names = ("root_share", "e_over_g")
+    registry = {n: dict(zip(("low", "high"), registry_range(n))) for n in names}
+    messages = []
+    for corner in _corners(registry, names):
+        try:
+            S.vary(scen, own | corner)
+        except ParameterError as exc:
+            messages.append(str(exc))
+    assert messages and all(m.startswith(refused) for m in messages)
+    assert ranges[clipped]["high"] < registry[clipped]["high"] and ranges[clipped]["clipped"]
+    for corner in _corners(ranges, names):
+        S.vary(scen, own | corner)  # raises if a corner is no tree
+
+
 def _linear(x: dict) -> float:
     """A gap linear in two inputs: Morris mu* = |c| (high - low) exactly on any trajectory,
     Sobol S1 = ST = c^2 var / total (independent uniforms)."""
