@@ -107,7 +107,7 @@ def _table(X, names, fail):
     return pd.DataFrame(rows)
 
 
-def test_morris_drops_a_trajectory_with_a_failed_point_and_says_so():
+def test_morris_drops_a_trajectory_with_a_failed_point_and_says_so(tmp_path):
     """4 trajectories, points 8 and 9 (the second trajectory) failed: the indices rest on 3,
     mu* is exactly |c| (high - low) (a partial trajectory would break it), and each failed
     point is named with its index, inputs (registry names and units) and reason."""
@@ -123,6 +123,19 @@ def test_morris_drops_a_trajectory_with_a_failed_point_and_says_so():
     assert x["evaluations"] == 25
     assert out["outputs"]["gap.energy_delivered"]["basis"] == {
         "trajectories": 3, "of": 4, "points": 21, "non_finite": 0}
+    table["gap.peak_force"] = float("nan")  # no point has it: the output is refused, said
+    gone = S.analyse(table, 4)
+    assert "gap.peak_force" not in gone["outputs"]
+    assert gone["refused"]["gap.peak_force"].startswith("no complete trajectory has a finite")
+    from treeimpact.compare.validity.sensitivity_study import said
+    from treeimpact.compare.validity.study import write_study
+
+    said(gone)
+    paths = write_study(tmp_path, {}, sensitivity={"trajectories": 4, "crossings": False,
+                                                   "sobol": 0, "trees": {"t": gone},
+                                                   "figure": None})
+    page = paths["md"].read_text()
+    assert "- t, force gap: no indices, no complete trajectory has a finite" in page
     assert x["indices"]["root_share"]["mu_star"] == pytest.approx(2.0 * 0.9, rel=1e-12)
     assert x["indices"]["restitution"]["mu_star"] == pytest.approx(0.5 * 0.45, rel=1e-12)
     assert x["indices"]["density"]["mu_star"] == pytest.approx(0.0, abs=1e-12)
