@@ -218,6 +218,8 @@ def _run(args) -> int:
             print(f"{kind}: {paths[kind]}")
     if paths.get("figures"):
         print(f"figures: {len(paths['figures'])} in {Path(paths['figures'][0]).parent}")
+    for line in paths.get("warnings", []):  # the study ran, some of its points did not
+        print(f"treeimpact: warning: {line}", file=sys.stderr)
     print(f"wall time: {time.perf_counter() - t_start:.1f} s (the whole command: its runs and "
           "sweeps, then its maps and pages)")
     return ExitCode.OK

@@ -33,6 +33,8 @@ from ..sweep.grid import Design
 from ..sweep.run import SweepSpec
 from ..verdicts import validity_tolerance
 from .contact_scan import shortest_within
+from .input_ranges import tree_ranges
+from .study_points import complete_groups, failed_points, failure_summary, rows_of
 
 
 #: The unmeasured inputs, in the order of the Morris design's columns (its seed reads them in
@@ -103,11 +105,22 @@ def inputs_of(scenario) -> dict:
             "root_share": 1.0 - bending * reduce_trunk(t).equivalent_stiffness}
 
 
-def problem(names=None) -> dict:
-    """The SALib problem: names and bounds of :data:`INPUTS` (only ``names`` when given)."""
+def problem(names=None, ranges: dict | None = None) -> dict:
+    """The SALib problem: names and bounds of :data:`INPUTS` (only ``names`` when given),
+    the bounds the tree's (``ranges``, compare.studies.input_ranges.tree_ranges) when
+    given, else the registry's."""
     names = list(INPUTS) if names is None else list(names)
     return {"num_vars": len(names), "names": names,
-            "bounds": [list(INPUTS[n][:2]) for n in names]}
+            "bounds": [[ranges[n]["low"], ranges[n]["high"]] if ranges else list(INPUTS[n][:2])
+                       for n in names]}
+
+
+def ranges_of(scenario, names=None) -> dict:
+    """The ranges of the free inputs ``names`` (default :func:`free_inputs`) on the tree
+    ``scenario``: compare.studies.input_ranges.tree_ranges, the rules that keep each point
+    a valid tree with the measured M_T and K_T."""
+    names = free_inputs(scenario) if names is None else tuple(names)
+    return tree_ranges(scenario, names, inputs_of(scenario))
 
 
 def vary(scenario, p: dict):
@@ -185,39 +198,44 @@ ANALYSES = {False: "treeimpact.compare.studies.sensitivity:answer_under",
             True: "treeimpact.compare.studies.sensitivity:answer_and_crossings"}
 
 
-def design(trajectories: int, seed: int = SEED, names=None) -> np.ndarray:
+def design(trajectories: int, seed: int = SEED, names=None,
+           ranges: dict | None = None) -> np.ndarray:
     """The Morris design: ``trajectories`` x (inputs + 1) points over :data:`INPUTS` (only
-    ``names`` when given), trajectory after trajectory, from the random ``seed``."""
+    ``names`` when given; over the tree's ``ranges`` when given, :func:`ranges_of`),
+    trajectory after trajectory, from the random ``seed``."""
     # lazy: +285 ms at import otherwise (scipy, pandas, SALib, numpy, pyarrow),
     # which this module's other callers do not need
     from SALib.sample import morris
 
-    return morris.sample(problem(names), trajectories, num_levels=LEVELS, seed=seed)
+    return morris.sample(problem(names, ranges), trajectories, num_levels=LEVELS, seed=seed)
 
 
 def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
                       crossings: bool = False):
     """The study of one tree (``scenario``) as a sweep (:class:`compare.sweep.run.SweepSpec`)
     into ``out``: the Morris design (:func:`design` of ``trajectories`` and ``seed``) over
-    its free inputs (:func:`free_inputs`) as ``input.*`` axes, :func:`answer_under` (with
-    ``crossings``, :func:`answer_and_crossings`) at each point."""
-    return design_sweep(scenario, out, lambda names: design(trajectories, seed, names),
+    its free inputs (:func:`free_inputs`, over the tree's :func:`ranges_of`) as ``input.*``
+    axes, :func:`answer_under` (with ``crossings``, :func:`answer_and_crossings`) at each
+    point."""
+    return design_sweep(scenario, out,
+                        lambda names, ranges: design(trajectories, seed, names, ranges),
                         crossings=crossings)
 
 
 def design_sweep(scenario, out, make_design, *, crossings: bool = False):
     """A design over one tree's free inputs (:func:`free_inputs` of ``scenario``) as a sweep
-    into ``out``: ``make_design(names)``'s rows as ``input.*`` axes, :func:`answer_under`
-    (with ``crossings``, :func:`answer_and_crossings`) at each point."""
+    into ``out``: ``make_design(names, ranges)``'s rows (``ranges``: the tree's,
+    :func:`ranges_of`) as ``input.*`` axes, :func:`answer_under` (with ``crossings``,
+    :func:`answer_and_crossings`) at each point."""
     scen = resolve_scenario(scenario)
     names = free_inputs(scen)
-    X = make_design(names)
+    X = make_design(names, ranges_of(scen, names))
     return SweepSpec(scen, Design.of([f"input.{n}" for n in names],
                                      [tuple(float(v) for v in row) for row in X]),
                      Path(out), ("analytic",), identify=False, analysis=ANALYSES[crossings])
 
 
-def _morris(names, X, y) -> dict:
+def _morris(names, X, y, ranges: dict | None = None) -> dict:
     """SALib's Morris analysis of ``y`` on the design ``X``: per input its mu, mu_star,
     sigma and mu_star_conf (SALib's keys; the interval's half-width at CONF_LEVEL from
     RESAMPLES bootstrap resamples, seeded)."""
@@ -227,7 +245,7 @@ def _morris(names, X, y) -> dict:
 
     with warnings.catch_warnings():  # one trajectory: sigma is undefined (NaN), fine
         warnings.simplefilter("ignore", RuntimeWarning)
-        res = morris.analyze(problem(names), X, y, num_levels=LEVELS,
+        res = morris.analyze(problem(names, ranges), X, y, num_levels=LEVELS,
                              num_resamples=RESAMPLES, conf_level=CONF_LEVEL, seed=SEED)
     return {n: {k: float(res[k][i]) for k in ("mu", "mu_star", "sigma", "mu_star_conf")}
             for i, n in enumerate(names)}
@@ -248,7 +266,7 @@ def deciding(indices: dict) -> tuple[list[str], bool]:
     return [ranked[0], *tied], not tied
 
 
-def _convergence(names, X, y, full: dict) -> dict | None:
+def _convergence(names, X, y, full: dict, ranges: dict | None = None) -> dict | None:
     """mu* from the design's first half of trajectories against all of them (N/2 vs N):
     the largest change as a share of the largest mu*, and whether the deciding inputs are
     the same; None with fewer than 4 trajectories."""
@@ -257,7 +275,7 @@ def _convergence(names, X, y, full: dict) -> dict | None:
     if r < 4:
         return None
     half = (r // 2) * per
-    part = _morris(names, X[:half], y[:half])
+    part = _morris(names, X[:half], y[:half], ranges)
     scale = max(v["mu_star"] for v in full.values()) or 1.0
     change = max(abs(part[n]["mu_star"] - full[n]["mu_star"]) for n in names) / scale
     return {"trajectories": [r // 2, r], "mu_star_half": {n: part[n]["mu_star"] for n in names},
@@ -276,38 +294,86 @@ def design_rows(table, X, names) -> tuple[list, list]:
 
 
 def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
-            held: dict | None = None) -> dict:
+            held: dict | None = None, ranges: dict | None = None) -> dict:
     """Per output of the sweep's ``table`` (the design of ``trajectories`` and ``seed``):
     its range over the design's evaluations (min and max over the stated
     input ranges; not a probability interval), the Morris indices of each input with SALib's
     keys (mu* in the output's units, its 95 % interval mu_star_conf), the inputs that decide
     it (:func:`deciding`), the measurements that would settle them and the N/2 convergence
     check. ``names``: the design's inputs (default all); ``held``: the measured ones, at
-    their values. Crossing durations enter as log10 s, 'never' as twice the longest
+    their values; ``ranges``: the tree's (:func:`ranges_of`; default the registry's).
+    Crossing durations enter as log10 s, 'never' as twice the longest
     duration scanned (a censored value: the ranking holds, the mu* of a crossing that
-    leaves the range is a lower bound)."""
+    leaves the range is a lower bound).
+
+    A point that did not run is kept (compare.studies.study_points: its index, inputs and
+    reason; ``failed``, ``failed_points``); the indices rest on the complete trajectories
+    only (``trajectories_used`` of ``trajectories``: a trajectory with a failed point gives
+    no exact elementary effect and is dropped whole, never imputed), the lowest and highest
+    on every point that ran (``evaluations``); no indices when no trajectory is complete.
+    A point that ran without an output's number (NaN) drops its trajectory for that output
+    alone (its ``basis`` counts them as ``non_finite``; ``refused``: the outputs left with
+    none)."""
     names = list(INPUTS) if names is None else list(names)
-    X = design(trajectories, seed, names)
-    ok, failed = design_rows(table, X, names)
-    out = {"inputs": {n: {"low": v[0], "high": v[1], "unit": v[2], "why": v[3],
-                          "settle": v[4]} for n, v in INPUTS.items() if n in names},
-           "held": dict(held or {}), "trajectories": trajectories, "points": len(X),
-           "evaluations": len(X), "failed": len(failed), "conf_level": CONF_LEVEL,
-           "num_resamples": RESAMPLES, "outputs": {}}
-    if failed:
-        out["errors"] = sorted({str(r.get("error")) for r in failed if r is not None})[:5]
+    X = design(trajectories, seed, names, ranges)
+    got, _ = design_rows(table, X, names)
+    failed = failed_points(names, X, got, OK)
+    per = len(names) + 1
+    kept = complete_groups(len(X) // per, per, failed)
+    idx = rows_of(kept, per)
+    ran = [r for r in got if r is not None and r.get("status") == OK]
+    out = {"inputs": inputs_entry(names, ranges),
+           "held": dict(held or {}), "trajectories": trajectories, "evaluations": len(ran),
+           "conf_level": CONF_LEVEL, "num_resamples": RESAMPLES,
+           "trajectories_used": len(kept), **failure_summary(failed, len(X)),
+           "outputs": {}, "refused": {}}
+    if not failed:
+        del out["errors"]
+    if not kept:
         return out
-    for name in (o for o in OUTPUTS if o in ok[0]):
-        y = np.array([float(r[name]) for r in ok])
-        if name.startswith("crossing."):
-            y = np.log10(np.where(np.isfinite(y), y, 2.0 * DURATIONS[-1]))
-        indices = _morris(names, X, y)
+    for name in (o for o in OUTPUTS if o in ran[0]):
+        y_all = _values(name, ran)
+        y_all = y_all[np.isfinite(y_all)]
+        y = _values(name, [got[i] for i in idx])
+        whole = [g for j, g in enumerate(kept) if np.all(np.isfinite(y[j * per:(j + 1) * per]))]
+        if not whole:  # a point that ran without this number: its trajectory gives none
+            out["refused"][name] = (f"no complete trajectory has a finite {name} "
+                                    f"({len(kept)} complete, each with a point without it)")
+            continue
+        sel = rows_of(whole, per)
+        y = _values(name, [got[i] for i in sel])
+        indices = _morris(names, X[sel], y, ranges)
         decide, separated = deciding(indices)
         out["outputs"][name] = {
-            "low": float(np.min(y)), "high": float(np.max(y)), "evaluations": int(y.size),
-            "never": int(np.sum(y >= math.log10(2.0 * DURATIONS[-1]) - 1e-12))
+            "low": float(np.min(y_all)), "high": float(np.max(y_all)),
+            "evaluations": int(y_all.size),
+            "basis": {"trajectories": len(whole), "of": trajectories, "points": len(sel),
+                      "non_finite": len(kept) - len(whole)},
+            "never": int(np.sum(y_all >= math.log10(2.0 * DURATIONS[-1]) - 1e-12))
             if name.startswith("crossing.") else 0,
             "indices": indices, "deciding": decide, "separated": separated,
             "settle": [INPUTS[n][4] for n in decide],
-            "convergence": _convergence(names, X, y, indices)}
+            "convergence": _convergence(names, X[sel], y, indices, ranges)}
+    return out
+
+
+def _values(name: str, rows) -> np.ndarray:
+    """One output's values on ``rows``: a crossing duration as log10 s, 'never' as twice
+    the longest duration scanned (:func:`analyse`)."""
+    y = np.array([float(r[name]) for r in rows])
+    if name.startswith("crossing."):
+        y = np.log10(np.where(np.isfinite(y), y, 2.0 * DURATIONS[-1]))
+    return y
+
+
+def inputs_entry(names, ranges: dict | None) -> dict:
+    """study.json's ``inputs``: per input its range on the tree (low, high), unit, why,
+    the measurement that settles it, the registry's range and why the tree's differs
+    (``clipped``, '' when not; compare.studies.input_ranges)."""
+    out = {}
+    for n in names:
+        v = INPUTS[n]
+        r = (ranges or {}).get(n) or {"low": v[0], "high": v[1], "clipped": ""}
+        out[n] = {"low": r["low"], "high": r["high"], "unit": v[2], "why": v[3],
+                  "settle": v[4], "registry": [v[0], v[1]], "clipped": r["clipped"]}
     return out

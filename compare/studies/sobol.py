@@ -25,7 +25,17 @@ import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
 
-from .sensitivity import ANSWER, CONF_LEVEL, INPUTS, design_rows, design_sweep, problem
+from ..runs import OK
+from .sensitivity import (
+    ANSWER,
+    CONF_LEVEL,
+    INPUTS,
+    design_rows,
+    design_sweep,
+    inputs_entry,
+    problem,
+)
+from .study_points import complete_groups, failed_points, failure_summary, rows_of
 
 #: The seed of the scrambled Sobol sequence and of SALib's bootstrap.
 SEED = 20261128
@@ -169,29 +179,54 @@ def output_entry(names, y, n: int, spec: dict | None = None) -> dict:
             "high": float(np.max(y))}
 
 
-def analyse_sobol(table, n: int, names=None, seed: int = SEED) -> dict:
+def analyse_sobol(table, n: int, names=None, seed: int = SEED,
+                  ranges: dict | None = None) -> dict:
     """Per answered gap of the sweep's ``table`` (:func:`sobol_design` of ``n`` and ``seed``
-    over ``names``, default every input): :func:`output_entry`; and :func:`measure_first`.
-    {n, evaluations, failed, conf_level, num_resamples, distribution, outputs,
-    measure_first} (errors: up to 5 when points failed; then no outputs)."""
+    over ``names``, default every input, on the tree's ``ranges``,
+    compare.studies.sensitivity.ranges_of; default the registry's): :func:`output_entry`;
+    and :func:`measure_first`. {n, evaluations (points that ran), points, failed,
+    failed_points, blocks_used, conf_level, num_resamples, distribution, inputs, outputs,
+    measure_first} (errors: up to 5 distinct reasons when points failed).
+
+    A failed point breaks its Saltelli block (A, the inputs' AB rows, B: each index's
+    estimator reads all of them), so the indices and their bootstrap intervals are computed
+    on the complete blocks only, ``blocks_used`` of n (each output's ``basis`` says so; its
+    N/2 check on the first half of them), the failed points kept with their reasons
+    (compare.studies.study_points), never imputed; no indices when no block is complete.
+    The indices then describe the inputs' box less the failed blocks' points. A point that
+    ran without a gap's number (NaN) drops its block for that gap alone (``basis``:
+    ``non_finite``)."""
     names = list(INPUTS) if names is None else list(names)
-    X = sobol_design(n, names, seed)
-    got, failed = design_rows(table, X, names)
-    out = {"n": n, "evaluations": len(X), "failed": len(failed), "conf_level": CONF_LEVEL,
+    spec = problem(names, ranges) if ranges else None
+    X = sobol_design(n, names, seed, spec)
+    got, _ = design_rows(table, X, names)
+    failed = failed_points(names, X, got, OK)
+    size = len(names) + 2
+    kept = complete_groups(n, size, failed)
+    idx = rows_of(kept, size)
+    out = {"n": n, "evaluations": len(X) - len(failed), "conf_level": CONF_LEVEL,
            "num_resamples": RESAMPLES, "seed": seed, "names": names,
            "distribution": "uniform over each input's stated range, independent",
-           "outputs": {}}
-    if failed:
-        out["errors"] = sorted({str(r.get("error")) for r in failed if r is not None})[:5]
+           "inputs": inputs_entry(names, ranges), "blocks_used": len(kept),
+           **failure_summary(failed, len(X)), "outputs": {}}
+    if not failed:
+        del out["errors"]
+    if not kept:
         return out
-    for key in (f"gap.{m}" for m in ANSWER if f"gap.{m}" in got[0]):
-        y = np.array([float(r[key]) for r in got])
-        if not np.all(np.isfinite(y)):
+    rows = [got[i] for i in idx]
+    for key in (f"gap.{m}" for m in ANSWER if f"gap.{m}" in rows[0]):
+        y = np.array([float(r[key]) for r in rows])
+        whole = [g for j, g in enumerate(kept) if np.all(np.isfinite(y[j * size:(j + 1) * size]))]
+        if not whole:  # every complete block has a point without this number
             out["outputs"][key] = {"status": "nothing", "error": "non-finite values"}
             continue
+        sel = rows_of(whole, size)
+        y = np.array([float(got[i][key]) for i in sel])
         with warnings.catch_warnings():  # a constant block of the bootstrap: nan conf, said
             warnings.simplefilter("ignore", RuntimeWarning)
-            out["outputs"][key] = output_entry(names, y, n)
+            out["outputs"][key] = output_entry(names, y, len(whole), spec) | {
+                "basis": {"blocks": len(whole), "of": n, "points": len(sel),
+                          "non_finite": len(kept) - len(whole)}}
     out["measure_first"] = measure_first(out["outputs"])
     return out
 
@@ -225,6 +260,8 @@ def measure_first(outputs: dict) -> dict:
 
 def sobol_sweep(scenario, out, n: int, seed: int = SEED):
     """The Sobol study of one tree (``scenario``) as a sweep into ``out``: the design of
-    :func:`sobol_design` (``n``, ``seed``) over its free inputs as ``input.*`` axes, the
-    answer's gaps (compare.studies.sensitivity.answer_under) at each point."""
-    return design_sweep(scenario, out, lambda names: sobol_design(n, names, seed))
+    :func:`sobol_design` (``n``, ``seed``) over its free inputs on the tree's ranges
+    (compare.studies.sensitivity.ranges_of) as ``input.*`` axes, the answer's gaps
+    (compare.studies.sensitivity.answer_under) at each point."""
+    return design_sweep(scenario, out, lambda names, ranges: sobol_design(
+        n, names, seed, problem(names, ranges)))

@@ -14,11 +14,11 @@ import os
 import socket
 from dataclasses import dataclass, field
 
-from treeimpact.analytic.errors import one_line
+from treeimpact.analytic.errors import OutsideValidity, ParameterError, SimulationDiverged, one_line
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS
 from treeimpact.compare.identification import identify_rung
-from treeimpact.compare.runs import DIVERGED, FAILED, OK, attempt
+from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, OUTSIDE, attempt
 
 #: The model quantities of a run kept as the table's ``model.*`` columns (SI; the run's
 #: ``model`` dict).
@@ -92,9 +92,27 @@ def execute(task: Task) -> list[dict]:
     for *_, record in task.rows:  # one analysis per distinct record parameters
         key = json.dumps(record, sort_keys=True)
         if key not in made:
-            made[key] = out | analyse(result, task.scenario, record)
+            made[key] = out | _analysed(analyse, result, task.scenario, record)
         outcomes.append(made[key])
     return outcomes
+
+
+def _analysed(analyse, result, scenario: Scenario, record: dict) -> dict:
+    """``analyse(result, scenario, record)``'s columns, or the point's outcome when it
+    raises (never the exception: one point does not end its sweep): INVALID for a
+    ParameterError (the point's inputs make no valid tree), OUTSIDE, DIVERGED, else FAILED,
+    each with its one-line reason (the row keeps the point's ``input.*`` values)."""
+    try:
+        return analyse(result, scenario, record)
+    except ParameterError as exc:
+        status, reason = INVALID, one_line(exc)
+    except OutsideValidity as exc:  # before SimulationDiverged, its base
+        status, reason = OUTSIDE, f"outside the model's validity: {one_line(exc)}"
+    except SimulationDiverged as exc:
+        status, reason = DIVERGED, f"diverged: {one_line(exc)}"
+    except Exception as exc:  # noqa: BLE001 - recorded and shown with the point
+        status, reason = FAILED, f"{type(exc).__name__}: {one_line(exc)}"
+    return {"status": status, "error": reason}
 
 
 def run_chunk(tasks: list) -> list:

@@ -60,9 +60,13 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
                          "(several: not separable)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8.5, frameon=False)
     first = next(iter(trees.values()))
+    short = [f"{n} {t['trajectories_used']}" for n, t in trees.items()
+             if t.get("trajectories_used", t.get("trajectories")) != t.get("trajectories")]
     fig.suptitle(f"Which unmeasured input moves each answer: Morris mu* with its "
                  f"{100 * first.get('conf_level', 0.95):.0f} % interval (whiskers), "
-                 f"{first.get('trajectories', '?')} trajectories per tree", fontsize=10)
+                 f"{first.get('trajectories', '?')} trajectories per tree"
+                 + (f" (complete, with no failed point: {', '.join(short)})" if short else ""),
+                 fontsize=10)
     path = Path(path)
 
     save_figure(fig, path, 100)

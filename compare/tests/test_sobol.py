@@ -185,13 +185,20 @@ def test_analyse_sobol_reads_a_table_of_the_design():
     assert out["measure_first"]["rows"][0]["input"] in ("root_share", "log10_pad_duration")
 
 
-def test_a_missing_point_is_counted_not_analysed():
+def test_a_missing_point_is_counted_and_its_block_dropped():
+    """A design of 4 whose first point has no row: counted, named (index 0, status
+    missing), and the indices rest on the 3 complete blocks (issue 50 item 4)."""
     n = 4
     X = sobol_design(n)
     rows = [{"status": "ok", **{f"input.{k}": v for k, v in zip(INPUTS, x)},
              "gap.x_max": 1.0} for x in X[1:]]
     out = analyse_sobol(pd.DataFrame(rows), n)
-    assert out["failed"] == 1 and out["outputs"] == {}
+    assert out["failed"] == 1 and out["blocks_used"] == 3
+    assert out["failed_points"][0]["index"] == 0
+    assert out["failed_points"][0]["status"] == "missing"
+    assert out["outputs"]["gap.x_max"]["basis"] == {
+        "blocks": 3, "of": 4, "points": 3 * (len(INPUTS) + 2), "non_finite": 0}
+    assert out["outputs"]["gap.x_max"]["status"] == "nothing"  # a constant gap
 
 
 def test_one_trees_design_runs_on_the_sweeps_with_its_measured_inputs_held(tmp_path):
@@ -200,7 +207,7 @@ def test_one_trees_design_runs_on_the_sweeps_with_its_measured_inputs_held(tmp_p
     the ranking names only free inputs."""
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.model.scenario_toml import scenario_toml
-    from treeimpact.compare.studies.sensitivity import free_inputs
+    from treeimpact.compare.studies.sensitivity import free_inputs, ranges_of
     from treeimpact.compare.studies.sobol import sobol_sweep
     from treeimpact.compare.sweep.run import run_sweeps
 
@@ -215,7 +222,7 @@ def test_one_trees_design_runs_on_the_sweeps_with_its_measured_inputs_held(tmp_p
     (res,) = run_sweeps([sobol_sweep(scen, tmp_path / "sweep", 4)], workers=0,
                         progress=False)
     assert len(res.table) == 4 * (len(names) + 2) and set(res.table["status"]) == {"ok"}
-    out = analyse_sobol(res.table, 4, names=names)
+    out = analyse_sobol(res.table, 4, names=names, ranges=ranges_of(scen))
     assert out["failed"] == 0 and len(out["outputs"]) == 5
     assert {r["input"] for r in out["measure_first"]["rows"]} == set(names)
     assert all(math.isfinite(o["low"]) for o in out["outputs"].values())

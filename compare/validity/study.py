@@ -9,7 +9,7 @@ import json
 import time
 from pathlib import Path
 
-from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.errors import NotAchieved, ParameterError
 from treeimpact.analytic.results import json_text
 from treeimpact.compare.backends import ENGINES
 from treeimpact.compare.provenance import provenance
@@ -102,7 +102,7 @@ def _validity_study(out, p: Preset, *, scenario, backends, workers, scheduler, p
             sampling_rungs=p.ident_sampling_rungs, engine_rungs=p.ident_engine_rungs,
             sampling_seeds=p.ident_sampling_seeds, crown_ratios=p.ident_crown_ratios)
     sensitivity = sensitivity_result(out, sens, sens_done) if sens else None
-    return write_study(out, sweeps, speed=speed, tolerance=tolerance,
+    paths = write_study(out, sweeps, speed=speed, tolerance=tolerance,
                        metrics=p.map_metrics, value=p.map_value, ident_study=ident_study,
                        sensitivity=sensitivity,
                        title=f"Model-validity study ({p.name} preset)",
@@ -110,6 +110,20 @@ def _validity_study(out, p: Preset, *, scenario, backends, workers, scheduler, p
                              "wall_s": time.perf_counter() - t0,
                              "rows_written": sum(r.rows_written for r in done),
                              "rows_done_before": sum(r.rows_done_before for r in done)})
+    return _points_said(paths, sensitivity, out)
+
+
+def _points_said(paths: dict, sensitivity: dict | None, out: Path) -> dict:
+    """The written study's ``paths`` with ``warnings``: one line per sensitivity design
+    with a failed point (compare.validity.sensitivity_study.point_counts), which the
+    command prints on stderr; NotAchieved (one line, after the pages are written into
+    ``out``) when no point of the sensitivity study ran."""
+    counts = (sensitivity or {}).get("points") or {}
+    if counts.get("points") and not counts["ran"]:
+        first = counts["lines"][0].split(" The first: ", 1)[-1] if counts["lines"] else ""
+        raise NotAchieved(f"sensitivity: none of its {counts['points']} points ran, so no "
+                          f"index; the first: {first}; the study is written in {out}")
+    return {**paths, "warnings": list(counts.get("lines", []))}
 
 
 def _combined_table(out: Path, sweeps: dict, speed: dict | None):

@@ -13,7 +13,7 @@ import threading
 import time
 from pathlib import Path
 
-from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.errors import NotAchieved, ParameterError, SimulationDiverged
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.analytic.model.scenario_toml import scenario_toml
@@ -105,6 +105,8 @@ class StudyJob:
             raise KeyboardInterrupt
         if code == ExitCode.DIVERGED:
             raise SimulationDiverged(what)
+        if code == ExitCode.NOT_ACHIEVED:  # it ran, and says what it could not do
+            raise NotAchieved(f"--with-study {self.preset}: {what}")
         raise ParameterError(f"--with-study {self.preset}: {what}")
 
     def check(self) -> None:
