@@ -16,10 +16,12 @@ differences in 1 (drawn in %).
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
+from matplotlib.colors import to_rgba
 from matplotlib.patches import Patch, Rectangle
 
 from ..rungs import RungKind
@@ -81,16 +83,16 @@ def judge(value, tolerance: float) -> State:
 
 
 def cell_text(value) -> str:
-    """A cell's number: the signed percentage, one decimal under 10 %, none above ('+1.2 %',
-    '-77 %'); 'n/a' without a number."""
+    """A cell's number, ``value`` (1) as the signed percentage, one decimal under 10 %, none
+    above ('+1.2 %', '-77 %'); 'n/a' without a number (None, NaN)."""
     if value is None or not math.isfinite(value):
         return "n/a"
     return f"{100 * value:+.1f} %" if abs(value) < 0.095 else f"{100 * value:+.0f} %"
 
 
 def short_reason(text: str) -> str:
-    """A reason as the figure's legend says it: up to its first parenthesis (the full
-    reason stays in the cell)."""
+    """A reason ``text`` as the figure's legend says it: up to its first parenthesis (the
+    full reason stays in the cell)."""
     return str(text).split(" (", 1)[0].strip().rstrip(".:;,")
 
 
@@ -207,6 +209,11 @@ HOLDS_FACE = "#dcefd8"
 OFF_MAP, OFF_RANGE = "OrRd", (0.55, 0.95)
 #: How many tolerances off a cell is at its darkest (5 % x 20 = 100 %).
 FULL_DARK = 20.0
+#: The narrowest figure (in): one tree's two columns leave its legend room.
+MIN_WIDTH = 8.0
+#: The legend's characters per line per inch of figure (8.5 pt text at figures.DPI: about
+#: 7 px a character, 110 px an inch, less the margins).
+LEGEND_CHARS = 11.0
 
 
 def off_face(value: float, tolerance: float):
@@ -219,16 +226,15 @@ def off_face(value: float, tolerance: float):
 
 
 def luminance(rgba) -> float:
-    """The grey a colour turns into (ITU-R 601 luma, as PIL's convert('L')), 0-1."""
+    """The grey the colour ``rgba`` (0-1 channels) turns into (ITU-R 601 luma, as PIL's
+    convert('L')), 0-1."""
     r, g, b = rgba[:3]
     return 0.299 * r + 0.587 * g + 0.114 * b
 
 
 def face_of(cell: dict, tolerance: float):
     """The RGBA face of ``cell`` (:func:`matrix_cells`): light for holds, :func:`off_face`
-    for off, white for n/a."""
-    from matplotlib.colors import to_rgba
-
+    (against ``tolerance``, 1) for off, white for n/a."""
     if cell["state"] == State.HOLDS:
         return to_rgba(HOLDS_FACE)
     if cell["state"] == State.OFF:
@@ -244,7 +250,8 @@ def matrix_figure(matrix: dict):
     tol, trees = matrix["tolerance"], [t["name"] for t in matrix["trees"]]
     quantities, assumptions = matrix["quantities"], list(matrix["assumptions"])
     ncol = len(trees) * len(assumptions)
-    fig, ax = plt.subplots(figsize=(1.55 * ncol + 2.6, 0.62 * len(quantities) + 3.0),
+    width = max(1.55 * ncol + 2.6, MIN_WIDTH)
+    fig, ax = plt.subplots(figsize=(width, 0.62 * len(quantities) + 3.0),
                            layout="constrained")
     cols = {(t, a): i * len(assumptions) + j for i, t in enumerate(trees)
             for j, a in enumerate(assumptions)}
@@ -270,7 +277,7 @@ def matrix_figure(matrix: dict):
                     fontsize=10, fontweight="bold")
         if i:
             ax.axvline(i * len(assumptions), color="black", lw=2.0)
-    _legend(fig, matrix)
+    _legend(fig, matrix, int(LEGEND_CHARS * width))
     fig.suptitle(f"Does each assumption hold at the tree's own pad and e? Each cell: the "
                  f"signed difference; holds within +-{100 * tol:.0f} %", fontsize=11)
     return fig
@@ -298,9 +305,9 @@ def _draw_cell(ax, x: int, y: int, cell: dict, tol: float) -> None:
             color=ink, bbox=box)
 
 
-def _legend(fig, matrix: dict) -> None:
+def _legend(fig, matrix: dict, chars: int) -> None:
     """The legend below the matrix: the three kinds of cell, what each column compares,
-    and each n/a letter's reason."""
+    and each n/a letter's reason, each line wrapped at ``chars`` characters."""
     tol = 100 * matrix["tolerance"]
     handles = [Patch(facecolor=HOLDS_FACE, edgecolor="0.6", label=f"holds: within +-{tol:.0f} %"),
                Patch(facecolor=off_face(2 * matrix["tolerance"], matrix["tolerance"]),
@@ -316,6 +323,7 @@ def _legend(fig, matrix: dict) -> None:
              "1-DOF record) against the exact 1-DOF model at the tree's e",
              "* mean over one collision duration"]
     words += [f"({k}) {v}" for k, v in matrix["notes"].items()]
+    words = [textwrap.fill(w, chars, subsequent_indent="    ") for w in words]
     blank = [Patch(visible=False) for _ in words]
     fig.legend(handles + blank, [h.get_label() for h in handles] + words,
                loc="outside lower center", ncols=1, frameon=False, fontsize=8.5,

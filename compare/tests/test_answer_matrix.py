@@ -178,3 +178,24 @@ def test_in_grey_the_off_cells_are_darker_than_the_ones_that_hold():
         medians.setdefault(c["state"], []).append(float(np.median(patch)))
     assert max(medians[State.OFF]) < min(medians[State.HOLDS]) - 0.1
     assert min(medians[State.NOT_AVAILABLE]) > 0.98
+
+
+@pytest.mark.parametrize("trees", [1, 3])
+def test_every_text_lies_inside_the_figure_saved_as_the_report_saves_it(tmp_path, trees):
+    """One tree (a user's report: the narrowest figure, a long name) and three: the
+    suptitle, the trees' heads, the cells and every legend line inside the figure's box."""
+    from treeimpact.compare import figure_text
+    from treeimpact.compare.report.figures import FigureFiles
+
+    name = "a-user-tree-with-a-rather-long-name"
+    rows = [dict(ANSWER[1], scenario=f"{name}-{i}") for i in range(trees)]
+    matrix = matrix_cells(rows, {r["scenario"]: SMALL_E["light"] for r in rows},
+                          {r["scenario"]: FITS["light"] for r in rows}, TOL)
+    fig = matrix_figure(matrix)
+    FigureFiles(tmp_path)(fig, "answer-matrix")  # titles fitted as the report's are
+    renderer, box = figure_text.renderer_of(fig), fig.bbox
+    texts = [fig._suptitle, *fig.axes[0].texts, *fig.legends[0].get_texts()]
+    out = [t.get_text() for t in texts if not box.contains(
+        *t.get_window_extent(renderer).min) or not box.contains(
+        *t.get_window_extent(renderer).max)]
+    assert not out, out
