@@ -82,12 +82,18 @@ def judge(value, tolerance: float) -> State:
     return State.HOLDS if abs(value) <= tolerance else State.OFF
 
 
-def cell_text(value) -> str:
+def cell_text(value, tolerance: float | None = None) -> str:
     """A cell's number, ``value`` (1) as the signed percentage, one decimal under 10 %, none
-    above ('+1.2 %', '-77 %'); 'n/a' without a number (None, NaN)."""
+    above ('+1.2 %', '-77 %'), more (up to three) where the printed number would otherwise
+    be judged otherwise than ``value`` against ``tolerance`` (1; -5.01 %, not -5.0 %, for an
+    "off" cell); 'n/a' without a number (None, NaN)."""
     if value is None or not math.isfinite(value):
         return "n/a"
-    return f"{100 * value:+.1f} %" if abs(value) < 0.095 else f"{100 * value:+.0f} %"
+    digits = 1 if abs(value) < 0.095 else 0
+    while tolerance is not None and digits < 3 and \
+            judge(round(100 * value, digits) / 100, tolerance) != judge(value, tolerance):
+        digits += 1
+    return f"{100 * value:+.{digits}f} %"
 
 
 def short_reason(text: str) -> str:
@@ -193,7 +199,8 @@ def matrix_cells(answer: list[dict], small_e_trees: dict, fits: dict,
                         notes[note] = text
                 cells.append({"tree": tree, "quantity": q.key, "label": q.label,
                               "assumption": assumption, "value": value,
-                              "state": judge(value, tolerance), "text": cell_text(value),
+                              "state": judge(value, tolerance),
+                              "text": cell_text(value, tolerance),
                               "reason": why, "note": note, "source": source})
     trees = [{"name": a["scenario"], "restitution": a.get("restitution"),
               "contact_duration": a.get("contact_duration")} for a in answer]
@@ -270,8 +277,9 @@ def matrix_figure(matrix: dict):
     for spine in ax.spines.values():
         spine.set_visible(False)
     for i, t in enumerate(matrix["trees"]):
-        pad = f", pad {1e3 * t['contact_duration']:g} ms" if t.get("contact_duration") else ""
-        ax.annotate(f"{t['name']}\n(e = {t['restitution']:g}{pad})",
+        said = ([f"e = {t['restitution']:g}"] if t.get("restitution") is not None else []) + (
+            [f"pad {1e3 * t['contact_duration']:g} ms"] if t.get("contact_duration") else [])
+        ax.annotate(t["name"] + (f"\n({', '.join(said)})" if said else ""),
                     ((i + 0.5) * len(assumptions) / ncol, 1.0), xycoords="axes fraction",
                     xytext=(0, 22), textcoords="offset points", ha="center", va="bottom",
                     fontsize=10, fontweight="bold")
@@ -337,5 +345,9 @@ def answer_matrix(scen_sections, small_e_trees: dict, sink=None) -> dict:
     gives (:class:`.figures.FigureFiles`; None without a sink)."""
     matrix = matrix_cells(one_dof_answer(scen_sections), small_e_trees,
                           continuum_fits(scen_sections), validity_tolerance())
+    # every tree's e and pad from its scenario (a tree without an answer row has neither)
+    contacts = [(s.ladder.name, s.ladder.scenario.contact) for s in scen_sections]
+    matrix["trees"] = [{"name": name, "restitution": c.restitution,
+                        "contact_duration": c.duration} for name, c in contacts]
     matrix["figure"] = sink(matrix_figure(matrix), "answer-matrix") if sink else None
     return matrix

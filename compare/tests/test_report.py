@@ -594,7 +594,7 @@ def test_the_answer_matrix_is_the_report_s_own_numbers_and_leads_the_answer(repo
     """Each drawn cell of the answer's matrix (compare.report.answer_matrix) against the
     report.json number it reads, judged by the 5 % rule; a cell without a number is n/a
     with its reason; the same figure in both pages, after the numbered sentences."""
-    from treeimpact.compare.report.answer_matrix import State
+    from treeimpact.compare.report.answer_matrix import State, cell_text
 
     paths, _ = report
     data = json.loads(paths["json"].read_text())
@@ -629,6 +629,7 @@ def test_the_answer_matrix_is_the_report_s_own_numbers_and_leads_the_answer(repo
             continue
         assert c["value"] == pytest.approx(want, rel=1e-12)
         assert c["state"] == ("holds" if abs(want) <= tol else "off")
+        assert c["text"] == cell_text(want, tol)
     assert seen_na >= 2  # x_max and the crown have no small-e formula
     md, html = paths["md"].read_text(), paths["html"].read_text()
     assert matrix["figure"] == "figures/answer-matrix.png"
