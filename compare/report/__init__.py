@@ -109,6 +109,11 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     wall["paper"] = time.perf_counter() - t0
     scen_sections = _scenario_sections(scens, cache, e_tables, sink, wall, engines=engines,
                                        segments=segments, progress=progress)
+    # lazy: +600 ms at import otherwise (matplotlib, scipy, numpy),
+    # which this module's other callers do not need
+    from .answer_matrix import answer_matrix
+
+    matrix = answer_matrix(scen_sections, small_e["trees"], sink)
     trunks = TrunksSection(tree=scens[0].name if scens else None)
     t0 = time.perf_counter()
     for job in study_jobs:
@@ -119,7 +124,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
         wall["waiting for the studies"] = time.perf_counter() - t0
     log = RunsSection(cache, wall)
     return {"paper": paper, "scenarios": scen_sections, "trunks": trunks, "studies": studies,
-            "runs": log, "contact": contact, "small_e": small_e}
+            "runs": log, "contact": contact, "small_e": small_e, "answer_matrix": matrix}
 
 
 def _report_sweeps(scens: list, out_dir, sink, progress: bool) -> tuple[dict, dict, dict]:
@@ -216,6 +221,7 @@ def _page_summary(sections: dict) -> dict:
     summary["answer_metrics"] = ANSWER_METRICS
     summary["answer_tolerance"] = validity_tolerance()
     summary["contact"] = sections["contact"]
+    summary["answer_matrix"] = sections["answer_matrix"]
     small_e = sections["small_e"]
     summary["small_e"] = {**small_e, "rows": small_e_rows(small_e["trees"]),
                           "step": E_GRID[1] - E_GRID[0], "e_max": E_GRID[-1],

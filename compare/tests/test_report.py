@@ -590,6 +590,55 @@ def test_answer_cells_sort_by_their_own_number(report):
     assert "td.dataset.sort" in html  # the sorter reads it
 
 
+def test_the_answer_matrix_is_the_report_s_own_numbers_and_leads_the_answer(report):
+    """Each drawn cell of the answer's matrix (compare.report.answer_matrix) against the
+    report.json number it reads, judged by the 5 % rule; a cell without a number is n/a
+    with its reason; the same figure in both pages, after the numbered sentences."""
+    from treeimpact.compare.report.answer_matrix import State, cell_text
+
+    paths, _ = report
+    data = json.loads(paths["json"].read_text())
+    matrix, tol = data["summary"]["answer_matrix"], data["answer"]["tolerance"]
+    rows = {a["scenario"]: a for a in data["answer"]["one_dof"]}
+    small_e = data["answer"]["small_e"]
+    metric = {"x_max": "x_max", "energy_delivered": "energy_delivered",
+              "crown_acceleration": "crown_peak_acceleration"}
+    approx = {"energy_delivered": "eq58_energy_transferred", "eq57_loss": "eq57_energy_loss",
+              "M_T": "identification_M_T", "K_T": "identification_K_T"}
+    seen_na = 0
+    for c in matrix["cells"]:
+        row, tree = rows[c["tree"]], c["tree"]
+        if c["assumption"] == "1-DOF trunk":
+            if c["quantity"] in metric:
+                want = row["metrics"][metric[c["quantity"]]]["rel"]
+            elif c["quantity"] == "eq57_loss":
+                loss = row["pad_loss"]
+                want = (loss["continuum"] - loss["one_dof"]) / abs(loss["one_dof"])
+            else:
+                fit = next(f for f in data["scenarios"][tree]["record_fits"]
+                           if f["rung"] == "beam")
+                want = None if c["quantity"] in fit.get("ranges", {}) else \
+                    fit["errors"][c["quantity"]]
+        else:
+            name = approx.get(c["quantity"])
+            want = small_e[tree][name]["error_at_e"] if name else None
+        if want is None:
+            seen_na += 1
+            assert c["state"] == State.NOT_AVAILABLE and c["value"] is None
+            assert matrix["notes"][c["note"]] and c["reason"]
+            continue
+        assert c["value"] == pytest.approx(want, rel=1e-12)
+        assert c["state"] == ("holds" if abs(want) <= tol else "off")
+        assert c["text"] == cell_text(want, tol)
+    assert seen_na >= 2  # x_max and the crown have no small-e formula
+    md, html = paths["md"].read_text(), paths["html"].read_text()
+    assert matrix["figure"] == "figures/answer-matrix.png"
+    assert (paths["html"].parent / matrix["figure"]).read_bytes()[:4] == b"\x89PNG"
+    for page in (md, html):
+        at = page.index(matrix["figure"])
+        assert page.index("The answer") < at < page.index("Where each tree's M_T comes from")
+
+
 def test_a_tree_without_a_1_dof_answer_is_said_so_not_a_crash(tmp_path):
     """open-center stopped at 30 ms, inside its moving-together phase: the paper's model and
     the soft SDOF refuse the run (energy_delivered needs the last separation). The report

@@ -63,7 +63,8 @@ def texts_from_report(report: dict) -> dict:
 
 
 #: The report's figures the pages show, copied with the numbers: page path -> report path.
-FIGURES = {"docs/img/contact-scan.png": "figures/contact-scan.png",
+FIGURES = {"docs/img/answer-matrix.png": "figures/answer-matrix.png",
+           "docs/img/contact-scan.png": "figures/contact-scan.png",
            "docs/img/small-e.png": "figures/small-e.png",
            "docs/img/design-map.png": "design/design-a_over_l-contact_duration.png"}
 
