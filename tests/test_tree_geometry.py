@@ -188,14 +188,14 @@ def test_the_assumed_ranges_are_the_paper_s_two_trees():
 
 
 def test_the_study_varies_a_geometry_tree_s_assumptions_and_keeps_its_geometry():
-    """A tree from its geometry: the study's inputs add its damping ratio; at its own inputs
-    vary() gives the tree back (1e-12); at every design point l, a, d, E and the crown are
-    kept while K_T is (1 - root share) 3 E I / a^3 (eq 8 with the root spring: the root
+    """A tree from its geometry: the study's inputs add its damping ratio and its assumed E;
+    at its own inputs vary() gives the tree back (1e-12); at every design point l, a, d and
+    the crown are kept, E is the point's, while K_T is (1 - root share) 3 E I / a^3 (eq 8 with the root spring: the root
     adds share / (1 - share) of the wood's flexibility) and the damping ratio is the
     point's (eq 14), so K_T and C_T move. 1e-9: round-off of the reduction's sums."""
     scen = ti.tree_scenario("plum", **PLUM)
     names = free_inputs(scen)
-    assert names[-1] == "damping_ratio" and "root_share" in names
+    assert names[-2:] == ("damping_ratio", "youngs_modulus") and "root_share" in names
     own = inputs_of(scen)
     back, _ = vary(scen, own)
     for f in dataclasses.fields(scen.trunk):
@@ -206,8 +206,9 @@ def test_the_study_varies_a_geometry_tree_s_assumptions_and_keeps_its_geometry()
         p = own | dict(zip(names, row))
         varied, _ = vary(scen, p)
         t = varied.trunk
-        for f in ("length", "clamp_height", "diameter", "youngs_modulus", "crown_mass"):
+        for f in ("length", "clamp_height", "diameter", "crown_mass"):
             assert getattr(t, f) == getattr(scen.trunk, f), f
+        assert t.youngs_modulus == p["youngs_modulus"]
         tree = reduce_trunk(t)
         rigid = 3.0 * t.bending_stiffness / t.clamp_height ** 3
         assert tree.equivalent_stiffness == pytest.approx((1 - p["root_share"]) * rigid,
@@ -216,6 +217,18 @@ def test_the_study_varies_a_geometry_tree_s_assumptions_and_keeps_its_geometry()
         stiffness.add(round(tree.equivalent_stiffness))
         damping.add(round(tree.equivalent_damping, 3))
     assert len(stiffness) > 1 and len(damping) > 1
+
+
+def test_a_given_e_is_held_by_the_study():
+    """E given: the study does not vary it (only the assumptions enter as unmeasured
+    inputs), and a given density is held too (listed measured)."""
+    scen = ti.tree_scenario("plum", **PLUM, youngs_modulus=8e9, density=700.0)
+    names = free_inputs(scen)
+    assert "youngs_modulus" not in names and "density" not in names
+    assert names[-1] == "damping_ratio"
+    for row in design(1, names=names):
+        varied, _ = vary(scen, inputs_of(scen) | dict(zip(names, row)))
+        assert (varied.trunk.youngs_modulus, varied.trunk.density) == (8e9, 700.0)
 
 
 def test_a_measured_tree_s_study_is_unchanged():

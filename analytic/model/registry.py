@@ -229,6 +229,11 @@ _UNMEASURED = {
                        "of Figs 4-5 (eq 42), Table 1's M_T and K_T and the 132.4 kg pendulum: "
                        "0.601 open center, 0.563 central leader"),
         "a pendulum test: b = -a2/a1 of the moving-together motion (eq 42)"),
+    "youngs_modulus": UnmeasuredRange(
+        8.89e8, 1.263e9, ("E = K_T a^3 / (3 I) (eq 47) of Table 1's two trees with the paper's "
+                          "rigid clamp: 8.89e8 open center, 1.263e9 Pa central leader (a tree from "
+                          "its geometry that was not given E)"),
+        "a static push test at the clamp (K_T) with the root held, or a core sample's E"),
 }
 
 #: What a tree from its geometry (``treeimpact scenario --crown-mass``) assumes for the
@@ -248,7 +253,8 @@ _ASSUMED = {
         "(eq 14), which does not depend on the pendulum: 0.563-0.601, their mean 0.582; "
         "C = C_T / J (eq 10 as derived)"),
     "youngs_modulus": Assumed(
-        "youngs_modulus", 1.076e9, 8.89e8, 1.263e9,
+        "youngs_modulus", 1.076e9, _UNMEASURED["youngs_modulus"].low,
+        _UNMEASURED["youngs_modulus"].high,
         "E = K_T a^3 / (3 I) (eq 47) of Table 1's K_T, a and d: the E with which the paper's "
         "rigid clamp gives its two trees' measured K_T, 8.89e8 (open center) to 1.263e9 Pa "
         "(central leader), their mean 1.076e9; the printed 8.9e9 / 12.6e9 are ten times these "

@@ -8,7 +8,8 @@ keeps its geometry, E and crown instead, and its assumed root spring and damping
 their ranges, so M_T, K_T and C_T move with them (:func:`vary`). Inputs a scenario file
 lists as measured (``[calibration] measured``) are held at its values. Runs on the sweep
 machinery: one sweep per tree whose points are the Morris design (``input.*`` axes), the
-analysis :func:`answer_under` running the 1-DOF models and the continuum at each point. Design notes: docs/sensitivity.md. SI units.
+analysis :func:`answer_under` running the 1-DOF models and the continuum at each point.
+Design notes: docs/sensitivity.md. SI units.
 """
 
 from __future__ import annotations
@@ -58,9 +59,9 @@ def _input(name: str) -> tuple:
 #: The unmeasured inputs: (low, high, unit, why the range, the measurement that would fix it);
 #: names, units, ranges and reasons are the registry's.
 INPUTS = {name: _input(name) for name in ORDER}
-#: The inputs only a tree from its geometry has (its damping assumed, not measured), after
-#: :data:`ORDER` in its design's columns.
-GEOMETRY_ORDER = ("damping_ratio",)
+#: The inputs only a tree from its geometry has (its damping, and E when not given, assumed,
+#: not measured), after :data:`ORDER` in its design's columns.
+GEOMETRY_ORDER = ("damping_ratio", "youngs_modulus")
 #: Every input a study may vary: :data:`INPUTS`, then a geometry tree's own.
 ALL_INPUTS = INPUTS | {name: _input(name) for name in GEOMETRY_ORDER}
 #: The outputs: the answer table's cells (continuum vs 1-DOF, relative) and the crossing
@@ -81,7 +82,8 @@ DURATIONS = tuple(float(d) for d in np.geomspace(2e-4, 5e-2, 8))
 FIELDS = {"clamp_mass": (BY_NAME["clamp_mass"].path,), "e_over_g": ("trunk.shear_modulus",),
           "log10_pad_duration": ("contact.duration", "contact.stiffness"),
           "restitution": (BY_NAME["restitution"].path,), "root_share": ("trunk.base_stiffness",),
-          "density": (BY_NAME["density"].path,), "damping_ratio": (BY_NAME["damping"].path,)}
+          "density": (BY_NAME["density"].path,), "damping_ratio": (BY_NAME["damping"].path,),
+          "youngs_modulus": (BY_NAME["youngs_modulus"].path,)}
 
 
 def from_geometry(scenario) -> bool:
@@ -99,10 +101,13 @@ def measured_inputs(scenario) -> tuple[str, ...]:
 
 def free_inputs(scenario=None) -> tuple[str, ...]:
     """The inputs the study varies: :data:`INPUTS` (with a tree from its geometry, and
-    :data:`GEOMETRY_ORDER`'s: its assumed damping) less the scenario's measured ones."""
+    :data:`GEOMETRY_ORDER`'s it assumed: its damping, its E when not given) less the
+    scenario's measured ones."""
     held = measured_inputs(scenario) if scenario is not None else ()
-    names = (*INPUTS, *GEOMETRY_ORDER) if scenario is not None and from_geometry(scenario) \
-        else tuple(INPUTS)
+    names = tuple(INPUTS)
+    if scenario is not None and from_geometry(scenario):
+        assumed = set(assumed_fields(scenario))
+        names += tuple(n for n in GEOMETRY_ORDER if set(FIELDS[n]) & assumed)
     return tuple(n for n in names if n not in held)
 
 
@@ -126,7 +131,7 @@ def inputs_of(scenario) -> dict:
            "root_share": 0.0 if math.isinf(t.base_stiffness)  # a rigid clamp: exactly 0
            else 1.0 - bending * tree.equivalent_stiffness}
     if from_geometry(scenario):
-        out["damping_ratio"] = tree.damping_ratio
+        out |= {"damping_ratio": tree.damping_ratio, "youngs_modulus": t.youngs_modulus}
     return out
 
 
@@ -141,9 +146,10 @@ def vary(scenario, p: dict):
     """``scenario`` at the unmeasured inputs ``p`` (:data:`ALL_INPUTS`), keeping what was
     measured and only that. A measured tree (Table 1's kind): M_T, K_T and C_T kept (the
     crown, root spring and damping recalibrated, eqs 7, 8, 10), E from the root's share of
-    K_T's flexibility. A tree from its geometry (:func:`from_geometry`): its geometry, E
-    and crown kept, the root spring set from the root's share with that E I and the damping
-    from the damping ratio (eq 14), so M_T, K_T and C_T move (eqs 7, 8, 10). Both: the clamp
+    K_T's flexibility. A tree from its geometry (:func:`from_geometry`): its geometry, its
+    E when given and its crown kept (an assumed E as ``p`` says), the root spring set from
+    the root's share with that E I and the damping from the damping ratio (eq 14), so M_T,
+    K_T and C_T move (eqs 7, 8, 10). Both: the clamp
     mass, the density, G = E / (E/G), the pad's duration and e as ``p`` says. Returns
     (scenario, the beam backend's beam theory)."""
     if from_geometry(scenario):
@@ -168,12 +174,14 @@ def vary(scenario, p: dict):
 
 
 def _vary_geometry(scenario, p: dict):
-    """:func:`vary` of a tree from its geometry: l, a, d, E and m_f kept; m_c, rho and G
-    set, then k_theta from the root's share (analytic.model.calibration.root_for_share) and
-    C from the damping ratio (damping_for_ratio, eqs 7, 8, 10, 14) of that trunk."""
+    """:func:`vary` of a tree from its geometry: l, a, d and m_f kept; m_c, rho, E (its own
+    when ``p`` has none) and G set, then k_theta from the root's share
+    (analytic.model.calibration.root_for_share) and C from the damping ratio
+    (damping_for_ratio, eqs 7, 8, 10, 14) of that trunk."""
     trunk, ratio = scenario.trunk, p["e_over_g"]
-    e_mod = trunk.youngs_modulus
+    e_mod = p.get("youngs_modulus", trunk.youngs_modulus)
     chosen = replace(trunk, clamp_mass=p["clamp_mass"], density=p["density"],
+                     youngs_modulus=e_mod,
                      shear_modulus=e_mod / ratio if ratio > 0 else None)
     chosen = replace(chosen, base_stiffness=root_for_share(chosen, p["root_share"]))
     chosen = replace(chosen, damping=damping_for_ratio(chosen, p["damping_ratio"]))

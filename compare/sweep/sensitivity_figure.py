@@ -13,16 +13,16 @@ from treeimpact.compare.figure_text import save_figure
 #: the registry's label on two lines (analytic.model.registry).
 INPUT_LABELS = {n: "\n".join(BY_NAME[n].label.rsplit(" ", 1))
                 for n in ("clamp_mass", "e_over_g", "log10_pad_duration", "restitution",
-                          "root_share", "density", "damping_ratio")}
+                          "root_share", "density", "damping_ratio", "youngs_modulus")}
 OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
                   "gap.crown_peak": "crown peak gap",
                   "gap.crown_peak_acceleration": "crown accel. gap",
                   "gap.peak_force": "force gap", "crossing.x_max": "crossing, x_max",
                   "crossing.energy_delivered": "crossing, energy"}
 #: The bars' colours, one per unmeasured input of :data:`INPUT_LABELS`, in its order (the
-#: damping ratio's only on a tree from its geometry, compare.studies.sensitivity).
+#: damping ratio's and E's only on a tree from its geometry, compare.studies.sensitivity).
 _COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
-            "tab:pink")
+            "tab:pink", "tab:olive")
 
 
 def sensitivity_figure(trees: dict, path: Path) -> Path | None:
