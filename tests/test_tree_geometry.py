@@ -73,7 +73,12 @@ def test_the_first_screen_line_says_where_the_geometry_tree_s_m_t_comes_from():
     text = mass_origin(trunk)
     shown = float(re.match(r"M_T = ([\d.]+) kg", text).group(1))
     assert shown == pytest.approx(printed_dynamic_mass(trunk), rel=5e-3), text  # 3 digits
-    assert "25 kg counted" in text
+    assert "25 kg counted" in text and "assumed" not in text  # no fields named: none
+    scen = ti.tree_scenario("plum", **PLUM)
+    text = mass_origin(trunk, scen.notes["assumed"])
+    for f in scen.notes["assumed"]:
+        assert BY_NAME[f.split(".")[1]].label in text, f
+    assert text.count("\n") == 0 and "no pendulum test" in text
 
 
 def test_given_e_and_density_are_kept_and_not_assumed():

@@ -47,8 +47,8 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
     m.add_argument("--tau", type=number, help="time of x_max from the extrapolated origin, s")
     g = sp.add_argument_group("the tree from its geometry (no pendulum test; root spring and "
                               "damping assumed, see docs/parameters.md)")
-    add_parameter_flag(g, "crown_mass", note="an estimate: fruit, leaves and scaffolds at l; "
-                       "not with the measured tree's flags")
+    add_parameter_flag(g, "crown_mass", note="an estimate; not with the measured tree's "
+                       "flags")
     c = sp.add_argument_group("chosen (defaults: the shipped trees' choices)")
     e = ASSUMED["youngs_modulus"]
     add_parameter_flag(c, "youngs_modulus",
