@@ -254,26 +254,32 @@ def record_from_simulation(simulation: Simulation, *, rate_hz: float = 5000.0,
 
 @_api
 def tree_scenario(name: str, **measured) -> Scenario:
-    """A scenario for your own tree from what you measured (the ``scenario`` command's).
+    """A scenario for your own tree from what you measured (the ``scenario`` command's):
+    a pendulum test's M_T, K_T and b, or the tree's geometry and a crown mass estimate.
 
     Args:
         name: the scenario's name.
         **measured: the test (``clamp_height`` a, m; ``diameter`` d, m; ``impactor_mass``
-            m, kg; ``equivalent_length`` l_e, m; ``release_angle_deg`` theta_r, deg), the
-            tree (``dynamic_mass`` M_T, kg; ``equivalent_stiffness`` K_T, N/m, or ``x_max``
-            m and ``tau`` s with ``a1`` m/s and ``a2`` m/s^2, the regression of Figs 4-5;
-            ``damping_rate`` b, 1/s, or ``a1`` and ``a2``) and the choices
-            (``youngs_modulus`` E, Pa, required; ``length``, ``density``, ``clamp_mass``,
-            ``restitution``, ``contact_duration``, ``t_end``: the shipped trees' when
-            left out), as :class:`compare.tree_scenario.TreeInputs` names them.
+            m, kg; ``equivalent_length`` l_e, m; ``release_angle_deg`` theta_r, deg), then
+            one of two ways: the tree measured (``dynamic_mass`` M_T, kg;
+            ``equivalent_stiffness`` K_T, N/m, or ``x_max`` m and ``tau`` s with ``a1``
+            m/s and ``a2`` m/s^2, the regression of Figs 4-5; ``damping_rate`` b, 1/s, or
+            ``a1`` and ``a2``; ``youngs_modulus`` E, Pa, required) or from its geometry
+            (``crown_mass`` m_f, kg; the root spring, the damping and, when left out, E and
+            ``density`` assumed as analytic.model.registry declares them), and the choices
+            (``length``, ``density``, ``clamp_mass``, ``restitution``,
+            ``contact_duration``, ``t_end``: the shipped trees' when left out), as
+            :class:`compare.tree_scenario.TreeInputs` names them.
 
     Returns:
-        :class:`Scenario`: the trunk calibrated to M_T, K_T and b (eqs 7, 8, 42), its notes
-        saying what was given, chosen and calibrated, its t_end one the analytic model's
-        x_max and separation fit in.
+        :class:`Scenario`: measured, the trunk calibrated to M_T, K_T and b (eqs 7, 8, 42);
+        from its geometry, M_T, K_T and C_T of eqs 7, 8, 10 with the assumptions; its notes
+        saying what was given, chosen, calibrated or assumed (each assumption's value,
+        range and reason), its t_end one the analytic model's x_max and separation fit in.
 
     Raises:
-        ParameterError: an unknown, missing, contradictory or out-of-range input, named.
+        ParameterError: an unknown, missing, contradictory or out-of-range input, named;
+            the two ways mixed (naming the keywords given).
         TypeError: an input that is not a number (a bool, a text), or a name not a text.
         OutsideValidity: a tree whose analytic x_max lies beyond the clamp height.
     """

@@ -1,11 +1,17 @@
-"""A scenario for a user's own tree from measured quantities (the ``scenario`` command and
-:func:`compare.api.tree_scenario` both build it here).
+"""A scenario for a user's own tree (the ``scenario`` command and
+:func:`compare.api.tree_scenario` both build it here), one of two ways:
 
-The measured M_T, K_T and b (or the regression a1, a2, x_max, tau of Figs 4-5) and the
-chosen l, rho, E, m_c become a trunk by :func:`analytic.model.calibration.calibrate_trunk`;
-the scenario's notes record which values were given, chosen and calibrated, as the shipped
-files do, and its t_end is one its analytic run can report. Errors name the command's flags
-(the API names them as its keywords). SI units.
+* measured: M_T, K_T and b (or the regression a1, a2, x_max, tau of Figs 4-5) of a pendulum
+  test with the chosen l, rho, E, m_c become a trunk by
+  :func:`analytic.model.calibration.calibrate_trunk`;
+* from its geometry: l, a, d, m_c and a crown mass estimate m_f (no pendulum test), the root
+  spring, the damping and (when not given) E and rho assumed as the registry declares them
+  (:func:`analytic.model.assumed.geometry_trunk`); M_T, K_T, C_T follow (eqs 7, 8, 10).
+
+The scenario's notes record which values were given, chosen, calibrated or assumed (each
+assumption's value, range and reason), as the shipped files do, and its t_end is one its
+analytic run can report. Errors name the command's flags (the API names them as its
+keywords). SI units.
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ import numbers
 from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.assumed import geometry_trunk
 from treeimpact.analytic.model.calibration import (
     MeasuredTree,
     calibrate_trunk,
@@ -32,7 +39,8 @@ from treeimpact.analytic.model.parameters import (
     check_range,
 )
 from treeimpact.analytic.model.plausible import implausible, warn_implausible
-from treeimpact.analytic.model.registry import BY_NAME
+from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.registry import ASSUMED, BY_NAME
 
 from .backends import get_backend
 from .names import show
@@ -42,16 +50,26 @@ from .names import show
 #: them with the new name.
 RENAMED = {"stiffness": "equivalent_stiffness", "release_angle": "release_angle_deg",
            "mass": "impactor_mass"}
-#: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml).
-DEFAULTS = {"length": 1.0, "density": 950.0, "clamp_mass": 4.0, "restitution": 0.1,
-            "contact_duration": 5e-4, "t_end": 0.1}
+#: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml;
+#: the density the registry's assumed green apple wood, analytic.model.registry).
+DEFAULTS = {"length": 1.0, "density": ASSUMED["density"].value, "clamp_mass": 4.0,
+            "restitution": 0.1, "contact_duration": 5e-4, "t_end": 0.1}
+#: The inputs of a pendulum test's measured tree; a tree from its geometry gives none of
+#: them (it gives the crown mass, :data:`GEOMETRY`).
+MEASURED = ("dynamic_mass", "equivalent_stiffness", "damping_rate", "a1", "a2", "x_max", "tau")
+#: The inputs only a tree from its geometry gives.
+GEOMETRY = ("crown_mass",)
+#: The inputs every tree gives (the test and the tree's geometry at the clamp).
+REQUIRED = ("clamp_height", "diameter", "impactor_mass", "equivalent_length",
+            "release_angle_deg")
 
 
 @dataclass(frozen=True)
 class TreeInputs:
     """What a user's tree scenario is built from (registry names, SI units): the test
-    (given), the tree (measured: M_T, and K_T or x_max and tau, and b or a1 and a2, the
-    regression of Figs 4-5), and the choices (None: :data:`DEFAULTS`)."""
+    (given), the tree either measured (M_T, and K_T or x_max and tau, and b or a1 and a2,
+    the regression of Figs 4-5; E required) or from its geometry (the crown mass m_f; E
+    and rho assumed when not given), and the choices (None: :data:`DEFAULTS`)."""
 
     name: str
     clamp_height: float  # a, m
@@ -59,8 +77,9 @@ class TreeInputs:
     impactor_mass: float  # m, kg
     equivalent_length: float  # l_e, m
     release_angle_deg: float  # theta_r, deg
-    dynamic_mass: float  # M_T, kg
-    youngs_modulus: float  # E, Pa
+    dynamic_mass: float | None = None  # M_T, kg
+    youngs_modulus: float | None = None  # E, Pa
+    crown_mass: float | None = None  # m_f, kg: a tree from its geometry
     equivalent_stiffness: float | None = None  # K_T, N/m
     damping_rate: float | None = None  # b, 1/s
     a1: float | None = None  # regression a1 = V, m/s (eq 40)
@@ -93,8 +112,7 @@ def check_keywords(name, measured: dict) -> None:
     out. Unknown keywords are the caller's to refuse (with what they may have meant)."""
     if not isinstance(name, str) or not name.strip():
         raise TypeError(f"name: expected the scenario's name, a non-empty str, got {name!r}")
-    fields = dataclasses.fields(TreeInputs)
-    required = [f.name for f in fields if f.default is dataclasses.MISSING and f.name != "name"]
+    required = list(REQUIRED)
     missing = [k for k in required if measured.get(k) is None]
     if missing:
         unit = _range_of(missing[0])[2]
@@ -181,10 +199,39 @@ def _as_typed(exc: ParameterError, inputs: TreeInputs) -> ParameterError:
     return exc
 
 
+def check_way(inputs: TreeInputs) -> bool:
+    """Whether ``inputs`` build a tree from its geometry (--crown-mass) rather than a
+    measured one (--dynamic-mass and the rest of :data:`MEASURED`); ParameterError in one
+    line naming the flags typed when both ways are mixed, or the two ways when neither is
+    given."""
+    measured = [show(k) for k in MEASURED if getattr(inputs, k) is not None]
+    geometry = [show(k) for k in GEOMETRY if getattr(inputs, k) is not None]
+    if measured and geometry:
+        raise ParameterError(
+            f"{geometry[0]}: a tree from its geometry (--crown-mass) or a measured tree "
+            f"(--dynamic-mass, ...), not both; given {', '.join(geometry + measured)}")
+    if not measured and not geometry:
+        raise ParameterError(
+            "--dynamic-mass: missing (a measured tree: M_T in kg with K_T and b, or a tree "
+            "from its geometry: --crown-mass in kg)")
+    return bool(geometry)
+
+
 def build_scenario(inputs: TreeInputs) -> Scenario:
-    """The calibrated :class:`Scenario` of ``inputs``, its t_end as given or the default."""
+    """The :class:`Scenario` of ``inputs`` (measured and calibrated, or from its geometry:
+    :func:`check_way`), its t_end as given or the default."""
     pendulum = Pendulum(mass=inputs.impactor_mass, equivalent_length=inputs.equivalent_length,
                         release_angle_deg=inputs.release_angle_deg)
+    if check_way(inputs):
+        trunk, notes = _geometry(inputs)
+        return _scenario(inputs, trunk, pendulum, notes, "built from its geometry")
+    for key, unit in (("dynamic_mass", "kg"), ("youngs_modulus", "Pa")):
+        if getattr(inputs, key) is None:
+            raise ParameterError(
+                f"{show(key)}: missing (a number in {unit}); a measured tree requires "
+                f"{', '.join(show(k) for k in (*REQUIRED, 'dynamic_mass', 'youngs_modulus'))}"
+                " with K_T and b (a tree from its geometry: --crown-mass instead of M_T, "
+                "K_T and b)")
     check_regression(inputs)
     given = ["a", "d", "theta_r", "m", "l_e", "M_T"]
     if inputs.damping_rate is not None:
@@ -223,12 +270,44 @@ def build_scenario(inputs: TreeInputs) -> Scenario:
     notes = calibration_notes(measured, given=", ".join(given),
                               chosen=", ".join([f"E = {inputs.youngs_modulus:g} Pa",
                                                 *chosen_names]))
-    notes["restitution"] = f"e = {_pick(inputs, 'restitution'):g} chosen"
+    return _scenario(inputs, trunk, pendulum, notes, "calibrated")
+
+
+def _scenario(inputs: TreeInputs, trunk, pendulum, notes: dict, how: str) -> Scenario:
+    """The scenario of ``trunk`` and ``pendulum`` with the chosen pad and t_end, its notes
+    ``notes`` and the restitution chosen; ``how`` it was built, for its description."""
+    notes = {**notes, "restitution": f"e = {_pick(inputs, 'restitution'):g} chosen"}
     contact = Contact(restitution=_pick(inputs, "restitution"),
                       duration=_pick(inputs, "contact_duration"))
     return Scenario(name=inputs.name, trunk=trunk, impactor=pendulum, contact=contact,
                     t_end=_pick(inputs, "t_end"),
-                    description=f"{inputs.name}: calibrated by treeimpact scenario", notes=notes)
+                    description=f"{inputs.name}: {how} by treeimpact scenario", notes=notes)
+
+
+def _geometry(inputs: TreeInputs) -> tuple:
+    """(trunk, notes) of a tree from its geometry (:func:`analytic.model.assumed.
+    geometry_trunk`): what was given, chosen and assumed, and the M_T, K_T, C_T that
+    follow (eqs 7, 8, 10). A given density is measured (the study holds it)."""
+    built = geometry_trunk(length=_pick(inputs, "length"), clamp_height=inputs.clamp_height,
+                           diameter=inputs.diameter, clamp_mass=_pick(inputs, "clamp_mass"),
+                           crown_mass=inputs.crown_mass, density=inputs.density,
+                           youngs_modulus=inputs.youngs_modulus)
+    given = ["a", "d", "theta_r", "m", "l_e", f"m_f = {inputs.crown_mass:g} kg (a crown mass "
+             "estimate)"]
+    given += [f"{sym} = {v:g} {unit}" for sym, v, unit in (
+        ("E", inputs.youngs_modulus, "Pa"), ("rho", inputs.density, "kg/m^3")) if v is not None]
+    chosen = [f"{sym} = {_pick(inputs, k):g} {unit}" for sym, k, unit in (
+        ("l", "length", "m"), ("m_c", "clamp_mass", "kg"))]
+    tree = reduce_trunk(built.trunk)
+    notes = {"given": ", ".join(given), "chosen": ", ".join(chosen),
+             "assumed": list(built.assumed), **built.notes,
+             "derived": (f"M_T = {tree.dynamic_mass:.6g} kg (eq 7), K_T = "
+                         f"{tree.equivalent_stiffness:.6g} N/m (eq 8), C_T = "
+                         f"{tree.equivalent_damping:.6g} N s/m (eq 10) from the geometry, the "
+                         "crown and the assumptions; no pendulum test")}
+    if inputs.density is not None:
+        notes["measured"] = ["trunk.density"]
+    return built.trunk, notes
 
 
 #: The model fields the command's flags set -> the flag (an error names what was typed).

@@ -59,6 +59,20 @@ def test_the_add_your_own_tree_example_runs(tmp_path, monkeypatch, capsys):
     assert "my-tree (analytic)" in capsys.readouterr().out
 
 
+def test_the_tree_from_its_geometry_example_runs(tmp_path, monkeypatch, capsys):
+    """The README's tree from its geometry: one `scenario --crown-mass`, its file written
+    with the assumptions named (issue 50 item 6)."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## Add your own tree from its geometry"):]
+    commands = [c for c in _code(section[:section.index("\n## ", 3)])
+                if c.startswith("treeimpact ")]
+    assert [c.split()[1] for c in commands] == ["scenario"] and "--crown-mass" in commands[0]
+    monkeypatch.chdir(tmp_path)
+    assert main(shlex.split(commands[0])[1:]) == 0
+    text = (tmp_path / "plum.toml").read_text()
+    assert "assumed_base_stiffness" in text and "assumed_damping" in text
+
+
 def test_the_identify_your_own_tree_example_runs_from_the_cli_alone(tmp_path, monkeypatch,
                                                                   capsys):
     """The README's identify example: `simulate --record` writes the record, `identify`

@@ -148,12 +148,12 @@ def test_every_place_spells_inputs_as_the_registry():
             continue
         p = registry.BY_SWEEP[name]
         assert (factor, unit) == (p.shown[0], p.shown_unit), name
-    for name, row in sensitivity.INPUTS.items():
+    for name, row in sensitivity.ALL_INPUTS.items():
         p = registry.BY_NAME[name]
         u = p.unmeasured
         assert row == (u.low, u.high, p.unit, u.why, u.measure), name
         assert p.low <= u.low < u.high <= p.high, name  # a study range inside the allowed one
-    assert set(sensitivity.INPUTS) == {p.name for p in registry.PARAMETERS if p.unmeasured}
+    assert set(sensitivity.ALL_INPUTS) == {p.name for p in registry.PARAMETERS if p.unmeasured}
     for name, fields in sensitivity.FIELDS.items():
         assert all(f in registry.BY_PATH for f in fields), name
     for name, inp in design.INPUTS.items():
@@ -198,6 +198,7 @@ def test_the_docs_table_is_the_registry_s():
 
     page = (Path(__file__).resolve().parents[1] / "docs" / "parameters.md").read_text()
     assert registry.registry_table() in page
+    assert registry.assumed_table() in page  # a tree from its geometry's assumptions
 
 
 def test_unit_tables_agree_with_the_registry():

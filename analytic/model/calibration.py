@@ -199,3 +199,27 @@ def with_clamp_mass(trunk: Trunk, clamp_mass: float, *, impactor_mass: float) ->
                             / (2.0 * (tree.dynamic_mass + impactor_mass)))
     return calibrate_trunk(replace(trunk, clamp_mass=clamp_mass), measured,
                            impactor_mass=impactor_mass)
+
+
+def root_for_share(trunk: Trunk, share: float) -> float:
+    """The root spring k_theta (N m/rad) that makes the root's share of ``trunk``'s static
+    flexibility at the clamp ``share`` (1): share = (a^2 / k_theta) / (a^3 / (3 E I) +
+    a^2 / k_theta) (eq 8 with the root spring), so k_theta = 3 E I (1 - share) / (a share);
+    inf (the paper's rigid clamp) at share 0. ParameterError naming root_share outside
+    [0, 1)."""
+    if not 0.0 <= share < 1.0:
+        raise ParameterError(f"root_share = {share!r}: allowed [0, 1) (the root's share of "
+                             "the flexibility at the clamp)")
+    if share == 0.0:
+        return math.inf
+    return 3.0 * trunk.bending_stiffness * (1.0 - share) / (trunk.clamp_height * share)
+
+
+def damping_for_ratio(trunk: Trunk, ratio: float) -> float:
+    """The distributed damping C (N s/m^2) that gives ``trunk`` (its crown, clamp, root
+    spring as they are) the damping ratio ``ratio`` = C_T / (2 sqrt(K_T M_T)) (eq 14):
+    C_T = 2 ratio sqrt(K_T M_T) with M_T, K_T of eqs 7, 8, and C = C_T / J (eq 10 as
+    derived, J the static shape's square integral, m)."""
+    tree = reduce_trunk(replace(trunk, damping=0.0))
+    j = static_mode_shape(trunk).square_integral()
+    return 2.0 * ratio * math.sqrt(tree.equivalent_stiffness * tree.dynamic_mass) / j

@@ -61,6 +61,21 @@ class UnmeasuredRange:
 
 
 @dataclass(frozen=True)
+class Assumed:
+    """What a tree built from its geometry assumes for an input nobody measured
+    (compare.tree_scenario; issue 50 item 6): ``value`` and the range [low, high] it may
+    lie in, both in the unit of the registry's parameter ``via`` (a dimensionless form that
+    transfers from the paper's trees to another: the root's share of the flexibility, the
+    damping ratio), and why (the physical reason and its source)."""
+
+    via: str
+    value: float
+    low: float
+    high: float
+    why: str
+
+
+@dataclass(frozen=True)
 class Plausible:
     """What fruit trees, harvesters and pads show of an input, [low, high] in the
     parameter's unit, and where that range comes from: a value inside the allowed range
@@ -93,6 +108,8 @@ class Parameter:
         design: the design study's range and reasons, or None.
         unmeasured: the sensitivity study's range, reason and fixing measurement, or None.
         plausible: what trees, harvesters and pads show (a warning beyond it), or None.
+        assumed: what a tree from its geometry assumes for it (value, range, reason), or
+            None (:class:`Assumed`).
     """
 
     name: str
@@ -111,6 +128,7 @@ class Parameter:
     meaning: str = ""
     unmeasured: UnmeasuredRange | None = None
     plausible: Plausible | None = None
+    assumed: Assumed | None = None
 
     @property
     def axis(self) -> str:
@@ -155,7 +173,8 @@ def _field(name, symbol, unit, low, high, label, path, sweep=None, shown=(1.0, "
     """A parameter that one scenario field holds (swept by its path unless ``sweep``)."""
     return Parameter(name, symbol, unit, low, high, label, path, sweep or path, shown,
                      _setter(path), design, text=text, meaning=meaning,
-                     unmeasured=_UNMEASURED.get(name), plausible=_PLAUSIBLE.get(name))
+                     unmeasured=_UNMEASURED.get(name), plausible=_PLAUSIBLE.get(name),
+                     assumed=_ASSUMED.get(name))
 
 
 _INF = math.inf
@@ -204,6 +223,46 @@ _UNMEASURED = {
     "density": UnmeasuredRange(
         500.0, 1100.0, ("green wood: the trunk's share of M_T (the crown mass follows from "
                         "the measured M_T)"), "weigh a trunk section"),
+    "damping_ratio": UnmeasuredRange(
+        0.563, 0.601, ("the tree's own damping ratio C_T / (2 sqrt(K_T M_T)) (eq 14) of the "
+                       "paper's two apple trees: C_T = 2 b (M_T + m) (eq 34) with b = -a2/a1 "
+                       "of Figs 4-5 (eq 42), Table 1's M_T and K_T and the 132.4 kg pendulum: "
+                       "0.601 open center, 0.563 central leader"),
+        "a pendulum test: b = -a2/a1 of the moving-together motion (eq 42)"),
+    "youngs_modulus": UnmeasuredRange(
+        8.89e8, 1.263e9, ("E = K_T a^3 / (3 I) (eq 47) of Table 1's two trees with the paper's "
+                          "rigid clamp: 8.89e8 open center, 1.263e9 Pa central leader (a tree from "
+                          "its geometry that was not given E)"),
+        "a static push test at the clamp (K_T) with the root held, or a core sample's E"),
+}
+
+#: What a tree from its geometry (``treeimpact scenario --crown-mass``) assumes for the
+#: inputs its user did not measure: the paper's own assumptions or its two trees' measured
+#: values in a form that transfers to another tree (compare.tree_scenario).
+_ASSUMED = {
+    "base_stiffness": Assumed(
+        "root_share", 0.0, _UNMEASURED["root_share"].low, _UNMEASURED["root_share"].high,
+        "the paper's own assumption: the trunk 'rigidly fixed to the ground' (eq 1), "
+        "k_theta = inf; up to 0.9 of the static flexibility at the clamp is the root's when "
+        "Table 1's printed E is to give its measured K_T (eq 8 with a root spring)"),
+    "damping": Assumed(
+        "damping_ratio", 0.582, _UNMEASURED["damping_ratio"].low,
+        _UNMEASURED["damping_ratio"].high,
+        "the paper gives no C (eq 9 assumes it proportional to velocity); its two trees' "
+        "measured decay b (eq 42) as the tree's own damping ratio C_T / (2 sqrt(K_T M_T)) "
+        "(eq 14), which does not depend on the pendulum: 0.563-0.601, their mean 0.582; "
+        "C = C_T / J (eq 10 as derived)"),
+    "youngs_modulus": Assumed(
+        "youngs_modulus", 1.076e9, _UNMEASURED["youngs_modulus"].low,
+        _UNMEASURED["youngs_modulus"].high,
+        "E = K_T a^3 / (3 I) (eq 47) of Table 1's K_T, a and d: the E with which the paper's "
+        "rigid clamp gives its two trees' measured K_T, 8.89e8 (open center) to 1.263e9 Pa "
+        "(central leader), their mean 1.076e9; the printed 8.9e9 / 12.6e9 are ten times these "
+        "(discrepancy 'eq 47')"),
+    "density": Assumed(
+        "density", 950.0, _UNMEASURED["density"].low, _UNMEASURED["density"].high,
+        "green apple wood, the shipped trees' choice; the range green wood's (the sensitivity "
+        "study's)"),
 }
 
 #: What orchard trees, harvesters and pads show of the scenario's fields (wider than the
@@ -246,7 +305,8 @@ PARAMETERS = (
            meaning="the wood's Young's modulus"),
     _field("clamp_mass", "m_c", "kg", 0.0, 1000.0, "clamp mass", "trunk.clamp_mass",
            meaning="the clamp's mass on the trunk"),
-    _field("crown_mass", "m_f", "kg", 0.0, 1e4, "crown mass", "trunk.crown_mass"),
+    _field("crown_mass", "m_f", "kg", 0.0, 1e4, "crown mass", "trunk.crown_mass",
+           meaning="the crown's mass at l: fruit, leaves and scaffolds, lumped (eq 7)"),
     _field("damping", "C", "N s/m^2", 0.0, 1e6, "distributed damping", "trunk.damping"),
     _field("base_stiffness", "k_theta", "N m/rad", 10.0, _INF, "root stiffness",
            "trunk.base_stiffness"),
@@ -289,6 +349,10 @@ PARAMETERS = (
     Parameter("damping_rate", "b", "1/s", 0.0, _INF,
               "damping rate C_T / (2 (M_T + m)) (eq 42)",
               meaning="the moving-together motion's decay rate C_T / (2 (M_T + m)) (eq 42)"),
+    Parameter("damping_ratio", "xi_T", "1", 0.0, 10.0,
+              "tree's damping ratio",
+              meaning="the tree's own damping ratio C_T / (2 sqrt(K_T M_T)) (eq 14)",
+              unmeasured=_UNMEASURED["damping_ratio"]),
     Parameter("contact_damping", "c_c", "N s/m", 0.0, _INF, "pad damping",
               meaning="the pad's damping c_c (set by e on a scenario)"),
     Parameter("e_over_g", "E / G", "1", 0.0, 20.0, "E / G (shear)",
@@ -308,6 +372,23 @@ BY_PATH = {p.path: p for p in PARAMETERS if p.path is not None}
 BY_SWEEP = {p.sweep: p for p in PARAMETERS if p.sweep is not None}
 #: the paper's symbol -> Parameter (M_T, K_T, C_T, E, ...).
 BY_SYMBOL = {p.symbol: p for p in PARAMETERS}
+
+
+#: The inputs a tree from its geometry assumes -> the parameter's name (registry order).
+ASSUMED = {p.name: p.assumed for p in PARAMETERS if p.assumed is not None}
+
+
+def assumed_table() -> str:
+    """What a tree from its geometry assumes, as a Markdown table (docs/parameters.md holds
+    it): the input, the value assumed and its range in the dimensionless form stated, and
+    why."""
+    rows = ["| input | assumed, as | value | range | why |", "|---|---|---|---|---|"]
+    for name, a in ASSUMED.items():
+        via = BY_NAME[a.via]
+        unit = "" if via.unit == "1" else f" {via.unit}"
+        rows.append(f"| `{name}` | {via.symbol} (`{a.via}`) | {_cell(a.value)}{unit} | "
+                    f"[{_cell(a.low)}, {_cell(a.high)}]{unit} | {a.why} |")
+    return "\n".join(rows) + "\n"
 
 
 def units_of(*keys: str) -> dict:

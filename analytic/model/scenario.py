@@ -12,7 +12,10 @@ Layout of a scenario file (SI units; angles in degrees where the key says ``_deg
     [contact]     restitution, stiffness? | duration?
     [calibration] free text: which values are calibrated and from what; and
                   measured = ["trunk.clamp_mass", ...]: the fields of :data:`MEASURABLE`
-                  that were measured on this tree (a sensitivity study holds them)
+                  that were measured on this tree (a sensitivity study holds them);
+                  assumed = ["trunk.base_stiffness", ...]: the fields of a tree built
+                  from its geometry that nobody measured (analytic.model.assumed.ASSUMABLE;
+                  never measured too), each with its ``assumed_<field>`` note
 
 Any error is a :class:`~analytic.errors.ParameterError` whose one-line message names
 the field and the allowed range.
@@ -29,6 +32,7 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 
+from .assumed import ASSUMABLE
 from .parameters import Billet, Contact, Pendulum, Scenario, Trunk, check_limit
 from .plausible import implausible, warn_implausible
 
@@ -148,6 +152,8 @@ def scenario_from_dict(data: dict, default_name: str = "scenario") -> Scenario:
         raise ParameterError("calibration: expected a table [calibration] of notes")
     if "measured" in notes:
         _check_measured(notes["measured"], {"trunk": trunk_t, "contact": con_t})
+    if "assumed" in notes:
+        _check_assumed(notes["assumed"], trunk_t, notes.get("measured", ()))
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name:
         raise ParameterError("name: expected a non-empty string")
@@ -175,6 +181,30 @@ def _check_measured(measured, tables: dict) -> None:
                                  f"not give {table}.{key}")
     if len(set(measured)) != len(measured):
         raise ParameterError(f"calibration.measured = {measured!r}: a field listed twice")
+
+
+def _check_assumed(assumed, trunk_t: dict, measured) -> None:
+    """``[calibration] assumed``: a list of distinct :data:`~.assumed.ASSUMABLE` fields, each
+    given in the file and none also measured."""
+    allowed = f"a list of {', '.join(repr(m) for m in ASSUMABLE)}"
+    if not isinstance(assumed, list) or not all(isinstance(m, str) for m in assumed) \
+            or len(set(assumed)) != len(assumed):
+        raise ParameterError(f"calibration.assumed = {assumed!r}: allowed {allowed}, each once")
+    for m in assumed:
+        if m not in ASSUMABLE:
+            raise ParameterError(f"calibration.assumed: {m!r}: allowed {allowed}")
+        if m.split(".")[1] not in trunk_t:
+            raise ParameterError(f"calibration.assumed: {m!r} is assumed but the file does "
+                                 f"not give {m}")
+        if m in measured:
+            raise ParameterError(f"calibration.assumed: {m!r} is also listed measured; a "
+                                 "field is one or the other")
+
+
+def assumed_fields(scenario: Scenario) -> tuple[str, ...]:
+    """The trunk fields the scenario's file says were assumed (a tree from its geometry:
+    analytic.model.assumed); () for a measured tree."""
+    return tuple(scenario.notes.get("assumed", ()))
 
 
 def measured_fields(scenario: Scenario) -> tuple[str, ...]:

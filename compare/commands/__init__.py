@@ -20,7 +20,8 @@ HELP = {
                 "and touch duration, checked in each engine"),
     "identify": ("tree properties (M_T, K_T, C_T, e, E) from your own pendulum-test record, "
                  "with 95 %% intervals"),
-    "scenario": "write a scenario file for your own tree from measured M_T, K_T, b",
+    "scenario": ("write a scenario file for your own tree from measured M_T, K_T, b or from its "
+                 "geometry and crown mass"),
     "sweep": "run a parameter sweep: validity maps and studies",
 }
 

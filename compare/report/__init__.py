@@ -30,7 +30,8 @@ from pathlib import Path
 
 from treeimpact.analytic.model.plausible import implausible
 from treeimpact.analytic.model.reduction import mass_parts
-from treeimpact.analytic.model.scenario import shipped_scenarios
+from treeimpact.analytic.model.registry import BY_PATH
+from treeimpact.analytic.model.scenario import assumed_fields, shipped_scenarios
 from treeimpact.analytic.results import json_text
 
 from ..ladder import build_ladder, prefetch_ladders
@@ -235,20 +236,27 @@ def _page_summary(sections: dict) -> dict:
         summary["in_short"]["design"] = design_in_short(summary["design"])
     summary["implausible"] = {s.ladder.name: found for s in sections["scenarios"]
                               if (found := [i.text for i in implausible(s.ladder.scenario)])}
-    summary["mass_origin"] = {s.ladder.name: mass_origin(s.ladder.scenario.trunk)
+    summary["mass_origin"] = {s.ladder.name: mass_origin(s.ladder.scenario.trunk,
+                                                         assumed_fields(s.ladder.scenario))
                               for s in sections["scenarios"]}
     return summary
 
 
-def mass_origin(trunk) -> str:
+def mass_origin(trunk, assumed=()) -> str:
     """Where ``trunk``'s M_T comes from (eq 7), in one line: its three parts and how many
     times the crown's mass counts (phi(l)^2, the crown's static motion per unit x at the
-    clamp, squared)."""
+    clamp, squared); for a tree from its geometry, the trunk fields it ``assumed``
+    (``[calibration] assumed``: no pendulum test measured M_T, K_T or C_T)."""
     p = mass_parts(trunk)
-    return (f"M_T = {num(p.total, 3)} kg = {num(p.trunk, 3)} kg of trunk + {num(p.clamp, 3)} kg "
+    text = (f"M_T = {num(p.total, 3)} kg = {num(p.trunk, 3)} kg of trunk + {num(p.clamp, 3)} kg "
             f"of clamp + {num(p.crown, 3)} kg of crown ({num(trunk.crown_mass, 3)} kg counted "
             f"{num(p.crown_weight, 3)} times: the crown moves {num(p.crown_weight ** 0.5, 3)} "
             "times the clamp in the static shape)")
+    if assumed:
+        text += ("; from its geometry and a crown estimate, no pendulum test: "
+                 f"{', '.join(BY_PATH[f].label for f in assumed)} assumed (the file's "
+                 "[calibration] gives each value, range and reason)")
+    return text
 
 
 def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -> dict:

@@ -27,6 +27,7 @@ from treeimpact.analytic.errors import ParameterError
 
 from ..runs import OK
 from .sensitivity import (
+    ALL_INPUTS,
     ANSWER,
     CONF_LEVEL,
     INPUTS,
@@ -242,7 +243,7 @@ def measure_first(outputs: dict) -> dict:
     for name in names:
         shares = {k: {"ST": v["indices"][name]["ST"], "ST_conf": v["indices"][name]["ST_conf"],
                       "rank": v["order"].index(name) + 1} for k, v in gaps.items()}
-        rows.append({"input": name, "measurement": INPUTS[name][4], "gaps": shares,
+        rows.append({"input": name, "measurement": ALL_INPUTS[name][4], "gaps": shares,
                      "largest_ST": max((s["ST"] for s in shares.values()
                                         if math.isfinite(s["ST"])), default=math.nan)})
     rows.sort(key=lambda r: (-r["largest_ST"] if math.isfinite(r["largest_ST"]) else math.inf,
@@ -254,7 +255,7 @@ def measure_first(outputs: dict) -> dict:
             continue
         chosen = v.get("settled", [])[:1] or v.get("tied", [])
         first[key] = {"status": v.get("status", "nothing"), "inputs": chosen,
-                      "measurements": [INPUTS[n][4] for n in chosen]}
+                      "measurements": [ALL_INPUTS[n][4] for n in chosen]}
     return {"rows": rows, "first": first}
 
 

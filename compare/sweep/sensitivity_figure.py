@@ -13,14 +13,16 @@ from treeimpact.compare.figure_text import save_figure
 #: the registry's label on two lines (analytic.model.registry).
 INPUT_LABELS = {n: "\n".join(BY_NAME[n].label.rsplit(" ", 1))
                 for n in ("clamp_mass", "e_over_g", "log10_pad_duration", "restitution",
-                          "root_share", "density")}
+                          "root_share", "density", "damping_ratio", "youngs_modulus")}
 OUTPUT_LABELS = {"gap.x_max": "x_max gap", "gap.energy_delivered": "energy gap",
                   "gap.crown_peak": "crown peak gap",
                   "gap.crown_peak_acceleration": "crown accel. gap",
                   "gap.peak_force": "force gap", "crossing.x_max": "crossing, x_max",
                   "crossing.energy_delivered": "crossing, energy"}
-#: The bars' colours, one per unmeasured input of :data:`INPUT_LABELS`, in its order.
-_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+#: The bars' colours, one per unmeasured input of :data:`INPUT_LABELS`, in its order (the
+#: damping ratio's and E's only on a tree from its geometry, compare.studies.sensitivity).
+_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
+            "tab:pink", "tab:olive")
 
 
 def sensitivity_figure(trees: dict, path: Path) -> Path | None:
@@ -44,8 +46,10 @@ def sensitivity_figure(trees: dict, path: Path) -> Path | None:
     outputs = list(dict.fromkeys(o for t in trees.values() for o in t["outputs"]))
     groups = [g for g in ([o for o in outputs if o.startswith("gap.")],
                           [o for o in outputs if o.startswith("crossing.")]) if g]
-    inputs = list(INPUT_LABELS)
-    colours = dict(zip(inputs, _COLOURS))
+    inputs = [i for i in INPUT_LABELS  # those some tree varies or holds
+              if any(i in o["indices"] for t in trees.values() for o in t["outputs"].values())
+              or any(i in t.get("held", {}) for t in trees.values())]
+    colours = {i: c for i, c in zip(INPUT_LABELS, _COLOURS) if i in inputs}
     fig = Figure(figsize=(3.4 * len(names) + 2.4, 0.85 * len(outputs) + 1.9),
                  layout="constrained")
     axes = fig.subplots(len(groups), len(names), squeeze=False, sharex="row", sharey="row",
