@@ -403,20 +403,27 @@ def analyse(table, trajectories: int, seed: int = SEED, names=None, *,
                                     f"({len(kept)} complete, each with a point without it)")
             continue
         sel = rows_of(whole, per)
-        y = _values(name, [got[i] for i in sel])
-        indices = _morris(names, X[sel], y, ranges)
-        decide, separated = deciding(indices)
-        out["outputs"][name] = {
-            "low": float(np.min(y_all)), "high": float(np.max(y_all)),
-            "evaluations": int(y_all.size),
-            "basis": {"trajectories": len(whole), "of": trajectories, "points": len(sel),
-                      "non_finite": len(kept) - len(whole)},
+        out["outputs"][name] = _output_entry(name, names, X[sel],
+                                             _values(name, [got[i] for i in sel]), y_all,
+                                             ranges, {"trajectories": len(whole),
+                                                      "of": trajectories, "points": len(sel),
+                                                      "non_finite": len(kept) - len(whole)})
+    return out
+
+
+def _output_entry(name: str, names, X, y, y_all, ranges, basis: dict) -> dict:
+    """study.json's entry of the output ``name`` (:func:`analyse`): its lowest and highest
+    over every point that ran (``y_all``), the Morris indices and N/2 check on the complete
+    trajectories' points ``X`` and values ``y``, the deciding inputs and their ``basis``."""
+    indices = _morris(names, X, y, ranges)
+    decide, separated = deciding(indices)
+    return {"low": float(np.min(y_all)), "high": float(np.max(y_all)),
+            "evaluations": int(y_all.size), "basis": basis,
             "never": int(np.sum(y_all >= math.log10(2.0 * DURATIONS[-1]) - 1e-12))
             if name.startswith("crossing.") else 0,
             "indices": indices, "deciding": decide, "separated": separated,
             "settle": [ALL_INPUTS[n][4] for n in decide],
-            "convergence": _convergence(names, X[sel], y, indices, ranges)}
-    return out
+            "convergence": _convergence(names, X, y, indices, ranges)}
 
 
 def _values(name: str, rows) -> np.ndarray:
