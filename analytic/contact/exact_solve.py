@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import threading
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 
 import numpy as np
@@ -34,6 +34,12 @@ from .phases import ContactPhase, Signal, bracket, check_switches, switch
 _BLOCK_ELEMENTS = 2 ** 13
 _EPS = float(np.finfo(float).eps)
 _DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
+#: The row of the pad's law F = k_c delta + c_c delta' (N), after the 8 observables': the
+#: samples' product forms it with them (its row over the modes: k_c delta's + c_c delta''s).
+_LAW = len(Observable)
+#: A switch time is refined until Newton's (Halley's) step is below this (s), plus 4 eps of
+#: the time itself.
+_ROOT_TOL = 1e-15
 #: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it), for states of
 #: at most _PARTS_MAX_COORDS energy coordinates (12 elements: 56): a 48-element state's
 #: forms hold ~4 MB, and keeping them did not speed its warm run (medians 29.7 kept, 23.1
@@ -95,10 +101,11 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     """What a :class:`_State` reads that is fixed by its decomposition ``modal`` and the
     model's pad, damping and observed points (delta = ``g`` . q): the works' integrals H_int
     and H_lin (stacked: damping; and the pad's, in contact), whether H_lin is non-zero, the
-    observation rows over the kept modes (m x 8, complex) and their conjugate transpose,
-    the law's rows (m x 4: delta, F, their slopes), delta's row over u and the observation
-    rows of a rigid mode's flight over the kept modes (8 x m: the observables' rates
-    Re(rows G V w), or None without a rigid mode). Kept on a small
+    observation rows over the kept modes (m x 9: the 8 observables and the law F, complex)
+    and their conjugate transpose,
+    the law's rows (m x 6: delta, F, their first and second derivatives), delta's row over u and the observation
+    rows of a rigid mode's flight over the kept modes (9 x m: the observables' and the law's
+    rates Re(rows G V w), or None without a rigid mode). Kept on a small
     ``modal`` (read-only arrays) for the next solve with the same inputs: the same
     arithmetic, so the same numbers."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
@@ -117,15 +124,18 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
     # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
     rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
-    rows_conj = rows.T.conj().copy()  # 8 x m: see _scan
     # delta and the law F = k_c delta + c_c delta', and their slopes
     delta, rate = rows[:, Observable.DELTA], rows[:, Observable.DELTA_RATE]
     law = np.stack([delta, k_c * delta + c_c * rate])
-    law = np.concatenate([law, law * modal.lam[kept]]).T.copy()  # m x 4
+    rows = np.column_stack([rows, law[1]])  # m x 9: the law's row after the observables'
+    rows_conj = rows.T.conj().copy()  # 9 x m: see _scan
+    lam = modal.lam[kept]
+    law = np.concatenate([law, law * lam, law * lam ** 2]).T.copy()  # m x 6
     gd = modal.displacement_row(g)
     drift = None
     if modal.drift is not None:  # the flight s G u(0) of a rigid mode, over the kept modes
-        drift = (observation_rows(model, modal, g) @ modal.drift)[:, kept].copy()
+        drift = (observation_rows(model, modal, g) @ modal.drift)[:, kept]
+        drift = np.vstack([drift, k_c * drift[_DELTA] + c_c * drift[_RATE]])  # 9 x m
     for a in (H_int, H_lin, rows, rows_conj, law, gd) + ((drift,) if drift is not None else ()):
         a.setflags(write=False)
     parts = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd, drift)
@@ -209,12 +219,23 @@ def _scratch(slot, shape: tuple, dtype) -> np.ndarray:
 
 @dataclass
 class _Grid:
-    """The sample grid (s) and what is written on it: the observables (8 x n, one row per
-    :class:`Observable`) and the pad's force (N)."""
+    """The sample grid (s) and what is written on it: the observables and the pad's law
+    (9 x n, one row per :class:`Observable`, then the law F, N) and each phase's first
+    sample and whether the pad touches in it (the force, max(0, F) in contact and 0 apart,
+    is formed from them once the phases are known: :meth:`force`)."""
 
     t: np.ndarray
     obs: np.ndarray
-    force: np.ndarray
+    starts: list = field(default_factory=list)
+    touching: list = field(default_factory=list)
+
+    def force(self) -> np.ndarray:
+        """The pad's force at the samples (N): max(0, F) where a contact phase wrote the
+        sample last, 0 elsewhere."""
+        counts = np.diff(np.append(self.starts, self.t.size))
+        inside = np.repeat(np.array(self.touching, dtype=bool), counts)
+        force = np.where(inside, self.obs[_LAW], 0.0)
+        return np.maximum(force, 0.0, out=force)
 
 
 def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
@@ -226,7 +247,7 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
     to_state = {True: _transfer(states[True].modal, states[False].modal),
                 False: _transfer(states[False].modal, states[True].modal)}
-    grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.empty(t_grid.size))
+    grid = _Grid(t_grid, np.empty((_LAW + 1, t_grid.size)))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
     ends = PhaseEnds([], [], [], [], [], [])
@@ -253,79 +274,71 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
 
 def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid, t: float,
           wk: np.ndarray):
-    """Write the observables and the force of the phase started at ``t`` (modal
-    coefficients ``wk`` over the kept spectrum) block by block until it ends; returns (time
-    into the phase, next phase) of the switch, or None when it lasts to the grid's end.
+    """Write the observables and the law of the phase started at ``t`` (modal coefficients
+    ``wk`` over the kept spectrum) block by block until it ends; returns (time into the
+    phase, next phase) of the switch, or None when it lasts to the grid's end.
 
     A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
-    one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
-    powers (2m x block), half the flops of the complex product's real part. The force is
-    max(0, F) of the law F computed for the switch (0 apart); :meth:`ContactPhase.has_ended`
-    written out (the same comparisons)."""
-    k_c, c_c = model.contact_stiffness, model.contact_damping
-    t_grid, n_t, obs, force = grid.t, grid.t.size, grid.obs, grid.force
+    one real product of the interleaved (Re, Im) of c, conjugated, (9 x 2m) and of the
+    powers (2m x block), half the flops of the complex product's real part; the law F is
+    its last row. :meth:`ContactPhase.has_ended` written out (the same comparisons)."""
+    t_grid, n_t, obs = grid.t, grid.t.size, grid.obs
     j0 = int(t_grid.searchsorted(t))
     if j0 >= n_t:
         return None
+    grid.starts.append(j0)
+    grid.touching.append(kind is ContactPhase.CONTACT)
     j, block = j0, 32
     # conj(exp(lambda s) wk), as the product reads it (conj of a product: exact)
     base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
     rows_conj, steps_ri, jumps_conj = st.rows_conj, st.steps_ri, st.jumps_conj
     contact, free = kind is ContactPhase.CONTACT, kind is ContactPhase.FREE
-    rate, flight = _flight(st, wk, k_c, c_c)
+    rate, flight = _flight(st, wk)
+    own_start = t_grid[j0] == t
     while j < n_t:
         jj = min(n_t, j + block)
         ob = np.matmul((rows_conj * base).view(float), steps_ri[:, :jj - j],
                        out=obs[:, j:jj])
         if rate is not None:
             ob += np.outer(rate, t_grid[j:jj] - t)
-        d = ob[_DELTA]
-        if free:  # apart, the law is read at the switch only (the same arithmetic there)
-            f, ended = None, d > 0.0
+        if free:
+            ended = ob[_DELTA] > 0.0
+        elif contact:
+            ended = ob[_LAW] <= 0.0
         else:
-            f = k_c * d + c_c * ob[_RATE]
-            ended = f <= 0.0 if contact else (f > 0.0) | (d < 0.0)
-        if j == j0 and t_grid[j0] == t:
+            ended = (ob[_LAW] > 0.0) | (ob[_DELTA] < 0.0)
+        if own_start and j == j0:
             ended[0] = False  # the phase's own start
         k = int(ended.argmax())
         if ended[k]:
-            if contact:
-                np.maximum(0.0, f[:k], out=force[j:j + k])
-            else:
-                force[j:j + k] = 0.0
             s_lo = max(float(t_grid[j + k - 1]) - t, 0.0) if j + k > j0 else 0.0
-            lo_values = None
-            if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
-                d_lo, r_lo = obs[_DELTA:_RATE + 1, j + k - 1].tolist()
-                lo_values = (d_lo, k_c * d_lo + c_c * r_lo)
-            d_hi, r_hi = ob[_DELTA:_RATE + 1, k].tolist()
-            f_hi = k_c * d_hi + c_c * r_hi if free else float(f[k])
+            # a sample of this phase: its delta and law as the product formed them
+            lo_values = (tuple(obs[_DELTA:_LAW + 1:_LAW - _DELTA, j + k - 1].tolist())
+                         if s_lo > 0.0 else None)
+            d_hi, f_hi = ob[_DELTA:_LAW + 1:_LAW - _DELTA, k].tolist()
             return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, d_hi, f_hi,
                            lo_values, flight)
-        if contact:
-            np.maximum(0.0, f, out=force[j:jj])
-        else:
-            force[j:jj] = 0.0
         if jj < n_t:
             base = base * jumps_conj[block]
         j, block = jj, min(8 * block, st.block)
     return None
 
 
-def _flight(st: _State, wk: np.ndarray, k_c: float, c_c: float):
+def _flight(st: _State, wk: np.ndarray):
     """(rates, flight) of a rigid mode's flight (a free billet) in the phase started with
-    modal coefficients ``wk``: the 8 observables' rates Re(rows G V w) (m/s, m/s^2; added
-    as rate * s) and those of delta and of the law (m/s, N/s); (None, (0, 0)) without one."""
+    modal coefficients ``wk``: the 8 observables' and the law's rates Re(rows G V w) (m/s,
+    m/s^2, N/s; added as rate * s) and those of delta and of the law (m/s, N/s); (None,
+    (0, 0)) without one."""
     if st.drift_rows is None:
         return None, (0.0, 0.0)
     rate = (st.drift_rows @ wk).real
-    return rate, (rate[_DELTA], k_c * rate[_DELTA] + c_c * rate[_RATE])
+    return rate, (rate[_DELTA], rate[_LAW])
 
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
     """The :class:`ExactSamples` of the written grid."""
-    x, y, vx, vy, _, _, crown, crown_v = grid.obs
-    return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
+    x, y, vx, vy, _, _, crown, crown_v, _ = grid.obs
+    return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force(),
                         pendulum_energy=PendulumEnergy(model, y, vy), crown=crown,
                         crown_velocity=crown_v, solution=solution)
 
@@ -339,17 +352,32 @@ def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: f
     None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`);
     ``flight``: the rates (m/s, N/s) a rigid mode's flight adds to delta and the law."""
     lam = st.lam
-    c = wk[:, None] * st.law  # m x 4: (delta, F, delta', F') = Re(exp(lambda s) @ c)
+    # m x 6: (delta, F, delta', F', delta'', F'') = Re(exp(lambda s) @ c)
+    c = wk[:, None] * st.law
     exp, dot = np.exp, np.dot
     d_rate, f_rate = float(flight[0]), float(flight[1])
+    last = [None, None]  # the last evaluation: s, its six values
+
+    def values(s):
+        v = last[1] if s == last[0] else dot(exp(lam * s), c).real.tolist()
+        last[0], last[1] = s, v
+        return v
 
     def delta(s):
-        v = dot(exp(lam * s), c).real.tolist()
-        return v[0] + d_rate * s, v[2] + d_rate
+        v = values(s)
+        return v[0] + d_rate * s, v[2] + d_rate, v[4]
 
     def law(s):
-        v = dot(exp(lam * s), c).real.tolist()
-        return v[1] + f_rate * s, v[3] + f_rate
+        v = values(s)
+        return v[1] + f_rate * s, v[3] + f_rate, v[5]
+
+    def delta_at(s):
+        """delta at s: at a root within a Newton step of the last evaluation, its value
+        carried there by its slope (the step is below 1e-15 s: its square is round-off)."""
+        if last[0] is not None and s != last[0] and abs(s - last[0]) <= _ROOT_TOL:
+            v = last[1]
+            return v[0] + d_rate * last[0] + (v[2] + d_rate) * (s - last[0])
+        return delta(s)[0]
 
     d_lo, f_lo = lo_values if lo_values is not None else (None, None)
 
@@ -358,15 +386,17 @@ def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: f
             return _newton_root(delta, s_lo, s_hi, d_hi, d_lo)
         return _newton_root(law, s_lo, s_hi, f_hi, f_lo)
 
-    return switch(kind, root, lambda s: delta(s)[0], d_hi, f_hi)
+    return switch(kind, root, delta_at, d_hi, f_hi)
 
 
 def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = None
                  ) -> float:
-    """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi
-    (``f_lo`` at lo, if known): a phase that starts on its own boundary (value 0 at lo) is
-    bracketed from just after its start; then Newton's steps inside the shrinking bracket
-    (bisection otherwise), to 1e-15 s."""
+    """Zero of ``fun`` (returning value, slope and curvature) in [lo, hi], ``f_hi`` its
+    value at hi (``f_lo`` at lo, if known): a phase that starts on its own boundary (value 0
+    at lo) is bracketed from just after its start; then Halley's steps (Newton's where its
+    denominator vanishes) inside the shrinking bracket (bisection otherwise), to
+    :data:`_ROOT_TOL` (s) and 4 eps of the time: done when a step or the bracket is below
+    that."""
     if f_lo is not None and f_lo * f_hi <= 0 and f_lo != 0.0:
         found = lo, f_lo  # what bracket() returns for a sign change at lo
     else:
@@ -375,16 +405,21 @@ def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = No
         return hi
     lo, f_lo = found
     s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
-    tol = 1e-15 + 4 * _EPS * abs(hi)
+    tol = _ROOT_TOL + 4 * _EPS * abs(hi)
     for _ in range(100):
-        f, slope = fun(s)
+        f, slope, curve = fun(s)
         if f == 0.0:
             return s
         if (f > 0.0) == (f_lo > 0.0):
             lo, f_lo = s, f
         else:
             hi = s
-        nxt = s - f / slope if slope != 0.0 else 0.5 * (lo + hi)
+        denom = 2.0 * slope * slope - f * curve
+        step = (2.0 * f * slope / denom if denom != 0.0 else
+                f / slope if slope != 0.0 else math.inf)
+        if abs(step) <= tol:  # converged: the correction is below the tolerance (or below
+            return min(max(s - step, lo), hi)  # a unit of s, where a bisection would restart)
+        nxt = s - step
         if not lo < nxt < hi:
             nxt = 0.5 * (lo + hi)
         if abs(nxt - s) <= tol or hi - lo <= tol:
