@@ -32,6 +32,9 @@ from .phases import ContactPhase, Signal, bracket, check_switches, switch
 #: powers exp(lambda i h) stay in cache (the soft SDOF, 2 modes: 4096 samples a block took
 #: half the time of 16384, benchmarks/bench_exact.py).
 _BLOCK_ELEMENTS = 2 ** 13
+#: The first block of a phase's samples and the factor each next one grows by, to the
+#: state's largest (most of the beam's chattering phases last 1-60 samples).
+_FIRST_BLOCK, _GROWTH = 32, 8
 _EPS = float(np.finfo(float).eps)
 _DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
 #: The row of the pad's law F = k_c delta + c_c delta' (N), after the 8 observables': the
@@ -68,6 +71,16 @@ class _State:
         self.steps_ri, self.jumps_conj = _powers(np.exp(self.lam * h), self.block, contact,
                                                  modal)
         self.k_c = model.contact_stiffness
+        self.to_kept, self.from_kept, self.drift_kept = _kept_half(modal)
+
+    def advance(self, wk: np.ndarray, s: float) -> np.ndarray:
+        """The state u at ``s`` (s) of the phase started with the kept modal coefficients
+        ``wk``: Re(V exp(lambda s) w) over the kept half (a conjugate pair twice its kept
+        member's real part), plus s G u(0) for a rigid mode's flight."""
+        u = (self.from_kept @ (np.exp(self.lam * s) * wk)).real
+        if self.drift_kept is not None:
+            u += s * (self.drift_kept @ wk).real
+        return u
 
     def done(self) -> None:
         """Drop the powers (the solve is over: their scratch memory serves the next)."""
@@ -80,7 +93,8 @@ class _State:
         exp(lambda s) w if known), J: (works, phases), the closed form of
         :class:`.modal.Quadratic`."""
         a = np.exp(self.modal.lam * s[:, None]) * w if a is None else a
-        out = _forms(self.H_int, a) - _forms(self.H_int, w)
+        ends = _forms(self.H_int, np.concatenate([a, w]))  # the ends', then the starts'
+        out = ends[:, :len(w)] - ends[:, len(w):]
         if self.secular:
             out = out + s * _forms(self.H_lin, w)
         return out.real
@@ -146,6 +160,23 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     return parts
 
 
+def _kept_half(modal) -> tuple:
+    """The kept half of ``modal``'s spectrum as the loop reads it: the rows of V^-1 giving
+    the kept coefficients from u (m x 2N), the columns of V weighted by :attr:`.Modal.weight`
+    (2N x m: u = Re(V_k (weight exp(lambda s) w_k))) and those of the flight G V, or None
+    without a rigid mode; kept on ``modal`` (read-only) for the next solve."""
+    kept = modal.__dict__.get("_kept_half")
+    if kept is None:
+        k = modal.kept
+        drift = None if modal.drift is None else modal.drift[:, k] * modal.weight
+        kept = (modal.Wu[k], modal.Vu[:, k] * modal.weight, drift)
+        for a in kept:
+            if a is not None:
+                a.setflags(write=False)
+        modal.__dict__["_kept_half"] = kept
+    return kept
+
+
 def _transfer(modal, other) -> np.ndarray:
     """:meth:`.modal.Modal.transfer` from ``other`` to ``modal``, kept on ``modal`` for
     the next solve with the same ``other`` (the same live object; read-only)."""
@@ -192,9 +223,9 @@ def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict
         n += k
     ri = _scratch(("rows", slot), (m, 2, count + 1), float)
     ri[:, 0], ri[:, 1] = steps.real, steps.imag
-    jumps, b = {count: steps[:, count].conj()}, 32
+    jumps, b = {count: steps[:, count].conj()}, _FIRST_BLOCK
     while b < count:
-        jumps[b], b = steps[:, b].conj(), 8 * b
+        jumps[b], b = steps[:, b].conj(), _GROWTH * b
     ri = ri.reshape(2 * m, count + 1)
     # the owner weakly: a table must not keep a dropped decomposition's memory from reuse
     _SCRATCH.tables[slot] = (weakref.ref(owner), tag, ri, jumps)
@@ -250,20 +281,19 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     grid = _Grid(t_grid, np.empty((_LAW + 1, t_grid.size)))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
-    ends = PhaseEnds([], [], [], [], [], [])
+    ends = PhaseEnds([], [], [], [], [])
     while True:
         st = states[kind.touching]
-        w = st.modal.Wu @ u
-        end = _scan(model, st, kind, grid, t, w[st.modal.kept])
+        wk = st.to_kept @ u
+        end = _scan(model, st, kind, grid, t, wk)
         end_s, nxt = end if end is not None else (t_end - t, None)
-        a = np.exp(st.modal.lam * end_s) * w
-        u = st.modal.advanced(w, a, end_s)
-        ends.add(t, kind, w, end_s, a, u)
+        u_end = st.advance(wk, end_s)
+        ends.add(t, kind, u, end_s, u_end)
         if nxt is None:
             break
         t += end_s
-        if nxt.touching != kind.touching:  # to the other state's energy coordinates
-            u = to_state[nxt.touching] @ u
+        # to the other state's energy coordinates
+        u = to_state[nxt.touching] @ u_end if nxt.touching != kind.touching else u_end
         kind = nxt
         check_switches(len(ends.t), t)
     for st in states.values():
@@ -288,7 +318,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
         return None
     grid.starts.append(j0)
     grid.touching.append(kind is ContactPhase.CONTACT)
-    j, block = j0, 32
+    j, block = j0, _FIRST_BLOCK
     # conj(exp(lambda s) wk), as the product reads it (conj of a product: exact)
     base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
     rows_conj, steps_ri, jumps_conj = st.rows_conj, st.steps_ri, st.jumps_conj
@@ -320,7 +350,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
                            lo_values, flight)
         if jj < n_t:
             base = base * jumps_conj[block]
-        j, block = jj, min(8 * block, st.block)
+        j, block = jj, min(_GROWTH * block, st.block)
     return None
 
 

@@ -144,14 +144,6 @@ class Modal:
             z = z + s * (self.T @ (self.drift @ w).real)
         return z
 
-    def advanced(self, w: np.ndarray, a: np.ndarray, s: float) -> np.ndarray:
-        """The state u at ``s`` (s) of the solution with modal coefficients ``w`` at s = 0,
-        ``a`` = exp(lambda s) w: Re(V a), plus s G u(0) for a rigid mode's flight."""
-        u = (self.Vu @ a).real
-        if self.drift is not None:
-            u = u + s * (self.drift @ w).real
-        return u
-
     def quadratic(self, Q: np.ndarray) -> Quadratic:
         """The quadratic form u^T Q u (Q over u) on this solution."""
         return Quadratic(self, Q)
