@@ -1,5 +1,6 @@
-"""Benchmark: the exact linear rungs, today's code against the baseline (50f1faa), and their
-floor (issue 39, item 2).
+"""Benchmark: the exact linear rungs, today's code against the baseline (f87a142, before
+issue 52's restructuring; issue 39's was 50f1faa), and their floor (issue 39 item 2, issue
+52 item 1).
 
 A run is ``treeimpact.simulate(name, backend=...)`` with the default options (0.1 s, 100
 samples a free collision): the ``beam`` backend at 12 and 48 elements, the ``soft`` SDOF
@@ -32,7 +33,7 @@ glibc's malloc settings reach both sides' children through the environment
 (``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=268435456 ... --out
 exact-malloc``: fresh pages' faults measured apart, docs/beam-impact.md).
 
-    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev 50f1faa] [--out NAME]
+    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev f87a142] [--out NAME]
 """
 
 from __future__ import annotations
@@ -47,19 +48,22 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _baseline  # noqa: E402
 import _results  # noqa: E402
 
-BASELINE = "50f1faa"
+BASELINE = "f87a142"
 #: (label, backend, options) of the runs timed.
 CASES = (("beam-12", "beam", {"elements": 12}), ("beam-48", "beam", {"elements": 48}),
          ("soft", "soft", {}), ("analytic", "analytic", {}))
-TARGET_MS = {"beam-12": 5.0, "beam-48": 100.0, "soft": 1.0, "analytic": 0.3}
+#: Issue 52 item 1's targets, a cold run single-threaded on 2 cores (ms).
+TARGET_MS = {"beam-12": 4.0, "beam-48": 50.0, "soft": 1.0, "analytic": 0.3}
 #: The equivalence grid (not timed): central-leader at contact duration (s) x crown ratio
 #: (crown mass / trunk mass) x e, 5 x 5 x 2 = 50 sweep points, each on the Newton model,
-#: the soft SDOF and the 12-element beam; every metric within 1e-9 of the baseline's.
+#: the soft SDOF and the 12-element beam; every metric within MAX_REL of the baseline's.
 GRID = {"contact_duration": (2e-4, 5e-4, 1e-3, 2e-3, 4e-3),
         "crown_ratio": (0.0, 0.25, 0.5, 1.0, 2.0), "restitution": (0.1, 0.6)}
 GRID_BACKENDS = (("analytic", {}), ("soft", {}), ("beam", {"elements": 12}))
-#: Largest relative difference of a metric allowed against the baseline (issue 39 item 2).
-MAX_REL = 1e-9
+#: Largest relative difference of a metric allowed against the baseline (issue 52 rule 2:
+#: below every printed digit and inside the 8e-7 spread between OpenBLAS kernels the project
+#: already accepts; issue 39's was 1e-9).
+MAX_REL = 1e-7
 
 GRID_SNIPPET = r"""
 import itertools, json

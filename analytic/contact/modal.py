@@ -73,6 +73,15 @@ class Modal:
         self.weight = np.where(lam.imag[self.kept] > 0.0, 2.0, 1.0)  # Re(V w) over the pairs
 
     @cached_property
+    def pair_sums(self) -> tuple[np.ndarray, np.ndarray]:
+        """(small, total): lambda_i + lambda_j over the pairs (1 where ``small``: below 1e-9
+        of the largest |lambda|, an undamped pair whose integrand is constant), as
+        :class:`Quadratic` divides by them."""
+        total = self.lam[:, None] + self.lam[None, :]
+        small = np.abs(total) < 1e-9 * max(1.0, float(np.max(np.abs(self.lam))))
+        return small, np.where(small, 1.0, total)
+
+    @cached_property
     def T(self) -> np.ndarray:
         """z = (q, q') = T u."""
         N = self.N
@@ -240,10 +249,9 @@ class Quadratic:
     def __init__(self, modal: Modal, Q: np.ndarray | None, H: np.ndarray | None = None):
         self.modal = modal
         H = modal.Vu.T @ Q @ modal.Vu if H is None else H
-        total = modal.lam[:, None] + modal.lam[None, :]
-        small = np.abs(total) < 1e-9 * max(1.0, float(np.max(np.abs(modal.lam))))
+        small, total = modal.pair_sums
         self.H = H
-        self.H_int = np.where(small, 0.0, H / np.where(small, 1.0, total))
+        self.H_int = np.where(small, 0.0, H / total)
         self.H_lin = np.where(small, H, 0.0)  # secular part: constant integrand
 
     def value(self, w, s, U=None):
@@ -335,11 +343,17 @@ class Observable(enum.IntEnum):
 
 def observation_rows(model: LinearImpactModel, modal: Modal, g: np.ndarray) -> np.ndarray:
     """Rows over u of the :class:`Observable` quantities of ``model`` on its solution
-    ``modal`` (delta = ``g`` . q), in their order (8 x 2N)."""
+    ``modal`` (delta = ``g`` . q), in their order (8 x 2N): the points' rows r over q (the
+    clamp, the pendulum, delta, the crown) as :meth:`Modal.displacement_row` and
+    :meth:`Modal.velocity_row` of each, all at once."""
     N = modal.N
-    e = np.eye(N)
-    clamp, pend, crown = e[model.clamp], e[N - 1], model.crown_gain * e[model.crown]
-    return np.array([modal.displacement_row(clamp), modal.displacement_row(pend),
-                     modal.velocity_row(clamp), modal.velocity_row(pend),
-                     modal.displacement_row(g), modal.velocity_row(g),
-                     modal.displacement_row(crown), modal.velocity_row(crown)])
+    points = np.zeros((4, N))
+    points[0, model.clamp], points[1, N - 1] = 1.0, 1.0
+    points[2], points[3, model.crown] = g, model.crown_gain
+    per_eta = points @ modal.Phi  # r . q per unit eta, each point
+    rows = np.zeros((8, 2 * N))
+    rows[[Observable.X, Observable.Y, Observable.DELTA, Observable.CROWN], :N] = (
+        per_eta / modal.scale)
+    rows[[Observable.VX, Observable.VY, Observable.DELTA_RATE, Observable.CROWN_VELOCITY],
+         N:] = per_eta
+    return rows
