@@ -59,7 +59,7 @@ class ExactSolution:
         st, s = self.states[True], np.array([t - self.starts[k]])
         w = self.w[k][None, :]
         work = self.contact_work[k] + float(st.works(w, s)[1, 0])
-        u = (st.modal.Vu @ (np.exp(st.modal.lam * s[0]) * self.w[k])).real
+        u = st.advance(self.w[k], float(s[0]))
         return work - float(st.energies(u[None, :])[2][0])
 
 
@@ -75,14 +75,16 @@ def ledger_solution(model: LinearImpactModel, states: dict, ends: PhaseEnds, t_e
     works, energy = np.zeros((P, 2)), np.zeros(P)
     touching = np.array([k.touching for k in ends.kind])
     U0, U, S = np.array(ends.u0), np.array(ends.u), np.array(ends.s)
-    W = np.empty(U0.shape, dtype=complex)  # the modal coefficients at each phase's start
+    W = [None] * P  # the kept modal coefficients at each phase's start
     for contact, st in states.items():
         idx = np.flatnonzero(touching == contact)
         if not idx.size:
             continue
-        W[idx] = U0[idx] @ st.modal.Wu.T
-        A = np.exp(st.modal.lam * S[idx, None]) * W[idx]
-        works[idx, :1 + contact] = st.works(W[idx], S[idx], A).T
+        Wc = U0[idx] @ st.to_kept.T
+        for p, row in zip(idx.tolist(), Wc):
+            W[p] = row
+        A = np.exp(st.lam * S[idx, None]) * Wc
+        works[idx, :1 + contact] = st.works(Wc, S[idx], A).T
         kin, pot, _ = st.energies(U[idx])
         energy[idx] = kin + pot
     if not np.all(np.isfinite(energy)):
@@ -92,7 +94,7 @@ def ledger_solution(model: LinearImpactModel, states: dict, ends: PhaseEnds, t_e
     e0 = model.initial_energy
     ledger = float(np.max(np.abs(energy + done.sum(axis=1) - e0)) / e0)
     before = [0.0, *done[:-1, 1].tolist()]
-    return ExactSolution(states=states, starts=ends.t, kinds=ends.kind, w=list(W),
+    return ExactSolution(states=states, starts=ends.t, kinds=ends.kind, w=W,
                          contact_work=before, t_end=t_end, ledger=ledger)
 
 

@@ -24,7 +24,8 @@ from .exact_ledger import (ExactSamples, ExactSolution, PendulumEnergy, PhaseEnd
                            ledger_solution)
 from .exact_record import record
 from .linear_model import LinearImpactModel, initial_state, matrices
-from .modal import Observable, decomposed, observation_rows, work_forms
+from .kept_works import kept_works
+from .modal import Observable, decomposed, observation_rows
 from .phases import ContactPhase, Signal, bracket, check_switches, switch
 
 #: Elements (samples x modes kept) of the largest block of samples the ``exact`` method
@@ -61,8 +62,8 @@ class _State:
         M, C, K, g = matrices(model, contact)
         self.modal = modal = decomposed(M, C, K)
         self.contact = contact
-        (self.H_int, self.H_lin, self.secular, self.rows, self.rows_conj, self.law,
-         self.gd, self.drift_rows) = _fixed_parts(model, modal, contact, g)
+        (self.kept_works, self.rows, self.rows_conj, self.law, self.gd,
+         self.drift_rows) = _fixed_parts(model, modal, contact, g)
         self.lam = modal.lam[modal.kept]
         self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
         # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
@@ -89,15 +90,11 @@ class _State:
     def works(self, w: np.ndarray, s: np.ndarray, a: np.ndarray | None = None
               ) -> np.ndarray:
         """The works of the trunk's damping (and of the pad, in contact) over [0, s_p] of
-        the phases p started with modal coefficients w (phases x 2N, s: phases; ``a`` =
-        exp(lambda s) w if known), J: (works, phases), the closed form of
-        :class:`.modal.Quadratic`."""
-        a = np.exp(self.modal.lam * s[:, None]) * w if a is None else a
-        ends = _forms(self.H_int, np.concatenate([a, w]))  # the ends', then the starts'
-        out = ends[:, :len(w)] - ends[:, len(w):]
-        if self.secular:
-            out = out + s * _forms(self.H_lin, w)
-        return out.real
+        the phases p started with the kept modal coefficients w (phases x m, s: phases;
+        ``a`` = exp(lambda s) w if known), J: (works, phases), the closed form of
+        :class:`.kept_works.KeptWorks`."""
+        a = np.exp(self.lam * s[:, None]) * w if a is None else a
+        return self.kept_works.integrals(w, s, a)
 
     def energies(self, u: np.ndarray) -> tuple:
         """(kinetic, elastic energy of the trunk's and pendulum's springs, the pad's elastic
@@ -113,12 +110,12 @@ class _State:
 
 def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) -> tuple:
     """What a :class:`_State` reads that is fixed by its decomposition ``modal`` and the
-    model's pad, damping and observed points (delta = ``g`` . q): the works' integrals H_int
-    and H_lin (stacked: damping; and the pad's, in contact), whether H_lin is non-zero, the
+    model's pad, damping and observed points (delta = ``g`` . q): the works' integrals over
+    the kept modes (:class:`.kept_works.KeptWorks`: damping; and the pad's, in contact), the
     observation rows over the kept modes (m x 9: the 8 observables and the law F, complex)
     and their conjugate transpose,
-    the law's rows (m x 6: delta, F, their first and second derivatives), delta's row over u and the observation
-    rows of a rigid mode's flight over the kept modes (9 x m: the observables' and the law's
+    the law's rows (m x 6: delta, F, their first and second derivatives), delta's row over
+    u and the observation rows of a rigid mode's flight over the kept modes (9 x m: the observables' and the law's
     rates Re(rows G V w), or None without a rigid mode). Kept on a small
     ``modal`` (read-only arrays) for the next solve with the same inputs: the same
     arithmetic, so the same numbers."""
@@ -129,15 +126,12 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     parts = cache.get(key)
     if parts is not None:
         return parts
-    damping, pad = work_forms(model, modal, contact, g)
-    works = [damping] + ([pad] if contact else [])
-    H_int = np.stack([f.H_int for f in works])
-    H_lin = np.stack([f.H_lin for f in works])
     kept = modal.kept
-    rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
-    # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
-    # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
-    rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
+    from_kept = _kept_half(modal)[1]
+    works = kept_works(model, modal, contact, g, from_kept)
+    # m x 8: obs = Re(U @ rows) over the kept modes; complex even when every kept mode is
+    # real (an overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
+    rows = np.array((observation_rows(model, modal, g) @ from_kept).T, dtype=complex)
     # delta and the law F = k_c delta + c_c delta', and their slopes
     delta, rate = rows[:, Observable.DELTA], rows[:, Observable.DELTA_RATE]
     law = np.stack([delta, k_c * delta + c_c * rate])
@@ -150,9 +144,10 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     if modal.drift is not None:  # the flight s G u(0) of a rigid mode, over the kept modes
         drift = (observation_rows(model, modal, g) @ modal.drift)[:, kept]
         drift = np.vstack([drift, k_c * drift[_DELTA] + c_c * drift[_RATE]])  # 9 x m
-    for a in (H_int, H_lin, rows, rows_conj, law, gd) + ((drift,) if drift is not None else ()):
-        a.setflags(write=False)
-    parts = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd, drift)
+    for a in (rows, rows_conj, law, gd, drift, *vars(works).values()):
+        if a is not None:
+            a.setflags(write=False)
+    parts = (works, rows, rows_conj, law, gd, drift)
     if 2 * modal.N <= _PARTS_MAX_COORDS:
         cache[key] = parts
         while len(cache) > _PARTS_KEPT:  # a sweep over the pad meets one free state often
@@ -188,12 +183,6 @@ def _transfer(modal, other) -> np.ndarray:
         # decompositions' cache until a garbage collection (their memory not reused)
         kept = modal.__dict__["_transfer"] = (weakref.ref(other), P)
     return kept[1]
-
-
-def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """w_p^T H_f w_p for each form H_f of the stack H (forms x n x n) and each row w_p of
-    w (phases x n): (forms, phases)."""
-    return ((H @ w.T) * w.T).sum(axis=1)
 
 
 def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict]:
