@@ -23,10 +23,11 @@ from treeimpact.analytic.results import ImpactRecord
 from .exact_ledger import (ExactSamples, ExactSolution, PendulumEnergy, PhaseEnds,
                            ledger_solution)
 from .exact_record import record
+from .exact_switch import locate as _locate
 from .linear_model import LinearImpactModel, initial_state, matrices
 from .kept_works import kept_works
 from .modal import Observable, decomposed, observation_rows
-from .phases import ContactPhase, Signal, bracket, check_switches, switch
+from .phases import ContactPhase, check_switches
 
 #: Elements (samples x modes kept) of the largest block of samples the ``exact`` method
 #: evaluates at once (32, 256, ... up to this over the modes, at least 1024 samples): the
@@ -36,14 +37,10 @@ _BLOCK_ELEMENTS = 2 ** 13
 #: The first block of a phase's samples and the factor each next one grows by, to the
 #: state's largest (most of the beam's chattering phases last 1-60 samples).
 _FIRST_BLOCK, _GROWTH = 32, 8
-_EPS = float(np.finfo(float).eps)
 _DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
 #: The row of the pad's law F = k_c delta + c_c delta' (N), after the 8 observables': the
 #: samples' product forms it with them (its row over the modes: k_c delta's + c_c delta''s).
 _LAW = len(Observable)
-#: A switch time is refined until Newton's (Halley's) step is below this (s), plus 4 eps of
-#: the time itself.
-_ROOT_TOL = 1e-15
 #: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it), for states of
 #: at most _PARTS_MAX_COORDS energy coordinates (12 elements: 56): a 48-element state's
 #: forms hold ~4 MB, and keeping them did not speed its warm run (medians 29.7 kept, 23.1
@@ -186,31 +183,27 @@ def _transfer(modal, other) -> np.ndarray:
 
 
 def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict]:
-    """step^i, i = 0..count, by doubling (round-off log2(count) eps), as the interleaved
-    (Re, Im) rows of each step (2m x (count + 1), in the scratch memory ``slot``); and
-    {b: conj(step^b)} for the block lengths b = 32, 256, ... (x 8), count. The slot's last
-    table is taken again when the same decomposition ``owner`` (the same live object: a new
-    one after :func:`.modal.clear_cache`) asks for the same steps and count: the same
+    """step^i, i = 0..count, as step^(c a) step^b (i = c a + b, b < c ~ sqrt(count); each
+    factor's table by doubling: round-off ~log2(count) eps), as the interleaved (Re, Im)
+    rows of each step (2m x (count + 1), in the scratch memory ``slot``); and {b:
+    conj(step^b)} for the block lengths b = 32, 256, ... (x 8), count. The slot's last table
+    is taken again when the same decomposition ``owner`` (the same live object: a new one
+    after :func:`.modal.clear_cache`) asks for the same steps and count: the same
     numbers."""
     tag = (step.tobytes(), count)
     kept = _SCRATCH.__dict__.setdefault("tables", {}).pop(slot, None)  # refilled below
     if kept is not None and kept[0]() is owner and kept[1] == tag:
         _SCRATCH.tables[slot] = kept
         return kept[2], kept[3]
-    m = len(step)
-    steps = _scratch("powers", (m, count + 1), complex)
-    steps[:, 0], steps[:, 1] = 1.0, step
-    product = _scratch("product", (m * (count // 2 + 1),), complex)
-    n = 1
-    while n < count:
-        k = min(n, count - n)
-        # through a separate array: np.multiply into an output overlapping its inputs'
-        # array takes another loop, which rounds otherwise (6e-14 apart after the doublings)
-        part = product[:m * k].reshape(m, k)
-        np.multiply(steps[:, 1:1 + k], steps[:, n:n + 1], out=part)
-        steps[:, n + 1:n + 1 + k] = part
-        n += k
-    ri = _scratch(("rows", slot), (m, 2, count + 1), float)
+    m, n = len(step), count + 1
+    c = 1 << (n.bit_length() + 1) // 2  # the inner factor's length, a power of 2
+    rows = -(-n // c)
+    low = _doubled(step, c)  # step^b, b < c
+    high = _doubled(low[:, -1] * step, rows)  # step^(c a), a < rows
+    steps = _scratch("powers", (m, rows, c), complex)
+    np.multiply(high[:, :, None], low[:, None, :], out=steps)
+    steps = steps.reshape(m, rows * c)[:, :n]
+    ri = _scratch(("rows", slot), (m, 2, n), float)
     ri[:, 0], ri[:, 1] = steps.real, steps.imag
     jumps, b = {count: steps[:, count].conj()}, _FIRST_BLOCK
     while b < count:
@@ -219,6 +212,21 @@ def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict
     # the owner weakly: a table must not keep a dropped decomposition's memory from reuse
     _SCRATCH.tables[slot] = (weakref.ref(owner), tag, ri, jumps)
     return ri, jumps
+
+
+def _doubled(step: np.ndarray, count: int) -> np.ndarray:
+    """step^i, i = 0..count - 1 (m x count, complex), by doubling: each pass multiplies the
+    powers so far by the last."""
+    out = np.empty((len(step), count), dtype=complex)
+    out[:, 0] = 1.0
+    if count > 1:
+        out[:, 1] = step
+    n = 2
+    while n < count:
+        k = min(n, count - n)
+        np.multiply(out[:, :k], out[:, n - 1:n] * step[:, None], out=out[:, n:n + k])
+        n += k
+    return out
 
 
 #: Per thread, arrays that outlive one solve to serve the next (:func:`_scratch`).
@@ -360,91 +368,6 @@ def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> 
     return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force(),
                         pendulum_energy=PendulumEnergy(model, y, vy), crown=crown,
                         crown_velocity=crown_v, solution=solution)
-
-
-def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
-            d_hi: float, f_hi: float, lo_values: tuple | None,
-            flight: tuple[float, float] = (0.0, 0.0)):
-    """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]
-    (:func:`.phases.switch`), each root by Newton's method on the exact solution's delta
-    and law with their slopes; ``lo_values``: (delta, law) at s_lo from the samples, or
-    None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`);
-    ``flight``: the rates (m/s, N/s) a rigid mode's flight adds to delta and the law."""
-    lam = st.lam
-    # m x 6: (delta, F, delta', F', delta'', F'') = Re(exp(lambda s) @ c)
-    c = wk[:, None] * st.law
-    exp, dot = np.exp, np.dot
-    d_rate, f_rate = float(flight[0]), float(flight[1])
-    last = [None, None]  # the last evaluation: s, its six values
-
-    def values(s):
-        v = last[1] if s == last[0] else dot(exp(lam * s), c).real.tolist()
-        last[0], last[1] = s, v
-        return v
-
-    def delta(s):
-        v = values(s)
-        return v[0] + d_rate * s, v[2] + d_rate, v[4]
-
-    def law(s):
-        v = values(s)
-        return v[1] + f_rate * s, v[3] + f_rate, v[5]
-
-    def delta_at(s):
-        """delta at s: at a root within a Newton step of the last evaluation, its value
-        carried there by its slope (the step is below 1e-15 s: its square is round-off)."""
-        if last[0] is not None and s != last[0] and abs(s - last[0]) <= _ROOT_TOL:
-            v = last[1]
-            return v[0] + d_rate * last[0] + (v[2] + d_rate) * (s - last[0])
-        return delta(s)[0]
-
-    d_lo, f_lo = lo_values if lo_values is not None else (None, None)
-
-    def root(signal):
-        if signal is Signal.DELTA:
-            return _newton_root(delta, s_lo, s_hi, d_hi, d_lo)
-        return _newton_root(law, s_lo, s_hi, f_hi, f_lo)
-
-    return switch(kind, root, delta_at, d_hi, f_hi)
-
-
-def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = None
-                 ) -> float:
-    """Zero of ``fun`` (returning value, slope and curvature) in [lo, hi], ``f_hi`` its
-    value at hi (``f_lo`` at lo, if known): a phase that starts on its own boundary (value 0
-    at lo) is bracketed from just after its start; then Halley's steps (Newton's where its
-    denominator vanishes) inside the shrinking bracket (bisection otherwise), to
-    :data:`_ROOT_TOL` (s) and 4 eps of the time: done when a step or the bracket is below
-    that."""
-    if f_lo is not None and f_lo * f_hi <= 0 and f_lo != 0.0:
-        found = lo, f_lo  # what bracket() returns for a sign change at lo
-    else:
-        found = bracket(lambda u: fun(u)[0], lo, hi, f_hi)
-    if found is None:
-        return hi
-    lo, f_lo = found
-    s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
-    tol = _ROOT_TOL + 4 * _EPS * abs(hi)
-    for _ in range(100):
-        f, slope, curve = fun(s)
-        if f == 0.0:
-            return s
-        if (f > 0.0) == (f_lo > 0.0):
-            lo, f_lo = s, f
-        else:
-            hi = s
-        denom = 2.0 * slope * slope - f * curve
-        step = (2.0 * f * slope / denom if denom != 0.0 else
-                f / slope if slope != 0.0 else math.inf)
-        if abs(step) <= tol:  # converged: the correction is below the tolerance (or below
-            return min(max(s - step, lo), hi)  # a unit of s, where a bisection would restart)
-        nxt = s - step
-        if not lo < nxt < hi:
-            nxt = 0.5 * (lo + hi)
-        if abs(nxt - s) <= tol or hi - lo <= tol:
-            return nxt
-        s = nxt
-    return s
 
 
 def sampled_record(model: LinearImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:

@@ -306,28 +306,6 @@ def ledger_forms(model: LinearImpactModel, modal: Modal, contact: bool,
     return LedgerForms(modal.quadratic(kin), modal.quadratic(pot), modal.quadratic(damp), pad)
 
 
-def work_forms(model: LinearImpactModel, modal: Modal, contact: bool, g: np.ndarray
-               ) -> tuple[Quadratic, Quadratic | None]:
-    """The rates of the trunk's damping work and (``contact``, else None) of the pad's work
-    F delta' of :func:`ledger_forms` (W) of ``model`` on its solution ``modal`` (delta =
-    ``g`` . q), their H = V^T Q V formed from Q's structure: the
-    damping acts on the velocities only (V_v^T Phi^T D Phi V_v, V_v the velocity rows of V),
-    the pad's form is of rank 2 (its rows over u, gd and gv: V^T gd, V^T gv); O(n^2) for the
-    pad and half the products for the damping, instead of two n^3 products each."""
-    N, k_c, c_c = modal.N, model.contact_stiffness, model.contact_damping
-    Dfull = np.zeros((N, N))
-    Dfull[:model.dofs, :model.dofs] = model.D
-    Vv = modal.Vu[N:]
-    damping = Quadratic(modal, None, Vv.T @ (modal.Phi.T @ Dfull @ modal.Phi) @ Vv)
-    if not contact:
-        return damping, None
-    a = modal.displacement_row(g) @ modal.Vu
-    b = modal.velocity_row(g) @ modal.Vu
-    ab = np.outer(a, b)
-    pad = Quadratic(modal, None, 0.5 * k_c * (ab + ab.T) + c_c * np.outer(b, b))
-    return damping, pad
-
-
 class Observable(enum.IntEnum):
     """The rows of :func:`observation_rows` (SI: m and m/s)."""
 
