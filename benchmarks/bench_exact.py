@@ -32,6 +32,8 @@ own cost (scenario, options, checks; measured as a run less ``simulate_beam``).
 
 The last columns: the cold run above its floor per contact phase (us), the per-phase
 Python and numpy calls the floor leaves out, and the metrics' largest relative difference.
+Then today's cold run split into its parts (:data:`PARTS`, :func:`measure_parts`): where the
+time above the floor goes.
 glibc's malloc settings reach both sides' children through the environment
 (``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=268435456 ... --out
 exact-malloc``: fresh pages' faults measured apart, docs/beam-impact.md).
@@ -119,7 +121,8 @@ print(json.dumps(out))
 """
 
 #: The floor's parts, timed in the new side's child (:func:`measure_floor`).
-FLOOR_CODE = '__import__("bench_exact").measure_floor(CASES, 15)'
+FLOOR_CODE = ('{"floor": __import__("bench_exact").measure_floor(CASES, 15), '
+              '"parts": __import__("bench_exact").measure_parts(CASES, 15)}')
 
 
 def _floor_module() -> str:
@@ -220,6 +223,78 @@ def measure_floor(cases, repeats: int) -> dict:
     return out
 
 
+#: The parts of a cold run :func:`measure_parts` times: what each covers.
+PARTS = {"decompositions": "modal.decomposed (eig, its inverse, the symmetric problem)",
+         "setup": "the two states less their decompositions (forms, rows, powers)",
+         "scan": "the samples' blocks and the phase test (the switches apart)",
+         "switches": "the switch search (Halley's method, exact_switch.locate)",
+         "loop": "the phase loop's own propagation, transfer and bookkeeping",
+         "ledger": "the works and the ledger over all phases", "metrics": "model_metrics",
+         "rest": "the backend's and the API's remainder (model, checks, result)"}
+
+
+def measure_parts(cases, repeats: int) -> dict:
+    """Per case and shipped tree (s, thread CPU time, means over ``repeats`` cold runs):
+    the cold run split into :data:`PARTS`, by timing the solver's own functions in place
+    (the Newton model is left out: it has none of them)."""
+    import time
+
+    import treeimpact
+    from treeimpact.analytic.contact import exact_solve, modal, soft
+    from treeimpact.analytic.continuum import beam_impact
+    from treeimpact.analytic.model.scenario import shipped_scenarios
+
+    acc: dict = {}
+
+    def timed(owner, name, label):
+        func = getattr(owner, name)
+
+        def wrapper(*args, **kwargs):
+            t0 = time.thread_time()
+            try:
+                return func(*args, **kwargs)
+            finally:
+                acc[label] = acc.get(label, 0.0) + time.thread_time() - t0
+        setattr(owner, name, wrapper)
+        return owner, name, func
+
+    patches = [timed(exact_solve, "decomposed", "decompositions"),
+               timed(exact_solve, "_State", "states"),
+               timed(exact_solve, "_scan", "scan+switches"),
+               timed(exact_solve, "_locate", "switches"),
+               timed(exact_solve, "ledger_solution", "ledger"),
+               timed(beam_impact, "solve", "solve"), timed(soft, "solve", "solve"),
+               timed(beam_impact, "model_metrics", "metrics"),
+               timed(soft, "model_metrics", "metrics")]
+    out = {}
+    try:
+        for label, backend, options in cases:
+            if backend == "analytic":
+                continue
+            for name in shipped_scenarios():
+                treeimpact.simulate(name, backend=backend, **options)
+                acc.clear()
+                total = 0.0
+                for _ in range(repeats):
+                    modal.clear_cache()
+                    t0 = time.thread_time()
+                    treeimpact.simulate(name, backend=backend, **options)
+                    total += time.thread_time() - t0
+                a = {k: v / repeats for k, v in acc.items()}
+                parts = {"decompositions": a["decompositions"],
+                         "setup": a["states"] - a["decompositions"],
+                         "scan": a["scan+switches"] - a["switches"],
+                         "switches": a["switches"], "ledger": a["ledger"],
+                         "loop": a["solve"] - a["states"] - a["scan+switches"] - a["ledger"],
+                         "metrics": a["metrics"]}
+                parts["rest"] = total / repeats - a["solve"] - a["metrics"]
+                out[f"{label}.{name}"] = parts
+    finally:
+        for owner, name, func in patches:
+            setattr(owner, name, func)
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=5)
@@ -254,7 +329,8 @@ def main() -> int:
     malloc = {k: v for k, v in os.environ.items() if k.startswith("MALLOC_")}
     _results.write(name, numbers, {"rounds": args.rounds, "repeats": args.repeats,
                                    "baseline": args.rev, "malloc": malloc,
-                                   "floor": sides["new"][0]["floor"]},
+                                   "floor": sides["new"][0]["floor"]["floor"],
+                                   "parts": sides["new"][0]["floor"]["parts"]},
                    started_load=start_load)
     return 0 if ok else 1
 
@@ -287,7 +363,7 @@ def _grid_report(grid: dict) -> dict:
 def _report(sides: dict, cases) -> tuple[dict, bool]:
     """Print and return the medians (cold and warm), ratios, floors and metric differences (the Newton
     model has no floor estimated: its columns are left out)."""
-    floor = sides["new"][0]["floor"]
+    floor, parts = sides["new"][0]["floor"]["floor"], sides["new"][0]["floor"]["parts"]
     numbers, ok = {}, True
     print(f"{'case':<28}{'old ms':>9}{'new ms':>9}{'ratio':>7}{'old warm':>9}{'warm ms':>9}"
           f"{'ratio':>7}{'solver fl':>10}{'floor ms':>10}{'new/floor':>10}{'us/phase':>9}"
@@ -317,9 +393,15 @@ def _report(sides: dict, cases) -> tuple[dict, bool]:
         else:
             line += f"{'-':>10}{'-':>10}{'-':>10}{'-':>9}"
         print(f"{line}{rel:>10.1e}")
+    print("today's cold run by part (ms, CPU): " + ", ".join(PARTS))
+    for key, split in parts.items():
+        numbers |= {f"parts_ms.{part}.{key}": round(v * 1e3, 3) for part, v in split.items()}
+        print(f"{key:<28}" + "".join(f"{split[part] * 1e3:>9.2f}" for part in PARTS))
+    whats = ["old_ms", "new_ms", "warm_ms", "ratio", "old_warm_ms", "warm_ratio", "floor_ms",
+             "solver_floor_ms", "over_floor", "above_floor_us_per_phase",
+             *(f"parts_ms.{part}" for part in PARTS)]
     for label, _, _ in cases:
-        for what in ("old_ms", "new_ms", "warm_ms", "ratio", "old_warm_ms", "warm_ratio",
-                     "floor_ms", "solver_floor_ms", "over_floor", "above_floor_us_per_phase"):
+        for what in whats:
             values = [v for k, v in numbers.items() if k.startswith(f"{what}.{label}.")]
             if values:
                 numbers[f"{what}.{label}"] = _results.span(values)
