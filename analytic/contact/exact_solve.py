@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import threading
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
@@ -37,6 +37,10 @@ _BLOCK_ELEMENTS = 2 ** 13
 #: The first block of a phase's samples and the factor each next one grows by, to the
 #: state's largest (most of the beam's chattering phases last 1-60 samples).
 _FIRST_BLOCK, _GROWTH = 32, 8
+#: Powers (modes x samples) up to which :func:`_powers` doubles one table: the soft SDOF's
+#: 2 x 4097 took 31 us so against 46 as two factors; a 12-element state's 27 x 1025 took
+#: 351 us against 82 (its doublings' copies grow with the table).
+_ONE_TABLE = 2 ** 14
 _DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
 #: The row of the pad's law F = k_c delta + c_c delta' (N), after the 8 observables': the
 #: samples' product forms it with them (its row over the modes: k_c delta's + c_c delta''s).
@@ -184,7 +188,8 @@ def _transfer(modal, other) -> np.ndarray:
 
 def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict]:
     """step^i, i = 0..count, as step^(c a) step^b (i = c a + b, b < c ~ sqrt(count); each
-    factor's table by doubling: round-off ~log2(count) eps), as the interleaved (Re, Im)
+    factor's table by doubling: round-off ~log2(count) eps; one doubled table for at most
+    :data:`_ONE_TABLE` powers in all), as the interleaved (Re, Im)
     rows of each step (2m x (count + 1), in the scratch memory ``slot``); and {b:
     conj(step^b)} for the block lengths b = 32, 256, ... (x 8), count. The slot's last table
     is taken again when the same decomposition ``owner`` (the same live object: a new one
@@ -196,13 +201,16 @@ def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict
         _SCRATCH.tables[slot] = kept
         return kept[2], kept[3]
     m, n = len(step), count + 1
-    c = 1 << (n.bit_length() + 1) // 2  # the inner factor's length, a power of 2
-    rows = -(-n // c)
-    low = _doubled(step, c)  # step^b, b < c
-    high = _doubled(low[:, -1] * step, rows)  # step^(c a), a < rows
-    steps = _scratch("powers", (m, rows, c), complex)
-    np.multiply(high[:, :, None], low[:, None, :], out=steps)
-    steps = steps.reshape(m, rows * c)[:, :n]
+    if m * n <= _ONE_TABLE:
+        steps = _doubled(step, n)
+    else:
+        c = 1 << (n.bit_length() + 1) // 2  # the inner factor's length, a power of 2
+        rows = -(-n // c)
+        low = _doubled(step, c)  # step^b, b < c
+        high = _doubled(low[:, -1] * step, rows)  # step^(c a), a < rows
+        steps = _scratch("powers", (m, rows, c), complex)
+        np.multiply(high[:, :, None], low[:, None, :], out=steps)
+        steps = steps.reshape(m, rows * c)[:, :n]
     ri = _scratch(("rows", slot), (m, 2, n), float)
     ri[:, 0], ri[:, 1] = steps.real, steps.imag
     jumps, b = {count: steps[:, count].conj()}, _FIRST_BLOCK
@@ -248,22 +256,20 @@ def _scratch(slot, shape: tuple, dtype) -> np.ndarray:
 @dataclass
 class _Grid:
     """The sample grid (s) and what is written on it: the observables and the pad's law
-    (9 x n, one row per :class:`Observable`, then the law F, N) and each phase's first
-    sample and whether the pad touches in it (the force, max(0, F) in contact and 0 apart,
-    is formed from them once the phases are known: :meth:`force`)."""
+    (9 x n, one row per :class:`Observable`, then the law F, N) and the pad's force (N;
+    max(0, F) in contact, 0 apart: :meth:`write_force`)."""
 
     t: np.ndarray
     obs: np.ndarray
-    starts: list = field(default_factory=list)
-    touching: list = field(default_factory=list)
+    force: np.ndarray
 
-    def force(self) -> np.ndarray:
-        """The pad's force at the samples (N): max(0, F) where a contact phase wrote the
-        sample last, 0 elsewhere."""
-        counts = np.diff(np.append(self.starts, self.t.size))
-        inside = np.repeat(np.array(self.touching, dtype=bool), counts)
-        force = np.where(inside, self.obs[_LAW], 0.0)
-        return np.maximum(force, 0.0, out=force)
+    def write_force(self, j0: int, j1: int, contact: bool) -> None:
+        """The force on the samples j0..j1 - 1 of one phase, from its law (once a phase:
+        the next phase overwrites a sample it starts on, as it does the observables)."""
+        if contact:
+            np.maximum(self.obs[_LAW, j0:j1], 0.0, out=self.force[j0:j1])
+        else:
+            self.force[j0:j1] = 0.0
 
 
 def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
@@ -275,7 +281,7 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
     to_state = {True: _transfer(states[True].modal, states[False].modal),
                 False: _transfer(states[False].modal, states[True].modal)}
-    grid = _Grid(t_grid, np.empty((_LAW + 1, t_grid.size)))
+    grid = _Grid(t_grid, np.empty((_LAW + 1, t_grid.size)), np.empty(t_grid.size))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
     ends = PhaseEnds([], [], [], [], [])
@@ -308,13 +314,12 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
     one real product of the interleaved (Re, Im) of c, conjugated, (9 x 2m) and of the
     powers (2m x block), half the flops of the complex product's real part; the law F is
-    its last row. :meth:`ContactPhase.has_ended` written out (the same comparisons)."""
+    its last row, and the force is written from it once the phase's end is known.
+    :meth:`ContactPhase.has_ended` written out (the same comparisons)."""
     t_grid, n_t, obs = grid.t, grid.t.size, grid.obs
     j0 = int(t_grid.searchsorted(t))
     if j0 >= n_t:
         return None
-    grid.starts.append(j0)
-    grid.touching.append(kind is ContactPhase.CONTACT)
     j, block = j0, _FIRST_BLOCK
     # conj(exp(lambda s) wk), as the product reads it (conj of a product: exact)
     base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
@@ -338,6 +343,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
             ended[0] = False  # the phase's own start
         k = int(ended.argmax())
         if ended[k]:
+            grid.write_force(j0, j + k, contact)
             s_lo = max(float(t_grid[j + k - 1]) - t, 0.0) if j + k > j0 else 0.0
             # a sample of this phase: its delta and law as the product formed them
             lo_values = (tuple(obs[_DELTA:_LAW + 1:_LAW - _DELTA, j + k - 1].tolist())
@@ -348,6 +354,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
         if jj < n_t:
             base = base * jumps_conj[block]
         j, block = jj, min(_GROWTH * block, st.block)
+    grid.write_force(j0, n_t, contact)
     return None
 
 
@@ -365,7 +372,7 @@ def _flight(st: _State, wk: np.ndarray):
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
     """The :class:`ExactSamples` of the written grid."""
     x, y, vx, vy, _, _, crown, crown_v, _ = grid.obs
-    return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force(),
+    return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
                         pendulum_energy=PendulumEnergy(model, y, vy), crown=crown,
                         crown_velocity=crown_v, solution=solution)
 

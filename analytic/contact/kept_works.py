@@ -28,37 +28,31 @@ from .linear_model import LinearImpactModel
 @dataclass(frozen=True)
 class KeptWorks:
     """The works' integral coefficients of one contact state over its kept modes: S / sum
-    and R / sum (forms x m x m, the forms the trunk's damping and, in contact, the pad's F
-    delta') and their secular parts (S and R where the exponent vanishes; None when none
-    does)."""
+    for each form, then R / sum for each (2 forms x m x m; the forms the trunk's damping
+    and, in contact, the pad's F delta'), and their secular parts (S and R where the
+    exponent vanishes, stacked alike; None when none does)."""
 
-    sym: np.ndarray
-    herm: np.ndarray
-    sym_lin: np.ndarray | None
-    herm_lin: np.ndarray | None
+    integral: np.ndarray
+    secular: np.ndarray | None
 
     def integrals(self, w: np.ndarray, s: np.ndarray, a: np.ndarray) -> np.ndarray:
         """int_0^s_p u^T Q_f u of each form f over the phases p started with the kept
         coefficients w (phases x m), lasting s (phases, s), a = exp(lambda s) w: (forms,
         phases), J."""
         n = len(w)
-        x = np.concatenate([a, w])  # the ends', then the starts'
-        sym = _sym_forms(self.sym, x)
-        herm = _herm_forms(self.herm, x)
-        out = (sym[:, :n] - sym[:, n:]).real + (herm[:, :n] - herm[:, n:]).real
-        if self.sym_lin is not None:
-            out += s * (_sym_forms(self.sym_lin, w).real + _herm_forms(self.herm_lin, w).real)
+        out = _ends_less_starts(self.integral, np.concatenate([a, w]), n)
+        if self.secular is not None:
+            out += s * _ends_less_starts(self.secular, w, 0)
         return 0.5 * out
 
 
-def _sym_forms(H: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """x_p^T H_f x_p for each form f and row p of x: (forms, rows)."""
-    return ((H @ x.T) * x.T).sum(axis=1)
-
-
-def _herm_forms(H: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """x_p^H H_f x_p for each form f and row p of x: (forms, rows)."""
-    return ((H @ x.T) * x.T.conj()).sum(axis=1)
+def _ends_less_starts(H: np.ndarray, x: np.ndarray, n: int) -> np.ndarray:
+    """Re(x_p^T S_f x_p) + Re(x_p^H R_f x_p) for each form f (H: the S, then the R) and row
+    p of x, the rows from n on subtracted from the first n (n = 0: none subtracted)."""
+    forms = len(H) // 2
+    Hx = H @ x.T
+    v = (Hx[:forms] * x.T).sum(axis=1).real + (Hx[forms:] * x.T.conj()).sum(axis=1).real
+    return v[:, :n] - v[:, n:] if n else v
 
 
 def kept_works(model: LinearImpactModel, modal, contact: bool, g: np.ndarray,
@@ -82,14 +76,12 @@ def kept_works(model: LinearImpactModel, modal, contact: bool, g: np.ndarray,
         herm.append(0.5 * k_c * (np.outer(ac, b) + np.outer(bc, a)) + c_c * np.outer(bc, b))
     lam = modal.lam[modal.kept]
     scale = 1e-9 * max(1.0, float(np.max(np.abs(modal.lam))))
-    parts = []
+    stacks = []
     for forms, total in ((np.stack(sym), lam[:, None] + lam[None, :]),
                          (np.stack(herm), lam.conj()[:, None] + lam[None, :])):
         small = np.abs(total) < scale
-        parts.append((np.where(small, 0.0, forms / np.where(small, 1.0, total)),
-                      np.where(small, forms, 0.0) if small.any() else None))
-    (sym_int, sym_lin), (herm_int, herm_lin) = parts
-    if (sym_lin is None) != (herm_lin is None):  # one secular part: the other's zeros
-        sym_lin = np.zeros_like(sym_int) if sym_lin is None else sym_lin
-        herm_lin = np.zeros_like(herm_int) if herm_lin is None else herm_lin
-    return KeptWorks(sym_int, herm_int, sym_lin, herm_lin)
+        stacks.append((np.where(small, 0.0, forms / np.where(small, 1.0, total)),
+                       np.where(small, forms, 0.0), small.any()))
+    (sym_int, sym_lin, sym_sec), (herm_int, herm_lin, herm_sec) = stacks
+    secular = np.concatenate([sym_lin, herm_lin]) if sym_sec or herm_sec else None
+    return KeptWorks(np.concatenate([sym_int, herm_int]), secular)
