@@ -1,5 +1,6 @@
-"""Benchmark: the exact linear rungs, today's code against the baseline (50f1faa), and their
-floor (issue 39, item 2).
+"""Benchmark: the exact linear rungs, today's code against the baseline (f87a142, before
+issue 52's restructuring; issue 39's was 50f1faa), and their floor (issue 39 item 2, issue
+52 item 1).
 
 A run is ``treeimpact.simulate(name, backend=...)`` with the default options (0.1 s, 100
 samples a free collision): the ``beam`` backend at 12 and 48 elements, the ``soft`` SDOF
@@ -9,9 +10,12 @@ child times ``--repeats`` runs after one warm-up (imports), the decompositions' 
 (:func:`analytic.contact.modal.decomposed`) cleared before each ("cold": every run
 decomposes both contact states, as the first run of a tree does; "warm": the cache kept, as
 a sweep over the pad meets its free state again: the decompositions, their fixed parts and
-the thread's last power tables are kept). Medians over the rounds' medians; ratios
-old / new, cold and warm; the metrics' largest relative difference (ledger_residual,
-round-off itself, left out).
+the thread's last power tables are kept). Each run is timed in its thread's CPU time
+(``time.thread_time``: on the shared machine a wall clock also counts the other jobs' turns
+on the 2 cores, and the old and new sides' ratios swung 0.3-3.5 under a load of 7; the CPU
+time still carries their cache traffic). Medians over the rounds' medians; ratios old / new,
+cold and warm; the metrics' largest relative difference (ledger_residual, round-off itself,
+left out).
 
 Same numbers: before the timing, each side runs :data:`GRID` (50 sweep points of
 central-leader on the Newton model, the soft SDOF and the 12-element beam) once; every
@@ -28,11 +32,13 @@ own cost (scenario, options, checks; measured as a run less ``simulate_beam``).
 
 The last columns: the cold run above its floor per contact phase (us), the per-phase
 Python and numpy calls the floor leaves out, and the metrics' largest relative difference.
+Then today's cold run split into its parts (:data:`PARTS`, :func:`measure_parts`): where the
+time above the floor goes.
 glibc's malloc settings reach both sides' children through the environment
 (``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=268435456 ... --out
 exact-malloc``: fresh pages' faults measured apart, docs/beam-impact.md).
 
-    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev 50f1faa] [--out NAME]
+    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev f87a142] [--out NAME]
 """
 
 from __future__ import annotations
@@ -47,19 +53,22 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _baseline  # noqa: E402
 import _results  # noqa: E402
 
-BASELINE = "50f1faa"
+BASELINE = "f87a142"
 #: (label, backend, options) of the runs timed.
 CASES = (("beam-12", "beam", {"elements": 12}), ("beam-48", "beam", {"elements": 48}),
          ("soft", "soft", {}), ("analytic", "analytic", {}))
-TARGET_MS = {"beam-12": 5.0, "beam-48": 100.0, "soft": 1.0, "analytic": 0.3}
+#: Issue 52 item 1's targets, a cold run single-threaded on 2 cores (ms).
+TARGET_MS = {"beam-12": 4.0, "beam-48": 50.0, "soft": 1.0, "analytic": 0.3}
 #: The equivalence grid (not timed): central-leader at contact duration (s) x crown ratio
 #: (crown mass / trunk mass) x e, 5 x 5 x 2 = 50 sweep points, each on the Newton model,
-#: the soft SDOF and the 12-element beam; every metric within 1e-9 of the baseline's.
+#: the soft SDOF and the 12-element beam; every metric within MAX_REL of the baseline's.
 GRID = {"contact_duration": (2e-4, 5e-4, 1e-3, 2e-3, 4e-3),
         "crown_ratio": (0.0, 0.25, 0.5, 1.0, 2.0), "restitution": (0.1, 0.6)}
 GRID_BACKENDS = (("analytic", {}), ("soft", {}), ("beam", {"elements": 12}))
-#: Largest relative difference of a metric allowed against the baseline (issue 39 item 2).
-MAX_REL = 1e-9
+#: Largest relative difference of a metric allowed against the baseline (issue 52 rule 2:
+#: below every printed digit and inside the 8e-7 spread between OpenBLAS kernels the project
+#: already accepts; issue 39's was 1e-9).
+MAX_REL = 1e-7
 
 GRID_SNIPPET = r"""
 import itertools, json
@@ -96,12 +105,12 @@ for label, backend, options in CASES:
         cold, warm = [], []
         for _ in range(REPEATS):
             clear_cache()
-            t0 = time.perf_counter()
+            t0 = time.thread_time()
             res = treeimpact.simulate(name, backend=backend, **options)
-            cold.append(time.perf_counter() - t0)
-            t0 = time.perf_counter()
+            cold.append(time.thread_time() - t0)
+            t0 = time.thread_time()
             treeimpact.simulate(name, backend=backend, **options)
-            warm.append(time.perf_counter() - t0)
+            warm.append(time.thread_time() - t0)
         metrics = {k: float(v) for k, v in dict(res.metrics.__dict__).items()}
         out[f"{label}.{name}"] = {"cold": statistics.median(cold),
                                   "warm": statistics.median(warm), "metrics": metrics,
@@ -112,7 +121,8 @@ print(json.dumps(out))
 """
 
 #: The floor's parts, timed in the new side's child (:func:`measure_floor`).
-FLOOR_CODE = '__import__("bench_exact").measure_floor(CASES, 15)'
+FLOOR_CODE = ('{"floor": __import__("bench_exact").measure_floor(CASES, 15), '
+              '"parts": __import__("bench_exact").measure_parts(CASES, 15)}')
 
 
 def _floor_module() -> str:
@@ -125,9 +135,9 @@ def _median_time(func, repeats: int) -> float:
     func()
     times = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = time.thread_time()
         func()
-        times.append(time.perf_counter() - t0)
+        times.append(time.thread_time() - t0)
     return statistics.median(times)
 
 
@@ -213,6 +223,78 @@ def measure_floor(cases, repeats: int) -> dict:
     return out
 
 
+#: The parts of a cold run :func:`measure_parts` times: what each covers.
+PARTS = {"decompositions": "modal.decomposed (eig, its inverse, the symmetric problem)",
+         "setup": "the two states less their decompositions (forms, rows, powers)",
+         "scan": "the samples' blocks and the phase test (the switches apart)",
+         "switches": "the switch search (Halley's method, exact_switch.locate)",
+         "loop": "the phase loop's own propagation, transfer and bookkeeping",
+         "ledger": "the works and the ledger over all phases", "metrics": "model_metrics",
+         "rest": "the backend's and the API's remainder (model, checks, result)"}
+
+
+def measure_parts(cases, repeats: int) -> dict:
+    """Per case and shipped tree (s, thread CPU time, means over ``repeats`` cold runs):
+    the cold run split into :data:`PARTS`, by timing the solver's own functions in place
+    (the Newton model is left out: it has none of them)."""
+    import time
+
+    import treeimpact
+    from treeimpact.analytic.contact import exact_solve, modal, soft
+    from treeimpact.analytic.continuum import beam_impact
+    from treeimpact.analytic.model.scenario import shipped_scenarios
+
+    acc: dict = {}
+
+    def timed(owner, name, label):
+        func = getattr(owner, name)
+
+        def wrapper(*args, **kwargs):
+            t0 = time.thread_time()
+            try:
+                return func(*args, **kwargs)
+            finally:
+                acc[label] = acc.get(label, 0.0) + time.thread_time() - t0
+        setattr(owner, name, wrapper)
+        return owner, name, func
+
+    patches = [timed(exact_solve, "decomposed", "decompositions"),
+               timed(exact_solve, "_State", "states"),
+               timed(exact_solve, "_scan", "scan+switches"),
+               timed(exact_solve, "_locate", "switches"),
+               timed(exact_solve, "ledger_solution", "ledger"),
+               timed(beam_impact, "solve", "solve"), timed(soft, "solve", "solve"),
+               timed(beam_impact, "model_metrics", "metrics"),
+               timed(soft, "model_metrics", "metrics")]
+    out = {}
+    try:
+        for label, backend, options in cases:
+            if backend == "analytic":
+                continue
+            for name in shipped_scenarios():
+                treeimpact.simulate(name, backend=backend, **options)
+                acc.clear()
+                total = 0.0
+                for _ in range(repeats):
+                    modal.clear_cache()
+                    t0 = time.thread_time()
+                    treeimpact.simulate(name, backend=backend, **options)
+                    total += time.thread_time() - t0
+                a = {k: v / repeats for k, v in acc.items()}
+                parts = {"decompositions": a["decompositions"],
+                         "setup": a["states"] - a["decompositions"],
+                         "scan": a["scan+switches"] - a["switches"],
+                         "switches": a["switches"], "ledger": a["ledger"],
+                         "loop": a["solve"] - a["states"] - a["scan+switches"] - a["ledger"],
+                         "metrics": a["metrics"]}
+                parts["rest"] = total / repeats - a["solve"] - a["metrics"]
+                out[f"{label}.{name}"] = parts
+    finally:
+        for owner, name, func in patches:
+            setattr(owner, name, func)
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=5)
@@ -247,7 +329,8 @@ def main() -> int:
     malloc = {k: v for k, v in os.environ.items() if k.startswith("MALLOC_")}
     _results.write(name, numbers, {"rounds": args.rounds, "repeats": args.repeats,
                                    "baseline": args.rev, "malloc": malloc,
-                                   "floor": sides["new"][0]["floor"]},
+                                   "floor": sides["new"][0]["floor"]["floor"],
+                                   "parts": sides["new"][0]["floor"]["parts"]},
                    started_load=start_load)
     return 0 if ok else 1
 
@@ -280,7 +363,7 @@ def _grid_report(grid: dict) -> dict:
 def _report(sides: dict, cases) -> tuple[dict, bool]:
     """Print and return the medians (cold and warm), ratios, floors and metric differences (the Newton
     model has no floor estimated: its columns are left out)."""
-    floor = sides["new"][0]["floor"]
+    floor, parts = sides["new"][0]["floor"]["floor"], sides["new"][0]["floor"]["parts"]
     numbers, ok = {}, True
     print(f"{'case':<28}{'old ms':>9}{'new ms':>9}{'ratio':>7}{'old warm':>9}{'warm ms':>9}"
           f"{'ratio':>7}{'solver fl':>10}{'floor ms':>10}{'new/floor':>10}{'us/phase':>9}"
@@ -310,9 +393,15 @@ def _report(sides: dict, cases) -> tuple[dict, bool]:
         else:
             line += f"{'-':>10}{'-':>10}{'-':>10}{'-':>9}"
         print(f"{line}{rel:>10.1e}")
+    print("today's cold run by part (ms, CPU): " + ", ".join(PARTS))
+    for key, split in parts.items():
+        numbers |= {f"parts_ms.{part}.{key}": round(v * 1e3, 3) for part, v in split.items()}
+        print(f"{key:<28}" + "".join(f"{split[part] * 1e3:>9.2f}" for part in PARTS))
+    whats = ["old_ms", "new_ms", "warm_ms", "ratio", "old_warm_ms", "warm_ratio", "floor_ms",
+             "solver_floor_ms", "over_floor", "above_floor_us_per_phase",
+             *(f"parts_ms.{part}" for part in PARTS)]
     for label, _, _ in cases:
-        for what in ("old_ms", "new_ms", "warm_ms", "ratio", "old_warm_ms", "warm_ratio",
-                     "floor_ms", "solver_floor_ms", "over_floor", "above_floor_us_per_phase"):
+        for what in whats:
             values = [v for k, v in numbers.items() if k.startswith(f"{what}.{label}.")]
             if values:
                 numbers[f"{what}.{label}"] = _results.span(values)

@@ -19,25 +19,22 @@ from .phases import ContactPhase
 
 @dataclass
 class PhaseEnds:
-    """Each phase as the loop leaves it: start (s), kind, modal coefficients at its start
-    over the full spectrum, duration (s), the coefficients exp(lambda s) w and the state u
-    at its end."""
+    """Each phase as the loop leaves it: start (s), kind, the state u at its start and its
+    end (in its contact state's energy coordinates) and its duration (s)."""
 
     t: list
     kind: list
-    w: list
+    u0: list
     s: list
-    a: list
     u: list
 
-    def add(self, t: float, kind: ContactPhase, w, s: float, a, u) -> None:
-        """Record a phase: start ``t`` (s), ``kind``, coefficients ``w`` at its start,
-        duration ``s`` (s), ``a`` = exp(lambda s) w and the state ``u`` at its end."""
+    def add(self, t: float, kind: ContactPhase, u0, s: float, u) -> None:
+        """Record a phase: start ``t`` (s), ``kind``, state ``u0`` at its start, duration
+        ``s`` (s) and the state ``u`` at its end."""
         self.t.append(t)
         self.kind.append(kind)
-        self.w.append(w)
+        self.u0.append(u0)
         self.s.append(s)
-        self.a.append(a)
         self.u.append(u)
 
 
@@ -62,7 +59,7 @@ class ExactSolution:
         st, s = self.states[True], np.array([t - self.starts[k]])
         w = self.w[k][None, :]
         work = self.contact_work[k] + float(st.works(w, s)[1, 0])
-        u = (st.modal.Vu @ (np.exp(st.modal.lam * s[0]) * self.w[k])).real
+        u = st.advance(self.w[k], float(s[0]))
         return work - float(st.energies(u[None, :])[2][0])
 
 
@@ -77,12 +74,17 @@ def ledger_solution(model: LinearImpactModel, states: dict, ends: PhaseEnds, t_e
     P = len(ends.t)
     works, energy = np.zeros((P, 2)), np.zeros(P)
     touching = np.array([k.touching for k in ends.kind])
-    W, A, U, S = np.array(ends.w), np.array(ends.a), np.array(ends.u), np.array(ends.s)
+    U0, U, S = np.array(ends.u0), np.array(ends.u), np.array(ends.s)
+    W = [None] * P  # the kept modal coefficients at each phase's start
     for contact, st in states.items():
         idx = np.flatnonzero(touching == contact)
         if not idx.size:
             continue
-        works[idx, :1 + contact] = st.works(W[idx], S[idx], A[idx]).T
+        Wc = U0[idx] @ st.to_kept.T
+        for p, row in zip(idx.tolist(), Wc):
+            W[p] = row
+        A = np.exp(st.lam * S[idx, None]) * Wc
+        works[idx, :1 + contact] = st.works(Wc, S[idx], A).T
         kin, pot, _ = st.energies(U[idx])
         energy[idx] = kin + pot
     if not np.all(np.isfinite(energy)):
@@ -92,7 +94,7 @@ def ledger_solution(model: LinearImpactModel, states: dict, ends: PhaseEnds, t_e
     e0 = model.initial_energy
     ledger = float(np.max(np.abs(energy + done.sum(axis=1) - e0)) / e0)
     before = [0.0, *done[:-1, 1].tolist()]
-    return ExactSolution(states=states, starts=ends.t, kinds=ends.kind, w=ends.w,
+    return ExactSolution(states=states, starts=ends.t, kinds=ends.kind, w=W,
                          contact_work=before, t_end=t_end, ledger=ledger)
 
 

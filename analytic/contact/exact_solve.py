@@ -23,17 +23,28 @@ from treeimpact.analytic.results import ImpactRecord
 from .exact_ledger import (ExactSamples, ExactSolution, PendulumEnergy, PhaseEnds,
                            ledger_solution)
 from .exact_record import record
+from .exact_switch import locate as _locate
 from .linear_model import LinearImpactModel, initial_state, matrices
-from .modal import Observable, decomposed, observation_rows, work_forms
-from .phases import ContactPhase, Signal, bracket, check_switches, switch
+from .kept_works import kept_works
+from .modal import Observable, decomposed, observation_rows
+from .phases import ContactPhase, check_switches
 
 #: Elements (samples x modes kept) of the largest block of samples the ``exact`` method
 #: evaluates at once (32, 256, ... up to this over the modes, at least 1024 samples): the
 #: powers exp(lambda i h) stay in cache (the soft SDOF, 2 modes: 4096 samples a block took
 #: half the time of 16384, benchmarks/bench_exact.py).
 _BLOCK_ELEMENTS = 2 ** 13
-_EPS = float(np.finfo(float).eps)
+#: The first block of a phase's samples and the factor each next one grows by, to the
+#: state's largest (most of the beam's chattering phases last 1-60 samples).
+_FIRST_BLOCK, _GROWTH = 32, 8
+#: Powers (modes x samples) up to which :func:`_powers` doubles one table: the soft SDOF's
+#: 2 x 4097 took 31 us so against 46 as two factors; a 12-element state's 27 x 1025 took
+#: 351 us against 82 (its doublings' copies grow with the table).
+_ONE_TABLE = 2 ** 14
 _DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
+#: The row of the pad's law F = k_c delta + c_c delta' (N), after the 8 observables': the
+#: samples' product forms it with them (its row over the modes: k_c delta's + c_c delta''s).
+_LAW = len(Observable)
 #: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it), for states of
 #: at most _PARTS_MAX_COORDS energy coordinates (12 elements: 56): a 48-element state's
 #: forms hold ~4 MB, and keeping them did not speed its warm run (medians 29.7 kept, 23.1
@@ -52,8 +63,8 @@ class _State:
         M, C, K, g = matrices(model, contact)
         self.modal = modal = decomposed(M, C, K)
         self.contact = contact
-        (self.H_int, self.H_lin, self.secular, self.rows, self.rows_conj, self.law,
-         self.gd, self.drift_rows) = _fixed_parts(model, modal, contact, g)
+        (self.kept_works, self.rows, self.rows_conj, self.law, self.gd,
+         self.drift_rows) = _fixed_parts(model, modal, contact, g)
         self.lam = modal.lam[modal.kept]
         self.block = max(1024, 1 << (_BLOCK_ELEMENTS // len(self.lam)).bit_length() - 1)
         # (re, im) of step^i interleaved per mode, i along the columns: 2m x (block + 1);
@@ -62,6 +73,16 @@ class _State:
         self.steps_ri, self.jumps_conj = _powers(np.exp(self.lam * h), self.block, contact,
                                                  modal)
         self.k_c = model.contact_stiffness
+        self.to_kept, self.from_kept, self.drift_kept = _kept_half(modal)
+
+    def advance(self, wk: np.ndarray, s: float) -> np.ndarray:
+        """The state u at ``s`` (s) of the phase started with the kept modal coefficients
+        ``wk``: Re(V exp(lambda s) w) over the kept half (a conjugate pair twice its kept
+        member's real part), plus s G u(0) for a rigid mode's flight."""
+        u = (self.from_kept @ (np.exp(self.lam * s) * wk)).real
+        if self.drift_kept is not None:
+            u += s * (self.drift_kept @ wk).real
+        return u
 
     def done(self) -> None:
         """Drop the powers (the solve is over: their scratch memory serves the next)."""
@@ -70,14 +91,11 @@ class _State:
     def works(self, w: np.ndarray, s: np.ndarray, a: np.ndarray | None = None
               ) -> np.ndarray:
         """The works of the trunk's damping (and of the pad, in contact) over [0, s_p] of
-        the phases p started with modal coefficients w (phases x 2N, s: phases; ``a`` =
-        exp(lambda s) w if known), J: (works, phases), the closed form of
-        :class:`.modal.Quadratic`."""
-        a = np.exp(self.modal.lam * s[:, None]) * w if a is None else a
-        out = _forms(self.H_int, a) - _forms(self.H_int, w)
-        if self.secular:
-            out = out + s * _forms(self.H_lin, w)
-        return out.real
+        the phases p started with the kept modal coefficients w (phases x m, s: phases;
+        ``a`` = exp(lambda s) w if known), J: (works, phases), the closed form of
+        :class:`.kept_works.KeptWorks`."""
+        a = np.exp(self.lam * s[:, None]) * w if a is None else a
+        return self.kept_works.integrals(w, s, a)
 
     def energies(self, u: np.ndarray) -> tuple:
         """(kinetic, elastic energy of the trunk's and pendulum's springs, the pad's elastic
@@ -93,12 +111,13 @@ class _State:
 
 def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) -> tuple:
     """What a :class:`_State` reads that is fixed by its decomposition ``modal`` and the
-    model's pad, damping and observed points (delta = ``g`` . q): the works' integrals H_int
-    and H_lin (stacked: damping; and the pad's, in contact), whether H_lin is non-zero, the
-    observation rows over the kept modes (m x 8, complex) and their conjugate transpose,
-    the law's rows (m x 4: delta, F, their slopes), delta's row over u and the observation
-    rows of a rigid mode's flight over the kept modes (8 x m: the observables' rates
-    Re(rows G V w), or None without a rigid mode). Kept on a small
+    model's pad, damping and observed points (delta = ``g`` . q): the works' integrals over
+    the kept modes (:class:`.kept_works.KeptWorks`: damping; and the pad's, in contact), the
+    observation rows over the kept modes (m x 9: the 8 observables and the law F, complex)
+    and their conjugate transpose,
+    the law's rows (m x 6: delta, F, their first and second derivatives), delta's row over
+    u and the observation rows of a rigid mode's flight over the kept modes (9 x m: the observables' and the law's
+    rates Re(rows G V w), or None without a rigid mode). Kept on a small
     ``modal`` (read-only arrays) for the next solve with the same inputs: the same
     arithmetic, so the same numbers."""
     k_c, c_c = model.contact_stiffness, model.contact_damping
@@ -108,32 +127,50 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     parts = cache.get(key)
     if parts is not None:
         return parts
-    damping, pad = work_forms(model, modal, contact, g)
-    works = [damping] + ([pad] if contact else [])
-    H_int = np.stack([f.H_int for f in works])
-    H_lin = np.stack([f.H_lin for f in works])
     kept = modal.kept
-    rows = observation_rows(model, modal, g) @ modal.Vu  # 8 x 2N over the modes
-    # m x 8: obs = Re(U @ rows); complex even when every kept mode is real (an
-    # overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
-    rows = np.array((rows[:, kept] * modal.weight).T, dtype=complex)
-    rows_conj = rows.T.conj().copy()  # 8 x m: see _scan
+    from_kept = _kept_half(modal)[1]
+    works = kept_works(model, modal, contact, g, from_kept)
+    # m x 8: obs = Re(U @ rows) over the kept modes; complex even when every kept mode is
+    # real (an overdamped pad: eig returns real vectors), as _scan's (Re, Im) product reads it
+    rows = np.array((observation_rows(model, modal, g) @ from_kept).T, dtype=complex)
     # delta and the law F = k_c delta + c_c delta', and their slopes
     delta, rate = rows[:, Observable.DELTA], rows[:, Observable.DELTA_RATE]
     law = np.stack([delta, k_c * delta + c_c * rate])
-    law = np.concatenate([law, law * modal.lam[kept]]).T.copy()  # m x 4
+    rows = np.column_stack([rows, law[1]])  # m x 9: the law's row after the observables'
+    rows_conj = rows.T.conj().copy()  # 9 x m: see _scan
+    lam = modal.lam[kept]
+    law = np.concatenate([law, law * lam, law * lam ** 2]).T.copy()  # m x 6
     gd = modal.displacement_row(g)
     drift = None
     if modal.drift is not None:  # the flight s G u(0) of a rigid mode, over the kept modes
-        drift = (observation_rows(model, modal, g) @ modal.drift)[:, kept].copy()
-    for a in (H_int, H_lin, rows, rows_conj, law, gd) + ((drift,) if drift is not None else ()):
-        a.setflags(write=False)
-    parts = (H_int, H_lin, bool(np.any(H_lin)), rows, rows_conj, law, gd, drift)
+        drift = (observation_rows(model, modal, g) @ modal.drift)[:, kept]
+        drift = np.vstack([drift, k_c * drift[_DELTA] + c_c * drift[_RATE]])  # 9 x m
+    for a in (rows, rows_conj, law, gd, drift, *vars(works).values()):
+        if a is not None:
+            a.setflags(write=False)
+    parts = (works, rows, rows_conj, law, gd, drift)
     if 2 * modal.N <= _PARTS_MAX_COORDS:
         cache[key] = parts
         while len(cache) > _PARTS_KEPT:  # a sweep over the pad meets one free state often
             cache.pop(next(iter(cache)), None)
     return parts
+
+
+def _kept_half(modal) -> tuple:
+    """The kept half of ``modal``'s spectrum as the loop reads it: the rows of V^-1 giving
+    the kept coefficients from u (m x 2N), the columns of V weighted by :attr:`.Modal.weight`
+    (2N x m: u = Re(V_k (weight exp(lambda s) w_k))) and those of the flight G V, or None
+    without a rigid mode; kept on ``modal`` (read-only) for the next solve."""
+    kept = modal.__dict__.get("_kept_half")
+    if kept is None:
+        k = modal.kept
+        drift = None if modal.drift is None else modal.drift[:, k] * modal.weight
+        kept = (modal.Wu[k], modal.Vu[:, k] * modal.weight, drift)
+        for a in kept:
+            if a is not None:
+                a.setflags(write=False)
+        modal.__dict__["_kept_half"] = kept
+    return kept
 
 
 def _transfer(modal, other) -> np.ndarray:
@@ -149,46 +186,55 @@ def _transfer(modal, other) -> np.ndarray:
     return kept[1]
 
 
-def _forms(H: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """w_p^T H_f w_p for each form H_f of the stack H (forms x n x n) and each row w_p of
-    w (phases x n): (forms, phases)."""
-    return ((H @ w.T) * w.T).sum(axis=1)
-
-
 def _powers(step: np.ndarray, count: int, slot, owner) -> tuple[np.ndarray, dict]:
-    """step^i, i = 0..count, by doubling (round-off log2(count) eps), as the interleaved
-    (Re, Im) rows of each step (2m x (count + 1), in the scratch memory ``slot``); and
-    {b: conj(step^b)} for the block lengths b = 32, 256, ... (x 8), count. The slot's last
-    table is taken again when the same decomposition ``owner`` (the same live object: a new
-    one after :func:`.modal.clear_cache`) asks for the same steps and count: the same
+    """step^i, i = 0..count, as step^(c a) step^b (i = c a + b, b < c ~ sqrt(count); each
+    factor's table by doubling: round-off ~log2(count) eps; one doubled table for at most
+    :data:`_ONE_TABLE` powers in all), as the interleaved (Re, Im)
+    rows of each step (2m x (count + 1), in the scratch memory ``slot``); and {b:
+    conj(step^b)} for the block lengths b = 32, 256, ... (x 8), count. The slot's last table
+    is taken again when the same decomposition ``owner`` (the same live object: a new one
+    after :func:`.modal.clear_cache`) asks for the same steps and count: the same
     numbers."""
     tag = (step.tobytes(), count)
     kept = _SCRATCH.__dict__.setdefault("tables", {}).pop(slot, None)  # refilled below
     if kept is not None and kept[0]() is owner and kept[1] == tag:
         _SCRATCH.tables[slot] = kept
         return kept[2], kept[3]
-    m = len(step)
-    steps = _scratch("powers", (m, count + 1), complex)
-    steps[:, 0], steps[:, 1] = 1.0, step
-    product = _scratch("product", (m * (count // 2 + 1),), complex)
-    n = 1
-    while n < count:
-        k = min(n, count - n)
-        # through a separate array: np.multiply into an output overlapping its inputs'
-        # array takes another loop, which rounds otherwise (6e-14 apart after the doublings)
-        part = product[:m * k].reshape(m, k)
-        np.multiply(steps[:, 1:1 + k], steps[:, n:n + 1], out=part)
-        steps[:, n + 1:n + 1 + k] = part
-        n += k
-    ri = _scratch(("rows", slot), (m, 2, count + 1), float)
+    m, n = len(step), count + 1
+    if m * n <= _ONE_TABLE:
+        steps = _doubled(step, n)
+    else:
+        c = 1 << (n.bit_length() + 1) // 2  # the inner factor's length, a power of 2
+        rows = -(-n // c)
+        low = _doubled(step, c)  # step^b, b < c
+        high = _doubled(low[:, -1] * step, rows)  # step^(c a), a < rows
+        steps = _scratch("powers", (m, rows, c), complex)
+        np.multiply(high[:, :, None], low[:, None, :], out=steps)
+        steps = steps.reshape(m, rows * c)[:, :n]
+    ri = _scratch(("rows", slot), (m, 2, n), float)
     ri[:, 0], ri[:, 1] = steps.real, steps.imag
-    jumps, b = {count: steps[:, count].conj()}, 32
+    jumps, b = {count: steps[:, count].conj()}, _FIRST_BLOCK
     while b < count:
-        jumps[b], b = steps[:, b].conj(), 8 * b
+        jumps[b], b = steps[:, b].conj(), _GROWTH * b
     ri = ri.reshape(2 * m, count + 1)
     # the owner weakly: a table must not keep a dropped decomposition's memory from reuse
     _SCRATCH.tables[slot] = (weakref.ref(owner), tag, ri, jumps)
     return ri, jumps
+
+
+def _doubled(step: np.ndarray, count: int) -> np.ndarray:
+    """step^i, i = 0..count - 1 (m x count, complex), by doubling: each pass multiplies the
+    powers so far by the last."""
+    out = np.empty((len(step), count), dtype=complex)
+    out[:, 0] = 1.0
+    if count > 1:
+        out[:, 1] = step
+    n = 2
+    while n < count:
+        k = min(n, count - n)
+        np.multiply(out[:, :k], out[:, n - 1:n] * step[:, None], out=out[:, n:n + k])
+        n += k
+    return out
 
 
 #: Per thread, arrays that outlive one solve to serve the next (:func:`_scratch`).
@@ -209,12 +255,21 @@ def _scratch(slot, shape: tuple, dtype) -> np.ndarray:
 
 @dataclass
 class _Grid:
-    """The sample grid (s) and what is written on it: the observables (8 x n, one row per
-    :class:`Observable`) and the pad's force (N)."""
+    """The sample grid (s) and what is written on it: the observables and the pad's law
+    (9 x n, one row per :class:`Observable`, then the law F, N) and the pad's force (N;
+    max(0, F) in contact, 0 apart: :meth:`write_force`)."""
 
     t: np.ndarray
     obs: np.ndarray
     force: np.ndarray
+
+    def write_force(self, j0: int, j1: int, contact: bool) -> None:
+        """The force on the samples j0..j1 - 1 of one phase, from its law (once a phase:
+        the next phase overwrites a sample it starts on, as it does the observables)."""
+        if contact:
+            np.maximum(self.obs[_LAW, j0:j1], 0.0, out=self.force[j0:j1])
+        else:
+            self.force[j0:j1] = 0.0
 
 
 def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
@@ -226,23 +281,22 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
     states = {c: _State(model, c, t_end / steps) for c in (False, True)}
     to_state = {True: _transfer(states[True].modal, states[False].modal),
                 False: _transfer(states[False].modal, states[True].modal)}
-    grid = _Grid(t_grid, np.empty((8, t_grid.size)), np.empty(t_grid.size))
+    grid = _Grid(t_grid, np.empty((_LAW + 1, t_grid.size)), np.empty(t_grid.size))
     u = states[True].modal.Tinv @ initial_state(model)
     t, kind = 0.0, ContactPhase.CONTACT
-    ends = PhaseEnds([], [], [], [], [], [])
+    ends = PhaseEnds([], [], [], [], [])
     while True:
         st = states[kind.touching]
-        w = st.modal.Wu @ u
-        end = _scan(model, st, kind, grid, t, w[st.modal.kept])
+        wk = st.to_kept @ u
+        end = _scan(model, st, kind, grid, t, wk)
         end_s, nxt = end if end is not None else (t_end - t, None)
-        a = np.exp(st.modal.lam * end_s) * w
-        u = st.modal.advanced(w, a, end_s)
-        ends.add(t, kind, w, end_s, a, u)
+        u_end = st.advance(wk, end_s)
+        ends.add(t, kind, u, end_s, u_end)
         if nxt is None:
             break
         t += end_s
-        if nxt.touching != kind.touching:  # to the other state's energy coordinates
-            u = to_state[nxt.touching] @ u
+        # to the other state's energy coordinates
+        u = to_state[nxt.touching] @ u_end if nxt.touching != kind.touching else u_end
         kind = nxt
         check_switches(len(ends.t), t)
     for st in states.values():
@@ -253,144 +307,74 @@ def solve(model: LinearImpactModel, t_end: float, dt_sample: float):
 
 def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid, t: float,
           wk: np.ndarray):
-    """Write the observables and the force of the phase started at ``t`` (modal
-    coefficients ``wk`` over the kept spectrum) block by block until it ends; returns (time
-    into the phase, next phase) of the switch, or None when it lasts to the grid's end.
+    """Write the observables and the law of the phase started at ``t`` (modal coefficients
+    ``wk`` over the kept spectrum) block by block until it ends; returns (time into the
+    phase, next phase) of the switch, or None when it lasts to the grid's end.
 
     A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
-    one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
-    powers (2m x block), half the flops of the complex product's real part. The force is
-    max(0, F) of the law F computed for the switch (0 apart); :meth:`ContactPhase.has_ended`
-    written out (the same comparisons)."""
-    k_c, c_c = model.contact_stiffness, model.contact_damping
-    t_grid, n_t, obs, force = grid.t, grid.t.size, grid.obs, grid.force
+    one real product of the interleaved (Re, Im) of c, conjugated, (9 x 2m) and of the
+    powers (2m x block), half the flops of the complex product's real part; the law F is
+    its last row, and the force is written from it once the phase's end is known.
+    :meth:`ContactPhase.has_ended` written out (the same comparisons)."""
+    t_grid, n_t, obs = grid.t, grid.t.size, grid.obs
     j0 = int(t_grid.searchsorted(t))
     if j0 >= n_t:
         return None
-    j, block = j0, 32
+    j, block = j0, _FIRST_BLOCK
     # conj(exp(lambda s) wk), as the product reads it (conj of a product: exact)
     base = (np.exp(st.lam * (t_grid[j0] - t)) * wk).conj()
     rows_conj, steps_ri, jumps_conj = st.rows_conj, st.steps_ri, st.jumps_conj
     contact, free = kind is ContactPhase.CONTACT, kind is ContactPhase.FREE
-    rate, flight = _flight(st, wk, k_c, c_c)
+    rate, flight = _flight(st, wk)
+    own_start = t_grid[j0] == t
     while j < n_t:
         jj = min(n_t, j + block)
         ob = np.matmul((rows_conj * base).view(float), steps_ri[:, :jj - j],
                        out=obs[:, j:jj])
         if rate is not None:
             ob += np.outer(rate, t_grid[j:jj] - t)
-        d = ob[_DELTA]
-        if free:  # apart, the law is read at the switch only (the same arithmetic there)
-            f, ended = None, d > 0.0
+        if free:
+            ended = ob[_DELTA] > 0.0
+        elif contact:
+            ended = ob[_LAW] <= 0.0
         else:
-            f = k_c * d + c_c * ob[_RATE]
-            ended = f <= 0.0 if contact else (f > 0.0) | (d < 0.0)
-        if j == j0 and t_grid[j0] == t:
+            ended = (ob[_LAW] > 0.0) | (ob[_DELTA] < 0.0)
+        if own_start and j == j0:
             ended[0] = False  # the phase's own start
         k = int(ended.argmax())
         if ended[k]:
-            if contact:
-                np.maximum(0.0, f[:k], out=force[j:j + k])
-            else:
-                force[j:j + k] = 0.0
+            grid.write_force(j0, j + k, contact)
             s_lo = max(float(t_grid[j + k - 1]) - t, 0.0) if j + k > j0 else 0.0
-            lo_values = None
-            if s_lo > 0.0:  # a sample of this phase: its delta and law as computed above
-                d_lo, r_lo = obs[_DELTA:_RATE + 1, j + k - 1].tolist()
-                lo_values = (d_lo, k_c * d_lo + c_c * r_lo)
-            d_hi, r_hi = ob[_DELTA:_RATE + 1, k].tolist()
-            f_hi = k_c * d_hi + c_c * r_hi if free else float(f[k])
+            # a sample of this phase: its delta and law as the product formed them
+            lo_values = (tuple(obs[_DELTA:_LAW + 1:_LAW - _DELTA, j + k - 1].tolist())
+                         if s_lo > 0.0 else None)
+            d_hi, f_hi = ob[_DELTA:_LAW + 1:_LAW - _DELTA, k].tolist()
             return _locate(kind, st, wk, s_lo, float(t_grid[j + k]) - t, d_hi, f_hi,
                            lo_values, flight)
-        if contact:
-            np.maximum(0.0, f, out=force[j:jj])
-        else:
-            force[j:jj] = 0.0
         if jj < n_t:
             base = base * jumps_conj[block]
-        j, block = jj, min(8 * block, st.block)
+        j, block = jj, min(_GROWTH * block, st.block)
+    grid.write_force(j0, n_t, contact)
     return None
 
 
-def _flight(st: _State, wk: np.ndarray, k_c: float, c_c: float):
+def _flight(st: _State, wk: np.ndarray):
     """(rates, flight) of a rigid mode's flight (a free billet) in the phase started with
-    modal coefficients ``wk``: the 8 observables' rates Re(rows G V w) (m/s, m/s^2; added
-    as rate * s) and those of delta and of the law (m/s, N/s); (None, (0, 0)) without one."""
+    modal coefficients ``wk``: the 8 observables' and the law's rates Re(rows G V w) (m/s,
+    m/s^2, N/s; added as rate * s) and those of delta and of the law (m/s, N/s); (None,
+    (0, 0)) without one."""
     if st.drift_rows is None:
         return None, (0.0, 0.0)
     rate = (st.drift_rows @ wk).real
-    return rate, (rate[_DELTA], k_c * rate[_DELTA] + c_c * rate[_RATE])
+    return rate, (rate[_DELTA], rate[_LAW])
 
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
     """The :class:`ExactSamples` of the written grid."""
-    x, y, vx, vy, _, _, crown, crown_v = grid.obs
+    x, y, vx, vy, _, _, crown, crown_v, _ = grid.obs
     return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
                         pendulum_energy=PendulumEnergy(model, y, vy), crown=crown,
                         crown_velocity=crown_v, solution=solution)
-
-
-def _locate(kind: ContactPhase, st: _State, wk: np.ndarray, s_lo: float, s_hi: float,
-            d_hi: float, f_hi: float, lo_values: tuple | None,
-            flight: tuple[float, float] = (0.0, 0.0)):
-    """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]
-    (:func:`.phases.switch`), each root by Newton's method on the exact solution's delta
-    and law with their slopes; ``lo_values``: (delta, law) at s_lo from the samples, or
-    None (s_lo the phase's start: evaluated, and bracketed by :func:`.phases.bracket`);
-    ``flight``: the rates (m/s, N/s) a rigid mode's flight adds to delta and the law."""
-    lam = st.lam
-    c = wk[:, None] * st.law  # m x 4: (delta, F, delta', F') = Re(exp(lambda s) @ c)
-    exp, dot = np.exp, np.dot
-    d_rate, f_rate = float(flight[0]), float(flight[1])
-
-    def delta(s):
-        v = dot(exp(lam * s), c).real.tolist()
-        return v[0] + d_rate * s, v[2] + d_rate
-
-    def law(s):
-        v = dot(exp(lam * s), c).real.tolist()
-        return v[1] + f_rate * s, v[3] + f_rate
-
-    d_lo, f_lo = lo_values if lo_values is not None else (None, None)
-
-    def root(signal):
-        if signal is Signal.DELTA:
-            return _newton_root(delta, s_lo, s_hi, d_hi, d_lo)
-        return _newton_root(law, s_lo, s_hi, f_hi, f_lo)
-
-    return switch(kind, root, lambda s: delta(s)[0], d_hi, f_hi)
-
-
-def _newton_root(fun, lo: float, hi: float, f_hi: float, f_lo: float | None = None
-                 ) -> float:
-    """Zero of ``fun`` (returning value and slope) in [lo, hi], ``f_hi`` its value at hi
-    (``f_lo`` at lo, if known): a phase that starts on its own boundary (value 0 at lo) is
-    bracketed from just after its start; then Newton's steps inside the shrinking bracket
-    (bisection otherwise), to 1e-15 s."""
-    if f_lo is not None and f_lo * f_hi <= 0 and f_lo != 0.0:
-        found = lo, f_lo  # what bracket() returns for a sign change at lo
-    else:
-        found = bracket(lambda u: fun(u)[0], lo, hi, f_hi)
-    if found is None:
-        return hi
-    lo, f_lo = found
-    s = lo - f_lo * (hi - lo) / (f_hi - f_lo)
-    tol = 1e-15 + 4 * _EPS * abs(hi)
-    for _ in range(100):
-        f, slope = fun(s)
-        if f == 0.0:
-            return s
-        if (f > 0.0) == (f_lo > 0.0):
-            lo, f_lo = s, f
-        else:
-            hi = s
-        nxt = s - f / slope if slope != 0.0 else 0.5 * (lo + hi)
-        if not lo < nxt < hi:
-            nxt = 0.5 * (lo + hi)
-        if abs(nxt - s) <= tol or hi - lo <= tol:
-            return nxt
-        s = nxt
-    return s
 
 
 def sampled_record(model: LinearImpactModel, t_end: float, dt_sample: float) -> ImpactRecord:

@@ -73,6 +73,15 @@ class Modal:
         self.weight = np.where(lam.imag[self.kept] > 0.0, 2.0, 1.0)  # Re(V w) over the pairs
 
     @cached_property
+    def pair_sums(self) -> tuple[np.ndarray, np.ndarray]:
+        """(small, total): lambda_i + lambda_j over the pairs (1 where ``small``: below 1e-9
+        of the largest |lambda|, an undamped pair whose integrand is constant), as
+        :class:`Quadratic` divides by them."""
+        total = self.lam[:, None] + self.lam[None, :]
+        small = np.abs(total) < 1e-9 * max(1.0, float(np.max(np.abs(self.lam))))
+        return small, np.where(small, 1.0, total)
+
+    @cached_property
     def T(self) -> np.ndarray:
         """z = (q, q') = T u."""
         N = self.N
@@ -143,14 +152,6 @@ class Modal:
         if self.drift is not None:  # the rigid modes' flight, s G u(0)
             z = z + s * (self.T @ (self.drift @ w).real)
         return z
-
-    def advanced(self, w: np.ndarray, a: np.ndarray, s: float) -> np.ndarray:
-        """The state u at ``s`` (s) of the solution with modal coefficients ``w`` at s = 0,
-        ``a`` = exp(lambda s) w: Re(V a), plus s G u(0) for a rigid mode's flight."""
-        u = (self.Vu @ a).real
-        if self.drift is not None:
-            u = u + s * (self.drift @ w).real
-        return u
 
     def quadratic(self, Q: np.ndarray) -> Quadratic:
         """The quadratic form u^T Q u (Q over u) on this solution."""
@@ -248,10 +249,9 @@ class Quadratic:
     def __init__(self, modal: Modal, Q: np.ndarray | None, H: np.ndarray | None = None):
         self.modal = modal
         H = modal.Vu.T @ Q @ modal.Vu if H is None else H
-        total = modal.lam[:, None] + modal.lam[None, :]
-        small = np.abs(total) < 1e-9 * max(1.0, float(np.max(np.abs(modal.lam))))
+        small, total = modal.pair_sums
         self.H = H
-        self.H_int = np.where(small, 0.0, H / np.where(small, 1.0, total))
+        self.H_int = np.where(small, 0.0, H / total)
         self.H_lin = np.where(small, H, 0.0)  # secular part: constant integrand
 
     def value(self, w, s, U=None):
@@ -306,28 +306,6 @@ def ledger_forms(model: LinearImpactModel, modal: Modal, contact: bool,
     return LedgerForms(modal.quadratic(kin), modal.quadratic(pot), modal.quadratic(damp), pad)
 
 
-def work_forms(model: LinearImpactModel, modal: Modal, contact: bool, g: np.ndarray
-               ) -> tuple[Quadratic, Quadratic | None]:
-    """The rates of the trunk's damping work and (``contact``, else None) of the pad's work
-    F delta' of :func:`ledger_forms` (W) of ``model`` on its solution ``modal`` (delta =
-    ``g`` . q), their H = V^T Q V formed from Q's structure: the
-    damping acts on the velocities only (V_v^T Phi^T D Phi V_v, V_v the velocity rows of V),
-    the pad's form is of rank 2 (its rows over u, gd and gv: V^T gd, V^T gv); O(n^2) for the
-    pad and half the products for the damping, instead of two n^3 products each."""
-    N, k_c, c_c = modal.N, model.contact_stiffness, model.contact_damping
-    Dfull = np.zeros((N, N))
-    Dfull[:model.dofs, :model.dofs] = model.D
-    Vv = modal.Vu[N:]
-    damping = Quadratic(modal, None, Vv.T @ (modal.Phi.T @ Dfull @ modal.Phi) @ Vv)
-    if not contact:
-        return damping, None
-    a = modal.displacement_row(g) @ modal.Vu
-    b = modal.velocity_row(g) @ modal.Vu
-    ab = np.outer(a, b)
-    pad = Quadratic(modal, None, 0.5 * k_c * (ab + ab.T) + c_c * np.outer(b, b))
-    return damping, pad
-
-
 class Observable(enum.IntEnum):
     """The rows of :func:`observation_rows` (SI: m and m/s)."""
 
@@ -343,11 +321,17 @@ class Observable(enum.IntEnum):
 
 def observation_rows(model: LinearImpactModel, modal: Modal, g: np.ndarray) -> np.ndarray:
     """Rows over u of the :class:`Observable` quantities of ``model`` on its solution
-    ``modal`` (delta = ``g`` . q), in their order (8 x 2N)."""
+    ``modal`` (delta = ``g`` . q), in their order (8 x 2N): the points' rows r over q (the
+    clamp, the pendulum, delta, the crown) as :meth:`Modal.displacement_row` and
+    :meth:`Modal.velocity_row` of each, all at once."""
     N = modal.N
-    e = np.eye(N)
-    clamp, pend, crown = e[model.clamp], e[N - 1], model.crown_gain * e[model.crown]
-    return np.array([modal.displacement_row(clamp), modal.displacement_row(pend),
-                     modal.velocity_row(clamp), modal.velocity_row(pend),
-                     modal.displacement_row(g), modal.velocity_row(g),
-                     modal.displacement_row(crown), modal.velocity_row(crown)])
+    points = np.zeros((4, N))
+    points[0, model.clamp], points[1, N - 1] = 1.0, 1.0
+    points[2], points[3, model.crown] = g, model.crown_gain
+    per_eta = points @ modal.Phi  # r . q per unit eta, each point
+    rows = np.zeros((8, 2 * N))
+    rows[[Observable.X, Observable.Y, Observable.DELTA, Observable.CROWN], :N] = (
+        per_eta / modal.scale)
+    rows[[Observable.VX, Observable.VY, Observable.DELTA_RATE, Observable.CROWN_VELOCITY],
+         N:] = per_eta
+    return rows
