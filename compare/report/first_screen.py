@@ -54,13 +54,14 @@ TERMS = {"one_dof": "1-DOF model", "why": "gap", "small_e": "holds up to e",
 
 
 def first_screen(summary: dict, scen_sections) -> list[dict]:
-    """The first screen's items, in order, each {key, anchor (the section backing it), term
-    (its glossary term), text}: the 1-DOF gaps, why the largest gap of each tree, small e,
+    """The first screen's items from the page's ``summary`` (its answer rows, tolerance,
+    small-e answers, findings and design answer) and the scenario sections
+    ``scen_sections``, in order, each {key, anchor (the section backing it), term (its
+    glossary term), text}: the 1-DOF gaps, why the largest gap of each tree, small e,
     what to measure first, the designer's choice (the last three only where the report has
     their part)."""
     why = why_text(summary["answer"], scen_sections)
-    items = [("one_dof", "answer-one-dof", one_dof_text(summary["answer"],
-                                                        summary["answer_tolerance"])),
+    items = [("one_dof", "answer-one-dof", one_dof_text(summary["answer"])),
              ("why", "findings" if summary.get("findings") else "summary", why),
              ("small_e", "answer-small-e", small_e_text((summary.get("small_e") or {})
                                                         .get("trees") or {},
@@ -70,10 +71,10 @@ def first_screen(summary: dict, scen_sections) -> list[dict]:
     return [{"key": k, "anchor": a, "term": TERMS[k], "text": t} for k, a, t in items if t]
 
 
-def one_dof_text(answer: list[dict], tol: float) -> str:
+def one_dof_text(answer: list[dict]) -> str:
     """How far the paper's 1-DOF model is off the continuum on x_max and the energy
-    delivered, the range over the trees at their own pad and e; the trees without an answer
-    and why."""
+    delivered, the range over the ``answer`` rows' trees at their own pad and e; the trees
+    without an answer and why (the tolerance is the table's and the small-e sentence's)."""
     rows = [a for a in answer if a.get("available")]
     text = ""
     if rows:
@@ -107,7 +108,8 @@ def cause_of(section, metric: str) -> str | None:
 
 
 def why_text(answer: list[dict], scen_sections) -> str:
-    """Per tree the physical cause of its largest 1-DOF gap (:func:`largest_gap`,
+    """Per tree of the ``answer`` rows (their sections ``scen_sections``) the physical cause
+    of its largest 1-DOF gap (:func:`largest_gap`,
     :func:`cause_of`), one clause per cause naming its trees with the gap, in the trees'
     order, after "Largest gap: ": "A's peak force (-85 %) and B's energy delivered (+213 %):
     the pendulum meets the light clamp, not M_T; C's ..."; a tree whose gap no documented
@@ -167,15 +169,16 @@ def small_e_text(trees: dict, tol: float) -> str:
         whose = "some tree's" if len(trees) > 1 else "the tree's"
         out.append(f"{'It' if keep else 'Small e'} fails at {whose} own e for {_and(fail)}.")
     if off or trunk:
-        off = off + (["the 1-DOF gaps"] if trunk else [])
-        out.append(f"Off even at e = 0, so not from e: {_and(off)}.")
+        off = off + (["both 1-DOF gaps" if len(trunk) == 2 else "1-DOF gaps"] if trunk else [])
+        out.append(f"Off even at e = 0, not from e: {_and(off)}.")
     if none:
         out.append(f"No verdict on {_and(none)}: no value at e = 0.")
     return " ".join(out)
 
 
 def measure_text(answer: list[dict]) -> str:
-    """Per headline gap, the input to measure first on each tree: its settled leader by the
+    """Per headline gap, the input to measure first on each tree of the ``answer`` rows
+    (their ``measure_first``): its settled leader by the
     variance-share rule (compare.studies.sobol.verdict), trees with the same leader named
     together; trees where no input leads yet said so. "" without a Sobol analysis."""
     rows = [a for a in answer if (a.get("measure_first") or {}).get("first")]
@@ -200,7 +203,7 @@ def measure_text(answer: list[dict]) -> str:
         open_ = leads.get(None)
         lead = "Measure first, for" if not out else "For"
         parts = named
-        parts += [f"nothing leads yet on {_and(open_)}"] if open_ else []
+        parts += [f"undecided on {_and(open_)}"] if open_ else []
         out.append(f"{lead} {gap}: {'; '.join(parts)}.")
     return " ".join(out)
 
