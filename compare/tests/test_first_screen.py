@@ -216,3 +216,21 @@ def test_every_head_on_the_first_screen_is_plain_or_has_its_glossary_tooltip(pag
 def test_the_counting_rule(text, n_words, lengths):
     assert len(F.words(text)) == n_words
     assert [len(F.words(s)) for s in F.sentences(text)] == lengths
+
+
+def test_a_tree_that_bounces_off_gets_its_whole_report(tmp_path):
+    """The light pendulum has no moving together, so no ledger at T0 and no ledger figure:
+    its scenario section renders without one (the page crashed on the missing figure), and
+    the written pages' first screen is report.json's."""
+    import json
+
+    from treeimpact.compare.report import write_report
+
+    paths = write_report(tmp_path, scenarios=[_light_pendulum()], runs=RunCache(),
+                         engines=("no-such-engine",), segments=4)
+    data = json.loads(paths["json"].read_text())
+    texts = [i["text"] for i in data["answer"]["first_screen"]]
+    assert _answer_md(paths["md"].read_text()) == texts
+    assert _answer_html(paths["html"].read_text()) == texts
+    page = paths["html"].read_text()
+    assert "<h3>Energy ledger at T0</h3>" in page and 'alt="energy ledger"' not in page
