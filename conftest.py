@@ -209,6 +209,7 @@ SESSION_FILES = frozenset({
 })
 MODULE_FIXTURE_FILES = frozenset({
     "compare/tests/test_figure_passes.py", "compare/tests/test_figure_titles.py",
+    "compare/tests/test_first_screen.py",
     "compare/tests/test_sobol_cross.py",
     "compare/tests/test_sort_keys.py", "tests/test_bullet_models.py",
     "tests/test_contact_cmd.py", "tests/test_doc_numbers.py",

@@ -31,7 +31,8 @@ REPORT_TERMS = (
     "not fixed", "identifiable", "band", "Not compared", "sweep", "study", "validity map",
     "dominating rung", "contact scan", "crossing", "sensitivity", "mu\\*",
     "Sobol indices", "ST", "N/2 change", "settled", "unsettled", "what to measure first",
-    "speed-accuracy curve")
+    "speed-accuracy curve", "range over the unmeasured inputs", "design map",
+    "designer's choice")
 
 
 def _bold() -> list[str]:
@@ -101,3 +102,30 @@ def test_citations_are_read(text, cited):
 def test_the_readme_links_the_glossary_on_its_first_screen():
     first_screen = "\n".join((ROOT / "README.md").read_text().splitlines()[:25])
     assert "(docs/glossary.md)" in first_screen
+
+
+def test_every_tooltip_the_report_asks_for_is_a_glossary_entry():
+    """The page's tooltips (issue 53 item 4) come from one lookup of the glossary
+    (compare/report/glossary.py): every term a template passes to ``|tip`` and every term of
+    the first screen's items and answer columns has its entry, and its tooltip is that
+    entry's first definition on one line."""
+    from treeimpact.compare.report.answer import ANSWER_TERMS
+    from treeimpact.compare.report.first_screen import TERMS
+    from treeimpact.compare.report.glossary import LINE, entries, tip
+
+    templates = "".join(p.read_text() for p in
+                        (ROOT / "compare" / "report" / "templates").glob("*.j2"))
+    asked = set(re.findall(r"'([^']+)'\|tip", templates)) | set(TERMS.values()) | set(
+        ANSWER_TERMS.values())
+    assert {"e", "x_max", "full-record fit"} <= asked
+    bold = _bold()
+    for term in sorted(asked):
+        assert _has_entry(term, bold), term
+        line = tip(term)
+        assert line.startswith(f"{term}: ") and "\n" not in line
+        assert len(line) <= len(term) + 2 + LINE + 4  # "term: " and the cut's " ..."
+    assert tip("x_max") == ("x_max: the largest trunk displacement at the clamp and its "
+                            "time")  # the entry's text up to its next term
+    with pytest.raises(KeyError, match="no entry for 'no such term'"):
+        tip("no such term")
+    assert len(entries()) > len(REPORT_TERMS)

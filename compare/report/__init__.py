@@ -46,6 +46,7 @@ from ..sweep.run import run_sweeps
 from ..verdicts import Verdict, validity_tolerance
 from .answer import (
     ANSWER_METRICS,
+    ANSWER_TERMS,
     grid_text,
     in_short,
     one_dof_answer,
@@ -55,6 +56,7 @@ from .answer import (
 from .base import environment, num
 from .design_answer import design_answer
 from .design_answer import in_short_text as design_in_short
+from .first_screen import first_screen, with_ranges
 from .measure import in_short_text, with_sobol
 from .pageset import clear_leftovers, staged, swap_in
 from .paper import PaperSection
@@ -220,6 +222,7 @@ def _page_summary(sections: dict) -> dict:
     with_sensitivity(summary["answer"], sections["studies"])
     with_sobol(summary["answer"], sections["studies"])
     summary["answer_metrics"] = ANSWER_METRICS
+    summary["answer_terms"] = ANSWER_TERMS
     summary["answer_tolerance"] = validity_tolerance()
     summary["contact"] = sections["contact"]
     summary["answer_matrix"] = sections["answer_matrix"]
@@ -234,6 +237,8 @@ def _page_summary(sections: dict) -> dict:
     summary["design"] = design_answer(sections["studies"])
     if summary["design"]:
         summary["in_short"]["design"] = design_in_short(summary["design"])
+    summary["answer_ranges"] = with_ranges(summary["answer"])
+    summary["first_screen"] = first_screen(summary, sections["scenarios"])
     summary["implausible"] = {s.ladder.name: found for s in sections["scenarios"]
                               if (found := [i.text for i in implausible(s.ladder.scenario)])}
     summary["mass_origin"] = {s.ladder.name: mass_origin(s.ladder.scenario.trunk,
@@ -320,9 +325,11 @@ def _report_data(sections: dict, summary: dict, stamp: str) -> dict:
                    "small_e_figure": small_e["figure"],
                    "measure_first": {a["scenario"]: a["measure_first"]
                                      for a in summary["answer"] if a.get("measure_first")},
-                   "design": summary["design"]},
+                   "design": summary["design"], "first_screen": summary["first_screen"],
+                   "ranges": summary["answer_ranges"]},
         "summary": {k: v for k, v in summary.items()
-                    if k not in ("answer", "small_e", "in_short", "answer_tolerance", "design")},
+                    if k not in ("answer", "small_e", "in_short", "answer_tolerance", "design",
+                                 "first_screen", "answer_ranges", "answer_terms")},
         "paper": sections["paper"].to_json(),
         "scenarios": {s.ladder.name: s.to_json() for s in sections["scenarios"]},
         "trunks": sections["trunks"].to_json(),

@@ -19,8 +19,12 @@ from .base import deciding
 ANSWER_METRICS = (("x_max", "x_max", 1e3, "mm"),
                   ("energy_delivered", "energy to tree", 1.0, "J"),
                   ("crown_peak", "crown peak", 1e3, "mm"),
-                  ("crown_peak_acceleration", "crown accel.*", 1e-3, "km/s^2"),
-                  ("peak_force", "force*", 1e-3, "kN"))
+                  ("crown_peak_acceleration", "crown acceleration*", 1e-3, "km/s^2"),
+                  ("peak_force", "peak force*", 1e-3, "kN"))
+#: Each answer metric's glossary term (docs/glossary.md), its column's tooltip.
+ANSWER_TERMS = {"x_max": "x_max", "energy_delivered": "energy delivered",
+                "crown_peak": "crown peak", "crown_peak_acceleration": "crown acceleration",
+                "peak_force": "peak force"}
 
 
 def one_dof_answer(scen_sections) -> list[dict]:

@@ -17,6 +17,8 @@ from treeimpact.compare.studies.sensitivity import INPUTS
 from treeimpact.compare.studies.sobol import verdict_text
 from treeimpact.compare.sweep.maps import INPUT_LABELS, OUTPUT_LABELS
 
+from .glossary import tip
+
 TEMPLATES = Path(__file__).with_name("templates")
 
 
@@ -222,6 +224,7 @@ def environment() -> jinja2.Environment:
         _ENV.filters["input_value"] = input_value
         _ENV.filters["sobol_verdict"] = sobol_verdict
         _ENV.filters["share"] = share
+        _ENV.filters["tip"] = tip
         _ENV.globals["interval"] = interval
     return _ENV
 

@@ -567,7 +567,8 @@ def test_the_answer_answers_both_halves_first(report):
         assert 0.0 <= a["holds_up_to_e"] <= E_GRID[-1]
     assert answer["small_e_figure"] == "figures/small-e.png"
     html = paths["html"].read_text()
-    order = [html.index(s) for s in (answer["in_short"]["small_e"][:40], 'id="answer-one-dof"',
+    small = next(i["text"] for i in answer["first_screen"] if i["key"] == "small_e")
+    order = [html.index(s) for s in (small[:40], 'id="answer-one-dof"',
                                      'id="answer-small-e"', 'src="figures/small-e.png"',
                                      'id="summary"')]
     assert order == sorted(order)
