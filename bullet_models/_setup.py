@@ -26,12 +26,14 @@ from treeimpact.analytic.continuum.chain import (
     lateral_jacobian,
 )
 from treeimpact.analytic.engine.interface import (
+    ENERGY_GROWTH_LIMIT,
     EngineSetup,
     check_choice,
     engine_model,
     trunk_chain,
     trunk_options,
 )
+from treeimpact.analytic.engine.phases import PhaseRule, input_energy, phase_rule
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import DEFAULT_CONTACT_DURATION, Scenario
 from treeimpact.analytic.model.reduction import reduce_trunk
@@ -62,6 +64,8 @@ class Setup(EngineSetup):
     calibration: str = "pad"  # analytic.contact.law.CALIBRATIONS
     matrices: tuple | None = field(default=None, repr=False)  # chain (M, K, D)
     step_set_by: str = "given"  # what set dt (:data:`STEP_REASONS`)
+    #: stepping by phase (analytic.engine.phases); None: every step is dt
+    phases: PhaseRule | None = field(default=None, compare=False)
 
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
@@ -101,7 +105,19 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
                  contact_damping=c_c, bullet=bullet, collision_duration=col,
                  omega_max=bodies.omega_max, apparent_mass=bodies.apparent_mass,
                  matrices=bodies.matrices, calibration=calibration,
-                 step_set_by=reason)
+                 step_set_by=reason,
+                 phases=_phases(model, scenario, pendulum, contact, dt, col, bodies, reason))
+
+
+def _phases(model, scenario, pendulum: str, contact: str, dt: float, col: float, bodies,
+            reason: str) -> PhaseRule | None:
+    """The run's stepping by phase (analytic.engine.phases) for the soft contact when the
+    rule chose its step (a given --dt is every step); None for the SDOF trunk and Newton's
+    impulses (a restitution impulse per contact, its step the contact's)."""
+    if reason == "given" or contact != "soft":
+        return None
+    return phase_rule(dt, bodies.omega_max, input_energy(model, scenario, pendulum), col,
+                      STEPS_PER_PERIOD, ENERGY_GROWTH_LIMIT)
 
 
 @dataclass(frozen=True)
