@@ -109,6 +109,6 @@ def phase_rule(contact_step: float, omega_max: float | None, input_energy: float
     h_f = 2.0 * math.pi / omega_max / steps_per_period
     if h_f < MIN_STEP_RATIO * contact_step:
         return None
-    chunk = max(1, int(math.ceil(2.0 * collision_duration / contact_step)))
+    chunk = max(1, round(2.0 * collision_duration / contact_step))
     return PhaseRule(float(contact_step), float(h_f),
                      (1.0 + growth_limit) * float(input_energy), chunk)
