@@ -57,7 +57,7 @@ def _run(engine, scen, opts, dt=None):
 
 
 def _rel(a: float, b: float) -> float:
-    return abs(a - b) / abs(b) if b else abs(a)
+    return float(abs(a - b) / abs(b) if b else abs(a))
 
 
 def convergence(scen, engine, opts) -> dict:
@@ -149,4 +149,6 @@ def measure(report_cases, engines, rounds: int) -> tuple[dict, dict]:
     details = {"rounds": rounds, "engines": list(engines),
                "cases": [{"case": list(c), "convergence": cv, "timing": tm}
                          for c, cv, tm in zip(case_list, conv, times)]}
-    return numbers, details
+    from treeimpact.analytic.results import to_jsonable
+
+    return to_jsonable(numbers), to_jsonable(details)
