@@ -47,9 +47,15 @@ def tolerances(pendulum: str) -> dict:
 
 
 def _run(engine, scen, opts, dt=None):
+    """One run, s: at ``dt`` (s, a fixed step) or, with None, by phase (the engine's
+    ``_setup.PHASED`` switched on: Bullet's default is the fixed step)."""
+    import importlib
+
     from treeimpact.compare.backends import get_backend
     from treeimpact.compare.runs import resolve_scenario
 
+    importlib.import_module(f"treeimpact.{engine}_models._setup").PHASED = dt is None or \
+        engine == "mujoco"
     t0 = time.perf_counter()
     r = get_backend(engine).simulate(resolve_scenario(scen), **opts,
                                      **({} if dt is None else {"dt": dt}))

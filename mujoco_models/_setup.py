@@ -63,6 +63,11 @@ SETUP_CACHE_SIZE = 64  # setups kept by make_setup (a repeated run does not reco
 #: the chains of fewer than about 20 segments are stepped by their contact and do not change.
 STEPS_PER_PERIOD = 10
 
+#: Stepping by phase by default (analytic.engine.phases; docs/engines.md "Stepping by
+#: phase"): every metric the ladder compares, on every shipped tree and the light
+#: pendulum's, within its tolerance of the fixed step (benchmarks/results/chain_phases.json).
+PHASED = True
+
 #: The trunk's root body per trunk model (its subtree's gravity is compensated).
 ROOT_BODIES = {"sdof": "trunk", "chain": "segment_0", "flex": "trunk_root"}
 
@@ -231,11 +236,12 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
 
 
 def _phases(fit, model, scenario, pendulum: str, integrator: str) -> PhaseRule | None:
-    """The run's stepping by phase (analytic.engine.phases) when the rule chose its step
+    """The run's stepping by phase (analytic.engine.phases) when :data:`PHASED` and the
+    rule chose its step
     (a given --dt is every step) and the integrator is Euler's or an implicit one (RK4 gets
     the contact law uncorrected and applies its dampers explicitly at each stage: not
     phased); None otherwise and for the SDOF trunk."""
-    if fit.step_set_by == "given" or integrator == "RK4":
+    if not PHASED or fit.step_set_by == "given" or integrator == "RK4":
         return None
     return phase_rule(fit.dt, fit.omega_max, input_energy(model, scenario, pendulum),
                       fit.collision_duration, STEPS_PER_PERIOD, ENERGY_GROWTH_LIMIT)

@@ -27,12 +27,22 @@ def _tolerances() -> dict:
     return {k: v["rel"] for k, v in table.items() if "rel" in v}
 
 
+def phased_on(monkeypatch, package: str) -> None:
+    """Stepping by phase in ``package`` (its ``_setup.PHASED``: MuJoCo's default, Bullet's
+    off by default, docs/engines.md)."""
+    import importlib
+
+    monkeypatch.setattr(importlib.import_module(f"{package}._setup"), "PHASED", True)
+
+
 @pytest.fixture(scope="module", params=ENGINES)
 def runs(request):
     """(engine module, phased run, fixed-step run at the same dt) of :data:`CASE`."""
     mod = pytest.importorskip(request.param)
     scen = load_scenario("open-center")
-    phased = mod.simulate(scen, **CASE)
+    with pytest.MonkeyPatch.context() as mp:
+        phased_on(mp, request.param)
+        phased = mod.simulate(scen, **CASE)
     fixed = mod.simulate(scen, **CASE, dt=phased.model["dt"])
     return mod, phased, fixed
 
@@ -64,8 +74,16 @@ def test_no_phases_for_an_sdof_trunk_or_steps_that_are_nearly_one():
 
 
 def test_a_given_dt_or_the_sdof_is_a_fixed_step():
+    """MuJoCo steps by phase by default, Bullet not (its reason: bullet_models._setup.PHASED);
+    a given --dt and the SDOF trunk are fixed steps."""
     pytest.importorskip("treeimpact.mujoco_models")
+    from treeimpact import bullet_models as bt
     from treeimpact import mujoco_models as mj
+    from treeimpact.bullet_models import _setup as bullet_setup
+    from treeimpact.mujoco_models import _setup as mujoco_setup
+
+    assert mujoco_setup.PHASED and not bullet_setup.PHASED
+    assert bt.make_setup(load_scenario("open-center"), trunk="chain", segments=4).phases is None
 
     scen = load_scenario("open-center")
     assert mj.make_setup(scen, trunk="sdof").phases is None
@@ -136,6 +154,7 @@ def test_a_re_touch_inside_a_big_step_is_not_missed(package, monkeypatch):
         return out
 
     monkeypatch.setattr(check_mod, name, counted)
+    phased_on(monkeypatch, package)
     monkeypatch.setattr(phases.PhaseRule, "free_steps", lambda self, gap, lam, left: min(
         200, int(left / self.free_step)) if gap > 0.0 else 0)
     scen = load_scenario("central-leader")
@@ -149,3 +168,19 @@ def test_a_re_touch_inside_a_big_step_is_not_missed(package, monkeypatch):
     assert loose.metrics["contact_episodes"] == fixed.metrics["contact_episodes"]
     for k, tol in _tolerances().items():
         assert abs(loose.metrics[k] - fixed.metrics[k]) <= tol * abs(fixed.metrics[k]), k
+
+
+def test_mujoco_reads_the_gap_and_the_inverse_mass_of_its_own_contact():
+    """The switch's gap is the spheres' distance less their radii (MuJoCo's geoms, equal to
+    the sensors' site distance the chunk check reads), and lambda_max of J_rel M^-1 J_rel^T
+    at rest is the contact's inverse effective mass A (its x row; the z rows vanish at rest)
+    to 1e-9; the linear pendulum starts touching, the overlap INITIAL_OVERLAP."""
+    pytest.importorskip("treeimpact.mujoco_models")
+    from treeimpact import mujoco_models as mj
+    from treeimpact.mujoco_models._phased import _Probe
+    from treeimpact.mujoco_models._rollout import INITIAL_OVERLAP
+
+    setup = mj.make_setup(load_scenario("open-center"), trunk="chain", segments=4)
+    gap, lam, _ = _Probe(setup.mjmodel).at(setup.initial_state)
+    assert gap == pytest.approx(-INITIAL_OVERLAP, abs=1e-15)
+    assert lam == pytest.approx(setup.inverse_mass, rel=1e-9)
