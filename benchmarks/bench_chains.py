@@ -24,6 +24,12 @@ with nothing of ours around it against the runner's step (MuJoCo: ``mujoco.rollo
 the runner's model, of 50f1faa's 24-tendon model and with the contact off; Bullet: bare
 ``stepSimulation``, the runner's loop, the loop without its contact query), medians of
 alternating rounds (docs/engines.md quotes ``chain_floors.json``).
+
+``--phases`` measures today's code only, in this process: every report chain and a light
+pendulum's, at the rule's fixed step dt, at dt / 2 and stepped by phase (the default): the
+convergence table against compare/tolerances.toml's stated tolerances and the steps and
+wall times of the fixed-step and phased runs side by side (benchmarks/_phases.py; writes
+``results/chain_phases.json``; docs/engines.md "Stepping by phase").
 """
 
 from __future__ import annotations
@@ -281,8 +287,18 @@ def main(argv=None) -> int:
                    help="the engines whose cases run (comma-separated; default both)")
     p.add_argument("--floors", action="store_true",
                    help="measure the engines' floors (today's code, in this process) instead")
+    p.add_argument("--phases", action="store_true",
+                   help="stepping by phase against the fixed step (today's code) instead")
     p.add_argument("--out", help="results file (default benchmarks/results/chains.json)")
     args = p.parse_args(argv)
+    if args.phases:
+        import _phases
+
+        start_load = _results.load_average()
+        numbers, details = _phases.measure(REPORT_CASES, args.engines.split(","), args.rounds)
+        _results.write("chain_phases", numbers, details, started_load=start_load,
+                       out=Path(args.out) if args.out else None)
+        return 0
     if args.floors:
         start_load = _results.load_average()
         _results.write("chains", floors(), {"steps": FLOOR_STEPS, "rounds": FLOOR_ROUNDS},

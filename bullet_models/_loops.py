@@ -98,62 +98,115 @@ def _loop_sdof(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
 
 def _loop_chain(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
     """Step the chain; per step one read of every hinge's state, one array of hinge torques,
-    the pendulum's state and torque, one contact query.
+    the pendulum's state and torque, one contact query. ``setup.phases``: stepped by phase
+    (:mod:`._phased`, the same time as ``n_steps`` steps of dt), else ``n_steps`` of dt.
 
     The hinge states (theta, theta') are read into one flat float array by ``np.fromiter``
     (no tuple per hinge, no 2-D array to flatten: the torques and the record are the same
     numbers); the record's arrays are built after the loop.
     """
     p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
-    model = setup.model
     M, K, _ = setup.matrices
     kdiag = np.diag(K).copy()
-    Dv, Dq = damping_operators(setup)
-    kp = model.impactor_stiffness
+    joints = world.trunk_joints
+    nj = len(joints)
+    gjss, gjs = p.getJointStates, p.getJointState
+    trunk_states = []  # flat arrays theta_0, theta'_0, theta_1, ... of each step
+    pendulum_states = []  # q, q' of each step, flat
+    contact_force = {}  # step -> summed normal force, N (steps with contact only)
+    rec = (trunk_states, pendulum_states, contact_force)
+    run = _chain_steps(world, setup, full, le, g, m, rec, tick)
+    h = None
+    if setup.phases is None:
+        run(n_steps, setup.dt, 0)
+    else:
+        from ._phased import phased_steps  # noqa: PLC0415 - the phased driver's own module
+
+        h = phased_steps(world, setup, run, rec, n_steps * setup.dt, full, le, m)
+    fromiter, flat, pair, n2 = np.fromiter, itertools.chain.from_iterable, itemgetter(0, 1), 2 * nj
+    trunk_states.append(fromiter(flat(map(pair, gjss(tb, joints, cid))), float, n2))
+    pendulum_states.extend(gjs(pb, 0, cid)[:2])
+    steps = len(trunk_states) - 1
+    states = np.array(trunk_states).reshape(steps + 1, nj, 2)
+    q, qd = np.array(pendulum_states).reshape(steps + 1, 2).T
+    force = np.zeros(steps + 1)
+    force[list(contact_force)] = list(contact_force.values())
+    out = _chain_record(setup, states[:, :, 0], states[:, :, 1], q, qd, force,
+                        (M, kdiag, *damping_operators(setup)))
+    if h is not None:
+        out["h"] = h
+        out["damping_power"] = _phased_damping_power(setup, states, M, kdiag, h)
+    return out
+
+
+def _phased_damping_power(setup, states, M, kdiag, h) -> np.ndarray:
+    """The damping's power per step of a run stepped by phase: the operators of each step's
+    own size ``h`` (s; the joint damping's implicit operators depend on it)."""
+    Q, QD = states[:, :, 0], states[:, :, 1]
+    out = np.empty(len(h))
+    for size in np.unique(h):
+        sel = np.flatnonzero(h == size)
+        Dv, Dq = damping_operators(setup, float(size))
+        tau = QD[sel] @ Dv.T
+        if Dq is not None:
+            tau -= Q[sel] @ Dq.T
+        out[sel] = np.einsum("ni,ni->n", tau, 0.5 * (QD[sel] + QD[sel + 1]))
+    return out
+
+
+def _chain_steps(world, setup, full, le, g, m, rec, tick):
+    """The chain's stepping loop as ``run(k, h, first)``: k steps of size h (s, the world's
+    step set to it), numbered from ``first``, appended to ``rec`` (trunk states, pendulum
+    states, contact force by step)."""
+    p, cid, tb, pb = world.p, world.cid, world.trunk, world.pendulum
+    M, K, _ = setup.matrices
+    kdiag = np.diag(K).copy()
+    kp = setup.model.impactor_stiffness
     mgl = m * g * le if full else 0.0
     joints = world.trunk_joints
     nj = len(joints)
-    gjss, sjma, sjm, gjs, step, gcp = (p.getJointStates, p.setJointMotorControlArray,
-                                       p.setJointMotorControl2, p.getJointState,
-                                       p.stepSimulation, p.getContactPoints)
-    TQ = p.TORQUE_CONTROL
-    # the hinge torques -K theta - (Dv theta' - Dq theta) as one operator on the state read
-    # from the engine, (theta_0, theta'_0, theta_1, theta'_1, ...)
-    torque = np.empty((nj, 2 * nj))
-    torque[:, 0::2] = -np.diag(kdiag) + (Dq if Dq is not None else 0.0)
-    torque[:, 1::2] = -Dv
-    trunk_states = []  # flat arrays theta_0, theta'_0, theta_1, ... of each step
-    pendulum_states = []  # q, q' of each step, flat
-    keep, keep_pendulum = trunk_states.append, pendulum_states.append
-    contact_force = {}  # step -> summed normal force, N (steps with contact only)
-    sin = math.sin
-    fromiter, flat, pair, n2 = np.fromiter, itertools.chain.from_iterable, itemgetter(0, 1), 2 * nj
-    for n in range(n_steps):
-        z = fromiter(flat(map(pair, gjss(tb, joints, cid))), float, n2)
-        ps = gjs(pb, 0, cid)
-        y = ps[0]
-        keep(z)
-        keep_pendulum(y)
-        keep_pendulum(ps[1])
-        sjma(tb, joints, TQ, forces=(torque @ z).tolist(), physicsClientId=cid)
-        # positional arguments as in _loop_sdof
-        sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
-        step(cid)
-        points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
-        if points:
-            contact_force[n] = sum(c[9] for c in points)
-        if not (n & 1023) and n:
-            tick(1024)  # the progress of a long run
-            if not np.all(np.isfinite(z)):
-                raise SimulationDiverged(f"bullet: non-finite state at t = {n * setup.dt:.4g} s")
-    keep(fromiter(flat(map(pair, gjss(tb, joints, cid))), float, n2))
-    pendulum_states.extend(gjs(pb, 0, cid)[:2])
-    states = np.array(trunk_states).reshape(n_steps + 1, nj, 2)
-    q, qd = np.array(pendulum_states).reshape(n_steps + 1, 2).T
-    force = np.zeros(n_steps + 1)
-    force[list(contact_force)] = list(contact_force.values())
-    return _chain_record(setup, states[:, :, 0], states[:, :, 1], q, qd, force,
-                         (M, kdiag, Dv, Dq))
+    torques = {}
+
+    def torque_of(h):  # -K theta - (Dv theta' - Dq theta) on (theta_0, theta'_0, ...)
+        if h not in torques:
+            Dv, Dq = damping_operators(setup, h)
+            t = np.empty((nj, 2 * nj))
+            t[:, 0::2] = -np.diag(kdiag) + (Dq if Dq is not None else 0.0)
+            t[:, 1::2] = -Dv
+            torques[h] = t
+        return torques[h]
+
+    def run(k, h, first):
+        torque = torque_of(h)
+        p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=cid)
+        gjss, sjma, sjm, gjs, step, gcp = (p.getJointStates, p.setJointMotorControlArray,
+                                           p.setJointMotorControl2, p.getJointState,
+                                           p.stepSimulation, p.getContactPoints)
+        TQ = p.TORQUE_CONTROL
+        keep, keep_pendulum = rec[0].append, rec[1].append
+        contact_force = rec[2]
+        sin = math.sin
+        fromiter, flat, pair = np.fromiter, itertools.chain.from_iterable, itemgetter(0, 1)
+        n2 = 2 * nj
+        for n in range(first, first + k):
+            z = fromiter(flat(map(pair, gjss(tb, joints, cid))), float, n2)
+            ps = gjs(pb, 0, cid)
+            y = ps[0]
+            keep(z)
+            keep_pendulum(y)
+            keep_pendulum(ps[1])
+            sjma(tb, joints, TQ, forces=(torque @ z).tolist(), physicsClientId=cid)
+            # positional arguments as in _loop_sdof
+            sjm(pb, 0, TQ, 0.0, 0.0, -mgl * sin(y) if full else -kp * y, 0.1, 1.0, -1.0, cid)
+            step(cid)
+            points = gcp(tb, pb, -2, -2, cid)  # -2: any link (PyBullet's default)
+            if points:
+                contact_force[n] = sum(c[9] for c in points)
+            if not (n & 1023) and n:
+                tick(1024)  # the progress of a long run
+                if not np.all(np.isfinite(z)):
+                    raise SimulationDiverged(f"bullet: non-finite state at step {n}")
+    return run
 
 
 def _chain_record(setup, Q, QD, q, qd, force, operators) -> dict:
@@ -176,8 +229,9 @@ def _chain_record(setup, Q, QD, q, qd, force, operators) -> dict:
             "joint_speed": max(float(np.max(np.abs(QD))), float(np.max(np.abs(qd))))}
 
 
-def damping_operators(setup) -> tuple[np.ndarray, np.ndarray | None]:
-    """(Dv, Dq): the chain's damping torque over step n is -(Dv theta'_n - Dq theta_n).
+def damping_operators(setup, dt: float | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """(Dv, Dq): the chain's damping torque over step n is -(Dv theta'_n - Dq theta_n), at
+    the step ``dt`` (s; None: ``setup.dt``).
 
     ``distributed``: explicit, Dv = D of :func:`analytic.continuum.chain.chain_matrices`, Dq = None
     (its largest rate, eig(M^-1 D) ~ C / (rho A) ~ 350 1/s, is far inside stability).
@@ -191,9 +245,10 @@ def damping_operators(setup) -> tuple[np.ndarray, np.ndarray | None]:
     M, K, D = setup.matrices
     if setup.damping != "joint":
         return D, None
+    dt = setup.dt if dt is None else dt
     B = np.diag(_joint_damping(M, K, D))
-    G = B @ np.linalg.inv(M + setup.dt * B)
-    return G @ M, -setup.dt * (G @ K)
+    G = B @ np.linalg.inv(M + dt * B)
+    return G @ M, -dt * (G @ K)
 
 
 def _joint_damping(M, K, D) -> np.ndarray:

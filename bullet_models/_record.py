@@ -38,7 +38,8 @@ def _record(setup, rec: dict, t_shift: float, e0: float, inertia) -> ImpactRecor
     model = setup.model
     dt = setup.dt
     n = rec["x"].size
-    t = np.arange(n) * dt - t_shift
+    h = rec.get("h")  # each step's size (s) of a run stepped by phase; None: every one dt
+    t = (np.arange(n) * dt if h is None else np.concatenate([[0.0], np.cumsum(h)])) - t_shift
     x, vx = rec["x"], rec["vx"]
     y, vy, pend_kin, pend_pot = _pendulum(setup, rec, inertia)
     if setup.trunk == "chain":
@@ -51,8 +52,12 @@ def _record(setup, rec: dict, t_shift: float, e0: float, inertia) -> ImpactRecor
     force = rec["force"]
     rel = vy - vx
     c_power = force[:-1] * 0.5 * (rel[:-1] + rel[1:])
-    damping_work = np.concatenate([[0.0], np.cumsum(d_power) * dt])
-    contact_work = np.concatenate([[0.0], np.cumsum(c_power) * dt])
+    if h is None:
+        damping_work = np.concatenate([[0.0], np.cumsum(d_power) * dt])
+        contact_work = np.concatenate([[0.0], np.cumsum(c_power) * dt])
+    else:
+        damping_work = np.concatenate([[0.0], np.cumsum(d_power * h)])
+        contact_work = np.concatenate([[0.0], np.cumsum(c_power * h)])
     if setup.contact == "soft":
         overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
         c_pot = 0.5 * setup.bullet.stiffness * overlap ** 2  # Bullet's spring k_b

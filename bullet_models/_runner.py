@@ -13,6 +13,8 @@ import multiprocessing as mp
 import os
 import time
 
+import numpy as np
+
 from treeimpact.analytic.budget import progress
 from treeimpact.analytic.engine.interface import chain_modes, trunk_chain
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
@@ -59,16 +61,24 @@ def run(setup: Setup) -> SimulationResult:
     t1 = time.perf_counter()
     with progress("bullet", n_steps, estimate) as tick:
         rec = loop(world, setup, n_steps, full, le, g, m, tick)
-    stepping = stepping_record(setup, n_steps, time.perf_counter() - t1, t1 - t0)
+    h = rec.get("h")
+    stepping = stepping_record(setup, n_steps if h is None else len(h),
+                               time.perf_counter() - t1, t1 - t0,
+                               0 if h is None else int(np.count_nonzero(h != dt)))
     return _result(setup, rec, t_shift, e0, inertia, stepping)
 
 
-def stepping_record(setup: Setup, steps: int, wall_s: float, swing_s: float) -> dict:
+def stepping_record(setup: Setup, steps: int, wall_s: float, swing_s: float,
+                    free_steps: int = 0) -> dict:
     """What a run's stepping cost (the result's ``extra["stepping"]``, the report's run
-    log): ``steps`` after the touch, the step ``dt`` (s) and what set it
-    (:data:`._setup.STEP_REASONS`), the loop's ``wall_s`` (s, record built after it) and
-    per step (us), and the full pendulum's free swing before the touch (``swing_s``, s)."""
+    log): ``steps`` after the touch, the contact's step ``dt`` (s) and what set it
+    (:data:`._setup.STEP_REASONS`), the ``free_steps`` of them at the trunk's ``free_dt``
+    (s; 0 and None at a fixed step, analytic.engine.phases), the loop's ``wall_s`` (s,
+    record built after it) and per step (us), and the full pendulum's free swing before
+    the touch (``swing_s``, s)."""
     return {"steps": int(steps), "dt": setup.dt, "step_set_by": setup.step_set_by,
+            "free_steps": int(free_steps),
+            "free_dt": setup.phases.free_step if setup.phases is not None else None,
             "stepping_s": wall_s, "step_us": 1e6 * wall_s / max(steps, 1),
             "swing_s": swing_s}
 

@@ -63,23 +63,33 @@ def _rest_potential(m: mujoco.MjModel, trunk_root: int) -> float:
     return float(d.energy[0] - m.body_subtreemass[trunk_root] * g * d.subtree_com[trunk_root, 2])
 
 
-def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]:
+def _record(setup, state0, states, sensors, h=None) -> tuple[ImpactRecord, float, float]:
     """Build the ImpactRecord (t = 0 at the touch); returns (record, initial energy, touch
-    index). Raises SimulationDiverged on a non-finite or stopped rollout, on energy growth
-    or energy the ledger shows the engine created, and when the bodies never touched."""
-    _check_rollout(setup, state0, states, sensors)
+    index). ``h``: each step's size (s; None: every step ``setup.dt``; stepped by phase,
+    analytic.engine.phases). Raises SimulationDiverged on a non-finite or stopped rollout,
+    on energy growth or energy the ledger shows the engine created, and when the bodies
+    never touched."""
+    uniform = h is None  # a fixed step keeps the fixed-step formulas, bit for bit
+    h = np.full(len(states), setup.dt) if uniform else np.asarray(h, dtype=float)
+    _check_rollout(setup, state0, states, sensors, h)
     m = setup.mjmodel
     nq, nv = m.nq, m.nv
     v_all = np.vstack([state0[1 + nq:1 + nq + nv], states[:, 1 + nq:1 + nq + nv]])  # n..N
     force, x, vx, y, vy, kinetic, potential = _sensed(setup, state0, states, sensors)
     pend, e0 = _pendulum_energy(setup, state0, states, v_all, y, vy, kinetic, potential)
-    damping_work, c_power = _damping_work(setup, v_all, force, vy - vx)
+    damping_work, c_power = _damping_work(setup, v_all, force, vy - vx, None if uniform else h)
     k_d = setup.law.stiffness
     overlap = np.where(force > 0.0, np.maximum(y - x, 0.0), 0.0)
     c_pot = 0.5 * k_d * overlap ** 2
-    contact_work = _contact_work(setup, kinetic + potential, e0, damping_work, c_power, c_pot)
-    start, t_touch, i1 = _touch(force, x, y, setup.dt)
-    t = np.arange(len(force), dtype=float) * setup.dt - t_touch
+    contact_work = _contact_work(setup, kinetic + potential, e0, damping_work, c_power, c_pot,
+                                 None if uniform else h)
+    if uniform:
+        start, t_touch, i1 = _touch(force, x, y, setup.dt)
+        t = np.arange(len(force), dtype=float) * setup.dt - t_touch
+    else:  # sample n: the state before step n
+        grid = np.concatenate([[0.0], np.cumsum(h[:-1])])
+        start, t_touch, i1 = _touch(force, x, y, grid)
+        t = grid - t_touch
     s = slice(start, None)
     base_d, base_c = damping_work[start], contact_work[start]
     record = ImpactRecord(
@@ -92,7 +102,7 @@ def _record(setup, state0, states, sensors) -> tuple[ImpactRecord, float, float]
     return record, e0, i1
 
 
-def _check_rollout(setup, state0, states, sensors) -> None:
+def _check_rollout(setup, state0, states, sensors, h) -> None:
     """Raise SimulationDiverged on a non-finite state or sensor, or a rollout that stopped
     advancing time (MuJoCo stops on a warning)."""
     if not (np.all(np.isfinite(states)) and np.all(np.isfinite(sensors))):
@@ -100,7 +110,7 @@ def _check_rollout(setup, state0, states, sensors) -> None:
     # a rollout stopped on a warning stops advancing time: every step must add dt (to the
     # round-off of t + dt, not of n dt, which grows with the number of steps)
     steps = np.diff(np.concatenate(([state0[0]], states[:, 0])))
-    if not np.all(np.abs(steps - setup.dt) <= 1e-6 * setup.dt):
+    if not np.all(np.abs(steps - h) <= 1e-6 * h):
         raise SimulationDiverged("mujoco: the rollout stopped on a MuJoCo warning "
                                  f"(dt = {setup.dt:.3g} s)")
 
@@ -149,7 +159,7 @@ def _pendulum_energy(setup, state0, states, v_all, y, vy, kinetic, potential) ->
     return pend, e0
 
 
-def _damping_work(setup, v_all, force, w) -> tuple:
+def _damping_work(setup, v_all, force, w, h=None) -> tuple:
     """(the dampers' work so far per sample J, the contact's power per step W or None for
     RK4): exact for Euler's step and the implicit ones (module docstring), a quadrature of
     the sampled power for RK4."""
@@ -168,10 +178,12 @@ def _damping_work(setup, v_all, force, w) -> tuple:
         elif B.any():
             d_power += np.einsum("ni,ni->n", v1 * np.diag(B), vbar)  # B diagonal (joint dampers)
         c_power = force[:-1] * 0.5 * (w[:-1] + w[1:])
-    return np.concatenate([[0.0], np.cumsum(d_power) * setup.dt]), c_power
+    work = np.cumsum(d_power) * setup.dt if h is None else np.cumsum(d_power * h[:len(d_power)])
+    return np.concatenate([[0.0], work]), c_power
 
 
-def _contact_work(setup, mech, e0: float, damping_work, c_power, c_pot) -> np.ndarray:
+def _contact_work(setup, mech, e0: float, damping_work, c_power, c_pot, h=None
+                  ) -> np.ndarray:
     """The contact's work so far per sample (J): the sum of ``c_power``, or for RK4 (None)
     what left the bodies other than through the dampers. Raises SimulationDiverged when the
     mechanical energy ``mech`` grows past the input ``e0`` or the ledger shows energy the
@@ -185,7 +197,8 @@ def _contact_work(setup, mech, e0: float, damping_work, c_power, c_pot) -> np.nd
         dissipated = contact_work - c_pot
         created = float(np.max(np.maximum.accumulate(dissipated) - dissipated))
     else:
-        contact_work = np.concatenate([[0.0], np.cumsum(c_power) * dt])
+        work = np.cumsum(c_power) * dt if h is None else np.cumsum(c_power * h[:len(c_power)])
+        contact_work = np.concatenate([[0.0], work])
         created = float(np.max(mech + damping_work + contact_work)) - e0
     if created > ENERGY_GROWTH_LIMIT * e0:  # the ledger: energy the engine made from nothing
         raise SimulationDiverged(
@@ -194,9 +207,10 @@ def _contact_work(setup, mech, e0: float, damping_work, c_power, c_pot) -> np.nd
     return contact_work
 
 
-def _touch(force, x, y, dt: float) -> tuple[int, float, int]:
-    """(first sample kept, touch time s, first sample with force): t = 0 at the touch, the
-    first sample with force, interpolated on the overlap y - x. Raises SimulationDiverged
+def _touch(force, x, y, grid) -> tuple[int, float, int]:
+    """(first sample kept, touch time s, first sample with force) on the samples' times
+    ``grid`` (s; a float: the fixed step dt): t = 0 at the touch, the first sample with
+    force, interpolated on the overlap y - x. Raises SimulationDiverged
     when the pendulum never touched the trunk."""
     on = np.flatnonzero(force > 0.0)
     if not on.size:
@@ -206,7 +220,9 @@ def _touch(force, x, y, dt: float) -> tuple[int, float, int]:
         return 0, 0.0, i1
     g0, g1 = (y - x)[i1 - 1], (y - x)[i1]
     frac = min(1.0, max(0.0, -g0 / (g1 - g0))) if g1 != g0 else 1.0
-    return i1 - 1, (i1 - 1 + frac) * dt, i1
+    if np.ndim(grid) == 0:
+        return i1 - 1, (i1 - 1 + frac) * grid, i1
+    return i1 - 1, float(grid[i1 - 1] + frac * (grid[i1] - grid[i1 - 1])), i1
 
 
 def _flex_energy(setup, states: np.ndarray) -> np.ndarray:
@@ -238,11 +254,13 @@ def _with_crown(setup, record: ImpactRecord, states: np.ndarray) -> ImpactRecord
     return with_crown(record, *lateral_motion(chain, q, v, chain.segments))
 
 
-def _result(setup, state0, states, sensors, stepping: dict | None = None) -> SimulationResult:
+def _result(setup, state0, states, sensors, stepping: dict | None = None, h=None
+            ) -> SimulationResult:
     """The run's SimulationResult from its rollout (the initial state, every step's states
-    and sensors), the model as MuJoCo ran it; ``stepping``: what the stepping cost
-    (:func:`._rollout.stepping_record`), kept in ``extra``."""
-    record, e0, _ = _record(setup, state0, states, sensors)
+    and sensors, each step's size ``h``, s, None: ``setup.dt``), the model as MuJoCo ran
+    it; ``stepping``: what the stepping cost (:func:`._rollout.stepping_record`), kept in
+    ``extra``."""
+    record, e0, _ = _record(setup, state0, states, sensors, h)
     if setup.trunk == "chain":  # the chain's top, from the hinge angles of the recorded states
         record = _with_crown(setup, record, states)
     elif setup.trunk == "flex":  # the rod's top vertex

@@ -19,6 +19,8 @@ from treeimpact.analytic.engine.interface import swing_time
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.two_body import TwoBodyModel
 
+from ._phased import phased_rollout
+
 INITIAL_OVERLAP = 1e-12  # m: the linear pendulum starts touching, the contact active
 SWING_STEP = 1e-4  # s: step of the full pendulum's free swing (contact disabled)
 SWING_MARGIN = 2e-3  # s: the swing hands over to dt this long before the exact arrival
@@ -144,7 +146,8 @@ def _swing_models(plans):
 
 def _run_group(plans: list[_Plan], nthread: int) -> list:
     """Roll out a group of plans with one size signature; returns per plan (initial state,
-    states, sensors, :func:`stepping_record`).
+    states, sensors, per-step h (s), :func:`stepping_record`): at a fixed step or by phase
+    (``setup.phases``).
     A run estimated longer than analytic.budget.PROGRESS_AFTER_S reports its progress."""
 
     swing = [p for p in plans if p.swing_steps > 0]
@@ -160,18 +163,58 @@ def _run_group(plans: list[_Plan], nthread: int) -> list:
     total = sum(p.nstep for p in plans)
     estimate = total * step_cost(plans[0].setup.mjmodel).seconds / max(1, min(nthread,
                                                                                  len(plans)))
+    fixed = [p for p in plans if p.setup.phases is None]
+    phased = [p for p in plans if p.setup.phases is not None]
+    runs = {}
     with progress("mujoco", total, estimate) as tick:
-        out = _rollout([p.setup.mjmodel for p in plans], [p.state0 for p in plans],
-                       [p.nstep for p in plans], nthread, tick)
-    return [(p.state0, st, sd, stepping_record(p, wall)) for p, (st, sd, wall) in zip(plans, out)]
+        out = _rollout([p.setup.mjmodel for p in fixed], [p.state0 for p in fixed],
+                       [p.nstep for p in fixed], nthread, tick) if fixed else []
+        for p, (st, sd, wall) in zip(fixed, out):
+            runs[id(p)] = (st, sd, None, 0, wall)
+        for p, r in zip(phased, _phased_runs(phased, nthread, tick)):
+            runs[id(p)] = r
+    return [(p.state0, st, sd, h, stepping_record(p, wall, h, big))
+            for p in plans for st, sd, h, big, wall in [runs[id(p)]]]
 
 
-def stepping_record(plan: _Plan, wall_s: float) -> dict:
+def _phased_runs(plans: list[_Plan], nthread: int, tick) -> list:
+    """(states, sensors, per-step h, big steps, wall s) of each plan stepped by phase
+    (:func:`._phased.phased_rollout`) for the fixed run's simulated time, on up to
+    ``nthread`` threads."""
+    stop = threading.Event()
+    lock = threading.Lock()
+
+    def locked_tick(n):
+        with lock:
+            tick(n)
+
+    def one(p):
+        t0 = time.perf_counter()
+        st, sd, h, big = phased_rollout(p.setup, p.state0, p.nstep * p.setup.dt, stop,
+                                        locked_tick)
+        return st, sd, h, big, time.perf_counter() - t0
+
+    if len(plans) <= 1 or nthread <= 1:
+        return [one(p) for p in plans]
+    pool = ThreadPoolExecutor(max_workers=min(nthread, len(plans)))
+    try:
+        return list(pool.map(one, plans))
+    finally:
+        stop.set()
+        pool.shutdown(wait=True)
+
+
+def stepping_record(plan: _Plan, wall_s: float, h=None, big: int = 0) -> dict:
     """What a run's stepping cost (the result's ``extra["stepping"]``, the report's run
     log): the ``steps`` of the recorded phase (from the touch, or from just before it after
-    the full pendulum's swing), the step ``dt`` (s) and what set it (``step_set_by``), the
-    rollout's ``wall_s`` (s) and per step (us), and the free swing's (``swing_s``, s)."""
+    the full pendulum's swing), the contact's step ``dt`` (s) and what set it
+    (``step_set_by``), the ``free_steps`` taken at the trunk's ``free_dt`` (s; 0 and None
+    at a fixed step, analytic.engine.phases), the rollout's ``wall_s`` (s) and per step
+    (us), and the free swing's (``swing_s``, s)."""
     setup = plan.setup
-    return {"steps": int(plan.nstep), "dt": setup.dt, "step_set_by": setup.step_set_by,
-            "stepping_s": wall_s, "step_us": 1e6 * wall_s / max(plan.nstep, 1),
+    steps = int(plan.nstep if h is None else len(h))
+    return {"steps": steps, "dt": setup.dt, "step_set_by": setup.step_set_by,
+            "free_steps": int(big),
+            "free_dt": setup.phases.free_step if setup.phases is not None else None,
+            "stepping_s": wall_s, "step_us": 1e6 * wall_s / max(steps, 1),
             "swing_s": plan.swing_s}

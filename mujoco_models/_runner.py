@@ -91,10 +91,10 @@ def run_setups(setups: list[Setup], *, max_workers=None) -> list:
     out = [None] * len(plans)
     with collected_warnings() as seen:
         for idx in groups.values():
-            for i, (s0, st, sd, cost) in zip(idx, _run_group([plans[i] for i in idx],
-                                                              nthread)):
+            for i, (s0, st, sd, h, cost) in zip(idx, _run_group([plans[i] for i in idx],
+                                                                 nthread)):
                 try:
-                    out[i] = _result(setups[i], s0, st, sd, cost)
+                    out[i] = _result(setups[i], s0, st, sd, cost, h)
                 except SimulationDiverged as exc:
                     out[i] = exc
     return _with_warnings(out, seen)

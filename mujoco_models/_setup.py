@@ -25,12 +25,14 @@ from treeimpact.analytic.contact.law import (
 from treeimpact.analytic.contact.timestep import check_time_step, choose_time_step, sdof_rate
 from treeimpact.analytic.continuum.chain import chain_matrices, default_segments, lateral_jacobian
 from treeimpact.analytic.engine.interface import (
+    ENERGY_GROWTH_LIMIT,
     EngineSetup,
     check_choice,
     engine_model,
     trunk_chain,
     trunk_options,
 )
+from treeimpact.analytic.engine.phases import PhaseRule, input_energy, phase_rule
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.reduction import reduce_trunk
@@ -61,6 +63,11 @@ SETUP_CACHE_SIZE = 64  # setups kept by make_setup (a repeated run does not reco
 #: the chains of fewer than about 20 segments are stepped by their contact and do not change.
 STEPS_PER_PERIOD = 10
 
+#: Stepping by phase by default (analytic.engine.phases; docs/engines.md "Stepping by
+#: phase"): every metric the ladder compares, on every shipped tree and the light
+#: pendulum's, within its tolerance of the fixed step (benchmarks/results/chain_phases.json).
+PHASED = True
+
 #: The trunk's root body per trunk model (its subtree's gravity is compensated).
 ROOT_BODIES = {"sdof": "trunk", "chain": "segment_0", "flex": "trunk_root"}
 
@@ -84,6 +91,8 @@ class Setup(EngineSetup):
     rest_potential: float = field(repr=False, compare=False)  # J: springs + pendulum gravity
     flex: _flex.FlexTrunk | None = field(default=None, repr=False, compare=False)
     step_set_by: str = "given"  # what set dt: "given", "contact" or "highest mode"
+    #: stepping by phase (analytic.engine.phases); None: every step is dt
+    phases: PhaseRule | None = field(default=None, compare=False)
 
     @property
     def effective_mass(self) -> float:
@@ -222,7 +231,20 @@ def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, rest
                  calibration=calibration, inverse_mass_approx=fit.inverse_mass_approx,
                  solref=tuple(fit.solref), integrator=integrator, mjmodel=mjmodel, spec=spec,
                  initial_state=state0, rest_potential=_rest_potential(mjmodel, root),
-                 flex=tspec.flex, step_set_by=fit.step_set_by)
+                 flex=tspec.flex, step_set_by=fit.step_set_by,
+                 phases=_phases(fit, model, scenario, pendulum, integrator))
+
+
+def _phases(fit, model, scenario, pendulum: str, integrator: str) -> PhaseRule | None:
+    """The run's stepping by phase (analytic.engine.phases) when :data:`PHASED` and the
+    rule chose its step
+    (a given --dt is every step) and the integrator is Euler's or an implicit one (RK4 gets
+    the contact law uncorrected and applies its dampers explicitly at each stage: not
+    phased); None otherwise and for the SDOF trunk."""
+    if not PHASED or fit.step_set_by == "given" or integrator == "RK4":
+        return None
+    return phase_rule(fit.dt, fit.omega_max, input_energy(model, scenario, pendulum),
+                      fit.collision_duration, STEPS_PER_PERIOD, ENERGY_GROWTH_LIMIT)
 
 
 @dataclass(frozen=True)

@@ -13,25 +13,33 @@ ENGINES = ["treeimpact.mujoco_models", "treeimpact.bullet_models"]
 
 
 @pytest.mark.parametrize("package", ENGINES)
-def test_a_run_records_its_steps_their_wall_time_and_what_set_its_step(package):
-    """result.extra["stepping"]: the steps after the touch are t_end / dt rounded up (MuJoCo
-    keeps 2 more, its record's ends), the wall per step is the stepping's over them, and
+def test_a_run_records_its_steps_their_wall_time_and_what_set_its_step(package, monkeypatch):
+    """result.extra["stepping"]: at a given (fixed) step the steps after the touch are t_end
+    / dt rounded up (MuJoCo keeps 2 more, its record's ends); a run stepped by phase
+    (MuJoCo's default, Bullet's with ``PHASED``) covers the same time with its contact steps and its free steps at the trunk's
+    own step (analytic.engine.phases); the wall per step is the stepping's over them, and
     the step is set by the term of the rule that is smallest (docs/time-step.md)."""
     import importlib
 
     mod = pytest.importorskip(package)
     setup_mod = importlib.import_module(f"{package}._setup")
+    monkeypatch.setattr(setup_mod, "PHASED", True)  # Bullet's default is the fixed step
     scen = load_scenario("open-center")
     run = mod.simulate(scen, trunk="chain", segments=4, t_end=0.03)
     cost = run.extra["stepping"]
     steps = math.ceil(0.03 / run.model["dt"]) + (2 if package.endswith("mujoco_models") else 0)
-    assert cost["steps"] == steps and cost["dt"] == run.model["dt"]
-    assert cost["step_us"] == pytest.approx(1e6 * cost["stepping_s"] / steps, rel=1e-12)
+    assert cost["dt"] == run.model["dt"] and cost["free_steps"] > 0
+    covered = (cost["steps"] - cost["free_steps"]) * cost["dt"] + cost["free_steps"] * cost[
+        "free_dt"]
+    assert covered == pytest.approx(steps * cost["dt"], abs=cost["dt"])  # the same time
+    assert cost["step_us"] == pytest.approx(1e6 * cost["stepping_s"] / cost["steps"],
+                                            rel=1e-12)
     assert 0.0 < cost["stepping_s"] and cost["swing_s"] >= 0.0
     assert cost["step_set_by"] in ("contact", "implicit contact")  # 4 segments: the contact
     given = mod.simulate(scen, trunk="chain", segments=4, t_end=0.03, dt=run.model["dt"])
-    assert given.extra["stepping"]["step_set_by"] == "given"
-    np.testing.assert_equal(given.metrics, run.metrics)  # the same step, the same run
+    fixed = given.extra["stepping"]
+    assert fixed["step_set_by"] == "given" and fixed["free_dt"] is None
+    assert fixed["steps"] == steps and fixed["free_steps"] == 0
     assert setup_mod.STEPS_PER_PERIOD == 10  # both engines: docs/time-step.md
 
 
