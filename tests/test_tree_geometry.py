@@ -195,9 +195,11 @@ def test_the_assumed_ranges_are_the_paper_s_two_trees():
 def test_the_study_varies_a_geometry_tree_s_assumptions_and_keeps_its_geometry():
     """A tree from its geometry: the study's inputs add its damping ratio and its assumed E;
     at its own inputs vary() gives the tree back (1e-12); at every design point l, a, d and
-    the crown are kept, E is the point's, while K_T is (1 - root share) 3 E I / a^3 (eq 8 with the root spring: the root
-    adds share / (1 - share) of the wood's flexibility) and the damping ratio is the
-    point's (eq 14), so K_T and C_T move. 1e-9: round-off of the reduction's sums."""
+    the crown are kept; the assumed E is eq 47's rigid-clamp modulus (wood and root
+    together), so the point's E sets K_T = 3 E I / a^3 and the root share only splits that
+    flexibility (the wood's E = E / (1 - share), eq 8 with the root spring); the damping
+    ratio is the point's (eq 14), so K_T and C_T move. 1e-9: round-off of the reduction's
+    sums."""
     scen = ti.tree_scenario("plum", **PLUM)
     names = free_inputs(scen)
     assert names[-2:] == ("damping_ratio", "youngs_modulus") and "root_share" in names
@@ -213,11 +215,11 @@ def test_the_study_varies_a_geometry_tree_s_assumptions_and_keeps_its_geometry()
         t = varied.trunk
         for f in ("length", "clamp_height", "diameter", "crown_mass"):
             assert getattr(t, f) == getattr(scen.trunk, f), f
-        assert t.youngs_modulus == p["youngs_modulus"]
+        share = p["root_share"]
+        assert t.youngs_modulus == pytest.approx(p["youngs_modulus"] / (1 - share), rel=1e-15)
         tree = reduce_trunk(t)
-        rigid = 3.0 * t.bending_stiffness / t.clamp_height ** 3
-        assert tree.equivalent_stiffness == pytest.approx((1 - p["root_share"]) * rigid,
-                                                          rel=1e-9)
+        both = 3.0 * p["youngs_modulus"] * t.second_moment / t.clamp_height ** 3
+        assert tree.equivalent_stiffness == pytest.approx(both, rel=1e-9)
         assert tree.damping_ratio == pytest.approx(p["damping_ratio"], rel=1e-9)
         stiffness.add(round(tree.equivalent_stiffness))
         damping.add(round(tree.equivalent_damping, 3))
@@ -232,8 +234,14 @@ def test_a_given_e_is_held_by_the_study():
     assert "youngs_modulus" not in names and "density" not in names
     assert names[-1] == "damping_ratio"
     for row in design(1, names=names):
-        varied, _ = vary(scen, inputs_of(scen) | dict(zip(names, row)))
-        assert (varied.trunk.youngs_modulus, varied.trunk.density) == (8e9, 700.0)
+        p = inputs_of(scen) | dict(zip(names, row))
+        varied, _ = vary(scen, p)
+        t = varied.trunk
+        assert (t.youngs_modulus, t.density) == (8e9, 700.0)
+        # the wood's own E: the root spring adds its share (eq 8); 1e-9: the sums' round-off
+        rigid = 3.0 * t.bending_stiffness / t.clamp_height ** 3
+        assert reduce_trunk(t).equivalent_stiffness == pytest.approx(
+            (1 - p["root_share"]) * rigid, rel=1e-9)
 
 
 def test_a_measured_tree_s_study_is_unchanged():

@@ -66,6 +66,18 @@ def _note(field: str, value: float, span: tuple | None) -> str:
     return f"{head}, range {a.low:g}-{a.high:g}{unit}{ends}: {a.why}"
 
 
+def with_root_share(trunk: Trunk, share: float, *, modulus_assumed: bool) -> Trunk:
+    """``trunk`` with the root's share ``share`` (1) of its static flexibility at the clamp.
+    An assumed E (``modulus_assumed``) is eq 47's rigid-clamp modulus of the paper's two
+    trees, the stiffness of wood and root together: the share then splits that flexibility,
+    the wood's E becoming E / (1 - share) and k_theta taking the rest (the clamp's static
+    stiffness 3 E I / a^3 kept, eq 8). A given E is the wood's own: k_theta is added to it
+    (K_T falls with the share). k_theta: analytic.model.calibration.root_for_share."""
+    if modulus_assumed and share > 0.0:
+        trunk = replace(trunk, youngs_modulus=trunk.youngs_modulus / (1.0 - share))
+    return replace(trunk, base_stiffness=root_for_share(trunk, share))
+
+
 def geometry_trunk(*, length: float, clamp_height: float, diameter: float,
                    clamp_mass: float, crown_mass: float, density: float | None = None,
                    youngs_modulus: float | None = None) -> GeometryTrunk:
@@ -90,7 +102,8 @@ def geometry_trunk(*, length: float, clamp_height: float, diameter: float,
     trunk = Trunk(length=length, clamp_height=clamp_height, diameter=diameter, density=density,
                   youngs_modulus=youngs_modulus, clamp_mass=clamp_mass, crown_mass=crown_mass)
     root, ratio = ASSUMED["base_stiffness"], ASSUMED["damping"]
-    trunk = replace(trunk, base_stiffness=root_for_share(trunk, root.value))
+    e_assumed = "trunk.youngs_modulus" in assumed
+    trunk = with_root_share(trunk, root.value, modulus_assumed=e_assumed)
     damping = damping_for_ratio(trunk, ratio.value)
     high = LIMITS["trunk.damping"][1]
     if damping > high:
@@ -101,8 +114,9 @@ def geometry_trunk(*, length: float, clamp_height: float, diameter: float,
             f"{high:g} N s/m^2 allowed (a tree beyond the paper's: measure its damping)")
     trunk = replace(trunk, damping=damping)
     assumed += ["trunk.base_stiffness", "trunk.damping"]
-    spans = {"trunk.base_stiffness": tuple(root_for_share(trunk, s) for s in
-                                           (root.low, root.high)),
+    spans = {"trunk.base_stiffness": tuple(
+                 with_root_share(trunk, s, modulus_assumed=e_assumed).base_stiffness
+                 for s in (root.low, root.high)),
              "trunk.damping": tuple(damping_for_ratio(trunk, r) for r in
                                     (ratio.low, ratio.high))}
     notes = {f"assumed_{f.split('.')[1]}": _note(f.split(".")[1], getattr(trunk, f.split(".")[1]),

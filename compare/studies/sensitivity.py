@@ -28,8 +28,8 @@ from treeimpact.analytic.model.calibration import (
     MeasuredTree,
     calibrate_trunk,
     damping_for_ratio,
-    root_for_share,
 )
+from treeimpact.analytic.model.assumed import with_root_share
 from treeimpact.analytic.model.parameters import Contact
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.registry import BY_NAME
@@ -194,15 +194,17 @@ def vary(scenario, p: dict):
 
 def _vary_geometry(scenario, p: dict):
     """:func:`vary` of a tree from its geometry: l, a, d and m_f kept; m_c, rho, E (its own
-    when ``p`` has none) and G set, then k_theta from the root's share
-    (analytic.model.calibration.root_for_share) and C from the damping ratio
-    (damping_for_ratio, eqs 7, 8, 10, 14) of that trunk."""
+    when ``p`` has none) and G set, then the root's share (analytic.model.assumed
+    .with_root_share: an assumed E, wood and root together, split by it at the clamp's
+    static stiffness; a given E, the wood's, with k_theta added) and C from the damping
+    ratio (damping_for_ratio, eqs 7, 8, 10, 14) of that trunk."""
     trunk, ratio = scenario.trunk, p["e_over_g"]
-    e_mod = p.get("youngs_modulus", trunk.youngs_modulus)
     chosen = replace(trunk, clamp_mass=p["clamp_mass"], density=p["density"],
-                     youngs_modulus=e_mod,
-                     shear_modulus=e_mod / ratio if ratio > 0 else None)
-    chosen = replace(chosen, base_stiffness=root_for_share(chosen, p["root_share"]))
+                     youngs_modulus=p.get("youngs_modulus", trunk.youngs_modulus))
+    chosen = with_root_share(chosen, p["root_share"], modulus_assumed="trunk.youngs_modulus"
+                             in assumed_fields(scenario))
+    e_wood = chosen.youngs_modulus
+    chosen = replace(chosen, shear_modulus=e_wood / ratio if ratio > 0 else None)
     chosen = replace(chosen, damping=damping_for_ratio(chosen, p["damping_ratio"]))
     contact = Contact(restitution=p["restitution"], duration=10.0 ** p["log10_pad_duration"])
     return (replace(scenario, trunk=chosen, contact=contact),
