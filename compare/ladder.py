@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 from treeimpact.analytic.continuum.chain import default_segments
-from treeimpact.analytic.model.parameters import Pendulum, Scenario
+from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
