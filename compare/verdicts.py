@@ -174,6 +174,12 @@ WHY_NONE = {
 }
 
 
+#: Why an identified value (``id_*``) has no value on either record of a comparison.
+WHY_NO_IDENTIFICATION = ("the paper's procedure (eqs 36-46) refused both records: it reads a "
+                         "pendulum's moving-together phase before x_max, which this tree's "
+                         "motion or impactor does not give")
+
+
 def absent_reason(metric: str, value, reference_value, rung: str, reference: str) -> str | None:
     """Why a comparison of ``metric`` has no pair of numbers, from the tree's physics
     (:data:`WHY_NONE`), or None when it has one or the absence is not explained: a value on
@@ -183,8 +189,9 @@ def absent_reason(metric: str, value, reference_value, rung: str, reference: str
     if all(has):
         return None
     if not any(has):
-        return (f"{metric} has no value on {rung} nor on {reference}: "
-                f"{WHY_NONE.get(metric, 'neither run reports it')}")
+        why = WHY_NONE.get(metric, WHY_NO_IDENTIFICATION if metric.startswith("id_") else
+                           "neither run reports it")
+        return f"{metric} has no value on {rung} nor on {reference}: {why}"
     if metric not in MOVING_TOGETHER or reference == "truth":
         return None
     on, off = (rung, reference) if has[0] else (reference, rung)
