@@ -181,10 +181,20 @@ WHY_NO_IDENTIFICATION = ("the paper's procedure (eqs 36-46) refused both records
 
 
 def absent_reason(metric: str, value, reference_value, rung: str, reference: str) -> str | None:
-    """Why a comparison of ``metric`` has no pair of numbers, from the tree's physics
-    (:data:`WHY_NONE`), or None when it has one or the absence is not explained: a value on
-    neither side; or a moving-together metric on one side only (one model's bodies move
-    together, the other's never do or do not part by t_end: different regimes)."""
+    """Why a comparison has no pair of numbers, from the tree's physics (:data:`WHY_NONE`).
+
+    Args:
+        metric: the metric compared.
+        value: the rung's value (SI; NaN or None when it has none).
+        reference_value: the reference's value (SI; NaN or None when it has none).
+        rung: the rung checked.
+        reference: what it is compared with (a rung id, "truth").
+
+    Returns:
+        The reason, or None when both values exist or the absence is not explained: a value
+        on neither side; or a moving-together metric on one side only (one model's bodies
+        move together, the other's never do or do not part by t_end: different regimes).
+    """
     has = (finite_number(value), finite_number(reference_value))
     if all(has):
         return None
