@@ -34,7 +34,7 @@ from treeimpact.analytic.model.two_body import two_body_model
 
 #: A re-strike is an impact after a free flight of at least this fraction of the trunk's
 #: undamped period 2 pi sqrt(M_T / K_T): the trunk swung away and came back. The impacts of
-#: a chattering sequence (eqs 22-33) follow each other within a small fraction of it.
+#: a chattering sequence (eqs 12-35) follow each other within a small fraction of it.
 RESTRIKE_FRACTION = 0.25
 #: The events a member's t_end must show are those up to the shipped trees' t_end, s.
 HORIZON = 0.1

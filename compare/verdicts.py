@@ -154,7 +154,7 @@ def relative_step(value, reference) -> float:
 
 
 #: Why a metric has no value on a run, from the tree's physics: the moving-together
-#: metrics (eqs 34-35, 45, 58) when the impactor parts before the trunk catches up with it,
+#: metrics (eq 34, eq 45, eq 58) when the impactor parts before the trunk catches up with it,
 #: the whole-event energies and impulse when the bodies have not parted for good by t_end,
 #: the contact history on the Newton model's impulsive impacts.
 MOVING_TOGETHER = ("T0", "x0", "V", "A_x", "A_y", "t_sep", "energy_transferred", "theta_b")
@@ -175,7 +175,7 @@ WHY_NONE = {
 
 
 #: Why an identified value (``id_*``) has no value on either record of a comparison.
-WHY_NO_IDENTIFICATION = ("the paper's procedure (eqs 36-46) refused both records: it reads a "
+WHY_NO_IDENTIFICATION = ("the paper's procedure (eqs 39-48) refused both records: it reads a "
                          "pendulum's moving-together phase before x_max, which this tree's "
                          "motion or impactor does not give")
 

@@ -122,7 +122,7 @@ def test_identification_against_truth(ladder_of, scenario, rung, metric):
     ident = ladder[rung.id].identification
     why = _procedure_does_not_apply(ladder, rung.id, scenario)
     if why and not ident.ok:
-        pytest.skip(f"{ladder.name} {rung.id}: {why}, so the paper's procedure (eqs 36-46) "
+        pytest.skip(f"{ladder.name} {rung.id}: {why}, so the paper's procedure (eqs 39-48) "
                     f"does not apply: {ident.reason}")
     share = ladder.value(rung.id, "x0") / ladder.value(rung.id, "x_max")
     expected = [e for e in TOL.get("identification_refused", {}).values()
