@@ -72,9 +72,11 @@ def _compare(paths: dict, refused: set) -> dict:
         if name in refused:
             continue
         tag = re.escape(name)
+        skips = [(int(n), why) for n, why in re.findall(
+            rf"^SKIPPED \[(\d+)\] \S+: {tag} (.*)$", text, re.M)]  # -rA groups equal skips
         out[name] = {
             "passed": len(re.findall(rf"^PASSED \S+\[{tag}-", text, re.M)),
-            "skipped": re.findall(rf"^SKIPPED \[\d+\] \S+: {tag} (.*)$", text, re.M),
+            "skipped": sum(n for n, _ in skips), "skip_reasons": skips,
             "failed": re.findall(rf"^FAILED \S+::(\w+\[{tag}-[^\]]*\])", text, re.M)}
     return out
 
