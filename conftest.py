@@ -213,6 +213,7 @@ MODULE_FIXTURE_FILES = frozenset({
     "compare/tests/test_sobol_cross.py",
     "compare/tests/test_sort_keys.py", "tests/test_bullet_models.py",
     "tests/test_contact_cmd.py", "tests/test_doc_numbers.py", "tests/test_engine_phases.py",
+    "tests/test_family.py",
     "tests/test_identify_procedure_events.py", "tests/test_identify_validation.py",
     "tests/test_layers.py", "tests/test_mujoco_flex.py", "tests/test_mujoco_models.py",
     "tests/test_paper.py", "tests/test_report_atomic.py",

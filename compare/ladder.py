@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 from treeimpact.analytic.continuum.chain import default_segments
-from treeimpact.analytic.model.parameters import Pendulum, Scenario
+from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
@@ -327,8 +327,7 @@ def build_ladder(scenario, *, cache: RunCache | None = None, engines=ENGINES,
             rr.values = {m: math.nan for m in ALL_METRICS}
             rr.identification = RungIdentification(SKIPPED, f"rung not run: {run.reason}")
         out.append(rr)
-    truth = rung_truth(scen) if isinstance(
-        scen.impactor, Pendulum) else {}
+    truth = rung_truth(scen)  # the tree's own 1-DOF model, whichever impactor strikes it
     return Ladder(scen, out, truth, tol)
 
 

@@ -39,6 +39,7 @@ class Verdict(StrEnum):
     FINDING_LOST = "finding-lost"  # a documented finding that is now within tolerance
     AMBIGUOUS = "ambiguous"  # a peak time of two near-equal maxima: not a robust quantity
     NOT_AVAILABLE = "n/a"  # a value does not exist (a rung without it, a NaN)
+    SKIPPED = "skipped"  # the quantity does not exist for this tree's motion (WHY_NONE)
 
     @property
     def flagged(self) -> bool:
@@ -152,6 +153,63 @@ def relative_step(value, reference) -> float:
     return (value - reference) / abs(reference)
 
 
+#: Why a metric has no value on a run, from the tree's physics: the moving-together
+#: metrics (eq 34, eq 45, eq 58) when the impactor parts before the trunk catches up with it,
+#: the whole-event energies and impulse when the bodies have not parted for good by t_end,
+#: the contact history on the Newton model's impulsive impacts.
+MOVING_TOGETHER = ("T0", "x0", "V", "A_x", "A_y", "t_sep", "energy_transferred", "theta_b")
+WHY_NONE = {
+    **dict.fromkeys(MOVING_TOGETHER,
+                    "the bodies never move together on this tree (the impactor parts before "
+                    "the trunk catches up: no impact process of eqs 12-35 whose T0, x0, V, "
+                    "t_sep or eq 58's rebound after it could be compared)"),
+    "theta_b": ("eq 58's rebound angle is a pendulum's after it parts from the trunk's "
+                "moving-together phase: a billet has no angle, and a pendulum that never "
+                "moves together with the trunk has no such phase"),
+    **dict.fromkeys(("energy_delivered", "contact_dissipation", "rebound_energy", "impulse"),
+                    "the bodies have not parted for good by t_end on this tree (the energies "
+                    "and the impulse are read after the last separation)"),
+    **dict.fromkeys(("peak_force", "first_contact_duration", "crown_peak_acceleration"),
+                    "Newton impacts are instantaneous (eqs 20-21): no contact force history"),
+}
+
+
+#: Why an identified value (``id_*``) has no value on either record of a comparison.
+WHY_NO_IDENTIFICATION = ("the paper's procedure (eqs 39-48) refused both records: it reads a "
+                         "pendulum's moving-together phase before x_max, which this tree's "
+                         "motion or impactor does not give")
+
+
+def absent_reason(metric: str, value, reference_value, rung: str, reference: str) -> str | None:
+    """Why a comparison has no pair of numbers, from the tree's physics (:data:`WHY_NONE`).
+
+    Args:
+        metric: the metric compared.
+        value: the rung's value (SI; NaN or None when it has none).
+        reference_value: the reference's value (SI; NaN or None when it has none).
+        rung: the rung checked.
+        reference: what it is compared with (a rung id, "truth").
+
+    Returns:
+        The reason, or None when both values exist or the absence is not explained: a value
+        on neither side; or a moving-together metric on one side only (one model's bodies
+        move together, the other's never do or do not part by t_end: different regimes).
+    """
+    has = (finite_number(value), finite_number(reference_value))
+    if all(has):
+        return None
+    if not any(has):
+        why = WHY_NONE.get(metric, WHY_NO_IDENTIFICATION if metric.startswith("id_") else
+                           "neither run reports it")
+        return f"{metric} has no value on {rung} nor on {reference}: {why}"
+    if metric not in MOVING_TOGETHER or reference == "truth":
+        return None
+    on, off = (rung, reference) if has[0] else (reference, rung)
+    return (f"{metric} has a value on {on} but none on {off}: on {off} the bodies never move "
+            f"together or do not part by t_end, on {on} they do: the two models are in "
+            f"different regimes, no pair of numbers to compare")
+
+
 def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: str,
           reference_value, entry: dict | None, tol: dict,
           physics: TreePhysics | None = None) -> Check:
@@ -178,6 +236,10 @@ def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: st
     rel = relative_step(value, reference_value)
     finding = finding_for(tol, physics, kind, metric, rung)
     tolerance = None if entry is None or entry.get("report_only") else float(entry["rel"])
+    why = absent_reason(metric, value, reference_value, rung, reference)
+    if why is not None:  # the quantity does not exist for the tree: no verdict column n/a
+        return Check(scenario, rung, metric, _f(value), reference, _f(reference_value), rel,
+                     tolerance, Verdict.SKIPPED, why)
     reason = entry["reason"] if entry else "no tolerance entry"
     if finding is not None:
         band = tuple(finding["band"])

@@ -37,8 +37,9 @@ COMPARE_FLOORS = (
     ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "findings",
      "verdicts", "rungs", "exits", "figure_text", "contact_text", "contact_engines",
      "contact_settings"),
-    # 2 one scenario, one record: the ladder, the identification, a user's tree's scenario
-    ("identification", "ladder", "mechanism", "tree_scenario"),
+    # 2 one scenario, one record: the ladder, the identification, a user's tree's scenario,
+    # the family of trees across the regimes
+    ("identification", "ladder", "mechanism", "tree_scenario", "family"),
     # 3 the sweep machinery: grid, plan, run, journal, maps
     ("sweep",),
     # 4 the studies built on sweeps: contact scan, small e, sensitivity, identification, speed

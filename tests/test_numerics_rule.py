@@ -38,6 +38,9 @@ NOT_RERUN = {
     "compare/tests/test_mechanism.py": "the soft SDOF's matched restitution to 1e-6 (its "
                                        "metrics move by 1e-12) and a one-line refusal",
     "tests/test_budget.py": "the cost model's estimates, within a factor of two",
+    "tests/test_family.py": "regimes (whether T0 and t_sep exist), exit codes, one-line "
+                            "refusals and which cells exist: no number a kernel's round-off "
+                            "(1e-12 relative) could move across",
     "tests/test_bullet_models.py": "Bullet against the chain's matrices at 1e-12 (one "
                                    "product's round-off, 2e-16), the soft SDOF at 0.5 %, "
                                    "convergence orders",

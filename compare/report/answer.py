@@ -243,8 +243,7 @@ def _small_e_sentence(trees: dict, tol: float) -> str:
             if not any(map(_finite, zeros)):  # neither held nor off: nothing at e = 0
                 unset.append(label)
                 continue
-            part = (f"{label} {_range(zeros, _pct, '..')} %" if all(map(_finite, zeros))
-                    else f"{label} (no value at e = 0 for every tree)")
+            part = _at_zero_part(label, dict(zip(trees, zeros)))
             (trunk if first[name].get("model") == "continuum" else off).append(part)
         else:
             held.append(_held_part(trees, name, answers, label))
@@ -264,6 +263,15 @@ def _small_e_sentence(trees: dict, tol: float) -> str:
         text += ((" " if text else "Small e: ") + "No answer for " + ", ".join(none)
                  + ": no value at any e of any tree (the runs' reasons are in the table).")
     return text
+
+
+def _at_zero_part(label: str, zeros: dict) -> str:
+    """'LABEL +a..+b %': the e = 0 errors ``zeros`` (tree -> error) that exist, naming the
+    trees where one does not (a sentence reads no cell that does not exist)."""
+    have = [z for z in zeros.values() if _finite(z)]
+    lacking = [tree for tree, z in zeros.items() if not _finite(z)]
+    text = f"{label} {_range(have, _pct, '..')} %"
+    return text + (f" (no value at e = 0 on {', '.join(lacking)})" if lacking else "")
 
 
 def _finite(v) -> bool:

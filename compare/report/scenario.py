@@ -249,7 +249,8 @@ class ScenarioSection(Section):
             "L": L, "rows": rows, "ident_rows": ident_rows, "truth": L.truth,
             "ident_metrics": IDENT_METRICS, "figures": self.figures,
             "rungs": L.rungs, "skips": [r for r in L.rungs if not r.ok],
-            "ledgers": self.ledgers, "sweep": self.sweep, "fits": self.fits,
+            "ledgers": self.ledgers, "no_ledger": self._no_ledger(),
+            "sweep": self.sweep, "fits": self.fits,
             "fits_not_fixed": any(f.get("ranges") for f in self.fits),
             "fit_rows": self._fit_rows(),
             "findings": findings, "mechanism": self.mechanism,
@@ -258,6 +259,15 @@ class ScenarioSection(Section):
             "metrics": ALL_METRICS, "OK": OK,
             "implausible": [i.text for i in implausible(L.scenario)],
         }
+
+    def _no_ledger(self) -> str | None:
+        """Why the ledger at T0 has no row (no rung that ran has a moving-together start:
+        the bodies never move together on this tree), or None when it has one."""
+        if any(v is not None for v in self.ledgers.values()):
+            return None
+        return ("No ledger at T0: on no rung that ran do the bodies move together (the "
+                "impactor parts before the trunk catches up), so there is no T0 to take "
+                "the energies at.")
 
     def _fit_rows(self) -> list[dict]:
         """The full-record fit table's rows: the truth, then each rung's cells

@@ -118,16 +118,6 @@ def require_run(ladder, rung_id: str) -> None:
         pytest.fail(f"{ladder.name} {rung_id}: {rr.reason}", pytrace=False)
 
 
-#: Why a metric exists on neither rung of a step: the tree's physics, not the code (the
-#: moving-together metrics of analytic.records: a light or bouncy impactor parts before the
-#: trunk catches up with it).
-WHY_NONE = dict.fromkeys(("T0", "x0", "V", "A_x", "A_y", "t_sep", "energy_transferred",
-                          "theta_b"),
-                         "the bodies never move together on this tree (the impactor parts "
-                         "before the trunk catches up: no impact process of eqs 12-35 whose "
-                         "T0, x0, V, t_sep or eq 58's rebound after it could be compared)")
-
-
 def _absent_on_both(check) -> bool:
     """A check with no value on either side: nothing to compare, not a disagreement."""
     from treeimpact.compare.verdicts import Verdict
@@ -136,20 +126,32 @@ def _absent_on_both(check) -> bool:
         isinstance(v, (int, float)) and v == v for v in (check.value, check.reference_value))
 
 
+def _skip_reason(ladder, check) -> str:
+    """The physical reason a check of a quantity the tree's motion does not have is skipped:
+    the verdict's own (compare.verdicts.absent_reason), or for a check with no value on
+    either side, :data:`compare.verdicts.WHY_NONE`'s."""
+    from treeimpact.compare.verdicts import WHY_NONE, Verdict
+
+    c = check
+    if c.verdict is Verdict.SKIPPED:
+        return f"{ladder.name} {c.rung}: {c.reason}"
+    return (f"{ladder.name} {c.rung}: {c.metric} has no value on {c.rung} nor on "
+            f"{c.reference}: {WHY_NONE.get(c.metric, 'neither run reports it')}")
+
+
 def assert_checks(ladder, checks) -> None:
     """Pass when every check's verdict passes (compare.verdicts.Verdict.passes: ``ok``, a
     ``finding`` in its band, or a peak time flagged ``ambiguous``, x(t) with two near-equal
     maxima, not judged by the documented rule; test_ladder checks which rungs are); skip
-    (with the physical reason, :data:`WHY_NONE`) when the only ones that do not are of a
-    metric that exists on neither rung (a user's tree, ``--scenario``, whose bodies never
-    move together); else print the table."""
+    (with the physical reason, compare.verdicts.WHY_NONE) when the only ones that do not are
+    of a quantity the tree's motion does not have (verdict ``skipped``: a user's tree,
+    ``--scenario``, whose bodies never move together); else print the table."""
     from treeimpact.compare.ladder import failure_table
+    from treeimpact.compare.verdicts import Verdict
 
     bad = [c for c in checks if not c.verdict.passes]
-    if bad and all(_absent_on_both(c) for c in bad):
-        c = bad[0]
-        pytest.skip(f"{ladder.name} {c.rung}: {c.metric} has no value on {c.rung} nor on "
-                    f"{c.reference}: {WHY_NONE.get(c.metric, 'neither run reports it')}")
+    if bad and all(c.verdict is Verdict.SKIPPED or _absent_on_both(c) for c in bad):
+        pytest.skip(_skip_reason(ladder, bad[0]))
     if bad:
         pytest.fail("\n" + failure_table(ladder, checks), pytrace=False)
 

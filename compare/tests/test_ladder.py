@@ -178,7 +178,13 @@ def test_verdicts():
     assert _check(1.06, 1.0, entry).verdict == "exceeds"
     assert _check(-0.94, -1.0, entry).rel_diff == pytest.approx(0.06)
     assert _check(1.06, 1.0, {"report_only": True, "reason": "r"}).verdict == "reported"
-    assert _check(math.nan, 1.0, entry).verdict == "n/a"
+    assert _check(math.nan, 1.0, entry, metric="x_max").verdict == "n/a"
+    # a quantity the tree's motion does not have: skipped with the physical reason
+    none = _check(math.nan, math.nan, entry, metric="x_max")
+    assert none.verdict == "skipped" and "no value on r nor on p" in none.reason
+    one = _check(math.nan, 1.0, entry)  # V on the reference only: different regimes
+    assert one.verdict == "skipped" and "different regimes" in one.reason
+    assert "move together" in _check(math.nan, math.nan, entry).reason
     f = {"name": "light clamp", "kinds": ["trunk"], "metric": "V",
          "when": {"loss_ratio_above": 2.0, "restitution_below": 0.5}, "band": [0.2, 0.5],
          "cause": "finding at loss_ratio {loss_ratio:g}", "reason": "the evidence"}
