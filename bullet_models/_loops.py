@@ -120,7 +120,7 @@ def _loop_chain(world, setup, n_steps, full, le, g, m, tick=lambda n: None):
     if setup.phases is None:
         run(n_steps, setup.dt, 0)
     else:
-        from ._phased import phased_steps  # noqa: PLC0415 - the phased driver's own module
+        from ._phased import phased_steps  # noqa: PLC0415 - lazy: the phased driver's own module, loaded only when a run steps by phase
 
         h = phased_steps(world, setup, run, rec, n_steps * setup.dt, full, le, m)
     fromiter, flat, pair, n2 = np.fromiter, itertools.chain.from_iterable, itemgetter(0, 1), 2 * nj

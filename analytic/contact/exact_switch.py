@@ -20,8 +20,9 @@ _ROOT_TOL = 1e-15
 def locate(kind: ContactPhase, st, wk: np.ndarray, s_lo: float, s_hi: float,
            d_hi: float, f_hi: float, lo_values: tuple | None,
            flight: tuple[float, float] = (0.0, 0.0)):
-    """(time into the phase, next phase) of the switch bracketed by [s_lo, s_hi]
-    (:func:`.phases.switch`) of the phase started with the kept modal coefficients ``wk``
+    """(time into the phase, next phase) of the switch bracketed by [``s_lo``, ``s_hi``]
+    (s; :func:`.phases.switch`, ``d_hi`` and ``f_hi`` the gap delta, m, and the law, N, at
+    ``s_hi``) of the ``kind`` phase started with the kept modal coefficients ``wk``
     on the state ``st`` (its kept eigenvalues ``lam`` and law rows ``law``, m x 6), each
     root by Halley's method on the exact solution's delta and law with their first two
     derivatives; ``lo_values``: (delta, law) at s_lo from the samples, or

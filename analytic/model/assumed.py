@@ -81,9 +81,10 @@ def with_root_share(trunk: Trunk, share: float, *, modulus_assumed: bool) -> Tru
 def geometry_trunk(*, length: float, clamp_height: float, diameter: float,
                    clamp_mass: float, crown_mass: float, density: float | None = None,
                    youngs_modulus: float | None = None) -> GeometryTrunk:
-    """The trunk of a tree given by its geometry (l, a, d in m), its clamp m_c and crown
-    m_f (kg) and, when known, its wood's density rho (kg/m^3) and E (Pa); the rest assumed
-    as the registry declares (module docstring).
+    """The trunk of a tree given by its geometry (``length`` l, ``clamp_height`` a,
+    ``diameter`` d, in m), its ``clamp_mass`` m_c and ``crown_mass`` m_f (kg) and, when
+    known, its wood's ``density`` rho (kg/m^3) and ``youngs_modulus`` E (Pa; None: both
+    assumed); the rest assumed as the registry declares (module docstring).
 
     Returns:
         :class:`GeometryTrunk`.

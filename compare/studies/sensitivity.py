@@ -438,7 +438,8 @@ def _values(name: str, rows) -> np.ndarray:
 
 
 def inputs_entry(names, ranges: dict | None) -> dict:
-    """study.json's ``inputs``: per input its range on the tree (low, high), unit, why,
+    """study.json's ``inputs``: per input of ``names`` its range on the tree (low, high,
+    from ``ranges``, compare.studies.input_ranges; None: the registry's), unit, why,
     the measurement that settles it, the registry's range and why the tree's differs
     (``clipped``, '' when not; compare.studies.input_ranges)."""
     out = {}

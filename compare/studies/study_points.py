@@ -27,7 +27,8 @@ def point_inputs(names, x) -> dict:
 
 
 def point_text(index: int, inputs: dict, reason: str) -> str:
-    """'point 14 (clamp_mass = 6 kg, root_share = 0.9): reason', one line."""
+    """'point 14 (clamp_mass = 6 kg, root_share = 0.9): reason', one line: the design row
+    ``index``, its ``inputs`` (:func:`point_inputs`) and the one-line ``reason``."""
     values = ", ".join(f"{n} = {v['value']:.6g}" + ("" if v["unit"] == "1" else f" {v['unit']}")
                        for n, v in inputs.items())
     return f"point {index} ({values}): {reason}"
@@ -68,8 +69,9 @@ def rows_of(groups: list[int], size: int) -> list[int]:
 
 
 def failure_summary(failed: list[dict], points: int) -> dict:
-    """The design's failures as study.json keeps them: {failed (count), failed_points (the
-    first MAX_LISTED), failed_listed, errors (up to 5 distinct reasons)}."""
+    """The design's failures (``failed``, :func:`failed_points`) as study.json keeps them:
+    {failed (count), failed_points (the first MAX_LISTED), failed_listed, errors (up to 5
+    distinct reasons), points (the design's size, ``points``)}."""
     return {"failed": len(failed), "failed_points": failed[:MAX_LISTED],
             "failed_listed": min(len(failed), MAX_LISTED),
             "errors": sorted({f["reason"] for f in failed})[:5], "points": points}

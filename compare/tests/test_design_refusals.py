@@ -98,6 +98,7 @@ def test_a_tree_outside_the_design_range_is_refused_by_its_own_value(tmp_path, c
     assert not (tmp_path / "d").exists()
 
 
+@pytest.mark.filterwarnings("ignore::treeimpact.analytic.errors.ImplausibleInput")
 def test_a_map_no_point_of_which_runs_is_named_by_the_tree(tmp_path):
     """m/M_T = 15.5 is inside the study's range, but at a/l = 0.1 (M_T larger) no impactor
     within the registry's 1e4 kg gives it: the refusal names the tree and its map."""

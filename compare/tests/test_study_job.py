@@ -207,10 +207,10 @@ def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):
     band = row["sensitivity"]["gap.x_max"]
     assert band["evaluations"] == 5 and -1.0 < band["low"] < band["high"] < 10.0
     html = paths["html"].read_text()
-    assert "Held at the file's measured values: clamp mass 4" in html
+    assert "held at the file's measured values: clamp mass 4" in html  # the measure-first line
     # what to measure first for this tree: its four free inputs ranked, in report.json
     first = json.loads(paths["json"].read_text())["answer"]["measure_first"]["my-tree"]
     assert {r["input"] for r in first["rows"]} == {"e_over_g", "log10_pad_duration",
                                                    "root_share", "density"}
     assert set(first["first"]) == {"gap.x_max", "gap.energy_delivered"}
-    assert "What to measure first" in html and first["sentence"].startswith("my-tree: ")
+    assert "what to measure first" in html and first["sentence"].startswith("my-tree: ")
