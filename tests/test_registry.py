@@ -131,7 +131,8 @@ def _scenario_options():
 def test_every_place_spells_inputs_as_the_registry():
     """CLI options, sweep axes, map axes, the sensitivity and design studies' inputs: each
     physical input under the registry's name and in its unit."""
-    from treeimpact.compare.studies import design, sensitivity
+    from treeimpact.compare.studies import design
+    from treeimpact.compare.studies import study_inputs as sensitivity
     from treeimpact.compare.sweep.grid import ALIASES
     from treeimpact.compare.sweep.map_cells import _AXES
 

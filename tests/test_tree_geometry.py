@@ -2,7 +2,7 @@
 ``ti.tree_scenario(crown_mass=...)`` build a scenario from what an orchard gives, without a
 pendulum test; what it assumes (the root spring, the damping, E and rho when not given)
 comes from the registry with its value, range and reason, and enters the sensitivity study
-as unmeasured inputs (compare.studies.sensitivity.vary)."""
+as unmeasured inputs (compare.studies.study_inputs.vary)."""
 
 from __future__ import annotations
 
@@ -28,7 +28,8 @@ from treeimpact.analytic.model.scenario_toml import scenario_toml
 from treeimpact.analytic.paper.reproduction import PENDULUM_MASS, TABLE_1
 from treeimpact.compare.cli import main
 from treeimpact.compare.report import mass_origin
-from treeimpact.compare.studies.sensitivity import design, free_inputs, inputs_of, vary
+from treeimpact.compare.studies.sensitivity import design
+from treeimpact.compare.studies.study_inputs import free_inputs, inputs_of, vary
 
 #: The issue's young plum: what an orchard gives (SI), no pendulum test.
 PLUM = {"clamp_height": 0.35, "diameter": 0.12, "impactor_mass": 20.0,

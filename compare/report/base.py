@@ -13,7 +13,7 @@ from pathlib import Path
 
 import jinja2
 
-from treeimpact.compare.studies.sensitivity import INPUTS
+from treeimpact.compare.studies.study_inputs import INPUTS
 from treeimpact.compare.studies.sobol import verdict_text
 from treeimpact.compare.sweep.maps import INPUT_LABELS, OUTPUT_LABELS
 
@@ -62,7 +62,7 @@ def span(values, digits: int = 3, sep: str = "-") -> str:
 
 
 #: The sensitivity study's dimensionless inputs, what their number is
-#: (compare.studies.sensitivity.INPUTS gives the others' units).
+#: (compare.studies.study_inputs.INPUTS gives the others' units).
 _INPUT_WORDS = {"root_share": "of the static flexibility at the clamp",
                 "e_over_g": "(E / G, 1)", "restitution": "(e, 1)"}
 

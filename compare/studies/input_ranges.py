@@ -1,7 +1,7 @@
 """The sensitivity study's input ranges for one tree (issue 50 item 4): the registry's
 ``unmeasured`` range of each input (analytic.model.registry), clipped where a value of it
 could not describe the tree it is applied to. The study keeps each tree's measured M_T and
-K_T (compare.studies.sensitivity.vary), so three physical rules bound the inputs:
+K_T (compare.studies.study_inputs.vary), so three physical rules bound the inputs:
 
 1. **E within its allowed range.** The root's share s of the static flexibility at the
    clamp sets E = E_0 / (1 - s), E_0 = a^3 K_T / (3 I) the rigid-root modulus (eq 8); E must
@@ -120,7 +120,7 @@ def tree_ranges(scenario, names, own: dict) -> dict:
     """The ranges of the inputs ``names`` (the study's free ones) on the tree ``scenario``:
     name -> {low, high, registry (the registry's [low, high]), clipped (why, '' when
     not)} by the module's three rules; ``own``: every input's value on the tree
-    (compare.studies.sensitivity.inputs_of; the held ones enter the rules at it). Units:
+    (compare.studies.study_inputs.inputs_of; the held ones enter the rules at it). Units:
     the registry's."""
     held = {k: v for k, v in own.items() if k not in names}
     trunk = scenario.trunk

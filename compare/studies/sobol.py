@@ -26,16 +26,8 @@ import numpy as np
 from treeimpact.analytic.errors import ParameterError
 
 from ..runs import OK
-from .sensitivity import (
-    ALL_INPUTS,
-    ANSWER,
-    CONF_LEVEL,
-    INPUTS,
-    design_rows,
-    design_sweep,
-    inputs_entry,
-    problem,
-)
+from .sensitivity import ANSWER, CONF_LEVEL, design_rows, design_sweep
+from .study_inputs import ALL_INPUTS, INPUTS, inputs_entry, problem
 from .study_points import complete_groups, failed_points, failure_summary, rows_of
 
 #: The seed of the scrambled Sobol sequence and of SALib's bootstrap.
@@ -184,7 +176,7 @@ def analyse_sobol(table, n: int, names=None, seed: int = SEED,
                   ranges: dict | None = None) -> dict:
     """Per answered gap of the sweep's ``table`` (:func:`sobol_design` of ``n`` and ``seed``
     over ``names``, default every input, on the tree's ``ranges``,
-    compare.studies.sensitivity.ranges_of; default the registry's): :func:`output_entry`;
+    compare.studies.study_inputs.ranges_of; default the registry's): :func:`output_entry`;
     and :func:`measure_first`. {n, evaluations (points that ran), points, failed,
     failed_points, blocks_used, conf_level, num_resamples, distribution, inputs, outputs,
     measure_first} (errors: up to 5 distinct reasons when points failed).
@@ -262,7 +254,7 @@ def measure_first(outputs: dict) -> dict:
 def sobol_sweep(scenario, out, n: int, seed: int = SEED):
     """The Sobol study of one tree (``scenario``) as a sweep into ``out``: the design of
     :func:`sobol_design` (``n``, ``seed``) over its free inputs on the tree's ranges
-    (compare.studies.sensitivity.ranges_of) as ``input.*`` axes, the answer's gaps
+    (compare.studies.study_inputs.ranges_of) as ``input.*`` axes, the answer's gaps
     (compare.studies.sensitivity.answer_under) at each point."""
     return design_sweep(scenario, out, lambda names, ranges: sobol_design(
         n, names, seed, problem(names, ranges)))

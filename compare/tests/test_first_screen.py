@@ -47,7 +47,7 @@ class _Study:
     Sobol design of :data:`SOBOL_N` per tree run now on the sweep machinery."""
 
     def __init__(self, scens, folder):
-        from treeimpact.compare.studies.sensitivity import free_inputs
+        from treeimpact.compare.studies.study_inputs import free_inputs
         from treeimpact.compare.studies.sobol import analyse_sobol, sobol_sweep
         from treeimpact.compare.sweep.run import run_sweeps
 

@@ -15,15 +15,17 @@ from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.studies.sensitivity import (
     ANSWER,
-    INPUTS,
     analyse,
     answer_under,
     deciding,
     design,
+    sensitivity_sweep,
+)
+from treeimpact.compare.studies.study_inputs import (
+    INPUTS,
     free_inputs,
     inputs_of,
     measured_inputs,
-    sensitivity_sweep,
     vary,
 )
 

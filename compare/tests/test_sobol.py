@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from treeimpact.compare.studies.sensitivity import INPUTS
+from treeimpact.compare.studies.study_inputs import INPUTS
 from treeimpact.compare.studies.sobol import (
     analyse_sobol,
     measure_first,
@@ -207,7 +207,7 @@ def test_one_trees_design_runs_on_the_sweeps_with_its_measured_inputs_held(tmp_p
     the ranking names only free inputs."""
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.model.scenario_toml import scenario_toml
-    from treeimpact.compare.studies.sensitivity import free_inputs, ranges_of
+    from treeimpact.compare.studies.study_inputs import free_inputs, ranges_of
     from treeimpact.compare.studies.sobol import sobol_sweep
     from treeimpact.compare.sweep.run import run_sweeps
 

@@ -10,7 +10,8 @@ import pytest
 from SALib.analyze import rbd_fast
 from SALib.sample import latin
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.studies.sensitivity import answer_under, free_inputs, problem
+from treeimpact.compare.studies.sensitivity import answer_under
+from treeimpact.compare.studies.study_inputs import free_inputs, problem
 from treeimpact.compare.studies.sobol import sobol_design, sobol_indices
 
 GAPS = ("gap.x_max", "gap.energy_delivered")

@@ -8,13 +8,12 @@ from pathlib import Path
 
 from treeimpact.analytic.model.scenario import shipped_scenarios
 from treeimpact.compare.runs import resolve_scenario
-from treeimpact.compare.studies.sensitivity import (
-    analyse,
+from treeimpact.compare.studies.sensitivity import analyse, sensitivity_sweep
+from treeimpact.compare.studies.study_inputs import (
     free_inputs,
     inputs_of,
     measured_inputs,
     ranges_of,
-    sensitivity_sweep,
 )
 from treeimpact.compare.studies.sobol import analyse_sobol, sobol_sweep
 

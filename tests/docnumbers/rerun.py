@@ -152,7 +152,8 @@ def _sensitivity_design(out: dict) -> None:
     """The sensitivity study's design (compare/studies/sensitivity.py, the presets): levels,
     inputs and their ranges, pads (ms), and each preset's trajectories and points."""
     from treeimpact.compare.studies.sensitivity import DURATIONS as PADS
-    from treeimpact.compare.studies.sensitivity import INPUTS, LEVELS
+    from treeimpact.compare.studies.sensitivity import LEVELS
+    from treeimpact.compare.studies.study_inputs import INPUTS
     from treeimpact.compare.validity.study import PRESETS
 
     out["code.sensitivity.levels"] = LEVELS
