@@ -100,6 +100,19 @@ class Run:
         return out
 
 
+def failure(exc: Exception, invalid: str) -> tuple[str, str]:
+    """(status, one-line reason) of a run or an analysis that raised ``exc``: ``invalid``
+    (the caller's status for inputs that make no valid run) for a ParameterError, OUTSIDE,
+    DIVERGED, else FAILED with the exception's type."""
+    if isinstance(exc, ParameterError):
+        return invalid, one_line(exc)
+    if isinstance(exc, OutsideValidity):  # before SimulationDiverged, its base
+        return OUTSIDE, f"outside the model's validity: {one_line(exc)}"
+    if isinstance(exc, SimulationDiverged):
+        return DIVERGED, f"diverged: {one_line(exc)}"
+    return FAILED, f"{type(exc).__name__}: {one_line(exc)}"
+
+
 def attempt(backend, scenario: Scenario, options: dict) -> Run:
     """The :class:`Run` of one backend run of ``scenario`` with ``options`` (``backend``: a
     :class:`compare.backends.Backend`), timed; never raises for a failing run (SKIPPED,
@@ -108,14 +121,8 @@ def attempt(backend, scenario: Scenario, options: dict) -> Run:
     result, reason, status = None, None, OK
     try:
         result = backend.simulate(scenario, **options)
-    except ParameterError as exc:
-        status, reason = SKIPPED, one_line(exc)
-    except OutsideValidity as exc:  # before SimulationDiverged, its base
-        status, reason = OUTSIDE, f"outside the model's validity: {one_line(exc)}"
-    except SimulationDiverged as exc:
-        status, reason = DIVERGED, f"diverged: {one_line(exc)}"
     except Exception as exc:  # noqa: BLE001 - recorded, shown, and failed on by the tests
-        status, reason = FAILED, f"{type(exc).__name__}: {one_line(exc)}"
+        status, reason = failure(exc, SKIPPED)
     return Run(scenario.name, backend.name, dict(options), status, result, reason,
                time.perf_counter() - t0)
 

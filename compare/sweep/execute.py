@@ -14,11 +14,11 @@ import os
 import socket
 from dataclasses import dataclass, field
 
-from treeimpact.analytic.errors import OutsideValidity, ParameterError, SimulationDiverged, one_line
+from treeimpact.analytic.errors import one_line
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import METRIC_KEYS
 from treeimpact.compare.identification import identify_rung
-from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, OUTSIDE, attempt
+from treeimpact.compare.runs import DIVERGED, FAILED, INVALID, OK, attempt, failure
 
 #: The model quantities of a run kept as the table's ``model.*`` columns (SI; the run's
 #: ``model`` dict).
@@ -104,14 +104,8 @@ def _analysed(analyse, result, scenario: Scenario, record: dict) -> dict:
     each with its one-line reason (the row keeps the point's ``input.*`` values)."""
     try:
         return analyse(result, scenario, record)
-    except ParameterError as exc:
-        status, reason = INVALID, one_line(exc)
-    except OutsideValidity as exc:  # before SimulationDiverged, its base
-        status, reason = OUTSIDE, f"outside the model's validity: {one_line(exc)}"
-    except SimulationDiverged as exc:
-        status, reason = DIVERGED, f"diverged: {one_line(exc)}"
     except Exception as exc:  # noqa: BLE001 - recorded and shown with the point
-        status, reason = FAILED, f"{type(exc).__name__}: {one_line(exc)}"
+        status, reason = failure(exc, INVALID)
     return {"status": status, "error": reason}
 
 
