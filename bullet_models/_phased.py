@@ -71,7 +71,7 @@ def phased_steps(world, setup, run, rec, total_time: float, full: bool, le, m: f
             del rec[0][n:], rec[1][2 * n:]
             for i in [i for i in contact_force if i >= n]:
                 del contact_force[i]
-        k = max(1, min(rule.chunk_steps, int(round((total_time - t) / rule.contact_step))))
+        k = rule.contact_chunk(total_time - t)
         run(k, rule.contact_step, n)
         sizes.append(np.full(k, rule.contact_step))
         t, n = t + k * rule.contact_step, n + k

@@ -82,7 +82,7 @@ def phased_rollout(setup, state0: np.ndarray, total_time: float, stop, tick):
                     t + n * rule.free_step, big + n
                 tick(n)
                 continue
-        n = max(1, min(rule.chunk_steps, int(round((total_time - t) / rule.contact_step))))
+        n = rule.contact_chunk(total_time - t)
         st, sd = mj_rollout.rollout(mc, dc, state[None], nstep=n, initial_warmstart=warm)
         parts.append((st[0], sd[0], np.full(n, rule.contact_step)))
         state, warm, t = st[0, -1], dc.qacc_warmstart.copy()[None], t + n * rule.contact_step

@@ -81,6 +81,11 @@ class PhaseRule:
         n = min(n, int(time_left / self.free_step))
         return n if n >= MIN_FREE_STEPS else 0
 
+    def contact_chunk(self, time_left: float) -> int:
+        """Contact steps to take before the next check, with ``time_left`` (s) before the
+        run's end: :attr:`chunk_steps`, fewer at the end, at least one."""
+        return max(1, min(self.chunk_steps, int(round(time_left / self.contact_step))))
+
 
 def input_energy(model, scenario, pendulum: str) -> float:
     """A run's input energy, J: the full pendulum's drop m g l_e (1 - cos theta_r), the
