@@ -158,7 +158,9 @@ def holds_text(a: dict) -> str:
     return text
 
 
-def _range(values, fmt, sep="-") -> str:
+def span_text(values, fmt, sep="-") -> str:
+    """``values``' lowest and highest, each as ``fmt`` prints it, joined by ``sep``; one
+    number when both print alike."""
     lo, hi = min(values), max(values)
     return fmt(lo) if fmt(lo) == fmt(hi) else f"{fmt(lo)}{sep}{fmt(hi)}"
 
@@ -169,7 +171,8 @@ def _inner(v) -> str:
     return f"{math.floor(1000 * v + 1e-6) / 1000:.3f}"
 
 
-def _pct(v) -> str:
+def pct_text(v) -> str:
+    """A relative difference ``v`` (1) as a signed whole percentage, without the unit."""
     return f"{100 * v:+.0f}"
 
 
@@ -186,7 +189,7 @@ def _steady(trees: dict, tol: float) -> str:
         ups = [t[name]["steady_up_to_e"] for t in trees.values() if "steady_up_to_e" in t[name]]
         whole = all(t[name].get("steady_bracket") is None for t in trees.values())
         parts.append(f"{label} over the whole range" if whole
-                     else f"{label} up to e = {_range(ups, _inner)}")
+                     else f"{label} up to e = {span_text(ups, _inner)}")
     if not parts:
         return ""
     return (f"; the trunk alone sets them (within {100 * tol:.0f} points of their e = 0 "
@@ -214,8 +217,8 @@ def in_short(one_dof: list[dict], trees: dict) -> dict:
         es = sorted({a["restitution"] for a in rows})
         out["one_dof"] = (
             f"The 1-DOF trunk: at each tree's own pad and e ({', '.join(f'{e:g}' for e in es)}) "
-            f"the paper's 1-DOF model is {_range(gaps['x_max'], _pct, '..')} % off the "
-            f"continuum trunk on x_max and {_range(gaps['energy_delivered'], _pct, '..')} % "
+            f"the paper's 1-DOF model is {span_text(gaps['x_max'], pct_text, '..')} % off the "
+            f"continuum trunk on x_max and {span_text(gaps['energy_delivered'], pct_text, '..')} % "
             f"on the energy delivered ({100 * tol:.0f} % counts as good enough).")
     missing = [a for a in one_dof if not a.get("available")]
     if missing:
@@ -270,7 +273,7 @@ def _at_zero_part(label: str, zeros: dict) -> str:
     trees where one does not (a sentence reads no cell that does not exist)."""
     have = [z for z in zeros.values() if _finite(z)]
     lacking = [tree for tree, z in zeros.items() if not _finite(z)]
-    text = f"{label} {_range(have, _pct, '..')} %"
+    text = f"{label} {span_text(have, pct_text, '..')} %"
     return text + (f" (no value at e = 0 on {', '.join(lacking)})" if lacking else "")
 
 
@@ -286,4 +289,4 @@ def _held_part(trees: dict, name: str, answers: list, label: str) -> str:
              if not t[name].get("monotone", True)] + [
         f"counting a second strike on {tree}" for tree, t in trees.items()
         if t[name].get("second_strike_from") is not None]
-    return f"{_range(ups, _inner)} for {label}" + (f" ({'; '.join(notes)})" if notes else "")
+    return f"{span_text(ups, _inner)} for {label}" + (f" ({'; '.join(notes)})" if notes else "")

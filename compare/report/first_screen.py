@@ -15,7 +15,7 @@ import math
 import re
 
 from ..rungs import RungKind
-from .answer import ANSWER_METRICS, ANSWER_TERMS
+from .answer import ANSWER_METRICS, ANSWER_TERMS, pct_text, span_text
 from .base import input_name
 
 #: The prefix of a documented finding's name that says which assumption it is about
@@ -33,15 +33,6 @@ def words(text: str) -> list[str]:
 def sentences(text: str) -> list[str]:
     """The sentences of ``text`` by the module's counting rule (ends at '. ', '; ', end)."""
     return [s for s in re.split(r"(?<=[.;])\s+", text.strip()) if words(s)]
-
-
-def _pct(v: float) -> str:
-    return f"{100 * v:+.0f}"
-
-
-def _span(values, fmt=_pct) -> str:
-    lo, hi = fmt(min(values)), fmt(max(values))
-    return lo if lo == hi else f"{lo} to {hi}"
 
 
 def _and(parts: list[str]) -> str:
@@ -78,8 +69,8 @@ def one_dof_text(answer: list[dict]) -> str:
     rows = [a for a in answer if a.get("available")]
     text = ""
     if rows:
-        x = _span([a["metrics"]["x_max"]["rel"] for a in rows])
-        en = _span([a["metrics"]["energy_delivered"]["rel"] for a in rows])
+        x, en = (span_text([a["metrics"][m]["rel"] for a in rows], pct_text, " to ")
+                 for m in ("x_max", "energy_delivered"))
         text = (f"The 1-DOF model is {x} % off the flexible trunk on x_max, {en} % on energy "
                 "delivered.")
     missing = [f"{a['scenario']} ({a['why']})" for a in answer if not a.get("available")]
@@ -122,7 +113,7 @@ def why_text(answer: list[dict], scen_sections) -> str:
             continue
         said = ANSWER_TERMS.get(m, m)
         groups.setdefault(cause_of(sections[row["scenario"]], m), []).append(
-            f"{row['scenario']}'s {said} ({_pct(row['metrics'][m]['rel'])} %)")
+            f"{row['scenario']}'s {said} ({pct_text(row['metrics'][m]['rel'])} %)")
     out = [f"{_and(trees)}: {cause}" if cause else
            f"{_and(trees)}: no documented cause matches (the ladder has the numbers)"
            for cause, trees in groups.items()]
