@@ -15,6 +15,7 @@ from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
 from .backends import ENGINES
+from .bounds import Pair, tree_entry
 from .findings import TreePhysics
 from .identification import (
     IDENT_METRICS,
@@ -187,9 +188,17 @@ class Ladder:
         ambiguous = self._ambiguous_peak(rung_id, prev, metric)
         if ambiguous is not None:
             return ambiguous
-        entry = self.tolerances.get("step", {}).get(r.rung.kind, {}).get(metric)
+        entry = self._entry("step", r.rung.kind, metric, rung_id, prev)
         return judge(self.name, rung_id, r.rung.kind, metric, self.value(rung_id, metric), prev,
                      self.value(prev, metric), entry, self.tolerances, self.physics)
+
+    def _entry(self, section: str, kind: str, metric: str, rung_id: str, reference: str):
+        """The tolerance file's entry for ``metric`` of the ``section``'s ``kind`` as it
+        applies to this tree: a per-tree bound evaluated on the two rungs
+        (:func:`compare.bounds.tree_entry`)."""
+        entry = self.tolerances.get(section, {}).get(kind, {}).get(metric)
+        return tree_entry(entry, Pair(self.scenario, self.physics, metric, self[rung_id],
+                                      self[reference]))
 
     def _ambiguous_peak(self, rung_id: str, reference: str, metric: str) -> Check | None:
         """t_xmax compared between a record with one clear maximum and one whose x(t) has a
@@ -229,7 +238,7 @@ class Ladder:
         ambiguous = self._ambiguous_peak(ids[1], ids[0], metric)
         if ambiguous is not None:
             return ambiguous
-        entry = self.tolerances.get("engines", {}).get(kind, {}).get(metric)
+        entry = self._entry("engines", kind, metric, ids[1], ids[0])
         return judge(self.name, ids[1], f"engines-{kind}", metric, self.value(ids[1], metric),
                      ids[0], self.value(ids[0], metric), entry, self.tolerances, self.physics)
 

@@ -16,6 +16,7 @@ from pathlib import Path
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import finite_number, to_jsonable
 
+from .bounds import validate_bound
 from .findings import (
     REFUSAL_QUANTITIES,
     TreePhysics,
@@ -82,11 +83,13 @@ def _validate(data: dict, path: str) -> None:
             raise ParameterError(f"{path}: {where}: every tolerance needs a one-line reason")
         if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
             raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
-        if "rel" not in entry and not entry.get("report_only") and not entry.get("undefined") \
+        validate_bound(f"{path}: {where}", entry)
+        if "rel" not in entry and "bound" not in entry and not entry.get("report_only") \
+                and not entry.get("undefined") \
                 and where != "identification_reported" \
                 and not where.startswith("identification_refused"):
-            raise ParameterError(f"{path}: {where}: give rel or report_only = true (or "
-                                 "undefined = true: no check)")
+            raise ParameterError(f"{path}: {where}: give rel, bound or report_only = true "
+                                 "(or undefined = true: no check)")
 
     for section in ("step", "engines"):
         for kind, metrics in data.get(section, {}).items():

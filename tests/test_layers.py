@@ -34,8 +34,8 @@ COMPARE_FLOORS = (
     # 1 what a run is: the backends by name, one run record, findings and verdicts, the
     # rung table, the pool, the exit codes, figure titles that fit
     # and the engines' contact settings (the engine registry names them)
-    ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "findings",
-     "verdicts", "rungs", "exits", "figure_text", "contact_text", "contact_engines",
+    ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "bounds",
+     "findings", "verdicts", "rungs", "exits", "figure_text", "contact_text", "contact_engines",
      "contact_settings"),
     # 2 one scenario, one record: the ladder, the identification, a user's tree's scenario,
     # the family of trees across the regimes

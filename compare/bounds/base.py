@@ -1,0 +1,92 @@
+"""The per-tree bound records and their registry (the package's docstring says how a
+tolerance entry names one)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from treeimpact.analytic.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class Bound:
+    """A tolerance for one tree.
+
+    Attributes:
+        rel: the relative tolerance on |value - reference| / |reference| (1), finite, >= 0.
+        words: how it follows, with this tree's numbers (one clause, no other tree's).
+    """
+
+    rel: float
+    words: str
+
+
+@dataclass(frozen=True)
+class Pair:
+    """What a bound reads: one comparison of the ladder.
+
+    Attributes:
+        scenario: the tree's :class:`analytic.Scenario`.
+        physics: its :class:`compare.findings.TreePhysics`.
+        metric: the metric compared.
+        rung: the checked rung's result (``compare.ladder.RungResult``: ``.result`` is its
+            SimulationResult, ``.values`` its ladder values).
+        reference: the reference rung's result, the same kind of object.
+    """
+
+    scenario: Any
+    physics: Any
+    metric: str
+    rung: Any
+    reference: Any
+
+    @property
+    def value(self) -> float:
+        """The checked rung's value of the metric (SI; NaN when missing)."""
+        return self.rung.values.get(self.metric, math.nan)
+
+    @property
+    def reference_value(self) -> float:
+        """The reference rung's value of the metric (SI; NaN when missing)."""
+        return self.reference.values.get(self.metric, math.nan)
+
+
+BoundFunction = Callable[[Pair], Bound]
+#: name -> the function that evaluates the bound on a :class:`Pair`.
+BOUNDS: dict[str, BoundFunction] = {}
+
+
+def register(name: str) -> Callable[[BoundFunction], BoundFunction]:
+    """Decorator: register the bound ``name`` (the tolerance file's ``bound = "name"``)."""
+    def deco(fn: BoundFunction) -> BoundFunction:
+        if name in BOUNDS:
+            raise ValueError(f"bound {name!r} registered twice")
+        BOUNDS[name] = fn
+        return fn
+    return deco
+
+
+def validate_bound(where: str, entry: dict) -> None:
+    """Refuse (ParameterError) a tolerance entry whose ``bound`` is not a registered one, or
+    that gives both a bound and a fixed ``rel``; ``where`` names the entry in the error."""
+    name = entry.get("bound")
+    if name is None:
+        return
+    if name not in BOUNDS:
+        raise ParameterError(f"{where}.bound = {name!r}: allowed {', '.join(sorted(BOUNDS))}")
+    if "rel" in entry or entry.get("report_only"):
+        raise ParameterError(f"{where}: give bound or rel (or report_only), not both")
+
+
+def tree_entry(entry: dict | None, pair: Pair) -> dict | None:
+    """``entry`` as it applies to ``pair``'s tree: a ``bound`` evaluated into ``rel``, its
+    words appended to the reason; an entry without a bound (or None) unchanged."""
+    if entry is None or "bound" not in entry:
+        return entry
+    b = BOUNDS[entry["bound"]](pair)
+    if not (math.isfinite(b.rel) and b.rel >= 0):
+        raise ValueError(f"bound {entry['bound']!r} gave rel = {b.rel!r} on {pair.metric}")
+    return {**entry, "rel": float(b.rel), "reason": f"{entry['reason']}: {b.words}"}
