@@ -32,7 +32,7 @@ from .rungs import (  # noqa: F401
     RungKind,
     analytic_samples,
 )
-from .runs import SKIPPED, Run, RunCache, Status, resolve_scenario
+from .runs import SKIPPED, Run, RunCache, Status, is_shipped, resolve_scenario
 from .verdicts import Check, Verdict, _f, judge, load_tolerances, relative_step
 
 #: Impact metrics of the ladder (keys of analytic.results.METRIC_KEYS).
@@ -176,7 +176,7 @@ class Ladder:
                     continue
                 for metric, entry in metrics.items():
                     if entry.get("undefined"):
-                        out.setdefault((name, entry["reason"]), []).append(metric)
+                        out.setdefault((name, self._shown(entry)["reason"]), []).append(metric)
         return [{"kind": k, "metrics": ms, "reason": why} for (k, why), ms in out.items()]
 
     def step_check(self, rung_id: str, metric: str) -> Check:
@@ -196,9 +196,24 @@ class Ladder:
         """The tolerance file's entry for ``metric`` of the ``section``'s ``kind`` as it
         applies to this tree: a per-tree bound evaluated on the two rungs
         (:func:`compare.bounds.tree_entry`)."""
-        entry = self.tolerances.get(section, {}).get(kind, {}).get(metric)
+        entry = self._shown(self.tolerances.get(section, {}).get(kind, {}).get(metric))
         return tree_entry(entry, Pair(self.scenario, self.physics, metric, self[rung_id],
                                       self[reference]))
+
+    @cached_property
+    def shipped(self) -> bool:
+        """Whether this is one of the shipped trees, input for input (its name alone is not
+        enough: a user's tree may share it): only then do reasons quote the shipped trees'
+        measurements (an entry's ``measured``)."""
+        return is_shipped(self.scenario)
+
+    def _shown(self, entry: dict | None) -> dict | None:
+        """``entry`` with the reason this tree is shown: its physics, and the shipped trees'
+        measurements (``measured``) on a shipped tree only."""
+        if not entry or "measured" not in entry:
+            return entry
+        reason = f"{entry['reason']} ({entry['measured']})" if self.shipped else entry["reason"]
+        return {**entry, "reason": reason}
 
     def _ambiguous_peak(self, rung_id: str, reference: str, metric: str) -> Check | None:
         """t_xmax compared between a record with one clear maximum and one whose x(t) has a
@@ -224,7 +239,7 @@ class Ladder:
         identification table shows the error against the truth without a check (the file's
         ``identification_reported`` reason)."""
         r = self[rung_id]
-        entry = self.tolerances.get("identification", {}).get(metric)
+        entry = self._shown(self.tolerances.get("identification", {}).get(metric))
         return judge(self.name, rung_id, r.rung.kind, f"id_{metric}",
                      r.values.get(f"id_{metric}", math.nan), "truth", self.truth[metric],
                      entry, self.tolerances, self.physics)

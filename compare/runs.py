@@ -32,7 +32,7 @@ from treeimpact.analytic.errors import (
     one_line,
 )
 from treeimpact.analytic.model.parameters import Scenario
-from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 from treeimpact.analytic.results import SimulationResult
 
 from .backends import BACKENDS, get_backend
@@ -133,6 +133,14 @@ def resolve_scenario(scenario) -> Scenario:
         return scenario
 
     return load_scenario(scenario)
+
+
+def is_shipped(scenario: Scenario) -> bool:
+    """Whether ``scenario`` is a shipped tree input for input (its name and every input
+    equal to the packaged file's), not a user's tree that shares a name."""
+    if scenario.name not in shipped_scenarios():
+        return False
+    return scenario_key(scenario) == scenario_key(load_scenario(scenario.name))
 
 
 def scenario_key(scenario: Scenario) -> str:

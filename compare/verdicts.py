@@ -84,6 +84,9 @@ def _validate(data: dict, path: str) -> None:
         if "rel" in entry and not (isinstance(entry["rel"], (int, float)) and entry["rel"] >= 0):
             raise ParameterError(f"{path}: {where}.rel: allowed [0, inf)")
         validate_bound(f"{path}: {where}", entry)
+        if "measured" in entry and not str(entry["measured"]).strip():
+            raise ParameterError(f"{path}: {where}.measured: the shipped trees' measurements "
+                                 "in words, or no key")
         if "rel" not in entry and "bound" not in entry and not entry.get("report_only") \
                 and not entry.get("undefined") \
                 and where != "identification_reported" \

@@ -53,3 +53,21 @@ def test_a_bound_that_is_not_a_number_is_an_error():
             B.tree_entry({"bound": name, "reason": "r"}, _pair(1.0, 1.0))
     finally:
         B.BOUNDS.pop(name)
+
+
+@pytest.mark.parametrize("tree, shown", [("central-leader", True), ("a user's edit", False)])
+def test_the_shipped_trees_measurements_are_quoted_on_a_shipped_tree_only(tree, shown):
+    """An entry's ``measured`` (the shipped trees' numbers) joins its reason on a shipped
+    tree, input for input; on any other tree (here central-leader with one input changed)
+    the reason is the physics alone."""
+    import dataclasses
+
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.ladder import Ladder
+
+    scen = load_scenario("central-leader")
+    if not shown:
+        scen = dataclasses.replace(scen, t_end=0.05)
+    ladder = Ladder(scen, [], {}, {})
+    entry = ladder._shown({"rel": 0.01, "reason": "physics", "measured": "0.3 % measured"})
+    assert entry["reason"] == ("physics (0.3 % measured)" if shown else "physics")
