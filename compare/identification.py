@@ -16,6 +16,7 @@ from treeimpact.analytic.identify.procedure import (
     truth_of,
 )
 from treeimpact.analytic.model.parameters import Pendulum, Scenario
+from treeimpact.analytic.model.registry import units_of
 
 from .runs import OK, SKIPPED, Status
 
@@ -25,11 +26,12 @@ from .runs import OK, SKIPPED, Status
 #: ``pair_damping_ratio`` is the paper's xi = b / omega_n of trunk and pendulum moving
 #: together (eqs 42-43), not the trunk's own damping ratio.
 IDENT_METRICS = ("M_T", "K_T", "pair_damping_ratio", "E")
-IDENT_UNITS = {"M_T": ("kg", "identified dynamic mass (eq 44)"),
-               "K_T": ("N/m", "identified stiffness (eq 46)"),
+_UNIT = units_of("M_T", "K_T", "E")  # the registry's units of the true values
+IDENT_UNITS = {"M_T": (_UNIT["M_T"], "identified dynamic mass (eq 44)"),
+               "K_T": (_UNIT["K_T"], "identified stiffness (eq 46)"),
                "pair_damping_ratio": ("1", "pair damping ratio xi = b / omega_n = C_T / (2 sqrt((K_T + k)(M_T + m))): "
                       "trunk and pendulum moving together (eqs 42-43)"),
-               "E": ("Pa", "identified Young's modulus (eq 47)")}
+               "E": (_UNIT["E"], "identified Young's modulus (eq 47)")}
 
 
 @dataclass(frozen=True)

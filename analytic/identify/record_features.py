@@ -10,6 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .pendulum_record import LENGTH_UNITS as RECORD_LENGTH_UNITS
+from .pendulum_record import TIME_UNITS as RECORD_TIME_UNITS
+
 MAD_SIGMA = 1.482602218505602  # sigma / MAD of a normal distribution
 
 
@@ -85,8 +88,9 @@ PLAUSIBLE = {"peak": (1e-5, 0.5), "rise": (5e-5, 2.0), "dt": (1e-7, 0.05), "spee
 #: Typical values, to choose between units that would all be plausible (a 5 mm peak, 20 ms
 #: to it, half the pendulum's speed).
 TYPICAL = {"peak": 5e-3, "rise": 0.02, "speed": 0.5}
-LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6}
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
+#: The record reader's units (pendulum_record: their powers of ten) as factors to SI.
+LENGTH_UNITS = {u: 10.0 ** p for u, p in RECORD_LENGTH_UNITS.items()}
+TIME_UNITS = {u: 10.0 ** p for u, p in RECORD_TIME_UNITS.items()}
 
 
 #: The largest dynamic mass a pendulum test meets at the clamp, kg (10 t: a whole large

@@ -7,14 +7,13 @@ import json
 import math
 
 from .parameters import STANDARD_GRAVITY, Scenario
+from .registry import BY_PATH
 
-_UNITS = {"length": "m", "clamp_height": "m", "diameter": "m", "density": "kg/m^3",
-          "youngs_modulus": "Pa", "clamp_mass": "kg", "crown_mass": "kg",
-          "damping": "N s/m^2", "base_stiffness": "N m/rad", "shear_modulus": "Pa",
-          "shear_coefficient": "1", "mass": "kg",
-          "equivalent_length": "m", "release_angle_deg": "deg", "gravity": "m/s^2",
-          "impact_speed": "m/s", "restitution": "1", "stiffness": "N/m", "duration": "s",
-          "t_end": "s"}
+def _unit(path: str) -> str | None:
+    """The registry's unit of the scenario field at ``path`` (``trunk.length``), None for a
+    field that is no physical input (a name, a type)."""
+    p = BY_PATH.get(path)
+    return p.unit if p is not None else None
 
 
 def _value(v) -> str:
@@ -24,10 +23,10 @@ def _value(v) -> str:
     return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf")  # round-trip exact
 
 
-def _line(key, v, units: bool = True) -> str:
+def _line(key, v, path: str | None = None) -> str:
     if isinstance(v, (list, tuple)):  # [calibration] measured: a list of field names
         return f"{key} = [{', '.join(_value(str(x)) for x in v)}]"
-    unit = _UNITS.get(key) if units else None
+    unit = _unit(path) if path else None
     return f"{key} = {_value(v)}" + (f"  # {unit}" if unit else "")
 
 
@@ -47,7 +46,7 @@ def scenario_toml(scenario: Scenario) -> str:
     lines = [_line("name", d["name"])]
     if scenario.description:
         lines.append(_line("description", scenario.description))
-    lines.append(_line("t_end", d["t_end"]))
+    lines.append(_line("t_end", d["t_end"], "t_end"))
     for table in ("trunk", "impactor", "contact"):
         lines += ["", f"[{table}]"]
         for key, v in d[table].items():
@@ -55,9 +54,9 @@ def scenario_toml(scenario: Scenario) -> str:
                 v = math.inf  # the paper's rigid clamp, written out
             if v is None or (key == "gravity" and v == STANDARD_GRAVITY):
                 continue  # an optional value left at its default
-            lines.append(f'type = "{v}"' if key == "type" else _line(key, v))
+            lines.append(f'type = "{v}"' if key == "type" else _line(key, v, f"{table}.{key}"))
     if scenario.notes:
         lines += ["", "[calibration]"]
-        lines += [_line(k, v if isinstance(v, (list, tuple)) else str(v), units=False)
+        lines += [_line(k, v if isinstance(v, (list, tuple)) else str(v))
                   for k, v in scenario.notes.items()]
     return "\n".join(lines) + "\n"

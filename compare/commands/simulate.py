@@ -43,9 +43,8 @@ def add_arguments(sp) -> None:
 
 
 #: Units of the ``model`` keys every backend reports (README); others print without one.
-MODEL_UNITS = {**units_of("M_T", "C_T", "K_T"), "m": "kg", "k": "N/m",
-               **units_of("restitution"),
-               "u1": "m/s", "dt": "s", "contact_stiffness": "N/m", "contact_damping": "N s/m",
+MODEL_UNITS = {**units_of("M_T", "C_T", "K_T", "m", "k", "restitution", "contact_stiffness"),
+               "u1": units_of("u_1")["u_1"], "dt": "s", "contact_damping": units_of("c_c")["c_c"],
                "engine_contact_stiffness": "N/m", "engine_contact_damping": "N s/m",
                "effective_mass": "kg",
                "contact_reduced_mass": "kg", "pad_damping_ratio": "1",
