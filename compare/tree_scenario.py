@@ -40,7 +40,7 @@ from treeimpact.analytic.model.parameters import (
 )
 from treeimpact.analytic.model.plausible import implausible, warn_implausible
 from treeimpact.analytic.model.reduction import reduce_trunk
-from treeimpact.analytic.model.registry import ASSUMED, BY_NAME
+from treeimpact.analytic.model.registry import BY_NAME, default_of
 
 from .backends import get_backend
 from .names import show
@@ -50,10 +50,10 @@ from .names import show
 #: them with the new name.
 RENAMED = {"stiffness": "equivalent_stiffness", "release_angle": "release_angle_deg",
            "mass": "impactor_mass"}
-#: Chosen values when not given: the shipped trees' choices (analytic/model/scenarios/*.toml;
-#: the density the registry's assumed green apple wood, analytic.model.registry).
-DEFAULTS = {"length": 1.0, "density": ASSUMED["density"].value, "clamp_mass": 4.0,
-            "restitution": 0.1, "contact_duration": 5e-4, "t_end": 0.1}
+#: Chosen values when not given: the registry's defaults, each with its source (the density
+#: the registry's assumed green apple wood; analytic.model.registry).
+DEFAULTS = {name: default_of(name) for name in
+            ("length", "density", "clamp_mass", "restitution", "contact_duration", "t_end")}
 #: The inputs of a pendulum test's measured tree; a tree from its geometry gives none of
 #: them (it gives the crown mass, :data:`GEOMETRY`).
 MEASURED = ("dynamic_mass", "equivalent_stiffness", "damping_rate", "a1", "a2", "x_max", "tau")

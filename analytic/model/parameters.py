@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from treeimpact.analytic.errors import ParameterError
 
-from .registry import PARAMETERS
+from .registry import PARAMETERS, default_of
 
 #: A scenario's name: it becomes part of file names (the scenario's, figures, sweeps).
 _NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9 ._-]{0,63}")
@@ -295,7 +295,9 @@ class Contact:
             raise ParameterError("contact: give either stiffness (N/m) or duration (s), not both")
 
 
-DEFAULT_CONTACT_DURATION = 5e-4  # s: half a millisecond, well inside the paper's T0 of 4-6 ms
+#: s: the pad's duration where a scenario gives neither stiffness nor duration (the
+#: registry's default, with its source).
+DEFAULT_CONTACT_DURATION = default_of("contact_duration")
 
 
 @dataclass(frozen=True)

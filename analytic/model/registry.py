@@ -87,6 +87,16 @@ class Plausible:
 
 
 @dataclass(frozen=True)
+class Default:
+    """The value an input takes where a user gives none (a tree built by ``scenario``,
+    the pad of a run without one), in the parameter's unit, and where that value comes
+    from (``source``, one line)."""
+
+    value: float
+    source: str
+
+
+@dataclass(frozen=True)
 class Parameter:
     """One physical input.
 
@@ -110,6 +120,8 @@ class Parameter:
         plausible: what trees, harvesters and pads show (a warning beyond it), or None.
         assumed: what a tree from its geometry assumes for it (value, range, reason), or
             None (:class:`Assumed`).
+        default: the value it takes where none is given, with its source, or None
+            (:class:`Default`; :func:`default_of`).
     """
 
     name: str
@@ -129,6 +141,7 @@ class Parameter:
     unmeasured: UnmeasuredRange | None = None
     plausible: Plausible | None = None
     assumed: Assumed | None = None
+    default: Default | None = None
 
     @property
     def axis(self) -> str:
@@ -174,7 +187,7 @@ def _field(name, symbol, unit, low, high, label, path, sweep=None, shown=(1.0, "
     return Parameter(name, symbol, unit, low, high, label, path, sweep or path, shown,
                      _setter(path), design, text=text, meaning=meaning,
                      unmeasured=_UNMEASURED.get(name), plausible=_PLAUSIBLE.get(name),
-                     assumed=_ASSUMED.get(name))
+                     assumed=_ASSUMED.get(name), default=_DEFAULTS.get(name))
 
 
 _INF = math.inf
@@ -289,6 +302,20 @@ _PLAUSIBLE = {
                               "2.3-2.5 m/s"),
     "contact_duration": Plausible(1e-4, 0.05, "a hard impactor (0.1 ms) to a thick rubber "
                                   "pad (50 ms)"),
+}
+
+#: The values inputs take where a user gives none, each with its source: the only place
+#: they are written (compare.tree_scenario, the pad law and the CLI read them here).
+_DEFAULTS = {
+    "length": Default(1.0, "the shipped trees' choice: about 1 m from the ground to the first "
+                      "scaffold (the paper gives no l)"),
+    "clamp_mass": Default(4.0, "the shipped trees' choice: a shaker clamp's jaws and pads on "
+                          "the trunk"),
+    "restitution": Default(0.1, "the paper gives no e ('very small'); 0.1 lies between the "
+                           "estimates from Table 1's V, x0 and T0 (treeimpact paper)"),
+    "contact_duration": Default(5e-4, "half a millisecond, well inside the paper's T0 of "
+                                "4-6 ms: the impact stays short against the trunk's motion"),
+    "t_end": Default(0.1, "past the shipped trees' x_max (9-30 ms) and their separation"),
 }
 
 #: Every physical input, scenario fields first (in LIMITS' order), then derived ones.
@@ -406,6 +433,18 @@ def units_of(*keys: str) -> dict:
     return out
 
 
+def default_of(name: str) -> float:
+    """The value the input ``name`` takes where none is given (its unit): its
+    :class:`Default`, else the value a tree from its geometry assumes for it in its own
+    unit (the density). KeyError for an input that has neither."""
+    p = BY_NAME[name]
+    if p.default is not None:
+        return p.default.value
+    if p.assumed is not None and p.assumed.via == name:
+        return p.assumed.value
+    raise KeyError(f"{name!r}: no default in the registry")
+
+
 def parameter(name: str) -> Parameter:
     """The :class:`Parameter` a name, a path or a sweep name means; ParameterError naming
     the allowed names otherwise."""
@@ -421,14 +460,16 @@ def _cell(x: float) -> str:
 
 def registry_table() -> str:
     """The registry as a Markdown table (docs/parameters.md holds it): name, symbol, unit,
-    range, plausible range with its source, label, scenario path (or the field a ratio sets)
-    and sweep name."""
-    rows = ["| name | symbol | unit | range | plausible (warned beyond) | label | sets | sweep |",
-            "|---|---|---|---|---|---|---|---|"]
+    range, plausible range with its source, default with its source, label, scenario path
+    (or the field a ratio sets) and sweep name."""
+    rows = ["| name | symbol | unit | range | plausible (warned beyond) | default | label | "
+            "sets | sweep |", "|---|---|---|---|---|---|---|---|---|"]
     for p in PARAMETERS:
         sets = f"`{p.path}`" if p.path else (f"`{p.sets}` (ratio)" if p.sets else "a reading")
         seen = (f"[{_cell(p.plausible.low)}, {_cell(p.plausible.high)}]: {p.plausible.source}"
                 if p.plausible else "")
+        default = f"{_cell(p.default.value)}: {p.default.source}" if p.default else ""
         rows.append(f"| `{p.name}` | {p.symbol} | {p.unit} | [{_cell(p.low)}, {_cell(p.high)}] "
-                    f"| {seen} | {p.label} | {sets} | {f'`{p.sweep}`' if p.sweep else ''} |")
+                    f"| {seen} | {default} | {p.label} | {sets} | "
+                    f"{f'`{p.sweep}`' if p.sweep else ''} |")
     return "\n".join(rows) + "\n"

@@ -49,7 +49,7 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
                               "damping assumed, see docs/parameters.md)")
     add_parameter_flag(g, "crown_mass", note="an estimate; not with the measured tree's "
                        "flags")
-    c = sp.add_argument_group("chosen (defaults: the shipped trees' choices)")
+    c = sp.add_argument_group("chosen (defaults: the registry's, each with its source in docs/parameters.md)")
     e = ASSUMED["youngs_modulus"]
     add_parameter_flag(c, "youngs_modulus",
                        note=f"required for a measured tree (Table 1 prints 8.9e9 and 12.6e9); "
