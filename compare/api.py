@@ -33,7 +33,7 @@ from .api_results import (
     modes_of,
     simulation_of,
 )
-from .backends import BACKENDS, ENGINES, get_backend, scenario_as_run
+from .backends import BACKENDS, ENGINES, get_backend
 from .ladder import build_ladder
 from .names import did_you_mean
 from .recording import check_sampling, sample
@@ -101,8 +101,8 @@ def simulate(scenario, backend: str = "analytic", **options) -> Simulation:
         SimulationDiverged: the run has no physical numbers to report.
     """
     scen = _resolve_name(scenario) if isinstance(scenario, str) else resolve_scenario(scenario)
-    result = get_backend(backend).simulate(scen, **options)
-    return simulation_of(result, scenario_as_run(scen, options))
+    as_run, result = get_backend(backend).run(scen, **options)
+    return simulation_of(result, as_run)
 
 
 @functools.lru_cache(maxsize=32)

@@ -152,20 +152,33 @@ class Backend:
         return bool(choices) and value in choices
 
     def simulate(self, scenario, **options):
-        """The backend's result for ``scenario`` with ``options`` (each checked by its
-        Option; one the backend does not take is refused), checked before anyone reports it
-        (a diverged run raises :class:`analytic.errors.SimulationDiverged`: never numbers),
-        its ``scenario`` the scenario as run (:func:`scenario_as_run`)."""
+        """The backend's result for ``scenario`` with ``options``: :meth:`run`'s result."""
+        return self.run(scenario, **options)[1]
+
+    def run(self, scenario, **options) -> tuple:
+        """``(scenario as run, result)`` of ``scenario`` with ``options``, each checked by
+        its Option (one the backend does not take is refused). The one way a physical input
+        reaches a backend: the options that override a scenario field
+        (:data:`SCENARIO_OPTIONS`) are applied to the scenario here, once
+        (:func:`scenario_as_run`), and the backend receives that scenario and its numerical
+        options only. The result is checked before anyone reports it (a diverged run raises
+        :class:`analytic.errors.SimulationDiverged`: never numbers)."""
         # lazy: +95 ms at import otherwise (numpy), which this module's other callers do not need
         from treeimpact.analytic.results import check_plausible
 
         func = self._load(self.simulate_ref)
         table = self.options()
         options = self._checked(options, table, set(table))
-        result = func(scenario, **options)
-        as_run = scenario_as_run(scenario, options).to_dict()
-        as_run["t_end"] = result.scenario.get("t_end", as_run["t_end"])  # an engine's own
-        return check_plausible(dataclasses.replace(result, scenario=as_run))
+        as_run = scenario_as_run(scenario, options)
+        try:
+            result = func(as_run, **{k: v for k, v in options.items()
+                                     if k not in SCENARIO_OPTIONS})
+        except ParameterError as exc:  # name a field as the user typed it: by its flag
+            exc.args = (as_typed(str(exc), options), *exc.args[1:])
+            raise
+        shown = as_run.to_dict()
+        shown["t_end"] = result.scenario.get("t_end", shown["t_end"])  # an engine's own
+        return as_run, check_plausible(dataclasses.replace(result, scenario=shown))
 
     def modes(self, scenario, **options):
         """The backend's modes dict for ``scenario`` (static stiffness at a, N/m; omegas,
@@ -198,6 +211,25 @@ class Backend:
         if refused:
             raise ParameterError("; ".join(refused))
         return out
+
+#: The run options that override a scenario field (:func:`scenario_as_run` applies them).
+SCENARIO_OPTIONS = frozenset({"restitution", "contact_stiffness", "contact_duration", "t_end"})
+
+
+#: The scenario field each pad option sets (a refusal names the flag where one set it).
+_FIELDS = {"restitution": "contact.restitution", "contact_stiffness": "contact.stiffness",
+           "contact_duration": "contact.duration"}
+
+
+def as_typed(message: str, options: dict) -> str:
+    """``message`` with each scenario field that a run option in ``options`` set named by
+    that option's flag instead (``contact.duration`` -> ``--contact-duration``): a refusal
+    names what the user typed."""
+    for option, path in _FIELDS.items():
+        if options.get(option) is not None:
+            message = message.replace(path, "--" + option.replace("_", "-"))
+    return message
+
 
 def scenario_as_run(scenario, options: dict):
     """``scenario`` with the run options that override its fields applied: restitution

@@ -101,6 +101,39 @@ def test_the_scenario_of_a_run_is_the_scenario_as_run():
                                               "duration": 0.002}
 
 
+@pytest.mark.parametrize("backend", ["analytic", "soft", "beam", "mujoco", "bullet"])
+def test_a_physical_input_reaches_a_backend_one_way_only(monkeypatch, backend):
+    """A run option that overrides a scenario field (compare.backends.SCENARIO_OPTIONS) is
+    applied to the scenario once, at the backends' door, and the backend receives that
+    scenario and its numerical options only (issue 51 item 2): here each backend's simulate
+    is replaced by a spy that records what it is given."""
+    from treeimpact.compare import backends as B
+
+    seen = {}
+
+    def spy(scenario, **options):
+        seen.update(scenario=scenario, options=options)
+        raise RuntimeError("spy")
+
+    b = B.get_backend(backend)
+    monkeypatch.setitem(B._LOADED, b.simulate_ref, spy)  # the loaded function, replaced
+    numerical = {"elements": 4} if backend == "beam" else {}
+    offered = set(b.options())
+    pad = next((p for p in ("contact_duration", "contact_stiffness") if p in offered), None)
+    physical = {"restitution": 0.3, "t_end": 0.05}
+    if pad is not None:  # the Newton model has no pad
+        physical[pad] = 0.002 if pad == "contact_duration" else 3e6
+    assert set(physical) <= B.SCENARIO_OPTIONS and set(physical) <= offered
+    with pytest.raises(RuntimeError, match="spy"):
+        b.simulate(ti.load_scenario("open-center"), **physical, **numerical)
+    assert seen["options"] == numerical  # nothing physical besides the scenario
+    contact = seen["scenario"].contact
+    assert contact.restitution == 0.3 and seen["scenario"].t_end == 0.05
+    want = {None: (5e-4, None), "contact_duration": (0.002, None),
+            "contact_stiffness": (None, 3e6)}[pad]  # open-center's own pad where none given
+    assert (contact.duration, contact.stiffness) == want
+
+
 def test_a_record_of_a_run_identifies_its_tree():
     """identify takes a Record and the test (a Scenario or a Pendulum with the trunk's
     geometry); the record of the exact model at 5 kHz, no noise, gives M_T back."""
