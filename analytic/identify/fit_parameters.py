@@ -1,6 +1,6 @@
 """The record fit's parameters by name: what each is (:class:`Slot`), its bounds, the
-optimiser's scale for it and whether it is held fixed (:class:`Parameter`, ``frozen``), and
-the set of them for one record (:class:`ParameterSet`). The optimiser works on the vector p
+optimiser's scale for it and whether it is held fixed (:class:`FitVariable`, ``frozen``), and
+the set of them for one record (:class:`FitVariables`). The optimiser works on the vector p
 of their values in :class:`Slot` order; nothing outside this module counts positions in it.
 docs/identification.md, "The full-record fit"."""
 
@@ -45,7 +45,7 @@ M_RANGE, K_RANGE, XI_RANGE, E_MAX = (1e-2, 1e5), (1.0, 1e10), (1e-3, 5.0), 0.95
 
 
 @dataclass(frozen=True)
-class Parameter:
+class FitVariable:
     """One parameter of the fit: its value, bounds, the optimiser's typical step
     (``scale``, least_squares' x_scale) and whether it is held at its value (``frozen``)."""
 
@@ -63,16 +63,16 @@ class Parameter:
 
 
 @dataclass(frozen=True)
-class ParameterSet:
-    """Every :class:`Slot`'s :class:`Parameter`, in slot order."""
+class FitVariables:
+    """Every :class:`Slot`'s :class:`FitVariable`, in slot order."""
 
     parameters: tuple
 
     def __post_init__(self):
         if tuple(p.slot for p in self.parameters) != tuple(Slot):
-            raise ValueError("ParameterSet: one Parameter per Slot, in Slot order")
+            raise ValueError("FitVariables: one FitVariable per Slot, in Slot order")
 
-    def __getitem__(self, slot: Slot) -> Parameter:
+    def __getitem__(self, slot: Slot) -> FitVariable:
         return self.parameters[slot]
 
     @property
@@ -93,22 +93,22 @@ class ParameterSet:
         """The optimiser's typical steps of the free parameters (least_squares' x_scale)."""
         return np.array([self.parameters[s].scale for s in self.free])
 
-    def freeze(self, *slots: Slot) -> ParameterSet:
+    def freeze(self, *slots: Slot) -> FitVariables:
         """The set with the parameters of ``slots`` held at their values."""
         return self._with(slots, frozen=True)
 
-    def thaw(self, *slots: Slot) -> ParameterSet:
+    def thaw(self, *slots: Slot) -> FitVariables:
         """The set with the parameters of ``slots`` free."""
         return self._with(slots, frozen=False)
 
-    def at(self, p) -> ParameterSet:
+    def at(self, p) -> FitVariables:
         """The set with the values of the vector p (shorter: zeros after its end)."""
         values = padded(p)
-        return ParameterSet(tuple(replace(q, value=float(values[q.slot]))
+        return FitVariables(tuple(replace(q, value=float(values[q.slot]))
                                   for q in self.parameters))
 
-    def _with(self, slots, **changes) -> ParameterSet:
-        return ParameterSet(tuple(replace(p, **changes) if p.slot in slots else p
+    def _with(self, slots, **changes) -> FitVariables:
+        return FitVariables(tuple(replace(p, **changes) if p.slot in slots else p
                                   for p in self.parameters))
 
 
@@ -124,7 +124,7 @@ SENSOR_TERMS = (Slot.X_OFFSET, *DRIFTS)
 
 
 def record_parameters(t: np.ndarray, dt: float, scale: list, *, restitution_given: bool,
-                      pendulum: bool, separable: bool = True) -> ParameterSet:
+                      pendulum: bool, separable: bool = True) -> FitVariables:
     """The fit's parameters for a record at times t (s; median interval ``dt``) whose
     channels' peaks are ``scale`` (m: x, then y): the bounds (M_RANGE, K_RANGE, XI_RANGE,
     E_MAX; the contact within the record, up to 10 samples before it), the optimiser's
@@ -146,5 +146,5 @@ def record_parameters(t: np.ndarray, dt: float, scale: list, *, restitution_give
         (Slot.X_DRIFT, -math.inf, math.inf, 1e-2 * x / span, not separable),
         (Slot.X_DRIFT2, -math.inf, math.inf, 1e-2 * x / span ** 2, True),
     )
-    return ParameterSet(tuple(Parameter(slot, 0.0, float(lo), float(hi), float(sc), frozen)
+    return FitVariables(tuple(FitVariable(slot, 0.0, float(lo), float(hi), float(sc), frozen)
                               for slot, lo, hi, sc, frozen in rows))

@@ -16,7 +16,7 @@ from .fit_parameters import (
     DRIFT_POWER,
     OFFSET_CHANNEL,
     SENSOR_TERMS,
-    ParameterSet,
+    FitVariables,
     Slot,
     record_parameters,
 )
@@ -35,7 +35,7 @@ class Problem:
     (y_model - y) / scale[1], and their Jacobian in the free parameters of ``params`` (the
     frozen ones held at their values in ``p0``)."""
 
-    def __init__(self, t, x, y, test: PendulumTest, scale, params: ParameterSet, p0):
+    def __init__(self, t, x, y, test: PendulumTest, scale, params: FitVariables, p0):
         self.t, self.test = t, test
         self.pendulum = y is not None
         self.data = np.concatenate([x, y]) if self.pendulum else np.asarray(x)
@@ -190,7 +190,7 @@ class Fitter:
         self.held_at_zero = [s for s in SENSOR_TERMS if self.params[s].frozen
                              and s != Slot.X_DRIFT2]
 
-    def refine(self, p0, keep, params: ParameterSet | None = None) -> Fit:
+    def refine(self, p0, keep, params: FitVariables | None = None) -> Fit:
         """The fit with all free from p0 on the samples ``keep`` selects: on every k-th of
         them (at most REFINE_SAMPLES), then a few steps on all of them if that left some
         out; ``params`` as in :meth:`fit`."""
@@ -199,7 +199,7 @@ class Fitter:
         return f if stride == 1 else self.fit(f.p, keep=keep, max_nfev=POLISH_NFEV,
                                               params=params)
 
-    def fit(self, p0, *, keep=None, stride: int = 1, params: ParameterSet | None = None,
+    def fit(self, p0, *, keep=None, stride: int = 1, params: FitVariables | None = None,
             loss="linear", f_scale=1.0, max_nfev=REFINE_NFEV) -> Fit:
         """A local least-squares fit from p0 of ``params``' free parameters (default the
         record's) on the samples ``keep`` selects (None: all), every ``stride``-th, with

@@ -11,7 +11,7 @@ import numpy as np
 
 from treeimpact.analytic.model.registry import units_of
 
-from .fit_parameters import E_MAX, ParameterSet, Slot
+from .fit_parameters import E_MAX, FitVariables, Slot
 from .fitter import Fit, Fitter, Problem
 from .one_impact import RIDGE, on_ridge
 from .procedure import PendulumTest, youngs_modulus
@@ -172,7 +172,7 @@ def ridge_estimates(ridge: Ridge, fitter: Fitter, keep, test: PendulumTest, floo
     ``floor`` m squared, of the pendulum ``test``), and over the profile's points between.
     ``values`` and ``intervals``: the fit's. Returns (values, intervals, determined,
     note)."""
-    at_e: ParameterSet = fitter.params.freeze(Slot.RESTITUTION)
+    at_e: FitVariables = fitter.params.freeze(Slot.RESTITUTION)
     tk, xk = fitter.t[keep], fitter.x[keep]
     intervals = dict(intervals)
     determined = {k: k not in RIDGE for k in values}

@@ -26,6 +26,14 @@ def apply_ratio(scenario, name: str, ratio: float):
     return set_field(scenario, BY_NAME[name].sets, ratio * _base(scenario, name))
 
 
+def ratio_of(scenario, name: str) -> float:
+    """The ratio ``name`` of ``scenario``: the field it sets over its base (a / l, m_f /
+    (rho A l), m / M_T with eq 7's M_T), the one place each ratio's formula is written.
+    KeyError for a non-ratio."""
+    section, _, field = BY_NAME[name].sets.partition(".")
+    return getattr(getattr(scenario, section), field) / _base(scenario, name)
+
+
 def apply_input(scenario, name: str, value):
     """``scenario`` with the registry's input ``name`` (a field or a ratio) at ``value``."""
     p = BY_NAME[name]

@@ -34,7 +34,7 @@ from treeimpact.compare.figure_text import save_figure
 from treeimpact.compare.runs import resolve_scenario
 
 from ..runs import OK
-from ..sweep.grid import OPTION, Axis, Grid, Parameter, resolve_parameter
+from ..sweep.grid import OPTION, Axis, Grid, GridTarget, resolve_parameter
 from ..sweep.journal import read_table
 from ..sweep.run import run_sweep
 
@@ -99,7 +99,7 @@ def speed_sweep(scenario, out, *, engines=ENGINES, dts=(1e-4, 3e-5, 1e-5),
                 Axis(resolve_parameter("contact_stiffness"), tuple(float(k) for k in
                                                                      stiffnesses))]
         if name is not None:
-            axes.append(Axis(Parameter(f"option.{name}", OPTION, name), tuple(values)))
+            axes.append(Axis(GridTarget(f"option.{name}", OPTION, name), tuple(values)))
         d = out / f"speed-{eng}"
         _warm_up(eng, scen, max(dts))
         run_sweep(scen, Grid(tuple(axes)), d, backends=("soft", eng),

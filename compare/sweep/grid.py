@@ -24,7 +24,7 @@ from treeimpact.analytic.model.parameters import (
     Trunk,
     check_range,
 )
-from treeimpact.analytic.model.reduction import reduce_trunk
+from treeimpact.analytic.model.ratios import RATIOS, ratio_of
 from treeimpact.analytic.model.registry import BY_NAME, PARAMETERS
 from treeimpact.compare.backends import BACKENDS
 
@@ -34,8 +34,8 @@ MAX_POINTS = 100_000
 GRID_FORM = "NAME=START:STOP:COUNT (COUNT values, both ends included) or NAME=V1,V2,..."
 
 
-class ParameterKind(StrEnum):
-    """What a grid NAME sets (:class:`Parameter`)."""
+class TargetKind(StrEnum):
+    """What a grid NAME sets (:class:`GridTarget`)."""
 
     SCENARIO = "scenario"  # a scenario field (dotted path)
     OPTION = "option"  # a backend option
@@ -44,7 +44,7 @@ class ParameterKind(StrEnum):
     INPUT = "input"  # an input of an analysis (the sensitivity study's)
 
 
-SCENARIO, OPTION, DERIVED, RECORD, INPUT = ParameterKind
+SCENARIO, OPTION, DERIVED, RECORD, INPUT = TargetKind
 
 #: How a run's record is sampled before an analysis reads it (``record.NAME`` axes; a sweep
 #: with such axes needs an analysis that takes them): (type, low, low included, unit).
@@ -57,12 +57,10 @@ RECORD_FIELDS = {"rate": (float, 0.0, False, "Hz"), "noise": (float, 0.0, True, 
 ALIASES = {p.sweep: p.path for p in PARAMETERS if p.path is not None and p.sweep != p.path}
 SHORT_NAMES = {target: name for name, target in ALIASES.items()}
 
-#: Derived ratios: (underlying dotted parameter, meaning); applied in this order.
-DERIVED_RATIOS = {
-    "a_over_l": (BY_NAME["a_over_l"].sets, "a / l: clamp (impact) height over trunk length"),
-    "crown_ratio": (BY_NAME["crown_ratio"].sets, "m_f / m_trunk: crown mass over trunk mass rho A l"),
-    "mass_ratio": (BY_NAME["mass_ratio"].sets, "m / M_T: impactor mass over the dynamic mass (eq 7)"),
-}
+#: Derived ratios: (underlying dotted parameter, meaning), the registry's; applied in this
+#: order (analytic.model.ratios.RATIOS).
+DERIVED_RATIOS = {name: (BY_NAME[name].sets, f"{BY_NAME[name].symbol}: {BY_NAME[name].meaning}")
+                  for name in RATIOS}
 
 
 def backend_option(name: str):
@@ -86,12 +84,12 @@ _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$")
 
 
 @dataclass(frozen=True)
-class Parameter:
+class GridTarget:
     """What a grid NAME sets: ``kind`` scenario/option/derived and its ``target``
     (dotted scenario path, option name, or ratio name)."""
 
     name: str
-    kind: ParameterKind
+    kind: TargetKind
     target: str
     given: str = ""  # the name as typed (messages name it), when it differs
 
@@ -105,8 +103,8 @@ def _fields(cls) -> set[str]:
     return {f.name for f in dataclasses.fields(cls)}
 
 
-def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
-    """The :class:`Parameter` a grid NAME (``name``) refers to, named by its one spelling (a
+def resolve_parameter(name: str, flag: str = "--grid") -> GridTarget:
+    """The :class:`GridTarget` a grid NAME (``name``) refers to, named by its one spelling (a
     short name of :data:`ALIASES` where the field has one), or a one-line ParameterError
     naming ``flag``."""
     if not isinstance(name, str) or not _NAME_RE.match(name):
@@ -114,24 +112,24 @@ def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
                              f"(trunk.crown_mass), a short name ({', '.join(sorted(ALIASES))}), "
                              f"a ratio ({', '.join(DERIVED_RATIOS)}) or a backend option")
     if name in DERIVED_RATIOS:
-        return Parameter(name, DERIVED, name)
+        return GridTarget(name, DERIVED, name)
     if name.startswith("input.") and _NAME_RE.match(name.split(".", 1)[1]):
-        return Parameter(name, INPUT, name.split(".", 1)[1])  # read by an analysis
+        return GridTarget(name, INPUT, name.split(".", 1)[1])  # read by an analysis
     if name.startswith("record."):
         field = name.split(".", 1)[1]
         if field not in RECORD_FIELDS:
             raise ParameterError(f"{flag} {name!r}: the record has no parameter {field!r}; "
                                  f"allowed: {', '.join('record.' + f for f in RECORD_FIELDS)}")
-        return Parameter(name, RECORD, field)
+        return GridTarget(name, RECORD, field)
     target = ALIASES.get(name, name)
     if target.startswith("option."):  # any option: check_grid refuses one no backend takes
         option = target.split(".", 1)[1]
-        return Parameter(option, OPTION, option, name)
+        return GridTarget(option, OPTION, option, name)
     if "." not in target and target not in _TOP_FIELDS and backend_option(target) is not None:
-        return Parameter(target, OPTION, target, name)
+        return GridTarget(target, OPTION, target, name)
     if "." not in target:
         if target in _TOP_FIELDS:
-            return Parameter(name, SCENARIO, target)
+            return GridTarget(name, SCENARIO, target)
         raise ParameterError(
             f"{flag} {name!r}: unknown name; allowed: dotted scenario fields "
             f"(trunk.*, impactor.*, contact.*, t_end), short names {', '.join(sorted(ALIASES))}, "
@@ -145,7 +143,7 @@ def resolve_parameter(name: str, flag: str = "--grid") -> Parameter:
     if field not in allowed:
         raise ParameterError(f"{flag} {name!r}: {section} has no field {field!r}; allowed: "
                              f"{', '.join(sorted(allowed))}")
-    return Parameter(SHORT_NAMES.get(target, target), SCENARIO, target, name)
+    return GridTarget(SHORT_NAMES.get(target, target), SCENARIO, target, name)
 
 
 @dataclass(frozen=True)
@@ -153,7 +151,7 @@ class Axis:
     """One swept parameter and its values (floats; ints for integer options; words for
     engine options that take words)."""
 
-    parameter: Parameter
+    parameter: GridTarget
     values: tuple
 
     @property
@@ -395,7 +393,4 @@ def point_from_key(key: str) -> dict:
 
 def derived_ratios(scenario: Scenario) -> dict:
     """The derived ratios of a scenario: a_over_l, crown_ratio, mass_ratio (see module doc)."""
-    t = scenario.trunk
-    return {"a_over_l": t.clamp_height / t.length,
-            "crown_ratio": t.crown_mass / t.trunk_mass,
-            "mass_ratio": scenario.impactor.mass / reduce_trunk(t).dynamic_mass}
+    return {name: ratio_of(scenario, name) for name in RATIOS}
