@@ -125,7 +125,7 @@ def discretisation_errors(scenario: Scenario, segments: int, metrics, trunk: str
 #: integrator's): :func:`converged_segments`.
 DISCRETISATION_SHARE = 0.5
 #: The search's reach over the stiffness-and-frequency rule's N (second-order errors fall 16
-#: times over it); a tree not converged there keeps the best N met.
+#: times over it); a tree not converged there gets the finest N of the reach.
 REACH = 4
 
 
@@ -137,7 +137,7 @@ def converged_segments(scenario: Scenario, tolerances, share: float = DISCRETISA
     the exact beam. ``tolerances``: (trunk, metric, rel) triples ("chain" or "rod", a key of
     :func:`exact_metrics`, relative tolerance; t_xmax left out where the ladder does not
     judge it, :func:`discretisation_errors`). Doubling from that N then bisecting,
-    up to :data:`REACH` times it (beyond: the N of the smallest worst share)."""
+    up to :data:`REACH` times it (not met there: that N, the finest the search allows)."""
     if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 < share <= 1:
         raise ParameterError(f"share = {share!r} is out of range: allowed (0, 1]")
     return _converged(scenario, tuple(sorted(tuple(t) for t in tolerances)), float(share))
@@ -145,23 +145,20 @@ def converged_segments(scenario: Scenario, tolerances, share: float = DISCRETISA
 
 @functools.lru_cache(maxsize=32)
 def _converged(scenario: Scenario, tolerances: tuple, share: float) -> int:
-    worst = {}
-
     def within(n: int) -> bool:
-        r = 0.0
-        for trunk in {t for t, _, _ in tolerances}:
+        for trunk in sorted({t for t, _, _ in tolerances}):
             rel = {m: v for t, m, v in tolerances if t == trunk and v > 0}
             e = discretisation_errors(scenario, n, rel, trunk)
-            r = max([r] + [abs(v) / (share * rel[m]) for m, v in e.items()])
-        worst[n] = r
-        return r <= 1.0
+            if any(abs(v) > share * rel[m] for m, v in e.items()):
+                return False
+        return True
 
     n0 = default_segments(scenario.trunk)
     top = min(REACH * n0, MAX_SEGMENTS)
     fail, n = n0 - 1, n0
     while not within(n):
         if n == top:
-            return min(worst, key=lambda k: (worst[k], k))
+            return top
         fail, n = n, min(2 * n, top)
     while n - fail > 1:
         mid = (fail + n) // 2
