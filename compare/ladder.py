@@ -9,7 +9,7 @@ import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
-from treeimpact.analytic.continuum.chain import default_segments
+from treeimpact.analytic.continuum.chain_impact import converged_segments
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
@@ -58,13 +58,18 @@ def meaning_of(metric: str) -> str:
 
 
 def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
-    """Segments of the hinged trunk: ``segments`` or analytic.continuum.chain.default_segments
-    of ``scenario``'s trunk (the smallest N within 0.5 % of the beam's static stiffness and
-    first two frequencies)."""
+    """Segments of the hinged trunk and the rod: ``segments``, or
+    analytic.continuum.chain_impact.converged_segments of ``scenario`` (the smallest N meeting
+    the static stiffness and first two frequencies within 0.5 % of the beam whose exact chain
+    and exact rod are within half of each [step.chain] and [step.rod] tolerance of the exact
+    beam; docs/trunk-models.md "Segments per tree")."""
     if segments is not None:
         return int(segments)
-
-    return default_segments(scenario.trunk)
+    steps = load_tolerances().get("step", {})
+    judged = tuple((trunk, metric, float(e["rel"])) for trunk in ("chain", "rod")
+                   for metric, e in steps.get(trunk, {}).items()
+                   if isinstance(e, dict) and "rel" in e)
+    return converged_segments(scenario, judged)
 
 
 def ladder_rungs(scenario, *, engines=ENGINES, segments: int | None = None) -> list[Rung]:

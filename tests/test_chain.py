@@ -265,3 +265,140 @@ def test_a_trunk_needing_hundreds_of_segments_is_searched_in_a_few_solves():
         n = chain._default_segments.__wrapped__(t, 0.005)
     assert 200 < n < 1000  # a 30 m trunk clamped at 0.3 m: the clamp's short segments
     assert spy.call_count <= 2 * math.ceil(math.log2(n)) + 1
+
+
+# ------------------------------------------------------------------ the exact chain struck by the pad
+# (analytic.continuum.chain_impact: the chain and the rod as linear trunks of the exact solver)
+
+def test_lateral_matrices_are_the_chains_energies_in_boundary_displacements():
+    """x = T theta: x^T M_x x, x^T K_x x, x^T D_x x equal the angle forms, and the clamp dof
+    is the chain's deflection at a (J(a) theta)."""
+    from treeimpact.analytic.continuum.chain import lateral_jacobian
+    from treeimpact.analytic.continuum.chain_impact import lateral_matrices, lateral_transform
+
+    chain = hinged_chain(LOADED, 9)
+    Mt, Kt, Dt = chain_matrices(chain)
+    Mx, Dx, Kx = lateral_matrices(chain, "chain")
+    theta = np.random.default_rng(5).normal(size=9)
+    x = lateral_transform(chain) @ theta
+    for a, b in ((Mx, Mt), (Kx, Kt), (Dx, Dt)):
+        assert x @ a @ x == pytest.approx(theta @ b @ theta, rel=1e-10)
+    ja = lateral_jacobian(chain, LOADED.clamp_height)[0]
+    assert x[chain.clamp_index - 1] == pytest.approx(ja @ theta, rel=1e-12)
+
+
+def test_rod_surrogate_is_the_chains_springs_on_the_lumped_vertex_masses():
+    """The rod's masses are rho A (h_{k-1} + h_k) / 2 per vertex (+ m_c, + m_f): the chain's
+    total mass less the base half segment; its stiffness the chain's."""
+    from treeimpact.analytic.continuum.chain_impact import lateral_matrices
+
+    chain = hinged_chain(LOADED, 10)
+    Mr, Dr, Kr = lateral_matrices(chain, "rod")
+    _, _, Kc = lateral_matrices(chain, "chain")
+    assert np.allclose(Mr, np.diag(np.diag(Mr)))
+    rho_a = LOADED.density * LOADED.area
+    total = rho_a * (LOADED.length - chain.lengths[0] / 2) + LOADED.clamp_mass + LOADED.crown_mass
+    assert np.trace(Mr) == pytest.approx(total, rel=1e-12)
+    np.testing.assert_allclose(Kr, Kc, rtol=0, atol=1e-9 * np.abs(Kc).max())
+    with pytest.raises(ParameterError, match="trunk = 'cable'"):
+        lateral_matrices(chain, "cable")
+
+
+def _beam_fine(scenario):
+    """The exact beam of ``scenario`` on the finest mesh (48 elements): the limit."""
+    from treeimpact.analytic.continuum.beam_impact import beam_impact_model
+    from treeimpact.analytic.continuum.chain_impact import exact_metrics
+
+    return exact_metrics(scenario, *beam_impact_model(scenario, elements=48))
+
+
+def test_exact_chain_x_max_converges_to_the_beam_at_second_order():
+    """open-center, N = 10, 20, 40 against the 48-element beam: x_max's error falls about
+    4 times per doubling (measured +0.31 / +0.07 / +0.01 % against the 12-element beam)."""
+    from treeimpact.analytic.continuum.chain_impact import discretised_metrics
+
+    s = load_scenario("open-center")
+    ref = _beam_fine(s)["x_max"]
+    err = [discretised_metrics(s, n)["x_max"] / ref - 1 for n in (10, 20, 40)]
+    assert abs(err[0]) < 5e-3 and abs(err[2]) < 3e-4, err
+    order = math.log2(abs(err[0] / err[1]))
+    assert 1.6 < order < 2.6, (err, order)  # second order, the beam's own error ~1e-4 aside
+
+
+def test_exact_chain_and_rod_agree_with_mujocos_runs_to_its_integrator():
+    """The exact surrogates are what MuJoCo integrates: open-center at N = 10, x_max and the
+    energies within 0.2 % (its implicit step, ~O(omega h)); peak_force is the step's lag."""
+    pytest.importorskip("mujoco")
+    from treeimpact.analytic.continuum.chain_impact import discretised_metrics
+    from treeimpact.mujoco_models import simulate
+
+    s = load_scenario("open-center")
+    for trunk, surrogate in (("chain", "chain"), ("flex", "rod")):
+        run = simulate(s, trunk=trunk, segments=10, pendulum="linear").metrics
+        exact = discretised_metrics(s, 10, surrogate)
+        for k in ("x_max", "crown_peak", "energy_transferred", "energy_delivered", "impulse"):
+            # measured: chain <= 5.5e-4, rod <= 1.2e-3 (energy_delivered)
+            assert run[k] == pytest.approx(exact[k], rel=2e-3), (trunk, k)
+
+
+def test_rod_surrogate_frequencies_are_mujocos_flex_modes():
+    """The surrogate's lowest frequencies against MuJoCo's flex (mujoco_models.modes): equal
+    up to the root body's neglected rho A h_0^3 / 12, which vanishes as N grows (measured
+    omega_2 -4.1e-3 at N = 4, -3.2e-4 at 10, -8.1e-5 at 16)."""
+    pytest.importorskip("mujoco")
+    from treeimpact.analytic.continuum.chain_impact import lateral_matrices
+    from treeimpact.mujoco_models import modes
+
+    s = load_scenario("open-center")
+    gaps = []
+    for n in (4, 10, 16):
+        w_mj = np.asarray(modes(s, trunk="flex", segments=n, n_modes=2)["model"]["omegas"])
+        M, _, K = lateral_matrices(hinged_chain(s.trunk, n), "rod")
+        w = np.sqrt(eigh(K, M, eigvals_only=True)[:2])
+        gaps.append(np.abs(w_mj / w - 1))
+    assert np.all(gaps[1] < 1e-3) and np.all(gaps[2] < gaps[0] / 10), gaps
+
+
+def _rule():
+    """The ladder's (trunk, metric, rel) triples of [step.chain] and [step.rod]."""
+    from treeimpact.compare.verdicts import load_tolerances
+
+    steps = load_tolerances()["step"]
+    return tuple((t, m, e["rel"]) for t in ("chain", "rod") for m, e in steps[t].items()
+                 if "rel" in e)
+
+
+def _worst(scenario, n, share=0.5):
+    from treeimpact.analytic.continuum.chain_impact import discretisation_errors
+
+    out = 0.0
+    for trunk in ("chain", "rod"):
+        rel = {m: v for t, m, v in _rule() if t == trunk}
+        e = discretisation_errors(scenario, n, rel, trunk)
+        out = max([out] + [abs(v) / (share * rel[m]) for m, v in e.items()])
+    return out
+
+
+@pytest.mark.parametrize("name", ["never-together", "open-center"])
+def test_converged_segments_is_the_smallest_n_within_half_of_each_tolerance(name):
+    """The per-tree rule: N >= default_segments, within half of every [step.chain] /
+    [step.rod] tolerance at N, and N - 1 not (or N is default_segments). never-together: a
+    family tree whose t_xmax needs more than the stiffness rule's 12."""
+    from treeimpact.analytic.continuum.chain_impact import converged_segments
+    from treeimpact.compare import family as F
+
+    s = (load_scenario(name) if name in SHIPPED else
+         F.build(F.BY_NAME[name]))
+    n0, n = default_segments(s.trunk), converged_segments(s, _rule())
+    assert n >= n0 and _worst(s, n) <= 1.0
+    assert n == n0 or _worst(s, n - 1) > 1.0
+    if name == "never-together":
+        assert n > n0
+
+
+def test_converged_segments_refuses_a_bad_share():
+    from treeimpact.analytic.continuum.chain_impact import converged_segments
+
+    for share in (0, 1.5, True):
+        with pytest.raises(ParameterError, match="share"):
+            converged_segments(load_scenario("open-center"), _rule(), share)
