@@ -253,6 +253,34 @@ def test_the_report_with_its_study_is_written_for_every_regime(report):
     assert (out / "report.html").stat().st_size and (out / "report.md").stat().st_size
 
 
+#: What a shipped tree's measurement looks like in words: its name, or the three trees'
+#: values side by side ("+4.0 / +4.2 / +1.9 %").
+SHIPPED_WORDS = re.compile(r"open-center|central-leader|realistic-crown|"
+                           r"[-+]?\d[\d.]* / [-+]?\d[\d.]* / [-+]?\d[\d.]*")
+
+
+def test_no_reason_shown_for_a_tree_quotes_a_shipped_tree(report):
+    """Every reason the report shows for a family member (each check's, each step left
+    uncompared) quotes that tree's numbers or none (issue 50 item 3): no tolerance entry's
+    ``measured`` words (the shipped trees' evidence, shown on those trees only), no shipped
+    tree's name and no three trees' values side by side."""
+    from treeimpact.compare.verdicts import load_tolerances
+
+    tol = load_tolerances()
+    measured = [e["measured"] for section in ("step", "engines")
+                for kind in tol.get(section, {}).values() for e in kind.values()
+                if "measured" in e]
+    measured += [e["measured"] for e in tol.get("identification", {}).values()
+                 if isinstance(e, dict) and "measured" in e]
+    data = json.loads((report[1] / "report.json").read_text())
+    for name, section in data["scenarios"].items():
+        reasons = [c["reason"] for c in section["checks"]]
+        reasons += [n["reason"] for n in section.get("not_compared", [])]
+        for reason in reasons:
+            assert not any(m in reason for m in measured), (name, reason)
+            assert not SHIPPED_WORDS.search(reason), (name, reason)
+
+
 def _small_e_reads_existing_cells(answer) -> None:
     """Each tree the small-e sentence names as having no value at e = 0 for a consequence
     has none there, and each range it quotes at e = 0 rests on a tree that has one."""
