@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 
+from treeimpact.analytic.errors import ParameterError
+
 from ..runs import RunCache
 from .base import Bound, Pair, register
 
@@ -282,3 +284,59 @@ def engines_moving_together(pair: Pair) -> Bound:
     """T0, x0, V of Bullet's SDOF (``pair.rung``) against MuJoCo's (``pair.reference``):
     each engine's shift from the same motion, summed."""
     return _moving_together_bound(pair, (pair.reference.result, pair.rung.result))
+
+
+# --------------------------------------------------------------------------- identification
+
+#: The procedure's regression window (s): analytic.identify.procedure.regress's default.
+WINDOW = 0.010
+#: The tree at e = 0, run on the Newton rung once a process: the procedure's own floor.
+_FLOOR_RUNS = RunCache()
+
+
+def procedure_floor(scenario, rung_result, metric: str) -> float:
+    """The procedure's relative error (1) on ``metric`` (an IDENT_METRICS key) on the exact
+    e = 0 record of ``scenario`` run as ``rung_result``'s rung (the Newton model): the bodies
+    move together from t = 0 with x0 = 0, the procedure's own assumption, so all that is
+    left is eq 39 truncated at t^2 over the window; NaN when it refuses that record."""
+    import dataclasses  # lazy: only the identification's bound needs it
+
+    # lazy: the procedure (numpy, scipy) only where an identification is judged
+    from treeimpact.analytic.identify.procedure import (
+        identify_from_record,
+        pendulum_test_of,
+        truth_of,
+    )
+
+    s0 = dataclasses.replace(scenario, contact=dataclasses.replace(scenario.contact,
+                                                                   restitution=0.0))
+    run = _FLOOR_RUNS.run(s0, rung_result.rung.backend, **dict(rung_result.rung.options))
+    if not run.ok:
+        return math.nan
+    tr = run.result.trajectory
+    try:
+        ident, _ = identify_from_record(tr.t, tr.x, pendulum_test_of(s0), y=tr.y,
+                                        reading="paper")
+    except (ParameterError, ValueError, FloatingPointError):  # refused: no floor to read
+        return math.nan
+    return getattr(ident, metric) / truth_of(s0)[metric] - 1.0
+
+
+@register("procedure-floor")
+def procedure_floor_bound(pair: Pair) -> Bound:
+    """An identified value on the Newton record (``pair.rung``) against the truth: the
+    floor of eq 39's truncation on this tree (:func:`procedure_floor`), scaled to the
+    record's own window: the t^3 term biases the quadratic's t^2 coefficient by 3 times the
+    window's midpoint from the origin, (s0 + W / 2) where the e = 0 record has W / 2 (an
+    upper bound on the growth: the same term in a1 lowers it), so
+    rel = |floor| (1 + 2 s0 / W), s0 = t_together - t_origin of the record's regression."""
+    metric = pair.metric.removeprefix("id_")
+    floor = procedure_floor(pair.scenario, pair.rung, metric)
+    reg = (pair.rung.identification.regression or {}) if pair.rung.identification else {}
+    s0 = reg.get("t_together", math.nan) - reg.get("t_origin", math.nan)
+    if not (math.isfinite(floor) and math.isfinite(s0)):
+        return Bound(0.0, "the procedure refuses this tree's e = 0 record or its own: no floor")
+    rel = abs(floor) * (1.0 + 2.0 * max(s0, 0.0) / WINDOW)
+    return Bound(rel, f"the procedure's error on this tree's e = 0 record is {floor:+.3g}; "
+                 f"the window starts s0 = {1e3 * s0:.3g} ms after the origin, so "
+                 f"|floor| (1 + 2 s0 / {1e3 * WINDOW:g} ms) = {rel:.3g}")
