@@ -205,7 +205,7 @@ SESSION_GROUP = "session-runs"
 SESSION_FILES = frozenset({
     "compare/tests/test_cross_checks.py", "compare/tests/test_ladder.py",
     "compare/tests/test_mechanism.py", "compare/tests/test_report.py",
-    "compare/tests/test_small_e.py",
+    "compare/tests/test_small_e.py", "compare/tests/test_bounds_contact.py",
 })
 MODULE_FIXTURE_FILES = frozenset({
     "compare/tests/test_figure_passes.py", "compare/tests/test_figure_titles.py",

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
+from types import SimpleNamespace
 
 from treeimpact.analytic.continuum.chain_impact import converged_segments
 from treeimpact.analytic.model.parameters import Scenario
@@ -244,7 +245,9 @@ class Ladder:
         identification table shows the error against the truth without a check (the file's
         ``identification_reported`` reason)."""
         r = self[rung_id]
-        entry = self._shown(self.tolerances.get("identification", {}).get(metric))
+        truth = SimpleNamespace(values={f"id_{metric}": self.truth[metric]}, result=None)
+        entry = tree_entry(self._shown(self.tolerances.get("identification", {}).get(metric)),
+                           Pair(self.scenario, self.physics, f"id_{metric}", r, truth))
         return judge(self.name, rung_id, r.rung.kind, f"id_{metric}",
                      r.values.get(f"id_{metric}", math.nan), "truth", self.truth[metric],
                      entry, self.tolerances, self.physics)
