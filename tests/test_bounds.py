@@ -53,3 +53,31 @@ def test_a_bound_that_is_not_a_number_is_an_error():
             B.tree_entry({"bound": name, "reason": "r"}, _pair(1.0, 1.0))
     finally:
         B.BOUNDS.pop(name)
+
+
+def test_the_shear_flexibility_is_the_closed_forms():
+    """[step.beam_theory]'s delta (compare.bounds.continuum.shear_flexibility) is the shear
+    term of the Timoshenko flexibility at a, a / (kappa G A), over the Euler-Bernoulli one
+    (1 / K_EB): checked against that closed form on a shipped tree and a low clamp, where the
+    shear's share is larger."""
+    import dataclasses
+    import math
+
+    from treeimpact.analytic.continuum.beam import beam_static_stiffness
+    from treeimpact.analytic.model.parameters import DEFAULT_E_OVER_G, DEFAULT_SHEAR_COEFFICIENT
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.bounds.continuum import shear_flexibility
+
+    tree = load_scenario("open-center")
+    low = dataclasses.replace(tree, trunk=dataclasses.replace(
+        tree.trunk, clamp_height=0.5 * tree.trunk.clamp_height))
+    deltas = []
+    for scen in (tree, low):
+        t = scen.trunk
+        assert t.shear_modulus is None and t.shear_coefficient is None  # the defaults
+        g, kappa = t.youngs_modulus / DEFAULT_E_OVER_G, DEFAULT_SHEAR_COEFFICIENT
+        shear = t.clamp_height / (kappa * g * math.pi * t.diameter ** 2 / 4)
+        delta = shear_flexibility(B.Pair(scen, None, "x_max", None, None))
+        assert delta == pytest.approx(shear * beam_static_stiffness(t), rel=1e-9)
+        deltas.append(delta)
+    assert deltas[1] > deltas[0] > 0
