@@ -81,3 +81,24 @@ def test_the_shear_flexibility_is_the_closed_forms():
         assert delta == pytest.approx(shear * beam_static_stiffness(t), rel=1e-9)
         deltas.append(delta)
     assert deltas[1] > deltas[0] > 0
+
+
+def test_the_impulse_ceiling_rests_on_modes_that_give_the_static_flexibility():
+    """[step.beam_theory]'s x_max bound sums the clamp's modes, phi_n(a)^2 / omega_n: the
+    same modes summed as phi_n(a)^2 / omega_n^2 give the static flexibility at a, which
+    beam_static_stiffness solves independently (no modes), on both theories; the shear
+    raises the ceiling more than the flexibility (the higher modes shift most) and the
+    crown's less."""
+    from treeimpact.analytic.continuum.beam import beam_static_stiffness
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.bounds.continuum import impulse_ceiling
+
+    tree = load_scenario("central-leader")
+    for theory in ("euler-bernoulli", "timoshenko"):
+        flex = impulse_ceiling(tree, 12, theory, "clamp", power=2)
+        assert flex == pytest.approx(1 / beam_static_stiffness(tree.trunk, theory), rel=1e-6)
+    step = {w: impulse_ceiling(tree, 12, "timoshenko", w) / impulse_ceiling(
+        tree, 12, "euler-bernoulli", w) - 1 for w in ("clamp", "crown")}
+    delta = beam_static_stiffness(tree.trunk) / beam_static_stiffness(tree.trunk,
+                                                                     "timoshenko") - 1
+    assert step["clamp"] > delta > step["crown"] > 0

@@ -190,3 +190,32 @@ def test_a_band_is_judged_so_it_can_fail():
                       TOL["step"]["beam"]["peak_force"], TOL, ladder.physics, pair).verdict
                 for v in (1.05 * ref, 0.5 * ref, 0.01 * ref)]
     assert verdicts == ["out-of-band", "finding", "out-of-band"]
+
+
+@pytest.mark.parametrize("name", shipped_scenarios())
+def test_the_conventions_bound_follows_from_the_trees_masses(name):
+    """[step.convention] peak_force: the effective convention's c_c is the pad's times
+    sqrt(mu(m, m_c) / mu(m, M_T)) = 1 / sqrt(loss_ratio) (the same e on the lighter reduced
+    mass), so the pad's damping ratio on the clamp is zeta(e) sqrt(loss_ratio) and its e_c
+    follows from TreePhysics alone; the bound (1 + e) / (1 + e_c) - 1 read from the runs is
+    that, and the measured step lies inside it."""
+    from treeimpact.analytic.contact.law import (
+        damping_ratio_for_restitution,
+        restitution_for_damping_ratio,
+    )
+    from treeimpact.compare.bounds import Pair
+    from treeimpact.compare.bounds.continuum import convention_impulse_bound
+
+    ladder = build_ladder(name, cache=RunCache(), engines=())
+    physics = ladder.physics
+    pad, eff = ladder["beam"].run.result.model, ladder["beam-effective"].run.result.model
+    assert eff["contact_damping"] / pad["contact_damping"] == pytest.approx(
+        physics.loss_ratio ** -0.5, rel=1e-9)
+    e = physics.restitution
+    e_c = restitution_for_damping_ratio(damping_ratio_for_restitution(e)
+                                        * physics.loss_ratio ** 0.5)
+    bound = convention_impulse_bound(Pair(ladder.scenario, physics, "peak_force",
+                                          ladder["beam-effective"], ladder["beam"]))
+    assert bound.rel == pytest.approx((1 + e) / (1 + e_c) - 1, rel=1e-6)
+    assert 0 < e_c < e
+    assert abs(ladder.step("beam-effective", "peak_force")) <= bound.rel
