@@ -17,9 +17,6 @@ from dataclasses import dataclass
 
 from .base import Bound, Pair, register
 
-#: The beam's largest mesh (analytic.continuum.beam_impact.MAX_ELEMENTS), read lazily there.
-_MAX_ELEMENTS = 48
-
 
 @dataclass(frozen=True)
 class FindingBand:
@@ -71,7 +68,8 @@ def clamp_to_m_t_loss(pair: Pair, finding: dict) -> FindingBand:
     instantaneous effective mass m_c, (1 - e^2) mu(m, m_c) u^2 / 2 (every later contact only
     adds, and a lighter mass is damped more by the same pad), and the plastic loss on M_T,
     mu(m, M_T) u^2 / 2 (the mass the pendulum meets grows from m_c towards M_T, never beyond);
-    relative to the soft SDOF's loss on the same tree. ``finding`` unused (the signature)."""
+    relative to the soft SDOF's loss on the same tree (``pair``: the beam run against the
+    soft SDOF's); ``finding`` unused (the signature)."""
     m, m_t, m_c, u, e = _masses(pair)
     ref = pair.reference_value
     one = (1 - e * e) * 0.5 * _mu(m, m_c) * u * u
@@ -88,7 +86,8 @@ def clamp_to_m_t_force(pair: Pair, finding: dict) -> FindingBand:
     """The mean contact force over t_c is the first contact's impulse, (1 + e) mu u, over
     t_c, and grows with the mass the pad presses on: from the clamp's instantaneous effective
     mass (mu(m, m_c) / mu(m, M_T) - 1 = 1 / loss_ratio - 1; a lighter mass rebounds less,
-    which only lowers it) up to M_T (the SDOF's own, 0). ``finding`` unused."""
+    which only lowers it) up to M_T (the SDOF's own, 0). ``pair``: the beam run against the
+    soft SDOF's (its TreePhysics); ``finding`` unused."""
     lo = 1.0 / pair.physics.loss_ratio - 1.0
     return FindingBand(lo, 0.0, (
         f"band from the impulse on the clamp's effective mass, 1 / loss_ratio - 1 = {lo:+.1%}"
@@ -100,7 +99,7 @@ def mesh(pair: Pair, finding: dict) -> FindingBand:
     """No physical prediction of the size: the band is the step measured with the beam at
     twice its elements (half, where twice exceeds the mesh's limit) within ``finding``'s
     ``mesh_rel`` (1) of that run's value, so the size the check reports is the continuum's,
-    not its mesh's."""
+    not its mesh's. ``pair``: the beam run against its reference."""
     n, other, v = mesh_value(pair)
     ref, tol = pair.reference_value, float(finding["mesh_rel"])
     s = v / ref - 1
@@ -112,10 +111,14 @@ def mesh(pair: Pair, finding: dict) -> FindingBand:
 
 def mesh_value(pair: Pair) -> tuple[int, int, float]:
     """(N, N', value): the checked beam run's elements N, the other mesh N' (2 N, or N / 2
-    where 2 N exceeds the limit) and the metric's value there (SI) with the same pad."""
+    where 2 N exceeds the limit) and the metric's value there (SI) with the same pad, for
+    ``pair``'s tree, beam run and metric."""
+    # lazy: the exact solver's module (numpy, scipy) only where a mesh band is evaluated
+    from treeimpact.analytic.continuum.beam_impact import MAX_ELEMENTS
+
     mo = pair.rung.result.model
     n = int(mo["elements"])
-    other = 2 * n if 2 * n <= _MAX_ELEMENTS else max(2, n // 2)
+    other = 2 * n if 2 * n <= MAX_ELEMENTS else max(2, n // 2)
     metrics = _beam_metrics(pair.scenario, other, mo["calibration"], mo["beam_theory"],
                             float(mo["restitution"]), float(mo["contact_stiffness"]),
                             float(pair.rung.result.scenario["t_end"]))
@@ -142,7 +145,7 @@ def _beam_metrics(scenario, elements: int, calibration: str, beam_theory: str,
 
 def shear_flexibility(pair: Pair) -> float:
     """delta (1): the flexibility the shear adds at a, 1 / K_Timoshenko - 1 / K_EB over
-    1 / K_EB (analytic.continuum.beam.beam_static_stiffness of the tree's trunk, exact)."""
+    1 / K_EB (analytic.continuum.beam.beam_static_stiffness of ``pair``'s trunk, exact)."""
     # lazy: the beam's matrices (numpy) only where a Timoshenko bound is evaluated
     from treeimpact.analytic.continuum.beam import beam_static_stiffness
 
@@ -160,7 +163,6 @@ def impulse_ceiling(scenario, elements: int, beam_theory: str, where: str,
     # lazy: the beam's matrices and scipy's eigensolver only where the bound is evaluated
     import numpy as np
     import scipy.linalg
-
     from treeimpact.analytic.continuum.beam_impact import beam_impact_model
 
     model, _ = beam_impact_model(scenario, elements=elements, beam_theory=beam_theory,
@@ -171,8 +173,8 @@ def impulse_ceiling(scenario, elements: int, beam_theory: str, where: str,
 
 
 def _shear_response(pair: Pair, where: str) -> Bound:
-    """:func:`shear_clamp_response`'s and :func:`shear_crown_response`'s bound at
-    ``where`` ("clamp" or "crown")."""
+    """:func:`shear_clamp_response`'s and :func:`shear_crown_response`'s bound on ``pair``
+    at ``where`` ("clamp" or "crown")."""
     elements = int(pair.rung.result.model["elements"])
     ceil = [impulse_ceiling(pair.scenario, elements, theory, where)
             for theory in ("euler-bernoulli", "timoshenko")]
@@ -196,14 +198,15 @@ def shear_clamp_response(pair: Pair) -> Bound:
     shear's delta); on the continuum the clamp's response per unit impulse at a is at most
     sum_n phi_n(a)^2 / omega_n (all modes in phase), which the shear raises by lowering each
     omega_n, the higher modes most. The peak moves by at most that ceiling's step times the
-    impulse's, (1 + c)(1 + |j|) - 1, both of this tree's trunk and runs."""
+    impulse's, (1 + c)(1 + |j|) - 1, both of this tree's trunk and runs (``pair``: the
+    Timoshenko run against the Euler-Bernoulli one)."""
     return _shear_response(pair, "clamp")
 
 
 @register("shear_crown_response")
 def shear_crown_response(pair: Pair) -> Bound:
     """crown_peak: as :func:`shear_clamp_response` with the crown's response per unit
-    impulse at a, ceiling sum_n |phi_n(a) phi_n(l)| / omega_n."""
+    impulse at a, ceiling sum_n |phi_n(a) phi_n(l)| / omega_n (``pair`` as there)."""
     return _shear_response(pair, "crown")
 
 
@@ -212,7 +215,8 @@ def energy_room_bound(pair: Pair) -> Bound:
     """The energy delivered by the Timoshenko continuum cannot exceed the impactor's energy
     m u^2 / 2 less one collision's loss on its clamp's effective mass,
     (1 - e^2) mu(m, m_c) u^2 / 2 (the pad loses at least that, the impactor keeps >= 0):
-    relative to the Euler-Bernoulli delivery, the room the energy balance leaves."""
+    relative to the Euler-Bernoulli delivery, the room the energy balance leaves (``pair``:
+    the Timoshenko run against the Euler-Bernoulli one)."""
     m, _, m_c, u, e = _masses(pair)
     most = 0.5 * m * u * u - (1 - e * e) * 0.5 * _mu(m, m_c) * u * u
     ref = pair.reference_value
@@ -229,7 +233,7 @@ def energy_room_bound(pair: Pair) -> Bound:
 def clamp_restitution(pair: Pair) -> float:
     """The pad convention's e on the clamp (1): its c_c, calibrated on M_T, at the damping
     ratio it has against the reduced mass with the clamp's effective mass (the reference
-    run's ``pad_damping_ratio``)."""
+    run's ``pad_damping_ratio`` of ``pair``)."""
     # lazy: the contact law only where a convention bound is evaluated
     from treeimpact.analytic.contact.law import restitution_for_damping_ratio
 
@@ -240,7 +244,8 @@ def clamp_restitution(pair: Pair) -> float:
 def convention_impulse_bound(pair: Pair) -> Bound:
     """The mean force over t_c is the first collision's impulse (1 + e) mu u over t_c: the
     effective convention restores e on the clamp where the pad's c_c (calibrated on M_T)
-    rebounds at e_c, so the force moves by at most (1 + e) / (1 + e_c) - 1."""
+    rebounds at e_c, so the force moves by at most (1 + e) / (1 + e_c) - 1 (``pair``: the
+    effective convention's run against the pad's)."""
     e = float(pair.rung.result.model["restitution"])
     e_c = clamp_restitution(pair)
     c_ratio = pair.rung.result.model["contact_damping"] / pair.reference.result.model[
