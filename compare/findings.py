@@ -120,6 +120,28 @@ def finding_for(tol: dict, physics: TreePhysics | None, kind: str, metric: str,
     return None
 
 
+def finding_band(finding: dict, pair) -> tuple[tuple | None, str]:
+    """The band ``finding`` holds on ``pair``'s tree (a :class:`compare.bounds.Pair`) and how
+    it follows there: its ``band_bound`` evaluated on the tree's own runs
+    (:data:`compare.bounds.continuum.BANDS`) with its words, or its fixed ``band`` with none;
+    (None, "") for a ``band_bound`` without a pair to evaluate it on."""
+    if "band_bound" not in finding:
+        return tuple(finding["band"]), ""
+    if pair is None:
+        return None, ""
+    # lazy: compare.bounds imports the bounds modules, which this module's other callers
+    # (the scenario command, the first screen) do not need
+    from .bounds.continuum import BANDS
+
+    b = BANDS[finding["band_bound"]](pair, finding)
+    if not (math.isfinite(b.lo) and math.isfinite(b.hi)):  # e.g. no value on the other mesh
+        return None, f"no band on this tree ({b.words})"
+    if not b.lo < b.hi:
+        raise ValueError(f"band {finding['band_bound']!r} gave [{b.lo!r}, {b.hi!r}] on "
+                         f"{pair.metric}")
+    return (float(b.lo), float(b.hi)), b.words
+
+
 def documented_refusal(tol: dict, reason: str, x0_share: float) -> dict | None:
     """The tolerance file ``tol``'s ``[identification_refused]`` entry whose words (``match``) begin ``reason`` (the
     procedure's refusal) and whose ``when`` holds for the Newton record's ``x0_share`` (x0 / x_max);

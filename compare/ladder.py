@@ -196,7 +196,8 @@ class Ladder:
             return ambiguous
         entry = self._entry("step", r.rung.kind, metric, rung_id, prev)
         return judge(self.name, rung_id, r.rung.kind, metric, self.value(rung_id, metric), prev,
-                     self.value(prev, metric), entry, self.tolerances, self.physics)
+                     self.value(prev, metric), entry, self.tolerances, self.physics,
+                     Pair(self.scenario, self.physics, metric, r, self[prev]))
 
     def _entry(self, section: str, kind: str, metric: str, rung_id: str, reference: str):
         """The tolerance file's entry for ``metric`` of the ``section``'s ``kind`` as it

@@ -17,10 +17,12 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import finite_number, to_jsonable
 
 from .bounds import validate_bound
+from .bounds.continuum import BANDS
 from .findings import (
     REFUSAL_QUANTITIES,
     TreePhysics,
     cause_text,
+    finding_band,
     finding_for,
     validate_cause,
     validate_when,
@@ -113,17 +115,34 @@ def _validate(data: dict, path: str) -> None:
     for kind, entry in data.get("ledger", {}).items():
         need_reason(f"ledger.{kind}", entry)
     for i, f in enumerate(data.get("finding", [])):
-        for key in ("name", "metric", "band", "cause", "reason", "kinds", "when"):
+        for key in ("name", "metric", "cause", "reason", "kinds", "when"):
             if key not in f:
                 raise ParameterError(f"{path}: finding[{i}].{key}: missing")
+        _validate_band(f"{path}: finding[{i}]", f)
         if "scenario" in f:
             raise ParameterError(f"{path}: finding[{i}].scenario: a finding is recognised "
                                  "from its physical cause (when), never from a tree's name")
         validate_when(f"{path}: finding[{i}]", f["when"])
         validate_cause(f"{path}: finding[{i}]", f)
+
+
+def _validate_band(where: str, f: dict) -> None:
+    """A finding gives a fixed ``band`` [lo, hi] (lo < hi) or a registered ``band_bound``
+    (a ``mesh`` band with its ``mesh_rel`` >= 0 and the reason for it), not both."""
+    if ("band" in f) == ("band_bound" in f):
+        raise ParameterError(f"{where}: give band or band_bound (one)")
+    if "band" in f:
         lo, hi = f["band"]
         if not lo < hi:
-            raise ParameterError(f"{path}: finding[{i}].band: need lo < hi")
+            raise ParameterError(f"{where}.band: need lo < hi")
+        return
+    if f["band_bound"] not in BANDS:
+        raise ParameterError(f"{where}.band_bound = {f['band_bound']!r}: allowed "
+                             f"{', '.join(sorted(BANDS))}")
+    if f["band_bound"] == "mesh" and not (isinstance(f.get("mesh_rel"), (int, float))
+                                          and f["mesh_rel"] >= 0
+                                          and str(f.get("mesh_reason", "")).strip()):
+        raise ParameterError(f"{where}: a mesh band needs mesh_rel >= 0 and mesh_reason")
 
 
 # --------------------------------------------------------------------------- checks
@@ -218,7 +237,7 @@ def absent_reason(metric: str, value, reference_value, rung: str, reference: str
 
 def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: str,
           reference_value, entry: dict | None, tol: dict,
-          physics: TreePhysics | None = None) -> Check:
+          physics: TreePhysics | None = None, pair=None) -> Check:
     """The verdict of one comparison of ``value`` with ``reference_value`` (:class:`Verdict`).
 
     Args:
@@ -233,6 +252,9 @@ def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: st
         tol: the whole tolerance file (its recorded findings).
         physics: the tree's physical quantities, which decide the findings whose cause
             it shows (:func:`compare.findings.finding_for`); None: no finding applies.
+        pair: the comparison's :class:`compare.bounds.Pair` (the tree and its two runs), on
+            which a finding's ``band_bound`` is evaluated; None: such a finding is only
+            reported.
 
     Returns:
         The :class:`Check`: the relative difference, the tolerance, the verdict and the
@@ -248,10 +270,13 @@ def judge(scenario: str, rung: str, kind: str, metric: str, value, reference: st
                      tolerance, Verdict.SKIPPED, why)
     reason = entry["reason"] if entry else "no tolerance entry"
     if finding is not None:
-        band = tuple(finding["band"])
+        band, words = finding_band(finding, pair)
         reason = cause_text(finding, physics)  # this tree's numbers only
+        reason = f"{reason}; {words}" if words else reason
         if not math.isfinite(rel):
             verdict = Verdict.NOT_AVAILABLE
+        elif band is None:
+            verdict = Verdict.REPORTED
         elif tolerance is not None and abs(rel) <= tolerance:
             verdict = Verdict.FINDING_LOST
         elif band[0] <= rel <= band[1]:

@@ -71,3 +71,52 @@ def test_the_shipped_trees_measurements_are_quoted_on_a_shipped_tree_only(tree, 
     ladder = Ladder(scen, [], {}, {})
     entry = ladder._shown({"rel": 0.01, "reason": "physics", "measured": "0.3 % measured"})
     assert entry["reason"] == ("physics (0.3 % measured)" if shown else "physics")
+
+
+def test_the_shear_flexibility_is_the_closed_forms():
+    """[step.beam_theory]'s delta (compare.bounds.continuum.shear_flexibility) is the shear
+    term of the Timoshenko flexibility at a, a / (kappa G A), over the Euler-Bernoulli one
+    (1 / K_EB): checked against that closed form on a shipped tree and a low clamp, where the
+    shear's share is larger."""
+    import dataclasses
+    import math
+
+    from treeimpact.analytic.continuum.beam import beam_static_stiffness
+    from treeimpact.analytic.model.parameters import DEFAULT_E_OVER_G, DEFAULT_SHEAR_COEFFICIENT
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.bounds.continuum import shear_flexibility
+
+    tree = load_scenario("open-center")
+    low = dataclasses.replace(tree, trunk=dataclasses.replace(
+        tree.trunk, clamp_height=0.5 * tree.trunk.clamp_height))
+    deltas = []
+    for scen in (tree, low):
+        t = scen.trunk
+        assert t.shear_modulus is None and t.shear_coefficient is None  # the defaults
+        g, kappa = t.youngs_modulus / DEFAULT_E_OVER_G, DEFAULT_SHEAR_COEFFICIENT
+        shear = t.clamp_height / (kappa * g * math.pi * t.diameter ** 2 / 4)
+        delta = shear_flexibility(B.Pair(scen, None, "x_max", None, None))
+        assert delta == pytest.approx(shear * beam_static_stiffness(t), rel=1e-9)
+        deltas.append(delta)
+    assert deltas[1] > deltas[0] > 0
+
+
+def test_the_impulse_ceiling_rests_on_modes_that_give_the_static_flexibility():
+    """[step.beam_theory]'s x_max bound sums the clamp's modes, phi_n(a)^2 / omega_n: the
+    same modes summed as phi_n(a)^2 / omega_n^2 give the static flexibility at a, which
+    beam_static_stiffness solves independently (no modes), on both theories; the shear
+    raises the ceiling more than the flexibility (the higher modes shift most) and the
+    crown's less."""
+    from treeimpact.analytic.continuum.beam import beam_static_stiffness
+    from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.bounds.continuum import impulse_ceiling
+
+    tree = load_scenario("central-leader")
+    for theory in ("euler-bernoulli", "timoshenko"):
+        flex = impulse_ceiling(tree, 12, theory, "clamp", power=2)
+        assert flex == pytest.approx(1 / beam_static_stiffness(tree.trunk, theory), rel=1e-6)
+    step = {w: impulse_ceiling(tree, 12, "timoshenko", w) / impulse_ceiling(
+        tree, 12, "euler-bernoulli", w) - 1 for w in ("clamp", "crown")}
+    delta = beam_static_stiffness(tree.trunk) / beam_static_stiffness(tree.trunk,
+                                                                     "timoshenko") - 1
+    assert step["clamp"] > delta > step["crown"] > 0

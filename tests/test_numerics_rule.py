@@ -53,6 +53,12 @@ NOT_RERUN = {
     "tests/test_identify_procedure_events.py": "contact onsets read from a soft record to "
                                                "one sample",
     "tests/test_numerics_rule.py": "whether the chain's modes reach LAPACK, not their values",
+    "tests/test_bounds.py": "the modes' sum against the static flexibility at 1e-6 and the "
+                            "shear's delta against its closed form at 1e-9, both sides on "
+                            "one kernel",
+    "compare/tests/test_findings.py": "the derived bands against the same masses and runs "
+                                      "recomputed in the same process (both sides on one "
+                                      "kernel) and verdicts inside bands of several %",
 }
 
 

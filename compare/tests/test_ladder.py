@@ -208,8 +208,9 @@ def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
             for metric, entry in metrics.items():
                 assert metric in ALL_METRICS, f"{section}.{kind}.{metric}: unknown metric"
                 assert len(entry["reason"]) > 20
-    for f in TOL["finding"]:
-        assert f["metric"] in ALL_METRICS and f["band"][0] < f["band"][1]
+    for f in TOL["finding"]:  # a fixed band, or one derived per tree (compare.bounds.continuum)
+        assert f["metric"] in ALL_METRICS
+        assert f["band"][0] < f["band"][1] if "band" in f else f["band_bound"]
     bad = tmp_path / "t.toml"
     bad.write_text('[step.engine]\nV = { rel = 0.01 }\n')
     with pytest.raises(ParameterError, match="reason"):
@@ -239,6 +240,14 @@ def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
                    'when = {}\nband = [0.1, 0.2]\ncause = "at {x_max_shipped}"\nreason = "r"\n')
     with pytest.raises(ParameterError, match="not a tree's quantity"):
         load_tolerances(bad)
+    finding = head + '[[finding]]\nname = "n"\nkinds = ["beam"]\nmetric = "x_max"\n' \
+        'when = {}\ncause = "c"\nreason = "r"\n'
+    for band, match in (('band = [0.1, 0.2]\nband_bound = "mesh"\n', "band or band_bound"),
+                        ("", "band or band_bound"), ('band_bound = "fitted"\n', "allowed"),
+                        ('band_bound = "mesh"\n', "mesh_rel")):
+        bad.write_text(finding + band)
+        with pytest.raises(ParameterError, match=match):
+            load_tolerances(bad)
     bad.write_text('[identification_reported]\nreason = "reported"\n[identification_refused]\n'
                    'x = { match = "refused", reason = "a refusal without its words" }\n')
     with pytest.raises(ParameterError, match="not identifiable"):
