@@ -137,3 +137,27 @@ def test_the_floor_bound_on_a_shipped_tree_is_its_e0_floor_at_its_window(ladder_
     assert 0.12 < floor < 0.16, floor
     check = ladder.identification_check("analytic", "pair_damping_ratio")
     assert check.verdict.passes and check.tolerance >= abs(floor), check
+
+
+def test_the_engine_t0_bound_halves_with_dt_and_holds_there(run_cache):
+    """engine-moving-together: delta_w = omega_c dt e u1, so the T0 bound is first order in
+    dt (a half at dt / 2, up to its one-step term); the MuJoCo SDOF's T0, x0 and V at dt / 2
+    lie within the bounds evaluated there. engine-first-order's premise on the peak force:
+    e(dt) / e(dt / 2) within the 1.6-2.4 its 8/3 factor assumes."""
+    soft = run_cache.run(TREE, "soft")
+    base = run_cache.run(TREE, "mujoco", trunk="sdof", pendulum="linear")
+    if not base.ok:
+        pytest.skip(f"{base.describe()}: {base.reason}")
+    half = run_cache.run(TREE, "mujoco", trunk="sdof", pendulum="linear",
+                         dt=base.result.model["dt"] / 2)
+    assert half.ok, half.reason
+    ref = SimpleNamespace(values=soft.result.metrics, result=soft.result)
+    shifts = [C.t0_shift(r.result, ref)[0] - r.result.model["dt"] for r in (base, half)]
+    assert math.isclose(shifts[1], shifts[0] / 2, rel_tol=1e-6)
+    for metric in ("T0", "x0", "V"):
+        rung = SimpleNamespace(values=half.result.metrics, result=half.result)
+        bound = C.engine_moving_together(B.Pair(None, None, metric, rung, ref)).rel
+        assert abs(relative_step(half.result.metrics[metric], ref.values[metric])) <= bound
+    force = [relative_step(r.result.metrics["peak_force"], soft.result.metrics["peak_force"])
+             for r in (base, half)]
+    assert 1.6 <= force[0] / force[1] <= 2.4, force
