@@ -1,6 +1,194 @@
 """Bounds on the pendulum's step (the compound pendulum against the linear one) and on the
-two engines against each other, from the tree's own runs."""
+two engines against each other, from the tree's own runs.
+
+* ``first_order_in_dt``: both engines step the contact and the trunk with a first-order
+  (semi-implicit Euler) step, so a compared difference Delta(dt) = Delta* + a dt carries a
+  first-order part a dt that is no physics of either model. Each compared run is run again
+  at half its own step (fixed, every step dt / 2: a finer step than the run's, phased or
+  not); Richardson's estimate of the first-order part is 2 |Delta(dt) - Delta(dt / 2)|. The
+  tolerance is the entry's ``floor`` (what stays at any step: its reason) plus that part,
+  plus for the pendulum's step the compound pendulum's own terms: its linearisation,
+  theta^2 / 2 at the largest angle theta = y / l_e it turns over the contacts (cos theta in
+  the contact point's speed; sin theta's theta^2 / 6 and 1 - cos theta's theta^2 / 12 are
+  smaller), and for the moving-together quantities the touch's phase within a step (the
+  linear pendulum starts at the touch, the compound one reaches it anywhere within a step,
+  so the event shifts by up to one step: dt over T0 or t_sep, vx(T0) dt over x0, the trunk's
+  deceleration times dt over V).
+* ``contact_sequence``: the contact count of two runs of the same chain and pad. The
+  smallest contacts that together carry less than :data:`GRAZING_SHARE` of the total
+  impulse are grazing touches that a sub-step change of the motion makes or removes (the
+  impulse check cannot tell them from none); the two sequences are the same up to those, so
+  their counts differ by at most the larger number of grazing contacts of either run.
+
+Design notes and measured figures: docs/ladder.md ("Tolerances per tree: the pendulum and
+the two engines").
+"""
 
 from __future__ import annotations
 
-from .base import Bound, Pair, register  # noqa: F401
+import math
+import tomllib
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from treeimpact.analytic.records import contact_intervals
+
+from .base import Bound, Pair, register
+
+#: Share of the total impulse that the grazing contacts carry together at most: the impulse
+#: check of the same two runs ([step.pendulum] impulse, floor 0.005) resolves no less, so
+#: contacts carrying less momentum together cannot be told from none by the compared metrics.
+GRAZING_SHARE = 0.005
+#: The quantities defined at the moving-together point T0, shifted by the touch's phase.
+AT_T0 = ("T0", "x0", "V", "t_sep")
+
+#: The tolerance file whose entries give the floors.
+TOLERANCES = Path(__file__).resolve().parents[1] / "tolerances.toml"
+
+_HALF_STEP_RUNS: dict = {}  # (scenario key, backend, options) -> Run at half the step
+
+
+def _relative(value: float, reference: float) -> float:
+    """(value - reference) / |reference| (1); NaN unless both are finite and reference != 0."""
+    if not (math.isfinite(value) and math.isfinite(reference)) or reference == 0:
+        return math.nan
+    return (value - reference) / abs(reference)
+
+
+def half_step_result(scenario, rung_result):
+    """The SimulationResult of ``rung_result``'s rung (a ``compare.ladder.RungResult``) on
+    ``scenario`` run again at half its step (s, fixed: ``dt`` given), cached per process;
+    None when that run does not finish (its reason is then the bound's words)."""
+    from treeimpact.compare.runs import RunCache, scenario_key  # lazy: compare.runs imports
+    # the backends, which the tolerance file's loader (this package's importer) does not need
+    rung = rung_result.rung
+    opts = {**dict(rung.options), "dt": 0.5 * float(rung_result.result.model["dt"])}
+    key = (scenario_key(scenario), rung.backend, tuple(sorted(opts.items())))
+    if key not in _HALF_STEP_RUNS:
+        _HALF_STEP_RUNS[key] = RunCache().run(scenario, rung.backend, **opts)
+    run = _HALF_STEP_RUNS[key]
+    return run.result if run.ok else None
+
+
+@lru_cache(maxsize=1)
+def _entries() -> dict:
+    """compare/tolerances.toml as parsed (its loader, compare.verdicts, imports this package,
+    so the floors are read from the file itself)."""
+    return tomllib.loads(TOLERANCES.read_text())
+
+
+def _floor(pair: Pair) -> float:
+    """The entry's ``floor`` (1) in compare/tolerances.toml for ``pair``'s metric:
+    [step.KIND] when its two rungs are of different kinds (the pendulum's step), else
+    [engines.KIND]; 0 where the entry gives none."""
+    kind, ref_kind = pair.rung.rung.kind, pair.reference.rung.kind
+    section = "step" if kind != ref_kind else "engines"
+    entry = _entries().get(section, {}).get(str(kind), {}).get(pair.metric, {})
+    return float(entry.get("floor", 0.0))
+
+
+def contact_angle(result, equivalent_length: float) -> float:
+    """The largest angle (rad) the pendulum turns from the touch over the contacts of
+    ``result`` (a SimulationResult): max |y| / l_e up to the last contact's end, with
+    ``equivalent_length`` l_e (m)."""
+    tr = result.trajectory
+    t, y, force = (np.asarray(a, dtype=float) for a in (tr.t, tr.y, tr.force))
+    on = np.flatnonzero(force > 0.0)
+    if on.size == 0:
+        return 0.0
+    return float(np.abs(y[:on[-1] + 1]).max() / equivalent_length)
+
+
+def touch_phase(result, metric: str) -> float:
+    """The relative shift (1) of ``metric`` (one of :data:`AT_T0`) of ``result`` when its
+    contact starts up to one step dt later: dt / T0, dt / t_sep, |vx(T0)| dt / |x0| or
+    |dvx/dt (T0)| dt / |V| (the trunk's deceleration read from the record at T0)."""
+    m, dt = result.metrics, float(result.model["dt"])
+    value = float(m.get(metric, math.nan))
+    if not (math.isfinite(value) and value != 0):
+        return 0.0
+    if metric in ("T0", "t_sep"):
+        return dt / abs(value)
+    tr = result.trajectory
+    t, vx = np.asarray(tr.t, dtype=float), np.asarray(tr.vx, dtype=float)
+    t0 = float(m["T0"])
+    if metric == "x0":
+        return abs(float(np.interp(t0, t, vx))) * dt / abs(value)
+    i = int(np.clip(np.searchsorted(t, t0), 1, t.size - 2))
+    accel = (vx[i + 1] - vx[i - 1]) / (t[i + 1] - t[i - 1])
+    return abs(float(accel)) * dt / abs(value)
+
+
+def _first_order(pair: Pair) -> tuple[float, str]:
+    """(Richardson's first-order part 2 |Delta(dt) - Delta(dt / 2)| (1), its words) of the
+    pair's difference, from both rungs run again at half their steps."""
+    a = half_step_result(pair.scenario, pair.rung)
+    b = half_step_result(pair.scenario, pair.reference)
+    if a is None or b is None:
+        return 0.0, "no first-order part: a run at half the step did not finish"
+    d = _relative(pair.value, pair.reference_value)
+    dh = _relative(float(a.metrics.get(pair.metric, math.nan)),
+                   float(b.metrics.get(pair.metric, math.nan)))
+    if not (math.isfinite(d) and math.isfinite(dh)):
+        return 0.0, "no first-order part: the difference is not defined at half the step"
+    part = 2.0 * abs(d - dh)
+    return part, (f"first-order part 2 |{100 * d:+.3f} % - ({100 * dh:+.3f} % at dt / 2)| "
+                  f"= {100 * part:.3f} % (dt = {1e6 * float(pair.rung.result.model['dt']):.3g}"
+                  f" / {1e6 * float(pair.reference.result.model['dt']):.3g} us)")
+
+
+def _pendulum_terms(pair: Pair) -> tuple[float, list[str]]:
+    """(the compound pendulum's own terms (1), their words): theta^2 / 2 at its largest
+    angle over the contacts, and for :data:`AT_T0` the touch's phase within a step."""
+    le = pair.scenario.impactor.equivalent_length
+    theta = contact_angle(pair.rung.result, le)
+    rel, words = 0.5 * theta * theta, [f"theta^2 / 2 = {0.5 * theta * theta:.2g} at theta = "
+                                       f"{theta:.3g} rad (y / l_e over the contacts)"]
+    if pair.metric in AT_T0:
+        phase = touch_phase(pair.rung.result, pair.metric)
+        rel += phase
+        words.append(f"touch phase {100 * phase:.3f} % (one step)")
+    return rel, words
+
+
+@register("first_order_in_dt")
+def first_order_in_dt(pair: Pair) -> Bound:
+    """The tolerance of ``pair`` (its two rungs' runs): the entry's floor plus the
+    first-order part of the difference (module docstring), plus the compound pendulum's
+    terms when the rung is the full pendulum against the linear one."""
+    floor = _floor(pair)
+    part, part_words = _first_order(pair)
+    rel, words = floor + part, [f"floor {100 * floor:.2g} %", part_words]
+    if pair.rung.rung.kind != pair.reference.rung.kind:  # the pendulum's step
+        extra, extra_words = _pendulum_terms(pair)
+        rel += extra
+        words += extra_words
+    return Bound(rel, " + ".join(words) + f" = {100 * rel:.3g} %")
+
+
+def episodes(result) -> tuple[int, int]:
+    """(contacts, grazing ones) of ``result``'s record (contacts: the runs of force > 0; the
+    grazing ones: the smallest, as many as together carry less than :data:`GRAZING_SHARE`
+    of the total impulse)."""
+    tr = result.trajectory
+    t, force = np.asarray(tr.t, dtype=float), np.asarray(tr.force, dtype=float)
+    raw = contact_intervals(force, 0.0)
+    carried = np.sort([float(np.trapezoid(force[i0:i1 + 2], t[i0:i1 + 2])) for i0, i1 in raw])
+    grazing = int(np.count_nonzero(np.cumsum(carried) < GRAZING_SHARE * carried.sum()))
+    return len(raw), grazing
+
+
+@register("contact_sequence")
+def contact_sequence(pair: Pair) -> Bound:
+    """The same sequence of contacts up to its grazing touches (module docstring) on
+    ``pair``'s two runs: the counts within the larger number of grazing contacts of
+    either."""
+    (na, ga), (nb, gb) = episodes(pair.rung.result), episodes(pair.reference.result)
+    ref = pair.reference_value
+    slack = max(ga, gb)
+    rel = slack / ref if math.isfinite(ref) and ref > 0 else 0.0
+    return Bound(rel, f"{na} and {nb} contacts, of which {ga} and {gb} grazing (together "
+                      f"under {100 * GRAZING_SHARE:g} % of the impulse): counts within {slack}"
+                      f" of {ref:g}")
