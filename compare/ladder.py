@@ -62,7 +62,7 @@ def chain_segments(scenario: Scenario, segments: int | None = None) -> int:
     """Segments of the hinged trunk and the rod: ``segments``, or
     analytic.continuum.chain_impact.converged_segments of ``scenario`` (the smallest N meeting
     the static stiffness and first two frequencies within 0.5 % of the beam whose exact chain
-    and exact rod are within half of each [step.chain] and [step.rod] tolerance of the exact
+    and exact rod are within three quarters of each [step.chain] and [step.rod] tolerance of the exact
     beam; docs/trunk-models.md "Segments per tree")."""
     if segments is not None:
         return int(segments)

@@ -89,9 +89,14 @@ def test_the_rod_rung_comes_from_the_registry_not_the_engine_name(monkeypatch):
 
 
 def test_default_segments_come_from_the_chain_convergence_rule():
+    """The ladder's N is chain_segments' (the compared metrics' convergence on the exact
+    chain and rod), never below the stiffness-and-frequency rule's; a given N is kept."""
     from treeimpact.analytic.continuum.chain import default_segments
+    from treeimpact.compare.ladder import chain_segments
 
-    n = default_segments(load_scenario("central-leader").trunk)
+    s = load_scenario("central-leader")
+    n = chain_segments(s)
+    assert n >= default_segments(s.trunk) and chain_segments(s, 7) == 7
     ids = [r.id for r in ladder_rungs("central-leader")]
     assert f"mujoco-chain{n}" in ids and f"bullet-chain{n}-full" in ids
 
