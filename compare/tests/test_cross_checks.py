@@ -28,7 +28,7 @@ PHYSICS = {s: TreePhysics.of(load_scenario(s)) for s in SCENARIOS}
 def _tested(scenario, rung, metric):
     """A tolerance, or a finding whose cause the tree's physics shows (never its name)."""
     entry = TOL.get("step", {}).get(rung.kind, {}).get(metric)
-    return bool(entry and "rel" in entry) or \
+    return bool(entry and ("rel" in entry or "bound" in entry)) or \
         finding_for(TOL, PHYSICS[scenario], rung.kind, metric, rung.id) is not None
 
 
@@ -167,7 +167,7 @@ def engine_cases():
                 continue
             for m in ALL_METRICS:
                 entry = TOL.get("engines", {}).get(kind, {}).get(m)
-                if entry and "rel" in entry:
+                if entry and ("rel" in entry or "bound" in entry):  # a per-tree bound too
                     out.append(pytest.param(s, kind, m, id=f"{NAMES[s]}-{kind}-{m}"))
     return out
 
