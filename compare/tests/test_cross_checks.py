@@ -167,7 +167,7 @@ def engine_cases():
                 continue
             for m in ALL_METRICS:
                 entry = TOL.get("engines", {}).get(kind, {}).get(m)
-                if entry and ("rel" in entry or "bound" in entry):
+                if entry and ("rel" in entry or "bound" in entry):  # a per-tree bound too
                     out.append(pytest.param(s, kind, m, id=f"{NAMES[s]}-{kind}-{m}"))
     return out
 
