@@ -74,10 +74,10 @@ PRESETS = {
         # engines' chains of every tree: its record fits), the lightest and heaviest crown
         # ratios, no sampling grid (the full preset's; docs/identification.md)
         help="default (contact duration x crown ratio on the analytic, soft and beam "
-             "backends, engines on 2 x 2 points) takes about 100 CPU-s (116 measured at a "
-             "load of 20), about a minute on 2 cores alone",
-        expected="about 100 CPU-s, about a minute with 2 workers alone (more beside make "
-                 "report's own runs and the design map): 8 contact durations x 6 crown ratios on the analytic, soft and beam backends, "
+             "backends, engines on 2 x 2 points) took about 90 s on 2 cores beside make "
+             "report's own runs at Sobol N = 64; N = 256 adds about 50 CPU-s",
+        expected="about 90 s with 2 workers beside make report's own runs and the design "
+                 "map at Sobol N = 64 (N = 256's 4608 more evaluations add about 50 CPU-s): 8 contact durations x 6 crown ratios on the analytic, soft and beam backends, "
                  "the engines' chains on 2 x 2 of them, the identification validation "
                  "(4 e x 2 crown ratios x 3 rungs) and the sensitivity study (30 Morris "
                  "trajectories per tree, 210 evaluations; Sobol N = 256, 2048 "
