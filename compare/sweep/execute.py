@@ -52,6 +52,8 @@ class Task:
     analysis: str | None = None
     part: int = 0  # the sweep of run_sweeps it belongs to
     rows: list = field(default_factory=list)  # (point, point key, target, record parameters)
+    run: str = ""  # the key of its backend call alone (the same for the tasks that repeat
+    #                one run per record, compare.sweep.plan; "": its own)
 
 
 def _identify(result, scenario: Scenario) -> dict:
@@ -66,10 +68,28 @@ def _identify(result, scenario: Scenario) -> dict:
     return out
 
 
+#: The last backend call this process made, (Task.run, its Run): the tasks that repeat one
+#: run per record (compare.sweep.plan) come in a row in a worker call, and the run is a
+#: deterministic function of its key (scenario digest, backend, options), so the next one
+#: reuses it instead of repeating it (the Sobol design's 6144 rows made 6144 identical runs
+#: of the base tree, about 1 ms each, whose result their analysis does not read).
+_LAST_RUN: list = [None, None]
+
+
+def _run(task: Task):
+    """The task's backend run (compare.runs.attempt), reused from :data:`_LAST_RUN` when the
+    previous task of this process made the same call (``task.run``)."""
+    if task.run and _LAST_RUN[0] == task.run:
+        return _LAST_RUN[1]
+    done = attempt(task.backend, task.scenario, task.options)
+    _LAST_RUN[:] = [task.run or None, done]
+    return done
+
+
 def execute(task: Task) -> list[dict]:
     """Run one task: the outcome of each of its rows; never raises for a failing run (the
     error is the outcome)."""
-    done = attempt(task.backend, task.scenario, task.options)
+    done = _run(task)
     out = {"status": done.status, "error": done.reason, "t_end": task.scenario.t_end,
            "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_s": done.wall_s}
     result = done.result

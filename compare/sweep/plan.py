@@ -151,16 +151,18 @@ def plan(scenario: Scenario, grid: Grid, targets: list[Target], *, identify: boo
                     and "samples" not in opts:
                 opts["samples"] = analytic_samples(scen.t_end)
             key = [scenario_key(scen), t.backend, options_key(opts)]
+            run = json.dumps(key, default=str, sort_keys=True)
             if analysis is not None and record and \
                     get_backend(t.backend).cost(opts) < ANALYSIS_COST:
                 # a run cheaper than its analysis is repeated per record: the records'
-                # analyses spread over the workers instead of queueing on one
+                # analyses spread over the workers instead of queueing on one (a worker
+                # makes the run once for its consecutive tasks of one run: Task.run)
                 key.append(record)
             key = json.dumps(key, default=str, sort_keys=True)
             task = tasks.get(key)
             if task is None:
                 task = tasks[key] = Task(key, scen, get_backend(t.backend), opts, identify,
-                                         analysis, part)
+                                         analysis, part, run=run)
             task.rows.append((point, pk, t, record))
     return list(tasks.values()), immediate
 

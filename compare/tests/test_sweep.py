@@ -488,6 +488,31 @@ def test_a_cheap_run_is_repeated_per_record_so_its_fits_spread_over_the_workers(
     assert len(by["fake"]) == 1 and len(by["fake"][0].rows) == 6
 
 
+def test_a_worker_makes_a_run_repeated_per_record_once_for_its_consecutive_tasks(monkeypatch):
+    """The tasks that repeat one run per record (above) share Task.run; a worker making them
+    one after the other makes the run once (compare.sweep.execute._LAST_RUN) and gives
+    every row the outcome the repeated runs gave; a task of another run makes its own."""
+    from treeimpact.compare.studies.ident_records import ANALYSIS
+    from treeimpact.compare.sweep import execute
+    from treeimpact.compare.sweep.plan import make_targets, plan
+
+    grid = parse_grid(["restitution=0.1,0.5", "record.rate=1e3,5e3,2e4"])
+    tasks, _ = plan(load_scenario("central-leader"), grid, make_targets(["analytic"]),
+                    identify=False, analysis=ANALYSIS)
+    assert len(tasks) == 6 and len({t.run for t in tasks}) == 2  # 2 runs x 3 records
+    made = []
+    real = execute.attempt
+    monkeypatch.setattr(execute, "attempt", lambda *a: made.append(a) or real(*a))
+    monkeypatch.setattr(execute, "_LAST_RUN", [None, None])
+    shared = execute.run_chunk(tasks)
+    assert len(made) == 2
+    monkeypatch.setattr(execute, "_run", lambda t: real(t.backend, t.scenario, t.options))
+    alone = execute.run_chunk(tasks)
+    drop = ("wall_s", "worker")
+    assert [[{k: v for k, v in r.items() if k not in drop} for r in rows] for rows in shared] \
+        == [[{k: v for k, v in r.items() if k not in drop} for r in rows] for rows in alone]
+
+
 def test_identification_map_matches_the_documented_floor_and_finding(tmp_path):
     res = run_sweep("central-leader", ["restitution=0,0.1", "impactor.mass=132.4,140"], tmp_path,
                     workers=0, progress=False)
