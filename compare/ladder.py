@@ -17,6 +17,7 @@ from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
 
 from .backends import ENGINES
 from .bounds import Pair, tree_entry
+from .peaks import other_peak, within_top
 from .findings import TreePhysics
 from .identification import (
     IDENT_METRICS,
@@ -191,7 +192,7 @@ class Ladder:
         maxima on either rung)."""
         r = self[rung_id]
         prev = r.rung.previous
-        ambiguous = self._ambiguous_peak(rung_id, prev, metric)
+        ambiguous = self._ambiguous_peak("step", r.rung.kind, rung_id, prev, metric)
         if ambiguous is not None:
             return ambiguous
         entry = self._entry("step", r.rung.kind, metric, rung_id, prev)
@@ -222,23 +223,48 @@ class Ladder:
         reason = f"{entry['reason']} ({entry['measured']})" if self.shipped else entry["reason"]
         return {**entry, "reason": reason}
 
-    def _ambiguous_peak(self, rung_id: str, reference: str, metric: str) -> Check | None:
+    def _ambiguous_peak(self, section: str, kind: str, rung_id: str, reference: str,
+                        metric: str) -> Check | None:
         """t_xmax compared between a record with one clear maximum and one whose x(t) has a
-        second maximum within 5 % of the largest (analytic.records.peak_times): flagged
-        'ambiguous', not judged (which peak wins flips with small changes). Records of the
-        same shape (both one peak, or both two) are judged as usual."""
+        second maximum within 5 % of the largest (analytic.records.peak_times), or between
+        two records with near-equal maxima whose largest is not the same peak (the peak of
+        one nearest the other's t_xmax is not its own maximum): flagged 'ambiguous', not
+        judged (which peak wins flips with small changes); and where each record stays
+        within the comparison's x_max tolerance of its maximum at the other's t_xmax
+        (:meth:`_flat_top`). Otherwise judged as usual; ``section`` and ``kind`` name the
+        comparison's entries (``step``/``engines``, the rung kind)."""
         if metric != "t_xmax":
             return None
         a, b = self[rung_id].peaks, self[reference].peaks
-        if (len(a) > 1) == (len(b) > 1):
-            return None
-        which, times = (rung_id, a) if len(a) > 1 else (reference, b)
         value, ref = self.value(rung_id, metric), self.value(reference, metric)
+        if (len(a) > 1) == (len(b) > 1) and not other_peak(a, b, value, ref):
+            return self._flat_top(section, kind, rung_id, reference)
+        which, times = (rung_id, a) if len(a) > 1 else (reference, b)
         return Check(self.name, rung_id, metric, _f(value), reference, _f(ref),
                      relative_step(value, ref), None, Verdict.AMBIGUOUS,
                      f"x(t) of {which} has maxima within {100 * PEAK_AMBIGUITY:.0f} % of each other at "
                      + ", ".join(f"{1e3 * s:.1f}" for s in times) + " ms: the time of the "
                      "maximum is not a robust quantity")
+
+    def _flat_top(self, section: str, kind: str, rung_id: str, reference: str) -> Check | None:
+        """t_xmax flagged 'ambiguous' where x(t) of each record, at the other's time of the
+        maximum, is within the comparison's x_max tolerance of its own maximum (a flat top:
+        x_max resolves no time within it); None otherwise (the tolerance is the x_max
+        entry's, per tree where it names a bound)."""
+        entry = self._entry(section, kind, "x_max", rung_id, reference)
+        tau = float(entry["rel"]) if entry and "rel" in entry else 0.0
+        runs = [self[r].result for r in (rung_id, reference)]
+        times = [self.value(r, "t_xmax") for r in (rung_id, reference)]
+        if tau <= 0 or any(r is None or r.trajectory is None for r in runs) or not (
+                within_top(runs[0].trajectory, times[1], tau)
+                and within_top(runs[1].trajectory, times[0], tau)):
+            return None
+        value, ref = times
+        return Check(self.name, rung_id, "t_xmax", _f(value), reference, _f(ref),
+                     relative_step(value, ref), None, Verdict.AMBIGUOUS,
+                     f"x(t) of both stays within the x_max tolerance ({100 * tau:.2g} %) of its "
+                     f"maximum from {1e3 * min(times):.2f} to {1e3 * max(times):.2f} ms: x_max "
+                     "resolves no time of the maximum within that flat top")
 
     def identification_check(self, rung_id: str, metric: str) -> Check:
         """The identified value of ``metric`` on the rung ``rung_id`` against the truth,
@@ -259,7 +285,7 @@ class Ladder:
         ids = [r.rung.id for r in self.rungs if r.rung.kind == kind]
         if len(ids) != 2:
             return None
-        ambiguous = self._ambiguous_peak(ids[1], ids[0], metric)
+        ambiguous = self._ambiguous_peak("engines", kind, ids[1], ids[0], metric)
         if ambiguous is not None:
             return ambiguous
         entry = self._entry("engines", kind, metric, ids[1], ids[0])

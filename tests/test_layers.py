@@ -35,8 +35,8 @@ COMPARE_FLOORS = (
     # rung table, the pool, the exit codes, figure titles that fit
     # and the engines' contact settings (the engine registry names them)
     ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "bounds",
-     "findings", "verdicts", "rungs", "exits", "figure_text", "contact_text", "contact_engines",
-     "contact_settings"),
+     "peaks", "findings", "verdicts", "rungs", "exits", "figure_text", "contact_text",
+     "contact_engines", "contact_settings"),
     # 2 one scenario, one record: the ladder, the identification, a user's tree's scenario,
     # the family of trees across the regimes
     ("identification", "ladder", "mechanism", "tree_scenario", "family"),

@@ -337,3 +337,33 @@ def test_every_engine_run_says_its_steps_and_what_set_its_step(ladder_of, run_ca
         assert js["step_set_by"] in expected, r.describe()
     rows = run_rows(engine_runs)
     assert all(row["stepping"]["steps"] > 0 for row in rows)
+
+
+def test_two_records_whose_largest_maximum_is_another_peak_are_ambiguous():
+    """Both records with near-equal maxima (times a, b): the time of the maximum is judged
+    only where both pick the same peak (the family's high clamp: four maxima within 1.1 %,
+    the chain's largest the beam's second); a single-peaked record is left to the rule of
+    one against several."""
+    from treeimpact.compare.peaks import other_peak as _other_peak
+
+    a, b = [0.010, 0.030], [0.011, 0.031]
+    assert _other_peak(a, b, 0.010, 0.031) and _other_peak(b, a, 0.031, 0.010)
+    assert not _other_peak(a, b, 0.010, 0.011) and not _other_peak(a, b, 0.030, 0.031)
+    assert not _other_peak([0.010], b, 0.010, 0.031)  # one peak: the other rule's case
+    assert not _other_peak(a, b, math.nan, 0.031)
+
+
+def test_a_flat_top_within_the_x_max_tolerance_resolves_no_time_of_the_maximum():
+    """x(t) = 1 - (t - 0.02)^2 / 0.01^2 near its top: at 0.021 s it is 1 % below its
+    maximum, so within a 1.5 % x_max tolerance and not within 0.5 %; outside the record or
+    at a NaN time nothing is within."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from treeimpact.compare.peaks import within_top
+
+    t = np.linspace(0.0, 0.04, 4001)
+    rec = SimpleNamespace(t=t, x=1.0 - (t - 0.02) ** 2 / 0.01 ** 2)
+    assert within_top(rec, 0.021, 0.015) and not within_top(rec, 0.021, 0.005)
+    assert not within_top(rec, 0.05, 0.5) and not within_top(rec, math.nan, 0.5)
