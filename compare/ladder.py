@@ -247,14 +247,17 @@ class Ladder:
                      "maximum is not a robust quantity")
 
     def _flat_top(self, section: str, kind: str, rung_id: str, reference: str) -> Check | None:
-        """t_xmax flagged 'ambiguous' where x(t) of each record, at the other's time of the
-        maximum, is within the comparison's x_max tolerance of its own maximum (a flat top:
-        x_max resolves no time within it); None otherwise (the tolerance is the x_max
-        entry's, per tree where it names a bound)."""
+        """t_xmax flagged 'ambiguous' where the two times differ beyond their tolerance and
+        x(t) of each record, at the other's time of the maximum, is within the comparison's
+        x_max tolerance of its own maximum (a flat top: x_max resolves no time within it);
+        None otherwise (the tolerances are the entries', per tree where they name a bound)."""
+        times = [self.value(r, "t_xmax") for r in (rung_id, reference)]
+        own = self._entry(section, kind, "t_xmax", rung_id, reference)
+        if own and "rel" in own and abs(relative_step(*times)) <= float(own["rel"]):
+            return None  # the times agree within their own tolerance: judged as usual
         entry = self._entry(section, kind, "x_max", rung_id, reference)
         tau = float(entry["rel"]) if entry and "rel" in entry else 0.0
         runs = [self[r].result for r in (rung_id, reference)]
-        times = [self.value(r, "t_xmax") for r in (rung_id, reference)]
         if tau <= 0 or any(r is None or r.trajectory is None for r in runs) or not (
                 within_top(runs[0].trajectory, times[1], tau)
                 and within_top(runs[1].trajectory, times[0], tau)):

@@ -10,6 +10,8 @@ from typing import Any
 
 from treeimpact.analytic.errors import ParameterError
 
+from ..backends import BACKENDS
+
 
 @dataclass(frozen=True)
 class Bound:
@@ -59,14 +61,29 @@ BoundFunction = Callable[[Pair], Bound]
 BOUNDS: dict[str, BoundFunction] = {}
 
 
-def register(name: str) -> Callable[[BoundFunction], BoundFunction]:
-    """Decorator: register the bound ``name`` (the tolerance file's ``bound = "name"``)."""
+#: The bounds that read an engine run's time step (``model["dt"]``) from both runs.
+NEEDS_STEP: set[str] = set()
+
+
+def register(name: str, *, step: bool = False) -> Callable[[BoundFunction], BoundFunction]:
+    """Decorator: register the bound ``name`` (the tolerance file's ``bound = "name"``);
+    ``step``: it reads the runs' time step (a run that records none is held to no step
+    error, :func:`tree_entry`)."""
     def deco(fn: BoundFunction) -> BoundFunction:
         if name in BOUNDS:
             raise ValueError(f"bound {name!r} registered twice")
         BOUNDS[name] = fn
+        if step:
+            NEEDS_STEP.add(name)
         return fn
     return deco
+
+
+def _records_step(pair: Pair) -> bool:
+    """Whether every engine run of ``pair`` records its time step (``model["dt"]``); the
+    exact references (no engine, no step) need none."""
+    runs = [r.result for r in (pair.rung, pair.reference) if r.result is not None]
+    return all("dt" in r.model for r in runs if BACKENDS[r.backend].engine)
 
 
 def validate_bound(where: str, entry: dict) -> None:
@@ -86,6 +103,9 @@ def tree_entry(entry: dict | None, pair: Pair) -> dict | None:
     words appended to the reason; an entry without a bound (or None) unchanged."""
     if entry is None or "bound" not in entry:
         return entry
+    if entry["bound"] in NEEDS_STEP and not _records_step(pair):
+        return {**entry, "rel": 0.0, "reason": f"{entry['reason']}: the run records no time "
+                "step (dt), so no step error is allowed"}
     b = BOUNDS[entry["bound"]](pair)
     if not (math.isfinite(b.rel) and b.rel >= 0):
         raise ValueError(f"bound {entry['bound']!r} gave rel = {b.rel!r} on {pair.metric}")

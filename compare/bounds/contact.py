@@ -137,7 +137,7 @@ def _resolution(pair: Pair, dt: float) -> tuple[float, str]:
     return 0.0, ""
 
 
-@register("engine-first-order")
+@register("engine-first-order", step=True)
 def engine_first_order(pair: Pair) -> Bound:
     """An engine SDOF (``pair.rung``) against the soft SDOF (``pair.reference``): the
     engine's first-order error at its dt from its rerun at dt / 2, relative to the soft
@@ -153,7 +153,7 @@ def engine_first_order(pair: Pair) -> Bound:
                  f"{err / ref:.2g} of {ref:.4g}{floor_words}: {rel:.2g}")
 
 
-@register("engines-first-order")
+@register("engines-first-order", step=True)
 def engines_first_order(pair: Pair) -> Bound:
     """Bullet's SDOF (``pair.rung``) against MuJoCo's (``pair.reference``), the same model
     and pad: each engine's first-order error from its rerun at dt / 2; they differ by at
@@ -195,14 +195,14 @@ def _energy_bound(pair: Pair, runs: tuple) -> Bound:
                  + f", over E_r = {e_r:.3g} J: {rel:.2g}{_meaningless(rel)}")
 
 
-@register("engine-energy")
+@register("engine-energy", step=True)
 def engine_energy(pair: Pair) -> Bound:
     """The engine SDOF's (``pair.rung``) rebound energy against the soft SDOF's
     (``pair.reference``): the step's energy error (omega_c dt)^2 / 2 of E0 over E_r."""
     return _energy_bound(pair, (pair.rung.result,))
 
 
-@register("engines-energy")
+@register("engines-energy", step=True)
 def engines_energy(pair: Pair) -> Bound:
     """Bullet's SDOF (``pair.rung``) against MuJoCo's (``pair.reference``) on the rebound
     energy: the sum of the two steps' energy errors over MuJoCo's E_r."""
@@ -273,13 +273,13 @@ def _moving_together_bound(pair: Pair, engines: tuple) -> Bound:
                  f": {rel:.2g}{_meaningless(rel)}")
 
 
-@register("engine-moving-together")
+@register("engine-moving-together", step=True)
 def engine_moving_together(pair: Pair) -> Bound:
     """T0, x0, V of an engine SDOF (``pair.rung``) against the soft SDOF (``pair.reference``)."""
     return _moving_together_bound(pair, (pair.rung.result,))
 
 
-@register("engines-moving-together")
+@register("engines-moving-together", step=True)
 def engines_moving_together(pair: Pair) -> Bound:
     """T0, x0, V of Bullet's SDOF (``pair.rung``) against MuJoCo's (``pair.reference``):
     each engine's shift from the same motion, summed."""
