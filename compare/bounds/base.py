@@ -83,7 +83,8 @@ def _records_step(pair: Pair) -> bool:
     """Whether every engine run of ``pair`` records its time step (``model["dt"]``); the
     exact references (no engine, no step) need none."""
     runs = [r.result for r in (pair.rung, pair.reference) if r.result is not None]
-    return all("dt" in r.model for r in runs if BACKENDS[r.backend].engine)
+    return all("dt" in r.model for r in runs
+               if getattr(BACKENDS.get(r.backend), "engine", False))
 
 
 def validate_bound(where: str, entry: dict) -> None:
