@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cache, cached_property
 from types import SimpleNamespace
 
 from treeimpact.analytic.continuum.chain_impact import converged_segments
@@ -192,12 +192,12 @@ class Ladder:
         maxima on either rung)."""
         r = self[rung_id]
         prev = r.rung.previous
-        ambiguous = self._ambiguous_peak("step", r.rung.kind, rung_id, prev, metric)
+        entry = cache(lambda: self._entry("step", r.rung.kind, metric, rung_id, prev))
+        ambiguous = self._ambiguous_peak("step", r.rung.kind, rung_id, prev, metric, entry)
         if ambiguous is not None:
             return ambiguous
-        entry = self._entry("step", r.rung.kind, metric, rung_id, prev)
         return judge(self.name, rung_id, r.rung.kind, metric, self.value(rung_id, metric), prev,
-                     self.value(prev, metric), entry, self.tolerances, self.physics,
+                     self.value(prev, metric), entry(), self.tolerances, self.physics,
                      Pair(self.scenario, self.physics, metric, r, self[prev]))
 
     def _entry(self, section: str, kind: str, metric: str, rung_id: str, reference: str):
@@ -224,7 +224,7 @@ class Ladder:
         return {**entry, "reason": reason}
 
     def _ambiguous_peak(self, section: str, kind: str, rung_id: str, reference: str,
-                        metric: str) -> Check | None:
+                        metric: str, entry) -> Check | None:
         """t_xmax compared between a record with one clear maximum and one whose x(t) has a
         second maximum within 5 % of the largest (analytic.records.peak_times), or between
         two records with near-equal maxima whose largest is not the same peak (the peak of
@@ -232,13 +232,15 @@ class Ladder:
         judged (which peak wins flips with small changes); and where each record stays
         within the comparison's x_max tolerance of its maximum at the other's t_xmax
         (:meth:`_flat_top`). Otherwise judged as usual; ``section`` and ``kind`` name the
-        comparison's entries (``step``/``engines``, the rung kind)."""
+        comparison's entries (``step``/``engines``, the rung kind), ``entry()`` gives the
+        metric's own entry as it applies to the tree (evaluated at most once, by the caller's
+        cache, and only where needed)."""
         if metric != "t_xmax":
             return None
         a, b = self[rung_id].peaks, self[reference].peaks
         value, ref = self.value(rung_id, metric), self.value(reference, metric)
         if (len(a) > 1) == (len(b) > 1) and not other_peak(a, b, value, ref):
-            return self._flat_top(section, kind, rung_id, reference)
+            return self._flat_top(section, kind, rung_id, reference, entry())
         which, times = (rung_id, a) if len(a) > 1 else (reference, b)
         return Check(self.name, rung_id, metric, _f(value), reference, _f(ref),
                      relative_step(value, ref), None, Verdict.AMBIGUOUS,
@@ -246,13 +248,14 @@ class Ladder:
                      + ", ".join(f"{1e3 * s:.1f}" for s in times) + " ms: the time of the "
                      "maximum is not a robust quantity")
 
-    def _flat_top(self, section: str, kind: str, rung_id: str, reference: str) -> Check | None:
+    def _flat_top(self, section: str, kind: str, rung_id: str, reference: str,
+                  own: dict | None) -> Check | None:
         """t_xmax flagged 'ambiguous' where the two times differ beyond their tolerance and
         x(t) of each record, at the other's time of the maximum, is within the comparison's
         x_max tolerance of its own maximum (a flat top: x_max resolves no time within it);
-        None otherwise (the tolerances are the entries', per tree where they name a bound)."""
+        None otherwise (``own``: t_xmax's entry as it applies to the tree; the tolerances are
+        the entries', per tree where they name a bound)."""
         times = [self.value(r, "t_xmax") for r in (rung_id, reference)]
-        own = self._entry(section, kind, "t_xmax", rung_id, reference)
         if own and "rel" in own and abs(relative_step(*times)) <= float(own["rel"]):
             return None  # the times agree within their own tolerance: judged as usual
         entry = self._entry(section, kind, "x_max", rung_id, reference)
@@ -288,12 +291,12 @@ class Ladder:
         ids = [r.rung.id for r in self.rungs if r.rung.kind == kind]
         if len(ids) != 2:
             return None
-        ambiguous = self._ambiguous_peak("engines", kind, ids[1], ids[0], metric)
+        entry = cache(lambda: self._entry("engines", kind, metric, ids[1], ids[0]))
+        ambiguous = self._ambiguous_peak("engines", kind, ids[1], ids[0], metric, entry)
         if ambiguous is not None:
             return ambiguous
-        entry = self._entry("engines", kind, metric, ids[1], ids[0])
         return judge(self.name, ids[1], f"engines-{kind}", metric, self.value(ids[1], metric),
-                     ids[0], self.value(ids[0], metric), entry, self.tolerances, self.physics)
+                     ids[0], self.value(ids[0], metric), entry(), self.tolerances, self.physics)
 
     def checks(self) -> list[Check]:
         """Every comparison of the ladder: steps, identification, engines against each other."""

@@ -17,6 +17,7 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import finite_number, to_jsonable
 
 from .bounds import validate_bound
+from .bounds.base import relative_step  # noqa: F401 (compare.verdicts.relative_step)
 from .bounds.continuum import BANDS
 from .findings import (
     REFUSAL_QUANTITIES,
@@ -168,14 +169,6 @@ class Check:
     def to_json(self) -> dict:
         """Every field, JSON-safe (the band as a list)."""
         return to_jsonable(self.__dict__ | {"band": list(self.band) if self.band else None})
-
-
-def relative_step(value, reference) -> float:
-    """(value - reference) / |reference| (1); NaN when either is not a finite number or
-    the reference is 0."""
-    if not (finite_number(value) and finite_number(reference)) or reference == 0:
-        return math.nan
-    return (value - reference) / abs(reference)
 
 
 #: Why a metric has no value on a run, from the tree's physics: the moving-together

@@ -3,6 +3,7 @@ tolerance entry names one)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -10,7 +11,10 @@ from typing import Any
 
 from treeimpact.analytic.errors import ParameterError
 
+from treeimpact.analytic.results import finite_number
+
 from ..backends import BACKENDS
+from ..runs import RunCache
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,8 @@ class Pair:
         rung: the checked rung's result (``compare.ladder.RungResult``: ``.result`` is its
             SimulationResult, ``.values`` its ladder values).
         reference: the reference rung's result, the same kind of object.
+        entry: the tolerance file's entry being evaluated (its ``floor`` and other keys),
+            set by :func:`tree_entry`; None outside it.
     """
 
     scenario: Any
@@ -44,6 +50,7 @@ class Pair:
     metric: str
     rung: Any
     reference: Any
+    entry: dict | None = None
 
     @property
     def value(self) -> float:
@@ -54,6 +61,27 @@ class Pair:
     def reference_value(self) -> float:
         """The reference rung's value of the metric (SI; NaN when missing)."""
         return self.reference.values.get(self.metric, math.nan)
+
+
+def relative_step(value, reference) -> float:
+    """(value - reference) / |reference| (1), what every tolerance is a bound on; NaN when
+    either is not a finite number or the reference is 0."""
+    if not (finite_number(value) and finite_number(reference)) or reference == 0:
+        return math.nan
+    return (value - reference) / abs(reference)
+
+
+#: The engines' runs at half their step, one per (tree, backend, options) and process.
+_HALF_STEP = RunCache()
+
+
+def half_step_run(scenario, rung_result):
+    """The :class:`compare.runs.Run` of ``rung_result``'s rung (a ``compare.ladder.RungResult``
+    of ``scenario``) again at half the step its run took (``dt`` given: a fixed step), made
+    once a process (the bounds that read a first-order step error share it)."""
+    dt = float(rung_result.result.model["dt"])
+    return _HALF_STEP.run(scenario, rung_result.rung.backend, **dict(rung_result.rung.options),
+                          dt=0.5 * dt)
 
 
 BoundFunction = Callable[[Pair], Bound]
@@ -107,7 +135,7 @@ def tree_entry(entry: dict | None, pair: Pair) -> dict | None:
     if entry["bound"] in NEEDS_STEP and not _records_step(pair):
         return {**entry, "rel": 0.0, "reason": f"{entry['reason']}: the run records no time "
                 "step (dt), so no step error is allowed"}
-    b = BOUNDS[entry["bound"]](pair)
+    b = BOUNDS[entry["bound"]](dataclasses.replace(pair, entry=entry))
     if not (math.isfinite(b.rel) and b.rel >= 0):
         raise ValueError(f"bound {entry['bound']!r} gave rel = {b.rel!r} on {pair.metric}")
     return {**entry, "rel": float(b.rel), "reason": f"{entry['reason']}: {b.words}"}

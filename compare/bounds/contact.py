@@ -24,16 +24,13 @@ import math
 from treeimpact.analytic.errors import ParameterError
 
 from ..runs import RunCache
-from .base import Bound, Pair, register
+from .base import Bound, Pair, half_step_run, register
 
 #: e(dt) <= RICHARDSON |v(dt) - v(dt/2)| for a first-order error with e(dt)/e(dt/2) >= 1.6.
 RICHARDSON = 1.6 / (1.6 - 1.0)
 #: The soft contact's T0 is where |vy - vx| < this fraction of u1 (analytic.records), so V
 #: (vx at T0) is defined to this fraction of u1 on either record.
 COMMON_VELOCITY_TOLERANCE = 1e-3
-
-#: The engines' runs at half the step, one per (tree, engine, options) and process.
-_HALF_STEP = RunCache()
 
 
 # --------------------------------------------------------------------------- soft vs Newton
@@ -108,8 +105,7 @@ def half_step_value(scenario, rung_result, metric: str) -> tuple[float, float]:
     of ``scenario``) and its value of ``metric`` (SI) rerun at dt / 2 (NaN when that run
     did not finish); each rerun once a process."""
     dt = float(rung_result.result.model["dt"])
-    run = _HALF_STEP.run(scenario, rung_result.rung.backend, **dict(rung_result.rung.options),
-                         dt=0.5 * dt)
+    run = half_step_run(scenario, rung_result)
     value = run.result.metrics.get(metric) if run.ok else None
     return dt, (math.nan if value is None else float(value))
 

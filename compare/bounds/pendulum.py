@@ -27,15 +27,12 @@ the two engines").
 from __future__ import annotations
 
 import math
-import tomllib
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
 from treeimpact.analytic.records import contact_intervals
 
-from .base import Bound, Pair, register
+from .base import Bound, Pair, half_step_run, register, relative_step
 
 #: Share of the total impulse that the grazing contacts carry together at most: the impulse
 #: check of the same two runs ([step.pendulum] impulse, floor 0.005) resolves no less, so
@@ -44,49 +41,18 @@ GRAZING_SHARE = 0.005
 #: The quantities defined at the moving-together point T0, shifted by the touch's phase.
 AT_T0 = ("T0", "x0", "V", "t_sep")
 
-#: The tolerance file whose entries give the floors.
-TOLERANCES = Path(__file__).resolve().parents[1] / "tolerances.toml"
-
-_HALF_STEP_RUNS: dict = {}  # (scenario key, backend, options) -> Run at half the step
-
-
-def _relative(value: float, reference: float) -> float:
-    """(value - reference) / |reference| (1); NaN unless both are finite and reference != 0."""
-    if not (math.isfinite(value) and math.isfinite(reference)) or reference == 0:
-        return math.nan
-    return (value - reference) / abs(reference)
-
 
 def half_step_result(scenario, rung_result):
     """The SimulationResult of ``rung_result``'s rung (a ``compare.ladder.RungResult``) on
-    ``scenario`` run again at half its step (s, fixed: ``dt`` given), cached per process;
+    ``scenario`` run again at half its step (:func:`compare.bounds.base.half_step_run`);
     None when that run does not finish (its reason is then the bound's words)."""
-    from treeimpact.compare.runs import RunCache, scenario_key  # lazy: compare.runs imports
-    # the backends, which the tolerance file's loader (this package's importer) does not need
-    rung = rung_result.rung
-    opts = {**dict(rung.options), "dt": 0.5 * float(rung_result.result.model["dt"])}
-    key = (scenario_key(scenario), rung.backend, tuple(sorted(opts.items())))
-    if key not in _HALF_STEP_RUNS:
-        _HALF_STEP_RUNS[key] = RunCache().run(scenario, rung.backend, **opts)
-    run = _HALF_STEP_RUNS[key]
+    run = half_step_run(scenario, rung_result)
     return run.result if run.ok else None
 
 
-@lru_cache(maxsize=1)
-def _entries() -> dict:
-    """compare/tolerances.toml as parsed (its loader, compare.verdicts, imports this package,
-    so the floors are read from the file itself)."""
-    return tomllib.loads(TOLERANCES.read_text())
-
-
 def _floor(pair: Pair) -> float:
-    """The entry's ``floor`` (1) in compare/tolerances.toml for ``pair``'s metric:
-    [step.KIND] when its two rungs are of different kinds (the pendulum's step), else
-    [engines.KIND]; 0 where the entry gives none."""
-    kind, ref_kind = pair.rung.rung.kind, pair.reference.rung.kind
-    section = "step" if kind != ref_kind else "engines"
-    entry = _entries().get(section, {}).get(str(kind), {}).get(pair.metric, {})
-    return float(entry.get("floor", 0.0))
+    """The evaluated entry's ``floor`` (1), what stays at any step; 0 where it gives none."""
+    return float((pair.entry or {}).get("floor", 0.0))
 
 
 def contact_angle(result, equivalent_length: float) -> float:
@@ -128,9 +94,8 @@ def _first_order(pair: Pair) -> tuple[float, str]:
     b = half_step_result(pair.scenario, pair.reference)
     if a is None or b is None:
         return 0.0, "no first-order part: a run at half the step did not finish"
-    d = _relative(pair.value, pair.reference_value)
-    dh = _relative(float(a.metrics.get(pair.metric, math.nan)),
-                   float(b.metrics.get(pair.metric, math.nan)))
+    d = relative_step(pair.value, pair.reference_value)
+    dh = relative_step(a.metrics.get(pair.metric), b.metrics.get(pair.metric))
     if not (math.isfinite(d) and math.isfinite(dh)):
         return 0.0, "no first-order part: the difference is not defined at half the step"
     part = 2.0 * abs(d - dh)
@@ -174,10 +139,9 @@ def first_order_in_dt(pair: Pair) -> Bound:
 
 
 def _within(pair: Pair, rel: float) -> bool:
-    """Whether ``pair``'s relative step (v - r) / |r|, as the verdict computes it, is finite
-    and within ``rel``."""
-    v, r = pair.value, pair.reference_value
-    return math.isfinite(v) and math.isfinite(r) and r != 0 and abs((v - r) / abs(r)) <= rel
+    """Whether ``pair``'s relative step, as the verdict computes it, is finite and within
+    ``rel``."""
+    return abs(relative_step(pair.value, pair.reference_value)) <= rel
 
 
 def episodes(result) -> tuple[int, int]:

@@ -74,9 +74,9 @@ def test_the_soft_step_shrinks_with_the_pad_duration_as_b_tc(run_cache):
     assert 0.5 * q < steps[1] / steps[0] < 1.5 * q, (steps, q)
 
 
-def test_the_engine_energy_bound_holds_at_half_the_step(run_cache):
-    """The MuJoCo SDOF's rebound energy at dt / 2 against the soft SDOF: within the bound
-    evaluated at dt / 2 (a quarter of the one at dt)."""
+def _at_half_step(run_cache):
+    """The soft SDOF's run and the MuJoCo SDOF's at its step and at half of it, on TREE
+    (skipped where MuJoCo is not here)."""
     soft = run_cache.run(TREE, "soft")
     base = run_cache.run(TREE, "mujoco", trunk="sdof", pendulum="linear")
     if not base.ok:
@@ -84,6 +84,13 @@ def test_the_engine_energy_bound_holds_at_half_the_step(run_cache):
     half = run_cache.run(TREE, "mujoco", trunk="sdof", pendulum="linear",
                          dt=base.result.model["dt"] / 2)
     assert half.ok, half.reason
+    return soft, base, half
+
+
+def test_the_engine_energy_bound_holds_at_half_the_step(run_cache):
+    """The MuJoCo SDOF's rebound energy at dt / 2 against the soft SDOF: within the bound
+    evaluated at dt / 2 (a quarter of the one at dt)."""
+    soft, _, half = _at_half_step(run_cache)
     ref = soft.result.metrics["rebound_energy"]
     bound = C.engine_energy(_pair("rebound_energy", 0, ref, half.result)).rel
     assert abs(relative_step(half.result.metrics["rebound_energy"], ref)) <= bound
@@ -144,13 +151,7 @@ def test_the_engine_t0_bound_halves_with_dt_and_holds_there(run_cache):
     dt (a half at dt / 2, up to its one-step term); the MuJoCo SDOF's T0, x0 and V at dt / 2
     lie within the bounds evaluated there. engine-first-order's premise on the peak force:
     e(dt) / e(dt / 2) within the 1.6-2.4 its 8/3 factor assumes."""
-    soft = run_cache.run(TREE, "soft")
-    base = run_cache.run(TREE, "mujoco", trunk="sdof", pendulum="linear")
-    if not base.ok:
-        pytest.skip(f"{base.describe()}: {base.reason}")
-    half = run_cache.run(TREE, "mujoco", trunk="sdof", pendulum="linear",
-                         dt=base.result.model["dt"] / 2)
-    assert half.ok, half.reason
+    soft, base, half = _at_half_step(run_cache)
     ref = SimpleNamespace(values=soft.result.metrics, result=soft.result)
     shifts = [C.t0_shift(r.result, ref)[0] - r.result.model["dt"] for r in (base, half)]
     assert math.isclose(shifts[1], shifts[0] / 2, rel_tol=1e-6)

@@ -28,8 +28,13 @@ PHYSICS = {s: TreePhysics.of(load_scenario(s)) for s in SCENARIOS}
 def _tested(scenario, rung, metric):
     """A tolerance, or a finding whose cause the tree's physics shows (never its name)."""
     entry = TOL.get("step", {}).get(rung.kind, {}).get(metric)
-    return bool(entry and ("rel" in entry or "bound" in entry)) or \
+    return _judged(entry) or \
         finding_for(TOL, PHYSICS[scenario], rung.kind, metric, rung.id) is not None
+
+
+def _judged(entry) -> bool:
+    """An entry with a tolerance: a fixed rel or a per-tree bound."""
+    return bool(entry and ("rel" in entry or "bound" in entry))
 
 
 def step_cases(metric):
@@ -167,7 +172,7 @@ def engine_cases():
                 continue
             for m in ALL_METRICS:
                 entry = TOL.get("engines", {}).get(kind, {}).get(m)
-                if entry and ("rel" in entry or "bound" in entry):  # a per-tree bound too
+                if _judged(entry):
                     out.append(pytest.param(s, kind, m, id=f"{NAMES[s]}-{kind}-{m}"))
     return out
 
