@@ -5,7 +5,7 @@ machine those threads fight the test process itself and each call costs ~1 s. Th
 only handles matrices of a few hundred rows, so one BLAS thread is the fast choice.
 
 The project installs one top-level package, `treeimpact`; an import of its folders by their
-bare names (`analytic`, `compare.ladder`) fails here, so a test cannot pass on a second copy.
+bare names (`analytic`, `compare.tree.ladder`) fails here, so a test cannot pass on a second copy.
 
 The tests whose numbers depend on BLAS and LAPACK round-off are marked ``numerics``
 (:data:`NUMERICS`): `make test` runs them again under two other machines' OpenBLAS kernels
@@ -28,7 +28,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 class _NoBareNames(importlib.abc.MetaPathFinder):
     """Refuse an import of the project's folders by their bare names (``analytic``,
-    ``compare.ladder``, ...): installed they are subpackages of ``treeimpact`` only, and a
+    ``compare.tree.ladder``, ...): installed they are subpackages of ``treeimpact`` only, and a
     bare import would load a second copy of a module. pytest itself imports the tests of
     ``compare/tests/`` (not installed) as ``compare.tests.*``, their package ``compare`` first:
     those are let through."""

@@ -148,7 +148,7 @@ def _duration(seconds: float) -> str:
 
 
 #: The command line's progress reporter: ``reporter(desc, total)`` -> an object with
-#: ``update(n)`` and ``close()`` (compare.progress.Progress); None: no progress.
+#: ``update(n)`` and ``close()`` (compare.runs.progress.Progress); None: no progress.
 _REPORTER: Callable | None = None
 
 

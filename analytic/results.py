@@ -194,7 +194,7 @@ class FreeCollision:
 
 
 #: Largest energy-ledger error (fraction of the input energy) a result may carry: every rung's
-#: own tolerance is below 2 % (compare/tolerances.toml [ledger]); beyond this it diverged.
+#: own tolerance is below 2 % (compare/runs/tolerances.toml [ledger]); beyond this it diverged.
 LEDGER_DIVERGED = 0.05
 
 

@@ -31,7 +31,7 @@ ENGINE_FILES = ("test_mujoco", "test_bullet", "test_engine", "test_cross_checks"
 _CHILD = r"""
 import json, sys, time
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.backends import get_backend
+from treeimpact.compare.runs.backends import get_backend
 name, backend, options = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 scenario, b = load_scenario(name), get_backend(backend)
 start = time.process_time()

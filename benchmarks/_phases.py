@@ -5,7 +5,7 @@ Per case (every shipped tree's report chains and a tree unlike them, ``LIGHT``: 
 pendulum that rebounds): the run at a fixed step dt (the rule's step, given as ``--dt``:
 what every run was before), at dt / 2 (that the fixed-step answer is converged) and stepped
 by phase (the default, analytic.engine.phases). Each metric the engines are compared by
-(compare/tolerances.toml [engines.chain], [engines.pendulum] for the full pendulum: the same
+(compare/runs/tolerances.toml [engines.chain], [engines.pendulum] for the full pendulum: the same
 model in two integrators) and the first contact's duration (read at the contact step's
 resolution, so within one dt_c) is judged: |dt/2 - dt| and |phased - dt| relative to the
 fixed-step value, each against the stated tolerance. The timing: ``rounds`` rounds, each
@@ -40,7 +40,7 @@ def cases(report_cases, engines) -> list:
 
 def tolerances(pendulum: str) -> dict:
     """metric -> stated relative tolerance of [engines.chain] or [engines.pendulum]."""
-    from treeimpact.compare.verdicts import TOLERANCES_PATH
+    from treeimpact.compare.runs.verdicts import TOLERANCES_PATH
 
     table = tomllib.loads(Path(TOLERANCES_PATH).read_text())["engines"][SECTIONS[pendulum]]
     return {k: float(v["rel"]) for k, v in table.items() if "rel" in v}
@@ -51,8 +51,8 @@ def _run(engine, scen, opts, dt=None):
     ``_setup.PHASED`` switched on: Bullet's default is the fixed step)."""
     import importlib
 
-    from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.backends import get_backend
+    from treeimpact.compare.runs.cache import resolve_scenario
 
     importlib.import_module(f"treeimpact.{engine}_models._setup").PHASED = dt is None or \
         engine == "mujoco"

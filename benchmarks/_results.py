@@ -56,7 +56,7 @@ def write(name: str, numbers: dict, details: dict | None = None, *, started_load
     """Write ``results/NAME.json`` (or ``out``): the flat ``numbers`` the docs may quote
     (a number, or [low, high] for a range over repeats or cases), the ``details`` behind
     them, and when, where, at which commit and under which load they were measured."""
-    from treeimpact.compare.provenance import code_version, environment
+    from treeimpact.compare.runs.provenance import code_version, environment
 
     path = Path(out) if out else RESULTS / f"{name}.json"
     path.parent.mkdir(parents=True, exist_ok=True)

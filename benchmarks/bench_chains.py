@@ -7,7 +7,7 @@ alternating, so that machine noise hits both alike: per case the median wall tim
 (s) on each side and their ratio, the steps taken and the wall time per step (us), and
 whether the two sides' numbers are the same to the last bit (every metric and the recorded
 x(t), y(t)) or, where they differ, the largest relative change of a metric the ladder
-compares a chain by (compare/tolerances.toml [step.chain]; every metric's change is in the
+compares a chain by (compare/runs/tolerances.toml [step.chain]; every metric's change is in the
 file's details).
 
 Cases: ``report``, the hinged chains of ``make report``'s ladders (every shipped tree, its
@@ -27,7 +27,7 @@ alternating rounds (docs/engines.md quotes ``chain_floors.json``).
 
 ``--phases`` measures today's code only, in this process: every report chain and a light
 pendulum's, at the rule's fixed step dt, at dt / 2 and stepped by phase (the default): the
-convergence table against compare/tolerances.toml's stated tolerances and the steps and
+convergence table against compare/runs/tolerances.toml's stated tolerances and the steps and
 wall times of the fixed-step and phased runs side by side (benchmarks/_phases.py; writes
 ``results/chain_phases.json``; docs/engines.md "Stepping by phase").
 """
@@ -61,8 +61,8 @@ PRESET_CASES = [("central-leader", engine, {"trunk": "chain", "segments": 32,
 SNIPPET = r'''
 import hashlib, json, math, time
 import numpy as np
-from treeimpact.compare.backends import get_backend
-from treeimpact.compare.runs import resolve_scenario
+from treeimpact.compare.runs.backends import get_backend
+from treeimpact.compare.runs.cache import resolve_scenario
 CASES = json.loads(%r)
 for engine in {c[1] for c in CASES}:
     get_backend(engine).simulate(resolve_scenario("open-center"), trunk="sdof")
@@ -85,12 +85,12 @@ print(json.dumps(out))
 
 def compared_metrics() -> tuple:
     """The metrics the ladder compares a chain with the continuum by a relative tolerance
-    (compare/tolerances.toml's [step.chain] entries with ``rel``): a change of the step
+    (compare/runs/tolerances.toml's [step.chain] entries with ``rel``): a change of the step
     must stay within those; the moving-together metrics (T0, x0, V, A_x, ...) follow the
     chattering sequence and are not compared on a chain."""
     import tomllib
 
-    from treeimpact.compare.verdicts import TOLERANCES_PATH
+    from treeimpact.compare.runs.verdicts import TOLERANCES_PATH
 
     table = tomllib.loads(Path(TOLERANCES_PATH).read_text())["step"]["chain"]
     return tuple(k for k, v in table.items() if "rel" in v)
@@ -166,7 +166,7 @@ def _mujoco_floor_models(scen: str, segments: int) -> tuple:
     import mujoco
     import numpy as np
 
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
     from treeimpact.mujoco_models import _builder
     from treeimpact.mujoco_models._rollout import _plan
     from treeimpact.mujoco_models._runner import make_setup
@@ -202,7 +202,7 @@ def _bullet_floor(scen: str, segments: int, variant: str) -> float:
 
     from treeimpact.bullet_models import _loops
     from treeimpact.bullet_models._runner import build_world, make_setup
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
 
     class NoQuery:  # the client with an empty contact query
         def __init__(self, p):

@@ -31,7 +31,7 @@ CASES = {"e0.1-0.5ms-50steps": dict(mass=132.4, other_mass=110.0, restitution=0.
 
 SNIPPET = """
 import json, time
-from treeimpact.compare.contact_settings import contact_settings
+from treeimpact.compare.runs.contact_settings import contact_settings
 CASES = {cases!r}
 contact_settings(**CASES["default-step-mujoco"])
 out = {{}}

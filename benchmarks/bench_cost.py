@@ -50,7 +50,7 @@ QUICK = ("mujoco sdof", "mujoco chain 8", "bullet chain 8", "soft, 1 us contact"
 _CHILD = r"""
 import json, resource, sys, time
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.backends import get_backend
+from treeimpact.compare.runs.backends import get_backend
 name, backend, options = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 scenario, b = load_scenario(name), get_backend(backend)
 if backend == "mujoco":

@@ -12,7 +12,7 @@ run, on central-leader, each into a temporary folder removed afterwards:
    cells) then costs cells x that, on 2 workers and, *estimated* (no 16-core machine
    here), on 16: cells x CPU-s a cell / 16 + the pool's start + the grid's worker calls x
    the pool's measured cost a call / 16;
-5. the local pool's own cost (compare.pool.process_map of ``len`` on tiny items, nothing
+5. the local pool's own cost (compare.runs.pool.process_map of ``len`` on tiny items, nothing
    to compute): its start (2 calls) and each further call (2000 calls), CPU-s a call;
 4. the engines' spot checks (``design_map(engines=True)``: MuJoCo's and Bullet's chains and
    MuJoCo's flex rod at the a/l x pad map's corners and the cells nearest its 5 % line):
@@ -44,9 +44,9 @@ METRICS = ("x_max", "energy_delivered", "crown_peak_acceleration")
 
 def _pair_map(workers: int, folder: Path) -> float:
     """Wall time (s) of one 30 x 30 a/l x m/M_T map on ``workers`` processes."""
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
     from treeimpact.compare.studies.design import PAIRS, design_spec, pair_grid
-    from treeimpact.compare.sweep.run import run_sweeps
+    from treeimpact.compare.studies.sweep.run import run_sweeps
 
     scen = resolve_scenario("central-leader")
     t0 = time.perf_counter()
@@ -61,7 +61,7 @@ def _pool_overhead(workers: int, calls: int = 2000, rounds: int = 3) -> dict:
     of ``calls`` calls x workers / the extra calls)."""
     from statistics import median
 
-    from treeimpact.compare.pool import process_map
+    from treeimpact.compare.runs.pool import process_map
 
     def wall(n):
         t0 = time.perf_counter()
@@ -78,13 +78,13 @@ def _pool_overhead(workers: int, calls: int = 2000, rounds: int = 3) -> dict:
 
 
 def _grid_calls(workers: int, cells: int) -> int:
-    """How many worker calls compare.sweep.cost.chunks makes of ``cells`` design-grid
+    """How many worker calls compare.studies.sweep.cost.chunks makes of ``cells`` design-grid
     cells (each one "analytic" task whose analysis runs the rungs, as design_spec plans
     them) on ``workers`` processes."""
     from types import SimpleNamespace as Task
 
-    from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.sweep.cost import chunks
+    from treeimpact.compare.runs.backends import get_backend
+    from treeimpact.compare.studies.sweep.cost import chunks
 
     return len(chunks([Task(backend=get_backend("analytic"), options={})] * cells, workers))
 
@@ -134,7 +134,7 @@ def main(argv=None) -> int:
     p.add_argument("--skip-engines", action="store_true", help="no spot checks")
     p.add_argument("--out", help="results file (default benchmarks/results/design.json)")
     args = p.parse_args(argv)
-    from treeimpact.compare.validity.design_study import run_design_study
+    from treeimpact.compare.report.validity.design_study import run_design_study
 
     start_load = _results.load_average()
     numbers, details = {}, {"slice": SLICE, "workers": args.workers}

@@ -1,10 +1,10 @@
-"""The family of trees (compare/family.py, issue 50 item 8) at full size: what each member
+"""The family of trees (compare/tree/family.py, issue 50 item 8) at full size: what each member
 produces on every command a user runs (a benchmark, not a test: nothing is asserted).
 
 Run: ``nice -n 5 .venv/bin/python benchmarks/bench_family.py [--count 30] [--no-report]``.
 For each member, into a temporary folder removed afterwards:
 
-1. its regime as the exact solver found it (compare.family.regime);
+1. its regime as the exact solver found it (compare.tree.family.regime);
 2. ``treeimpact simulate`` on every backend (and the beam's Timoshenko theory) at the
    backends' default sizes (the segment rule's chain, the beam's default mesh): exit code,
    the metrics or the one-line refusal, wall time;
@@ -36,7 +36,7 @@ import _results  # noqa: E402
 #: simulate's backends at their default sizes.
 BACKENDS = {"analytic": [], "soft": [], "beam": [], "timoshenko": ["--beam-theory", "timoshenko"],
             "mujoco": [], "bullet": []}
-CLI = [sys.executable, "-m", "treeimpact.compare.cli"]
+CLI = [sys.executable, "-m", "treeimpact.compare.interface.cli"]
 
 
 def _simulate(path: Path) -> dict:
@@ -114,7 +114,7 @@ def _report(paths: dict, study: Path, folder: Path) -> dict:
 
 
 def main() -> None:
-    from treeimpact.compare import family as F
+    from treeimpact.compare.tree import family as F
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--count", type=int, default=30, help="design map values an input")

@@ -30,7 +30,7 @@ import hashlib, json, pickle, sys, tempfile, time
 from pathlib import Path
 import matplotlib
 matplotlib.use("Agg")
-from treeimpact.compare.ladder import build_ladder
+from treeimpact.compare.tree.ladder import build_ladder
 from treeimpact.compare.report import figures as F
 from treeimpact.compare.report.scenario import energy_ledger
 cache = pickle.load(open(CACHE, "rb"))
@@ -56,8 +56,8 @@ print(json.dumps({"save_s": save_s, "digests": digests}))
 
 def _cache(trees: list, folder: Path) -> Path:
     """Every rung of the trees' ladders run once (today's code), pickled into ``folder``."""
-    from treeimpact.compare.ladder import prefetch_ladders
-    from treeimpact.compare.runs import RunCache
+    from treeimpact.compare.runs.cache import RunCache
+    from treeimpact.compare.tree.ladder import prefetch_ladders
 
     cache = RunCache()
     prefetch_ladders(cache, trees)

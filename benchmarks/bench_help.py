@@ -28,9 +28,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _results  # noqa: E402
 from _baseline import baseline_tree, verify_import  # noqa: E402
 
-#: The console script's own lines (pyproject's ``treeimpact = "treeimpact.compare.cli:main"``),
-#: run with ``-c`` for the old tree, which has no console script of its own.
-LAUNCHER = "import sys; from treeimpact.compare.cli import main; sys.exit(main(['--help']))"
+#: The console script's own lines (pyproject's
+#: ``treeimpact = "treeimpact.compare.interface.cli:main"``), run with ``-c`` for the old
+#: tree, which has no console script of its own.
+LAUNCHER = ("import sys; from treeimpact.compare.interface.cli import main; "
+            "sys.exit(main(['--help']))")
 
 
 def _run(argv: list, env: dict, cwd: str) -> tuple[float, float, str]:

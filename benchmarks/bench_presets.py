@@ -37,7 +37,7 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--out", help="results file (default benchmarks/results/presets.json)")
     args = p.parse_args(argv)
-    from treeimpact.compare.sweep.run import run_sweep
+    from treeimpact.compare.studies.sweep.run import run_sweep
 
     start_load = _results.load_average()
     with tempfile.TemporaryDirectory(prefix="bench-presets-") as tmp:

@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def _table(title: str, total: float, timings: dict, extra: dict | None = None) -> None:
-    """Runs execute on a process pool (compare.runs.RunCache.prefetch): their wall times are
+    """Runs execute on a process pool (compare.runs.cache.RunCache.prefetch): their wall times are
     per run, summed over the workers, so they are shown as CPU-side seconds and as a share
     of the summed run time; the wall-clock split is in the sections below."""
     busy = sum(t["wall_s"] for t in timings.values()) or 1.0
@@ -48,8 +48,8 @@ def main(argv=None) -> int:
 
     import pytest
 
-    from treeimpact.compare import runs
     from treeimpact.compare.report import write_report
+    from treeimpact.compare.runs import cache as runs
 
     if not args.skip_pytest:
         t0 = time.perf_counter()

@@ -7,8 +7,8 @@ Run: ``.venv/bin/python benchmarks/bench_report_cpu.py [--make] [--rounds N] [--
 1. The Sobol rows, old and new side by side in one process, alternately, ``--rounds``
    times each: central-leader's Sobol sweep of ``--n`` base samples (``workers=0``) with
    the base tree's run made for every row (the old sweep: one run per record, as
-   compare.sweep.plan repeats a run cheaper than its analysis) and with it made once per
-   worker call (compare.sweep.execute ``_LAST_RUN``); the CPU per row (time.process_time),
+   compare.studies.sweep.plan repeats a run cheaper than its analysis) and with it made once per
+   worker call (compare.studies.sweep.execute ``_LAST_RUN``); the CPU per row (time.process_time),
    the medians and their ratio, and each evaluation's runs alone (Newton, soft, beam at
    its default, the tree varied: compare.studies.study_inputs.vary), the floor of a row.
 2. ``--make``: ``make report`` (OUT in a temporary folder, removed) with its process tree's
@@ -96,11 +96,11 @@ def sobol_rows(n: int, reuse: bool) -> float:
     """CPU s per row of central-leader's Sobol sweep of ``n`` base samples in this process,
     with the base tree's run reused across a worker call's tasks (``reuse``) or made per
     row (the old sweep)."""
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
     from treeimpact.compare.studies.sobol import sobol_sweep
     from treeimpact.compare.studies.study_inputs import free_inputs
-    from treeimpact.compare.sweep import execute
-    from treeimpact.compare.sweep.run import run_sweeps
+    from treeimpact.compare.studies.sweep import execute
+    from treeimpact.compare.studies.sweep.run import run_sweeps
 
     scen = resolve_scenario("central-leader")
     rows = n * (len(free_inputs(scen)) + 2)  # the Saltelli design's, no second order
@@ -125,7 +125,7 @@ def evaluation_parts(n: int) -> dict:
     from treeimpact.analytic.contact.soft import simulate_soft
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
     from treeimpact.analytic.impact.simulate import simulate
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
     from treeimpact.compare.studies.sobol import sobol_design
     from treeimpact.compare.studies.study_inputs import (free_inputs, inputs_of, problem,
                                                          ranges_of, vary)

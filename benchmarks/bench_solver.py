@@ -166,7 +166,7 @@ import json, statistics, sys, time
 import treeimpact as ti
 from treeimpact.analytic.impact.solver import solve_impacts
 from treeimpact.analytic.model.two_body import two_body_model
-from treeimpact.compare.sweep.apply import apply_point
+from treeimpact.compare.studies.sweep.apply import apply_point
 REPEATS = int(sys.argv[1])
 def median_us(fn):
     fn()

@@ -27,7 +27,8 @@ core here (heartbeats, monitors), which would otherwise come off the process poo
 figure on a 2-core machine. A backend whose rows are not
 all ``ok`` is reported as not measured (a failing run is fast, so its points per second
 would mean nothing). Points per second = grid points / wall time of
-:func:`compare.sweep.run.run_sweep` (planning, runs, the CSV journal and the Parquet table).
+:func:`compare.studies.sweep.run.run_sweep` (planning, runs, the CSV journal and the Parquet
+table).
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from treeimpact.compare.sweep.run import run_sweep  # noqa: E402
+from treeimpact.compare.studies.sweep.run import run_sweep  # noqa: E402
 
 #: Grid per backend: about 10-20 s of work for one worker on this machine.
 GRIDS = {
@@ -124,7 +125,7 @@ def main(argv=None) -> int:
     ap.add_argument("--dask-defaults", action="store_true",
                     help="the LocalCluster with Dask's defaults, not DASK_SWEEP_CONFIG")
     args = ap.parse_args(argv)
-    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.runs.backends import get_backend
 
     backends = []
     for b in args.backends.split(","):

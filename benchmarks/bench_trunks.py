@@ -42,7 +42,7 @@ from treeimpact.analytic.contact.timestep import stability_limit
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.provenance import code_version
+from treeimpact.compare.runs.provenance import code_version
 from treeimpact.mujoco_models import make_setup, modes, simulate
 
 #: The package's copy (compare/report/trunks.py's TRUNKS_JSON), the only one.

@@ -23,7 +23,7 @@ _RUNNER = ("make_setup", "modes", "run", "simulate", "simulate_batch")
 #: Bullet's contact for a target law at a time step (contactStiffness/contactDamping, the
 #: largest step it holds) and the two-body collision, with the world's and the links' flags,
 #: that measures what a setting achieves: what ``treeimpact contact`` reads
-#: (compare.contact_engines). Loaded on first use: name -> its module.
+#: (compare.runs.contact_engines). Loaded on first use: name -> its module.
 _CONTACT = {"bullet_contact": "_contact", "largest_time_step": "_contact",
             "per_body": "_contact", "LINK_FLAGS": "_world", "WORLD_FLAGS": "_world",
             "two_body_collision": "_world"}

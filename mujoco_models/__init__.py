@@ -23,7 +23,7 @@ from .options import OPTIONS
 _RUNNER = ("build_model", "make_setup", "modes", "run", "simulate", "simulate_batch")
 #: MuJoCo's contact for a target law at a time step (solref/solimp, the engine law its
 #: Euler step needs) and the two-body collision that measures what a setting achieves:
-#: what ``treeimpact contact`` reads (compare.contact_engines). Loaded on first use.
+#: what ``treeimpact contact`` reads (compare.runs.contact_engines). Loaded on first use.
 _CONTACT = ("IMPEDANCE", "SOLIMP_TAIL", "effective_denominator", "engine_law",
             "solref_for_law", "time_constant_impedance", "time_constant_solref",
             "two_body_collision", "two_body_mjcf")

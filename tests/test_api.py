@@ -13,9 +13,9 @@ import typing
 import pytest
 
 import treeimpact as ti
-from treeimpact.compare.api import REPORT_DIR, SWEEP_BACKENDS, SWEEP_SCENARIO
-from treeimpact.compare.ladder import Ladder
-from treeimpact.compare.sweep.run import SweepResult
+from treeimpact.compare.interface.api import REPORT_DIR, SWEEP_BACKENDS, SWEEP_SCENARIO
+from treeimpact.compare.studies.sweep.run import SweepResult
+from treeimpact.compare.tree.ladder import Ladder
 
 #: What the API returns without exporting it (ladder(), sweep()).
 RETURNED = (Ladder, SweepResult)
@@ -103,11 +103,11 @@ def test_the_scenario_of_a_run_is_the_scenario_as_run():
 
 @pytest.mark.parametrize("backend", ["analytic", "soft", "beam", "mujoco", "bullet"])
 def test_a_physical_input_reaches_a_backend_one_way_only(monkeypatch, backend):
-    """A run option that overrides a scenario field (compare.backends.SCENARIO_OPTIONS) is
+    """A run option that overrides a scenario field (compare.runs.backends.SCENARIO_OPTIONS) is
     applied to the scenario once, at the backends' door, and the backend receives that
     scenario and its numerical options only (issue 51 item 2): here each backend's simulate
     is replaced by a spy that records what it is given."""
-    from treeimpact.compare import backends as B
+    from treeimpact.compare.runs import backends as B
 
     seen = {}
 
@@ -168,9 +168,9 @@ MY_TREE = dict(clamp_height=0.315, diameter=0.126, impactor_mass=132.4, equivale
 
 def test_tree_scenario_is_the_scenario_command_s(tmp_path, capsys):
     """The API's tree_scenario and ``treeimpact scenario`` with the same inputs give the
-    same file (one builder, compare.tree_scenario), and it reduces to the M_T, K_T given."""
+    same file (one builder, compare.tree.scenario), and it reduces to the M_T, K_T given."""
     from treeimpact.analytic.model.reduction import reduce_trunk
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     argv = ["scenario", "my-tree", *[a for k, v in MY_TREE.items()
                                      for a in (f"--{k.replace('_', '-')}", repr(v))]]
@@ -212,7 +212,7 @@ def test_errors_from_the_api_name_keyword_arguments_not_flags(call, words):
 
 
 def test_the_api_s_defaults_are_the_command_line_s():
-    from treeimpact.compare.cli import build_parser
+    from treeimpact.compare.interface.cli import build_parser
 
     sub = build_parser()._subparsers._group_actions[0].choices
     default = {c: {a.dest: a.default for a in sub[c]._actions} for c in sub}
@@ -227,7 +227,7 @@ def test_the_api_s_defaults_are_the_command_line_s():
     assert sig["simulate"]["backend"].default == default["simulate"]["backend"]
     assert sig["modes"]["backend"].default == default["modes"]["backend"]
     assert sig["identify"]["restitution"].default is default["identify"]["restitution"]
-    from treeimpact.compare.recording import DEFAULTS
+    from treeimpact.compare.runs.recording import DEFAULTS
 
     assert sig["record_from_simulation"]["rate_hz"].default == DEFAULTS["rate"]
     assert sig["record_from_simulation"]["noise"].default == DEFAULTS["noise"]

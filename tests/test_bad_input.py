@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from treeimpact.compare.cli import main
-from treeimpact.compare.exits import ExitCode
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.exits import ExitCode
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = (ROOT / "analytic" / "model" / "scenarios" / "open-center.toml").read_text()
@@ -131,7 +131,7 @@ def test_max_seconds_admits_a_run_and_long_runs_tell_their_progress(capsys, monk
     from treeimpact.analytic import budget
 
     monkeypatch.setattr(budget, "PROGRESS_AFTER_S", 0.0)  # every run is "long"
-    monkeypatch.setattr("treeimpact.compare.progress._on_terminal", lambda stream: True)
+    monkeypatch.setattr("treeimpact.compare.runs.progress._on_terminal", lambda stream: True)
     code = main(["simulate", "central-leader", "--backend", "mujoco", "--segments", "4",
                  "--t-end", "0.02", "--max-seconds", "1000", "--json"])
     out, err = capsys.readouterr()
@@ -226,7 +226,7 @@ def test_mujoco_warnings_go_to_stderr_not_a_log_file_in_the_working_directory(tm
 def test_sigterm_ends_a_sweep_like_ctrl_c(tmp_path):
     out = tmp_path / "sweep"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "treeimpact.compare.cli", "sweep", "--grid",
+        [sys.executable, "-m", "treeimpact.compare.interface.cli", "sweep", "--grid",
          "restitution=0.1:0.9:300", "--grid", "crown_ratio=0,1,2", "--backend",
          "analytic,soft", "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -267,7 +267,7 @@ def test_a_stop_signal_ends_the_report_with_one_line_and_no_orphans(tmp_path, ho
     # SIGINT at its default action whatever the test run's (a background job's is ignored,
     # and the report rightly keeps an inherited ignore: test_signals)
     proc = subprocess.Popen(
-        [sys.executable, "-c", SIGINT_DEFAULT, "-m", "treeimpact.compare.cli", "report",
+        [sys.executable, "-c", SIGINT_DEFAULT, "-m", "treeimpact.compare.interface.cli", "report",
          "--out", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60  # a hang guard, not a speed check
@@ -289,8 +289,8 @@ def test_a_scheduler_without_workers_is_one_line_after_its_timeout(tmp_path, mon
     from distributed import Client, LocalCluster
 
     from treeimpact.analytic.errors import ParameterError
-    from treeimpact.compare import pool
-    from treeimpact.compare.sweep import run
+    from treeimpact.compare.runs import pool
+    from treeimpact.compare.studies.sweep import run
 
     monkeypatch.setattr(pool, "SCHEDULER_TIMEOUT_S", 1)
     with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster, \
@@ -309,7 +309,7 @@ def test_a_scheduler_lost_during_the_sweep_is_one_line_and_keeps_the_rows(tmp_pa
     from distributed.comm.core import CommClosedError
 
     from treeimpact.analytic.errors import ParameterError
-    from treeimpact.compare.sweep import run
+    from treeimpact.compare.studies.sweep import run
 
     def lost(futures, *a, **k):
         raise CommClosedError("in <TCP (closed)>: Stream is closed")
@@ -326,7 +326,7 @@ def test_a_scheduler_lost_during_the_sweep_is_one_line_and_keeps_the_rows(tmp_pa
 def test_a_library_warning_during_a_command_is_one_stderr_line(capsys):
     import warnings
 
-    from treeimpact.compare import process
+    from treeimpact.compare.interface import process
 
     before = warnings.showwarning
     restore = process.install_budget(None)
@@ -431,7 +431,7 @@ def test_ctrl_c_ends_the_report_with_exit_130_at_any_moment(tmp_path, awaited, d
 
     out = tmp_path / "rep"
     proc = subprocess.Popen(
-        [sys.executable, "-c", SIGINT_DEFAULT, "-m", "treeimpact.compare.cli", "report",
+        [sys.executable, "-c", SIGINT_DEFAULT, "-m", "treeimpact.compare.interface.cli", "report",
          "--scenario", "open-center", "--out", str(out)], cwd=ROOT, stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE, text=True, start_new_session=True)
     lines: list = []
@@ -477,7 +477,7 @@ def test_an_interrupt_python_could_only_print_is_delivered_again(capsys):
     command's stop signals it is the stop request it was: exit 130, one line."""
     import weakref
 
-    from treeimpact.compare.process import run_command, stop_signals
+    from treeimpact.compare.interface.process import run_command, stop_signals
 
     class Thing:
         pass
@@ -650,7 +650,7 @@ def test_lapack_s_own_lines_reach_the_terminal_worded(capfd):
     NaNs, as identify's fits could meet) come out as treeimpact's worded warnings."""
     import numpy as np
 
-    from treeimpact.compare.backends import worded_c_output
+    from treeimpact.compare.runs.backends import worded_c_output
 
     with worded_c_output("LAPACK", "the caller checks its own results"):
         with pytest.raises(np.linalg.LinAlgError):

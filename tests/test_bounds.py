@@ -1,4 +1,4 @@
-"""The per-tree bound mechanism (compare.bounds): an entry naming a bound gets that tree's
+"""The per-tree bound mechanism (compare.runs.bounds): an entry naming a bound gets that tree's
 tolerance and words; a bound that is not registered, or given beside a fixed rel, is
 refused in one line."""
 
@@ -10,7 +10,7 @@ from types import SimpleNamespace
 import pytest
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.compare import bounds as B
+from treeimpact.compare.runs import bounds as B
 
 
 def _pair(value, reference):
@@ -63,7 +63,7 @@ def test_the_shipped_trees_measurements_are_quoted_on_a_shipped_tree_only(tree, 
     import dataclasses
 
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.ladder import Ladder
+    from treeimpact.compare.tree.ladder import Ladder
 
     scen = load_scenario("central-leader")
     if not shown:
@@ -74,7 +74,7 @@ def test_the_shipped_trees_measurements_are_quoted_on_a_shipped_tree_only(tree, 
 
 
 def test_the_shear_flexibility_is_the_closed_forms():
-    """[step.beam_theory]'s delta (compare.bounds.continuum.shear_flexibility) is the shear
+    """[step.beam_theory]'s delta (compare.runs.bounds.continuum.shear_flexibility) is the shear
     term of the Timoshenko flexibility at a, a / (kappa G A), over the Euler-Bernoulli one
     (1 / K_EB): checked against that closed form on a shipped tree and a low clamp, where the
     shear's share is larger."""
@@ -84,7 +84,7 @@ def test_the_shear_flexibility_is_the_closed_forms():
     from treeimpact.analytic.continuum.beam import beam_static_stiffness
     from treeimpact.analytic.model.parameters import DEFAULT_E_OVER_G, DEFAULT_SHEAR_COEFFICIENT
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.bounds.continuum import shear_flexibility
+    from treeimpact.compare.runs.bounds.continuum import shear_flexibility
 
     tree = load_scenario("open-center")
     low = dataclasses.replace(tree, trunk=dataclasses.replace(
@@ -109,7 +109,7 @@ def test_the_impulse_ceiling_rests_on_modes_that_give_the_static_flexibility():
     crown's less."""
     from treeimpact.analytic.continuum.beam import beam_static_stiffness
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.bounds.continuum import impulse_ceiling
+    from treeimpact.compare.runs.bounds.continuum import impulse_ceiling
 
     tree = load_scenario("central-leader")
     for theory in ("euler-bernoulli", "timoshenko"):

@@ -280,7 +280,7 @@ def test_newton_contact_on_the_chain_is_eq_21_with_the_apparent_mass(central):
 
 def test_newton_and_soft_contact_agree_on_the_chain_peak(central):
     """Both contacts on the same chain: x_max differs by the soft collision's damper work,
-    order b t_c <= 0.015 (step.contact of compare/tolerances.toml); 0.06 % measured."""
+    order b t_c <= 0.015 (step.contact of compare/runs/tolerances.toml); 0.06 % measured."""
     soft = simulate(central, trunk="chain", t_end=0.02)
     newton = simulate(central, trunk="chain", contact="newton", t_end=0.02)
     assert newton.metrics["x_max"] == pytest.approx(soft.metrics["x_max"], rel=0.015)
@@ -290,7 +290,7 @@ def test_newton_and_soft_contact_agree_on_the_chain_peak(central):
 def test_joint_damping_alternative_matches_mujoco(central):
     """The documented hinge-damping alternative, against the other engine with the same rule
     (MuJoCo integrates joint damping implicitly, as the runner does): integrator differences
-    only, 1 % as engines.trunk in compare/tolerances.toml (0.11 %, 0.27 % measured)."""
+    only, 1 % as engines.trunk in compare/runs/tolerances.toml (0.11 %, 0.27 % measured)."""
     mujoco_models = pytest.importorskip("treeimpact.mujoco_models")
     got = simulate(central, trunk="chain", trunk_damping_model="joint", t_end=0.02)
     ref = mujoco_models.simulate(central, trunk="chain", trunk_damping_model="joint", t_end=0.02)

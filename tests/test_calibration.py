@@ -20,7 +20,7 @@ from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario, scenario_from_dict, shipped_scenarios
 from treeimpact.analytic.model.scenario_toml import scenario_toml
 from treeimpact.analytic.paper.reproduction import TABLE_1
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 
 @pytest.mark.parametrize("name", ["open-center", "central-leader"])

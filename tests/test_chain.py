@@ -361,7 +361,7 @@ def test_rod_surrogate_frequencies_are_mujocos_flex_modes():
 
 def _rule():
     """The ladder's (trunk, metric, rel) triples of [step.chain] and [step.rod]."""
-    from treeimpact.compare.verdicts import load_tolerances
+    from treeimpact.compare.runs.verdicts import load_tolerances
 
     steps = load_tolerances()["step"]
     return tuple((t, m, e["rel"]) for t in ("chain", "rod") for m, e in steps[t].items()
@@ -385,7 +385,7 @@ def test_converged_segments_is_the_smallest_n_within_its_share_of_each_tolerance
     [step.chain] / [step.rod] tolerance at N, and N - 1 not (or N is default_segments).
     the shipped trees keep theirs; free-billet, a family tree whose rod's x_max needs more."""
     from treeimpact.analytic.continuum.chain_impact import converged_segments
-    from treeimpact.compare import family as F
+    from treeimpact.compare.tree import family as F
 
     s = (load_scenario(name) if name in SHIPPED else
          F.build(F.BY_NAME[name]))

@@ -54,8 +54,9 @@ def test_a_command_leaves_only_its_output(argv, leaves, tmp_path):
                      "--diameter", "0.126", "--plot", "fit.png"])
         leaves = leaves | {"fit.png"}
     for args in runs:
-        proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", *args], cwd=work,
-                              env=env, capture_output=True, text=True, timeout=300, check=False)
+        proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.interface.cli", *args],
+                              cwd=work, env=env, capture_output=True, text=True, timeout=300,
+                              check=False)
         assert proc.returncode == 0, proc.stderr[-2000:]
         assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr, \
             proc.stderr[-2000:]

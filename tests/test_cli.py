@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from treeimpact.analytic.results import METRIC_KEYS
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 
 def run(capsys, *argv):
@@ -146,14 +146,14 @@ def test_modes_side_by_side(capsys):
 
 
 def test_console_script_exit_code_without_traceback():
-    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", "simulate",
+    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.interface.cli", "simulate",
                            "open-center", "--restitution", "2"], capture_output=True, text=True)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr and "--restitution = 2.0" in proc.stderr  # the flag typed
 
 
 def test_soft_backend_takes_the_engines_contact_stiffness_flag(capsys):
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     assert main(["simulate", "open-center", "--backend", "soft", "--contact-stiffness", "1e9",
                  "--json"]) == 0
@@ -188,7 +188,7 @@ def test_modes_text_shows_the_difference_from_the_beam(capsys):
 
 
 def test_every_option_has_help_text():
-    from treeimpact.compare.cli import build_parser
+    from treeimpact.compare.interface.cli import build_parser
 
     parser = build_parser()
     subparsers = next(a for a in parser._actions if a.choices and isinstance(a.choices, dict))
@@ -200,7 +200,7 @@ def test_every_option_has_help_text():
 
 def test_the_command_line_starts_without_scipy():
     """`treeimpact --help` should not pay for scipy (about 0.3 s of its start-up)."""
-    code = "import sys, treeimpact.compare.cli; print('scipy' in sys.modules)"
+    code = "import sys, treeimpact.compare.interface.cli; print('scipy' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 
@@ -210,8 +210,8 @@ def test_the_command_line_starts_without_scipy():
 def test_every_help_page_prints(command):
     """`treeimpact [COMMAND] --help` exits 0 with its usage (a bare % in a help string makes
     argparse fail while formatting it)."""
-    argv = [sys.executable, "-m", "treeimpact.compare.cli", *([command] if command else []),
-            "--help"]
+    argv = [sys.executable, "-m", "treeimpact.compare.interface.cli",
+            *([command] if command else []), "--help"]
     out = subprocess.run(argv, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-500:]
     assert out.stdout.startswith("usage: treeimpact")
@@ -220,7 +220,7 @@ def test_every_help_page_prints(command):
 def test_building_every_help_page_imports_no_scipy():
     """`treeimpact COMMAND --help` builds every subparser: none of them may pull in scipy
     (0.38 s; a module-level scipy import in analytic.records once made --help take 0.55 s)."""
-    code = ("import sys; from treeimpact.compare.cli import build_parser; build_parser(); "
-            "print('scipy' in sys.modules)")
+    code = ("import sys; from treeimpact.compare.interface.cli import build_parser; "
+            "build_parser(); print('scipy' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from treeimpact.compare.cli import build_parser
-from treeimpact.compare.verdicts import Verdict
+from treeimpact.compare.interface.cli import build_parser
+from treeimpact.compare.runs.verdicts import Verdict
 
 ROOT = Path(__file__).resolve().parent.parent
 CLI = ROOT / "docs" / "cli.md"
@@ -87,8 +87,8 @@ def test_no_section_shows_a_flag_its_command_does_not_have(command):
 
 
 def test_every_grid_name_of_the_sweep_is_listed():
-    from treeimpact.compare.commands._common import backend_options
-    from treeimpact.compare.sweep.grid import ALIASES, DERIVED_RATIOS, RECORD_FIELDS
+    from treeimpact.compare.interface.commands._common import backend_options
+    from treeimpact.compare.studies.sweep.grid import ALIASES, DERIVED_RATIOS, RECORD_FIELDS
 
     section = _sections()["sweep"]
     names = [*ALIASES, *DERIVED_RATIOS, *(f"record.{f}" for f in RECORD_FIELDS),
@@ -98,8 +98,8 @@ def test_every_grid_name_of_the_sweep_is_listed():
 
 
 #: Where the pages explain the verdicts: (page, the text that starts the explanation).
-VERDICT_PLACES = [("cli.md", "Verdicts (`compare.verdicts.Verdict`"),
-                  ("ladder.md", "Verdicts (`compare.verdicts.Verdict`"),
+VERDICT_PLACES = [("cli.md", "Verdicts (`compare.runs.verdicts.Verdict`"),
+                  ("ladder.md", "Verdicts (`compare.runs.verdicts.Verdict`"),
                   ("glossary.md", "## Verdicts")]
 
 
@@ -154,7 +154,7 @@ def test_every_command_shown_runs_and_prints_what_its_page_says(tmp_path, monkey
     import json
     import shlex
 
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     shown = _shown()
     assert {c for _, c in shown} >= set(COVERED), "a covered command is no longer shown"

@@ -9,8 +9,8 @@ import argparse
 import pytest
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.compare.cli import build_parser, main
-from treeimpact.compare.commands import COMMANDS
+from treeimpact.compare.interface.cli import build_parser, main
+from treeimpact.compare.interface.commands import COMMANDS
 
 PARSER = build_parser()
 SUBPARSERS = next(a for a in PARSER._actions if isinstance(a, argparse._SubParsersAction))
@@ -86,7 +86,7 @@ def test_every_physical_flag_is_spelled_and_explained_as_the_registry_says():
     name, and its help opens with the registry's symbol, unit and meaning (issue 42: one
     name, one place); a removed spelling (``--mass`` for the pendulum's) is refused."""
     from treeimpact.analytic.model.registry import BY_NAME
-    from treeimpact.compare.commands._common import registry_help
+    from treeimpact.compare.interface.commands._common import registry_help
 
     seen = set()
     for command, parser in SUBPARSERS.choices.items():

@@ -10,9 +10,9 @@ import tempfile
 
 import pytest
 
-from treeimpact.compare.cli import main
-from treeimpact.compare.contact_engines import GEOM_PLACEHOLDERS
-from treeimpact.compare.contact_settings import contact_settings, target_law
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.contact_engines import GEOM_PLACEHOLDERS
+from treeimpact.compare.runs.contact_settings import contact_settings, target_law
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -316,7 +316,7 @@ def test_a_target_the_step_cannot_hold_is_exit_4_with_what_would_hold_it(capsys)
     shown only in a table cell; now exit 4 after the table, one stderr line with what was
     achieved and the shortest duration this dt holds and the largest dt for the target, each
     of which the command then holds (exit 0)."""
-    from treeimpact.compare.exits import ExitCode
+    from treeimpact.compare.runs.exits import ExitCode
 
     argv = ["contact", "--effective-mass", "1", "--restitution", "0.5", "--dt", "0.001",
             "--engine", "mujoco"]

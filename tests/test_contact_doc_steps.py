@@ -9,7 +9,7 @@ import re
 from pathlib import Path
 
 from tests.docnumbers.rerun import DEFAULT_STEP_CASE
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "contact-settings.md"
 

@@ -117,7 +117,7 @@ def test_paper_fit_contact_prints_and_writes_every_model_and_target(monkeypatch,
     from functools import partial
 
     from treeimpact.analytic.paper import contact_fit
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     monkeypatch.setattr(contact_fit, "fit_paper_trees",
                         partial(contact_fit.fit_paper_trees, models=("analytic",)))

@@ -116,9 +116,9 @@ def test_the_contact_scan_s_crossings_hold_now():
     from treeimpact.analytic.contact.soft import simulate_soft
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
     from treeimpact.analytic.model.scenario import load_scenario
+    from treeimpact.compare.runs.verdicts import validity_tolerance
     from treeimpact.compare.studies.contact_scan import DURATIONS, HEADLINE_METRICS
-    from treeimpact.compare.sweep.apply import apply_point
-    from treeimpact.compare.verdicts import validity_tolerance
+    from treeimpact.compare.studies.sweep.apply import apply_point
 
     n = json.loads(docs.NUMBERS.read_text())["numbers"]
     assert n["scan.points"] == len(DURATIONS)
@@ -200,8 +200,8 @@ def test_the_presets_quote_their_measured_cost():
     default study in `make report`, results/make.json; the full grid extrapolated from its
     slice, results/presets.json); "about": within 25 % (the machine's noise, a factor ~2
     under load, is in the files' load averages, not here)."""
-    from treeimpact.compare.cli import build_parser
-    from treeimpact.compare.validity.study import PRESETS
+    from treeimpact.compare.interface.cli import build_parser
+    from treeimpact.compare.report.validity.study import PRESETS
 
     made, full = _results("make"), _results("presets")
     sweep = build_parser()._subparsers._group_actions[0].choices["sweep"]

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from treeimpact.compare.cli import build_parser, main
+from treeimpact.compare.interface.cli import build_parser, main
 
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]

@@ -27,7 +27,7 @@ def test_engine_packages_implement_the_interface_and_name_their_options(package)
     assert isinstance(mod, Engine)
     keyword = {p.name for p in inspect.signature(mod.simulate).parameters.values()
                if p.kind == p.KEYWORD_ONLY}
-    assert set(mod.OPTIONS) == keyword  # what compare.backends checks options against
+    assert set(mod.OPTIONS) == keyword  # what compare.runs.backends checks options against
 
 
 @pytest.mark.parametrize("package", ENGINES)

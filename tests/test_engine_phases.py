@@ -1,6 +1,6 @@
 """The engines stepped by phase (analytic.engine.phases, docs/engines.md "Stepping by
 phase"): the rule's bound, the switches at the physical events, and the phased run against
-the fixed-step run within the stated tolerances (compare/tolerances.toml [engines.chain]:
+the fixed-step run within the stated tolerances (compare/runs/tolerances.toml [engines.chain]:
 the same model in two integrators) on a small chain and a short run. Not among
 conftest.NUMERICS: the tolerances checked are >= 0.5 %, far above any BLAS round-off."""
 
@@ -20,7 +20,7 @@ CASE = {"trunk": "chain", "segments": 4, "t_end": 0.03}
 
 
 def _tolerances() -> dict:
-    from treeimpact.compare.verdicts import TOLERANCES_PATH
+    from treeimpact.compare.runs.verdicts import TOLERANCES_PATH
 
     with open(TOLERANCES_PATH, "rb") as fh:
         table = tomllib.load(fh)["engines"]["chain"]
@@ -93,7 +93,7 @@ def test_a_given_dt_or_the_sdof_is_a_fixed_step():
 
 
 def test_the_phased_run_is_the_fixed_step_run_within_the_stated_tolerances(runs):
-    """Every metric compare/tolerances.toml compares two engines' chains by, within its
+    """Every metric compare/runs/tolerances.toml compares two engines' chains by, within its
     tolerance of the fixed-step run; the first contact to the last bit's order (it is
     stepped at the same dt from the same state); the same contact sequence; fewer steps."""
     _, phased, fixed = runs

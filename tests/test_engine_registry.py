@@ -1,6 +1,6 @@
 """A new engine is one folder plus one registration (issue 42 item 2; docs/engines.md,
 "Adding an engine"): a fake engine package written into a temporary folder, registered
-with one :func:`compare.backends.register_engine` call and nothing else edited, runs its
+with one :func:`compare.runs.backends.register_engine` call and nothing else edited, runs its
 rungs of a ladder, and the ladder's verdicts catch the error it was built with."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import textwrap
 
 import pytest
 
-from treeimpact.compare import backends
-from treeimpact.compare.backends import Backend, Engine, engine_registered
+from treeimpact.compare.runs import backends
+from treeimpact.compare.runs.backends import Backend, Engine, engine_registered
 
 #: The fake engine: the analytic soft-contact SDOF (the ``soft`` rung's own backend) with
 #: its x_max raised by X_MAX_ERROR and every other metric left as the soft rung's.
@@ -53,7 +53,7 @@ def test_a_registered_fake_engine_runs_its_ladder_rungs_and_its_error_is_caught(
     """The fake engine's SDOF rung stands in the ladder beside the shipped rungs, judged
     against the soft rung: x_max exceeds its tolerance by the error put in (+3 %, the
     tolerance 0.5 %), every other metric of that rung agrees (the same soft solution)."""
-    from treeimpact.compare.ladder import build_ladder, failure_table
+    from treeimpact.compare.tree.ladder import build_ladder, failure_table
 
     assert "fake" in backends.engines() and backends.BACKENDS["fake"].engine
     ladder = build_ladder("central-leader", engines=("fake",))
@@ -73,7 +73,7 @@ def test_a_taken_name_is_refused_and_the_fake_engine_gives_no_contact_settings(f
     """Registering a second engine called "mujoco" is refused; an engine registered without
     ``contact`` is not among ``treeimpact contact``'s engines."""
     from treeimpact.analytic.errors import ParameterError
-    from treeimpact.compare.contact_settings import ENGINES
+    from treeimpact.compare.runs.contact_settings import ENGINES
 
     with pytest.raises(ParameterError, match="already registered"):
         backends.register_engine(Engine(backends.BACKENDS["mujoco"], "again", "x", "x"))

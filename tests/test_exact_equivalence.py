@@ -21,7 +21,7 @@ import pytest
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.sweep.apply import apply_point
+from treeimpact.compare.studies.sweep.apply import apply_point
 
 HERE = Path(__file__).parent
 FIXTURE = json.loads((HERE / "data" / "exact_metrics.json").read_text())

@@ -1,4 +1,4 @@
-"""One set of exit codes (compare/exits.py's ExitCode): the values docs/cli.md documents, read
+"""One set of exit codes (compare/runs/exits.py's ExitCode): the values docs/cli.md documents, read
 by every place that returns or checks one; no bare 0, 2, 3 or 130 where a command ends or a
 child's exit code is read."""
 
@@ -10,13 +10,14 @@ from pathlib import Path
 
 import pytest
 
-from treeimpact.compare.exits import ExitCode
+from treeimpact.compare.runs.exits import ExitCode
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The modules that return a command's exit code or read a child command's.
-EXIT_MODULES = sorted([ROOT / "compare" / "cli.py", ROOT / "compare" / "process.py",
-                       ROOT / "compare" / "validity" / "study_job.py",
-                       *(ROOT / "compare" / "commands").glob("*.py")])
+INTERFACE = ROOT / "compare" / "interface"
+EXIT_MODULES = sorted([INTERFACE / "cli.py", INTERFACE / "process.py",
+                       ROOT / "compare" / "report" / "validity" / "study_job.py",
+                       *(INTERFACE / "commands").glob("*.py")])
 #: The exit codes' values, as literals they would be written with.
 VALUES = {int(c) for c in ExitCode}
 
@@ -92,7 +93,7 @@ def test_each_way_a_run_falls_short_has_its_code_and_its_words(capsys, error, st
     OutsideValidity is also a SimulationDiverged, yet never worded as diverged); a
     divergence stays exit 3."""
     from treeimpact.analytic import errors
-    from treeimpact.compare.process import run_command
+    from treeimpact.compare.interface.process import run_command
 
     def command(_):
         raise getattr(errors, error)("the target")

@@ -1,4 +1,4 @@
-"""A family of trees across the regimes (compare/family.py; issue 50 items 2 and 8), at small
+"""A family of trees across the regimes (compare/tree/family.py; issue 50 items 2 and 8), at small
 sizes, through what a user runs: ``treeimpact simulate`` on every backend (and the beam's
 Timoshenko theory), ``pytest compare --scenario``, ``treeimpact report`` with its study (the
 design map at its smallest, 2 values an input) and the design map itself. Each output is
@@ -25,9 +25,9 @@ import sys
 import pytest
 
 from treeimpact.analytic.contact.soft import simulate_soft
-from treeimpact.compare import family as F
-from treeimpact.compare.cli import main
-from treeimpact.compare.verdicts import MOVING_TOGETHER, WHY_NONE
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.verdicts import MOVING_TOGETHER, WHY_NONE
+from treeimpact.compare.tree import family as F
 
 FAMILY = {m.name: (m, s, r) for m, s, r in F.family()}
 #: The members whose ladder runs here (pytest compare; the report without low-clamp, its
@@ -107,7 +107,7 @@ def _backend_of(extra) -> str:
 @pytest.mark.parametrize("name", list(FAMILY))
 def test_simulate_every_backend(files, name, backend):
     """Exit 0 with every metric a finite number, or null only where the tree's motion has
-    no such quantity (compare.verdicts.WHY_NONE); or a one-line refusal."""
+    no such quantity (compare.runs.verdicts.WHY_NONE); or a one-line refusal."""
     code, out, err = _simulate(files[name], BACKENDS[backend])
     if code != 0:
         _one_line_refusal(code, err)
@@ -221,8 +221,8 @@ def test_the_design_map_reads_only_cells_that_exist(designs, name):
 def report(files, designs, tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
     args = [a for n in REPORTED for a in ("--scenario", str(files[n]))]
-    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", "report", *args,
-                           "--study", str(designs[1] / REPORTED[0]), "--out", str(out)],
+    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.interface.cli", "report",
+                           *args, "--study", str(designs[1] / REPORTED[0]), "--out", str(out)],
                           capture_output=True, text=True, timeout=1200)
     return proc, out
 
@@ -258,7 +258,7 @@ def test_no_reason_shown_for_a_tree_quotes_a_shipped_tree(report):
     uncompared) quotes that tree's numbers or none (issue 50 item 3): no tolerance entry's
     ``measured`` words (the shipped trees' evidence, shown on those trees only), no shipped
     tree's name and no three trees' values side by side."""
-    from treeimpact.compare.verdicts import load_tolerances
+    from treeimpact.compare.runs.verdicts import load_tolerances
 
     tol = load_tolerances()
     measured = [e["measured"] for section in ("step", "engines")

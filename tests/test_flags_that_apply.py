@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 
 def one_line(capsys, argv, code) -> str:
@@ -66,7 +66,7 @@ def test_outside_validity_is_its_own_run_status():
     divergence stays DIVERGED."""
     from treeimpact.analytic.errors import OutsideValidity, SimulationDiverged
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.runs import DIVERGED, OUTSIDE, attempt
+    from treeimpact.compare.runs.cache import DIVERGED, OUTSIDE, attempt
 
     class Raising:
         name = "raising"

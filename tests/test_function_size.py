@@ -6,7 +6,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-from treeimpact.compare.backends import ENGINE_REGISTRY
+from treeimpact.compare.runs.backends import ENGINE_REGISTRY
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The source folders: the engines' from their registrations.

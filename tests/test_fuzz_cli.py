@@ -16,7 +16,7 @@ import pytest
 
 from treeimpact.analytic.model.plausible import implausible
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = (ROOT / "analytic" / "model" / "scenarios" / "central-leader.toml").read_text()

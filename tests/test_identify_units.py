@@ -16,8 +16,8 @@ from treeimpact.analytic.identify.fit_parameters import Slot, record_parameters
 from treeimpact.analytic.identify.pendulum_record import read_record
 from treeimpact.analytic.identify.record_features import mixed_time_unit
 from treeimpact.analytic.identify.record_fit import Record, at_range_end, fit_record
-from treeimpact.compare.cli import main
-from treeimpact.compare.exits import ExitCode
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.exits import ExitCode
 
 from test_record_fit import ARGS, synthetic
 

@@ -21,8 +21,8 @@ from treeimpact.analytic.identify.diagnosis import DiagnosisKind
 from treeimpact.analytic.identify.intervals import DETERMINED_FACTOR, TREE
 from treeimpact.analytic.identify.pendulum_record import read_record
 from treeimpact.analytic.identify.record_fit import Record, fit_record
-from treeimpact.compare.cli import main
-from treeimpact.compare.exits import ExitCode
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.exits import ExitCode
 
 DATA = Path(__file__).resolve().parent / "data" / "identify"
 sys.path.insert(0, str(DATA))

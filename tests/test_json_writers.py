@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from treeimpact.analytic.results import json_text, to_jsonable
-from treeimpact.compare.cli import main
-from treeimpact.compare.exits import ExitCode
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.exits import ExitCode
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "identify"
@@ -85,9 +85,10 @@ def test_no_package_writer_bypasses_the_converter():
     own that could write NaN or crash on a numpy scalar."""
     keys = {("analytic", "results.py"),  # json_text itself
             ("analytic/model", "scenario_toml.py"),  # a TOML basic string's quoting
-            ("compare", "runs.py"), ("compare", "provenance.py"),  # scenario digests
-            ("compare/sweep", "grid.py"), ("compare/sweep", "plan.py"),  # grid/task keys
-            ("compare/sweep", "execute.py")}  # one analysis per distinct record: a key
+            ("compare/runs", "cache.py"), ("compare/runs", "provenance.py"),  # scenario digests
+            ("compare/studies/sweep", "grid.py"),  # grid keys
+            ("compare/studies/sweep", "plan.py"),  # task keys
+            ("compare/studies/sweep", "execute.py")}  # one analysis per distinct record: a key
     found = set()
     for top in ("analytic", "compare", "mujoco_models", "bullet_models"):
         for path in (ROOT / top).rglob("*.py"):
@@ -197,12 +198,12 @@ def test_every_json_command_writes_strict_json(argv, capsys):
 
 
 def test_the_sweep_journal_takes_numpy_scalars(tmp_path):
-    """The CSV writer of the sweeps (compare.sweep.journal.Journal): numpy's scalars as
+    """The CSV writer of the sweeps (compare.studies.sweep.journal.Journal): numpy's scalars as
     their Python values (a float32 NaN empty as a float's, not "nan"), read back as
     written."""
     import csv
 
-    from treeimpact.compare.sweep.journal import Journal
+    from treeimpact.compare.studies.sweep.journal import Journal
 
     journal = Journal(tmp_path / "j.csv", ["b", "i", "f", "nan", "g"])
     journal.append([{"b": np.bool_(True), "i": np.int64(3), "f": np.float64(0.1),

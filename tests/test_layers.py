@@ -15,10 +15,10 @@ from pathlib import Path
 
 import pytest
 
-from treeimpact.compare.backends import ENGINE_REGISTRY
+from treeimpact.compare.runs.backends import ENGINE_REGISTRY
 
 ROOT = Path(__file__).resolve().parents[1]
-#: The engines' source folders, from their registrations (compare.backends.ENGINE_REGISTRY).
+#: The engines' source folders, from their registrations (compare.runs.backends.ENGINE_REGISTRY).
 ENGINES = tuple(e.folder for e in ENGINE_REGISTRY.values())
 #: Source folder -> its dotted name once installed.
 FOLDERS = {"treeimpact": "treeimpact", "analytic": "treeimpact.analytic",
@@ -31,25 +31,16 @@ ANALYTIC_FLOORS = ("threads", "errors", "budget", "results", "model", "records",
 #: a subpackage of compare); a module imports only its own floor or lower ones, and the
 #: units of one floor import each other without a circle.
 COMPARE_FLOORS = (
-    # 1 what a run is: the backends by name, one run record, findings and verdicts, the
-    # rung table, the pool, the exit codes, figure titles that fit
-    # and the engines' contact settings (the engine registry names them)
-    ("names", "provenance", "recording", "progress", "pool", "backends", "runs", "bounds",
-     "peaks", "findings", "verdicts", "rungs", "exits", "figure_text", "contact_text",
-     "contact_engines", "contact_settings"),
-    # 2 one scenario, one record: the ladder, the identification, a user's tree's scenario,
-    # the family of trees across the regimes
-    ("identification", "ladder", "mechanism", "tree_scenario", "family"),
-    # 3 the sweep machinery: grid, plan, run, journal, maps
-    ("sweep",),
-    # 4 the studies built on sweeps: contact scan, small e, sensitivity, identification, speed
+    # 1 runs/: what a run is (the backends, one Run record, tolerances, verdicts, rungs, pool)
+    ("runs",),
+    # 2 tree/: one tree (its ladder judged, its record fit, a user's tree, the family)
+    ("tree",),
+    # 3 studies/: the sweep machinery (studies/sweep/) and the studies built on sweeps
     ("studies",),
-    # 5 the report: sections rendered from results
+    # 4 report/: the report's sections, and the validity study's pages (report/validity/)
     ("report",),
-    # 6 the model-validity study (it renders its page with the report's templates)
-    ("validity",),
-    # 7 the interface: the public API and the command line
-    ("api_results", "api", "process", "cli", "commands"),
+    # 5 interface/: the public API, one module per command, the parser, the process policy
+    ("interface",),
 )
 
 
@@ -192,28 +183,49 @@ def test_the_cycle_finder_finds_a_circle():
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
 
 
-def _unit(module: str) -> str:
-    """The unit a module belongs to: its top-level package's module or subpackage
-    (``treeimpact.compare.sweep`` for treeimpact.compare.sweep.run)."""
-    return ".".join(module.split(".")[:3])
+def _unit(module: str, depth: int = 3) -> str:
+    """The unit a module belongs to: the module or subpackage of its first ``depth - 1``
+    package levels (depth 3: ``treeimpact.compare.studies`` for
+    treeimpact.compare.studies.sweep.run; depth 4: ``treeimpact.compare.studies.sweep``)."""
+    return ".".join(module.split(".")[:depth])
 
 
-def _unit_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+def _unit_graph(graph: dict[str, set[str]], depth: int = 3) -> dict[str, set[str]]:
     """The import graph between units (a package-level circle is a circle here)."""
     units: dict[str, set[str]] = {}
     for module, deps in graph.items():
-        units.setdefault(_unit(module), set()).update(
-            _unit(d) for d in deps if _unit(d) != _unit(module))
+        units.setdefault(_unit(module, depth), set()).update(
+            _unit(d, depth) for d in deps if _unit(d, depth) != _unit(module, depth))
     for deps in list(units.values()):
         for d in deps:
             units.setdefault(d, set())
     return units
 
 
+def _units_inside(graph: dict[str, set[str]], package: str) -> dict[str, set[str]]:
+    """The import graph between the units of ``package`` (its modules and subpackages, each
+    one node), from the imports between the modules inside it."""
+    inside = {m: {d for d in deps if d.startswith(package + ".")}
+              for m, deps in graph.items() if m.startswith(package + ".")}
+    return _unit_graph(inside, package.count(".") + 2)
+
+
+#: The project's packages below treeimpact (each has units: its modules and subpackages).
+PACKAGES = sorted(n for n, p in MODULES.items() if p.name == "__init__.py" and "." in n)
+
+
 def test_no_circle_between_packages():
     """No circle between the units of a package either (sweep/ and report/, a study and
     report/...), function-level imports included: each subpackage is one node."""
     assert _cycles(_unit_graph(GRAPH)) == []
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_no_circle_between_the_units_of_a_subpackage(package):
+    """The same inside every package at every depth (compare/report/ and its validity/,
+    compare/runs/ and its bounds/, compare/studies/ and its sweep/): each of its subpackages
+    is one node among its modules."""
+    assert _cycles(_units_inside(GRAPH, package)) == []
 
 
 def test_a_circle_between_packages_is_found():
@@ -223,6 +235,11 @@ def test_a_circle_between_packages_is_found():
              "t.c.report": {"t.c.sweep.run"}, "t.c.sweep.run": set()}
     assert _cycles(graph) == []
     assert _cycles(_unit_graph(graph)) == [["t.c.report", "t.c.sweep"]]
+    def inside(m: str) -> str:  # the same modules one package deeper, in t.c.x
+        return m.replace("t.c.", "t.c.x.", 1)
+
+    nested = {inside(m): {inside(d) for d in deps} for m, deps in graph.items()}
+    assert _cycles(_units_inside(nested, "t.c.x")) == [["t.c.x.report", "t.c.x.sweep"]]
 
 
 def test_the_import_finder_sees_every_name_and_reference():
@@ -293,30 +310,31 @@ def test_dependencies_flow_one_way(module):
     assert _upward(module, GRAPH[module] | LAUNCHES[module]) == []
 
 
-#: Today's two upward edges before issue 42 (pool.py preloaded floor 4 by name; study_job.py
+#: Today's two upward edges before issue 42 (pool.py preloaded floor 3 by name; study_job.py
 #: started the command line): the finder must see both, and the floor check refuse both.
 _UPWARD_BEFORE = {
-    "treeimpact.compare.pool": (
-        'FORKSERVER_PRELOAD = ("treeimpact.compare.runs", '
+    "treeimpact.compare.runs.pool": (
+        'FORKSERVER_PRELOAD = ("treeimpact.compare.runs.cache", '
         '"treeimpact.compare.studies.ident_fits",\n'
         '                      "treeimpact.compare.studies.ident_records")\n'),
-    "treeimpact.compare.validity.study_job": (
-        'import sys\nargv = [sys.executable, "-m", "treeimpact.compare.cli", "sweep"]\n'),
+    "treeimpact.compare.report.validity.study_job": (
+        'import sys\n'
+        'argv = [sys.executable, "-m", "treeimpact.compare.interface.cli", "sweep"]\n'),
 }
 
 
 def test_the_floor_check_refuses_the_upward_edges_of_before():
-    """The check above can fail: pool.py's old preload names (floor 1 naming floor 4) and
-    study_job.py's old command line (floor 6 starting floor 7) are refused."""
+    """The check above can fail: pool.py's old preload names (floor 1 naming floor 3) and
+    study_job.py's old command line (floor 4 starting floor 5) are refused."""
     pool, job = (_references_of(m, m.rpartition(".")[0], src)
                  for m, src in _UPWARD_BEFORE.items())
-    assert pool == ({"treeimpact.compare.runs", "treeimpact.compare.studies.ident_fits",
+    assert pool == ({"treeimpact.compare.runs.cache", "treeimpact.compare.studies.ident_fits",
                      "treeimpact.compare.studies.ident_records"}, set())
-    assert job == (set(), {"treeimpact.compare.cli"})
-    assert len(_upward("treeimpact.compare.pool", pool[0])) == 2
-    assert _upward("treeimpact.compare.validity.study_job", job[1]) == [
-        "treeimpact.compare.validity.study_job (floor 6, validity) names "
-        "treeimpact.compare.cli (floor 7, api_results/api/process/cli/commands)"]
+    assert job == (set(), {"treeimpact.compare.interface.cli"})
+    assert len(_upward("treeimpact.compare.runs.pool", pool[0])) == 2
+    assert _upward("treeimpact.compare.report.validity.study_job", job[1]) == [
+        "treeimpact.compare.report.validity.study_job (floor 4, report) names "
+        "treeimpact.compare.interface.cli (floor 5, interface)"]
 
 
 def _top_level_names(path: Path) -> set[str]:
@@ -359,11 +377,20 @@ def test_a_misspelled_name_in_a_string_is_found():
     """The check above can fail: a misspelled module, a missing function, a ``-m`` of a
     module that is not there."""
     source = ('PRELOAD = ("treeimpact.compare.studies.ident_fitz",)\n'
-              'RUN = "treeimpact.compare.runs:no_such_function"\n'
+              'RUN = "treeimpact.compare.runs.cache:no_such_function"\n'
               'ARGV = ["-m", "treeimpact.compare.clli"]\n')
     assert sorted(_unresolved(source)) == ["treeimpact.compare.clli",
-                                           "treeimpact.compare.runs:no_such_function",
+                                           "treeimpact.compare.runs.cache:no_such_function",
                                            "treeimpact.compare.studies.ident_fitz"]
+
+
+def test_the_architecture_page_states_each_floor_of_compare():
+    """docs/architecture.md gives each floor of :data:`COMPARE_FLOORS` one numbered line,
+    bottom first, naming its folder (a floor added, removed or reordered fails here)."""
+    text = (ROOT / "docs" / "architecture.md").read_text()
+    section = text.split("## compare/, bottom first")[1].split("\n## ")[0]
+    found = re.findall(r"^(\d)\. `(\w+)/`: ", section, re.M)
+    assert found == [(str(i), unit) for i, (unit,) in enumerate(COMPARE_FLOORS, 1)]
 
 
 @pytest.mark.parametrize("top", ["analytic", "compare"])
@@ -412,7 +439,7 @@ def test_pyproject_maps_every_package_folder_under_treeimpact():
 
 def test_every_package_folder_is_registered():
     """Each top-level folder holding an __init__.py is one of :data:`FOLDERS` (an engine's
-    through its registration, compare.backends.register_engine), tooling aside: an engine
+    through its registration, compare.runs.backends.register_engine), tooling aside: an engine
     folder not registered, or registered but not in pyproject.toml's package list (the test
     above), fails here (docs/engines.md, "Adding an engine")."""
     tooling = {"tests", "benchmarks", "examples"}
@@ -421,7 +448,7 @@ def test_every_package_folder_is_registered():
 
 
 #: The package data the wheel carries: source folder -> patterns of files in it.
-PACKAGE_DATA = {"analytic/model": ["scenarios/*.toml"], "compare": ["tolerances.toml"],
+PACKAGE_DATA = {"analytic/model": ["scenarios/*.toml"], "compare/runs": ["tolerances.toml"],
                 "compare/report": ["templates/*.j2", "data/*.json"],
                 "mujoco_models": ["models/*.xml"], "bullet_models": ["models/*.urdf"]}
 
@@ -534,7 +561,7 @@ def test_installed_the_project_is_one_top_level_package(tmp_path):
     """From a directory outside the checkout: treeimpact imports, the folders' bare names
     do not (the installed distribution adds one top-level name)."""
     code = ("import importlib, json\n"
-            "import treeimpact.analytic.impact.solver, treeimpact.compare.cli\n"
+            "import treeimpact.analytic.impact.solver, treeimpact.compare.interface.cli\n"
             "out = {}\n"
             f"for name in {tuple(f for f in FOLDERS if f != 'treeimpact')!r}:\n"
             "    try:\n"

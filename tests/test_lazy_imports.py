@@ -53,11 +53,12 @@ _PROBE = """
 import atexit, json, sys
 def _loaded():
     names = {m.split(".")[0] for m in sys.modules}
-    commands = sorted(m for m in sys.modules if m.startswith("treeimpact.compare.commands."))
+    commands = sorted(m for m in sys.modules
+                      if m.startswith("treeimpact.compare.interface.commands."))
     print(json.dumps({"heavy": sorted(set(HEAVY) & names), "commands": commands}),
           file=sys.stderr)
 atexit.register(_loaded)
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 sys.exit(main(ARGV))
 """
 
@@ -77,9 +78,9 @@ def _imported_by(argv: list) -> dict:
 
 
 def test_treeimpact_help_imports_no_numerics_and_no_command():
-    """`treeimpact --help` lists the commands from compare.commands.HELP: no command's module
-    is imported, so none of the numerics or engines behind them (a behaviour, not a time:
-    benchmarks/bench_help.py measures what it costs)."""
+    """`treeimpact --help` lists the commands from compare.interface.commands.HELP: no
+    command's module is imported, so none of the numerics or engines behind them (a
+    behaviour, not a time: benchmarks/bench_help.py measures what it costs)."""
     assert _imported_by(["--help"]) == {"heavy": [], "commands": []}
 
 
@@ -88,18 +89,19 @@ def test_a_commands_help_imports_that_command_alone():
     simulate parser only, whose backends' options bring numpy; no other command loads."""
     seen = _imported_by(["simulate", "--help"])
     assert "numpy" in seen["heavy"]
-    assert seen["commands"] == ["treeimpact.compare.commands._common",
-                                "treeimpact.compare.commands.simulate"]
+    assert seen["commands"] == ["treeimpact.compare.interface.commands._common",
+                                "treeimpact.compare.interface.commands.simulate"]
 
 
 def test_every_command_module_is_the_one_its_name_looks_up():
-    """compare.commands.HELP names each command once, and COMMANDS[name] is the module whose
-    NAME it is, with the parser's two functions."""
-    from treeimpact.compare.commands import COMMANDS, HELP
+    """compare.interface.commands.HELP names each command once, and COMMANDS[name] is the
+    module whose NAME it is, with the parser's two functions."""
+    from treeimpact.compare.interface.commands import COMMANDS, HELP
 
     assert list(COMMANDS) == list(HELP)
     for name in HELP:
         module = COMMANDS[name]
         assert module.NAME == name and callable(module.add_arguments) and callable(module.run)
-    names = {p.stem for p in (ROOT / "compare" / "commands").glob("*.py")} - {"__init__"}
+    folder = ROOT / "compare" / "interface" / "commands"
+    names = {p.stem for p in folder.glob("*.py")} - {"__init__"}
     assert {n for n in names if not n.startswith("_")} == set(HELP)  # no command left out

@@ -480,7 +480,7 @@ def test_rk4_refuses_a_step_its_explicit_dampers_cannot_take(central):
 
 
 def test_speed_study_runs_one_curve_per_mujoco_integrator():
-    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.runs.backends import get_backend
     from treeimpact.compare.studies.speed import engine_variants
 
     name, values, reason, runnable = engine_variants("mujoco")
@@ -583,7 +583,7 @@ def test_cli_simulate_and_modes_with_the_mujoco_backend(capsys):
     import json
 
     from treeimpact.analytic.results import METRIC_KEYS
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     code = main(["simulate", "central-leader", "--backend", "mujoco", "--trunk", "chain",
                  "--segments", "8", "--t-end", "0.05", "--json"])
@@ -599,7 +599,7 @@ def test_cli_simulate_and_modes_with_the_mujoco_backend(capsys):
 def test_cli_simulate_with_an_integrator(capsys):
     import json
 
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     code = main(["simulate", "central-leader", "--backend", "mujoco", "--integrator", "RK4",
                  "--t-end", "0.05", "--json"])
@@ -611,7 +611,7 @@ def test_cli_simulate_with_an_integrator(capsys):
                                   ["--backend", "bullet", "--integrator", "RK4"],
                                   ["--integrator", "RK4"]])  # analytic: no integrator
 def test_cli_integrator_refused_with_one_line(capsys, args):
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     code = main(["simulate", "central-leader", *args])
     err = capsys.readouterr().err
@@ -624,7 +624,7 @@ def test_cli_integrator_refused_with_one_line(capsys, args):
                                          (["--contact-stiffness", "-5"], "stiffness"),
                                          (["--trunk", "sdof", "--segments", "4"], "segments")])
 def test_cli_bad_mujoco_options_are_one_line_errors(capsys, args, field):
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     code = main(["simulate", "central-leader", "--backend", "mujoco", *args])
     err = capsys.readouterr().err

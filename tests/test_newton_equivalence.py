@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 import treeimpact as ti
-from treeimpact.compare.sweep.apply import apply_point
+from treeimpact.compare.studies.sweep.apply import apply_point
 
 FIXTURE = json.loads((Path(__file__).parent / "data" / "newton_metrics.json").read_text())
 #: The issue's bound; the closed forms only regroup the same float operations, so a change

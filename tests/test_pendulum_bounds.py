@@ -1,4 +1,4 @@
-"""The per-tree bounds of the pendulum's step and of the two engines (compare.bounds.pendulum)
+"""The per-tree bounds of the pendulum's step and of the two engines (compare.runs.bounds.pendulum)
 against independent checks: the linearisation term scales as the angle squared, the touch's
 phase as the step, a grazing contact is counted as grazing, and the first-order part the
 bound estimates from one halving of the step predicts a second halving (the difference is
@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from treeimpact.compare.bounds import pendulum as P
+from treeimpact.compare.runs.bounds import pendulum as P
 
 
 def _result(t, y, force, vx=None, dt=1e-6, **metrics):
@@ -79,9 +79,9 @@ def test_the_pendulum_step_s_difference_is_first_order_in_dt():
     (the family's bounce-off): the difference at dt, dt / 2 and dt / 4 (fixed steps). The
     first-order part that the bound reads from the first halving, 2 |D(dt) - D(dt / 2)|,
     predicts D(dt / 4) = D* + (D(dt / 2) - D*) / 2 to within a tenth of that part."""
-    from treeimpact.compare import family
-    from treeimpact.compare.backends import get_backend
     from treeimpact.analytic.continuum.chain import default_segments
+    from treeimpact.compare.runs.backends import get_backend
+    from treeimpact.compare.tree import family
 
     bounce_off = family.build(family.BY_NAME["bounce-off"])
     bullet = get_backend("bullet")

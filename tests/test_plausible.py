@@ -104,7 +104,7 @@ def test_the_cli_runs_the_slip_and_warns_in_one_line_each(tmp_path):
     stderr one line per implausible input, in the project's words (no Python source
     location, no category name)."""
     path = _edited(tmp_path, "release_angle_deg", "release_angle_deg = 0.635")
-    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", "simulate",
+    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.interface.cli", "simulate",
                            str(path), "--json"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["metrics"]["x_max"] > 0
@@ -120,7 +120,7 @@ def test_a_refusal_keeps_its_one_line_and_carries_the_slip_that_may_explain_it(t
     one stderr line, the refusal first and the implausible input as its note (not 'run as
     given': it was not run)."""
     path = _edited(tmp_path, "release_angle_deg", "release_angle_deg = 0.635")
-    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", "simulate",
+    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.interface.cli", "simulate",
                            str(path), "--backend", "soft", "--contact-duration", "1e-6"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2, proc.stderr

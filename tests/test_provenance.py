@@ -9,8 +9,8 @@ from importlib import metadata
 
 from treeimpact.analytic.model.parameters import Contact
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.cli import main
-from treeimpact.compare.provenance import provenance, scenario_digest
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.provenance import provenance, scenario_digest
 
 
 def _json(capsys, *argv):

@@ -18,7 +18,7 @@ from treeimpact.analytic.identify.record_fit import Record, fit_record
 from treeimpact.analytic.impact.solver import solve_impacts
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import two_body_model
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 RATE = 5000.0  # Hz: the sampling rate
 NOISE = 0.01  # of the peak: 1 % white noise

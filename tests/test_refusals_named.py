@@ -31,7 +31,7 @@ TEST = ["--impactor-mass", "132.4", "--equivalent-length", "1.51", "--release-an
 
 def cli(*argv, env=None) -> tuple[int, str, str]:
     """(exit code, stdout, stderr) of ``treeimpact argv`` in its own process."""
-    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.cli", *argv],
+    proc = subprocess.run([sys.executable, "-m", "treeimpact.compare.interface.cli", *argv],
                           capture_output=True, text=True, cwd=ROOT,
                           env={**os.environ, **(env or {})}, check=False)
     return proc.returncode, proc.stdout, proc.stderr

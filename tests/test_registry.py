@@ -88,7 +88,7 @@ def test_ratio_apply_closed_forms():
 
 
 def test_ratios_are_the_sweeps_derived_ratios():
-    from treeimpact.compare.sweep.grid import DERIVED_RATIOS
+    from treeimpact.compare.studies.sweep.grid import DERIVED_RATIOS
 
     assert set(RATIOS) == set(DERIVED_RATIOS)
     for name, (target, _) in DERIVED_RATIOS.items():
@@ -114,7 +114,7 @@ def test_lookup_by_name_path_or_sweep():
 def _scenario_options():
     """(option name, Option) of every backend option that overrides a scenario input."""
     from treeimpact.analytic.model import options
-    from treeimpact.compare.backends import BACKENDS
+    from treeimpact.compare.runs.backends import BACKENDS
 
     shared = {id(o) for o in (options.RESTITUTION, options.T_END, options.CONTACT_STIFFNESS,
                               options.CONTACT_DURATION)}
@@ -133,8 +133,8 @@ def test_every_place_spells_inputs_as_the_registry():
     physical input under the registry's name and in its unit."""
     from treeimpact.compare.studies import design
     from treeimpact.compare.studies import study_inputs as sensitivity
-    from treeimpact.compare.sweep.grid import ALIASES
-    from treeimpact.compare.sweep.map_cells import _AXES
+    from treeimpact.compare.studies.sweep.grid import ALIASES
+    from treeimpact.compare.studies.sweep.map_cells import _AXES
 
     found = _scenario_options()
     assert {n for n, _ in found} == {"restitution", "t_end", "contact_stiffness",
@@ -188,7 +188,7 @@ def test_model_fields_are_registry_names():
 def test_report_input_keys_are_registry_names():
     """The JSON keys the report writes for the sensitivity study's inputs are registry
     names (compare.report.base reads their units and labels by these keys)."""
-    from treeimpact.compare.sweep.sensitivity_figure import INPUT_LABELS
+    from treeimpact.compare.studies.sweep.sensitivity_figure import INPUT_LABELS
 
     assert set(INPUT_LABELS) <= set(registry.BY_NAME)
     assert INPUT_LABELS["log10_pad_duration"] == "pad contact\nduration"  # not 'stiffness'
@@ -206,8 +206,8 @@ def test_unit_tables_agree_with_the_registry():
     """Every unit table that names a registry quantity (by name or symbol: K_T, M_T, C_T,
     E, restitution) gives the registry's unit, and "1" (never "-") for a dimensionless one."""
     from treeimpact.analytic.identify.intervals import UNITS as FIT
-    from treeimpact.compare.api_results import ESTIMATE_UNITS
-    from treeimpact.compare.commands.simulate import MODEL_UNITS
+    from treeimpact.compare.interface.api_results import ESTIMATE_UNITS
+    from treeimpact.compare.interface.commands.simulate import MODEL_UNITS
     from treeimpact.compare.report.paper import UNITS as PAPER
 
     for table in (FIT, ESTIMATE_UNITS, MODEL_UNITS, PAPER):
@@ -224,7 +224,7 @@ def test_small_e_sweep_passes_values_not_text():
     grid the spec text it used to write parsed to; a bad value is refused."""
     from treeimpact.analytic.errors import ParameterError
     from treeimpact.compare.studies.small_e import grid_of, small_e_sweep
-    from treeimpact.compare.sweep.grid import parse_grid, value_axis
+    from treeimpact.compare.studies.sweep.grid import parse_grid, value_axis
 
     s = _central()
     grid = small_e_sweep(s, "unused").grid

@@ -22,8 +22,8 @@ import contextlib, io, json
 from treeimpact.analytic.contact.law import contact_law
 from treeimpact.analytic.model import registry
 from treeimpact.analytic.model.parameters import DEFAULT_CONTACT_DURATION
-from treeimpact.compare.cli import main
-from treeimpact.compare.tree_scenario import DEFAULTS
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.tree.scenario import DEFAULTS
 out = io.StringIO()
 with contextlib.redirect_stdout(out), contextlib.suppress(SystemExit):
     main(["scenario", "--help"])

@@ -23,10 +23,10 @@ from pathlib import Path
 import pytest
 
 from treeimpact.compare import report as report_module
-from treeimpact.compare.pool import STOP
-from treeimpact.compare.process import run_command, stop_signals
+from treeimpact.compare.interface.process import run_command, stop_signals
 from treeimpact.compare.report import pageset
-from treeimpact.compare.runs import RunCache
+from treeimpact.compare.runs.cache import RunCache
+from treeimpact.compare.runs.pool import STOP
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The cheap report the tests write: one tree, the analytic rungs and an engine that does
@@ -36,7 +36,7 @@ CHEAP = {"scenarios": ["open-center"], "engines": ("no-such-engine",), "segments
 OLD, NEW = "1999-01-01 00:00 UTC (old)", "2001-01-01 00:00 UTC (new)"
 #: Appended to each figure of the new set (the old set's figures are the real ones).
 NEW_FIGURE = b"(new)"
-#: The one line of an interrupted command (compare.process.run_command).
+#: The one line of an interrupted command (compare.interface.process.run_command).
 INTERRUPTED = "treeimpact: interrupted"
 
 
@@ -271,9 +271,10 @@ def test_held_signals_deliver_a_signal_after_the_body():
     assert reached == ["the body's end"]
 
 
-#: Runs ``treeimpact report`` (python -m treeimpact.compare.cli, so the command line's own
-#: ending) of the CHEAP configuration with SIGINT at Python's own handler (a background
-#: job inherits it ignored), paused at one moment of its writing until a file appears:
+#: Runs ``treeimpact report`` (python -m treeimpact.compare.interface.cli, so the command
+#: line's own ending) of the CHEAP configuration with SIGINT at Python's own handler (a
+#: background job inherits it ignored), paused at one moment of its writing until a file
+#: appears:
 #: argv = out folder, the file it writes when it pauses, the file that ends the pause,
 #: the moment ("staged": all pages written into the new set; "swap": its first rename).
 CHILD = textwrap.dedent("""
@@ -306,7 +307,7 @@ CHILD = textwrap.dedent("""
             return real_replace(src, dst)
         os.replace = replace
     sys.argv = ["treeimpact", "report", "--scenario", "open-center", "--out", out]
-    runpy.run_module("treeimpact.compare.cli", run_name="__main__")
+    runpy.run_module("treeimpact.compare.interface.cli", run_name="__main__")
 """)
 
 
@@ -357,7 +358,7 @@ def test_ctrl_c_while_a_real_report_writes_its_pages(tmp_path, moment, kept):
 
 
 def test_a_signal_after_the_outcome_leaves_the_exit_code(tmp_path):
-    """The command line's ending (compare.cli.entry): a SIGINT once the command has its
+    """The command line's ending (compare.interface.cli.entry): a SIGINT once the command has its
     outcome, as the interpreter ends (here: from an atexit hook, where Python's own
     handler would raise, and later its teardown the default action), leaves exit 0 and
     no line. Before, `treeimpact report` so ended by the signal (exit -2)."""
@@ -366,7 +367,7 @@ def test_a_signal_after_the_outcome_leaves_the_exit_code(tmp_path):
         signal.signal(signal.SIGINT, signal.default_int_handler)
         atexit.register(lambda: os.kill(os.getpid(), signal.SIGINT))
         sys.argv = ["treeimpact", "paper"]
-        from treeimpact.compare.cli import entry
+        from treeimpact.compare.interface.cli import entry
         sys.exit(entry())
     """)
     proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True,

@@ -14,7 +14,7 @@ from treeimpact.analytic.results import Trajectory, to_jsonable
 
 
 def test_exact_results_carry_the_solution_and_a_record_soft_results_a_record():
-    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.runs.backends import get_backend
 
     scen = load_scenario("open-center")
     exact, soft = simulate(scen), get_backend("soft").simulate(scen)

@@ -12,9 +12,9 @@ import sys
 import textwrap
 
 import pytest
-from treeimpact.compare import process
-from treeimpact.compare.pool import STOP
-from treeimpact.compare.process import run_command, stop_signals
+from treeimpact.compare.interface import process
+from treeimpact.compare.interface.process import run_command, stop_signals
+from treeimpact.compare.runs.pool import STOP
 
 
 def _python_m(tmp_path, body: str) -> subprocess.CompletedProcess:
@@ -27,10 +27,11 @@ def _python_m(tmp_path, body: str) -> subprocess.CompletedProcess:
 
 def test_an_interrupt_that_escaped_an_exec_still_exits_130_under_python_m(tmp_path):
     """A Ctrl-C landing while dataclasses build a class (an exec of source text, at import)
-    ended `python -m treeimpact.compare.cli` by SIGINT (exit -2) after its exit-130 line."""
+    ended `python -m treeimpact.compare.interface.cli` by SIGINT (exit -2) after its exit-130
+    line."""
     proc = _python_m(tmp_path, """
         import sys
-        from treeimpact.compare.process import run_command, stop_signals
+        from treeimpact.compare.interface.process import run_command, stop_signals
 
         def command(_):
             exec("raise KeyboardInterrupt")  # as the interrupt lands in dataclasses' exec
@@ -47,7 +48,7 @@ def test_a_command_that_reports_its_own_interrupt_exits_130_under_python_m(tmp_p
     """The sweep prints its own 'sweep interrupted' line and returns 130: same exit."""
     proc = _python_m(tmp_path, """
         import sys
-        from treeimpact.compare.process import run_command, stop_signals
+        from treeimpact.compare.interface.process import run_command, stop_signals
 
         def command(_):
             try:
@@ -109,7 +110,7 @@ def test_an_error_line_starts_its_own_line_after_a_half_drawn_bar(monkeypatch):
     """A progress bar (tqdm: on a terminal, and a sweep's on any stream) is redrawn in
     place without a newline: the error that ends the command begins a line of its own."""
     from treeimpact.analytic.errors import ParameterError
-    from treeimpact.compare.progress import Progress
+    from treeimpact.compare.runs.progress import Progress
 
     stream = io.StringIO()
     monkeypatch.setattr(sys, "stderr", stream)
@@ -130,7 +131,7 @@ def test_an_error_line_starts_its_own_line_after_a_half_drawn_bar(monkeypatch):
 def test_a_closed_bar_is_not_ended_twice(monkeypatch, cause):
     """A bar closed normally leaves nothing for the error path to end (no blank line)."""
     from treeimpact.analytic.errors import SimulationDiverged
-    from treeimpact.compare.progress import Progress
+    from treeimpact.compare.runs.progress import Progress
 
     stream = io.StringIO()
     monkeypatch.setattr(sys, "stderr", stream)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 
 @pytest.mark.parametrize("backend", ["analytic", "soft"])

@@ -96,7 +96,7 @@ _CLI_CHILD = """
 import json, sys
 import numpy as np
 from threadpoolctl import threadpool_info, threadpool_limits
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 def counts():
     return sorted(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
@@ -129,7 +129,7 @@ def test_a_cli_command_without_the_variable_runs_single_threaded(tmp_path):
 _POOL_CHILD = """
 import json
 from threadpoolctl import threadpool_limits
-from treeimpact.compare.pool import process_map
+from treeimpact.compare.runs.pool import process_map
 import pooled
 
 with threadpool_limits(limits=2, user_api="blas"):
@@ -163,7 +163,7 @@ def test_a_dask_worker_runs_single_threaded_and_keeps_its_setting():
     the worker's own setting back after it."""
     from distributed import Client, LocalCluster
 
-    from treeimpact.compare.pool import run_chunks
+    from treeimpact.compare.runs.pool import run_chunks
 
     got = []
     with threadpool_limits(limits=CALLER, user_api="blas"), \

@@ -25,7 +25,7 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.parameters import Trunk
 from treeimpact.analytic.model.scenario import load_scenario, scenario_from_dict
 from treeimpact.analytic.model.scenario_toml import scenario_toml
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 SLENDER = Trunk(length=1.3, clamp_height=1.3, diameter=0.1, density=900.0,

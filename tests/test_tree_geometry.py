@@ -26,7 +26,7 @@ from treeimpact.analytic.model.registry import ASSUMED, BY_NAME
 from treeimpact.analytic.model.scenario import load_scenario, scenario_from_dict
 from treeimpact.analytic.model.scenario_toml import scenario_toml
 from treeimpact.analytic.paper.reproduction import PENDULUM_MASS, TABLE_1
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 from treeimpact.compare.report import mass_origin
 from treeimpact.compare.studies.sensitivity import design
 from treeimpact.compare.studies.study_inputs import free_inputs, inputs_of, vary

@@ -21,7 +21,7 @@ from .beam import beam_natural_frequencies, beam_static_stiffness
 MIN_SEGMENTS = 2
 MAX_SEGMENTS = 1000
 #: The engines' ``segments`` option: a chain has 2 or more (a sweep's ``segments=1`` is its
-#: name for the SDOF trunk, ``--trunk sdof``: compare.sweep.grid reads it so).
+#: name for the SDOF trunk, ``--trunk sdof``: compare.studies.sweep.grid reads it so).
 SEGMENTS = Option(int, "segments of the hinged trunk (default: the fewest within 0.5 % of "
                   "the beam's static stiffness and first two frequencies)", low=MIN_SEGMENTS,
                   high=MAX_SEGMENTS)

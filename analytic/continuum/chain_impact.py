@@ -108,7 +108,7 @@ def discretisation_errors(scenario: Scenario, segments: int, metrics, trunk: str
     :func:`exact_metrics`'s keys) both have finite and the beam non-zero; others absent
     (t_xmax too when one x(t) has several near-equal maxima and the other one: which peak
     wins flips with small changes, and the ladder flags that t_xmax 'ambiguous', not judged;
-    compare.ladder.Ladder._ambiguous_peak)."""
+    compare.tree.ladder.Ladder._ambiguous_peak)."""
     ref, got = beam_metrics(scenario), discretised_metrics(scenario, int(segments), trunk)
     out = {}
     mixed = (ref["x_peaks"] > 1) != (got["x_peaks"] > 1)

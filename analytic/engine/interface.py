@@ -74,7 +74,7 @@ class EngineSetup:
 @runtime_checkable
 class Engine(Protocol):
     """A physics-engine backend: a module with these four names (mujoco_models,
-    bullet_models); ``compare.backends`` registers it by name."""
+    bullet_models); ``compare.runs.backends`` registers it by name."""
 
     OPTIONS: dict  # option name -> treeimpact.analytic.model.options.Option
 

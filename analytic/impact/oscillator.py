@@ -35,7 +35,7 @@ class Oscillator:
 
     def __reduce__(self):
         # pickled as its two parameters: the cached closures (scalar_advance, _bounds5) are
-        # rebuilt on use (results cross process pools: compare.runs.RunCache.prefetch)
+        # rebuilt on use (results cross process pools: compare.runs.cache.RunCache.prefetch)
         return (self.__class__, (self.beta, self.omega_sq))
 
     @classmethod

@@ -63,7 +63,7 @@ class UnmeasuredRange:
 @dataclass(frozen=True)
 class Assumed:
     """What a tree built from its geometry assumes for an input nobody measured
-    (compare.tree_scenario; issue 50 item 6): ``value`` and the range [low, high] it may
+    (compare.tree.scenario; issue 50 item 6): ``value`` and the range [low, high] it may
     lie in, both in the unit of the registry's parameter ``via`` (a dimensionless form that
     transfers from the paper's trees to another: the root's share of the flexibility, the
     damping ratio), and why (the physical reason and its source)."""
@@ -251,7 +251,7 @@ _UNMEASURED = {
 
 #: What a tree from its geometry (``treeimpact scenario --crown-mass``) assumes for the
 #: inputs its user did not measure: the paper's own assumptions or its two trees' measured
-#: values in a form that transfers to another tree (compare.tree_scenario).
+#: values in a form that transfers to another tree (compare.tree.scenario).
 _ASSUMED = {
     "base_stiffness": Assumed(
         "root_share", 0.0, _UNMEASURED["root_share"].low, _UNMEASURED["root_share"].high,
@@ -305,7 +305,7 @@ _PLAUSIBLE = {
 }
 
 #: The values inputs take where a user gives none, each with its source: the only place
-#: they are written (compare.tree_scenario, the pad law and the CLI read them here).
+#: they are written (compare.tree.scenario, the pad law and the CLI read them here).
 _DEFAULTS = {
     "length": Default(1.0, "the shipped trees' choice: about 1 m from the ground to the first "
                       "scaffold (the paper gives no l)"),

@@ -13,7 +13,7 @@ Sections, one module each, each a class with a jinja2 template under ``templates
 
 How the page is laid out (tables in scroll boxes, the run list, the figures): docs/report.md.
 
-The runs come from a :class:`compare.runs.RunCache` (``runs``), by default the session
+The runs come from a :class:`compare.runs.cache.RunCache` (``runs``), by default the session
 cache that ``pytest compare`` fills, so ``pytest compare --report DIR`` reuses its runs.
 """
 
@@ -34,16 +34,16 @@ from treeimpact.analytic.model.registry import BY_PATH
 from treeimpact.analytic.model.scenario import assumed_fields, shipped_scenarios
 from treeimpact.analytic.results import json_text
 
-from ..ladder import build_ladder, prefetch_ladders
-from ..pool import check_stop, preload_in_workers, process_map
-from ..progress import Progress, plan
-from ..provenance import provenance, scenario_digest
-from ..runs import RunCache, resolve_scenario
+from ..runs.cache import RunCache, resolve_scenario
+from ..runs.pool import check_stop, preload_in_workers, process_map
+from ..runs.progress import Progress, plan
+from ..runs.provenance import provenance, scenario_digest
+from ..runs.verdicts import Verdict, validity_tolerance
 from ..studies.contact_scan import scan_result, scan_sweep
 from ..studies.ident_fits import fit_one, fit_tasks
 from ..studies.small_e import E_GRID, RESOLUTION, small_e_answer, small_e_sweep
-from ..sweep.run import run_sweeps
-from ..verdicts import Verdict, validity_tolerance
+from ..studies.sweep.run import run_sweeps
+from ..tree.ladder import build_ladder, prefetch_ladders
 from .answer import (
     ANSWER_METRICS,
     ANSWER_TERMS,
@@ -80,7 +80,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     ``out_dir/figures``; none without either), the pages linking them as ``figures/`` of
     the page's folder ``out_dir``; ``progress``: runs and
     sections reported on stderr as they finish; ``study_jobs``: studies running beside the
-    report (compare.validity.study_job.StudyJob), each a section once it ends."""
+    report (compare.report.validity.study_job.StudyJob), each a section once it ends."""
     # lazy: +291 ms at import otherwise (matplotlib, numpy),
     # which this module's other callers do not need
     from .figures import FigureFiles
@@ -99,7 +99,7 @@ def build_sections(scenarios=None, study_dirs=(), runs=None, *, engines=None, se
     wall = {}
     t0 = time.perf_counter()
     if progress:
-        plan(4)  # the report's stages: runs, sweeps, record fits, sections (compare.progress)
+        plan(4)  # the report's stages: runs, sweeps, record fits, sections (compare.runs.progress)
     prefetch_ladders(cache, scens, engines=engines, segments=segments, progress=progress)
     wall["runs (process pool)"] = time.perf_counter() - t0
     for job in study_jobs:  # a study that failed meanwhile fails the report now
@@ -269,10 +269,10 @@ def write_report(out_dir, scenarios=None, study_dirs=(), runs=None, **options) -
 
     ``scenarios``: shipped names, TOML paths or Scenario objects (default: the shipped
     scenarios); ``study_dirs``: directories of model-validity studies; ``runs``: the
-    :class:`compare.runs.RunCache` to take runs from (default: a new one).
+    :class:`compare.runs.cache.RunCache` to take runs from (default: a new one).
     ``options`` (:func:`build_sections`'): ``engines`` (tuple of engine backends) and
     ``segments`` (hinged trunk) go to the ladder; ``progress``; ``study_jobs``: studies
-    running beside the report (compare.validity.study_job.StudyJob), included when they end.
+    running beside the report (compare.report.validity.study_job.StudyJob), included when they end.
     Returns ``{"html": Path, "md": Path, "json": Path}``; figures go to
     ``out_dir/figures``. The pages and figures are one set (:mod:`.pageset`): written into a
     temporary folder inside ``out_dir`` and swapped into place together, so an interrupt or
@@ -319,7 +319,7 @@ def _report_data(sections: dict, summary: dict, stamp: str) -> dict:
         "generated": stamp,
         "provenance": provenance(scenarios={s.ladder.name: scenario_digest(s.ladder.scenario)
                                             for s in sections["scenarios"]}),
-        "tolerances": "compare/tolerances.toml",
+        "tolerances": "compare/runs/tolerances.toml",
         "answer": {"tolerance": summary["answer_tolerance"], "in_short": summary["in_short"],
                    "one_dof": summary["answer"], "small_e": small_e["trees"],
                    "small_e_figure": small_e["figure"],

@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 
-from ..rungs import RungKind
+from ..runs.rungs import RungKind
+from ..runs.verdicts import validity_tolerance
 from ..studies.small_e import bracket_text
-from ..verdicts import validity_tolerance
 from .base import deciding
 
 #: The quantities the answer leads with, what a harvester designer needs of the 1-DOF model:
@@ -34,7 +34,7 @@ def one_dof_answer(scen_sections) -> list[dict]:
     :data:`ANSWER_METRICS` at the scenario's contact, and whether the 1-DOF model explains
     the continuum's record at all (the full-record fit). The 1-DOF value is the paper's
     (Newton) model's, or the soft SDOF's with the same pad where Newton's impulses have none
-    (force, acceleration). Within compare.ladder.validity_tolerance it is good enough."""
+    (force, acceleration). Within compare.tree.ladder.validity_tolerance it is good enough."""
     tolerance = validity_tolerance()
     out = []
     for s in scen_sections:

@@ -6,7 +6,7 @@ tree's own pad and e, and by how much it is off.
 :func:`matrix_cells` reads every cell from a number the report already holds (the answer
 rows of :func:`.answer.one_dof_answer`, the small-e answers at the tree's e, the full-record
 fits of the continuum's record) and judges it by the validity tolerance
-(compare.verdicts.validity_tolerance, 5 %): within it the assumption holds, beyond it it is
+(compare.runs.verdicts.validity_tolerance, 5 %): within it the assumption holds, beyond it it is
 off; a number that does not exist is n/a with its reason. :func:`matrix_figure` draws the
 cells (matplotlib, as :mod:`.figures`), readable in grey scale: "holds" light, "off" darker
 the further off and hatched, n/a white with a letter naming its reason. SI units; relative
@@ -24,8 +24,8 @@ import numpy as np
 from matplotlib.colors import to_rgba
 from matplotlib.patches import Patch, Rectangle
 
-from ..rungs import RungKind
-from ..verdicts import validity_tolerance
+from ..runs.rungs import RungKind
+from ..runs.verdicts import validity_tolerance
 from .answer import one_dof_answer
 from .figures import plt
 from .scenario import fit_cells, fit_truth
@@ -341,7 +341,7 @@ def _legend(fig, matrix: dict, chars: int) -> None:
 def answer_matrix(scen_sections, small_e_trees: dict, sink=None) -> dict:
     """The report's matrix (:func:`matrix_cells`) of its scenario sections ``scen_sections``
     (their fits made) and small-e answers ``small_e_trees`` (tree -> answers), judged by
-    compare.verdicts.validity_tolerance, with its ``figure``: the path ``sink(fig, stem)``
+    compare.runs.verdicts.validity_tolerance, with its ``figure``: the path ``sink(fig, stem)``
     gives (:class:`.figures.FigureFiles`; None without a sink)."""
     matrix = matrix_cells(one_dof_answer(scen_sections), small_e_trees,
                           continuum_fits(scen_sections), validity_tolerance())

@@ -13,9 +13,9 @@ from pathlib import Path
 
 import jinja2
 
-from treeimpact.compare.studies.study_inputs import INPUTS
 from treeimpact.compare.studies.sobol import verdict_text
-from treeimpact.compare.sweep.maps import INPUT_LABELS, OUTPUT_LABELS
+from treeimpact.compare.studies.study_inputs import INPUTS
+from treeimpact.compare.studies.sweep.maps import INPUT_LABELS, OUTPUT_LABELS
 
 from .glossary import tip
 

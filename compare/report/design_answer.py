@@ -1,5 +1,5 @@
 """The design answer of a report (issue 43): what a design study run beside the report
-(``report --with-study design``, compare/validity/design_study.py) found for its tree, for
+(``report --with-study design``, compare/report/validity/design_study.py) found for its tree, for
 report.json's ``answer.design.<tree>`` and the page's first screen. Every sentence is the
 study's own, read off its maps by the rule of docs/design-map.md; nothing is recomputed."""
 
@@ -12,7 +12,7 @@ from .study_kinds import StudyKind, register_kind
 FIRST_PAIR = ("a_over_l", "contact_duration")
 
 
-#: The design map (compare/validity/design_study.py's design.json), rendered by design_body.
+#: The design map (compare/report/validity/design_study.py's design.json), rendered by design_body.
 register_kind(StudyKind("design", "design.json", "pairs", "design_body", "d",
                         lambda d: {p.get("figure") for p in d["pairs"]}))
 

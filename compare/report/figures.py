@@ -21,15 +21,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from treeimpact.compare.backends import BACKENDS  # noqa: E402
-from treeimpact.compare.figure_text import save_figure  # noqa: E402
-from treeimpact.compare.rungs import ENGINE_KINDS, RungKind  # noqa: E402
+from treeimpact.compare.runs.backends import BACKENDS  # noqa: E402
+from treeimpact.compare.runs.figure_text import save_figure  # noqa: E402
+from treeimpact.compare.runs.rungs import ENGINE_KINDS, RungKind  # noqa: E402
 
 DPI = 110
 plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10,
                      "legend.fontsize": 9, "axes.grid": True, "grid.alpha": 0.3})
 
-#: shades of an engine without its own (:attr:`compare.backends.Backend.shades`)
+#: shades of an engine without its own (:attr:`compare.runs.backends.Backend.shades`)
 _DEFAULT_SHADES = ("#2ca02c", "#5fd35f", "#98df8a", "#145a14")
 #: an engine's rungs in the order of its shades and line styles: the kinds every engine
 #: runs, then its own elastic rod

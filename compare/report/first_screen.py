@@ -14,12 +14,12 @@ from __future__ import annotations
 import math
 import re
 
-from ..rungs import RungKind
+from ..runs.rungs import RungKind
 from .answer import ANSWER_METRICS, ANSWER_TERMS, pct_text, span_text
 from .base import input_name
 
 #: The prefix of a documented finding's name that says which assumption it is about
-#: (compare/tolerances.toml ``[[finding]] name``); the rest names the physical cause.
+#: (compare/runs/tolerances.toml ``[[finding]] name``); the rest names the physical cause.
 ASSUMPTION = "1-DOF assumption: "
 #: The headline gaps of the measure-first item, as its sentences say them.
 HEADLINE_WORDS = {"gap.x_max": "x_max", "gap.energy_delivered": "energy delivered"}
@@ -90,7 +90,7 @@ def largest_gap(row: dict) -> str | None:
 def cause_of(section, metric: str) -> str | None:
     """The physical cause the report diagnoses for the continuum's gap on ``metric`` in the
     scenario ``section``: the documented finding its continuum (beam-kind) rung's check on
-    that metric is recognised as (compare.findings, from the tree's physics), less its
+    that metric is recognised as (compare.runs.findings, from the tree's physics), less its
     :data:`ASSUMPTION` prefix; None when no finding is recognised."""
     beams = {r.rung.id for r in section.ladder.rungs if r.rung.kind == RungKind.BEAM}
     found = next((c.finding for c in section.checks

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.results import to_jsonable
-from treeimpact.compare.backends import BACKENDS
+from treeimpact.compare.runs.backends import BACKENDS
 
 from .base import Section, options_text, tidy
 
@@ -42,7 +42,7 @@ def run_rows(runs) -> list[dict]:
 
 
 class RunsSection(Section):
-    """Every run behind the page (``cache``, a compare.runs.RunCache), its status, reason
+    """Every run behind the page (``cache``, a compare.runs.cache.RunCache), its status, reason
     and wall time, with the report's stages' wall times ``wall_s`` (stage -> s)."""
 
     template = "runlog"

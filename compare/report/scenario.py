@@ -12,13 +12,13 @@ from treeimpact.analytic.model.plausible import implausible
 from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.results import to_jsonable
 
-from ..identification import IDENT_METRICS
-from ..ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
-from ..mechanism import matched_loss_evidence
-from ..rungs import RungKind
-from ..runs import OK, SKIPPED
+from ..runs.cache import OK, SKIPPED
+from ..runs.rungs import RungKind
+from ..runs.verdicts import Verdict
 from ..studies.ident_fits import fit_one, fit_tasks
-from ..verdicts import Verdict
+from ..tree.identification import IDENT_METRICS
+from ..tree.ladder import ALL_METRICS, build_ladder, meaning_of, unit_of
+from ..tree.mechanism import matched_loss_evidence
 from . import figures, summary_figures
 from .base import Section, tidy
 
@@ -190,7 +190,7 @@ class ScenarioSection(Section):
         """The section of ``scenario`` from the runs in ``cache`` (a RunCache: runs it
         lacks are made here, so prefetch them first) and its small-e sweep's table
         ``e_table`` (compare.studies.small_e.small_e_sweep; None: the section has no identification
-        against e); ``engines`` and ``segments`` as :func:`compare.ladder.build_ladder`,
+        against e); ``engines`` and ``segments`` as :func:`compare.tree.ladder.build_ladder`,
         ``figure_sink`` and ``fits`` as the constructor's."""
         kw = {} if engines is None else {"engines": engines}
         ladder = build_ladder(scenario, cache=cache, segments=segments, **kw)

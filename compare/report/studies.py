@@ -5,9 +5,10 @@ linked where they are (paths relative to the page), its ``*.json`` files are car
 report.json, and a ``summary.md`` (or ``README.md``) is shown as its text. The section's
 title is the directory's name.
 
-A directory written by ``treeimpact sweep`` (its ``study.json``, :mod:`compare.validity.study`)
-is rendered from that data with the study's own templates: each figure in place, under its
-caption, headings nested under the section's; figures it does not show follow it.
+A directory written by ``treeimpact sweep`` (its ``study.json``,
+:mod:`compare.report.validity.study`) is rendered from that data with the study's own
+templates: each figure in place, under its caption, headings nested under the section's;
+figures it does not show follow it.
 """
 
 from __future__ import annotations
@@ -63,12 +64,12 @@ def _figures_of(study: dict) -> set:
     return {n for n in named if n}
 
 
-#: The validity study (compare/validity/study.py's study.json), rendered by study_body.
+#: The validity study (compare/report/validity/study.py's study.json), rendered by study_body.
 register_kind(StudyKind("validity", "study.json", "validity", "study_body", "s", _figures_of))
 
 
 class StudySection(Section):
-    """A finished study's folder as a section: a study of compare.sweep rendered from its
+    """A finished study's folder as a section: a study of compare.studies.sweep rendered from its
     study.json, any other from its figures and summary text. ``directory``: the folder
     (ParameterError if it is not one); ``page_dir``: the report's folder, the figures
     linked relative to it."""

@@ -1,5 +1,5 @@
-"""Studies built on sweeps (floor 4 of compare, docs/architecture.md): each runs as one or
-more sweeps (:mod:`treeimpact.compare.sweep`) and reduces their tables to an answer.
+"""Studies built on sweeps (floor 3 of compare, docs/architecture.md): each runs as one or
+more sweeps (:mod:`treeimpact.compare.studies.sweep`) and reduces their tables to an answer.
 
 * :mod:`.contact_scan` - the shortest contact duration for which the 1-DOF model holds;
 * :mod:`.small_e` - up to which e each consequence of "e is small" holds;

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..runs import OK
-from ..sweep.run import SweepSpec, run_sweeps
-from ..verdicts import validity_tolerance
+from ..runs.cache import OK
+from ..runs.verdicts import validity_tolerance
+from .sweep.run import SweepSpec, run_sweeps
 
 #: Contact durations scanned (s): 0.2 ms (a hard impactor) to 50 ms (half the trunk's
 #: quarter period; a very soft pad), 14 points, log-spaced.
@@ -23,7 +23,7 @@ HEADLINE_METRICS = ("x_max", "energy_delivered", "crown_peak_acceleration")
 
 
 def scan_sweep(scenario, out, durations=DURATIONS):
-    """The scan of one scenario as a sweep (:class:`compare.sweep.run.SweepSpec`) into
+    """The scan of one scenario as a sweep (:class:`compare.studies.sweep.run.SweepSpec`) into
     ``out``: ``contact_duration`` over ``durations`` on the soft and beam rungs."""
     return SweepSpec(scenario, ["contact_duration=" + ",".join(repr(float(d))
                                                                for d in durations)],
@@ -48,7 +48,7 @@ def scan_result(table, durations=DURATIONS, metrics=HEADLINE_METRICS,
     pad does against each trunk's clamp: the scanned duration is the pad's collision time
     on the 1-DOF pair, not the contact the continuum sees), failed: [reasons]} from a scan's
     sweep table, for the scanned ``durations`` (s) and ``metrics``. ``tolerance``: default
-    the studies' criterion (compare.verdicts.validity_tolerance)."""
+    the studies' criterion (compare.runs.verdicts.validity_tolerance)."""
     if tolerance is None:
         tolerance = validity_tolerance()
     rows = {(r["target"], float(r["contact_duration"])): r

@@ -1,7 +1,7 @@
 """The design map: where the paper's 1-DOF trunk and its small-e consequences hold over the
 choices a harvester designer makes (clamp height, impactor mass, pad, e) for one tree.
 
-A cell is one point of those choices applied to the tree (compare.sweep.apply: the ratios
+A cell is one point of those choices applied to the tree (compare.studies.sweep.apply: the ratios
 ``a_over_l`` and ``mass_ratio``, the pad's ``contact_duration`` and ``restitution``); its
 numbers are the continuum trunk's gaps to the 1-DOF model (the answer table's: x_max, energy
 delivered, crown acceleration) and the small-e errors (eq 57, the identified M_T and K_T) of
@@ -25,8 +25,8 @@ from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.impact.simulate import simulate
-from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.model.registry import BY_NAME
+from treeimpact.analytic.model.two_body import two_body_model
 
 from .small_e import at_restitution, errors_of_run
 
@@ -96,7 +96,7 @@ def _input(name: str) -> Input:
                  Scale.LOG if d.log else Scale.LINEAR, p.shown[0], p.shown[1])
 
 
-#: The designer's choices, the sweep's names (compare.sweep.grid), from the registry.
+#: The designer's choices, the sweep's names (compare.studies.sweep.grid), from the registry.
 INPUTS = {name: _input(name) for name in _LABELS}
 #: What the map does not vary: the tree as its scenario file gives it.
 HELD = ("the trunk's length, diameter, wood (E, density), damping, root spring, clamp mass "
@@ -185,9 +185,9 @@ def operating_point(scenario) -> dict:
     """The tree ``scenario``'s own value of every input (:data:`INPUTS` units): a/l, m/M_T (M_T of eq 7),
     the pad's contact duration (s; from its stiffness on the 1-DOF pair if the file gives
     that) and e."""
-    # lazy: +62 ms at import otherwise (treeimpact.compare.sweep.grid),
+    # lazy: +62 ms at import otherwise (treeimpact.compare.studies.sweep.grid),
     # which this module's other callers do not need
-    from ..sweep.grid import derived_ratios
+    from .sweep.grid import derived_ratios
 
     c = scenario.contact
     duration = c.duration
@@ -249,9 +249,9 @@ def check_grid_specs(specs, flag: str = "--grid") -> None:
     """ParameterError (one line naming ``flag`` and the spec as typed) for one of the
     ``specs`` (``--grid`` specs) of a design input with values outside its allowed range,
     or an axis that is not a design input."""
-    # lazy: +62 ms at import otherwise (treeimpact.compare.sweep.grid),
+    # lazy: +62 ms at import otherwise (treeimpact.compare.studies.sweep.grid),
     # which this module's other callers do not need
-    from ..sweep.grid import parse_axis
+    from .sweep.grid import parse_axis
 
     for spec in specs:
         axis = parse_axis(spec, flag)
@@ -281,12 +281,12 @@ def check_operating_point(scenario, label: str) -> None:
 
 
 def design_spec(scenario, specs, out, label: str | None = None):
-    """A sweep (compare.sweep.run.SweepSpec) of :func:`design_cell` over the ``--grid``
+    """A sweep (compare.studies.sweep.run.SweepSpec) of :func:`design_cell` over the ``--grid``
     ``specs`` on ``scenario`` into ``out``; ``label``: what a refusal of the grid names (a
     map's grid the study made; None: the specs, as typed)."""
-    # lazy: +59 ms at import otherwise (treeimpact.compare.sweep.run),
+    # lazy: +59 ms at import otherwise (treeimpact.compare.studies.sweep.run),
     # which this module's other callers do not need
-    from ..sweep.run import SweepSpec
+    from .sweep.run import SweepSpec
 
     return SweepSpec(scenario, list(specs), Path(out), ("analytic",), identify=True,
                      analysis="treeimpact.compare.studies.design:design_cell", label=label)

@@ -1,6 +1,6 @@
 """A design map's recommendation in the designer's units (issue 50 item 5): the cell a map
 recommends (compare.studies.design_words.nearest_within: a/l, m/M_T, contact duration, e)
-applied to the tree as its cells are (compare.sweep.apply), then the three choices a
+applied to the tree as its cells are (compare.studies.sweep.apply), then the three choices a
 designer makes on a machine, in their units: the clamp height a = (a/l) l (m), the impactor's
 mass m = (m/M_T) M_T with eq 7's M_T of the trunk clamped there (kg), the pad as its contact
 duration (s) and its stiffness k_c = mu (pi / tau_c)^2 for the 1-DOF pair's reduced mass mu
@@ -36,9 +36,9 @@ def designer_choice(scenario, point: dict) -> dict:
     1-DOF pair's reduced mass of the impactor and eq 7's M_T there), ``energy_delivered``
     (J, the continuum trunk's at e, read at E_FLOOR below it) and
     ``energy_delivered_one_dof`` (J, the exact 1-DOF model's), with ``point``."""
-    # lazy: +62 ms at import otherwise (treeimpact.compare.sweep.apply), which the study's
+    # lazy: +62 ms at import otherwise (treeimpact.compare.studies.sweep.apply), which the study's
     # other readers (the words, the answer) do not need
-    from ..sweep.apply import apply_point
+    from .sweep.apply import apply_point
 
     s, _ = apply_point(scenario, dict(point))
     mu = two_body_model(s).reduced_mass

@@ -13,13 +13,13 @@ import numpy as np
 
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 
-from ..backends import get_backend
-from ..pool import process_map
-from ..runs import OK, attempt
-from ..sweep.apply import apply_point
-from ..verdicts import load_tolerances
+from ..runs.backends import get_backend
+from ..runs.cache import OK, attempt
+from ..runs.pool import process_map
+from ..runs.verdicts import load_tolerances
 from .design import INPUTS
 from .design_words import along, shown
+from .sweep.apply import apply_point
 
 
 @dataclass(frozen=True)
@@ -109,7 +109,7 @@ def spot_sentence(checks: list, pair) -> str:
 
 def spot_checks(scenario, x, y, z, pair, here: dict, tol: float, workers=None) -> dict:
     """The spot checks of one map (:func:`spot_points` of ``z`` over ``x``, ``y``, ``pair``
-    at ``here`` and ``tol``) on the tree ``scenario``, run on compare.pool's ``workers``:
+    at ``here`` and ``tol``) on the tree ``scenario``, run on compare.runs.pool's ``workers``:
     {"cells": [...], "sentence": str}."""
     points = spot_points(x, y, z, pair, here, tol)
     checks = process_map(spot_check, [(scenario, p) for p in points], workers=workers)

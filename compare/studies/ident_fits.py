@@ -23,7 +23,7 @@ FIT_NOISE = 0.01
 
 
 def fit_tasks(ladder) -> list[tuple]:
-    """One task per rung of ``ladder`` (a built compare.ladder.Ladder) with a record, for
+    """One task per rung of ``ladder`` (a built compare.tree.ladder.Ladder) with a record, for
     :func:`fit_one`: (rung id, t (s), x (m) sampled at FIT_RATE with FIT_NOISE, the pendulum
     test, the true M_T (kg), K_T (N/m), C_T (N s/m) of the two-body model, eqs 7-11); none
     when the ladder's impactor is not a pendulum."""

@@ -1,5 +1,5 @@
 """The identification study's maps: each method's errors of M_T, K_T and b over e x crown
-ratio, one row of panels per rung, on the study's one colour scale (compare.sweep.maps).
+ratio, one row of panels per rung, on the study's one colour scale (compare.studies.sweep.maps).
 docs/identification.md."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from treeimpact.compare.figure_text import save_figure
+from treeimpact.compare.runs.figure_text import save_figure
 
 from .ident_records import NOISE, PARAMETERS, RATE
 
@@ -23,9 +23,9 @@ def identification_error_map(rows: list[dict], method: str, path: Path) -> Path:
     # which this module's other callers do not need
     from matplotlib.figure import Figure
 
-    # lazy: +51 ms at import otherwise (treeimpact.compare.sweep.map_cells),
+    # lazy: +51 ms at import otherwise (treeimpact.compare.studies.sweep.map_cells),
     # which this module's other callers do not need
-    from treeimpact.compare.sweep.map_cells import (
+    from treeimpact.compare.studies.sweep.map_cells import (
         DEFAULT_TOLERANCE,
         _norm,
         _percent_colorbar,
@@ -80,9 +80,9 @@ def _panel(ax, rows: list[dict], method: str, k: str, es: list, cs: list, scale:
     """One rung's panel of parameter ``k``: the errors over e (``es``) x crown ratio
     (``cs``) on the study's colour scale, each cell's value or why it has none; returns
     the mesh (for the colour bar)."""
-    # lazy: +51 ms at import otherwise (treeimpact.compare.sweep.map_cells),
+    # lazy: +51 ms at import otherwise (treeimpact.compare.studies.sweep.map_cells),
     # which this module's other callers do not need
-    from treeimpact.compare.sweep.map_cells import _ink
+    from treeimpact.compare.studies.sweep.map_cells import _ink
 
     Z = np.full((len(cs), len(es)), np.nan)
     why = {}

@@ -18,10 +18,10 @@ from treeimpact.analytic.identify.procedure import (
     truth_of,
 )
 from treeimpact.analytic.model.ratios import apply_input
-from treeimpact.compare.backends import get_backend
-from treeimpact.compare.runs import resolve_scenario
+from treeimpact.compare.runs.backends import get_backend
+from treeimpact.compare.runs.cache import resolve_scenario
 
-from ..runs import FAILED, OK
+from ..runs.cache import FAILED, OK
 
 RATE = 5e3  # Hz: a common displacement-transducer rate
 NOISE = 0.01  # Gaussian noise, fraction of the record's peak

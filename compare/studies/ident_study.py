@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from treeimpact.analytic.results import json_text
-from treeimpact.compare.sweep.run import SweepSpec, run_sweeps
+from treeimpact.compare.studies.sweep.run import SweepSpec, run_sweeps
 
 from .ident_maps import identification_error_map
 from .ident_records import ANALYSIS, NOISE, PARAMETERS, RATE, case_row
@@ -51,7 +51,7 @@ def _axis(name: str, values) -> str:
 def study_sweeps(out, scenario: str = "central-leader", *, restitutions=RESTITUTIONS,
                  crown_ratios=CROWN_RATIOS, rungs=RUNGS, sampling_rungs=SAMPLING_RUNGS,
                  engine_rungs=ENGINE_RUNGS, sampling_seeds=SAMPLING_SEEDS) -> dict:
-    """The study as sweeps (name -> :class:`compare.sweep.run.SweepSpec`) of the shipped
+    """The study as sweeps (name -> :class:`compare.studies.sweep.run.SweepSpec`) of the shipped
     ``scenario`` (its name or a TOML path) into ``out/identification/``: the grid of
     ``restitutions`` e (1) x ``crown_ratios`` (m_f / m_trunk, 1) on ``rungs``, the engines'
     corner (:data:`ENGINE_RESTITUTIONS` x :data:`ENGINE_CROWN_RATIOS`) on ``engine_rungs``,

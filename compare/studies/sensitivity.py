@@ -24,10 +24,8 @@ from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.impact.simulate import simulate
 
-from ..runs import OK, resolve_scenario
-from ..sweep.grid import Design
-from ..sweep.run import SweepSpec
-from ..verdicts import validity_tolerance
+from ..runs.cache import OK, resolve_scenario
+from ..runs.verdicts import validity_tolerance
 from .contact_scan import shortest_within
 from .study_inputs import (
     ALL_INPUTS,
@@ -40,6 +38,8 @@ from .study_inputs import (
     vary,
 )
 from .study_points import complete_groups, failed_points, failure_summary, rows_of
+from .sweep.grid import Design
+from .sweep.run import SweepSpec
 
 
 #: The outputs: the answer table's cells (continuum vs 1-DOF, relative) and the crossing
@@ -120,11 +120,11 @@ def design(trajectories: int, seed: int = SEED, names=None,
 
 def sensitivity_sweep(scenario, out, trajectories: int, seed: int = SEED, *,
                       crossings: bool = False):
-    """The study of one tree (``scenario``) as a sweep (:class:`compare.sweep.run.SweepSpec`)
-    into ``out``: the Morris design (:func:`design` of ``trajectories`` and ``seed``) over
-    its free inputs (:func:`free_inputs`, over the tree's :func:`ranges_of`) as ``input.*``
-    axes, :func:`answer_under` (with ``crossings``, :func:`answer_and_crossings`) at each
-    point."""
+    """The study of one tree (``scenario``) as a sweep
+    (:class:`compare.studies.sweep.run.SweepSpec`) into ``out``: the Morris design
+    (:func:`design` of ``trajectories`` and ``seed``) over its free inputs
+    (:func:`free_inputs`, over the tree's :func:`ranges_of`) as ``input.*`` axes,
+    :func:`answer_under` (with ``crossings``, :func:`answer_and_crossings`) at each point."""
     return design_sweep(scenario, out,
                         lambda names, ranges: design(trajectories, seed, names, ranges),
                         crossings=crossings)

@@ -19,12 +19,10 @@ from pathlib import Path
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.impact.simulate import simulate
 
-from ..identification import IDENT_METRICS, identify_rung
-from ..rungs import analytic_samples
-from ..runs import OK, resolve_scenario
-from ..sweep.grid import Grid, value_axis
-from ..sweep.run import SweepSpec
-from ..verdicts import validity_tolerance
+from ..runs.cache import OK, resolve_scenario
+from ..runs.rungs import analytic_samples
+from ..runs.verdicts import validity_tolerance
+from ..tree.identification import IDENT_METRICS, identify_rung
 from .small_e_curves import (  # noqa: F401 (the curves' reading, re-exported)
     MONOTONE_SLACK,
     RESOLUTION,
@@ -35,6 +33,8 @@ from .small_e_curves import (  # noqa: F401 (the curves' reading, re-exported)
     steady_text,
     verdict,
 )
+from .sweep.grid import Grid, value_axis
+from .sweep.run import SweepSpec
 
 #: The e of the curves (1): [0, 0.05] in steps of 0.005 (the identification's and eq 45's
 #: crossings lie there), then to 0.9 in steps of 0.05.
@@ -205,7 +205,7 @@ def errors_of_run(result, scenario, *, continuum: bool = True) -> dict:
 
 
 def errors_at_run(result, scenario, record=None) -> dict:
-    """The sweep's analysis (compare.sweep.run): :func:`errors_of_run` of ``result`` (a run
+    """The sweep's analysis (compare.studies.sweep.run): :func:`errors_of_run` of ``result`` (a run
     of ``scenario``) with the continuum; ``record`` (the sweep's) is not read."""
     return errors_of_run(result, scenario)
 
@@ -221,7 +221,7 @@ def grid_of(scenario, grid=E_GRID) -> tuple:
 
 def small_e_sweep(scenario, out):
     """The small-e curves of one tree (``scenario``) as a sweep
-    (:class:`compare.sweep.run.SweepSpec`)
+    (:class:`compare.studies.sweep.run.SweepSpec`)
     into ``out``: the exact solver at every e of :func:`grid_of`, :func:`errors_at_run` on
     each."""
     scen = resolve_scenario(scenario)

@@ -25,7 +25,7 @@ import numpy as np
 
 from treeimpact.analytic.errors import ParameterError
 
-from ..runs import OK
+from ..runs.cache import OK
 from .sensitivity import ANSWER, CONF_LEVEL, design_rows, design_sweep
 from .study_inputs import ALL_INPUTS, INPUTS, inputs_entry, problem
 from .study_points import complete_groups, failed_points, failure_summary, rows_of

@@ -1,7 +1,7 @@
 """Speed-accuracy curves per engine (after Erez, Tassa and Todorov 2015).
 
 For each engine and each of its variants (MuJoCo integrators, Bullet contact modes; from
-:attr:`compare.backends.Backend.variants`) the scenario's engine-numerics model (SDOF trunk, linear pendulum: :data:`SPEED_ENGINE_OPTIONS`)
+:attr:`compare.runs.backends.Backend.variants`) the scenario's engine-numerics model (SDOF trunk, linear pendulum: :data:`SPEED_ENGINE_OPTIONS`)
 is run over a range of time steps ``dt`` (s) and contact stiffnesses ``k_c``
 (N/m). Each run gives a point:
 
@@ -29,14 +29,14 @@ import numpy as np
 from treeimpact.analytic.contact.law import stiffness_for_duration
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.two_body import two_body_model
-from treeimpact.compare.backends import ENGINES, get_backend
-from treeimpact.compare.figure_text import save_figure
-from treeimpact.compare.runs import resolve_scenario
+from treeimpact.compare.runs.backends import ENGINES, get_backend
+from treeimpact.compare.runs.cache import resolve_scenario
+from treeimpact.compare.runs.figure_text import save_figure
 
-from ..runs import OK
-from ..sweep.grid import OPTION, Axis, Grid, GridTarget, resolve_parameter
-from ..sweep.journal import read_table
-from ..sweep.run import run_sweep
+from ..runs.cache import OK
+from .sweep.grid import OPTION, Axis, Grid, GridTarget, resolve_parameter
+from .sweep.journal import read_table
+from .sweep.run import run_sweep
 
 #: Metrics of the error: those the contact model itself changes by at most b t_c
 #: (tolerances.toml [step.contact]), so the error against the paper can go to zero as the

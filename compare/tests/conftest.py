@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import pytest
 
-from treeimpact.compare.runs import DIVERGED, FAILED, SKIPPED, RunCache
+from treeimpact.compare.runs.cache import DIVERGED, FAILED, SKIPPED, RunCache
 
 #: The session's runs: every test, the ladders and ``--report DIR`` share them.
 SESSION_CACHE = RunCache()
@@ -61,7 +61,7 @@ def _validated(path):
     (the soft pad at e = 0) is the tests' to skip with its reason."""
     from treeimpact.analytic.errors import ParameterError, SimulationDiverged, one_line
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.runs.backends import get_backend
 
     scen = load_scenario(path)
     try:
@@ -94,12 +94,12 @@ _LADDERS: dict = {}
 
 @pytest.fixture(scope="session")
 def ladder_of(run_cache):
-    """ladder_of(name) -> the scenario's :class:`compare.ladder.Ladder`, built once."""
-    from treeimpact.compare.ladder import build_ladder
+    """ladder_of(name) -> the scenario's :class:`compare.tree.ladder.Ladder`, built once."""
+    from treeimpact.compare.tree.ladder import build_ladder
 
     def get(name):
         if not _LADDERS:  # first use: every session tree's runs at once, on a process pool
-            from treeimpact.compare.ladder import prefetch_ladders
+            from treeimpact.compare.tree.ladder import prefetch_ladders
 
             prefetch_ladders(run_cache, list(SCENARIOS))
         if name not in _LADDERS:
@@ -120,7 +120,7 @@ def require_run(ladder, rung_id: str) -> None:
 
 def _absent_on_both(check) -> bool:
     """A check with no value on either side: nothing to compare, not a disagreement."""
-    from treeimpact.compare.verdicts import Verdict
+    from treeimpact.compare.runs.verdicts import Verdict
 
     return check.verdict is Verdict.NOT_AVAILABLE and not any(
         isinstance(v, (int, float)) and v == v for v in (check.value, check.reference_value))
@@ -128,9 +128,9 @@ def _absent_on_both(check) -> bool:
 
 def _skip_reason(ladder, check) -> str:
     """The physical reason a check of a quantity the tree's motion does not have is skipped:
-    the verdict's own (compare.verdicts.absent_reason), or for a check with no value on
-    either side, :data:`compare.verdicts.WHY_NONE`'s."""
-    from treeimpact.compare.verdicts import WHY_NONE, Verdict
+    the verdict's own (compare.runs.verdicts.absent_reason), or for a check with no value on
+    either side, :data:`compare.runs.verdicts.WHY_NONE`'s."""
+    from treeimpact.compare.runs.verdicts import WHY_NONE, Verdict
 
     c = check
     if c.verdict is Verdict.SKIPPED:
@@ -140,14 +140,14 @@ def _skip_reason(ladder, check) -> str:
 
 
 def assert_checks(ladder, checks) -> None:
-    """Pass when every check's verdict passes (compare.verdicts.Verdict.passes: ``ok``, a
+    """Pass when every check's verdict passes (compare.runs.verdicts.Verdict.passes: ``ok``, a
     ``finding`` in its band, or a peak time flagged ``ambiguous``, x(t) with two near-equal
     maxima, not judged by the documented rule; test_ladder checks which rungs are); skip
-    (with the physical reason, compare.verdicts.WHY_NONE) when the only ones that do not are
+    (with the physical reason, compare.runs.verdicts.WHY_NONE) when the only ones that do not are
     of a quantity the tree's motion does not have (verdict ``skipped``: a user's tree,
     ``--scenario``, whose bodies never move together); else print the table."""
-    from treeimpact.compare.ladder import failure_table
-    from treeimpact.compare.verdicts import Verdict
+    from treeimpact.compare.runs.verdicts import Verdict
+    from treeimpact.compare.tree.ladder import failure_table
 
     bad = [c for c in checks if not c.verdict.passes]
     if bad and all(c.verdict is Verdict.SKIPPED or _absent_on_both(c) for c in bad):

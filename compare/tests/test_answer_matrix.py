@@ -188,8 +188,8 @@ def test_in_grey_the_off_cells_are_darker_than_the_ones_that_hold():
 def test_every_text_lies_inside_the_figure_saved_as_the_report_saves_it(tmp_path, trees):
     """One tree (a user's report: the narrowest figure, a long name) and three: the
     suptitle, the trees' heads, the cells and every legend line inside the figure's box."""
-    from treeimpact.compare import figure_text
     from treeimpact.compare.report.figures import FigureFiles
+    from treeimpact.compare.runs import figure_text
 
     name = "a-user-tree-with-a-rather-long-name"
     rows = [dict(ANSWER[1], scenario=f"{name}-{i}") for i in range(trees)]

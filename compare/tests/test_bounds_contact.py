@@ -1,4 +1,4 @@
-"""The per-tree bounds of the pad's steps (compare/bounds/contact.py), each against an
+"""The per-tree bounds of the pad's steps (compare/runs/bounds/contact.py), each against an
 independent check: the soft-vs-Newton step shrinks with the pad's duration as b t_c says,
 the engines' energy bound is second order in dt and holds at dt / 2, and on a shipped tree
 each bound sits above the measured step, near today's fixed tolerance."""
@@ -10,9 +10,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from treeimpact.compare import bounds as B
-from treeimpact.compare.bounds import contact as C
-from treeimpact.compare.verdicts import load_tolerances, relative_step
+from treeimpact.compare.runs import bounds as B
+from treeimpact.compare.runs.bounds import contact as C
+from treeimpact.compare.runs.verdicts import load_tolerances, relative_step
 
 TREE = "central-leader"
 

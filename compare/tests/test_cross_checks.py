@@ -2,8 +2,8 @@
 scenarios, or ``pytest compare --scenario TREE``'s), the backends and the rungs (ids
 ``<scenario name>-<rung>``, e.g. ``open-center-mujoco-chain10``).
 
-Each step test compares a rung with the rung below it (compare/ladder.py) under the
-tolerance of compare/tolerances.toml; only (rung kind, metric) pairs with a tolerance or a
+Each step test compares a rung with the rung below it (compare/tree/ladder.py) under the
+tolerance of compare/runs/tolerances.toml; only (rung kind, metric) pairs with a tolerance or a
 documented finding are generated (the others are reported by the ladder, with the reason
 the file gives). A rung whose engine is not available here is skipped with the reason.
 """
@@ -13,9 +13,9 @@ from __future__ import annotations
 import pytest
 
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.findings import TreePhysics, documented_refusal, finding_for
-from treeimpact.compare.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs
-from treeimpact.compare.verdicts import load_tolerances
+from treeimpact.compare.runs.findings import TreePhysics, documented_refusal, finding_for
+from treeimpact.compare.runs.verdicts import load_tolerances
+from treeimpact.compare.tree.ladder import ALL_METRICS, IDENT_METRICS, ladder_rungs
 
 from .conftest import NAMES, SCENARIOS, assert_checks, require_run
 
@@ -203,7 +203,8 @@ def test_energy_ledger_closes(ladder_of, scenario, rung):
     ladder = ladder_of(scenario)
     require_run(ladder, rung.id)
     entry = TOL["ledger"].get(rung.kind)
-    assert entry is not None, f"compare/tolerances.toml: no [ledger] tolerance for {rung.kind!r}"
+    assert entry is not None, \
+        f"compare/runs/tolerances.toml: no [ledger] tolerance for {rung.kind!r}"
     residual = ladder[rung.id].result.metrics["ledger_residual"]
     assert residual <= entry["rel"], (
         f"{scenario} {rung.id}: ledger residual {residual:.3g} > {entry['rel']} "

@@ -1,4 +1,4 @@
-"""The design study (compare.studies.design, design_words, compare.validity.design_study):
+"""The design study (compare.studies.design, design_words, compare.report.validity.design_study):
 its cells against the rungs run directly on a tree rebuilt by hand, the words-from-map rule
 on constructed maps, the 5 % line where the cells change side, bad ranges refused in one
 line (exit 2), the page section and the registration."""
@@ -20,7 +20,7 @@ from treeimpact.compare.studies import design_words as W
 
 
 def _by_hand(scen, a_over_l: float, mass_ratio: float):
-    """The tree at (a/l, m/M_T) built without compare.sweep.apply: the clamp at a/l of l,
+    """The tree at (a/l, m/M_T) built without compare.studies.sweep.apply: the clamp at a/l of l,
     then the impactor's mass m/M_T times eq 7's M_T of that clamped trunk."""
     from treeimpact.analytic.model.reduction import reduce_trunk
 
@@ -34,8 +34,8 @@ def test_cells_agree_with_the_rungs_run_directly(tmp_path):
     from treeimpact.analytic.contact.soft import simulate_soft
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
     from treeimpact.analytic.impact.simulate import simulate
-    from treeimpact.compare.runs import resolve_scenario
-    from treeimpact.compare.sweep.run import run_sweeps
+    from treeimpact.compare.runs.cache import resolve_scenario
+    from treeimpact.compare.studies.sweep.run import run_sweeps
 
     scen = resolve_scenario("central-leader")
     spec = D.design_spec(scen, ["a_over_l=0.15,0.5", "mass_ratio=0.3,3"], tmp_path / "m")
@@ -59,7 +59,7 @@ def test_cells_agree_with_the_rungs_run_directly(tmp_path):
 def test_the_cells_move_with_the_inputs_applied():
     """A cell that ignored its point would repeat the tree's own numbers."""
     from treeimpact.analytic.impact.simulate import simulate
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
 
     scen = resolve_scenario("central-leader")
     low, high = _by_hand(scen, 0.15, 0.3), _by_hand(scen, 0.5, 3.0)
@@ -69,7 +69,7 @@ def test_the_cells_move_with_the_inputs_applied():
 
 
 def test_operating_point_is_the_trees_own():
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
 
     scen = resolve_scenario("central-leader")
     here = D.operating_point(scen)
@@ -144,7 +144,7 @@ def test_the_sentence_is_read_off_a_constructed_map():
 
 
 def test_a_bad_range_is_refused_in_one_line(tmp_path, capsys):
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     rc = main(["sweep", "--preset", "design", "--grid", "a_over_l=0.01:0.6:5",
                "--workers", "0", "--out", str(tmp_path / "d")])
@@ -166,8 +166,8 @@ def test_a_bad_range_is_refused_in_one_line(tmp_path, capsys):
 
 def test_the_study_writes_its_maps_words_and_section(tmp_path):
     from treeimpact.compare.report.studies import StudySection
-    from treeimpact.compare.validity.design_study import run_design_study
-    from treeimpact.compare.validity.study import get_preset
+    from treeimpact.compare.report.validity.design_study import run_design_study
+    from treeimpact.compare.report.validity.study import get_preset
 
     assert get_preset("design").run is run_design_study  # registered beside it
     paths = run_design_study(tmp_path / "design", "central-leader", count=4, workers=0,
@@ -270,7 +270,7 @@ def test_spot_sentence_names_every_disagreement():
 def test_the_engines_agree_with_the_continuum_at_the_trees_own_cell():
     """The shipped tree's own cell, where tolerances.toml's chain and rod tolerances were
     measured: every engine within them (the map's other cells may not be: reported)."""
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
     from treeimpact.compare.studies.design_engines import spot_check
 
     scen = resolve_scenario("central-leader")
@@ -290,7 +290,7 @@ def test_a_long_damped_pad_is_read_after_it_lets_go():
     force threshold, where Bullet's pad still pushed 0.003 N and its record held the
     compression the dashpot balances (26 mm, 36 J) as energy the bodies could get back;
     read where the force is 0, every engine trunk is within its tolerances there."""
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
     from treeimpact.compare.studies.design_engines import spot_check
 
     check = spot_check((resolve_scenario("central-leader"),

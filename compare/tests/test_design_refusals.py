@@ -22,7 +22,7 @@ from treeimpact.compare.studies import design_words as W
 
 
 def _main(argv, capsys) -> tuple[int, str]:
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     rc = main(argv)
     err = capsys.readouterr().err.strip()
@@ -58,7 +58,7 @@ def test_a_flag_the_preset_fixes_is_refused(tmp_path, capsys, preset, flag):
 @pytest.mark.parametrize("spec", ["a_over_l=0.3:0.3:1", "a_over_l=0.3:0.3:4",
                                   "restitution=0:0:1"])
 def test_an_empty_range_is_refused_naming_the_flag_and_value(tmp_path, capsys, spec):
-    from treeimpact.compare.sweep.grid import parse_grid
+    from treeimpact.compare.studies.sweep.grid import parse_grid
 
     with pytest.raises(ParameterError) as exc:
         parse_grid([spec])
@@ -75,7 +75,7 @@ def test_an_empty_range_is_refused_naming_the_flag_and_value(tmp_path, capsys, s
 
 
 def test_a_one_value_list_and_a_real_range_are_kept():
-    from treeimpact.compare.sweep.grid import parse_grid
+    from treeimpact.compare.studies.sweep.grid import parse_grid
 
     assert parse_grid(["a_over_l=0.3"]).axes[0].values == (0.3,)
     assert parse_grid(["a_over_l=0.2:0.4:3"]).axes[0].values == (0.2, 0.3, 0.4)
@@ -102,7 +102,7 @@ def test_a_tree_outside_the_design_range_is_refused_by_its_own_value(tmp_path, c
 def test_a_map_no_point_of_which_runs_is_named_by_the_tree(tmp_path):
     """m/M_T = 15.5 is inside the study's range, but at a/l = 0.1 (M_T larger) no impactor
     within the registry's 1e4 kg gives it: the refusal names the tree and its map."""
-    from treeimpact.compare.validity.design_study import run_design_study
+    from treeimpact.compare.report.validity.design_study import run_design_study
 
     path = _tree(tmp_path, "h2", **{"impactor.mass": 1700.0})
     with pytest.raises(ParameterError) as exc:
@@ -117,7 +117,7 @@ def _short_tree(tmp_path):
 
 
 def test_a_study_none_of_whose_cells_ran_is_not_achieved(tmp_path):
-    from treeimpact.compare.validity.design_study import run_design_study
+    from treeimpact.compare.report.validity.design_study import run_design_study
 
     out = tmp_path / "d"
     with pytest.raises(NotAchieved) as exc:
@@ -131,7 +131,7 @@ def test_a_study_none_of_whose_cells_ran_is_not_achieved(tmp_path):
 
 def test_the_command_and_the_api_say_so(tmp_path, capsys, monkeypatch):
     import treeimpact
-    from treeimpact.compare.validity import design_study, presets
+    from treeimpact.compare.report.validity import design_study, presets
 
     small = dataclasses.replace(presets.PRESETS["design"], run=functools.partial(
         design_study.run_design_study, count=2))  # the preset on a 2 x 2 map
@@ -172,7 +172,7 @@ def test_no_sentence_from_a_line_without_cells():
 
 
 def test_the_trees_own_cell_without_numbers_is_said_so(tmp_path):
-    from treeimpact.compare.validity.design_study import tree_cell
+    from treeimpact.compare.report.validity.design_study import tree_cell
 
     scen = load_scenario(_short_tree(tmp_path))
     cell, problem = tree_cell(scen)

@@ -22,7 +22,7 @@ from treeimpact.compare.studies import design_words as W
 
 def _tree(scen, a_over_l: float, mass_ratio: float, name: str):
     """``scen`` clamped at a/l with an impactor of m/M_T (eq 7's M_T of the clamped trunk),
-    built without compare.sweep.apply."""
+    built without compare.studies.sweep.apply."""
     from treeimpact.analytic.model.reduction import reduce_trunk
 
     trunk = dataclasses.replace(scen.trunk, clamp_height=a_over_l * scen.trunk.length)
@@ -34,7 +34,7 @@ def _tree(scen, a_over_l: float, mass_ratio: float, name: str):
 @functools.lru_cache(maxsize=None)
 def _central():
     """central-leader (a plain cached function, not a module fixture: no scheduling group)."""
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
 
     return resolve_scenario("central-leader")
 
@@ -185,7 +185,7 @@ def test_the_study_of_a_tree_unlike_the_shipped_ones(tmp_path, plum):
     """A 3 x 3 study of the light-impactor tree: its maps span its own point, every
     reading along an input agrees with its own cell, every recommendation is in the
     designer's units."""
-    from treeimpact.compare.validity.design_study import run_design_study
+    from treeimpact.compare.report.validity.design_study import run_design_study
 
     paths = run_design_study(tmp_path, plum, count=3, workers=1)
     d = json.loads(paths["json"].read_text())

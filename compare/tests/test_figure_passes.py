@@ -1,5 +1,5 @@
 """Issue 39 item 3 (make report's non-physics work): fitting a figure's titles
-(compare.figure_text.fit_titles) lays it out once per round with its layout engine alone; each
+(compare.runs.figure_text.fit_titles) lays it out once per round with its layout engine alone; each
 round was a draw with no output of every artist before, on top of savefig's two draws (its
 own no-output one, then the one it writes). Counted here (a round's draw that comes back
 fails), and the PNG bytes checked against the old procedure (written out below as the
@@ -17,9 +17,9 @@ from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine
 
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare import figure_text
-from treeimpact.compare.ladder import build_ladder
 from treeimpact.compare.report import figures as report_figures
+from treeimpact.compare.runs import figure_text
+from treeimpact.compare.tree.ladder import build_ladder
 
 DPI = report_figures.DPI
 

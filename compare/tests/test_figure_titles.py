@@ -9,10 +9,10 @@ from __future__ import annotations
 import pytest
 
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare import figure_text
 from treeimpact.compare.report import figures as report_figures
 from treeimpact.compare.report.summary_figures import contact_scan_figure
-from treeimpact.compare.runs import RunCache
+from treeimpact.compare.runs import figure_text
+from treeimpact.compare.runs.cache import RunCache
 
 SCAN = {"durations": [2e-4, 5e-4, 2e-3, 1e-2, 5e-2], "gaps": {
     "x_max": [0.4, 0.1, 0.03, 0.01, 0.0], "energy_delivered": [2.0, 1.1, 0.4, 0.1, 0.02],
@@ -49,8 +49,8 @@ def drawn(tmp_path_factory):
     from treeimpact.compare.report.answer_figures import small_e_figure
     from treeimpact.compare.report.scenario import ScenarioSection
     from treeimpact.compare.studies.small_e import small_e_answer, small_e_sweep
-    from treeimpact.compare.sweep.run import run_sweeps
-    from treeimpact.compare.sweep.sensitivity_figure import sensitivity_figure
+    from treeimpact.compare.studies.sweep.run import run_sweeps
+    from treeimpact.compare.studies.sweep.sensitivity_figure import sensitivity_figure
 
     tmp = tmp_path_factory.mktemp("figures")
     files = report_figures.FigureFiles(tmp)
@@ -64,7 +64,7 @@ def drawn(tmp_path_factory):
     mp = pytest.MonkeyPatch()
     mp.setattr(figure_text, "save_figure", keep)
     mp.setattr(report_figures, "save_figure", keep)
-    from treeimpact.compare.sweep import sensitivity_figure as sens_module
+    from treeimpact.compare.studies.sweep import sensitivity_figure as sens_module
 
     mp.setattr(sens_module, "save_figure", keep)  # each module's own name for it
     try:
@@ -116,10 +116,10 @@ def test_every_figure_is_saved_through_the_title_fitting():
     studies' maps, identify's plot): ``.savefig(`` appears in figure_text.py alone."""
     from pathlib import Path
 
-    root = Path(figure_text.__file__).resolve().parents[1]
+    root = Path(figure_text.__file__).resolve().parents[2]
     files = [p for top in ("analytic", "compare", "mujoco_models", "bullet_models",
                            "treeimpact") for p in (root / top).rglob("*.py")]
     assert len(files) > 50, root
     writers = sorted(str(p.relative_to(root)) for p in files
                      if "tests" not in p.parts and ".savefig(" in p.read_text())
-    assert writers == ["compare/figure_text.py"], writers
+    assert writers == ["compare/runs/figure_text.py"], writers

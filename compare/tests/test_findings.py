@@ -1,7 +1,7 @@
 """Findings by physics, not by tree (issue 41): a shipped tree written as a user's scenario
 file gets the same verdicts cell by cell, and a user's own tree shows the findings whose
 causes its physics has. On the ladder's analytic and continuum rungs (engines=(): ms each;
-the engine rungs' verdicts use the same compare.findings rules)."""
+the engine rungs' verdicts use the same compare.runs.findings rules)."""
 
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ import pytest
 
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 from treeimpact.analytic.model.scenario_toml import scenario_toml
-from treeimpact.compare.cli import main
-from treeimpact.compare.findings import TreePhysics, finding_for
-from treeimpact.compare.ladder import build_ladder
-from treeimpact.compare.runs import RunCache
-from treeimpact.compare.verdicts import load_tolerances
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.runs.cache import RunCache
+from treeimpact.compare.runs.findings import TreePhysics, finding_for
+from treeimpact.compare.runs.verdicts import load_tolerances
+from treeimpact.compare.tree.ladder import build_ladder
 
 TOL = load_tolerances()
 
@@ -98,8 +98,8 @@ def test_a_findings_verdict_quotes_its_own_trees_numbers_and_no_other_trees():
     number in the text is one of its own or a rule's threshold (2, 1, 0.02, eq numbers)."""
     import re
 
-    from treeimpact.compare.findings import TreePhysics, cause_text
-    from treeimpact.compare.verdicts import judge, load_tolerances
+    from treeimpact.compare.runs.findings import TreePhysics, cause_text
+    from treeimpact.compare.runs.verdicts import judge, load_tolerances
 
     tol = load_tolerances()
     physics = TreePhysics(restitution=0.37, loss_ratio=3.21, crown_factor=1.57)
@@ -117,7 +117,7 @@ def test_a_findings_verdict_quotes_its_own_trees_numbers_and_no_other_trees():
 
 # --------------------------------------------------------------------------- bands per tree
 # issue 50 item 3: each 1-DOF finding's band is derived for the tree judged
-# (compare/bounds/continuum.py), never the shipped trees' envelope.
+# (compare/runs/bounds/continuum.py), never the shipped trees' envelope.
 
 MASS_BANDS = ("contact_dissipation", "peak_force")
 MESH_BANDS = ("x_max", "energy_delivered", "energy_transferred", "crown_peak",
@@ -180,8 +180,8 @@ def test_a_findings_band_moves_with_loss_ratio():
 def test_a_band_is_judged_so_it_can_fail():
     """The derived band is a check: a beam step outside it is out-of-band (a peak force
     above the SDOF's, against the band's upper end 0), one inside a finding."""
-    from treeimpact.compare.bounds import Pair
-    from treeimpact.compare.verdicts import judge
+    from treeimpact.compare.runs.bounds import Pair
+    from treeimpact.compare.runs.verdicts import judge
 
     ladder = build_ladder("open-center", cache=RunCache(), engines=())
     pair = Pair(ladder.scenario, ladder.physics, "peak_force", ladder["beam"], ladder["soft"])
@@ -203,8 +203,8 @@ def test_the_conventions_bound_follows_from_the_trees_masses(name):
         damping_ratio_for_restitution,
         restitution_for_damping_ratio,
     )
-    from treeimpact.compare.bounds import Pair
-    from treeimpact.compare.bounds.continuum import convention_impulse_bound
+    from treeimpact.compare.runs.bounds import Pair
+    from treeimpact.compare.runs.bounds.continuum import convention_impulse_bound
 
     ladder = build_ladder(name, cache=RunCache(), engines=())
     physics = ladder.physics

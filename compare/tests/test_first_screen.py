@@ -20,7 +20,7 @@ from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.report import _page_summary, build_sections
 from treeimpact.compare.report.base import environment, input_name
 from treeimpact.compare.report.glossary import entries
-from treeimpact.compare.runs import RunCache
+from treeimpact.compare.runs.cache import RunCache
 
 F = importlib.import_module("treeimpact.compare.report.first_screen")
 
@@ -47,9 +47,9 @@ class _Study:
     Sobol design of :data:`SOBOL_N` per tree run now on the sweep machinery."""
 
     def __init__(self, scens, folder):
-        from treeimpact.compare.studies.study_inputs import free_inputs
         from treeimpact.compare.studies.sobol import analyse_sobol, sobol_sweep
-        from treeimpact.compare.sweep.run import run_sweeps
+        from treeimpact.compare.studies.study_inputs import free_inputs
+        from treeimpact.compare.studies.sweep.run import run_sweeps
 
         trees = {}
         for s in scens:
@@ -73,7 +73,7 @@ def _pages(scens, folder) -> tuple[dict, str, str, list]:
 
 @pytest.fixture(scope="module", params=["shipped", "light-pendulum"])
 def pages(request, tmp_path_factory):
-    from treeimpact.compare.runs import resolve_scenario
+    from treeimpact.compare.runs.cache import resolve_scenario
 
     scens = ([resolve_scenario(n) for n in ("central-leader", "open-center", "realistic-crown")]
              if request.param == "shipped" else [_light_pendulum()])
@@ -131,11 +131,11 @@ def test_the_1_dof_sentence_quotes_the_table(pages):
 def test_the_largest_gap_has_its_cause_from_the_trees_physics(pages):
     """Per tree: the metric named is the one of largest |gap| (from the ladder's rungs:
     the continuum against the paper's model, the soft SDOF where it has no value), and the
-    cause is the finding compare.findings recognises for that metric from the tree's
+    cause is the finding compare.runs.findings recognises for that metric from the tree's
     physical quantities (loss_ratio, crown_factor, e), never its name."""
-    from treeimpact.compare.findings import TreePhysics, finding_for
     from treeimpact.compare.report.answer import ANSWER_METRICS, ANSWER_TERMS
-    from treeimpact.compare.rungs import RungKind
+    from treeimpact.compare.runs.findings import TreePhysics, finding_for
+    from treeimpact.compare.runs.rungs import RungKind
 
     summary, _, _, sections = pages
     why = next(i["text"] for i in summary["first_screen"] if i["key"] == "why")

@@ -155,15 +155,15 @@ def test_engine_chain_and_continuum_records_get_the_same_verdict(crown):
 def test_full_preset_validates_identification_on_every_rung():
     """The issue's validation: records from every rung (analytic, soft, beam, both engines'
     chains) at 1-20 kHz with 0.5-2 % noise; the default study keeps the cheap part."""
-    from treeimpact.compare.backends import ENGINES
+    from treeimpact.compare.report.validity.study import get_preset
+    from treeimpact.compare.runs.backends import ENGINES
     from treeimpact.compare.studies.ident_study import (
         RUNGS,
         SAMPLING_NOISES,
         SAMPLING_RATES,
         study_sweeps,
     )
-    from treeimpact.compare.sweep.grid import parse_grid
-    from treeimpact.compare.validity.study import get_preset
+    from treeimpact.compare.studies.sweep.grid import parse_grid
 
     full = get_preset("full")
     assert full.identification and set(full.ident_engine_rungs) == set(ENGINES)

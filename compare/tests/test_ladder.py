@@ -17,9 +17,12 @@ from treeimpact.analytic.identify.procedure import (
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.options import Option
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
-from treeimpact.compare import backends
-from treeimpact.compare.backends import Backend
-from treeimpact.compare.ladder import (
+from treeimpact.compare.runs import backends
+from treeimpact.compare.runs.backends import Backend
+from treeimpact.compare.runs.cache import DIVERGED, FAILED, OK, SKIPPED, RunCache
+from treeimpact.compare.runs.findings import TreePhysics
+from treeimpact.compare.runs.verdicts import judge, load_tolerances
+from treeimpact.compare.tree.ladder import (
     ALL_METRICS,
     ANALYTIC_SAMPLE_STEP,
     IDENT_METRICS,
@@ -27,9 +30,6 @@ from treeimpact.compare.ladder import (
     failure_table,
     ladder_rungs,
 )
-from treeimpact.compare.runs import DIVERGED, FAILED, OK, SKIPPED, RunCache
-from treeimpact.compare.findings import TreePhysics
-from treeimpact.compare.verdicts import judge, load_tolerances
 
 TOL = load_tolerances()
 
@@ -70,7 +70,7 @@ def test_the_rod_rung_comes_from_the_registry_not_the_engine_name(monkeypatch):
     import sys
     import types
 
-    from treeimpact.compare.rungs import RungKind, rung_table
+    from treeimpact.compare.runs.rungs import RungKind, rung_table
 
     def register(name, trunks):
         mod = types.ModuleType(f"_fake_{name}")
@@ -92,7 +92,7 @@ def test_default_segments_come_from_the_chain_convergence_rule():
     """The ladder's N is chain_segments' (the compared metrics' convergence on the exact
     chain and rod), never below the stiffness-and-frequency rule's; a given N is kept."""
     from treeimpact.analytic.continuum.chain import default_segments
-    from treeimpact.compare.ladder import chain_segments
+    from treeimpact.compare.tree.ladder import chain_segments
 
     s = load_scenario("central-leader")
     n = chain_segments(s)
@@ -213,7 +213,8 @@ def test_every_tolerance_has_a_reason_and_bad_files_are_refused(tmp_path):
             for metric, entry in metrics.items():
                 assert metric in ALL_METRICS, f"{section}.{kind}.{metric}: unknown metric"
                 assert len(entry["reason"]) > 20
-    for f in TOL["finding"]:  # a fixed band, or one derived per tree (compare.bounds.continuum)
+    # a fixed band, or one derived per tree (compare.runs.bounds.continuum)
+    for f in TOL["finding"]:
         assert f["metric"] in ALL_METRICS
         assert f["band"][0] < f["band"][1] if "band" in f else f["band_bound"]
     bad = tmp_path / "t.toml"
@@ -320,8 +321,8 @@ def test_every_engine_run_says_its_steps_and_what_set_its_step(ladder_of, run_ca
     The report's chains (10-12 segments) are stepped by their contact, not the chain's
     highest mode (docs/time-step.md); a chain run stepped by phase covers t_end with its
     contact steps and its free steps (docs/engines.md "Stepping by phase")."""
-    from treeimpact.compare.backends import ENGINES
     from treeimpact.compare.report.runlog import run_rows
+    from treeimpact.compare.runs.backends import ENGINES
 
     ladder_of("open-center")
     runs = [r for r in run_cache if r.ok]
@@ -344,7 +345,7 @@ def test_two_records_whose_largest_maximum_is_another_peak_are_ambiguous():
     only where both pick the same peak (the family's high clamp: four maxima within 1.1 %,
     the chain's largest the beam's second); a single-peaked record is left to the rule of
     one against several."""
-    from treeimpact.compare.peaks import other_peak as _other_peak
+    from treeimpact.compare.runs.peaks import other_peak as _other_peak
 
     a, b = [0.010, 0.030], [0.011, 0.031]
     assert _other_peak(a, b, 0.010, 0.031) and _other_peak(b, a, 0.031, 0.010)
@@ -361,7 +362,7 @@ def test_a_flat_top_within_the_x_max_tolerance_resolves_no_time_of_the_maximum()
 
     import numpy as np
 
-    from treeimpact.compare.peaks import within_top
+    from treeimpact.compare.runs.peaks import within_top
 
     t = np.linspace(0.0, 0.04, 4001)
     rec = SimpleNamespace(t=t, x=1.0 - (t - 0.02) ** 2 / 0.01 ** 2)

@@ -1,5 +1,5 @@
 """The mechanism of the 1-DOF findings: matching the 1-DOF model's impact loss to the
-continuum's closes the energy gap (compare.mechanism)."""
+continuum's closes the energy gap (compare.tree.mechanism)."""
 
 import pytest
 
@@ -7,8 +7,8 @@ from treeimpact.analytic.contact.matched_loss import matched_loss_restitution
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.compare.ladder import build_ladder
-from treeimpact.compare.mechanism import matched_loss_evidence
+from treeimpact.compare.tree.ladder import build_ladder
+from treeimpact.compare.tree.mechanism import matched_loss_evidence
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 

@@ -1,11 +1,11 @@
-"""The one pool (compare.pool): results in the items' order, progress per item, an item that
+"""The one pool (compare.runs.pool): results in the items' order, progress per item, an item that
 kills its worker becomes its own outcome instead of taking the run down."""
 
 import os
 
 import pytest
 
-from treeimpact.compare.pool import process_map
+from treeimpact.compare.runs.pool import process_map
 
 
 def _square_or_crash(x):
@@ -49,7 +49,7 @@ def test_a_stop_request_ends_a_wait_for_workers_within_the_poll_interval(tmp_pat
     return their results after 60 s, which is also this test's hang guard)."""
     import threading
 
-    from treeimpact.compare import pool
+    from treeimpact.compare.runs import pool
 
     marks = [tmp_path / "a", tmp_path / "b"]
     timer = threading.Timer(0.5, pool.request_stop)
@@ -68,7 +68,7 @@ def test_the_stop_flag_takes_no_lock_a_second_signal_could_wait_for():
     signal landing inside it (timeout signals the command, then its group) waited for that
     lock in the same thread forever: a `treeimpact report` hung until killed. The flag is a
     plain attribute: nothing in it can be acquired."""
-    from treeimpact.compare import pool
+    from treeimpact.compare.runs import pool
 
     assert not any(hasattr(v, "acquire") for v in vars(pool.STOP).values())
     pool.request_stop()
@@ -83,7 +83,7 @@ def test_a_pool_broken_by_the_stop_signal_is_the_stop_not_a_traceback(monkeypatc
     """A signal to the process group also ends the forkserver and the workers: a pool
     starting then fails with EOFError (measured: a `timeout` during a report's first pool).
     With a stop requested that is the stop (KeyboardInterrupt: one line, exit 130)."""
-    from treeimpact.compare import pool
+    from treeimpact.compare.runs import pool
 
     class Dying:
         _processes = {}
@@ -128,7 +128,7 @@ def test_ending_a_pool_kills_a_worker_that_outlives_sigterm_and_its_manager_thre
     60 s and leave their marks (that is also the hang guard)."""
     from concurrent.futures import wait
 
-    from treeimpact.compare import pool as pool_module
+    from treeimpact.compare.runs import pool as pool_module
 
     marks = [tmp_path / "a", tmp_path / "b"]
     pool = pool_module._executor(2, "fork")
@@ -144,7 +144,7 @@ def test_ending_a_pool_kills_a_worker_that_outlives_sigterm_and_its_manager_thre
 def test_a_preload_name_that_is_no_module_is_refused_loudly():
     """A renamed module named for the forkserver's preload fails in the caller (the
     forkserver itself ignores an ImportError), and names it."""
-    from treeimpact.compare import pool as pool_module
+    from treeimpact.compare.runs import pool as pool_module
 
     before = dict(pool_module._PRELOAD)
     with pytest.raises(ImportError, match="treeimpact.compare.studies.no_such_module"):
@@ -153,9 +153,9 @@ def test_a_preload_name_that_is_no_module_is_refused_loudly():
         pool_module.preload_in_workers("treeimpact.no_such_package.module")
     assert pool_module._PRELOAD == before
     # the pooled function's module joins the named ones when it is the package's
-    preload = pool_module._forkserver_preload(("treeimpact.compare.runs", "builtins"))
+    preload = pool_module._forkserver_preload(("treeimpact.compare.runs.cache", "builtins"))
     assert preload[:len(before)] == list(before) and "builtins" not in preload
-    assert "treeimpact.compare.runs" in preload
+    assert "treeimpact.compare.runs.cache" in preload
 
 
 def test_the_forkserver_imports_what_the_caller_named(tmp_path):
@@ -168,9 +168,10 @@ def test_the_forkserver_imports_what_the_caller_named(tmp_path):
         "import sys\n\ndef loaded(name):\n    return name in sys.modules\n")
     code = ("import sys; sys.path.insert(0, '.')\n"
             "from probe import loaded\n"
-            "from treeimpact.compare.pool import preload_in_workers, process_map\n"
+            "from treeimpact.compare.runs.pool import preload_in_workers, process_map\n"
             "preload_in_workers('treeimpact.compare.studies.ident_fits')\n"
-            "names = ['treeimpact.compare.studies.ident_fits', 'treeimpact.compare.sweep.grid']\n"
+            "names = ['treeimpact.compare.studies.ident_fits',\n"
+            "         'treeimpact.compare.studies.sweep.grid']\n"
             "print(process_map(loaded, names, workers=2))\n")
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                           text=True, timeout=120)

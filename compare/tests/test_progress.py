@@ -1,4 +1,4 @@
-"""The command's progress display (compare.progress): quiet off a terminal, bars named by
+"""The command's progress display (compare.runs.progress): quiet off a terminal, bars named by
 job and stage, the overall line's fraction, and a child job's records drawn by its parent."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import io
 
 import pytest
-from treeimpact.compare import progress
+from treeimpact.compare.runs import progress
 
 
 class _Terminal(io.StringIO):

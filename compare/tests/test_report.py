@@ -14,7 +14,7 @@ from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.paper.reproduction import reproduce
 from treeimpact.compare.report import write_report
-from treeimpact.compare.runs import RunCache
+from treeimpact.compare.runs.cache import RunCache
 
 
 @pytest.fixture(scope="module")
@@ -112,10 +112,10 @@ def test_every_axis_has_a_unit(tmp_path):
     """Every figure of a scenario's section and the answer's (the small-e curves, the
     contact scan)."""
     from treeimpact.compare.report.answer_figures import small_e_figure
-    from treeimpact.compare.report.summary_figures import contact_scan_figure
     from treeimpact.compare.report.scenario import ScenarioSection
+    from treeimpact.compare.report.summary_figures import contact_scan_figure
     from treeimpact.compare.studies.small_e import small_e_answer, small_e_sweep
-    from treeimpact.compare.sweep.run import run_sweeps
+    from treeimpact.compare.studies.sweep.run import run_sweeps
 
     figs = []
 
@@ -172,8 +172,8 @@ def test_json_has_no_nan(report):
 
 
 def test_each_engine_draws_its_rungs_in_its_own_three_shades():
-    from treeimpact.compare.backends import BACKENDS, ENGINES
     from treeimpact.compare.report.figures import rung_style
+    from treeimpact.compare.runs.backends import BACKENDS, ENGINES
 
     class Rung:
         def __init__(self, backend, kind):
@@ -184,7 +184,7 @@ def test_each_engine_draws_its_rungs_in_its_own_three_shades():
     assert len(set(colours.values())) == 3 * len(ENGINES)  # no two rungs share a colour
     assert all(colours[(e, "engine")] == BACKENDS[e].shades[0] for e in ENGINES)
     # an engine's own elastic rod (MuJoCo's flex) has a fourth shade of its own
-    from treeimpact.compare.rungs import offers_rod
+    from treeimpact.compare.runs.rungs import offers_rod
 
     rods = {e: rung_style(Rung(e, "rod")) for e in ENGINES if offers_rod(e)}
     assert rods and not {r["color"] for r in rods.values()} & set(colours.values())
@@ -299,7 +299,7 @@ def test_the_run_list_is_short_rounded_and_failures_first(report):
     """Runs without a result first, with their reasons; every run in a collapsed list;
     options rounded to 3 significant digits with their units, reasons to 4."""
     from treeimpact.compare.report.runlog import run_rows
-    from treeimpact.compare.runs import OK, SKIPPED, Run
+    from treeimpact.compare.runs.cache import OK, SKIPPED, Run
 
     rows = run_rows([Run("tree", "soft", {"contact_duration": 0.00030583481301971617,
                                           "restitution": 0.1}, OK, wall_s=0.1),
@@ -325,7 +325,7 @@ def test_not_compared_is_said_once_per_reason_in_plain_words(report):
     """'Not compared' groups the tolerance file's undefined entries once per reason and
     names each comparison in words, never by its key (convention, engines.pendulum)."""
     from treeimpact.compare.report.scenario import not_compared_lines
-    from treeimpact.compare.rungs import RungKind
+    from treeimpact.compare.runs.rungs import RungKind
 
     lines = not_compared_lines([
         {"kind": "convention", "metrics": ["T0", "V"], "reason": "moving-together point"},
@@ -386,7 +386,7 @@ def test_force_and_displacement_figures_tell_the_rungs_apart(ladder_of):
     inside their axes; the displacement: one difference panel per rung, the 1-DOF trunks
     on one y scale and the flexible trunks on another."""
     from treeimpact.compare.report import figures
-    from treeimpact.compare.rungs import RungKind
+    from treeimpact.compare.runs.rungs import RungKind
 
     ladder = ladder_of("central-leader")
     ok = [r for r in ladder.rungs if r.ok]
@@ -537,7 +537,7 @@ def test_the_pooled_record_fits_are_each_rungs_own(report):
     each fit lands on its own rung, in the ladder's order, and equals the fit made in this
     process (the same record, noise seed and optimiser: equal to rounding of the JSON)."""
     from treeimpact.compare.studies.ident_fits import fit_one, fit_tasks
-    from treeimpact.compare.ladder import build_ladder
+    from treeimpact.compare.tree.ladder import build_ladder
 
     paths, cache = report
     fits = json.loads(paths["json"].read_text())["scenarios"]["open-center"]["record_fits"]
@@ -668,7 +668,7 @@ def test_the_report_command_exits_4_when_a_tree_has_no_1_dof_answer(tmp_path, mo
     """The pages are written and listed on stdout; stderr says which tree has no 1-DOF
     answer and why, and the exit code is 4 (ran, could not do what was asked)."""
     import treeimpact.compare.report as report_module
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     def written(out, **_):
         page = tmp_path / "report.json"

@@ -59,9 +59,9 @@ def test_the_validation_refuses_in_one_line_and_keeps_a_good_tree(tmp_path):
 
 
 def test_a_tree_at_e_0_is_collected_and_its_soft_rungs_skip_with_the_reason(tmp_path):
-    from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.findings import TreePhysics
-    from treeimpact.compare.runs import SKIPPED, attempt
+    from treeimpact.compare.runs.backends import get_backend
+    from treeimpact.compare.runs.cache import SKIPPED, attempt
+    from treeimpact.compare.runs.findings import TreePhysics
 
     scen = load_scenario("central-leader")
     dead = _with(scen, "contact", restitution=0.0)
@@ -84,7 +84,7 @@ def test_a_tree_at_e_0_is_collected_and_its_soft_rungs_skip_with_the_reason(tmp_
 
 
 def _check(metric, value, reference):
-    from treeimpact.compare.verdicts import Check, Verdict
+    from treeimpact.compare.runs.verdicts import Check, Verdict
 
     return Check("light", "beam", metric, value, "soft", reference, math.nan, 0.02,
                  Verdict.NOT_AVAILABLE, "")
@@ -107,7 +107,7 @@ def test_a_light_impactor_never_moves_with_the_trunk_on_the_reference():
     """The physics the skip names: a 0.1 kg impactor (the registry's lightest) on
     central-leader's 110 kg M_T parts before the trunk catches up (eq 12-35's T0 does not
     exist), where the paper's 132.4 kg pendulum moves with it."""
-    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.runs.backends import get_backend
 
     scen = load_scenario("central-leader")
     light = _with(scen, "impactor", mass=0.1)

@@ -134,7 +134,7 @@ def test_an_input_is_named_alone_only_when_its_interval_clears_the_runner_up():
 
 def test_the_study_of_one_tree_runs_on_the_sweeps(tmp_path):
     """One Morris trajectory (7 points) as a sweep, in this process: every point finite."""
-    from treeimpact.compare.sweep.run import run_sweeps
+    from treeimpact.compare.studies.sweep.run import run_sweeps
 
     (res,) = run_sweeps([sensitivity_sweep("open-center", tmp_path, 1)], workers=0,
                         progress=False)
@@ -180,7 +180,7 @@ def test_measuring_the_deciding_input_narrows_its_band(tmp_path):
     """central-leader's x_max gap is decided by the root's compliance (with the shear and
     the pad, not separable at 6 trajectories); measuring the root (the file's base
     stiffness held) narrows the band the answer table prints to under two thirds."""
-    from treeimpact.compare.sweep.run import run_sweeps
+    from treeimpact.compare.studies.sweep.run import run_sweeps
 
     scen = load_scenario("central-leader")
     held = _measured(tmp_path, scen, ["trunk.base_stiffness"])

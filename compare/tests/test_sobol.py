@@ -9,7 +9,6 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from treeimpact.compare.studies.study_inputs import INPUTS
 from treeimpact.compare.studies.sobol import (
     analyse_sobol,
     measure_first,
@@ -20,6 +19,7 @@ from treeimpact.compare.studies.sobol import (
     verdict,
     verdict_text,
 )
+from treeimpact.compare.studies.study_inputs import INPUTS
 
 ISHIGAMI = {"num_vars": 3, "names": ["x1", "x2", "x3"], "bounds": [[-math.pi, math.pi]] * 3}
 
@@ -207,9 +207,9 @@ def test_one_trees_design_runs_on_the_sweeps_with_its_measured_inputs_held(tmp_p
     the ranking names only free inputs."""
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.model.scenario_toml import scenario_toml
-    from treeimpact.compare.studies.study_inputs import free_inputs, ranges_of
     from treeimpact.compare.studies.sobol import sobol_sweep
-    from treeimpact.compare.sweep.run import run_sweeps
+    from treeimpact.compare.studies.study_inputs import free_inputs, ranges_of
+    from treeimpact.compare.studies.sweep.run import run_sweeps
 
     text = scenario_toml(load_scenario("open-center")).replace(
         "[calibration]",
@@ -278,7 +278,7 @@ def test_n_is_a_power_of_two_and_the_docs_say_each_presets():
     from pathlib import Path
 
     from treeimpact.analytic.errors import ParameterError
-    from treeimpact.compare.validity.study import PRESETS
+    from treeimpact.compare.report.validity.study import PRESETS
 
     with pytest.raises(ParameterError, match="power of two"):
         sobol_design(48)

@@ -15,7 +15,7 @@ import pytest
 
 from treeimpact.compare.report import write_report
 from treeimpact.compare.report.sort_keys import add_sort_keys
-from treeimpact.compare.runs import RunCache
+from treeimpact.compare.runs.cache import RunCache
 
 #: The units the report prints after a number, to SI (this test's own table).
 SI = {"%": 1e-2, "ms": 1e-3, "s": 1.0, "mm": 1e-3, "m": 1.0, "kN": 1e3, "N": 1.0, "J": 1.0,

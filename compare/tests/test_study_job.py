@@ -1,5 +1,6 @@
-"""A study run beside the report (compare/validity/study_job.py, ``report --with-study``): its
-section in the page, its failure as the report's, its end when the report stops."""
+"""A study run beside the report (compare/report/validity/study_job.py, ``report
+--with-study``): its section in the page, its failure as the report's, its end when the
+report stops."""
 
 from __future__ import annotations
 
@@ -10,11 +11,11 @@ import time
 import pytest
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.compare.cli import main
-from treeimpact.compare.commands.report import PROGRAM
+from treeimpact.compare.interface.cli import main
+from treeimpact.compare.interface.commands.report import PROGRAM
 from treeimpact.compare.report import write_report
-from treeimpact.compare.runs import RunCache
-from treeimpact.compare.validity.study_job import StudyJob
+from treeimpact.compare.report.validity.study_job import StudyJob
+from treeimpact.compare.runs.cache import RunCache
 
 
 def _quick(job: StudyJob, *grid: str) -> StudyJob:
@@ -92,7 +93,7 @@ def test_a_command_and_its_group_signalled_as_timeout_does_end_with_the_study(tm
     import signal
     import subprocess
 
-    proc = subprocess.Popen([sys.executable, "-m", "treeimpact.compare.cli", "report",
+    proc = subprocess.Popen([sys.executable, "-m", "treeimpact.compare.interface.cli", "report",
                              "--out", str(tmp_path), "--with-study", "default"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
@@ -183,8 +184,8 @@ def test_your_tree_gets_its_own_band_with_its_measured_inputs_held(tmp_path):
 
     from treeimpact.analytic.model.scenario import load_scenario
     from treeimpact.analytic.model.scenario_toml import scenario_toml
-    from treeimpact.compare.validity.sensitivity_study import run_sensitivity
-    from treeimpact.compare.validity.study import write_study
+    from treeimpact.compare.report.validity.sensitivity_study import run_sensitivity
+    from treeimpact.compare.report.validity.study import write_study
 
     tree = replace(load_scenario("open-center"), name="my-tree")
     text = scenario_toml(tree).replace(

@@ -127,8 +127,8 @@ def test_morris_drops_a_trajectory_with_a_failed_point_and_says_so(tmp_path):
     gone = S.analyse(table, 4)
     assert "gap.peak_force" not in gone["outputs"]
     assert gone["refused"]["gap.peak_force"].startswith("no complete trajectory has a finite")
-    from treeimpact.compare.validity.sensitivity_study import said
-    from treeimpact.compare.validity.study import write_study
+    from treeimpact.compare.report.validity.sensitivity_study import said
+    from treeimpact.compare.report.validity.study import write_study
 
     said(gone)
     paths = write_study(tmp_path, {}, sensitivity={"trajectories": 4, "crossings": False,
@@ -187,8 +187,8 @@ def test_a_study_survives_a_point_that_cannot_run(tmp_path, monkeypatch):
     e = 0.3 refused: the study completes, counts and names the failed points with their
     inputs, the indices say what they rest on, the page (html and md) shows the count and
     stderr's line says it."""
-    from treeimpact.compare.validity.sensitivity_study import run_sensitivity
-    from treeimpact.compare.validity.study import _points_said, write_study
+    from treeimpact.compare.report.validity.sensitivity_study import run_sensitivity
+    from treeimpact.compare.report.validity.study import _points_said, write_study
 
     monkeypatch.setattr(S, "answer_under", _flaky(lambda p: p["restitution"] > 0.3))
     study = tmp_path / "study"
@@ -220,7 +220,7 @@ def test_a_study_survives_a_point_that_cannot_run(tmp_path, monkeypatch):
 def _tiny(monkeypatch):
     """A preset of a one-point validity sweep and a one-trajectory Morris, N = 1 Sobol
     sensitivity part (15 points on open-center), registered for this test."""
-    from treeimpact.compare.validity.presets import PRESETS, Preset
+    from treeimpact.compare.report.validity.presets import PRESETS, Preset
 
     monkeypatch.setitem(PRESETS, "tiny", Preset(
         "tiny", "open-center", ("restitution=0.1",), ladder=False, engines=(), speed=False,
@@ -232,7 +232,7 @@ def _tiny(monkeypatch):
 def test_a_study_where_no_point_ran_exits_4_with_one_line(tmp_path, monkeypatch, capsys):
     """Every point refused: ``treeimpact sweep --preset`` writes the study and exits 4 with
     one stderr line naming the first point and its inputs."""
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     monkeypatch.setattr(S, "answer_under", _flaky(lambda p: True))
     out = tmp_path / "study"
@@ -248,7 +248,7 @@ def test_a_study_where_no_point_ran_exits_4_with_one_line(tmp_path, monkeypatch,
 def test_a_study_with_some_failed_points_exits_0_and_says_so(tmp_path, monkeypatch, capsys):
     """Points above e = 0.3 refused: exit 0, and stderr's warning per design with a failed
     point says how many and names the first."""
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     monkeypatch.setattr(S, "answer_under", _flaky(lambda p: p["restitution"] > 0.3))
     code = main([*_tiny(monkeypatch), "--out", str(tmp_path / "study")])
@@ -269,7 +269,7 @@ def test_a_report_says_not_achieved_when_its_study_exits_4(tmp_path):
     import sys
 
     from treeimpact.analytic.errors import NotAchieved
-    from treeimpact.compare.validity.study_job import StudyJob
+    from treeimpact.compare.report.validity.study_job import StudyJob
 
     child = [sys.executable, "-c", "import sys; print('treeimpact: not achieved: "
              "sensitivity: none of its 3 points ran'); sys.exit(4)"]

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from treeimpact.compare.cli import main
+from treeimpact.compare.interface.cli import main
 from treeimpact.compare.report import study_kinds
 from treeimpact.compare.report.studies import StudySection
-from treeimpact.compare.validity import presets
+from treeimpact.compare.report.validity import presets
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -48,8 +48,8 @@ def test_a_registered_study_runs_from_the_command_line(fake, tmp_path, capsys):
         "fake": {"tree": "central-leader"}}
     assert main(["sweep", "--preset", "nope", "--out", str(tmp_path / "n")]) == 2
     assert "fake" in capsys.readouterr().err.splitlines()[-1]  # the choices read the registry
-    from treeimpact.compare.commands.report import _study_folders
-    from treeimpact.compare.validity.study_job import StudyJob
+    from treeimpact.compare.interface.commands.report import _study_folders
+    from treeimpact.compare.report.validity.study_job import StudyJob
 
     assert _study_folders(["default", "fake"]) == {"default": "study", "fake": "fake"}
     job = StudyJob("fake", tmp_path / "fake", ["treeimpact"], scenarios=["open-center"])
@@ -78,6 +78,6 @@ def test_the_docs_name_the_files_a_new_study_touches():
     text = (ROOT / "docs" / "architecture.md").read_text()
     part = text[text.index("## Adding a study"):]
     part = part[:part.index("\n## ", 4)] if "\n## " in part[4:] else part
-    for name in ("compare/validity/presets.py", "compare/validity/__init__.py",
+    for name in ("compare/report/validity/presets.py", "compare/report/validity/__init__.py",
                  "compare/report/study_kinds.py", "register(Preset(", "register_kind("):
         assert name in part, name

@@ -1,5 +1,5 @@
-"""Tests of compare.sweep: grid specs, scenario overrides, the sweep runner (resume, failures,
-Dask), discrepancy and identification maps, speed points, and ``treeimpact sweep``.
+"""Tests of compare.studies.sweep: grid specs, scenario overrides, the sweep runner (resume,
+failures, Dask), discrepancy and identification maps, speed points, and ``treeimpact sweep``.
 
 Runs use the analytic backend (4 ms each) and a few soft-contact runs (0.1 s each) so the
 file stays within a few seconds on a busy 2-core machine.
@@ -21,13 +21,13 @@ from treeimpact.analytic.model.options import RESTITUTION, T_END, Option
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import METRIC_KEYS
-from treeimpact.compare.sweep.apply import apply_point
-from treeimpact.compare.sweep.grid import derived_ratios, parse_axis, parse_grid
-from treeimpact.compare.sweep.maps import discrepancies, identification_maps, validity_maps
-from treeimpact.compare.runs import INVALID
-from treeimpact.compare.sweep.journal import JOURNAL, TABLE, read_table
-from treeimpact.compare.sweep.run import run_sweep
+from treeimpact.compare.runs.cache import INVALID
 from treeimpact.compare.studies.speed import speed_points
+from treeimpact.compare.studies.sweep.apply import apply_point
+from treeimpact.compare.studies.sweep.grid import derived_ratios, parse_axis, parse_grid
+from treeimpact.compare.studies.sweep.journal import JOURNAL, TABLE, read_table
+from treeimpact.compare.studies.sweep.maps import discrepancies, identification_maps, validity_maps
+from treeimpact.compare.studies.sweep.run import run_sweep
 
 # --------------------------------------------------------------------------- grid specs
 
@@ -108,7 +108,8 @@ def test_derived_ratios_round_trip(ratios):
     for k, v in ratios.items():
         assert got[k] == pytest.approx(v, rel=1e-12)  # round-off of one product and quotient
     t = scen.trunk
-    # independent of compare.sweep: m_trunk = rho pi d^2 / 4 l, M_T from eq 7 (reduce_trunk)
+    # independent of compare.studies.sweep: m_trunk = rho pi d^2 / 4 l, M_T from eq 7
+    # (reduce_trunk)
     if "crown_ratio" in ratios:
         m_trunk = t.density * math.pi * t.diameter ** 2 / 4 * t.length
         assert t.crown_mass == pytest.approx(ratios["crown_ratio"] * m_trunk, rel=1e-12)
@@ -127,7 +128,7 @@ def test_point_outside_a_range_names_the_grid_parameter():
 # --------------------------------------------------------------------------- the runner
 
 
-#: The stand-in engines' options tables (compare.backends reads a backend's options there).
+#: The stand-in engines' options tables (compare.runs.backends reads a backend's options there).
 FAKE_OPTIONS = {"restitution": RESTITUTION, "t_end": T_END}
 T_END_OPTIONS = {"t_end": T_END}
 TRUNK_OPTIONS = {"trunk": Option(("sdof", "chain"), "trunk"), "segments": SEGMENTS,
@@ -147,7 +148,7 @@ def _explode_or_diverge(scenario, *, restitution=None, t_end=None):
 
 @pytest.fixture
 def fake_engine(monkeypatch):
-    from treeimpact.compare import backends
+    from treeimpact.compare.runs import backends
 
     monkeypatch.setitem(backends.BACKENDS, "fake", backends.Backend(
         "fake", f"{__name__}:_explode_or_diverge", None, "test engine",
@@ -197,7 +198,7 @@ def _infinite_x_max(scenario, *, t_end=None):
 
 
 def test_run_returning_infinite_metrics_is_recorded_as_diverged(tmp_path, monkeypatch):
-    from treeimpact.compare import backends
+    from treeimpact.compare.runs import backends
 
     monkeypatch.setitem(backends.BACKENDS, "inf", backends.Backend(
         "inf", f"{__name__}:_infinite_x_max", None, "test engine",
@@ -220,7 +221,7 @@ def _dies_at_half(scenario, *, t_end=None):
 
 
 def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
-    from treeimpact.compare import backends
+    from treeimpact.compare.runs import backends
 
     monkeypatch.setitem(backends.BACKENDS, "crash", backends.Backend(
         "crash", f"{__name__}:_dies_at_half", None, "test engine",
@@ -239,8 +240,8 @@ def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
 
 
 def test_segments_one_is_the_sdof_trunk_and_shares_its_run(monkeypatch):
-    from treeimpact.compare import backends
-    from treeimpact.compare.sweep.plan import make_targets, plan
+    from treeimpact.compare.runs import backends
+    from treeimpact.compare.studies.sweep.plan import make_targets, plan
 
     monkeypatch.setitem(backends.BACKENDS, "eng", backends.Backend(
         "eng", f"{__name__}:_engine_with_trunk", None, "test engine",
@@ -271,7 +272,7 @@ def _takes_segments(scenario, *, segments=None, t_end=None):
 
 
 def test_unavailable_option_is_a_skipped_row_not_a_crash(tmp_path, fake_engine, monkeypatch):
-    from treeimpact.compare import backends
+    from treeimpact.compare.runs import backends
 
     monkeypatch.setitem(backends.BACKENDS, "seg", backends.Backend(
         "seg", f"{__name__}:_takes_segments", None, "test engine",
@@ -404,7 +405,7 @@ def test_validity_map_of_soft_against_analytic(tmp_path):
 
 def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tmp_path):
     from treeimpact.compare.report.studies import StudySection
-    from treeimpact.compare.validity.study import write_study
+    from treeimpact.compare.report.validity.study import write_study
 
     res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"], tmp_path / "s",
                     backends=["analytic", "soft"], workers=0, progress=False)
@@ -436,7 +437,7 @@ def test_study_stands_alone_and_is_a_report_section_with_its_figures_in_place(tm
 def test_a_study_without_speed_curves_says_where_its_engine_runs_are(tmp_path, fake_engine):
     """A study whose engine runs are on its validity maps and which draws no speed-accuracy
     curves says so (not 'No engine in this study' above its engine runs)."""
-    from treeimpact.compare.validity.study import write_study
+    from treeimpact.compare.report.validity.study import write_study
 
     res = run_sweep("central-leader", ["restitution=0.2,0.3"], tmp_path / "s",
                     backends=["analytic", fake_engine], workers=0, progress=False)
@@ -448,8 +449,8 @@ def test_a_study_without_speed_curves_says_where_its_engine_runs_are(tmp_path, f
 
 
 def test_long_runs_are_their_own_worker_calls_and_short_ones_are_batched(fake_engine):
-    from treeimpact.compare.sweep.cost import chunks as _chunks
-    from treeimpact.compare.sweep.plan import make_targets, plan
+    from treeimpact.compare.studies.sweep.cost import chunks as _chunks
+    from treeimpact.compare.studies.sweep.plan import make_targets, plan
 
     tasks, _ = plan(load_scenario("central-leader"), parse_grid(["restitution=0:0.9:40"]),
                     make_targets(["analytic", fake_engine]), identify=False)
@@ -473,10 +474,10 @@ def test_a_cheap_run_is_repeated_per_record_so_its_fits_spread_over_the_workers(
     analysis (an engine, 1 s); a run cheaper than a fit (analytic, 5 ms) is made once per
     record, so 18 fits of one record grid do not queue on one worker (the default study's
     sampling grid did: 10 s on one core)."""
-    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.runs.backends import get_backend
     from treeimpact.compare.studies.ident_records import ANALYSIS
-    from treeimpact.compare.sweep.cost import ANALYSIS_COST
-    from treeimpact.compare.sweep.plan import make_targets, plan
+    from treeimpact.compare.studies.sweep.cost import ANALYSIS_COST
+    from treeimpact.compare.studies.sweep.plan import make_targets, plan
 
     grid = parse_grid(["restitution=0.1", "record.rate=1e3,5e3,2e4", "record.seed=1,2"])
     tasks, _ = plan(load_scenario("central-leader"), grid,
@@ -490,11 +491,11 @@ def test_a_cheap_run_is_repeated_per_record_so_its_fits_spread_over_the_workers(
 
 def test_a_worker_makes_a_run_repeated_per_record_once_for_its_consecutive_tasks(monkeypatch):
     """The tasks that repeat one run per record (above) share Task.run; a worker making them
-    one after the other makes the run once (compare.sweep.execute._LAST_RUN) and gives
+    one after the other makes the run once (compare.studies.sweep.execute._LAST_RUN) and gives
     every row the outcome the repeated runs gave; a task of another run makes its own."""
     from treeimpact.compare.studies.ident_records import ANALYSIS
-    from treeimpact.compare.sweep import execute
-    from treeimpact.compare.sweep.plan import make_targets, plan
+    from treeimpact.compare.studies.sweep import execute
+    from treeimpact.compare.studies.sweep.plan import make_targets, plan
 
     grid = parse_grid(["restitution=0.1,0.5", "record.rate=1e3,5e3,2e4"])
     tasks, _ = plan(load_scenario("central-leader"), grid, make_targets(["analytic"]),
@@ -545,7 +546,7 @@ def test_speed_point_is_max_relative_error_and_wall_time_per_simulated_second():
 
 
 def test_treeimpact_sweep_writes_table_maps_and_study(tmp_path, capsys):
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     out = tmp_path / "sw"
     rc = main(["sweep", "--grid", "restitution=0.2:0.6:3", "--grid", "mass_ratio=0.5,1",
@@ -580,7 +581,7 @@ def test_treeimpact_sweep_writes_table_maps_and_study(tmp_path, capsys):
      ["--sensitivity-scenario", "used with --preset"]),
 ])
 def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
-    from treeimpact.compare.cli import main
+    from treeimpact.compare.interface.cli import main
 
     rc = main(["sweep", *argv, "--backend", "analytic", "--out", str(tmp_path / "o")]
               if "--backend" not in argv else ["sweep", *argv, "--out", str(tmp_path / "o")])
@@ -593,8 +594,8 @@ def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
 
 def test_interrupted_sweep_command_says_how_to_resume_and_exits_130(tmp_path, capsys,
                                                                      monkeypatch):
-    from treeimpact.compare.cli import main
-    from treeimpact.compare.commands import sweep
+    from treeimpact.compare.interface.cli import main
+    from treeimpact.compare.interface.commands import sweep
 
     def interrupted(*args, **kw):
         raise KeyboardInterrupt
@@ -615,8 +616,8 @@ def test_map_cells_print_their_values_outline_the_tolerance_and_say_why_na():
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
-    from treeimpact.compare.sweep.map_cells import _extend, _heat
-    from treeimpact.compare.sweep.validity_maps import _validity_caption
+    from treeimpact.compare.studies.sweep.map_cells import _extend, _heat
+    from treeimpact.compare.studies.sweep.validity_maps import _validity_caption
 
     matplotlib.use("Agg")
     cell = pd.DataFrame({"restitution": [0.1, 0.5, 0.9], "crown_ratio": [0.0, 0.0, 0.0],
@@ -644,7 +645,7 @@ def test_map_labels_fit_their_cells_and_ticks_read_in_the_texts_units():
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from treeimpact.compare.sweep.map_cells import (
+    from treeimpact.compare.studies.sweep.map_cells import (
         _grid_figure,
         _heat,
         _percent_colorbar,
@@ -687,7 +688,7 @@ def test_every_map_axis_of_a_registry_input_states_its_display_unit():
     test_every_axis_has_a_unit): the registry's words and display unit, "(1)" for a
     dimensionless number; a caption's prose leaves "(1)" out."""
     from treeimpact.analytic.model.registry import PARAMETERS
-    from treeimpact.compare.sweep.map_cells import _label, axis_label
+    from treeimpact.compare.studies.sweep.map_cells import _label, axis_label
 
     swept = [p for p in PARAMETERS if p.sweep is not None]
     assert {"restitution", "crown_ratio", "contact_duration"} <= {p.sweep for p in swept}
@@ -700,8 +701,8 @@ def test_every_map_axis_of_a_registry_input_states_its_display_unit():
 def test_every_map_of_a_study_shares_one_colour_scale_and_letters_only_where_shown(tmp_path):
     """Validity and identification maps of one study on one colour scale; the study's text
     lists the rung letters a map prints, none when the maps show steps (no letters)."""
-    from treeimpact.compare.sweep.maps import DEFAULT_TOLERANCE, colour_scale
-    from treeimpact.compare.validity.study import write_study
+    from treeimpact.compare.report.validity.study import write_study
+    from treeimpact.compare.studies.sweep.maps import DEFAULT_TOLERANCE, colour_scale
 
     res = run_sweep("central-leader", ["restitution=0.3,0.6", "crown_ratio=0,1"],
                     tmp_path / "s", backends=["analytic", "soft"], workers=0, progress=False)
@@ -721,7 +722,7 @@ def test_the_identification_caption_counts_reasons_whatever_the_rows_order():
     """Cells whose procedure stopped for one reason count as one reason, whatever numbers
     its message carries, and the caption does not follow the order the sweep's workers
     finished in (it did: two runs of one study wrote two captions)."""
-    from treeimpact.compare.sweep.identification_maps import _why_not_identified
+    from treeimpact.compare.studies.sweep.identification_maps import _why_not_identified
 
     stop = ("identification: the bodies do not move together before x_max (the pendulum "
             "is {} mm off the trunk on the way to the peak, above 0.113 mm)")

@@ -11,7 +11,7 @@ today's code with it at 1e-9 relative.
 The 50 points vary every swept axis over its range together (a 5-dimensional Halton
 sequence, bases 2 3 5 7 11): restitution 0.05-0.95, contact_duration 0.2-2 ms (log),
 crown_ratio 0-4, a_over_l 0.15-0.85, mass_ratio 0.2-3 (log); each is applied to the shipped
-scenarios in turn by compare/sweep/apply.py (the sweeps' rule).
+scenarios in turn by compare/studies/sweep/apply.py (the sweeps' rule).
 
     python tests/data/make_exact_metrics.py [--rev ee677a4]
 
@@ -75,7 +75,7 @@ import json
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.contact.soft import simulate_soft
-from treeimpact.compare.sweep.apply import apply_point
+from treeimpact.compare.studies.sweep.apply import apply_point
 cases = json.loads(%(cases)r)
 out = []
 for case in cases:

@@ -7,7 +7,7 @@ relative of the code before its speed work). Generated once, from the baseline c
 
 The commit's package is laid out beside today's (benchmarks/_baseline.py) and run in a child
 process; each case is a shipped scenario, a sweep point applied to it by that commit's
-compare.sweep.apply (restitution, crown_ratio, a_over_l, mass_ratio, t_end) and the run's
+compare.studies.sweep.apply (restitution, crown_ratio, a_over_l, mass_ratio, t_end) and the run's
 options. Floats are stored as JSON numbers (repr: they read back bit for bit), NaN as NaN.
 """
 
@@ -47,7 +47,7 @@ e.g. still in contact at t_end, is a case too: its one-line error)."""
 SNIPPET = """
 import json, sys
 import treeimpact as ti
-from treeimpact.compare.sweep.apply import apply_point
+from treeimpact.compare.studies.sweep.apply import apply_point
 out = []
 for case in json.loads(sys.stdin.read()):
     scen, options = apply_point(ti.load_scenario(case["scenario"]), case["point"])

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 
-from treeimpact.compare.runs import OK
+from treeimpact.compare.runs.cache import OK
 
 from .base import DISPLAY, TREES, finite, per_tree, put, rounded, span
 
@@ -46,13 +46,13 @@ def view_from_report(report: dict) -> dict:
 
 
 def view_from_ladders(ladders) -> dict:
-    """The view of ladders run now (:func:`compare.ladder.build_ladder`), with the report's
+    """The view of ladders run now (:func:`compare.tree.ladder.build_ladder`), with the report's
     own answer and mechanism functions."""
     from types import SimpleNamespace
 
-    from treeimpact.compare.mechanism import matched_loss_evidence
     from treeimpact.compare.report.answer import one_dof_answer
-    from treeimpact.compare.verdicts import relative_step
+    from treeimpact.compare.runs.verdicts import relative_step
+    from treeimpact.compare.tree.mechanism import matched_loss_evidence
 
     answers = {a["scenario"]: a for a in one_dof_answer([SimpleNamespace(ladder=L, fits=[])
                                                          for L in ladders])
@@ -78,7 +78,7 @@ def view_from_ladders(ladders) -> dict:
 def cheap_ladders():
     """The shipped trees' ladders without the engines (analytic, soft, beam, Timoshenko,
     the effective-mass convention): about 2 s."""
-    from treeimpact.compare.ladder import build_ladder
+    from treeimpact.compare.tree.ladder import build_ladder
 
     return [build_ladder(t, engines=()) for t in TREES]
 

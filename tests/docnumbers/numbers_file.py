@@ -21,7 +21,7 @@ def write_numbers(report_dir: Path, path: Path = NUMBERS) -> list[str]:
     """docs/numbers.json from a report directory and the cheap part rerun now; returns the
     keys where the two disagree beyond :data:`RECOMPUTE_REL` (the report is from other
     code than this checkout: rerun ``make report``)."""
-    from treeimpact.compare.provenance import code_version, environment
+    from treeimpact.compare.runs.provenance import code_version, environment
 
     report = json.loads((Path(report_dir) / "report.json").read_text())
     out = (from_view(view_from_report(report)) | from_sensitivity(report)

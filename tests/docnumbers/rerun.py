@@ -57,7 +57,7 @@ def shipped() -> dict:
     Timoshenko trunk's softening, the code's limits, where the flexibility at the clamp is,
     the hinged chain's errors and the sensitivity study's design."""
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.verdicts import validity_tolerance
+    from treeimpact.compare.runs.verdicts import validity_tolerance
 
     out: dict = {"validity_tolerance_pct": rounded(100.0 * validity_tolerance())}
     scens = {t: load_scenario(t) for t in TREES}
@@ -151,10 +151,10 @@ def _chain_errors(out: dict, scens: dict) -> None:
 def _sensitivity_design(out: dict) -> None:
     """The sensitivity study's design (compare/studies/sensitivity.py, the presets): levels,
     inputs and their ranges, pads (ms), and each preset's trajectories and points."""
+    from treeimpact.compare.report.validity.study import PRESETS
     from treeimpact.compare.studies.sensitivity import DURATIONS as PADS
     from treeimpact.compare.studies.sensitivity import LEVELS
     from treeimpact.compare.studies.study_inputs import INPUTS
-    from treeimpact.compare.validity.study import PRESETS
 
     out["code.sensitivity.levels"] = LEVELS
     out["code.sensitivity.inputs"] = len(INPUTS)
@@ -224,7 +224,7 @@ CONTACT_CASES = ((132.4, 4.0, 0.5, 2e-3, 4e-5), (132.4, 110.0, 0.1, 5e-4, 1e-5),
 def contact_command() -> dict:
     """``treeimpact contact`` on :data:`CONTACT_CASES`: what each engine achieves with the
     corrected settings and with the naive formula (about 1 s)."""
-    from treeimpact.compare.contact_settings import contact_settings
+    from treeimpact.compare.runs.contact_settings import contact_settings
 
     out: dict = {}
     errs: dict = {"mujoco": [], "bullet": []}
@@ -275,7 +275,7 @@ def contact_default_step() -> dict:
     """``treeimpact contact`` at MuJoCo's default 2 ms step (:data:`DEFAULT_STEP_CASE`): the
     touch's steps, the duration's error, e of the same setting at dt/2 and 2 dt, and the
     largest step Bullet takes for it (about 0.1 s)."""
-    from treeimpact.compare.contact_settings import contact_settings
+    from treeimpact.compare.runs.contact_settings import contact_settings
 
     m1, m2, e, touch, dt = DEFAULT_STEP_CASE
     res = contact_settings(mass=m1, other_mass=m2, restitution=e, touch_duration=touch, dt=dt,
@@ -300,15 +300,15 @@ PROCEDURE_SEEDS = 100
 
 def procedure_on_noisy_records() -> dict:
     """The paper's procedure (eqs 39-48, its ``paper`` reading) on seeded records of the
-    central-leader model at 5 kHz with 1 % noise (compare.recording, as `treeimpact simulate
+    central-leader model at 5 kHz with 1 % noise (compare.runs.recording, as `treeimpact simulate
     --record` writes them), with 20 ms of rest before the impact (the README's commands)
     and with 10 ms (the cut docs/identification.md's table uses): the median and the range
     over :data:`PROCEDURE_SEEDS` seeds of its M_T error, % (a few seconds)."""
     import numpy as np
     from treeimpact.analytic.identify.procedure import PendulumTest, identify_from_record
     from treeimpact.analytic.model.scenario import load_scenario
-    from treeimpact.compare.backends import get_backend
-    from treeimpact.compare.recording import REST, sample
+    from treeimpact.compare.runs.backends import get_backend
+    from treeimpact.compare.runs.recording import REST, sample
 
     tree = load_scenario("central-leader")
     result = get_backend("analytic").simulate(tree)

@@ -211,7 +211,7 @@ def _backend_option_variants() -> dict:
     """option name -> [(Option, [backends])]: one entry per distinct definition (Bullet's
     --trunk takes fewer words than MuJoCo's)."""
     from treeimpact.analytic.errors import ParameterError
-    from treeimpact.compare.backends import BACKENDS
+    from treeimpact.compare.runs.backends import BACKENDS
 
     out: dict = {}
     for name, backend in BACKENDS.items():
@@ -250,14 +250,14 @@ def simulate_options(n: dict) -> str:
 
 def modes_options(n: dict) -> str:
     """docs/cli.md: ``treeimpact modes``'s backend options."""
-    from treeimpact.compare.commands.modes import MODES_OPTIONS
+    from treeimpact.compare.interface.commands.modes import MODES_OPTIONS
 
     return options_table(MODES_OPTIONS)
 
 
 def sweep_grid_names(n: dict) -> str:
     """docs/cli.md: the names a ``--grid`` axis may take besides dotted scenario fields."""
-    from treeimpact.compare.sweep.grid import ALIASES, DERIVED_RATIOS, RECORD_FIELDS
+    from treeimpact.compare.studies.sweep.grid import ALIASES, DERIVED_RATIOS, RECORD_FIELDS
 
     rows = ["| NAME | what |", "|---|---|"]
     for name, target in sorted(ALIASES.items()):

@@ -242,7 +242,7 @@ def beam_record(crown_ratio: float, rate: float, noise: float, seed: int, e: flo
     truth of its SDOF reduction, the identify flags, the contact time)."""
     from treeimpact.analytic.identify.procedure import pendulum_test_of
     from treeimpact.analytic.model.two_body import two_body_model
-    from treeimpact.compare.backends import get_backend
+    from treeimpact.compare.runs.backends import get_backend
     from treeimpact.compare.studies.ident_records import Case, _scenario
 
     scen = _scenario(Case("central-leader", e, crown_ratio, "beam"))
@@ -725,7 +725,7 @@ def coverage_numbers(seeds: int, e: float = 0.1) -> dict:
 def write_numbers(path: Path, numbers: dict, about: str) -> None:
     """Merge ``numbers`` into the results file ``path`` (docs/results/identify-validation.json:
     tests/docnumbers/ reads its ``numbers``), with when and at which commit."""
-    from treeimpact.compare.provenance import code_version
+    from treeimpact.compare.runs.provenance import code_version
 
     data = json.loads(path.read_text()) if path.exists() else {"numbers": {}, "about": {}}
     data["numbers"] |= {k: (round(v, 6) if isinstance(v, float) else v)
