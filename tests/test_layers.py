@@ -31,9 +31,9 @@ ANALYTIC_FLOORS = ("threads", "errors", "budget", "results", "model", "records",
 #: a subpackage of compare); a module imports only its own floor or lower ones, and the
 #: units of one floor import each other without a circle.
 COMPARE_FLOORS = (
-    # 1 runs/: what a run is (the backends, one Run record, tolerances, verdicts, rungs, pool)
+    # 1 runs/: what a run is: backends, one Run record, tolerances and verdicts, rungs, the pool
     ("runs",),
-    # 2 tree/: one tree (its ladder judged, its record fit, a user's tree, the family)
+    # 2 tree/: one tree: its ladder judged, its record fit, a user's tree, the family of trees
     ("tree",),
     # 3 studies/: the sweep machinery (studies/sweep/) and the studies built on sweeps
     ("studies",),
@@ -386,11 +386,15 @@ def test_a_misspelled_name_in_a_string_is_found():
 
 def test_the_architecture_page_states_each_floor_of_compare():
     """docs/architecture.md gives each floor of :data:`COMPARE_FLOORS` one numbered line,
-    bottom first, naming its folder (a floor added, removed or reordered fails here)."""
+    bottom first, naming its folder, with the role its comment above states (a floor
+    added, removed, reordered or reworded on one side only fails here)."""
     text = (ROOT / "docs" / "architecture.md").read_text()
     section = text.split("## compare/, bottom first")[1].split("\n## ")[0]
-    found = re.findall(r"^(\d)\. `(\w+)/`: ", section, re.M)
-    assert found == [(str(i), unit) for i, (unit,) in enumerate(COMPARE_FLOORS, 1)]
+    documented = re.findall(r"^(\d)\. `(\w+)/`: (.+)$", section, re.M)
+    source = Path(__file__).read_text().split("COMPARE_FLOORS = (\n")[1].split("\n)\n")[0]
+    commented = re.findall(r"^    # (\d) (\w+)/: (.+)$", source, re.M)
+    assert [u for _, u, _ in commented] == [unit for (unit,) in COMPARE_FLOORS]
+    assert documented == commented
 
 
 @pytest.mark.parametrize("top", ["analytic", "compare"])
