@@ -131,7 +131,7 @@ def _on_stop_signal(signum, frame) -> None:
     """The stop signals' handler while a command runs: :func:`compare.runs.pool.on_stop_signal`
     (``signum``, ``frame`` as the signal module passes them), and once the command has its
     outcome only the stop request. Imports nothing (a handler can land inside an import)."""
-    pool = sys.modules[__package__ + ".pool"]  # imported by stop_signals
+    pool = sys.modules["treeimpact.compare.runs.pool"]  # imported by stop_signals
     if _COMMAND["ended"]:
         pool.request_stop()
         return
