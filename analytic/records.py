@@ -60,6 +60,12 @@ class ShiftPlan:
     width: np.ndarray | None = None
     into: np.ndarray | None = None
 
+    def head(self, k: int) -> "ShiftPlan":
+        """The plan of the first ``k`` (<= n) shifted samples alone."""
+        return replace(self, n=k, x=self.x[:k],
+                                   width=None if self.width is None else self.width[:k],
+                                   into=None if self.into is None else self.into[:k])
+
 
 def shift_plan(t: np.ndarray, shift: float) -> ShiftPlan:
     """The :class:`ShiftPlan` of increasing times t (s) shifted by ``shift`` (s, > 0, less
@@ -127,9 +133,7 @@ def _force_peak(t: np.ndarray, force: np.ndarray, window: float, plan) -> float:
     c[:e] = _running_integral(t[:e], f[:e])
     c[e:] = c[e - 1]
     k = min(plan.n, last + 1)  # the windows starting at or before the last force
-    part = ShiftPlan(k, plan.x[:k], plan.q, *(None if a is None else a[:k]
-                                               for a in (plan.width, plan.into)))
-    return _peak(window_means(t, c, window, part))
+    return _peak(window_means(t, c, window, plan.head(k)))
 
 
 def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy: float, *,

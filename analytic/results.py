@@ -23,7 +23,15 @@ from .threads import blas_limit
 #: the bodies moving together (eq 34), the bodies parted for good by t_end (the whole-event
 #: energies and impulse are read after the last separation), or a contact-force history
 #: (none under Newton's instantaneous impacts, eqs 20-21: the analytic rung's are NaN).
-TOGETHER, PARTED, FORCE = "moving together", "parted", "contact force"
+class Needs(enum.Enum):
+    """What a run must have for a metric to have a value (:attr:`Metric.needs`)."""
+
+    TOGETHER = "moving together"
+    PARTED = "parted"
+    FORCE = "contact force"
+
+
+TOGETHER, PARTED, FORCE = Needs.TOGETHER, Needs.PARTED, Needs.FORCE
 
 
 @dataclass(frozen=True)
@@ -40,8 +48,8 @@ class Metric:
         ladder: whether the ladder compares it between rungs (then every [step.*] and
             [engines.*] section of compare/tolerances.toml has its entry).
         count: whether it is a whole number (a count of impacts or contacts).
-        needs: what a run must have for it to have a value: "" nothing, else
-            :data:`TOGETHER`, :data:`PARTED` or :data:`FORCE`.
+        needs: what a run must have for it to have a value (:class:`Needs`), None for
+            nothing.
     """
 
     name: str
@@ -51,7 +59,7 @@ class Metric:
     equation: str = ""
     ladder: bool = True
     count: bool = False
-    needs: str = ""
+    needs: Needs | None = None
 
 
 #: Every output metric, in the order of every backend's ``metrics`` dict (paper's symbols).
@@ -111,9 +119,9 @@ METRIC_UNITS = {m.name: (m.unit, m.meaning) for m in METRICS}
 LADDER_METRICS = tuple(m.name for m in METRICS if m.ladder)
 
 
-def metrics_needing(needs: str) -> tuple[str, ...]:
+def metrics_needing(needs: Needs) -> tuple[str, ...]:
     """The keys of the metrics whose value ``needs`` (:attr:`Metric.needs`) of a run."""
-    return tuple(m.name for m in METRICS if m.needs == needs)
+    return tuple(m.name for m in METRICS if m.needs is needs)
 
 
 class Deferred:

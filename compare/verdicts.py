@@ -14,7 +14,8 @@ from functools import lru_cache
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.results import FORCE, PARTED, TOGETHER, finite_number, metrics_needing, to_jsonable
+from treeimpact.analytic.results import (FORCE, PARTED, TOGETHER, finite_number,
+                                         metrics_needing, to_jsonable)
 
 from .bounds import validate_bound
 from .bounds.base import relative_step  # noqa: F401 (compare.verdicts.relative_step)

@@ -67,7 +67,7 @@ def test_the_declarations_are_one_per_metric_and_well_formed():
     names = [m.name for m in METRICS]
     assert len(set(names)) == len(names) and len({m.label for m in METRICS}) == len(names)
     for m in METRICS:
-        assert m.needs in ("", TOGETHER, PARTED, FORCE), m.name
+        assert m.needs in (None, TOGETHER, PARTED, FORCE), m.name
         assert not m.count or m.unit == "1", m.name  # a count is dimensionless
         assert m.meaning and "\n" not in m.meaning, m.name
     # the ladder's metric list is the declarations', re-exported where the ladder reads it
