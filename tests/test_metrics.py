@@ -24,6 +24,7 @@ from pathlib import Path
 import pytest
 
 import treeimpact as ti
+from treeimpact.compare.verdicts import TOLERANCES_PATH
 from treeimpact.analytic.results import (
     FORCE,
     LADDER_METRICS,
@@ -38,9 +39,8 @@ from test_glossary import _cited, glossary_problems
 from test_registry_defaults import _copy
 
 ROOT = Path(__file__).resolve().parents[1]
-#: The tolerance file (found by name: compare/'s modules may move, the file with them).
-TOLERANCES = next(p for p in sorted((ROOT / "compare").rglob("tolerances.toml"))
-                  if "tests" not in p.parts)
+#: The tolerance file, as the verdicts read it.
+TOLERANCES = Path(TOLERANCES_PATH)
 #: A declaration the tests add, as a new metric would be: a ladder metric without a field,
 #: a tolerance entry or a glossary entry yet.
 EXTRA = Metric("probe_time", "s", "probe time", "a probe's time after the first touch",
