@@ -60,6 +60,12 @@ class ShiftPlan:
     width: np.ndarray | None = None
     into: np.ndarray | None = None
 
+    def head(self, k: int) -> "ShiftPlan":
+        """The plan of the first ``k`` (<= n) shifted samples alone."""
+        return replace(self, n=k, x=self.x[:k],
+                                   width=None if self.width is None else self.width[:k],
+                                   into=None if self.into is None else self.into[:k])
+
 
 def shift_plan(t: np.ndarray, shift: float) -> ShiftPlan:
     """The :class:`ShiftPlan` of increasing times t (s) shifted by ``shift`` (s, > 0, less
@@ -110,6 +116,26 @@ def _peak(values: np.ndarray) -> float:
     return max(float(values.max()), -float(values.min())) if values.size else math.nan
 
 
+def _force_peak(t: np.ndarray, force: np.ndarray, window: float, plan) -> float:
+    """max |window means| of the ``force`` (N) over ``window`` (s) at the times t (s):
+    :func:`window_means` of its running impulse (``plan``: their :func:`shift_plan`, or None
+    when the record is shorter than the window: NaN), over the windows that start at or
+    before the last nonzero force. A later window holds no force: its running impulse C is
+    constant there (each step adds (0 + 0) h / 2), so its mean is exactly 0, which max |.|
+    does not need beside any other value; with no nonzero force, every window's mean."""
+    f = np.asarray(force, dtype=float)
+    nonzero = f != 0.0  # a NaN counts: its windows stay
+    last = f.size - 1 - int(nonzero[::-1].argmax())
+    if plan is None or not nonzero[last]:
+        return _peak(window_means(t, _running_integral(t, f), window, plan))
+    e = min(f.size, last + 2)  # C[e:] = C[e - 1]: the steps from sample last + 1 on are 0
+    c = np.empty(f.size)
+    c[:e] = _running_integral(t[:e], f[:e])
+    c[e:] = c[e - 1]
+    k = min(plan.n, last + 1)  # the windows starting at or before the last force
+    return _peak(window_means(t, c, window, plan.head(k)))
+
+
 def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy: float, *,
                         impactor_mass: float, impactor_stiffness: float,
                         impact_speed: float, collision_duration: float) -> dict:
@@ -135,8 +161,7 @@ def whole_event_metrics(record: "ImpactRecord", intervals: list, initial_energy:
     plan = (shift_plan(t, collision_duration)
             if collision_duration > 0 and t[-1] - t[0] > collision_duration else None)
     out = {"energy_delivered": nan, "contact_dissipation": nan, "rebound_energy": nan,
-           "impulse": nan, "peak_force": _peak(window_means(
-               t, _running_integral(t, r.force), collision_duration, plan)),
+           "impulse": nan, "peak_force": _force_peak(t, r.force, collision_duration, plan),
            "contact_episodes": len(intervals), "first_contact_duration": nan,
            "crown_peak": nan,
            "crown_peak_acceleration": nan}
@@ -195,8 +220,9 @@ def _released(force: np.ndarray, start: int) -> int | None:
     little and hold a compression its dashpot balances: the elastic energy of that
     compression never returns to the bodies, so the loss is read after the release);
     None when the force never reaches 0 within the record."""
-    free = np.flatnonzero(np.asarray(force[start:]) <= 0.0)
-    return int(start + free[0]) if free.size and start + free[0] < force.size - 1 else None
+    free = np.asarray(force[start:]) <= 0.0
+    k = int(free.argmax()) if free.size else 0  # the first True (0 if none)
+    return start + k if free.size and free[k] and start + k < force.size - 1 else None
 
 
 def _release_time(t: np.ndarray, force: np.ndarray, i0: int, i1: int) -> float:
@@ -306,21 +332,26 @@ def _common_velocity_time(t: np.ndarray, rel: np.ndarray, i0: int, tol: float) -
     """T0 (s): the first time in a contact from sample ``i0`` on where the relative velocity
     ``rel`` (m/s, from that sample) changes sign or falls within ``tol``, interpolated
     linearly between the samples at times ``t``; the contact's start if it is within
-    ``tol`` there or never."""
-    g = np.abs(rel) - tol  # <= 0 once the velocities are common
-    if rel.size > 1:
-        cross = np.flatnonzero(((g[:-1] > 0) & (g[1:] <= 0))
-                               | (np.sign(rel[:-1]) * np.sign(rel[1:]) < 0))
-    else:
-        cross = np.array([], dtype=int)
-    if g[0] <= 0 or not cross.size:
+    ``tol`` there or never. The samples are searched in growing chunks (256, then x 8: T0
+    is most often within the first few), each pair of neighbours tested as over the whole."""
+    if abs(rel[0]) - tol <= 0:
         return float(t[i0])
-    k = int(cross[0])
-    # the sign change of rel, or the crossing of |rel| = tol, interpolated linearly
-    a, b = (rel[k], rel[k + 1]) if np.sign(rel[k]) != np.sign(rel[k + 1]) else (
-        g[k], g[k + 1])
-    frac = a / (a - b) if a != b else 0.0
-    return float(t[i0 + k] + frac * (t[i0 + k + 1] - t[i0 + k]))
+    start, size = 0, 256
+    while start < rel.size - 1:
+        seg = rel[start:start + size + 1]  # pairs (start + i, start + i + 1)
+        g = np.abs(seg) - tol  # <= 0 once the velocities are common
+        cross = np.flatnonzero(((g[:-1] > 0) & (g[1:] <= 0))
+                               | (np.sign(seg[:-1]) * np.sign(seg[1:]) < 0))
+        if cross.size:
+            k = int(cross[0])
+            # the sign change of rel, or the crossing of |rel| = tol, interpolated linearly
+            a, b = (seg[k], seg[k + 1]) if np.sign(seg[k]) != np.sign(seg[k + 1]) else (
+                g[k], g[k + 1])
+            frac = a / (a - b) if a != b else 0.0
+            j = i0 + start + k
+            return float(t[j] + frac * (t[j + 1] - t[j]))
+        start, size = start + size, 8 * size
+    return float(t[i0])
 
 
 def _displacement_peak(t: np.ndarray, x: np.ndarray) -> tuple[float, float]:

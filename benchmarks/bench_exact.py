@@ -1,6 +1,6 @@
-"""Benchmark: the exact linear rungs, today's code against the baseline (f87a142, before
-issue 52's restructuring; issue 39's was 50f1faa), and their floor (issue 39 item 2, issue
-52 item 1).
+"""Benchmark: the exact linear rungs, today's code against the baseline (f3763a6, before
+issue 52 item 1's fifth pass; its fourth pass's was f87a142, issue 39's 50f1faa), and their
+floor (issue 39 item 2, issue 52 item 1).
 
 A run is ``treeimpact.simulate(name, backend=...)`` with the default options (0.1 s, 100
 samples a free collision): the ``beam`` backend at 12 and 48 elements, the ``soft`` SDOF
@@ -38,7 +38,7 @@ glibc's malloc settings reach both sides' children through the environment
 (``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=268435456 ... --out
 exact-malloc``: fresh pages' faults measured apart, docs/beam-impact.md).
 
-    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev f87a142] [--out NAME]
+    python benchmarks/bench_exact.py [--rounds 5] [--repeats 7] [--rev f3763a6] [--out NAME]
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _baseline  # noqa: E402
 import _results  # noqa: E402
 
-BASELINE = "f87a142"
+BASELINE = "f3763a6"
 #: (label, backend, options) of the runs timed.
 CASES = (("beam-12", "beam", {"elements": 12}), ("beam-48", "beam", {"elements": 48}),
          ("soft", "soft", {}), ("analytic", "analytic", {}))

@@ -20,16 +20,22 @@ CASE = {"trunk": "chain", "segments": 4, "t_end": 0.03}
 
 
 def _tolerances() -> dict:
+    """metric -> [engines.chain]'s ``rel``, or a per-tree bound's ``floor`` (what stays at
+    any step: the bound's first-order part is two integrators', and the phased and fixed
+    runs are one engine); every compared metric has one."""
     from treeimpact.compare.runs.verdicts import TOLERANCES_PATH
 
     with open(TOLERANCES_PATH, "rb") as fh:
         table = tomllib.load(fh)["engines"]["chain"]
-    return {k: v["rel"] for k, v in table.items() if "rel" in v}
+    out = {k: v.get("rel", v.get("floor")) for k, v in table.items()
+           if "rel" in v or ("bound" in v and "floor" in v)}
+    assert {"x_max", "impulse", "peak_force", "crown_peak"} <= out.keys(), out
+    return out
 
 
 def phased_on(monkeypatch, package: str) -> None:
-    """Stepping by phase in ``package`` (its ``_setup.PHASED``: MuJoCo's default, Bullet's
-    off by default, docs/engines.md)."""
+    """Stepping by phase in ``package`` (its ``_setup.PHASED``, both engines' default,
+    docs/engines.md): the test stays a test of the phased stepping if a default changes."""
     import importlib
 
     monkeypatch.setattr(importlib.import_module(f"{package}._setup"), "PHASED", True)
@@ -74,22 +80,22 @@ def test_no_phases_for_an_sdof_trunk_or_steps_that_are_nearly_one():
 
 
 def test_a_given_dt_or_the_sdof_is_a_fixed_step():
-    """MuJoCo steps by phase by default, Bullet not (its reason: bullet_models._setup.PHASED);
-    a given --dt and the SDOF trunk are fixed steps."""
+    """Both engines step by phase by default (their reasons: each ``_setup.PHASED``); a
+    given --dt, the SDOF trunk and Bullet's Newton impulses are fixed steps."""
     pytest.importorskip("treeimpact.mujoco_models")
     from treeimpact import bullet_models as bt
     from treeimpact import mujoco_models as mj
     from treeimpact.bullet_models import _setup as bullet_setup
     from treeimpact.mujoco_models import _setup as mujoco_setup
 
-    assert mujoco_setup.PHASED and not bullet_setup.PHASED
-    assert bt.make_setup(load_scenario("open-center"), trunk="chain", segments=4).phases is None
-
+    assert mujoco_setup.PHASED and bullet_setup.PHASED
     scen = load_scenario("open-center")
-    assert mj.make_setup(scen, trunk="sdof").phases is None
-    setup = mj.make_setup(scen, trunk="chain", segments=4)
-    assert setup.phases is not None and setup.phases.contact_step == setup.dt
-    assert mj.make_setup(scen, trunk="chain", segments=4, dt=setup.dt).phases is None
+    for mod in (mj, bt):
+        assert mod.make_setup(scen, trunk="sdof").phases is None
+        setup = mod.make_setup(scen, trunk="chain", segments=4)
+        assert setup.phases is not None and setup.phases.contact_step == setup.dt
+        assert mod.make_setup(scen, trunk="chain", segments=4, dt=setup.dt).phases is None
+    assert bt.make_setup(scen, trunk="chain", segments=4, contact="newton").phases is None
 
 
 def test_the_phased_run_is_the_fixed_step_run_within_the_stated_tolerances(runs):

@@ -16,14 +16,14 @@ ENGINES = ["treeimpact.mujoco_models", "treeimpact.bullet_models"]
 def test_a_run_records_its_steps_their_wall_time_and_what_set_its_step(package, monkeypatch):
     """result.extra["stepping"]: at a given (fixed) step the steps after the touch are t_end
     / dt rounded up (MuJoCo keeps 2 more, its record's ends); a run stepped by phase
-    (MuJoCo's default, Bullet's with ``PHASED``) covers the same time with its contact steps and its free steps at the trunk's
-    own step (analytic.engine.phases); the wall per step is the stepping's over them, and
+    (both engines' default, ``_setup.PHASED``) covers the same time with its contact steps
+    and its free steps at the trunk's own step (analytic.engine.phases); the wall per step is the stepping's over them, and
     the step is set by the term of the rule that is smallest (docs/time-step.md)."""
     import importlib
 
     mod = pytest.importorskip(package)
     setup_mod = importlib.import_module(f"{package}._setup")
-    monkeypatch.setattr(setup_mod, "PHASED", True)  # Bullet's default is the fixed step
+    monkeypatch.setattr(setup_mod, "PHASED", True)  # the default; phased whatever it is
     scen = load_scenario("open-center")
     run = mod.simulate(scen, trunk="chain", segments=4, t_end=0.03)
     cost = run.extra["stepping"]

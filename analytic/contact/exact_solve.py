@@ -2,7 +2,8 @@
 switches and samples as :mod:`.exact_record`, evaluated only where the metrics read them.
 
 Within a phase the modal coordinates at the samples are exp(lambda i h) times those at a
-block's first sample (no exponential per sample), only the 8 observables are formed, and
+block's first sample (no exponential per sample), only the observables the metrics and
+the phase test read are formed (:data:`_SAMPLED`, the pad's law), and
 each switch (the rule of :mod:`.phases`) is refined by Newton's method on the exact
 solution. The energies come in closed form where the metrics read them; the energy ledger is
 checked at every switch and at t_end. Design notes: docs/beam-impact.md.
@@ -41,10 +42,15 @@ _FIRST_BLOCK, _GROWTH = 32, 8
 #: 2 x 4097 took 31 us so against 46 as two factors; a 12-element state's 27 x 1025 took
 #: 351 us against 82 (its doublings' copies grow with the table).
 _ONE_TABLE = 2 ** 14
-_DELTA, _RATE = int(Observable.DELTA), int(Observable.DELTA_RATE)
-#: The row of the pad's law F = k_c delta + c_c delta' (N), after the 8 observables': the
-#: samples' product forms it with them (its row over the modes: k_c delta's + c_c delta''s).
-_LAW = len(Observable)
+#: The observables the samples' product forms, in :class:`Observable`'s order: all but
+#: delta' (the law's row below carries it; no metric reads it): 8 rows with the law's, the
+#: product half the time of 9 (OpenBLAS's 8-row tile: a 12-element state's 1024-sample
+#: block 19 us against 35, each kept row's numbers the same, measured).
+_SAMPLED = tuple(int(o) for o in Observable if o is not Observable.DELTA_RATE)
+#: The rows of delta and of the pad's law F = k_c delta + c_c delta' (N) in the samples'
+#: product and on the grid: the law's after the sampled observables' (its row over the
+#: modes: k_c delta's + c_c delta''s).
+_DELTA, _LAW = _SAMPLED.index(Observable.DELTA), len(_SAMPLED)
 #: The newest :func:`_fixed_parts` a decomposition keeps (pads met with it), for states of
 #: at most _PARTS_MAX_COORDS energy coordinates (12 elements: 56): a 48-element state's
 #: forms hold ~4 MB, and keeping them did not speed its warm run (medians 29.7 kept, 23.1
@@ -113,10 +119,11 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     """What a :class:`_State` reads that is fixed by its decomposition ``modal`` and the
     model's pad, damping and observed points (delta = ``g`` . q): the works' integrals over
     the kept modes (:class:`.kept_works.KeptWorks`: damping; and the pad's, in contact), the
-    observation rows over the kept modes (m x 9: the 8 observables and the law F, complex)
+    observation rows over the kept modes (m x 8: the :data:`_SAMPLED` observables and the
+    law F, complex)
     and their conjugate transpose,
     the law's rows (m x 6: delta, F, their first and second derivatives), delta's row over
-    u and the observation rows of a rigid mode's flight over the kept modes (9 x m: the observables' and the law's
+    u and the observation rows of a rigid mode's flight over the kept modes (8 x m: the sampled observables' and the law's
     rates Re(rows G V w), or None without a rigid mode). Kept on a small
     ``modal`` (read-only arrays) for the next solve with the same inputs: the same
     arithmetic, so the same numbers."""
@@ -136,15 +143,16 @@ def _fixed_parts(model: LinearImpactModel, modal, contact: bool, g: np.ndarray) 
     # delta and the law F = k_c delta + c_c delta', and their slopes
     delta, rate = rows[:, Observable.DELTA], rows[:, Observable.DELTA_RATE]
     law = np.stack([delta, k_c * delta + c_c * rate])
-    rows = np.column_stack([rows, law[1]])  # m x 9: the law's row after the observables'
-    rows_conj = rows.T.conj().copy()  # 9 x m: see _scan
+    rows = np.column_stack([rows[:, _SAMPLED], law[1]])  # m x 8: the sampled, the law
+    rows_conj = rows.T.conj().copy()  # 8 x m: see _scan
     lam = modal.lam[kept]
     law = np.concatenate([law, law * lam, law * lam ** 2]).T.copy()  # m x 6
     gd = modal.displacement_row(g)
     drift = None
     if modal.drift is not None:  # the flight s G u(0) of a rigid mode, over the kept modes
         drift = (observation_rows(model, modal, g) @ modal.drift)[:, kept]
-        drift = np.vstack([drift, k_c * drift[_DELTA] + c_c * drift[_RATE]])  # 9 x m
+        law_rate = k_c * drift[Observable.DELTA] + c_c * drift[Observable.DELTA_RATE]
+        drift = np.vstack([drift[_SAMPLED, :], law_rate])  # 8 x m, as the rows
     for a in (rows, rows_conj, law, gd, drift, *vars(works).values()):
         if a is not None:
             a.setflags(write=False)
@@ -256,7 +264,7 @@ def _scratch(slot, shape: tuple, dtype) -> np.ndarray:
 @dataclass
 class _Grid:
     """The sample grid (s) and what is written on it: the observables and the pad's law
-    (9 x n, one row per :class:`Observable`, then the law F, N) and the pad's force (N;
+    (8 x n, one row per :data:`_SAMPLED` observable, then the law F, N) and the pad's force (N;
     max(0, F) in contact, 0 apart: :meth:`write_force`)."""
 
     t: np.ndarray
@@ -312,7 +320,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
     phase, next phase) of the switch, or None when it lasts to the grid's end.
 
     A block's observables are Re(sum_k step_k^i c_k) with c_k = base_k rows_k:
-    one real product of the interleaved (Re, Im) of c, conjugated, (9 x 2m) and of the
+    one real product of the interleaved (Re, Im) of c, conjugated, (8 x 2m) and of the
     powers (2m x block), half the flops of the complex product's real part; the law F is
     its last row, and the force is written from it once the phase's end is known.
     :meth:`ContactPhase.has_ended` written out (the same comparisons)."""
@@ -360,7 +368,7 @@ def _scan(model: LinearImpactModel, st: _State, kind: ContactPhase, grid: _Grid,
 
 def _flight(st: _State, wk: np.ndarray):
     """(rates, flight) of a rigid mode's flight (a free billet) in the phase started with
-    modal coefficients ``wk``: the 8 observables' and the law's rates Re(rows G V w) (m/s,
+    modal coefficients ``wk``: the sampled observables' and the law's rates Re(rows G V w) (m/s,
     m/s^2, N/s; added as rate * s) and those of delta and of the law (m/s, N/s); (None,
     (0, 0)) without one."""
     if st.drift_rows is None:
@@ -371,7 +379,7 @@ def _flight(st: _State, wk: np.ndarray):
 
 def _samples(model: LinearImpactModel, grid: _Grid, solution: ExactSolution) -> ExactSamples:
     """The :class:`ExactSamples` of the written grid."""
-    x, y, vx, vy, _, _, crown, crown_v, _ = grid.obs
+    x, y, vx, vy, _, crown, crown_v, _ = grid.obs
     return ExactSamples(t=grid.t, x=x, vx=vx, y=y, vy=vy, force=grid.force,
                         pendulum_energy=PendulumEnergy(model, y, vy), crown=crown,
                         crown_velocity=crown_v, solution=solution)

@@ -23,8 +23,8 @@ class Metrics:
 
     Attributes:
         n_impacts: impacts before the bodies move together (eqs 20-21), a count.
-        T0: duration of the impact process, first impact to moving together, s.
-        x0: trunk displacement when the bodies begin to move together, m.
+        T0: duration of the impact process, first impact to moving together (Table 1), s.
+        x0: trunk displacement when the bodies begin to move together (Table 1), m.
         V: their common velocity then (eq 34), m/s.
         x_max: largest displacement of the impact point (eqs 37-38), m.
         t_xmax: its time after the first impact, s.
@@ -33,11 +33,11 @@ class Metrics:
         A_y: area under y(t) over the impact process (eq 44), m s.
         impact_loss: energy lost in the impacts (eq 56), J.
         impact_loss_inelastic: its e = 0 approximation (eq 57), J.
-        energy_transferred: energy transferred to the tree (eq 58), J.
+        energy_transferred: energy transferred to the tree (eq 58 with eq 56's loss), J.
         theta_b: the pendulum's rebound angle (eq 58), rad (NaN for a billet).
         ledger_residual: largest energy-ledger error over the input energy, 1.
         energy_delivered: work of the contact force on the trunk over all contacts, J.
-        contact_dissipation: energy lost in the contact over all contacts, J.
+        contact_dissipation: energy lost in the contact over all contacts (eq 56 summed), J.
         rebound_energy: the pendulum's energy after its last separation, J.
         impulse: total impulse of the contact force, N s.
         peak_force: largest contact force averaged over one touch duration, N.

@@ -14,7 +14,8 @@ from functools import lru_cache
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.results import finite_number, to_jsonable
+from treeimpact.analytic.results import (FORCE, PARTED, TOGETHER, finite_number,
+                                         metrics_needing, to_jsonable)
 
 from .bounds import validate_bound
 from .bounds.base import relative_step  # noqa: F401 (compare.runs.verdicts.relative_step)
@@ -175,7 +176,7 @@ class Check:
 #: metrics (eq 34, eq 45, eq 58) when the impactor parts before the trunk catches up with it,
 #: the whole-event energies and impulse when the bodies have not parted for good by t_end,
 #: the contact history on the Newton model's impulsive impacts.
-MOVING_TOGETHER = ("T0", "x0", "V", "A_x", "A_y", "t_sep", "energy_transferred", "theta_b")
+MOVING_TOGETHER = metrics_needing(TOGETHER)  # analytic.results.METRICS
 WHY_NONE = {
     **dict.fromkeys(MOVING_TOGETHER,
                     "the bodies never move together on this tree (the impactor parts before "
@@ -184,10 +185,10 @@ WHY_NONE = {
     "theta_b": ("eq 58's rebound angle is a pendulum's after it parts from the trunk's "
                 "moving-together phase: a billet has no angle, and a pendulum that never "
                 "moves together with the trunk has no such phase"),
-    **dict.fromkeys(("energy_delivered", "contact_dissipation", "rebound_energy", "impulse"),
+    **dict.fromkeys(metrics_needing(PARTED),
                     "the bodies have not parted for good by t_end on this tree (the energies "
                     "and the impulse are read after the last separation)"),
-    **dict.fromkeys(("peak_force", "first_contact_duration", "crown_peak_acceleration"),
+    **dict.fromkeys(metrics_needing(FORCE),
                     "Newton impacts are instantaneous (eqs 20-21): no contact force history"),
 }
 

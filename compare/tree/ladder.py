@@ -13,7 +13,7 @@ from types import SimpleNamespace
 from treeimpact.analytic.continuum.chain_impact import converged_segments
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
-from treeimpact.analytic.results import METRIC_UNITS, finite_number, to_jsonable
+from treeimpact.analytic.results import LADDER_METRICS, METRIC_UNITS, finite_number, to_jsonable
 
 from ..runs.backends import ENGINES
 from ..runs.bounds import Pair, tree_entry
@@ -37,11 +37,7 @@ from .identification import (
     rung_truth,
 )
 
-#: Impact metrics of the ladder (keys of analytic.results.METRIC_KEYS).
-LADDER_METRICS = ("T0", "x0", "V", "x_max", "t_xmax", "t_sep", "impact_loss",
-                  "energy_transferred", "theta_b", "energy_delivered", "contact_dissipation",
-                  "rebound_energy", "impulse", "peak_force", "contact_episodes", "crown_peak",
-                  "crown_peak_acceleration")
+#: The ladder's metrics: analytic.results.LADDER_METRICS and the identified ones as ``id_``.
 ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
 
 
