@@ -5,6 +5,7 @@ refused in one line."""
 from __future__ import annotations
 
 import math
+import re
 from types import SimpleNamespace
 
 import pytest
@@ -41,6 +42,27 @@ def test_a_bad_bound_is_refused_in_one_line(entry, words):
     if entry["bound"] not in B.BOUNDS and "rel" in entry:
         pytest.skip("no bound registered yet")
     with pytest.raises(ParameterError, match=words):
+        B.validate_bound("step.x.x_max", entry)
+
+
+@pytest.mark.parametrize("floor, words", [
+    (-0.1, "floor = -0.1: allowed a relative error in [0, 1)"),
+    (1.5, "floor = 1.5: allowed"), ("0.005", "floor = '0.005': allowed"),
+    (True, "floor = True: allowed")])
+def test_a_floor_outside_a_relative_error_is_refused_in_one_line(floor, words):
+    name = next(iter(B.READS_FLOOR))
+    with pytest.raises(ParameterError, match=re.escape(words)):
+        B.validate_bound("step.x.x_max", {"bound": name, "floor": floor, "reason": "r"})
+    B.validate_bound("step.x.x_max", {"bound": name, "floor": 0.005, "reason": "r"})
+
+
+@pytest.mark.parametrize("entry", [{"rel": 0.01, "floor": 0.005, "reason": "r"},
+                                   {"bound": "pad-time", "floor": 0.005, "reason": "r"}])
+def test_a_floor_no_bound_reads_is_refused(entry):
+    """A floor beside a fixed rel, or beside a bound that does not read one, would be
+    silently ignored."""
+    assert entry.get("bound") in (None, *B.BOUNDS) and "pad-time" not in B.READS_FLOOR
+    with pytest.raises(ParameterError, match=r"step\.x\.x_max\.floor: read only with bound"):
         B.validate_bound("step.x.x_max", entry)
 
 

@@ -14,7 +14,15 @@ Design notes: docs/ladder.md ("Tolerances per tree").
 
 from __future__ import annotations
 
-from .base import BOUNDS, Bound, Pair, register, tree_entry, validate_bound  # noqa: F401
+from .base import (  # noqa: F401
+    BOUNDS,
+    READS_FLOOR,
+    Bound,
+    Pair,
+    register,
+    tree_entry,
+    validate_bound,
+)
 
 # the modules that hold bounds, each registering its own (import order is registry order)
 from . import chain, contact, continuum, pendulum  # noqa: E402,F401

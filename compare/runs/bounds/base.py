@@ -92,18 +92,24 @@ BOUNDS: dict[str, BoundFunction] = {}
 
 #: The bounds that read an engine run's time step (``model["dt"]``) from both runs.
 NEEDS_STEP: set[str] = set()
+#: The bounds that read their entry's ``floor`` (a relative error that stays at any step).
+READS_FLOOR: set[str] = set()
 
 
-def register(name: str, *, step: bool = False) -> Callable[[BoundFunction], BoundFunction]:
+def register(name: str, *, step: bool = False,
+             floor: bool = False) -> Callable[[BoundFunction], BoundFunction]:
     """Decorator: register the bound ``name`` (the tolerance file's ``bound = "name"``);
     ``step``: it reads the runs' time step (a run that records none is held to no step
-    error, :func:`tree_entry`)."""
+    error, :func:`tree_entry`); ``floor``: it reads its entry's ``floor`` (checked by
+    :func:`validate_bound`)."""
     def deco(fn: BoundFunction) -> BoundFunction:
         if name in BOUNDS:
             raise ValueError(f"bound {name!r} registered twice")
         BOUNDS[name] = fn
         if step:
             NEEDS_STEP.add(name)
+        if floor:
+            READS_FLOOR.add(name)
         return fn
     return deco
 
@@ -117,11 +123,19 @@ def _records_step(pair: Pair) -> bool:
 
 
 def validate_bound(where: str, entry: dict) -> None:
-    """Refuse (ParameterError) a tolerance entry whose ``bound`` is not a registered one, or
-    that gives both a bound and a fixed ``rel``; ``where`` names the entry in the error."""
+    """Refuse (ParameterError) a tolerance entry whose ``bound`` is not a registered one,
+    that gives both a bound and a fixed ``rel``, or whose ``floor`` is not a relative error
+    in [0, 1) read by its bound (a floor no bound reads would be silently ignored);
+    ``where`` names the entry in the error."""
     name = entry.get("bound")
+    if "floor" in entry and name not in READS_FLOOR:
+        raise ParameterError(f"{where}.floor: read only with bound = "
+                             f"{' or '.join(repr(b) for b in sorted(READS_FLOOR))}")
     if name is None:
         return
+    floor = entry.get("floor", 0.0)
+    if isinstance(floor, bool) or not isinstance(floor, (int, float)) or not 0 <= floor < 1:
+        raise ParameterError(f"{where}.floor = {floor!r}: allowed a relative error in [0, 1)")
     if name not in BOUNDS:
         raise ParameterError(f"{where}.bound = {name!r}: allowed {', '.join(sorted(BOUNDS))}")
     if "rel" in entry or entry.get("report_only"):

@@ -118,7 +118,7 @@ def _pendulum_terms(pair: Pair) -> tuple[float, list[str]]:
     return rel, words
 
 
-@register("first_order_in_dt", step=True)
+@register("first_order_in_dt", step=True, floor=True)
 def first_order_in_dt(pair: Pair) -> Bound:
     """The tolerance of ``pair`` (its two rungs' runs): the entry's floor plus the
     first-order part of the difference (module docstring), plus the compound pendulum's
