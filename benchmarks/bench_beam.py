@@ -26,6 +26,7 @@ from pathlib import Path
 
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
+from treeimpact.analytic.model.options import scenario_as_run
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _results  # noqa: E402
@@ -54,7 +55,8 @@ def main() -> int:
         for _ in range(args.repeats):
             for method in METHODS:
                 t0 = time.perf_counter()
-                res = simulate_beam(scenario, elements=args.elements, t_end=0.1, method=method)
+                res = simulate_beam(scenario_as_run(scenario, {"t_end": 0.1}),
+                                    elements=args.elements, method=method)
                 times[method].append(time.perf_counter() - t0)
                 metrics[method] = res.metrics
         med = {m: statistics.median(v) for m, v in times.items()}

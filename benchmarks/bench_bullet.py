@@ -42,6 +42,7 @@ from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 from treeimpact.bullet_models import _runner
 from treeimpact.bullet_models._runner import build_world, make_setup, run
+from treeimpact.analytic.model.options import scenario_as_run
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _results  # noqa: E402
@@ -135,7 +136,7 @@ def main(argv=None) -> None:
     p.loadPlugin("pdControlPlugin", physicsClientId=pd_client)
     print("runner vs bare stepSimulation (central-leader, soft contact), medians of", REPEATS)
     for trunk, t_end in (("sdof", 0.1), ("chain", 0.02)):
-        setup = make_setup(s, trunk=trunk, t_end=t_end)
+        setup = make_setup(scenario_as_run(s, {"t_end": t_end}), trunk=trunk)
         rates = [in_run_rates(setup) for _ in range(REPEATS)]
         runner = statistics.median(r for r, _ in rates)
         stepping = statistics.median(b for _, b in rates)

@@ -43,6 +43,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _baseline  # noqa: E402
 import _results  # noqa: E402
+from treeimpact.analytic.model.options import scenario_as_run
 
 REPORT_CASES = [(scen, engine, opts)
                 for scen, n in (("central-leader", 12), ("open-center", 10),
@@ -185,7 +186,8 @@ def _mujoco_floor_models(scen: str, segments: int) -> tuple:
     setup = make_setup(s, trunk="chain", segments=segments)
     fewest, _builder._add_dampers = _builder._add_dampers, per_point
     try:  # another t_end: not the cached setup
-        old = make_setup(s, trunk="chain", segments=segments, t_end=s.t_end * (1 + 1e-9))
+        old = make_setup(scenario_as_run(s, {"t_end": s.t_end * (1 + 1e-9)}),
+                         trunk="chain", segments=segments)
     finally:
         _builder._add_dampers = fewest
     off = copy.deepcopy(setup.mjmodel)

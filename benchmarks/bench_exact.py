@@ -154,7 +154,7 @@ def _linear_model(name: str, backend: str, options: dict):
         model, sdof = beam_impact_model(scen, **options)
         run = lambda: simulate_beam(scen, **options)  # noqa: E731
     else:
-        sdof = two_body_model(scen, None)
+        sdof = two_body_model(scen)
         k_c, c_c = contact_law(sdof, scen.contact)
         model = sdof_impact_model(sdof, scen.trunk, k_c, c_c)
         run = lambda: simulate_soft(scen)  # noqa: E731

@@ -84,12 +84,14 @@ def stepping_record(setup: Setup, steps: int, wall_s: float, swing_s: float,
 
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
-             contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             trunk_damping_model=None, calibration=None) -> SimulationResult:
+             contact="soft", dt=None, trunk_damping_model=None, calibration=None
+             ) -> SimulationResult:
     """Run one scenario in PyBullet (rules: docs/engines.md); backend "bullet".
 
     Args:
-        scenario: the tree, pendulum and contact.
+        scenario: the tree, pendulum and contact (its e, pad and t_end: a run option that
+            overrides one is applied to it before, analytic.model.options.scenario_as_run;
+            a pad's stiffness only with the soft contact).
         trunk: "chain" (hinged rigid segments, default) or "sdof" (eq 11 on a prismatic
             joint).
         segments: the chain's segments (None: the fewest within 0.5 % of the beam).
@@ -97,11 +99,8 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
             theta_r, swinging to the trunk).
         contact: "soft" (the pad as Bullet's ERP/CFM spring-damper) or "newton" (Bullet's
             restitution impulses).
-        contact_stiffness: the pad's k_c, N/m, soft contact only (None: the scenario's).
         dt: the time step, s (None: :mod:`analytic.contact.timestep`'s rule, within what
             Bullet's implicit contact holds).
-        restitution: e (None: the scenario's contact.restitution; soft: below 1).
-        t_end: the time simulated after the touch, s (None: the scenario's).
         trunk_damping_model: "distributed" (None, the default: eq 9's C along the trunk) or
             "joint" (in the chain's hinges); refused with ``trunk = "sdof"``.
         calibration: "pad" (None, the default) the SDOF rung's (k_c, c_c); "effective" c_c
@@ -116,9 +115,7 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
         SimulationDiverged: the run diverged.
     """
     return run(make_setup(scenario, trunk=trunk, segments=segments, pendulum=pendulum,
-                          contact=contact, contact_stiffness=contact_stiffness, dt=dt,
-                          restitution=restitution, t_end=t_end,
-                          trunk_damping_model=trunk_damping_model,
+                          contact=contact, dt=dt, trunk_damping_model=trunk_damping_model,
                           calibration=calibration))
 
 

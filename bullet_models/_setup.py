@@ -81,34 +81,31 @@ class Setup(EngineSetup):
 
 
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
-               contact="soft", contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               trunk_damping_model=None, calibration=None) -> Setup:
+               contact="soft", dt=None, trunk_damping_model=None, calibration=None) -> Setup:
     """Validate the options and build everything a run of ``scenario`` needs, without the
-    engine: ``trunk``, ``segments``, ``pendulum``, ``contact``, ``contact_stiffness``
-    (N/m), ``dt`` (s), ``restitution``, ``t_end`` (s), ``trunk_damping_model`` and
-    ``calibration`` as in :func:`bullet_models._runner.simulate`; ParameterError for a bad
-    one (before any chain is built where it can)."""
+    engine: ``trunk``, ``segments``, ``pendulum``, ``contact``, ``dt`` (s),
+    ``trunk_damping_model`` and ``calibration`` as in
+    :func:`bullet_models._runner.simulate`; ParameterError for a bad one (before any chain
+    is built where it can)."""
     check_choice("contact", contact, CONTACTS)
     damping, calibration = trunk_options(trunk, trunk_damping_model, calibration)
     model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
                                 trunk_damping_model=damping,
-                                calibration=calibration, restitution=restitution,
-                                t_end=t_end)
+                                calibration=calibration)
     if contact == "soft" and not model.restitution < 1.0:  # before the chain is built
         raise ParameterError(
-            f"e = {model.restitution:g} (--restitution, contact.restitution): Bullet's soft "
+            f"contact.restitution = {model.restitution:g}: Bullet's soft "
             "contact steps "
             "implicitly and always dissipates: allowed (0, 1) with --contact soft (e = 1: "
             "--contact newton)")
     bodies = _bodies(scenario, trunk, segments, pendulum)
     segments = bodies.segments
     if contact == "soft":
-        k_c, c_c, bullet, dt, col, reason = _soft_contact(model, scenario, bodies,
-                                                          contact_stiffness, dt, t_end,
+        k_c, c_c, bullet, dt, col, reason = _soft_contact(model, scenario, bodies, dt, t_end,
                                                           calibration)
     else:
         k_c = c_c = bullet = None
-        dt, col, reason = _newton_contact(model, bodies, contact_stiffness, dt)
+        dt, col, reason = _newton_contact(model, bodies, scenario.contact, dt)
     check_work(t_end, dt, step_cost(segments or 1))
     return Setup(scenario=scenario, model=model, trunk=trunk, pendulum=pendulum,
                  contact=contact, damping=damping, segments=segments, dt=float(dt),
@@ -172,15 +169,15 @@ def _bodies(scenario: Scenario, trunk: str, segments, pendulum: str) -> _Bodies:
     return _Bodies(trunk_urdf, pend_urdf, segments, apparent, omega_max, matrices)
 
 
-def _soft_contact(model: TwoBodyModel, scenario: Scenario, bodies: _Bodies,
-                  contact_stiffness, dt, t_end: float, calibration: str) -> tuple:
+def _soft_contact(model: TwoBodyModel, scenario: Scenario, bodies: _Bodies, dt,
+                  t_end: float, calibration: str) -> tuple:
     """(k_c N/m, c_c N s/m, Bullet's contact, dt s, detection duration s, what set dt
     (:data:`STEP_REASONS`)) of the pad on the trunk's apparent mass: the step from the
     collision Bullet integrates and the fastest mode (given ``dt`` checked), within the step
     Bullet's implicit contact can hold."""
     m = model.impactor_mass
     mu = bodies.apparent_mass * m / (bodies.apparent_mass + m)
-    k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness)
+    k_c, c_c = contact_law(model, scenario.contact)
     if calibration == "effective":  # e on the trunk's effective mass, not the pad's c_c
         c_c = effective_damping(k_c, model.restitution, mu)
     law_model = TwoBodyModel(bodies.apparent_mass, 0.0, 1.0, m, 0.0, model.impact_speed,
@@ -208,11 +205,13 @@ def _soft_contact(model: TwoBodyModel, scenario: Scenario, bodies: _Bodies,
             reason)
 
 
-def _newton_contact(model: TwoBodyModel, bodies: _Bodies, contact_stiffness, dt) -> tuple:
+def _newton_contact(model: TwoBodyModel, bodies: _Bodies, contact, dt) -> tuple:
     """(dt s, detection duration s = dt, what set dt) of Bullet's restitution impulses: the
-    step from the default contact duration and the fastest mode (given ``dt`` checked)."""
-    if contact_stiffness is not None:
-        raise ParameterError("--contact-stiffness: only for --contact soft")
+    step from the default contact duration and the fastest mode (given ``dt`` checked); a
+    pad given by its stiffness (``contact.stiffness``) is refused: the impulses have none."""
+    if contact.stiffness is not None:
+        raise ParameterError(f"contact.stiffness = {contact.stiffness:g} N/m: only for "
+                             "--contact soft (Bullet's restitution impulses have no pad)")
     m = model.impactor_mass
     w = bodies.omega_max if bodies.omega_max is not None else math.sqrt(
         (model.equivalent_stiffness + model.impactor_stiffness) / min(model.dynamic_mass, m))

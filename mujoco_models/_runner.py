@@ -30,23 +30,20 @@ __all__ = ["OPTIONS", "Setup", "build_model", "engine_trunk_matrices", "flex_mod
 
 
 def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
-             contact_stiffness=None, dt=None, restitution=None, t_end=None,
-             trunk_damping_model=None, integrator="Euler", calibration=None
+             dt=None, trunk_damping_model=None, integrator="Euler", calibration=None
              ) -> SimulationResult:
     """Run one scenario in MuJoCo (rules: docs/engines.md); backend "mujoco".
 
     Args:
-        scenario: the tree, pendulum and contact.
+        scenario: the tree, pendulum and contact (its e, pad and t_end: a run option that
+            overrides one is applied to it before, analytic.model.options.scenario_as_run).
         trunk: "chain" (hinged rigid segments, default), "sdof" (eq 11 on a slide joint),
             "flex" (MuJoCo's 1-D elastic rod) or "cable" (refused: gone in MuJoCo 4.0).
         segments: the chain's or the rod's segments (None: the fewest within 0.5 % of the
             beam, :func:`analytic.continuum.chain.default_segments`).
         pendulum: "linear" (eq 13, starting at the touch at u_1) or "full" (released from
             theta_r, swinging to the trunk).
-        contact_stiffness: the pad's k_c, N/m (None: the scenario's contact law).
         dt: the time step, s (None: :mod:`analytic.contact.timestep`'s rule).
-        restitution: e (None: the scenario's contact.restitution).
-        t_end: the time simulated after the touch, s (None: the scenario's).
         trunk_damping_model: "distributed" (None, the default: eq 9's C along the trunk) or
             "joint" (in the chain's hinges); refused with ``trunk = "sdof"``.
         integrator: MuJoCo's ``Euler`` (default), ``implicit``, ``implicitfast`` or
@@ -63,8 +60,7 @@ def simulate(scenario: Scenario, *, trunk="chain", segments=None, pendulum="line
         SimulationDiverged: the run diverged (with MuJoCo's warning, if it gave one).
     """
     out = simulate_batch([scenario], trunk=trunk, segments=segments, pendulum=pendulum,
-                         contact_stiffness=contact_stiffness, dt=dt, restitution=restitution,
-                         t_end=t_end, trunk_damping_model=trunk_damping_model,
+                         dt=dt, trunk_damping_model=trunk_damping_model,
                          integrator=integrator,
                          calibration=calibration, max_workers=1)[0]
     if isinstance(out, SimulationDiverged):

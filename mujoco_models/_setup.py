@@ -127,14 +127,12 @@ def _trunk_spec(scenario: Scenario, trunk: str, segments, damping) -> tuple:
 
 @mujoco_warnings
 def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="linear",
-               contact_stiffness=None, dt=None, restitution=None, t_end=None,
-               trunk_damping_model=None, integrator="Euler", calibration=None
+               dt=None, trunk_damping_model=None, integrator="Euler", calibration=None
                ) -> Setup:
     """Validate the options and compile the model of ``scenario`` (rules in the module
-    docstring): ``trunk``, ``segments``, ``pendulum``, ``contact_stiffness`` (N/m), ``dt``
-    (s), ``restitution``, ``t_end`` (s), ``trunk_damping_model``, ``integrator`` and
-    ``calibration`` as in :func:`mujoco_models._runner.simulate`; ParameterError for a bad
-    one.
+    docstring): ``trunk``, ``segments``, ``pendulum``, ``dt`` (s), ``trunk_damping_model``,
+    ``integrator`` and ``calibration`` as in :func:`mujoco_models._runner.simulate`;
+    ParameterError for a bad one.
 
     Setups are cached per (scenario, options) (the last :data:`SETUP_CACHE_SIZE`): a repeated
     run does not recompile. Do not modify ``setup.mjmodel`` in place; copy it.
@@ -142,13 +140,11 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
     if not isinstance(scenario, Scenario):  # before hashing it for the cache
         raise ParameterError("scenario: expected an analytic.Scenario")
     try:
-        setup = _cached_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
-                              restitution, t_end, trunk_damping_model, integrator,
-                              calibration)
+        setup = _cached_setup(scenario, trunk, segments, pendulum, dt, trunk_damping_model,
+                              integrator, calibration)
     except TypeError:  # an unhashable option value: validate and build without the cache
-        return _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt,
-                           restitution, t_end, trunk_damping_model, integrator,
-                           calibration)
+        return _make_setup(scenario, trunk, segments, pendulum, dt, trunk_damping_model,
+                           integrator, calibration)
     _check_work(setup.mjmodel, setup.t_end, setup.dt)  # the budget may have changed since
     return setup
 
@@ -192,21 +188,20 @@ def _cached_setup(*args) -> Setup:
     return _make_setup(*args)
 
 
-def _make_setup(scenario, trunk, segments, pendulum, contact_stiffness, dt, restitution,
-                t_end, damping, integrator, calibration) -> Setup:
+def _make_setup(scenario, trunk, segments, pendulum, dt, damping, integrator, calibration
+                ) -> Setup:
     """:func:`make_setup` without its cache (the options in its order, positional)."""
     check_choice("integrator", integrator, INTEGRATORS)
     damping, calibration = trunk_options(trunk, damping, calibration)
     model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
                                 trunk_damping_model=damping,
-                                calibration=calibration, restitution=restitution,
-                                t_end=t_end, trunks=TRUNKS)
+                                calibration=calibration, trunks=TRUNKS)
     if trunk == "flex":
         _flex.check_flex_options(integrator, damping)
     if not model.restitution > 0.0:
-        raise ParameterError("--restitution = 0: a soft contact needs e in (0, 1] (e = 0 "
+        raise ParameterError("contact.restitution = 0: a soft contact needs e in (0, 1] (e = 0 "
                              "needs infinite damping)")
-    k, c_pad = contact_law(model, scenario.contact, stiffness=contact_stiffness)
+    k, c_pad = contact_law(model, scenario.contact)
     tspec, n = _trunk_spec(scenario, trunk, segments, damping)
     if tspec.chain is not None:  # a chain's budget before seconds of building it
         _check_work_before_building(model, scenario, tspec.chain, k, c_pad, t_end, dt,

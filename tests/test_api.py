@@ -134,6 +134,42 @@ def test_a_physical_input_reaches_a_backend_one_way_only(monkeypatch, backend):
     assert (contact.duration, contact.stiffness) == want
 
 
+@pytest.mark.parametrize("backend", ["analytic", "soft", "beam", "mujoco", "bullet"])
+def test_no_backend_function_takes_a_physical_input_beside_the_scenario(backend):
+    """The backends' own functions take (scenario, numerical options): none has a keyword of
+    analytic.model.options.OVERRIDES (e, the pad, t_end), which only the scenario carries
+    (issue 51 item 2); the engines' setup and batch functions neither."""
+    import importlib
+    import inspect
+
+    from treeimpact.analytic.model.options import OVERRIDES
+    from treeimpact.compare.runs import backends as B
+
+    b = B.get_backend(backend)
+    module = importlib.import_module(b.simulate_ref.split(":")[0])
+    funcs = [b._load(b.simulate_ref)] + [getattr(module, n) for n in ("make_setup",
+                                                                       "simulate_batch")
+                                         if hasattr(module, n)]
+    for func in funcs:
+        taken = set(inspect.signature(func).parameters) & set(OVERRIDES)
+        assert not taken, (func.__qualname__, taken)
+
+
+def test_a_run_option_is_checked_once_where_it_enters_the_scenario():
+    """An override out of range is refused by the scenario's own field check (the registry's
+    range) and named by its flag as typed, on a backend that takes it: the same line the
+    field gives, the field's name replaced."""
+    from treeimpact.analytic.errors import ParameterError
+    from treeimpact.analytic.model.parameters import Contact
+    from treeimpact.compare.runs.backends import get_backend
+
+    with pytest.raises(ParameterError) as field:
+        Contact(restitution=1.5)
+    with pytest.raises(ParameterError) as flag:
+        get_backend("soft").simulate(ti.load_scenario("open-center"), restitution=1.5)
+    assert str(flag.value) == str(field.value).replace("contact.restitution", "--restitution")
+
+
 def test_a_record_of_a_run_identifies_its_tree():
     """identify takes a Record and the test (a Scenario or a Pendulum with the trunk's
     geometry); the record of the exact model at 5 kHz, no noise, gives M_T back."""

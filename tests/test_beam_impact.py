@@ -27,6 +27,7 @@ from treeimpact.analytic.continuum.beam_impact import (
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.reduction import static_flexibility
 from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.options import numerical_options, scenario_as_run
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 
@@ -151,7 +152,7 @@ def test_whole_event_energies_match_an_ode_integration():
     """The exact solution's energy delivered, rebound and dissipation over the whole
     chattering event (25 switches) against :func:`_whole_event_reference`."""
     scenario = load_scenario("realistic-crown")
-    result = simulate_beam(scenario, elements=6, t_end=0.012)
+    result = simulate_beam(scenario_as_run(scenario, {"t_end": 0.012}), elements=6)
     assert result.model["contact_switches"] >= 20  # the whole chattering sequence
     model, _ = beam_impact_model(scenario, elements=6)
     ref = _whole_event_reference(model, 0.012)
@@ -298,8 +299,9 @@ def test_the_methods_give_the_same_metrics(name, options):
     """``exact`` (observables on the grid, energies in closed form where read) against
     ``exact-full`` (every sample's state and energies): the same phases on the same samples."""
     scenario = load_scenario(name)
-    full = simulate_beam(scenario, method="exact-full", **options).metrics
-    fast = simulate_beam(scenario, method="exact", **options).metrics
+    as_run, numerical = scenario_as_run(scenario, options), numerical_options(options)
+    full = simulate_beam(as_run, method="exact-full", **numerical).metrics
+    fast = simulate_beam(as_run, method="exact", **numerical).metrics
     for key, value in full.items():
         if key == "ledger_residual":  # round-off, both below 1e-9
             assert fast[key] < 1e-9 and value < 1e-9
@@ -341,9 +343,9 @@ def test_the_exact_methods_record_is_sampled_when_first_read():
     import pickle
 
     scenario = load_scenario("open-center")
-    fast = simulate_beam(scenario, t_end=0.02)
+    fast = simulate_beam(scenario_as_run(scenario, {"t_end": 0.02}))
     fast = pickle.loads(pickle.dumps(fast))
-    full = simulate_beam(scenario, t_end=0.02, method="exact-full")
+    full = simulate_beam(scenario_as_run(scenario, {"t_end": 0.02}), method="exact-full")
     for name in ("t", "x", "vx", "y", "vy", "force"):
         a, b = getattr(fast.trajectory, name), getattr(full.trajectory, name)
         # the same samples of the same phases, formed another way: round-off (1e-13 measured)
@@ -392,10 +394,18 @@ def test_effective_calibration_gives_e_on_the_clamps_effective_mass():
 
 @pytest.mark.parametrize("options, field", [
     ({"elements": 1}, "--elements"), ({"elements": 2.5}, "--elements"),
-    ({"calibration": "mass"}, "--calibration"), ({"t_end": -1.0}, "--t-end"),
-    ({"method": "euler"}, "--method")])
+    ({"calibration": "mass"}, "--calibration"), ({"method": "euler"}, "--method")])
 @pytest.mark.blas_free
 def test_bad_options_are_one_line_errors(options, field):
     with pytest.raises(ParameterError, match=field):
         simulate_beam(load_scenario("open-center"), **options)
+
+
+@pytest.mark.blas_free
+def test_a_bad_t_end_is_refused_where_it_enters_the_scenario():
+    """--t-end is a scenario field: refused by the scenario (its range), named as typed."""
+    from treeimpact.compare.runs.backends import get_backend
+
+    with pytest.raises(ParameterError, match=r"^--t-end = -1.0 s is out of range: allowed"):
+        get_backend("beam").simulate(load_scenario("open-center"), t_end=-1.0)
 

@@ -20,6 +20,7 @@ from treeimpact.analytic.records import contact_intervals  # noqa: E402
 from treeimpact.bullet_models import _contact, modes, simulate, simulate_batch  # noqa: E402
 from treeimpact.bullet_models._runner import build_world, engine_matrices, load, make_setup  # noqa: E402
 from treeimpact.bullet_models.regenerate import MODELS_DIR, generated  # noqa: E402
+from treeimpact.analytic.model.options import numerical_options, scenario_as_run
 
 
 @pytest.fixture(scope="module")
@@ -221,7 +222,7 @@ def test_newton_contact_reproduces_exact_impacts(name, refine):
 
 
 def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
-    res = simulate(central, trunk="sdof", pendulum="full", t_end=0.01)
+    res = simulate(scenario_as_run(central, {"t_end": 0.01}), trunk="sdof", pendulum="full")
     rec = res.record
     # speed at the last step before contact vs u1 of eq 48: the bob's own inertia (1e-6
     # m l_e^2) lowers it by 5e-7; symplectic Euler's energy error is O(omega h) mid-swing
@@ -233,7 +234,7 @@ def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
                                   dict(trunk="sdof", pendulum="full"),
                                   dict(trunk="chain", t_end=0.015)])
 def test_energy_ledger_closes_within_one_percent(central, opts):
-    res = simulate(central, **opts)
+    res = simulate(scenario_as_run(central, opts), **numerical_options(opts))
     assert res.metrics["ledger_residual"] < 0.01  # issue: ledger below 1 %
 
 
@@ -243,8 +244,9 @@ def test_bad_option_is_a_one_line_parameter_error(central):
     assert "\n" not in str(exc.value)
     with pytest.raises(ParameterError, match="too large"):
         simulate(central, trunk="sdof", dt=1e-3)
-    with pytest.raises(ParameterError, match=r"e = 1 \(--restitution, contact.restitution\): .*allowed \(0, 1\)") as exc:
-        simulate(central, trunk="sdof", restitution=1.0)  # implicit contact step: e < 1
+    with pytest.raises(ParameterError, match=r"contact.restitution = 1: .*allowed \(0, 1\)") as exc:
+        simulate(scenario_as_run(central, {"restitution": 1.0}),
+                 trunk="sdof")  # implicit contact step: e < 1
     assert "\n" not in str(exc.value)
 
 
@@ -254,7 +256,7 @@ def test_newton_contact_on_the_chain_is_eq_21_with_the_apparent_mass(central):
     (fails if Bullet's inertias or its 100 rad/s joint-speed clamp were in the way)."""
     from treeimpact.analytic.continuum.chain import chain_matrices
 
-    setup = make_setup(central, trunk="chain", contact="newton", t_end=1e-3)
+    setup = make_setup(scenario_as_run(central, {"t_end": 1e-3}), trunk="chain", contact="newton")
     world = build_world(setup)
     p, cid = world.p, world.cid
     u, m, e = setup.model.impact_speed, setup.model.impactor_mass, setup.model.restitution
@@ -281,8 +283,8 @@ def test_newton_contact_on_the_chain_is_eq_21_with_the_apparent_mass(central):
 def test_newton_and_soft_contact_agree_on_the_chain_peak(central):
     """Both contacts on the same chain: x_max differs by the soft collision's damper work,
     order b t_c <= 0.015 (step.contact of compare/runs/tolerances.toml); 0.06 % measured."""
-    soft = simulate(central, trunk="chain", t_end=0.02)
-    newton = simulate(central, trunk="chain", contact="newton", t_end=0.02)
+    soft = simulate(scenario_as_run(central, {"t_end": 0.02}), trunk="chain")
+    newton = simulate(scenario_as_run(central, {"t_end": 0.02}), trunk="chain", contact="newton")
     assert newton.metrics["x_max"] == pytest.approx(soft.metrics["x_max"], rel=0.015)
     assert newton.metrics["ledger_residual"] < 0.01  # issue: ledger below 1 %
 
@@ -292,8 +294,10 @@ def test_joint_damping_alternative_matches_mujoco(central):
     (MuJoCo integrates joint damping implicitly, as the runner does): integrator differences
     only, 1 % as engines.trunk in compare/runs/tolerances.toml (0.11 %, 0.27 % measured)."""
     mujoco_models = pytest.importorskip("treeimpact.mujoco_models")
-    got = simulate(central, trunk="chain", trunk_damping_model="joint", t_end=0.02)
-    ref = mujoco_models.simulate(central, trunk="chain", trunk_damping_model="joint", t_end=0.02)
+    got = simulate(scenario_as_run(central, {"t_end": 0.02}),
+                   trunk="chain", trunk_damping_model="joint")
+    ref = mujoco_models.simulate(scenario_as_run(central, {"t_end": 0.02}), trunk="chain",
+                                 trunk_damping_model="joint")
     for key in ("x_max", "t_xmax"):
         assert got.metrics[key] == pytest.approx(ref.metrics[key], rel=0.01), key
     assert got.metrics["ledger_residual"] < 0.01
@@ -302,8 +306,8 @@ def test_joint_damping_alternative_matches_mujoco(central):
 def test_json_model_keys_include_the_mujoco_backends(central):
     """Same JSON keys as the MuJoCo backend (its engine-specific solref/solimp aside)."""
     mujoco_models = pytest.importorskip("treeimpact.mujoco_models")
-    got = simulate(central, trunk="sdof", t_end=2e-3).to_json()
-    ref = mujoco_models.simulate(central, trunk="sdof", t_end=2e-3).to_json()
+    got = simulate(scenario_as_run(central, {"t_end": 2e-3}), trunk="sdof").to_json()
+    ref = mujoco_models.simulate(scenario_as_run(central, {"t_end": 2e-3}), trunk="sdof").to_json()
     assert set(got) == set(ref)
     for part in ("metrics", "scenario"):
         assert set(got[part]) == set(ref[part]), part
@@ -315,9 +319,10 @@ def test_json_model_keys_include_the_mujoco_backends(central):
 
 def test_batch_over_a_process_pool_matches_serial_runs(central):
     scen = [central, load_scenario("open-center")]
-    batch = simulate_batch(scen, trunk="sdof", t_end=0.005, max_workers=2)
+    batch = simulate_batch([scenario_as_run(s, {"t_end": 0.005}) for s in scen],
+                           trunk="sdof", max_workers=2)
     for s, r in zip(scen, batch):
-        serial = simulate(s, trunk="sdof", t_end=0.005)
+        serial = simulate(scenario_as_run(s, {"t_end": 0.005}), trunk="sdof")
         assert r.metrics["x_max"] == serial.metrics["x_max"]  # same deterministic engine
 
 
@@ -339,5 +344,6 @@ def test_the_batchs_processes_start_with_the_librarys_blas_limit(central, monkey
             super().__init__(1)
 
     monkeypatch.setattr(cf, "ProcessPoolExecutor", Pool)
-    simulate_batch([central, central], trunk="sdof", t_end=0.002, max_workers=2)
+    simulate_batch([scenario_as_run(s, {"t_end": 0.002}) for s in [central, central]],
+                   trunk="sdof", max_workers=2)
     assert seen == {"mp_context": "spawn", "initializer": limit_process, "max_workers": 2}

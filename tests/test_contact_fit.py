@@ -18,6 +18,7 @@ from treeimpact.analytic.paper.contact_fit import (
     read_like_the_paper,
 )
 from treeimpact.analytic.paper.reproduction import TABLE_1
+from treeimpact.analytic.model.options import scenario_as_run
 
 
 def test_the_fit_recovers_a_contact_it_generated(monkeypatch):
@@ -31,8 +32,8 @@ def test_the_fit_recovers_a_contact_it_generated(monkeypatch):
     monkeypatch.setattr(contact_fit, "GRID", {"contact_duration": 6, "restitution": 4})
     monkeypatch.setattr(contact_fit, "STARTS", 1)
     scen = load_scenario("open-center")
-    measured = read_like_the_paper(simulate_soft(scen, contact_duration=3e-3,
-                                                 restitution=0.3), scen)
+    as_run = scenario_as_run(scen, {"contact_duration": 3e-3, "restitution": 0.3})
+    measured = read_like_the_paper(simulate_soft(as_run), scen)
     assert all(math.isfinite(v) and v > 0 for v in measured.values()), measured
     fit = fit_to_measurements(scen, measured, model="soft")
     assert fit["dof"] == 4 and set(fit["parameters"]) == {"contact_duration", "restitution"}
@@ -62,7 +63,7 @@ def test_a_parameter_pressed_against_its_range_is_flagged(monkeypatch):
     from treeimpact.analytic.paper import contact_fit
 
     scen = load_scenario("open-center")
-    measured = read_like_the_paper(simulate(scen, restitution=0.3), scen)
+    measured = read_like_the_paper(simulate(scenario_as_run(scen, {"restitution": 0.3})), scen)
     free = fit_to_measurements(scen, measured, model="analytic")["parameters"]["restitution"]
     assert not free["on_bound"] and free["value"] == pytest.approx(0.3, abs=0.02)
     monkeypatch.setitem(contact_fit.FREE, "restitution",

@@ -11,12 +11,15 @@ import pytest
 
 from treeimpact.analytic.engine import phases
 from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.options import scenario_as_run
 
 ENGINES = ["treeimpact.mujoco_models", "treeimpact.bullet_models"]
 #: A small, cheap chain whose free step is many contact steps (open-center at 4 segments:
 #: omega_max 1.2e4 rad/s, h_f = 5.2e-5 s against dt_c = 1.1 us in MuJoCo, 1.9 us in
 #: Bullet) and a run through its contact phase into free vibration.
-CASE = {"trunk": "chain", "segments": 4, "t_end": 0.03}
+CASE = {"trunk": "chain", "segments": 4}
+#: The case's simulated time, s (a scenario field: applied to the scenario).
+CASE_T_END = 0.03
 
 
 def _tolerances() -> dict:
@@ -45,7 +48,7 @@ def phased_on(monkeypatch, package: str) -> None:
 def runs(request):
     """(engine module, phased run, fixed-step run at the same dt) of :data:`CASE`."""
     mod = pytest.importorskip(request.param)
-    scen = load_scenario("open-center")
+    scen = scenario_as_run(load_scenario("open-center"), {"t_end": CASE_T_END})
     with pytest.MonkeyPatch.context() as mp:
         phased_on(mp, request.param)
         phased = mod.simulate(scen, **CASE)
@@ -163,8 +166,8 @@ def test_a_re_touch_inside_a_big_step_is_not_missed(package, monkeypatch):
     phased_on(monkeypatch, package)
     monkeypatch.setattr(phases.PhaseRule, "free_steps", lambda self, gap, lam, left: min(
         200, int(left / self.free_step)) if gap > 0.0 else 0)
-    scen = load_scenario("central-leader")
-    opts = {"trunk": "chain", "segments": 6, "t_end": 0.012, "pendulum": "linear"}
+    scen = scenario_as_run(load_scenario("central-leader"), {"t_end": 0.012})
+    opts = {"trunk": "chain", "segments": 6, "pendulum": "linear"}
     loose = mod.simulate(scen, **opts)
     fixed = mod.simulate(scen, **opts, dt=loose.model["dt"])
     r = loose.trajectory

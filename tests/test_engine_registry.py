@@ -27,7 +27,7 @@ FAKE = textwrap.dedent(f'''
 
 
     def simulate(scenario, **options):
-        r = simulate_soft(scenario, t_end=options.get("t_end"))
+        r = simulate_soft(scenario)  # the scenario as run: e, pad and t_end applied
         metrics = {{**r.metrics, "x_max": r.metrics["x_max"] * (1 + {X_MAX_ERROR!r})}}
         return dataclasses.replace(r, backend="fake", metrics=metrics)
 ''')

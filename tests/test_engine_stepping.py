@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.options import scenario_as_run
 
 ENGINES = ["treeimpact.mujoco_models", "treeimpact.bullet_models"]
 
@@ -24,8 +25,8 @@ def test_a_run_records_its_steps_their_wall_time_and_what_set_its_step(package, 
     mod = pytest.importorskip(package)
     setup_mod = importlib.import_module(f"{package}._setup")
     monkeypatch.setattr(setup_mod, "PHASED", True)  # the default; phased whatever it is
-    scen = load_scenario("open-center")
-    run = mod.simulate(scen, trunk="chain", segments=4, t_end=0.03)
+    scen = scenario_as_run(load_scenario("open-center"), {"t_end": 0.03})
+    run = mod.simulate(scen, trunk="chain", segments=4)
     cost = run.extra["stepping"]
     steps = math.ceil(0.03 / run.model["dt"]) + (2 if package.endswith("mujoco_models") else 0)
     assert cost["dt"] == run.model["dt"] and cost["free_steps"] > 0
@@ -36,7 +37,7 @@ def test_a_run_records_its_steps_their_wall_time_and_what_set_its_step(package, 
                                             rel=1e-12)
     assert 0.0 < cost["stepping_s"] and cost["swing_s"] >= 0.0
     assert cost["step_set_by"] in ("contact", "implicit contact")  # 4 segments: the contact
-    given = mod.simulate(scen, trunk="chain", segments=4, t_end=0.03, dt=run.model["dt"])
+    given = mod.simulate(scen, trunk="chain", segments=4, dt=run.model["dt"])
     fixed = given.extra["stepping"]
     assert fixed["step_set_by"] == "given" and fixed["free_dt"] is None
     assert fixed["steps"] == steps and fixed["free_steps"] == 0

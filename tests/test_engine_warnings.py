@@ -22,6 +22,7 @@ _BLOWN_UP_RUN = """
 import copy, dataclasses, sys
 import mujoco
 from treeimpact.analytic.errors import SimulationDiverged
+from treeimpact.analytic.model.options import scenario_as_run
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.mujoco_models import make_setup, run
 assert mujoco.get_mju_user_warning() is None, "importing the engine set a handler"
@@ -29,7 +30,7 @@ mine = []
 def handler(message):  # a user's own
     mine.append(message)
 mujoco.set_mju_user_warning(handler)
-setup = make_setup(load_scenario("central-leader"), trunk="sdof", t_end=0.01)
+setup = make_setup(scenario_as_run(load_scenario("central-leader"), {"t_end": 0.01}), trunk="sdof")
 assert mujoco.get_mju_user_warning() is handler, "make_setup kept its handler"
 m = copy.copy(setup.mjmodel)
 m.jnt_stiffness[:] = 1e30

@@ -22,6 +22,7 @@ from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.studies.sweep.apply import apply_point
+from treeimpact.analytic.model.options import scenario_as_run
 
 HERE = Path(__file__).parent
 FIXTURE = json.loads((HERE / "data" / "exact_metrics.json").read_text())
@@ -144,9 +145,10 @@ def test_an_overdamped_pad_whose_kept_modes_are_all_real_solves_as_the_full_meth
     from treeimpact.analytic.model.scenario import load_scenario
 
     scenario = load_scenario("central-leader")
-    fast = simulate_soft(scenario, contact_duration=9.222875017929675e-05, t_end=0.02)
-    full = simulate_soft(scenario, contact_duration=9.222875017929675e-05, t_end=0.02,
-                         method="ode")
+    as_run = scenario_as_run(scenario, {"contact_duration": 9.222875017929675e-05,
+                                        "t_end": 0.02})
+    fast = simulate_soft(as_run)
+    full = simulate_soft(as_run, method="ode")
     for name in ("x_max", "impact_loss"):
         a, b = fast.metrics[name], full.metrics[name]
         # the ode method's own tolerance (rtol 1e-9 per step, summed over the event): 1e-6

@@ -8,6 +8,7 @@ from __future__ import annotations
 import pytest
 
 from treeimpact.compare.interface.cli import main
+from treeimpact.analytic.model.options import scenario_as_run
 
 
 def one_line(capsys, argv, code) -> str:
@@ -39,8 +40,9 @@ def test_the_chain_flags_still_apply_to_the_chain():
     from treeimpact.mujoco_models import simulate
 
     s = load_scenario("central-leader")
-    base = simulate(s, trunk="chain", segments=4, t_end=0.03)
-    joint = simulate(s, trunk="chain", segments=4, t_end=0.03, trunk_damping_model="joint")
+    base = simulate(scenario_as_run(s, {"t_end": 0.03}), trunk="chain", segments=4)
+    joint = simulate(scenario_as_run(s, {"t_end": 0.03}),
+                     trunk="chain", segments=4, trunk_damping_model="joint")
     assert joint.metrics["x_max"] != base.metrics["x_max"]
 
 

@@ -17,11 +17,12 @@ from treeimpact.analytic.identify.procedure import (
 )
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.scenario import load_scenario
+from treeimpact.analytic.model.options import scenario_as_run
 
 
 def record(name, e, dt=2e-5):
     scen = load_scenario(name)
-    res = simulate(scen, restitution=e, samples=int(round(0.1 / dt)) + 1)
+    res = simulate(scenario_as_run(scen, {"restitution": e}), samples=int(round(0.1 / dt)) + 1)
     tr = res.trajectory
     return scen, res, tr
 

@@ -31,6 +31,7 @@ from treeimpact.mujoco_models._record import _damping_matrices, _record  # noqa:
 from treeimpact.mujoco_models._rollout import _plan  # noqa: E402
 from treeimpact.mujoco_models._runner import engine_trunk_matrices, make_setup  # noqa: E402
 from treeimpact.mujoco_models.regenerate import MODELS_DIR, generated  # noqa: E402
+from treeimpact.analytic.model.options import numerical_options, scenario_as_run
 
 
 @pytest.fixture(scope="module")
@@ -84,9 +85,10 @@ def _free_collision_restitution(scenario, trunk, e, integrator="Euler", dt_facto
     """
     s = dataclasses.replace(scenario, contact=Contact(restitution=e, duration=5e-4))
     cal = _effective(trunk)
-    dt = None if dt_factor == 1.0 else make_setup(s, trunk=trunk, t_end=1e-3,
+    dt = None if dt_factor == 1.0 else make_setup(scenario_as_run(s, {"t_end": 1e-3}), trunk=trunk,
                                                   **cal).dt * dt_factor
-    setup = make_setup(s, trunk=trunk, t_end=1e-3, integrator=integrator, dt=dt, **cal)
+    setup = make_setup(scenario_as_run(s, {"t_end": 1e-3}),
+                       trunk=trunk, integrator=integrator, dt=dt, **cal)
     m = copy.deepcopy(setup.mjmodel)
     m.jnt_stiffness[:] = 0.0
     m.dof_damping[:] = 0.0
@@ -127,7 +129,8 @@ def test_implicit_integrators_take_eulers_contact_map(central, trunk):
     euler = _free_collision_restitution(central, trunk, 0.3)[0]
     fast = _free_collision_restitution(central, trunk, 0.3, "implicitfast")[0]
     full, setup = _free_collision_restitution(central, trunk, 0.3, "implicit")
-    law = make_setup(setup.scenario, trunk=trunk, t_end=1e-3, **_effective(trunk)).law
+    law = make_setup(scenario_as_run(setup.scenario, {"t_end": 1e-3}),
+                     trunk=trunk, **_effective(trunk)).law
     assert (setup.law.stiffness, setup.law.damping) == (law.stiffness, law.damping)  # Euler's
     assert fast == pytest.approx(euler, abs=1e-12)  # round-off: measured <= 1.3e-14
     # implicit also linearises the chain's Coriolis forces: measured 5.8e-7 (chain), 1e-16 (SDOF)
@@ -196,7 +199,8 @@ def test_chain_damping_is_one_tendon_per_hinge_carrying_d(central, segments):
     np.testing.assert_array_equal(np.diag(L), 1.0)
     assert not np.triu(L, 1).any()
     np.testing.assert_allclose((L * d) @ L.T, Dl, rtol=0, atol=1e-14 * scale)  # Cholesky
-    m = make_setup(central, trunk="chain", segments=segments, t_end=1e-3).mjmodel  # budget
+    m = make_setup(scenario_as_run(central, {"t_end": 1e-3}),
+                   trunk="chain", segments=segments).mjmodel  # budget
     assert m.ntendon == segments  # was 2 N, one per damping point
     Dm = _damping_matrices(m)[0][:segments, :segments]
     np.testing.assert_allclose(Dm, Dl, rtol=0, atol=1e-14 * scale)  # round-off
@@ -254,7 +258,7 @@ def test_sdof_peak_and_loss_match_at_default_step(name):
 
 
 def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
-    res = simulate(central, trunk="sdof", pendulum="full", t_end=0.005)
+    res = simulate(scenario_as_run(central, {"t_end": 0.005}), trunk="sdof", pendulum="full")
     # Euler's swing at 1e-4 s conserves a modified energy equal to the true one at the
     # bottom; the bob's own inertia (1e-6 m l_e^2) lowers the speed by 5e-7: measured 1.1e-6
     assert res.extra["impact_speed_measured"] == pytest.approx(
@@ -266,7 +270,7 @@ def test_full_pendulum_reaches_the_trunk_at_eq_48_speed(central):
                                   dict(trunk="chain", t_end=0.02),
                                   dict(trunk="chain", trunk_damping_model="joint", t_end=0.02)])
 def test_energy_ledger_closes_within_one_percent(central, opts):
-    res = simulate(central, **opts)
+    res = simulate(scenario_as_run(central, opts), **numerical_options(opts))
     assert res.metrics["ledger_residual"] < 0.01  # issue: below 1 % (measured <= 3e-4)
     rec = res.record
     assert rec.damping_work[-1] > 0.0 and rec.contact_work[-1] > 0.0  # both ledgers active
@@ -302,7 +306,7 @@ def test_bad_options_are_one_line_parameter_errors(central):
 
 
 def test_non_finite_state_is_reported_as_diverged(central):
-    setup = make_setup(central, trunk="sdof", t_end=1e-3)
+    setup = make_setup(scenario_as_run(central, {"t_end": 1e-3}), trunk="sdof")
     plan = _plan(setup)
     m = setup.mjmodel
     st, sd = rollout.rollout(m, mujoco.MjData(m), plan.state0, nstep=plan.nstep)
@@ -314,7 +318,7 @@ def test_non_finite_state_is_reported_as_diverged(central):
 
 def test_rollout_that_stops_advancing_time_is_reported_as_diverged(central):
     """rollout stops stepping (time frozen) after a MuJoCo warning: the run is diverged."""
-    setup = make_setup(central, trunk="sdof", t_end=1e-3)
+    setup = make_setup(scenario_as_run(central, {"t_end": 1e-3}), trunk="sdof")
     plan = _plan(setup)
     m = setup.mjmodel
     st, sd = rollout.rollout(m, mujoco.MjData(m), plan.state0, nstep=plan.nstep)
@@ -354,7 +358,8 @@ def test_energy_created_while_damped_is_reported_as_diverged(central, integrator
     """The ledger rule: kinetic energy the engine invents after the impact (10 % of the input,
     mechanical energy still below the input) is caught by kinetic + potential + works (for
     RK4: as a fall of the contact's dissipated energy)."""
-    setup = make_setup(central, trunk="sdof", t_end=0.05, integrator=integrator)
+    setup = make_setup(scenario_as_run(central, {"t_end": 0.05}),
+                       trunk="sdof", integrator=integrator)
     plan = _plan(setup)
     m = setup.mjmodel
     st, sd = rollout.rollout(m, mujoco.MjData(m), plan.state0, nstep=plan.nstep)
@@ -454,10 +459,11 @@ def test_integrator_option_builds_that_integrator_and_keeps_the_default(central)
         assert setup.mjmodel.opt.integrator == enum and setup.integrator == name
         assert f'integrator="{name}"' in mjcf_text(setup.spec)
     assert "integrator=" not in mjcf_text(default.spec)  # MuJoCo's default: the files keep it
-    batch = simulate_batch([central], trunk="sdof", integrator="RK4", t_end=0.005)[0]
+    batch = simulate_batch([scenario_as_run(s, {"t_end": 0.005}) for s in [central]],
+                           trunk="sdof", integrator="RK4")[0]
     assert batch.model["integrator"] == "RK4"
-    assert batch.metrics["x_max"] == simulate(central, trunk="sdof", integrator="RK4",
-                                              t_end=0.005).metrics["x_max"]
+    assert batch.metrics["x_max"] == simulate(scenario_as_run(central, {"t_end": 0.005}),
+                                              trunk="sdof", integrator="RK4").metrics["x_max"]
 
 
 @pytest.mark.parametrize("bad", ["euler", "RK2", "", None])
@@ -490,9 +496,10 @@ def test_speed_study_runs_one_curve_per_mujoco_integrator():
 
 def test_batch_through_rollout_matches_serial_runs(central):
     scen = [central, load_scenario("open-center")]
-    batch = simulate_batch(scen, trunk="sdof", t_end=0.005, max_workers=2)
+    batch = simulate_batch([scenario_as_run(s, {"t_end": 0.005}) for s in scen],
+                           trunk="sdof", max_workers=2)
     for s, r in zip(scen, batch):
-        serial = simulate(s, trunk="sdof", t_end=0.005)
+        serial = simulate(scenario_as_run(s, {"t_end": 0.005}), trunk="sdof")
         assert r.metrics["x_max"] == serial.metrics["x_max"]  # same deterministic engine
         assert r.model["dt"] == serial.model["dt"]
 
@@ -639,7 +646,7 @@ def test_pad_calibration_keeps_the_soft_sdofs_contact_law(central, trunk):
     from treeimpact.analytic.contact.law import contact_law, restitution_for_damping_ratio
     from treeimpact.analytic.model.two_body import two_body_model
 
-    setup = make_setup(central, trunk=trunk, t_end=1e-3)
+    setup = make_setup(scenario_as_run(central, {"t_end": 1e-3}), trunk=trunk)
     k, c = contact_law(two_body_model(central), central.contact)
     assert setup.law.law_stiffness == pytest.approx(k, rel=1e-12)
     assert setup.law.law_damping == pytest.approx(c, rel=1e-9)  # brentq on e, then back to c
@@ -660,12 +667,13 @@ def test_chain_converges_to_the_beam():
 
     s = load_scenario("open-center")
     n = default_segments(s.trunk)
-    beam = simulate_beam(s, elements=24, t_end=0.03).metrics
+    beam = simulate_beam(scenario_as_run(s, {"t_end": 0.03}), elements=24).metrics
     gaps = []
     for segments in (n, 2 * n, 4 * n):
         # x_max is reached at 11.8 ms: the chain's x_max and t_xmax to 18 ms are its values
         # to 30 ms to the last bit (measured at N, 2N, 4N; the 4N run half the CPU)
-        chain = simulate(s, trunk="chain", segments=segments, t_end=0.018).metrics
+        chain = simulate(scenario_as_run(s, {"t_end": 0.018}),
+                         trunk="chain", segments=segments).metrics
         gaps.append([abs(chain[k] / beam[k] - 1) for k in ("x_max", "t_xmax")])
     gaps = np.array(gaps)
     # measured: x_max 3.0e-3, 6.9e-4, 2.1e-5; t_xmax 6.9e-3, 1.9e-3, 5.1e-4 (4N is stepped by
@@ -689,7 +697,8 @@ def test_chain_whole_event_metrics_converge_to_the_beam():
     # t_end of 0.1 s to the last bit (measured at N and 2N, 18 and 28 contacts; at 30 ms a
     # contact is missing), for a third of the CPU
     gaps = np.array([[abs(chain[k] / beam[k] - 1) for k in keys] for chain in (
-        simulate(s, trunk="chain", segments=m, t_end=0.05).metrics for m in (n, 2 * n))])
+        simulate(scenario_as_run(s, {"t_end": 0.05}),
+                 trunk="chain", segments=m).metrics for m in (n, 2 * n))])
     # measured at N, 2N: crown 1.4e-3, 2e-4; acceleration 6.9e-2, 4.4e-3; impulse 4.1e-3,
     # 2.3e-4; contact loss 2.1e-2, 1.4e-3
     assert np.all(gaps[1] < gaps[0] / 2)
@@ -709,8 +718,9 @@ def test_a_rollout_in_chunks_steps_bitwise_as_one_call(monkeypatch):
 
     def states(chunk_seconds, batch):
         monkeypatch.setattr(_rollout, "CHUNK_SECONDS", chunk_seconds)
-        runs = simulate_batch(scens, segments=4, t_end=0.03, max_workers=2) if batch else [
-            simulate(s, segments=4, t_end=0.03) for s in scens]
+        runs = simulate_batch([scenario_as_run(s, {"t_end": 0.03}) for s in scens],
+                              segments=4, max_workers=2) if batch else [
+            simulate(scenario_as_run(s, {"t_end": 0.03}), segments=4) for s in scens]
         assert all(r.scenario["t_end"] / r.model["dt"] > 3000 for r in runs)  # several chunks
         return [np.column_stack([r.trajectory.x, r.trajectory.y]) for r in runs]
 

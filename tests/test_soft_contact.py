@@ -21,6 +21,7 @@ from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import contact_intervals, metrics_from_record
 from treeimpact.analytic.results import ImpactRecord
+from treeimpact.analytic.model.options import scenario_as_run
 
 
 def integrated_restitution(zeta: float) -> float:
@@ -108,8 +109,8 @@ def test_trunk_damping_during_the_first_collision_shifts_the_apparent_restitutio
     # velocities right after the first contact are not those of a free collision; the
     # shift is bounded by the impulse of the damper, C_T * (x after the collision)
     scenario = load_scenario("open-center")
-    model = two_body_model(scenario, 0.9)
-    rec = simulate_soft(scenario, restitution=0.9, t_end=0.002).record
+    model = two_body_model(scenario_as_run(scenario, {"restitution": 0.9}))
+    rec = simulate_soft(scenario_as_run(scenario, {"restitution": 0.9, "t_end": 0.002})).record
     after = contact_intervals(rec.force, 0.0)[0][1] + 1
     measured = -(rec.vy[after] - rec.vx[after]) / model.impact_speed
     bound = (model.equivalent_damping * rec.x[after]
@@ -145,7 +146,7 @@ def test_stiff_contact_limit_recovers_the_rigid_newton_model():
     rigid = simulate_exact(scenario).metrics
     errors = []
     for duration in (1e-3, 2.5e-4, 6.25e-5):
-        soft = simulate_soft(scenario, contact_duration=duration).metrics
+        soft = simulate_soft(scenario_as_run(scenario, {"contact_duration": duration})).metrics
         errors.append(max(abs(soft[k] / rigid[k] - 1.0)
                           for k in ("x_max", "t_sep", "energy_transferred")))
     # the soft contact converges to Newton's law as its duration goes to zero
@@ -247,8 +248,8 @@ def test_the_exact_solver_and_the_ode_integration_give_the_same_metrics(name, du
     impact count and the crown; 1e-7 relative: the integration's tolerance, compounded where
     a metric is read at an interpolated switch (impact_loss at T0, 5e-8 measured)."""
     scen = load_scenario(name)
-    exact = simulate_soft(scen, contact_duration=duration)
-    ode = simulate_soft(scen, contact_duration=duration, method="ode")
+    exact = simulate_soft(scenario_as_run(scen, {"contact_duration": duration}))
+    ode = simulate_soft(scenario_as_run(scen, {"contact_duration": duration}), method="ode")
     for key, ref in ode.metrics.items():
         if key == "ledger_residual":  # each method's own round-off: both tiny
             assert exact.metrics[key] < 1e-9 and ref < 1e-8

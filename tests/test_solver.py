@@ -13,10 +13,11 @@ from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.impact.solver import TAIL_ENERGY_FRACTION, solve_impacts
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
+from treeimpact.analytic.model.options import scenario_as_run
 
 
 def paper_model(e=0.1, name="open-center"):
-    return two_body_model(load_scenario(name), e)
+    return two_body_model(scenario_as_run(load_scenario(name), {"restitution": e}))
 
 
 def billet_model(e):
@@ -72,7 +73,7 @@ def test_eq33_is_an_equality_for_the_billet(e):
 
 @pytest.mark.parametrize("name", ["open-center", "central-leader", "realistic-crown"])
 def test_plastic_impact_is_single_and_loses_eq57_exactly(name):
-    res = simulate(load_scenario(name), restitution=0.0)
+    res = simulate(scenario_as_run(load_scenario(name), {"restitution": 0.0}))
     sol = res.solution
     assert len([i for i in sol.impacts if i.t <= sol.together_start[0]]) == 1
     assert res.metrics["n_impacts"] == 1
@@ -119,7 +120,7 @@ def test_tail_closed_only_when_negligible():
 @pytest.mark.parametrize("name", ["open-center", "central-leader", "realistic-crown"])
 @pytest.mark.parametrize("e", E_VALUES)
 def test_energy_ledger_closes_at_every_event(name, e):
-    sol = simulate(load_scenario(name), restitution=e).solution
+    sol = simulate(scenario_as_run(load_scenario(name), {"restitution": e})).solution
     rows = sol.ledger()
     assert len(rows) >= 2
     assert max(r["residual"] for r in rows) < 1e-9  # the issue's ledger tolerance
@@ -307,7 +308,7 @@ def test_first_peak_time_is_the_first_local_maximum_of_dense_samples(beta, omega
 def test_closed_form_x_max_matches_dense_sampling(name, e):
     """x_max, t_xmax (eq 37) in closed form against the largest of 400 001 samples of the
     exact motion: x_max within the samples' resolution, never below the best sample."""
-    sol = solve_impacts(two_body_model(load_scenario(name), e), 0.1)
+    sol = solve_impacts(paper_model(e, name), 0.1)
     t = np.linspace(0.0, 0.1, 400_001)
     x = sol.state(t)[0]
     i = int(np.argmax(x))

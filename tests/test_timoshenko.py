@@ -26,6 +26,7 @@ from treeimpact.analytic.model.parameters import Trunk
 from treeimpact.analytic.model.scenario import load_scenario, scenario_from_dict
 from treeimpact.analytic.model.scenario_toml import scenario_toml
 from treeimpact.compare.interface.cli import main
+from treeimpact.analytic.model.options import scenario_as_run
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 SLENDER = Trunk(length=1.3, clamp_height=1.3, diameter=0.1, density=900.0,
@@ -248,10 +249,12 @@ def test_timoshenko_impact_converges_in_elements(name):
 
 def test_euler_bernoulli_stays_the_default_and_ignores_g():
     scenario = load_scenario("open-center")
-    default = simulate_beam(scenario, t_end=0.03).metrics
-    explicit = simulate_beam(scenario, t_end=0.03, beam_theory="euler-bernoulli").metrics
+    default = simulate_beam(scenario_as_run(scenario, {"t_end": 0.03})).metrics
+    explicit = simulate_beam(scenario_as_run(scenario, {"t_end": 0.03}),
+                             beam_theory="euler-bernoulli").metrics
     trunk = dataclasses.replace(scenario.trunk, shear_modulus=1e7, shear_coefficient=0.5)
-    with_g = simulate_beam(dataclasses.replace(scenario, trunk=trunk), t_end=0.03).metrics
+    with_g = simulate_beam(scenario_as_run(dataclasses.replace(scenario, trunk=trunk),
+                                           {"t_end": 0.03})).metrics
     np.testing.assert_equal(default, explicit)
     np.testing.assert_equal(default, with_g)
 

@@ -16,6 +16,7 @@ from treeimpact.analytic.model.reduction import crown_factor
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.model.scenario import load_scenario as load
 from treeimpact.analytic.model.two_body import two_body_model
+from treeimpact.analytic.model.options import scenario_as_run
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 WHOLE = ("energy_delivered", "contact_dissipation", "rebound_energy", "impulse")
@@ -24,9 +25,9 @@ WHOLE = ("energy_delivered", "contact_dissipation", "rebound_energy", "impulse")
 def test_plastic_newton_impact_loses_the_closed_form():
     """e = 0: one impact, loss 1/2 m M/(m+M) u1^2; the rest stays in the system."""
     scen = load_scenario("central-leader")
-    model = two_body_model(scen, 0.0)
+    model = two_body_model(scenario_as_run(scen, {"restitution": 0.0}))
     m, M, u = model.impactor_mass, model.dynamic_mass, model.impact_speed
-    got = simulate(scen, restitution=0.0).metrics
+    got = simulate(scenario_as_run(scen, {"restitution": 0.0})).metrics
     assert got["contact_dissipation"] == pytest.approx(0.5 * m * M / (m + M) * u ** 2,
                                                        rel=1e-12)
     assert got["energy_delivered"] + got["contact_dissipation"] + got["rebound_energy"] == \
@@ -56,7 +57,7 @@ def test_stiff_soft_contact_tends_to_the_newton_whole_event(name):
     newton = simulate(scen).metrics
     errs = []
     for duration in (2e-4, 1e-4, 5e-5):
-        soft = simulate_soft(scen, contact_duration=duration).metrics
+        soft = simulate_soft(scenario_as_run(scen, {"contact_duration": duration})).metrics
         errs.append(max(abs(soft[k] / newton[k] - 1) for k in WHOLE))
     assert errs[-1] < 0.03  # first order in the collision duration (measured 0.3-2 %)
     assert errs[-1] < errs[0]  # and shrinking with it
@@ -152,7 +153,7 @@ def test_newton_force_and_crown_acceleration_are_impulsive():
 
 def test_a_record_still_in_contact_has_no_whole_event_energies():
     scen = load_scenario("central-leader")
-    res = simulate_soft(dataclasses.replace(scen), t_end=1e-4)
+    res = simulate_soft(scenario_as_run(dataclasses.replace(scen), {"t_end": 1e-4}))
     assert all(math.isnan(res.metrics[k]) for k in WHOLE)
 
 

@@ -91,15 +91,12 @@ def contact_law(model: TwoBodyModel, contact: Contact | None = None, *,
     """
     mu = model.reduced_mass
     if stiffness is None and duration is None and contact is not None:
-        stiffness, duration = contact.stiffness, contact.duration
-    if stiffness is not None and duration is not None:
-        raise ParameterError("contact: give either stiffness (N/m) or duration (s), not both")
+        stiffness, duration = contact.stiffness, contact.duration  # checked by the Contact
+    else:  # a pad given here: checked as a Contact's fields (one of the two at most)
+        Contact(restitution=model.restitution, stiffness=stiffness, duration=duration)
     if stiffness is None:
-        duration = DEFAULT_CONTACT_DURATION if duration is None else duration
-        Contact(restitution=model.restitution, duration=duration)  # validates
-        stiffness = stiffness_for_duration(mu, duration)
-    else:
-        Contact(restitution=model.restitution, stiffness=stiffness)
+        stiffness = stiffness_for_duration(
+            mu, DEFAULT_CONTACT_DURATION if duration is None else duration)
     zeta = damping_ratio_for_restitution(model.restitution)
     return stiffness, 2.0 * zeta * math.sqrt(stiffness * mu)
 

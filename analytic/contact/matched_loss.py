@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.parameters import Scenario, check_range
+from treeimpact.analytic.model.options import scenario_as_run
 
 #: Newton's contact loss is continuous and decreasing in e on [0, 1); e = 1 loses nothing.
 _E_LOW, _E_HIGH = 0.0, 1.0 - 1e-6
@@ -25,7 +26,8 @@ def matched_loss_restitution(scenario: Scenario, contact_loss: float, *,
     check_range("contact_loss", contact_loss, low=0, low_open=True, unit="J")
 
     def excess(e):
-        return simulate(scenario, restitution=e, samples=2).metrics["contact_dissipation"] \
+        return simulate(scenario_as_run(scenario, {"restitution": e}),
+                        samples=2).metrics["contact_dissipation"] \
             - contact_loss
 
     hi, lo = excess(_E_LOW), excess(_E_HIGH)

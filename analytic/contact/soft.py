@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from treeimpact.analytic.budget import Knob, StepCost, check_work
-from treeimpact.analytic.errors import ParameterError, SimulationDiverged
+from treeimpact.analytic.errors import SimulationDiverged
 from treeimpact.analytic.model.options import (
     CONTACT_DURATION,
     CONTACT_STIFFNESS,
@@ -70,50 +70,42 @@ def sdof_impact_model(model: TwoBodyModel, trunk, k_c: float, c_c: float
         impact_speed=model.impact_speed, contact_stiffness=k_c, contact_damping=c_c)
 
 
-def duration_knob(model: TwoBodyModel, contact, stiffness, duration, samples: int,
-                  damping=None) -> Knob | None:
+def duration_knob(model: TwoBodyModel, contact, samples: int, damping=None) -> Knob | None:
     """The pad's duration as the budget's :class:`~analytic.budget.Knob` (the record's step
-    is the collision's time over ``samples``): ``--contact-duration`` when given, else the
-    scenario's ``contact.duration`` (or its default); None for a pad set by its stiffness.
-    ``model``: the 1-DOF pair the pad law is solved on; ``damping``: k_c (N/m) -> c_c
-    (N s/m) where the run recalibrates c_c (the beam's effective convention), else the
-    law's own c_c."""
-    if stiffness is not None or (duration is None and contact.stiffness is not None):
+    is the collision's time over ``samples``): the ``contact``'s ``contact.duration`` (or
+    its default; a run option that set it is named by its flag where the run refuses,
+    analytic.model.options.as_typed); None for a pad set by its stiffness. ``model``: the
+    1-DOF pair the pad law is solved on; ``damping``: k_c (N/m) -> c_c (N s/m) where the
+    run recalibrates c_c (the beam's effective convention), else the law's own c_c."""
+    if contact.stiffness is not None:
         return None
-    label = "--contact-duration" if duration is not None else "contact.duration"
-    value = duration if duration is not None else (
-        contact.duration if contact.duration is not None else DEFAULT_CONTACT_DURATION)
+    value = contact.duration if contact.duration is not None else DEFAULT_CONTACT_DURATION
 
     def dt_of(tau: float) -> float:
         k_c, c_c = contact_law(model, duration=tau)
         return collision_duration(model, k_c, c_c if damping is None else damping(k_c)) / samples
 
-    return Knob(label, value, "s", dt_of, BY_PATH["contact.duration"].high)
+    return Knob("contact.duration", value, "s", dt_of, BY_PATH["contact.duration"].high)
 
 
-def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
-                  contact_stiffness: float | None = None,
-                  contact_duration: float | None = None,
-                  t_end: float | None = None, samples_per_collision: int = 100,
+def simulate_soft(scenario: Scenario, *, samples_per_collision: int = 100,
                   method: str = "exact"):
-    """The scenario's two-body model with the soft contact, solved to ``t_end`` (s).
+    """The scenario's two-body model with the soft contact (its pad: contact.stiffness or
+    contact.duration, :func:`contact_law`), solved to its t_end (s).
 
-    ``restitution`` replaces the scenario's e; ``contact_stiffness`` (N/m) or
-    ``contact_duration`` (s) replace the scenario's contact stiffness (:func:`contact_law`);
-    the record is sampled ``samples_per_collision`` times per free collision; ``method``
+    The record is sampled ``samples_per_collision`` times per free collision; ``method``
     (:data:`METHODS`) changes the cost, not the solution. Returns a SimulationResult
     (backend "analytic-soft") whose metrics come from
     :func:`analytic.records.metrics_from_record`, the same rule the engines use.
     """
     method = SoftMethod(OPTIONS["method"].check("method", method))
-    model = two_body_model(scenario, restitution)
-    t_end = scenario.t_end if t_end is None else t_end
-    k_c, c_c = contact_law(model, scenario.contact, stiffness=contact_stiffness,
-                           duration=contact_duration)
+    model = two_body_model(scenario)
+    t_end = scenario.t_end
+    k_c, c_c = contact_law(model, scenario.contact)
     t_col = collision_duration(model, k_c, c_c)
     dt = t_col / samples_per_collision
-    check_work(t_end, dt, SAMPLE_COST, duration_knob(
-        model, scenario.contact, contact_stiffness, contact_duration, samples_per_collision))
+    check_work(t_end, dt, SAMPLE_COST,
+               duration_knob(model, scenario.contact, samples_per_collision))
     if method is SoftMethod.ODE:
         rec = with_static_shape_crown(soft_record(model, k_c, c_c, t_end, dt_sample=dt),
                                       scenario.trunk)
@@ -127,12 +119,9 @@ def simulate_soft(scenario: Scenario, *, restitution: float | None = None,
     metrics = model_metrics(samples, model, scenario.impactor, collision_duration=t_col)
     model_dict = {**model.as_dict(), "contact_stiffness": k_c, "contact_damping": c_c,
                   **pad_fields(k_c, c_c, model.reduced_mass)}
-    scen = scenario.to_dict()
-    scen["contact"]["restitution"] = model.restitution
-    scen["t_end"] = t_end  # the run's, as the engines record it (a --t-end's refusal names it)
     return SimulationResult(
-        backend="analytic-soft", metrics=metrics, model=model_dict, scenario=scen,
-        trajectory=trajectory, record=rec, collision_duration=t_col)
+        backend="analytic-soft", metrics=metrics, model=model_dict,
+        scenario=scenario.to_dict(), trajectory=trajectory, record=rec, collision_duration=t_col)
 
 
 def soft_record(model: TwoBodyModel, k_c: float, c_c: float, t_end: float, dt_sample: float):

@@ -38,7 +38,7 @@ from treeimpact.analytic.model.options import (
     T_END,
     Option,
 )
-from treeimpact.analytic.model.parameters import Scenario, check_range
+from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.two_body import two_body_model
 from treeimpact.analytic.records import model_metrics
 from treeimpact.analytic.results import SimulationResult, Trajectory
@@ -87,15 +87,12 @@ SAMPLE_COST = StepCost(1e-6, 200.0, "samples of the beam's modal solution")
 
 
 def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
-                      restitution: float | None = None, contact_stiffness: float | None = None,
-                      duration: float | None = None, calibration: str = "pad",
-                      beam_theory: str = "euler-bernoulli"):
+                      calibration: str = "pad", beam_theory: str = "euler-bernoulli"):
     """``(LinearImpactModel, TwoBodyModel)``: the beam problem of ``scenario`` on
-    ``elements`` elements and the SDOF model it refines (e: ``restitution`` if given, else
-    the scenario's).
+    ``elements`` elements and the SDOF model it refines (the scenario's e).
 
-    k_c comes from :func:`analytic.contact.law.contact_law` on the SDOF model (the pad's
-    stiffness, from ``contact_stiffness`` N/m, ``duration`` s or the scenario); c_c per
+    k_c comes from :func:`analytic.contact.law.contact_law` on the SDOF model (the
+    scenario's pad: contact.stiffness, N/m, or contact.duration, s); c_c per
     ``calibration`` (:data:`CALIBRATIONS`); the trunk's ``beam_theory`` of
     :data:`analytic.continuum.timoshenko.BEAM_THEORIES`.
     """
@@ -106,9 +103,8 @@ def beam_impact_model(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
         raise ParameterError(f"--calibration = {calibration!r}: allowed "
                              f"{', '.join(CALIBRATIONS)}")
     check_beam_theory(beam_theory)
-    sdof = two_body_model(scenario, restitution)
-    k_c, c_c = contact_law(sdof, scenario.contact, stiffness=contact_stiffness,
-                           duration=duration)
+    sdof = two_body_model(scenario)
+    k_c, c_c = contact_law(sdof, scenario.contact)
     M, D, K, nodes, keep = _mesh_matrices(scenario.trunk, int(elements), beam_theory)
     trunk = scenario.trunk
     model = LinearImpactModel(
@@ -140,32 +136,26 @@ def _mesh_matrices(trunk, elements: int, beam_theory: str) -> tuple:
 
 
 def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
-                  calibration: str = "pad", restitution: float | None = None,
-                  contact_stiffness: float | None = None,
-                  contact_duration: float | None = None, t_end: float | None = None,
-                  method: str = "exact", beam_theory: str = "euler-bernoulli"):
-    """The scenario with the continuum trunk and the pad, solved exactly to ``t_end`` (s).
+                  calibration: str = "pad", method: str = "exact",
+                  beam_theory: str = "euler-bernoulli"):
+    """The scenario with the continuum trunk and the pad, solved exactly to its t_end (s).
 
-    ``elements``, ``calibration``, ``restitution``, ``contact_stiffness`` (N/m) and
-    ``contact_duration`` (s, as ``duration``) as in :func:`beam_impact_model`.
-    Returns a SimulationResult (backend "beam") with the metrics of
+    ``elements`` and ``calibration`` as in :func:`beam_impact_model` (the pad: the
+    scenario's contact). Returns a SimulationResult (backend "beam") with the metrics of
     :func:`analytic.records.metrics_from_record` (the engines' rule) and the trajectory.
     ``method`` (:class:`BeamMethod`) changes the cost, not the solution; ``beam_theory``
     (``euler-bernoulli`` or ``timoshenko``: shear deformation and rotary inertia, the
     scenario's trunk.shear_modulus and shear_coefficient) the trunk.
     """
-    t_end = scenario.t_end if t_end is None else t_end
-    check_range("--t-end", t_end, low=0, low_open=True, unit="s")
+    t_end = scenario.t_end
     method = BeamMethod(OPTIONS["method"].check("method", method))
-    model, sdof = beam_impact_model(scenario, elements=elements, restitution=restitution,
-                                    contact_stiffness=contact_stiffness,
-                                    duration=contact_duration, calibration=calibration,
+    model, sdof = beam_impact_model(scenario, elements=elements, calibration=calibration,
                                     beam_theory=beam_theory)
     t_col = collision_duration(sdof, model.contact_stiffness, model.contact_damping)
 
     dt = t_col / SAMPLES_PER_COLLISION
     check_work(t_end, dt, SAMPLE_COST, duration_knob(
-        sdof, scenario.contact, contact_stiffness, contact_duration, SAMPLES_PER_COLLISION,
+        sdof, scenario.contact, SAMPLES_PER_COLLISION,
         _effective(model, sdof) if calibration == "effective" else None))
     t_detect = detection_duration(sdof, scenario.contact, stiffness=model.contact_stiffness)
     if method is BeamMethod.EXACT_FULL:
@@ -185,11 +175,8 @@ def simulate_beam(scenario: Scenario, *, elements: int = DEFAULT_ELEMENTS,
                   "effective_mass": model.effective_mass, "contact_switches": switches,
                   **pad_fields(model.contact_stiffness, model.contact_damping,
                                1.0 / (1.0 / model.effective_mass + 1.0 / sdof.impactor_mass))}
-    scen = scenario.to_dict()
-    scen["contact"]["restitution"] = sdof.restitution
-    scen["t_end"] = t_end  # the run's, as the engines record it (a --t-end's refusal names it)
     return SimulationResult(
-        backend="beam", metrics=metrics, model=model_dict, scenario=scen,
+        backend="beam", metrics=metrics, model=model_dict, scenario=scenario.to_dict(),
         trajectory=trajectory, record=record, collision_duration=t_col,
         extra={"crown": crown})
 

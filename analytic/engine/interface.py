@@ -22,7 +22,7 @@ from treeimpact.analytic.continuum.chain import (
 from treeimpact.analytic.continuum.modes import beam_reference
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.model.options import CONTACT_STIFFNESS, RESTITUTION, T_END, Option
-from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario
+from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import model_metrics, with_static_shape_crown
 from treeimpact.analytic.results import SimulationResult
@@ -127,15 +127,14 @@ def trunk_options(trunk: str, trunk_damping_model, calibration) -> tuple[str, st
 
 
 def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping_model: str,
-                 calibration: str, restitution, t_end, trunks: tuple = TRUNKS
-                 ) -> tuple[TwoBodyModel, float]:
+                 calibration: str, trunks: tuple = TRUNKS) -> tuple[TwoBodyModel, float]:
     """The options every engine shares, checked (one-line errors), and the scenario's
-    two-body model (eqs 7-13, 48) with the end time (s) of an engine run.
+    two-body model (eqs 7-13, 48) with the end time (s) of an engine run (the scenario's
+    t_end: a run option that overrides it or e is applied to the scenario before,
+    analytic.model.options.scenario_as_run).
 
     ``trunk``, ``pendulum``, ``trunk_damping_model`` and ``calibration`` are checked against
-    their choices; ``restitution`` overrides the scenario's e (validated as
-    ``contact.restitution``); ``pendulum = "full"`` needs a pendulum impactor; ``t_end``
-    (default the scenario's) must be a finite positive number; ``trunks``: the engine's
+    their choices; ``pendulum = "full"`` needs a pendulum impactor; ``trunks``: the engine's
     trunk models (default the shared ones).
     """
     check_choice("trunk", trunk, trunks)
@@ -144,16 +143,9 @@ def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping
     check_choice("calibration", calibration, CALIBRATIONS)
     if not isinstance(scenario, Scenario):
         raise ParameterError("scenario: expected an analytic.Scenario")
-    if restitution is not None:
-        Contact(restitution=restitution)
     if pendulum == "full" and not isinstance(scenario.impactor, Pendulum):
         raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
-    model = two_body_model(scenario, restitution)
-    t_end = scenario.t_end if t_end is None else t_end
-    if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
-            math.isfinite(t_end) and t_end > 0):
-        raise ParameterError(f"--t-end = {t_end!r} s is out of range: allowed (0, inf) s")
-    return model, float(t_end)
+    return two_body_model(scenario), float(scenario.t_end)
 
 
 def trunk_chain(scenario: Scenario, trunk: str, segments, *, engine: str = "the engine",

@@ -7,9 +7,8 @@ from functools import lru_cache, partial
 
 import numpy as np
 
-from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.options import RESTITUTION, T_END, Option
-from treeimpact.analytic.model.parameters import Contact, Pendulum, Scenario
+from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from treeimpact.analytic.model.reduction import crown_factor
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import with_static_shape_crown
@@ -107,37 +106,30 @@ OPTIONS = {"restitution": RESTITUTION, "t_end": T_END,
            "samples": Option(int, "samples of the trajectory", low=2, cli=False)}
 
 
-def simulate(scenario: Scenario, *, restitution: float | None = None, t_end: float | None = None,
-             samples: int = 2001) -> SimulationResult:
-    """Solve the scenario's two-body model exactly (eqs 12-35) up to ``t_end`` (s), with e
-    = ``restitution`` if given (else the scenario's).
+def simulate(scenario: Scenario, *, samples: int = 2001) -> SimulationResult:
+    """Solve the scenario's two-body model exactly (eqs 12-35) up to its t_end (s), with its
+    e (a run option that overrides one is applied to the scenario before:
+    analytic.model.options.scenario_as_run).
 
     Returns a :class:`SimulationResult` (backend "analytic") with the metrics, the model
     (M_T, C_T, K_T, m, k, e, u1) and the trajectory sampled at ``samples`` times.
     """
-    if restitution is not None:
-        Contact(restitution=restitution)  # validates the range with a one-line error
-    model = _model_of(scenario, restitution)
-    t_end = scenario.t_end if t_end is None else t_end
-    if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
-        raise ParameterError(f"t_end = {t_end!r} s is out of range: allowed (0, inf) s")
-    sol = solve_impacts(model, t_end)
+    sol = solve_impacts(_model_of(scenario), scenario.t_end)
     return result_from_solution(sol, scenario, samples=samples)
 
 
-def _model_of(scenario: Scenario, restitution: float | None) -> TwoBodyModel:
-    """:func:`two_body_model` of ``scenario`` with e = ``restitution`` (None: its own),
-    reduced and checked once per scenario and e (a sweep or a fit runs one many times; the
-    model is frozen): ~10 us of a 0.2 ms run."""
+def _model_of(scenario: Scenario) -> TwoBodyModel:
+    """:func:`two_body_model` of ``scenario``, reduced once per scenario (a sweep or a fit
+    runs one many times; the model is frozen): ~10 us of a 0.2 ms run."""
     try:
-        return _cached_model(scenario, restitution, type(restitution))
+        return _cached_model(scenario)
     except TypeError:  # a scenario holding something unhashable: reduced every time
-        return two_body_model(scenario, restitution)
+        return two_body_model(scenario)
 
 
 @lru_cache(maxsize=256)
-def _cached_model(scenario: Scenario, restitution, _kind) -> TwoBodyModel:
-    return two_body_model(scenario, restitution)
+def _cached_model(scenario: Scenario) -> TwoBodyModel:
+    return two_body_model(scenario)
 
 
 @lru_cache(maxsize=256)

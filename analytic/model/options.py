@@ -8,12 +8,14 @@ plausibility range, unit and meaning from the registry (:mod:`.registry`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
 
-from .parameters import check_range
+from .parameters import Scenario, check_range
 from .registry import BY_PATH
 
 
@@ -73,3 +75,48 @@ RESTITUTION = scenario_option("contact.restitution")
 T_END = scenario_option("t_end")
 CONTACT_STIFFNESS = scenario_option("contact.stiffness")
 CONTACT_DURATION = scenario_option("contact.duration")
+
+#: The run options that override a scenario field for one run, option -> the field's dotted
+#: path (:func:`scenario_as_run` applies them; every backend takes some of them).
+OVERRIDES = {"restitution": "contact.restitution", "contact_stiffness": "contact.stiffness",
+             "contact_duration": "contact.duration", "t_end": "t_end"}
+
+
+def scenario_as_run(scenario: Scenario, options: dict) -> Scenario:
+    """``scenario`` with the run options of :data:`OVERRIDES` in ``options`` applied (None:
+    not given): ``restitution`` (1), ``contact_stiffness`` (N/m; the duration then unset),
+    ``contact_duration`` (s; the stiffness then unset) and ``t_end`` (s). The one way a run
+    option reaches the physics: each value is range-checked here, once, by the scenario's
+    own dataclasses (a refusal names the field: :func:`as_typed` names it by its flag).
+    Returns the scenario itself when nothing is overridden (frozen)."""
+    given = {k: options[k] for k in OVERRIDES if options.get(k) is not None}
+    if not given:
+        return scenario
+    contact = scenario.contact
+    if "restitution" in given:
+        contact = dataclasses.replace(contact, restitution=given["restitution"])
+    if "contact_stiffness" in given:
+        contact = dataclasses.replace(contact, stiffness=given["contact_stiffness"],
+                                      duration=None)
+    if "contact_duration" in given:
+        contact = dataclasses.replace(contact, duration=given["contact_duration"],
+                                      stiffness=None)
+    return dataclasses.replace(scenario, contact=contact,
+                               t_end=given.get("t_end", scenario.t_end))
+
+
+def numerical_options(options: dict) -> dict:
+    """``options`` without the run options of :data:`OVERRIDES`: what a backend's own
+    function takes beside the scenario as run (:func:`scenario_as_run`)."""
+    return {k: v for k, v in options.items() if k not in OVERRIDES}
+
+
+def as_typed(message: str, options: dict) -> str:
+    """``message`` with each scenario field that a run option in ``options`` set named by
+    that option's flag instead (``contact.duration`` -> ``--contact-duration``): a refusal
+    names what the user typed."""
+    for option, path in OVERRIDES.items():
+        if options.get(option) is not None:
+            flag = "--" + option.replace("_", "-")
+            message = re.sub(rf"(?<![\w.-]){re.escape(path)}\b", flag, message)
+    return message

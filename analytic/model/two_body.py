@@ -86,12 +86,11 @@ class TwoBodyModel:
                 "restitution": self.restitution, "u1": self.impact_speed}
 
 
-def two_body_model(scenario: Scenario, restitution: float | None = None) -> TwoBodyModel:
-    """Reduce a scenario to the model of Fig 3 (eqs 7-11, 13, 48), with e = ``restitution``
-    if given (else the scenario's)."""
+def two_body_model(scenario: Scenario) -> TwoBodyModel:
+    """Reduce a scenario to the model of Fig 3 (eqs 7-11, 13, 48), with its e."""
     tree = reduce_trunk(scenario.trunk)
     imp = scenario.impactor
-    e = scenario.contact.restitution if restitution is None else restitution
+    e = scenario.contact.restitution
     if isinstance(imp, Pendulum):
         k = imp.stiffness
     elif isinstance(imp, Billet):

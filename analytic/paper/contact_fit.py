@@ -25,6 +25,7 @@ from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.identify.procedure import regress
 from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.calibration import with_clamp_mass
+from treeimpact.analytic.model.options import numerical_options, scenario_as_run
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.records import contact_intervals
@@ -157,11 +158,13 @@ def read_like_the_paper(result, scenario: Scenario) -> dict:
 
 def _scenario_at(scenario: Scenario, params: dict) -> tuple[Scenario, dict]:
     """(scenario, backend options) at a parameter point: the clamp mass recalibrates the
-    trunk at fixed M_T, K_T, C_T; the pad goes to the backend."""
+    trunk at fixed M_T, K_T, C_T; the pad and e go into the scenario (scenario_as_run), the
+    rest to the backend."""
     if "clamp_mass" in params:
         scenario = replace(scenario, trunk=with_clamp_mass(scenario.trunk, params["clamp_mass"],
                                                            impactor_mass=scenario.impactor.mass))
-    return scenario, {k: v for k, v in params.items() if k != "clamp_mass"}
+    rest = {k: v for k, v in params.items() if k != "clamp_mass"}
+    return scenario_as_run(scenario, rest), numerical_options(rest)
 
 
 def fit_to_measurements(scenario: Scenario, measured: dict, *, model: str = "beam",

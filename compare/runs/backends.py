@@ -21,6 +21,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.model.options import (
+    OVERRIDES,
+    as_typed,
+    numerical_options,
+    scenario_as_run,
+)
 
 from .names import did_you_mean
 
@@ -169,11 +175,10 @@ class Backend:
         func = self._load(self.simulate_ref)
         table = self.options()
         options = self._checked(options, table, set(table))
-        as_run = scenario_as_run(scenario, options)
-        try:
-            result = func(as_run, **{k: v for k, v in options.items()
-                                     if k not in SCENARIO_OPTIONS})
-        except ParameterError as exc:  # name a field as the user typed it: by its flag
+        try:  # a refusal names a field as the user typed it: by its flag
+            as_run = scenario_as_run(scenario, options)
+            result = func(as_run, **numerical_options(options))
+        except ParameterError as exc:
             exc.args = (as_typed(str(exc), options), *exc.args[1:])
             raise
         shown = as_run.to_dict()
@@ -204,50 +209,18 @@ class Backend:
                                f"{did_you_mean(key, known)}")
                 continue
             try:
+                # a scenario field's override is checked once, where it enters the
+                # scenario (scenario_as_run: the field's own range, named by its flag)
                 out[key] = table[key].check(key, value) if key in table and value is not None \
-                    else value
+                    and key not in SCENARIO_OPTIONS else value
             except ParameterError as exc:
                 refused.append(str(exc))
         if refused:
             raise ParameterError("; ".join(refused))
         return out
 
-#: The run options that override a scenario field (:func:`scenario_as_run` applies them).
-SCENARIO_OPTIONS = frozenset({"restitution", "contact_stiffness", "contact_duration", "t_end"})
-
-
-#: The scenario field each pad option sets (a refusal names the flag where one set it).
-_FIELDS = {"restitution": "contact.restitution", "contact_stiffness": "contact.stiffness",
-           "contact_duration": "contact.duration"}
-
-
-def as_typed(message: str, options: dict) -> str:
-    """``message`` with each scenario field that a run option in ``options`` set named by
-    that option's flag instead (``contact.duration`` -> ``--contact-duration``): a refusal
-    names what the user typed."""
-    for option, path in _FIELDS.items():
-        if options.get(option) is not None:
-            message = message.replace(path, "--" + option.replace("_", "-"))
-    return message
-
-
-def scenario_as_run(scenario, options: dict):
-    """``scenario`` with the run options that override its fields applied: restitution
-    (contact.restitution), t_end, contact_stiffness (contact.stiffness, the duration then
-    unset) and contact_duration (contact.duration, the stiffness then unset)."""
-    contact = scenario.contact
-    if options.get("restitution") is not None:
-        contact = dataclasses.replace(contact, restitution=options["restitution"])
-    if options.get("contact_stiffness") is not None:
-        contact = dataclasses.replace(contact, stiffness=options["contact_stiffness"],
-                                      duration=None)
-    if options.get("contact_duration") is not None:
-        contact = dataclasses.replace(contact, duration=options["contact_duration"],
-                                      stiffness=None)
-    t_end = scenario.t_end if options.get("t_end") is None else options["t_end"]
-    if contact is scenario.contact and t_end is scenario.t_end:
-        return scenario  # nothing overridden: the scenario as given (frozen)
-    return dataclasses.replace(scenario, contact=contact, t_end=t_end)
+#: The run options that override a scenario field (analytic.model.options.OVERRIDES).
+SCENARIO_OPTIONS = frozenset(OVERRIDES)
 
 
 BACKENDS = {

@@ -35,6 +35,7 @@ class TreePhysics:
         continuum's mass matrix at the clamp)."""
         # lazy: +130 ms at import otherwise (numpy), which this module's other callers do not need
         from treeimpact.analytic.continuum.beam_impact import beam_impact_model
+        from treeimpact.analytic.model.options import scenario_as_run
 
         # lazy: +54 ms at import otherwise (numpy), which this module's other callers do not need
         from treeimpact.analytic.model.reduction import crown_factor, reduce_trunk
@@ -43,7 +44,8 @@ class TreePhysics:
         m_t = reduce_trunk(scenario.trunk).dynamic_mass
         # the beam's effective mass at the clamp: its mesh's, whatever the pad; built at an e
         # the soft pad law takes (e = 0, valid for the Newton model, needs infinite damping)
-        m_c = beam_impact_model(scenario, restitution=PAD_E)[0].effective_mass
+        m_c = beam_impact_model(scenario_as_run(scenario, {"restitution": PAD_E})
+                                )[0].effective_mass
         return cls(restitution=float(scenario.contact.restitution),
                    loss_ratio=_reduced(m, m_t) / _reduced(m, m_c),
                    crown_factor=float(crown_factor(scenario.trunk)))

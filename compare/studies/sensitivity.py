@@ -23,6 +23,7 @@ import numpy as np
 from treeimpact.analytic.contact.soft import simulate_soft
 from treeimpact.analytic.continuum.beam_impact import simulate_beam
 from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.options import scenario_as_run
 
 from ..runs.cache import OK, resolve_scenario
 from ..runs.verdicts import validity_tolerance
@@ -90,8 +91,9 @@ def answer_and_crossings(result, scenario, params: dict) -> dict:
     out = _answer(scen, theory)
     gaps = {m: [] for m in CROSSING}
     for d in DURATIONS:
-        s = simulate_soft(scen, contact_duration=d).metrics
-        b = simulate_beam(scen, contact_duration=d, beam_theory=theory).metrics
+        s = simulate_soft(scenario_as_run(scen, {"contact_duration": d})).metrics
+        b = simulate_beam(scenario_as_run(scen, {"contact_duration": d}),
+                          beam_theory=theory).metrics
         for m in CROSSING:
             gaps[m].append(_gap(s[m], b[m]))
     for m in CROSSING:

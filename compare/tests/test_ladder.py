@@ -30,6 +30,7 @@ from treeimpact.compare.tree.ladder import (
     failure_table,
     ladder_rungs,
 )
+from treeimpact.analytic.model.options import scenario_as_run
 
 TOL = load_tolerances()
 
@@ -266,7 +267,8 @@ def test_identification_tolerances_are_the_procedure_floor_at_e0(name):
     record (the paper's assumption). Measured here again: M_T, K_T, E within them for every
     shipped scenario (pair_damping_ratio for the light crowns), so the e = 0.1 findings are caused by e."""
     scen = load_scenario(name)
-    res = simulate(scen, restitution=0.0, samples=int(round(scen.t_end / ANALYTIC_SAMPLE_STEP))
+    res = simulate(scenario_as_run(scen, {"restitution": 0.0}),
+                   samples=int(round(scen.t_end / ANALYTIC_SAMPLE_STEP))
                    + 1)
     tr = res.trajectory
     ident, _ = identify_from_record(tr.t, tr.x, pendulum_test_of(scen), y=tr.y, reading="paper")

@@ -9,6 +9,7 @@ from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.compare.tree.ladder import build_ladder
 from treeimpact.compare.tree.mechanism import matched_loss_evidence
+from treeimpact.analytic.model.options import scenario_as_run
 
 SCENARIOS = ("open-center", "central-leader", "realistic-crown")
 
@@ -30,7 +31,8 @@ def test_matched_loss_closes_the_energy_gap(name, run_cache):
 def test_matched_restitution_reproduces_the_loss():
     scen = load_scenario("central-leader")
     e = matched_loss_restitution(scen, 20.0)
-    got = simulate(scen, restitution=e, samples=2).metrics["contact_dissipation"]
+    got = simulate(scenario_as_run(scen, {"restitution": e}),
+                   samples=2).metrics["contact_dissipation"]
     assert got == pytest.approx(20.0, rel=1e-6)  # brentq to 1e-9 in e
 
 

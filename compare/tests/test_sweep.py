@@ -28,6 +28,7 @@ from treeimpact.compare.studies.sweep.grid import derived_ratios, parse_axis, pa
 from treeimpact.compare.studies.sweep.journal import JOURNAL, TABLE, read_table
 from treeimpact.compare.studies.sweep.maps import discrepancies, identification_maps, validity_maps
 from treeimpact.compare.studies.sweep.run import run_sweep
+from treeimpact.analytic.model.options import scenario_as_run
 
 # --------------------------------------------------------------------------- grid specs
 
@@ -143,7 +144,7 @@ def _explode_or_diverge(scenario, *, restitution=None, t_end=None):
         raise RuntimeError("solver blew up")
     if e == 0.5:
         raise SimulationDiverged("energy grew")
-    return simulate(scenario, t_end=t_end)
+    return simulate(scenario_as_run(scenario, {"t_end": t_end}))
 
 
 @pytest.fixture
@@ -192,7 +193,7 @@ def test_value_invalid_at_every_point_is_refused_before_anything_runs(tmp_path):
 
 def _infinite_x_max(scenario, *, t_end=None):
     """A stand-in engine that returns (does not raise) a run whose x_max blew up."""
-    result = simulate(scenario, t_end=t_end)
+    result = simulate(scenario_as_run(scenario, {"t_end": t_end}))
     result.metrics["x_max"] = math.inf
     return result
 
@@ -217,7 +218,7 @@ def _dies_at_half(scenario, *, t_end=None):
 
     if scenario.contact.restitution == 0.5 and multiprocessing.parent_process() is not None:
         os._exit(1)
-    return simulate(scenario, t_end=t_end)
+    return simulate(scenario_as_run(scenario, {"t_end": t_end}))
 
 
 def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
@@ -268,7 +269,7 @@ def _engine_with_trunk(scenario, *, trunk="chain", segments=None, pendulum="line
 
 def _takes_segments(scenario, *, segments=None, t_end=None):
     """A stand-in engine that takes ``segments`` (and ignores it)."""
-    return simulate(scenario, t_end=t_end)
+    return simulate(scenario_as_run(scenario, {"t_end": t_end}))
 
 
 def test_unavailable_option_is_a_skipped_row_not_a_crash(tmp_path, fake_engine, monkeypatch):

@@ -9,6 +9,7 @@ import math
 from treeimpact.analytic.contact.matched_loss import matched_loss_restitution
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.model.options import scenario_as_run
 
 from ..runs.rungs import RungKind
 
@@ -31,7 +32,8 @@ def matched_loss_evidence(ladder) -> dict | None:
         e_star = matched_loss_restitution(ladder.scenario, loss)
     except ParameterError as exc:
         return {"error": str(exc)}
-    matched = simulate(ladder.scenario, restitution=e_star, samples=2).metrics
+    matched = simulate(scenario_as_run(ladder.scenario, {"restitution": e_star}),
+                       samples=2).metrics
     rows = []
     for metric, scale, unit in MECHANISM_METRICS:
         v0, v1, vb = (ref.values.get(metric, math.nan), matched[metric],

@@ -34,15 +34,16 @@ def at_fitted_contact(fit: dict) -> dict:
     each tree (what the 1-DOF assumption costs there): four runs, a second."""
     from treeimpact.analytic.contact.soft import simulate_soft
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
+    from treeimpact.analytic.model.options import numerical_options, scenario_as_run
     from treeimpact.analytic.model.scenario import load_scenario
 
     out: dict = {}
     gaps: dict = {"x_max": {}, "energy_delivered": {}}
     for name, tree in fit["contact_fit"].items():
         params = {k: v["value"] for k, v in tree["fits"]["beam"]["parameters"].items()}
-        scen = load_scenario(name)
-        soft = simulate_soft(scen, **params).metrics
-        beam = simulate_beam(scen, **params).metrics
+        scen = scenario_as_run(load_scenario(name), params)  # the fitted pad and e
+        soft = simulate_soft(scen, **numerical_options(params)).metrics
+        beam = simulate_beam(scen, **numerical_options(params)).metrics
         for m in gaps:
             gaps[m][name] = 100.0 * (beam[m] / soft[m] - 1.0)
     for m, by_tree in gaps.items():

@@ -15,6 +15,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from treeimpact.analytic.model.options import scenario_as_run
+
 from .base import Bound, Pair, register
 
 
@@ -119,25 +121,25 @@ def mesh_value(pair: Pair) -> tuple[int, int, float]:
     mo = pair.rung.result.model
     n = int(mo["elements"])
     other = 2 * n if 2 * n <= MAX_ELEMENTS else max(2, n // 2)
-    metrics = _beam_metrics(pair.scenario, other, mo["calibration"], mo["beam_theory"],
-                            float(mo["restitution"]), float(mo["contact_stiffness"]),
-                            float(pair.rung.result.scenario["t_end"]))
+    as_run = scenario_as_run(pair.scenario, {  # the rung's e, pad and t_end
+        "restitution": float(mo["restitution"]),
+        "contact_stiffness": float(mo["contact_stiffness"]),
+        "t_end": float(pair.rung.result.scenario["t_end"])})
+    metrics = _beam_metrics(as_run, other, mo["calibration"], mo["beam_theory"])
     value = metrics.get(pair.metric)
     return n, other, (math.nan if value is None else float(value))
 
 
 @functools.lru_cache(maxsize=8)
-def _beam_metrics(scenario, elements: int, calibration: str, beam_theory: str,
-                  restitution: float, contact_stiffness: float, t_end: float) -> dict:
-    """The beam run's metrics on ``elements`` elements (the scenario, its ``calibration``,
-    ``beam_theory``, e = ``restitution``, k_c = ``contact_stiffness`` N/m, to ``t_end`` s):
+def _beam_metrics(scenario, elements: int, calibration: str, beam_theory: str) -> dict:
+    """The beam run's metrics of ``scenario`` (as run) on ``elements`` elements (its
+    ``calibration``, ``beam_theory``):
     kept for the tree's other metrics (one run, under a second)."""
     # lazy: the exact solver (numpy, scipy) only where a mesh band is evaluated
     from treeimpact.analytic.continuum.beam_impact import simulate_beam
 
     return dict(simulate_beam(scenario, elements=elements, calibration=calibration,
-                              beam_theory=beam_theory, restitution=restitution,
-                              contact_stiffness=contact_stiffness, t_end=t_end).metrics)
+                              beam_theory=beam_theory).metrics)
 
 
 # --------------------------------------------------------------------------- Timoshenko
@@ -165,8 +167,10 @@ def impulse_ceiling(scenario, elements: int, beam_theory: str, where: str,
     import scipy.linalg
     from treeimpact.analytic.continuum.beam_impact import beam_impact_model
 
-    model, _ = beam_impact_model(scenario, elements=elements, beam_theory=beam_theory,
-                                 restitution=0.5)
+    # the mesh's modes, whatever the pad: built at an e the soft pad law takes (e = 0 needs
+    # infinite damping)
+    model, _ = beam_impact_model(scenario_as_run(scenario, {"restitution": 0.5}),
+                                 elements=elements, beam_theory=beam_theory)
     w2, v = scipy.linalg.eigh(np.asarray(model.K), np.asarray(model.M))
     at = model.clamp if where == "clamp" else model.crown
     return float(np.sum(np.abs(v[model.clamp] * v[at]) / w2 ** (power / 2)))
