@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from .parameters import Billet, Pendulum, Scenario, check_range
+from .parameters import LIMITS, Billet, Pendulum, Scenario, check_range
 from .reduction import reduce_trunk
 
 
@@ -35,7 +35,8 @@ class TwoBodyModel:
         check_range("model.impactor_mass", self.impactor_mass, low=0, low_open=True, unit="kg")
         check_range("model.impactor_stiffness", self.impactor_stiffness, low=0, unit="N/m")
         check_range("model.impact_speed", self.impact_speed, low=0, low_open=True, unit="m/s")
-        check_range("model.restitution", self.restitution, low=0, high=1)
+        low, high, _ = LIMITS["contact.restitution"]  # the registry's range of e
+        check_range("model.restitution", self.restitution, low=low, high=high)
 
     @property
     def reduced_mass(self) -> float:
