@@ -28,7 +28,6 @@ from treeimpact.compare.studies.sweep.grid import derived_ratios, parse_axis, pa
 from treeimpact.compare.studies.sweep.journal import JOURNAL, TABLE, read_table
 from treeimpact.compare.studies.sweep.maps import discrepancies, identification_maps, validity_maps
 from treeimpact.compare.studies.sweep.run import run_sweep
-from treeimpact.analytic.model.options import scenario_as_run
 
 # --------------------------------------------------------------------------- grid specs
 
@@ -137,14 +136,14 @@ TRUNK_OPTIONS = {"trunk": Option(("sdof", "chain"), "trunk"), "segments": SEGMEN
 SEGMENTS_OPTIONS = {"segments": SEGMENTS, "t_end": T_END}
 
 
-def _explode_or_diverge(scenario, *, restitution=None, t_end=None):
+def _explode_or_diverge(scenario):
     """A stand-in engine: fails at e >= 0.8, diverges at e = 0.5, else the analytic run."""
     e = scenario.contact.restitution
     if e >= 0.8:
         raise RuntimeError("solver blew up")
     if e == 0.5:
         raise SimulationDiverged("energy grew")
-    return simulate(scenario_as_run(scenario, {"t_end": t_end}))
+    return simulate(scenario)  # the scenario as run (its e and t_end applied)
 
 
 @pytest.fixture
@@ -191,9 +190,9 @@ def test_value_invalid_at_every_point_is_refused_before_anything_runs(tmp_path):
         run_sweep("central-leader", ["option.foo=1"], tmp_path / "s", workers=0)
 
 
-def _infinite_x_max(scenario, *, t_end=None):
+def _infinite_x_max(scenario):
     """A stand-in engine that returns (does not raise) a run whose x_max blew up."""
-    result = simulate(scenario_as_run(scenario, {"t_end": t_end}))
+    result = simulate(scenario)  # the scenario as run (its e and t_end applied)
     result.metrics["x_max"] = math.inf
     return result
 
@@ -211,14 +210,14 @@ def test_run_returning_infinite_metrics_is_recorded_as_diverged(tmp_path, monkey
     assert math.isnan(row["x_max"]) and math.isnan(row["T0"])
 
 
-def _dies_at_half(scenario, *, t_end=None):
+def _dies_at_half(scenario):
     """A stand-in engine whose worker process dies (as in a crash) at e = 0.5."""
     import multiprocessing
     import os
 
     if scenario.contact.restitution == 0.5 and multiprocessing.parent_process() is not None:
         os._exit(1)
-    return simulate(scenario_as_run(scenario, {"t_end": t_end}))
+    return simulate(scenario)  # the scenario as run (its e and t_end applied)
 
 
 def test_worker_process_dying_costs_only_its_point(tmp_path, monkeypatch):
@@ -262,14 +261,14 @@ def test_segments_one_is_the_sdof_trunk_and_shares_its_run(monkeypatch):
     assert len(shared) == 1 and len(shared[0].rows) == 3
 
 
-def _engine_with_trunk(scenario, *, trunk="chain", segments=None, pendulum="linear",
-                       t_end=None):  # pragma: no cover - planned, never run
+def _engine_with_trunk(scenario, *, trunk="chain", segments=None,
+                       pendulum="linear"):  # pragma: no cover - planned, never run
     raise AssertionError("not run")
 
 
-def _takes_segments(scenario, *, segments=None, t_end=None):
+def _takes_segments(scenario, *, segments=None):
     """A stand-in engine that takes ``segments`` (and ignores it)."""
-    return simulate(scenario_as_run(scenario, {"t_end": t_end}))
+    return simulate(scenario)  # the scenario as run (its e and t_end applied)
 
 
 def test_unavailable_option_is_a_skipped_row_not_a_crash(tmp_path, fake_engine, monkeypatch):
