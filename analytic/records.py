@@ -14,7 +14,8 @@ from treeimpact.analytic.model.parameters import pendulum_stiffness
 from treeimpact.analytic.model.reduction import crown_factor
 
 from .errors import ParameterError
-from .results import METRIC_KEYS, ImpactRecord
+from .results import ImpactRecord
+from .metrics import METRIC_KEYS
 
 
 def static_shape_crown(record: "ImpactRecord", tip: float):

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from treeimpact.analytic.results import METRIC_KEYS
+from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.compare.interface.cli import main
 
 

@@ -51,7 +51,7 @@ def test_every_report_term_has_an_entry():
 
 def glossary_problems(metrics) -> list[str]:
     """What the glossary lacks for the metric declarations ``metrics``
-    (analytic.results.METRICS): an entry for each one's label, and each equation it
+    (analytic.metrics.METRICS): an entry for each one's label, and each equation it
     declares restated."""
     bold, restated, out = _bold(), _restated(), []
     for m in metrics:
@@ -63,7 +63,7 @@ def glossary_problems(metrics) -> list[str]:
 
 
 def test_every_metric_and_rung_kind_of_the_report_has_an_entry():
-    from treeimpact.analytic.results import METRICS
+    from treeimpact.analytic.metrics import METRICS
     from treeimpact.compare.runs.rungs import RungKind
 
     text = GLOSSARY.read_text()

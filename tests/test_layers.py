@@ -25,8 +25,8 @@ FOLDERS = {"treeimpact": "treeimpact", "analytic": "treeimpact.analytic",
            **{folder: f"treeimpact.{folder}" for folder in ENGINES},
            "compare": "treeimpact.compare"}
 #: analytic's floors, bottom first: a module imports only its own floor or lower ones.
-ANALYTIC_FLOORS = ("threads", "errors", "budget", "results", "model", "records", "impact",
-                   "contact", "continuum", "identify", "engine", "paper")
+ANALYTIC_FLOORS = ("threads", "errors", "budget", "metrics", "results", "model", "records",
+                   "impact", "contact", "continuum", "identify", "engine", "paper")
 #: compare's floors, bottom first (docs/architecture.md): each a set of units (a module or
 #: a subpackage of compare); a module imports only its own floor or lower ones, and the
 #: units of one floor import each other without a circle.

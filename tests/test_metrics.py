@@ -1,5 +1,5 @@
 """Metrics declared once (issue 51 item 4): each output metric is one ``Metric`` of
-analytic/results.py's ``METRICS`` (name, unit, label, meaning, equation, whether the ladder
+analytic/metrics.py's ``METRICS`` (name, unit, label, meaning, equation, whether the ladder
 compares it, whether it is a count, what a run must have for it to exist). The metric keys,
 the units' table, the ladder's metrics, the times checked against t_end and the verdicts'
 absence reasons are derived from it; what is written elsewhere by hand is checked against it
@@ -25,7 +25,7 @@ import pytest
 
 import treeimpact as ti
 from treeimpact.compare.runs.verdicts import TOLERANCES_PATH
-from treeimpact.analytic.results import (
+from treeimpact.analytic.metrics import (
     FORCE,
     LADDER_METRICS,
     METRIC_KEYS,
@@ -237,10 +237,10 @@ def test_a_new_declaration_is_caught_where_it_still_needs_writing():
 
 PROBE = r"""
 import json
-from treeimpact.analytic import results
+from treeimpact.analytic import metrics, results
 from treeimpact.compare.runs import verdicts
 from treeimpact.compare.tree.ladder import ALL_METRICS, LADDER_METRICS, meaning_of, unit_of
-print(json.dumps({"keys": results.METRIC_KEYS, "units": results.METRIC_UNITS,
+print(json.dumps({"keys": metrics.METRIC_KEYS, "units": metrics.METRIC_UNITS,
                   "ladder": LADDER_METRICS, "all": ALL_METRICS,
                   "unit": unit_of("probe_time"), "meaning": meaning_of("probe_time"),
                   "times": results.TIME_KEYS, "why_none": verdicts.WHY_NONE.get("probe_time"),
@@ -250,7 +250,7 @@ print(json.dumps({"keys": results.METRIC_KEYS, "units": results.METRIC_UNITS,
 
 def test_adding_a_declaration_on_a_copy_is_one_line_and_the_lists_follow(tmp_path):
     copy = _copy(tmp_path)
-    source = copy / "treeimpact/analytic/results.py"
+    source = copy / "treeimpact/analytic/metrics.py"
     text = source.read_text()
     last = '"of the crown averaged over t_c (NaN for Newton impulses)", needs=FORCE),\n'
     assert text.count(last) == 1  # the last declaration

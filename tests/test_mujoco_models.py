@@ -589,7 +589,7 @@ def test_regenerate_writes_changed_and_removes_stale_files(tmp_path, monkeypatch
 def test_cli_simulate_and_modes_with_the_mujoco_backend(capsys):
     import json
 
-    from treeimpact.analytic.results import METRIC_KEYS
+    from treeimpact.analytic.metrics import METRIC_KEYS
     from treeimpact.compare.interface.cli import main
 
     code = main(["simulate", "central-leader", "--backend", "mujoco", "--trunk", "chain",

@@ -55,7 +55,7 @@ _EXPORTS = {
     "DiagnosisKind": "treeimpact.compare.interface.api_results",
     "Conclusion": "treeimpact.compare.interface.api_results",
     "Record": "treeimpact.analytic.identify.pendulum_record",
-    "METRIC_UNITS": "treeimpact.analytic.results",
+    "METRIC_UNITS": "treeimpact.analytic.metrics",
     "ParameterError": "treeimpact.analytic.errors",
     "SimulationDiverged": "treeimpact.analytic.errors",
 }

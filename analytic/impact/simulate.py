@@ -12,7 +12,8 @@ from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from treeimpact.analytic.model.reduction import crown_factor
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import with_static_shape_crown
-from treeimpact.analytic.results import METRIC_KEYS, ImpactRecord, SimulationResult, Trajectory
+from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajectory
+from treeimpact.analytic.metrics import METRIC_KEYS
 
 from .events import Motion
 from .solution import ImpactSolution
@@ -21,7 +22,7 @@ from .together import force_coefficients
 
 
 def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dict:
-    """The metrics of :data:`analytic.results.METRIC_KEYS` from an exact solution ``sol``
+    """The metrics of :data:`analytic.metrics.METRIC_KEYS` from an exact solution ``sol``
     (theta_b needs the ``scenario``'s pendulum; NaN without it).
 
     T0, x0, V: start of the first moving-together phase (the accumulation point when the
@@ -76,7 +77,7 @@ def impact_metrics(sol: ImpactSolution, scenario: Scenario | None = None) -> dic
 
 
 def _whole_event(sol: ImpactSolution, scenario: Scenario | None) -> dict:
-    """Whole-event metrics of the exact solution (analytic.results.METRIC_UNITS): every
+    """Whole-event metrics of the exact solution (analytic.metrics.METRIC_UNITS): every
     impact, tail and moving-together phase. The energies and the impulse need the bodies to
     have parted for good within t_end (else NaN); the impulse is the pendulum's momentum
     balance m u1 - m y'(t) - k int_0^t y dt; force and crown acceleration are impulsive."""

@@ -13,7 +13,8 @@ from treeimpact.analytic.identify.conclusion import Conclusion
 from treeimpact.analytic.identify.diagnosis import Diagnosis, DiagnosisKind  # noqa: F401 (public)
 from treeimpact.analytic.identify.intervals import UNITS as FIT_UNITS
 from treeimpact.analytic.model.parameters import Scenario
-from treeimpact.analytic.results import METRIC_KEYS, Trajectory
+from treeimpact.analytic.results import Trajectory
+from treeimpact.analytic.metrics import METRIC_KEYS
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,8 @@ from functools import lru_cache
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.results import (FORCE, PARTED, TOGETHER, finite_number,
-                                         metrics_needing, to_jsonable)
+from treeimpact.analytic.results import finite_number, to_jsonable
+from treeimpact.analytic.metrics import FORCE, PARTED, TOGETHER, metrics_needing
 
 from .bounds import validate_bound
 from .bounds.base import relative_step  # noqa: F401 (compare.runs.verdicts.relative_step)
@@ -176,7 +176,7 @@ class Check:
 #: metrics (eq 34, eq 45, eq 58) when the impactor parts before the trunk catches up with it,
 #: the whole-event energies and impulse when the bodies have not parted for good by t_end,
 #: the contact history on the Newton model's impulsive impacts.
-MOVING_TOGETHER = metrics_needing(TOGETHER)  # analytic.results.METRICS
+MOVING_TOGETHER = metrics_needing(TOGETHER)  # analytic.metrics.METRICS
 WHY_NONE = {
     **dict.fromkeys(MOVING_TOGETHER,
                     "the bodies never move together on this tree (the impactor parts before "

@@ -20,7 +20,7 @@ from treeimpact.analytic.impact.simulate import simulate
 from treeimpact.analytic.model.options import RESTITUTION, T_END, Option
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.analytic.results import METRIC_KEYS
+from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.compare.runs.cache import INVALID
 from treeimpact.compare.studies.speed import speed_points
 from treeimpact.compare.studies.sweep.apply import apply_point

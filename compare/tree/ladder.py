@@ -13,7 +13,8 @@ from types import SimpleNamespace
 from treeimpact.analytic.continuum.chain_impact import converged_segments
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
-from treeimpact.analytic.results import LADDER_METRICS, METRIC_UNITS, finite_number, to_jsonable
+from treeimpact.analytic.results import finite_number, to_jsonable
+from treeimpact.analytic.metrics import LADDER_METRICS, METRIC_UNITS
 
 from ..runs.backends import ENGINES
 from ..runs.bounds import Pair, tree_entry
@@ -37,7 +38,7 @@ from .identification import (
     rung_truth,
 )
 
-#: The ladder's metrics: analytic.results.LADDER_METRICS and the identified ones as ``id_``.
+#: The ladder's metrics: analytic.metrics.LADDER_METRICS and the identified ones as ``id_``.
 ALL_METRICS = LADDER_METRICS + tuple(f"id_{k}" for k in IDENT_METRICS)
 
 

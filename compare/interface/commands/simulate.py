@@ -7,7 +7,8 @@ from __future__ import annotations
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.model.registry import units_of
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.analytic.results import METRIC_UNITS, json_text
+from treeimpact.analytic.results import json_text
+from treeimpact.analytic.metrics import METRIC_UNITS
 from treeimpact.compare.runs.backends import BACKENDS, get_backend
 from treeimpact.compare.runs.provenance import provenance
 from treeimpact.compare.runs.recording import DEFAULTS, REST, check_sampling, sample

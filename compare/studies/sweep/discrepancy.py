@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from treeimpact.analytic.results import METRIC_KEYS
+from treeimpact.analytic.metrics import METRIC_KEYS
 
 # the ladder's metrics, so a study and the report speak of the same things
 from treeimpact.compare.runs.cache import OK
