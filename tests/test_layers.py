@@ -591,6 +591,25 @@ def test_the_public_api_resolves_and_is_documented():
         treeimpact.no_such_name  # noqa: B018
 
 
+def test_the_public_api_is_one_plain_module_of_re_exports():
+    """The public names are treeimpact.api's (issue 51 item 3): a module of from-imports
+    that defines nothing of its own, and ``treeimpact`` hands exactly those names on (no
+    list of its own)."""
+    import ast
+
+    import treeimpact
+    import treeimpact.api as api
+
+    tree = ast.parse((ROOT / "treeimpact" / "api.py").read_text())
+    kinds = {type(node) for node in tree.body}
+    assert kinds <= {ast.Expr, ast.ImportFrom, ast.Assign}, kinds  # docstring, imports, __all__
+    assert treeimpact.__all__ == api.__all__ and len(api.__all__) == len(set(api.__all__))
+    for name in api.__all__:
+        value = getattr(api, name)
+        assert getattr(value, "__module__", "") != "treeimpact.api", name  # defined elsewhere
+        assert getattr(treeimpact, name) is value, name
+
+
 def test_importing_treeimpact_loads_no_implementation():
     """``import treeimpact`` is cheap: its names load on first use (the CLI's start-up)."""
     code = ("import sys, treeimpact; "

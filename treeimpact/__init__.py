@@ -12,64 +12,29 @@ The public API (SI units; docs/api.md)::
     ladder = ti.ladder(scenario)                       # one assumption per rung, judged
     ti.report("reports")                               # report.html, .md, .json
 
-Everything else (``treeimpact.analytic``, ``treeimpact.compare``, the engine packages) is
-the implementation. Names load on first use, so ``import treeimpact`` stays fast.
+The public names are :mod:`treeimpact.api`'s, a plain module of re-exports; everything
+else (``treeimpact.analytic``, ``treeimpact.compare``, the engine packages) is the
+implementation. The names load on first use, so ``import treeimpact`` stays fast.
 """
 
 from importlib import import_module
 
-#: Public name -> the module that defines it.
-_EXPORTS = {
-    # scenarios: load, build, write
-    "Scenario": "treeimpact.analytic.model.parameters",
-    "Trunk": "treeimpact.analytic.model.parameters",
-    "Pendulum": "treeimpact.analytic.model.parameters",
-    "Billet": "treeimpact.analytic.model.parameters",
-    "Contact": "treeimpact.analytic.model.parameters",
-    "load_scenario": "treeimpact.analytic.model.scenario",
-    "shipped_scenarios": "treeimpact.analytic.model.scenario",
-    "scenario_toml": "treeimpact.analytic.model.scenario_toml",
-    "MeasuredTree": "treeimpact.analytic.model.calibration",
-    "tree_scenario": "treeimpact.compare.interface.api",
-    "calibrate_trunk": "treeimpact.analytic.model.calibration",
-    # runs, ladders, sweeps, identification, the report
-    "simulate": "treeimpact.compare.interface.api",
-    "modes": "treeimpact.compare.interface.api",
-    "backends": "treeimpact.compare.interface.api",
-    "ladder": "treeimpact.compare.interface.api",
-    "sweep": "treeimpact.compare.interface.api",
-    "design_map": "treeimpact.compare.interface.api",
-    "read_record": "treeimpact.compare.interface.api",
-    "record_from_simulation": "treeimpact.compare.interface.api",
-    "identify": "treeimpact.compare.interface.api",
-    "report": "treeimpact.compare.interface.api",
-    # results (typed, SI) and errors
-    "Simulation": "treeimpact.compare.interface.api_results",
-    "Metrics": "treeimpact.compare.interface.api_results",
-    "Model": "treeimpact.compare.interface.api_results",
-    "Modes": "treeimpact.compare.interface.api_results",
-    "TrunkModes": "treeimpact.compare.interface.api_results",
-    "Identification": "treeimpact.compare.interface.api_results",
-    "Estimate": "treeimpact.compare.interface.api_results",
-    "Diagnosis": "treeimpact.compare.interface.api_results",
-    "DiagnosisKind": "treeimpact.compare.interface.api_results",
-    "Conclusion": "treeimpact.compare.interface.api_results",
-    "Record": "treeimpact.analytic.identify.pendulum_record",
-    "METRIC_UNITS": "treeimpact.analytic.metrics",
-    "ParameterError": "treeimpact.analytic.errors",
-    "SimulationDiverged": "treeimpact.analytic.errors",
-}
-
-__all__ = sorted(_EXPORTS)
+#: The package's folders (``from treeimpact import mujoco_models`` imports the folder, never
+#: the API).
+_FOLDERS = frozenset({"analytic", "compare", "mujoco_models", "bullet_models"})
 
 
 def __getattr__(name: str):
-    if name not in _EXPORTS:
+    """A public name (and ``__all__``) from :mod:`treeimpact.api`, loaded on first use."""
+    if name.startswith("__") and name != "__all__" or name in _FOLDERS:
         raise AttributeError(f"module 'treeimpact' has no attribute {name!r}")
-    value = getattr(import_module(_EXPORTS[name]), name)
+    api = import_module("treeimpact.api")
+    if name != "__all__" and name not in api.__all__:
+        raise AttributeError(f"module 'treeimpact' has no attribute {name!r}")
+    value = getattr(api, name)
     globals()[name] = value  # later reads skip this hook
     return value
 
 
 def __dir__():
-    return sorted(set(globals()) | set(__all__))
+    return sorted(set(globals()) | set(import_module("treeimpact.api").__all__))
