@@ -224,3 +224,27 @@ def test_building_every_help_page_imports_no_scipy():
             "build_parser(); print('scipy' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_simulate_runs_through_the_public_api_and_its_refusal_names_the_flag(monkeypatch,
+                                                                             capsys):
+    """One face (issue 51 item 3): ``treeimpact simulate`` calls treeimpact.api.simulate
+    (here a spy around it), the API whose refusals name keywords (``t_end``) for a Python
+    caller and the flags (``--t-end``) while a command runs (compare.runs.names.NAMING)."""
+    import treeimpact.api as api
+
+    calls = []
+    real = api.simulate
+
+    def spy(*args, **kwargs):
+        calls.append((args[1:], kwargs))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(api, "simulate", spy)
+    assert main(["simulate", "open-center", "--backend", "soft", "--restitution", "0.3"]) == 0
+    assert calls == [(("soft",), {"restitution": 0.3}), (("analytic",), {"restitution": 0.3})]
+    capsys.readouterr()
+    assert main(["simulate", "open-center", "--t-end", "0"]) == 2
+    assert "--t-end = 0.0 s is out of range" in capsys.readouterr().err
+    with pytest.raises(api.ParameterError, match=r"^t_end = 0 s is out of range"):
+        real("open-center", t_end=0)

@@ -27,7 +27,7 @@ from treeimpact.analytic.threads import enter_limit, exit_limit
 
 from ..runs.backends import BACKENDS, ENGINES, get_backend
 from ..runs.cache import resolve_scenario
-from ..runs.names import did_you_mean
+from ..runs.names import NAMING, did_you_mean
 from ..runs.recording import check_sampling, sample
 from ..studies.sweep.run import run_sweep
 from ..tree.ladder import build_ladder
@@ -70,6 +70,8 @@ def _api(func):
         try:
             return func(*args, **kwargs)
         except ParameterError as exc:
+            if NAMING.get() == "flag":  # a command's call: its refusal names the flags
+                raise
             raise ParameterError(_keywords(str(exc))) from None
         finally:
             exit_limit()

@@ -17,7 +17,7 @@ import sys
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.threads import blas_limit
 
-from ..runs.names import did_you_mean
+from ..runs.names import NAMING, did_you_mean
 from ..runs.progress import set_job
 from .commands import COMMANDS, HELP
 from .process import command_environment, run_command, stop_signals
@@ -122,8 +122,12 @@ def _run(argv, ending: bool) -> int:
         words = sys.argv[1:] if argv is None else list(argv)
         args = build_parser(named_command(words), every=False).parse_args(words)
         set_job(args.command)
-        with command_environment(getattr(args, "max_seconds", None)), blas_limit():
-            return COMMANDS[args.command].run(args)
+        naming = NAMING.set("flag")  # the API the commands call names the flags typed
+        try:
+            with command_environment(getattr(args, "max_seconds", None)), blas_limit():
+                return COMMANDS[args.command].run(args)
+        finally:
+            NAMING.reset(naming)
 
     with stop_signals(ending):
         return run_command(command, None)

@@ -9,7 +9,13 @@ flags (``--contact-stiffness``) for the command line or as keywords for the Pyth
 
 from __future__ import annotations
 
+import contextvars
 import difflib
+
+#: How a refusal names what the user typed: ``"keyword"`` (``t_end``) from a call of the
+#: Python API (compare.interface.api), ``"flag"`` (``--t-end``) while a command of the
+#: command line runs (compare.interface.cli sets it): the commands call the same API.
+NAMING = contextvars.ContextVar("treeimpact_naming", default="keyword")
 
 #: The paper's symbols (docs/glossary.md) -> the name of the flag or keyword that sets them.
 SYMBOLS = {"e": "restitution", "m": "impactor_mass", "l_e": "equivalent_length",

@@ -89,11 +89,14 @@ def print_simulation(scenario, result, reference) -> None:
 def run(args) -> int:
     """Run the scenario on the backend of the parsed command line ``args`` and print it
     (text or ``--json``; with ``--record`` also write the record); exit code 0."""
-    backend = get_backend(args.backend)
+    # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
+    from treeimpact.api import simulate
+
+    get_backend(args.backend)  # a one-line refusal naming --backend, before the scenario
     scenario = load_scenario(args.scenario)
     opts = options_of(args, backend_options())
     check_record_arguments(args)
-    result = backend.simulate(scenario, **opts)
+    result = simulate(scenario, args.backend, **opts).result
     written = write_record(args, scenario, result) if args.record else None
     if args.json:
         out = result.to_json() | {"provenance": provenance(scenario, result, options=opts)}
@@ -102,7 +105,7 @@ def run(args) -> int:
     reference = None
     if args.backend != "analytic":  # the paper's model beside it (a few ms)
         opts = options_of(args, ("restitution", "t_end"))
-        reference = get_backend("analytic").simulate(scenario, **opts)
+        reference = simulate(scenario, "analytic", **opts).result
     print_simulation(scenario, result, reference)
     if written:
         print(written)
