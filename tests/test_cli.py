@@ -248,3 +248,18 @@ def test_simulate_runs_through_the_public_api_and_its_refusal_names_the_flag(mon
     assert "--t-end = 0.0 s is out of range" in capsys.readouterr().err
     with pytest.raises(api.ParameterError, match=r"^t_end = 0 s is out of range"):
         real("open-center", t_end=0)
+
+
+@pytest.mark.parametrize("backend", ["analytic", "beam", "mujoco"])
+def test_modes_writes_the_public_apis_result(capsys, backend):
+    """``treeimpact modes --json`` is treeimpact.modes' typed result as JSON (Modes.to_json,
+    issue 51 item 3): the same numbers the API returns, a chain's segments with it."""
+    import treeimpact as ti
+
+    assert main(["modes", "central-leader", "--backend", backend, "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    want = ti.modes("central-leader", backend)
+    assert got["model"]["static_stiffness"] == want.model.static_stiffness
+    assert got["model"]["omegas"] == list(want.model.omegas)
+    assert got["beam"]["omegas"] == list(want.beam.omegas)
+    assert got["model"].get("segments") == want.model.segments

@@ -210,6 +210,12 @@ class TrunkModes:
     omegas: tuple
     segments: int | None = None
 
+    def to_json(self) -> dict:
+        """The trunk as ``treeimpact modes --json`` writes it (``segments`` only for a
+        chain)."""
+        out = {"static_stiffness": self.static_stiffness, "omegas": list(self.omegas)}
+        return out if self.segments is None else out | {"segments": self.segments}
+
 
 @dataclass(frozen=True)
 class Modes:
@@ -223,6 +229,10 @@ class Modes:
 
     model: TrunkModes
     beam: TrunkModes
+
+    def to_json(self) -> dict:
+        """``{"model": ..., "beam": ...}``, as ``treeimpact modes --json`` writes them."""
+        return {"model": self.model.to_json(), "beam": self.beam.to_json()}
 
 
 def modes_of(res: dict) -> Modes:

@@ -32,10 +32,13 @@ def add_arguments(sp) -> None:
 def run(args) -> int:
     """Print the backend's modes beside the beam's for the parsed command line ``args``
     (text or ``--json``); exit code 0."""
-    backend = get_backend(args.backend)
+    # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
+    from treeimpact.api import modes
+
+    get_backend(args.backend)  # a one-line refusal naming --backend, before the scenario
     scenario = load_scenario(args.scenario)
     opts = options_of(args, MODES_OPTIONS)
-    res = backend.modes(scenario, **opts)
+    res = modes(scenario, args.backend, **opts).to_json()
     if args.json:
         res = res | {"provenance": provenance(scenario, backend=args.backend, options=opts)}
         print(json_text(res, indent=2))
