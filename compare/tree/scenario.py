@@ -43,7 +43,7 @@ from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.registry import BY_NAME, default_of
 
 from ..runs.backends import get_backend
-from ..runs.names import show
+from ..runs.names import NAMING, show
 
 #: Removed spellings of the inputs -> their names now (compare.runs.names.did_you_mean): the
 #: ``scenario`` command's flags and :func:`treeimpact.tree_scenario`'s keywords both refuse
@@ -109,7 +109,9 @@ def check_keywords(name, measured: dict) -> None:
     given (ParameterError naming the first missing and every required one), every input
     given a real number (TypeError: a bool, a text or a list is not one) within the
     registry's declared range (ParameterError; analytic.model.registry). None means left
-    out. Unknown keywords are the caller's to refuse (with what they may have meant)."""
+    out. Unknown keywords are the caller's to refuse (with what they may have meant). Named
+    as flags (``--clamp-height``) while a command of the command line calls it (NAMING)."""
+    style = NAMING.get()
     if not isinstance(name, str) or not name.strip():
         raise TypeError(f"name: expected the scenario's name, a non-empty str, got {name!r}")
     required = list(REQUIRED)
@@ -117,16 +119,18 @@ def check_keywords(name, measured: dict) -> None:
     if missing:
         unit = _range_of(missing[0])[2]
         what = "a number" if unit == "1" else f"a number in {unit}"
-        raise ParameterError(f"{missing[0]}: missing ({what}); required: "
-                             f"{', '.join(required)}")
+        raise ParameterError(f"{show(missing[0], style)}: missing ({what}); required: "
+                             f"{', '.join(show(k, style) for k in required)}")
     for key, value in measured.items():
         if value is None:
             continue
         low, high, unit = _range_of(key)
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             what = "a number" if unit == "1" else f"a number in {unit}"
-            raise TypeError(f"{key}: expected {what}, got {value!r} ({type(value).__name__})")
-        check_range(key, float(value), low=low, high=high, unit="" if unit == "1" else unit)
+            raise TypeError(f"{show(key, style)}: expected {what}, got {value!r} "
+                            f"({type(value).__name__})")
+        check_range(show(key, style), float(value), low=low, high=high,
+                    unit="" if unit == "1" else unit, low_open=_low_open(key))
 
 
 def tree_scenario(inputs: TreeInputs) -> Scenario:
@@ -162,7 +166,13 @@ def check_regression(inputs: TreeInputs) -> None:
             high = check_range("--clamp-height", inputs.clamp_height, low=0.0, low_open=True,
                                unit="m")
         check_range(f"--{key.replace('_', '-')}", value, low=low, high=high, unit=unit,
-                    low_open=key != "a2")
+                    low_open=_low_open(key))
+
+
+def _low_open(key: str) -> bool:
+    """Whether a regression input's range excludes its low end: a1 = V, x_max and tau are
+    positive (0 has no maximum of eq 38 to read), a2 may be 0 (no damping)."""
+    return key in REGRESSION_RANGES and key != "a2"
 
 
 def _stiffness(inputs: TreeInputs, pendulum) -> float:

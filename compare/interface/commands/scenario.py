@@ -19,7 +19,7 @@ from treeimpact.analytic.model.scenario_toml import scenario_toml
 from ...runs.exits import ExitCode
 from treeimpact.analytic.model.registry import ASSUMED
 
-from ...tree.scenario import DEFAULTS, TreeInputs, tree_scenario
+from ...tree.scenario import DEFAULTS, TreeInputs
 from ...tree.scenario import RENAMED as TREE_RENAMED
 from ._common import add_parameter_flag, number
 
@@ -66,8 +66,11 @@ def run(args) -> int:
     runs (:func:`compare.tree.scenario.tree_scenario`); exit code 0. Bad input is a
     ParameterError naming the flag (exit 2); a tree whose analytic x_max lies beyond the
     clamp height is OutsideValidity (exit 4, nothing written)."""
-    fields = [f.name for f in dataclasses.fields(TreeInputs)]
-    scenario = tree_scenario(TreeInputs(**{n: getattr(args, n) for n in fields}))
+    # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
+    from treeimpact.api import tree_scenario
+
+    fields = [f.name for f in dataclasses.fields(TreeInputs) if f.name != "name"]
+    scenario = tree_scenario(args.name, **{n: getattr(args, n) for n in fields})
     text = scenario_toml(scenario)
     if args.out is None:
         print(text, end="")
