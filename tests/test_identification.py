@@ -93,7 +93,7 @@ def test_eq45_default_areas_are_half_x0_T0():
 def test_readings_differ_and_are_all_finite():
     test = pendulum_test_of(load_scenario("open-center"))
     vals = {r: identify(a1=1.286, a2=-35.998, x_max=10.375e-3, tau=16e-3, x0=2.4e-3,
-                        T0=4e-3, test=test, reading=r).M_T for r in READINGS}
+                        T0=4e-3, test=test, reading=r).dynamic_mass for r in READINGS}
     assert len({round(v, 6) for v in vals.values()}) == 3
 
 
@@ -122,6 +122,7 @@ def test_a_record_that_breaks_the_premises_is_not_identifiable():
     for change, words in (({"pair_damping_ratio": -0.89}, "pair_damping_ratio = -0.89"),
                           ({"pair_damping_ratio": 1.2}, "0 < b / omega_n < 1"),
                           ({"V": 3.0}, "not below the impact speed"),
-                          ({"M_T": -10.3}, "M_T = -10.3 kg"), ({"K_T": -860.0}, "K_T = -860")):
+                          ({"dynamic_mass": -10.3}, "M_T = -10.3 kg"),
+                          ({"equivalent_stiffness": -860.0}, "K_T = -860")):
         with pytest.raises(ParameterError, match=f"^not identifiable: .*{words}"):
             check_identifiable(dataclasses.replace(ident, **change))

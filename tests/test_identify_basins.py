@@ -19,12 +19,13 @@ def test_a_parameter_at_its_range_s_end_leaves_what_it_moves_undetermined():
     params = record_parameters(np.linspace(0.0, 0.1, 101), 1e-3, [0.01],
                                restitution_given=False, pendulum=False)
     p = np.zeros(len(Slot))
-    p[Slot.LN_M_T], p[Slot.LN_K_T], p[Slot.TRUNK_DAMPING_RATIO] = math.log(110.0), 14.0, 0.1
+    p[Slot.LN_DYNAMIC_MASS], p[Slot.LN_EQUIVALENT_STIFFNESS], p[Slot.TRUNK_DAMPING_RATIO] = (
+        math.log(110.0), 14.0, 0.1)
     p[Slot.T0] = 0.02
     assert at_range_end(p, params) == set()  # e = 0: physical
-    p[Slot.LN_M_T] = math.log(M_RANGE[1])
+    p[Slot.LN_DYNAMIC_MASS] = math.log(M_RANGE[1])
     assert {"M_T", "C_T", "omega_1", "V_1"} <= at_range_end(p, params)
-    p[Slot.LN_M_T], p[Slot.RESTITUTION] = math.log(110.0), E_MAX
+    p[Slot.LN_DYNAMIC_MASS], p[Slot.RESTITUTION] = math.log(110.0), E_MAX
     assert at_range_end(p, params) == {"restitution", "V_1"}
     assert at_range_end(p, params.freeze(Slot.RESTITUTION)) == set()  # e given: held
 

@@ -99,7 +99,8 @@ def test_a_t0_within_a_sample_of_its_range_end_is_not_determined():
     t = np.arange(0.0, 0.1, 2e-4)
     params = record_parameters(t, 2e-4, [0.01], restitution_given=False, pendulum=False)
     p = np.zeros(len(Slot))
-    p[Slot.LN_M_T], p[Slot.LN_K_T], p[Slot.TRUNK_DAMPING_RATIO] = math.log(100.0), 14.0, 0.1
+    p[Slot.LN_DYNAMIC_MASS], p[Slot.LN_EQUIVALENT_STIFFNESS], p[Slot.TRUNK_DAMPING_RATIO] = (
+        math.log(100.0), 14.0, 0.1)
     p[Slot.RESTITUTION] = 0.1
     for t0, ends in ((params[Slot.T0].low + 1e-4, True), (params[Slot.T0].high - 1e-4, True),
                      (0.01, False)):

@@ -60,7 +60,7 @@ def test_printed_eq44_sign_does_not_reproduce_M_T():
     for t in TABLE_1.values():
         printed = identify(a1=t.a1, a2=t.a2, x_max=t.x_max, tau=t.tau, x0=t.x0, T0=t.T0,
                            test=t.test, reading="printed")
-        assert abs(printed.M_T - t.M_T) / t.M_T > 0.2
+        assert abs(printed.dynamic_mass - t.dynamic_mass) / t.dynamic_mass > 0.2
 
 
 def test_discrepancy_list_is_machine_readable():

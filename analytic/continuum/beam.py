@@ -164,7 +164,7 @@ def flexibility(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOU
     _check_trunk(trunk)
     check_beam_theory(beam_theory)
     z = np.asarray(nodes, dtype=float)
-    ei, l, kt = trunk.bending_stiffness, trunk.length, trunk.base_stiffness
+    ei, l, base_stiffness = trunk.bending_stiffness, trunk.length, trunk.base_stiffness
     zz, ze = z[:, None], z[None, :]  # response at zz, load at ze
     lo = np.minimum(zz, ze)
     below = zz <= ze
@@ -176,11 +176,11 @@ def flexibility(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOU
     t_m = lo / ei
     if beam_theory != EULER_BERNOULLI and math.isfinite(trunk.shear_rigidity):
         w_f = w_f + lo / trunk.shear_rigidity  # shear force 1 below zeta: w' - psi = 1 / kGA
-    if math.isfinite(kt):  # root rotation = base moment / k_theta, a rigid rotation above
-        w_f = w_f + zz * ze / kt
-        t_f = t_f + ze / kt + 0 * zz
-        w_m = w_m + zz / kt + 0 * ze
-        t_m = t_m + 1.0 / kt
+    if math.isfinite(base_stiffness):  # root rotation = base moment / k_theta, rigid above it
+        w_f = w_f + zz * ze / base_stiffness
+        t_f = t_f + ze / base_stiffness + 0 * zz
+        w_m = w_m + zz / base_stiffness + 0 * ze
+        t_m = t_m + 1.0 / base_stiffness
     n = len(z)
     F = np.zeros((2 * n, 2 * n))
     F[0::2, 0::2] = w_f
@@ -188,7 +188,7 @@ def flexibility(trunk: Trunk, nodes: np.ndarray, beam_theory: str = EULER_BERNOU
     F[0::2, 1::2] = w_m * l  # per unit of the force conjugate to l w' (a moment of 1/l)
     F[1::2, 1::2] = t_m * l * l
     keep = [i for i in range(2 * n) if i != 0]
-    if not math.isfinite(kt):
+    if not math.isfinite(base_stiffness):
         keep.remove(1)
     keep = np.array(keep)
     return F[np.ix_(keep, keep)], keep

@@ -44,11 +44,11 @@ def lateral_matrices(chain, trunk: str = "chain") -> tuple[np.ndarray, np.ndarra
     masses and rotary inertias); "rod": the same hinge springs with MuJoCo's flex's lumped
     vertex masses rho A (h_{k-1} + h_k) / 2 (+ m_c at a, + m_f at l) and dampers C (h_{k-1} +
     h_k) / 2 (its root body's rho A h_0^3 / 12 on the root hinge neglected)."""
-    Mt, Kt, Dt = chain_matrices(chain)
+    M_hinge, K_hinge, D_hinge = chain_matrices(chain)
     Ti = np.linalg.inv(lateral_transform(chain))
-    K = Ti.T @ Kt @ Ti
+    K = Ti.T @ K_hinge @ Ti
     if trunk == "chain":
-        M, D = Ti.T @ Mt @ Ti, Ti.T @ Dt @ Ti
+        M, D = Ti.T @ M_hinge @ Ti, Ti.T @ D_hinge @ Ti
     elif trunk == "rod":
         tr = chain.trunk
         h = chain.lengths

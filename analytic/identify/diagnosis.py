@@ -99,8 +99,8 @@ def optimiser_trouble(p, lower_t0: float, upper_t0: float, dt: float, status: in
     Returns:
         The OPTIMISER diagnosis, or None.
     """
-    at_bound = [name for name, slot, lim in (("M_T", Slot.LN_M_T, M_RANGE),
-                                             ("K_T", Slot.LN_K_T, K_RANGE))
+    at_bound = [name for name, slot, lim in (("M_T", Slot.LN_DYNAMIC_MASS, M_RANGE),
+                                             ("K_T", Slot.LN_EQUIVALENT_STIFFNESS, K_RANGE))
                 if min(abs(p[slot] - math.log(lim[0])), abs(p[slot] - math.log(lim[1])))
                 < 1e-3]
     if p[Slot.TRUNK_DAMPING_RATIO] > XI_RANGE[1] - 1e-3:
@@ -119,7 +119,7 @@ def swing_back(p, test: PendulumTest) -> float:
     the motion fitted as ``p`` (:class:`fit_parameters.Slot` order) with the pendulum of
     ``test``: the swing back a record must reach to fix the damping (inf if none within
     four periods of the slower of the trunk's own and the joint motion)."""
-    M, K = math.exp(p[Slot.LN_M_T]), math.exp(p[Slot.LN_K_T])
+    M, K = math.exp(p[Slot.LN_DYNAMIC_MASS]), math.exp(p[Slot.LN_EQUIVALENT_STIFFNESS])
     w = min(math.sqrt(K / M), math.sqrt((K + test.impactor_stiffness)
                                         / (M + test.impactor_mass)))
     s = p[Slot.T0] + np.linspace(0.0, 8.0 * math.pi / w, 4001)[1:]
@@ -170,8 +170,8 @@ def residual_diagnosis(p, test: PendulumTest, judged: NoiseJudgement, resid_afte
             f"the pendulum's record is not explained: its residual is {judged.ratio_y:.3g} x "
             f"its noise"))
     peak_w, strength = dominant_frequency(resid_after, dt)
-    M, K = math.exp(p[Slot.LN_M_T]), math.exp(p[Slot.LN_K_T])
-    own = [math.sqrt(math.exp(p[Slot.LN_K_T] - p[Slot.LN_M_T])),
+    M, K = math.exp(p[Slot.LN_DYNAMIC_MASS]), math.exp(p[Slot.LN_EQUIVALENT_STIFFNESS])
+    own = [math.sqrt(math.exp(p[Slot.LN_EQUIVALENT_STIFFNESS] - p[Slot.LN_DYNAMIC_MASS])),
            math.sqrt((K + test.impactor_stiffness) / (M + test.impactor_mass))]
     if strength > PEAK_STRENGTH and all(abs(peak_w / w - 1.0) > PEAK_SEPARATION for w in own):
         return Diagnosis(DiagnosisKind.SECOND_MODE, (

@@ -23,7 +23,8 @@ MAX_EVENTS = 20_000
 def two_body_at(p, test: PendulumTest) -> TwoBodyModel:
     """The two-body model (SI) at p with the pendulum of ``test``: M_T = e^ln_m_t, K_T =
     e^ln_k_t, C_T = 2 zeta sqrt(K_T M_T) with zeta the trunk's damping ratio."""
-    M, K = math.exp(float(p[Slot.LN_M_T])), math.exp(float(p[Slot.LN_K_T]))
+    M, K = (math.exp(float(p[Slot.LN_DYNAMIC_MASS])),
+            math.exp(float(p[Slot.LN_EQUIVALENT_STIFFNESS])))
     ratio, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])
     return TwoBodyModel(dynamic_mass=M, equivalent_damping=2.0 * ratio * math.sqrt(K * M),
                         equivalent_stiffness=K,

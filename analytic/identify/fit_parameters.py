@@ -16,8 +16,8 @@ import numpy as np
 class Slot(IntEnum):
     """The record fit's parameters, each at its place in the parameter vector p (SI)."""
 
-    LN_M_T = 0  # ln M_T, M_T in kg (eq 11)
-    LN_K_T = 1  # ln K_T, K_T in N/m (eq 11)
+    LN_DYNAMIC_MASS = 0  # ln M_T, M_T in kg (eq 11)
+    LN_EQUIVALENT_STIFFNESS = 1  # ln K_T, K_T in N/m (eq 11)
     TRUNK_DAMPING_RATIO = 2  # C_T / (2 sqrt(K_T M_T)), the trunk's own (eq 14)
     RESTITUTION = 3  # e (eq 21)
     T0 = 4  # s, the time of the first contact
@@ -33,7 +33,8 @@ class Slot(IntEnum):
 
 
 #: The tree's parameters: the model is differentiated numerically in these.
-MODEL_SLOTS = (Slot.LN_M_T, Slot.LN_K_T, Slot.TRUNK_DAMPING_RATIO, Slot.RESTITUTION)
+MODEL_SLOTS = (Slot.LN_DYNAMIC_MASS, Slot.LN_EQUIVALENT_STIFFNESS, Slot.TRUNK_DAMPING_RATIO,
+               Slot.RESTITUTION)
 #: The sensors' offsets and the channel (0: x, 1: y) each moves.
 OFFSET_CHANNEL = {Slot.X_OFFSET: 0, Slot.Y_OFFSET: 1}
 #: The drift terms and the power of s = t - t0 each multiplies.
@@ -136,8 +137,8 @@ def record_parameters(t: np.ndarray, dt: float, scale: list, *, restitution_give
     span = float(t[-1] - t[0])
     x, y = scale[0], scale[-1]
     rows = (
-        (Slot.LN_M_T, math.log(M_RANGE[0]), math.log(M_RANGE[1]), 1.0, False),
-        (Slot.LN_K_T, math.log(K_RANGE[0]), math.log(K_RANGE[1]), 1.0, False),
+        (Slot.LN_DYNAMIC_MASS, math.log(M_RANGE[0]), math.log(M_RANGE[1]), 1.0, False),
+        (Slot.LN_EQUIVALENT_STIFFNESS, math.log(K_RANGE[0]), math.log(K_RANGE[1]), 1.0, False),
         (Slot.TRUNK_DAMPING_RATIO, XI_RANGE[0], XI_RANGE[1], 0.1, False),
         (Slot.RESTITUTION, 0.0, E_MAX, 0.1, restitution_given),
         (Slot.T0, t[0] - 10 * dt, t[-1] - 10 * dt, dt, False),

@@ -52,7 +52,7 @@ def estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[di
     positive ones (M_T, K_T, C_T, the damping ratios, E, omega_1, V_1), asin(sqrt(e)) in
     [0, pi/2] for e; the pendulum sensor's offset too if ``pendulum``. The two damping ratios
     are :data:`DAMPING_RATIOS`."""
-    M, K = math.exp(p[Slot.LN_M_T]), math.exp(p[Slot.LN_K_T])
+    M, K = math.exp(p[Slot.LN_DYNAMIC_MASS]), math.exp(p[Slot.LN_EQUIVALENT_STIFFNESS])
     zeta, e = float(p[Slot.TRUNK_DAMPING_RATIO]), float(p[Slot.RESTITUTION])  # trunk's
     m, u1, k = test.impactor_mass, test.impact_speed, test.impactor_stiffness
     C = 2.0 * zeta * math.sqrt(K * M)
@@ -72,17 +72,19 @@ def estimates(p, cov, test: PendulumTest, *, pendulum: bool = False) -> tuple[di
               "pair_damping_ratio": pair, "restitution": e, "E": e_mod, "omega_1": omega,
               "V_1": v1}
     intervals = {
-        "M_T": log_interval(M, z * sd(LN_M_T=1)),
-        "K_T": log_interval(K, z * sd(LN_K_T=1)),
-        "C_T": log_interval(C, z * sd(LN_M_T=0.5, LN_K_T=0.5, TRUNK_DAMPING_RATIO=1.0 / zeta)),
+        "M_T": log_interval(M, z * sd(LN_DYNAMIC_MASS=1)),
+        "K_T": log_interval(K, z * sd(LN_EQUIVALENT_STIFFNESS=1)),
+        "C_T": log_interval(C, z * sd(LN_DYNAMIC_MASS=0.5, LN_EQUIVALENT_STIFFNESS=0.5,
+                                      TRUNK_DAMPING_RATIO=1.0 / zeta)),
         "trunk_damping_ratio": log_interval(zeta, z * sd(TRUNK_DAMPING_RATIO=1.0 / zeta)),
         "pair_damping_ratio": log_interval(pair, z * sd(
-            LN_M_T=0.5 * m / (M + m), LN_K_T=0.5 * k / (K + k),
+            LN_DYNAMIC_MASS=0.5 * m / (M + m), LN_EQUIVALENT_STIFFNESS=0.5 * k / (K + k),
             TRUNK_DAMPING_RATIO=1.0 / zeta)),
         "restitution": restitution_interval(e, z * sd(RESTITUTION=1)),
-        "E": log_interval(e_mod, z * sd(LN_K_T=1)),
-        "omega_1": log_interval(omega, z * sd(LN_M_T=-0.5, LN_K_T=0.5)),
-        "V_1": log_interval(v1, z * sd(LN_M_T=-M / (M + m), RESTITUTION=1.0 / (1.0 + e))),
+        "E": log_interval(e_mod, z * sd(LN_EQUIVALENT_STIFFNESS=1)),
+        "omega_1": log_interval(omega, z * sd(LN_DYNAMIC_MASS=-0.5, LN_EQUIVALENT_STIFFNESS=0.5)),
+        "V_1": log_interval(v1, z * sd(LN_DYNAMIC_MASS=-M / (M + m),
+                                       RESTITUTION=1.0 / (1.0 + e))),
     }
     for name, slot in NUISANCE.items():
         if slot == Slot.Y_OFFSET and not pendulum:

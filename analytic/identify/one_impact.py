@@ -31,12 +31,13 @@ def on_ridge(p, e: float, test: PendulumTest) -> np.ndarray:
     """The parameters with restitution e and the same omega_1, trunk damping ratio and V_1
     as p (the pendulum's m and u_1 from ``test``): the same record while the pendulum does
     not return (M_T + m = m (1 + e) u_1 / V_1); NaN where that needs M_T <= 0."""
-    M, m = math.exp(p[Slot.LN_M_T]), test.impactor_mass
+    M, m = math.exp(p[Slot.LN_DYNAMIC_MASS]), test.impactor_mass
     M_e = (M + m) * (1.0 + e) / (1.0 + float(p[Slot.RESTITUTION])) - m
     out = np.array(p, float)
     if not M_e > 0:  # no positive M_T gives that V_1 at this e
         return np.full(out.shape, np.nan)
-    out[Slot.LN_M_T] = math.log(M_e)
-    out[Slot.LN_K_T] = p[Slot.LN_K_T] + math.log(M_e) - p[Slot.LN_M_T]  # omega_1 kept
+    out[Slot.LN_DYNAMIC_MASS] = math.log(M_e)
+    out[Slot.LN_EQUIVALENT_STIFFNESS] = (p[Slot.LN_EQUIVALENT_STIFFNESS] + math.log(M_e)
+                                         - p[Slot.LN_DYNAMIC_MASS])  # omega_1 kept
     out[Slot.RESTITUTION] = e
     return out

@@ -70,10 +70,16 @@ class PendulumTest:
         return self.gravity / self.equivalent_length
 
 
-def youngs_modulus(stiffness: float, clamp_height: float, diameter: float) -> float:
+def youngs_modulus(equivalent_stiffness: float, clamp_height: float, diameter: float) -> float:
     """E = K_T a^3 / (3 I), Pa, I = pi d^4 / 64 (eq 47; K_T = 3 E I / a^3, eq 8), from the
-    ``stiffness`` K_T (N/m), the ``clamp_height`` a (m) and the trunk's ``diameter`` d (m)."""
-    return stiffness * clamp_height ** 3 / (3.0 * (math.pi * diameter ** 4 / 64.0))
+    ``equivalent_stiffness`` K_T (N/m), the ``clamp_height`` a (m) and the trunk's
+    ``diameter`` d (m)."""
+    return equivalent_stiffness * clamp_height ** 3 / (3.0 * (math.pi * diameter ** 4 / 64.0))
+
+
+#: The symbols the identified quantities go by outside the code (:meth:`Identified.as_dict`,
+#: :func:`truth_of`, the JSON): field name -> key.
+KEYS = {"dynamic_mass": "M_T", "equivalent_stiffness": "K_T"}
 
 
 @dataclass(frozen=True)
@@ -91,15 +97,15 @@ class Identified:
     T0: float  # s
     A_x: float  # m s
     A_y: float  # m s
-    M_T: float  # kg, eq 44
-    K_T: float  # N/m, eq 46
+    dynamic_mass: float  # kg, eq 44
+    equivalent_stiffness: float  # N/m, eq 46
     E: float  # Pa, eq 47
     x_max: float
     tau: float  # s, time of x_max from the extrapolated origin
 
     def as_dict(self) -> dict:
-        """Every field, name -> value (SI)."""
-        return asdict(self)
+        """Every field, name -> value (SI), the quantities by their symbols (:data:`KEYS`)."""
+        return {KEYS.get(name, name): value for name, value in asdict(self).items()}
 
 
 def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: float,
@@ -123,20 +129,23 @@ def identify(*, a1: float, a2: float, x_max: float, tau: float, x0: float, T0: f
     u1, V = test.impact_speed, a1
     if reading == "consistent":
         omega_1 = omega_n
-        M_T = ((m * (u1 - V) - k * A_y + k * A_x - m * omega_n ** 2 * A_x - 2 * b * m * x0)
-               / (V + omega_n ** 2 * A_x + 2 * b * x0))
-        K_T = omega_n ** 2 * (M_T + m) - k
+        dynamic_mass = ((m * (u1 - V) - k * A_y + k * A_x - m * omega_n ** 2 * A_x
+                         - 2 * b * m * x0)
+                        / (V + omega_n ** 2 * A_x + 2 * b * x0))
+        equivalent_stiffness = omega_n ** 2 * (dynamic_mass + m) - k
     else:
         if reading == "paper":
             omega_1, sign = omega_n * math.sqrt(max(0.0, 1.0 - pair * pair)), 1.0
         else:
             omega_1, sign = omega_n, -1.0
-        M_T = m * (u1 - V - w2 * A_y) / (V + omega_1 ** 2 * A_x + sign * 2 * pair * omega_1 * x0)
-        K_T = omega_1 ** 2 * (M_T + m) - k  # eq 46
-    E = youngs_modulus(K_T, test.clamp_height, test.diameter)  # eq 47
+        dynamic_mass = (m * (u1 - V - w2 * A_y)
+                        / (V + omega_1 ** 2 * A_x + sign * 2 * pair * omega_1 * x0))
+        equivalent_stiffness = omega_1 ** 2 * (dynamic_mass + m) - k  # eq 46
+    E = youngs_modulus(equivalent_stiffness, test.clamp_height, test.diameter)  # eq 47
     return Identified(reading=reading, V=V, b=b, omega_n=omega_n, pair_damping_ratio=pair,
                       omega_1=omega_1,
-                      u1=u1, x0=x0, T0=T0, A_x=A_x, A_y=A_y, M_T=M_T, K_T=K_T, E=E,
+                      u1=u1, x0=x0, T0=T0, A_x=A_x, A_y=A_y, dynamic_mass=dynamic_mass,
+                      equivalent_stiffness=equivalent_stiffness, E=E,
                       x_max=x_max, tau=tau)
 
 
@@ -282,8 +291,9 @@ def check_identifiable(ident: Identified) -> Identified:
     elif not ident.V < ident.u1:
         problem = (f"V = {ident.V:.3g} m/s is not below the impact speed u1 = "
                    f"{ident.u1:.3g} m/s (eq 44)")
-    elif not (ident.M_T > 0.0 and ident.K_T > 0.0):
-        problem = (f"M_T = {ident.M_T:.3g} kg, K_T = {ident.K_T:.3g} N/m: eqs 44 and 46 give "
+    elif not (ident.dynamic_mass > 0.0 and ident.equivalent_stiffness > 0.0):
+        problem = (f"M_T = {ident.dynamic_mass:.3g} kg, K_T = "
+                   f"{ident.equivalent_stiffness:.3g} N/m: eqs 44 and 46 give "
                    "a non-positive mass or stiffness")
     if problem is not None:
         raise ParameterError(f"not identifiable: {problem}")
@@ -303,12 +313,15 @@ def pendulum_test_of(scenario) -> PendulumTest:
 def truth_of(scenario) -> dict:
     """What the procedure should find for a scenario's SDOF model (SI)."""
     mod = two_body_model(scenario)
-    mt, kt, ct, m, k = (mod.dynamic_mass, mod.equivalent_stiffness, mod.equivalent_damping,
-                        mod.impactor_mass, mod.impactor_stiffness)
-    wn = math.sqrt((kt + k) / (mt + m))
-    b = ct / (2 * (mt + m))
-    return {"M_T": mt, "K_T": kt, "b": b, "omega_n": wn, "pair_damping_ratio": b / wn,
-            "E": youngs_modulus(kt, scenario.trunk.clamp_height, scenario.trunk.diameter)}
+    dynamic_mass, equivalent_stiffness, equivalent_damping, m, k = (
+        mod.dynamic_mass, mod.equivalent_stiffness, mod.equivalent_damping, mod.impactor_mass,
+        mod.impactor_stiffness)
+    wn = math.sqrt((equivalent_stiffness + k) / (dynamic_mass + m))
+    b = equivalent_damping / (2 * (dynamic_mass + m))
+    return {"M_T": dynamic_mass, "K_T": equivalent_stiffness, "b": b, "omega_n": wn,
+            "pair_damping_ratio": b / wn,
+            "E": youngs_modulus(equivalent_stiffness, scenario.trunk.clamp_height,
+                                scenario.trunk.diameter)}
 
 
 def identification_errors(ident: Identified, truth: dict) -> dict:

@@ -281,8 +281,8 @@ _HELD = {Slot.RESTITUTION: ("restitution", "given"), Slot.X_OFFSET: ("x_offset",
 
 #: The reported quantities each fitted parameter moves: a parameter at an end of the fit's
 #: range (no tree's value) leaves none of them determined.
-_MOVES = {Slot.LN_M_T: ("M_T", "C_T", "pair_damping_ratio", "omega_1", "V_1"),
-          Slot.LN_K_T: ("K_T", "C_T", "pair_damping_ratio", "E", "omega_1"),
+_MOVES = {Slot.LN_DYNAMIC_MASS: ("M_T", "C_T", "pair_damping_ratio", "omega_1", "V_1"),
+          Slot.LN_EQUIVALENT_STIFFNESS: ("K_T", "C_T", "pair_damping_ratio", "E", "omega_1"),
           Slot.TRUNK_DAMPING_RATIO: ("trunk_damping_ratio", "C_T", "pair_damping_ratio"),
           Slot.RESTITUTION: ("restitution", "V_1"), Slot.T0: ("t0",)}
 #: A parameter this close to a bound, in its optimiser scales, is at it.

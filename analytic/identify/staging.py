@@ -64,7 +64,7 @@ def first_guess(feat: Features, test: PendulumTest, e: float, y=None, t=None, *,
     K = omega ** 2 * M if one else omega ** 2 * (M + m) - k
     K = min(max(K, 2.0 * K_RANGE[0]), 0.5 * K_RANGE[1])
     p = np.zeros(len(Slot))
-    p[Slot.LN_M_T], p[Slot.LN_K_T] = math.log(M), math.log(K)
+    p[Slot.LN_DYNAMIC_MASS], p[Slot.LN_EQUIVALENT_STIFFNESS] = math.log(M), math.log(K)
     p[Slot.TRUNK_DAMPING_RATIO], p[Slot.RESTITUTION] = trunk_damping_ratio, e
     p[Slot.T0], p[Slot.X_OFFSET] = feat.t_contact, feat.rest
     if y is not None:

@@ -133,30 +133,31 @@ def calibrate_trunk(chosen: Trunk, measured: MeasuredTree, *, impactor_mass: flo
                f"needs a crown mass of {crown:.6g} kg, above the "
                f"{LIMITS['trunk.crown_mass'][1]:g} kg allowed (eq 7)")
             + f"; allowed [{own:.6g}, {high:.6g}] kg for this l, d, rho and m_c")
-    c_t = 2.0 * measured.damping_rate * (measured.dynamic_mass + impactor_mass)
-    _check_damping(measured.damping_rate, c_t / j, measured.dynamic_mass + impactor_mass, j)
-    return replace(trunk, crown_mass=crown, damping=c_t / j)
+    equivalent_damping = 2.0 * measured.damping_rate * (measured.dynamic_mass + impactor_mass)
+    _check_damping(measured.damping_rate, equivalent_damping / j,
+                   measured.dynamic_mass + impactor_mass, j)
+    return replace(trunk, crown_mass=crown, damping=equivalent_damping / j)
 
 
-def _base_stiffness(k_t: float, a: float, rigid: float) -> float:
-    """The root spring (N m/rad) that makes the trunk's clamp stiffness ``k_t`` (N/m, eq 8:
-    1/K_T = a^3 / (3 E I) + a^2 / k_r, ``rigid`` the first term, m/N, at clamp height
-    ``a``, m); ParameterError naming equivalent_stiffness and its allowed range (k_r
-    within trunk.base_stiffness's) when there is none."""
+def _base_stiffness(equivalent_stiffness: float, a: float, rigid: float) -> float:
+    """The root spring (N m/rad) that makes the trunk's clamp stiffness
+    ``equivalent_stiffness`` (N/m, eq 8: 1/K_T = a^3 / (3 E I) + a^2 / k_r, ``rigid`` the
+    first term, m/N, at clamp height ``a``, m); ParameterError naming equivalent_stiffness
+    and its allowed range (k_r within trunk.base_stiffness's) when there is none."""
     k_low = LIMITS["trunk.base_stiffness"][0]
     low, high = 1.0 / (rigid + a ** 2 / k_low), 1.0 / rigid
-    flexibility = 1.0 / k_t
+    flexibility = 1.0 / equivalent_stiffness
     if flexibility < rigid * (1.0 - 1e-12):
         raise ParameterError(
-            f"equivalent_stiffness = {k_t:.6g} N/m: above the rigid-clamp trunk's "
-            f"3 E I / a^3 = {high:.6g} N/m (eq 8); allowed [{low:.6g}, {high:.6g}] N/m "
-            "for this E, d and a (a stiffer tree needs a larger E)")
+            f"equivalent_stiffness = {equivalent_stiffness:.6g} N/m: above the rigid-clamp "
+            f"trunk's 3 E I / a^3 = {high:.6g} N/m (eq 8); allowed [{low:.6g}, {high:.6g}] "
+            "N/m for this E, d and a (a stiffer tree needs a larger E)")
     base = math.inf if flexibility <= rigid else a ** 2 / (flexibility - rigid)
     if base < k_low:
         raise ParameterError(
-            f"equivalent_stiffness = {k_t:.6g} N/m: needs a root spring of {base:.6g} N m/rad, "
-            f"below the {k_low:g} N m/rad allowed (eq 8); allowed [{low:.6g}, {high:.6g}] N/m "
-            "for this E, d and a")
+            f"equivalent_stiffness = {equivalent_stiffness:.6g} N/m: needs a root spring of "
+            f"{base:.6g} N m/rad, below the {k_low:g} N m/rad allowed (eq 8); allowed "
+            f"[{low:.6g}, {high:.6g}] N/m for this E, d and a")
     return base
 
 

@@ -37,8 +37,8 @@ class TreeTable:
     x0: float
     T0: float
     A_x: float
-    M_T: float
-    K_T: float
+    dynamic_mass: float
+    equivalent_stiffness: float
     diameter: float
     clamp_height: float
     E: float
@@ -72,18 +72,22 @@ class TreeTable:
 TABLE_1 = {
     "open-center": TreeTable(
         name="open-center", release_angle_deg=33.76, u1=2.235, V=1.286, x0=2.4e-3, T0=4e-3,
-        A_x=4.8e-6, M_T=87.0, K_T=1.2e6, diameter=0.142, clamp_height=0.354, E=8.9e9,
+        A_x=4.8e-6, dynamic_mass=87.0, equivalent_stiffness=1.2e6, diameter=0.142,
+        clamp_height=0.354, E=8.9e9,
         a0=-2e-6, a1=1.286, a2=-35.998, x_max=10.375e-3, tau=16e-3, b=28.0, omega_n=79.2,
         xi=0.35, rebound_angle_deg=4.0, energy_loss_pct=40.0),
     "central-leader": TreeTable(
         name="central-leader", release_angle_deg=36.39, u1=2.404, V=1.167, x0=4.3e-3, T0=6e-3,
-        A_x=12.9e-6, M_T=110.0, K_T=1.5e6, diameter=0.126, clamp_height=0.315, E=12.6e9,
+        A_x=12.9e-6, dynamic_mass=110.0, equivalent_stiffness=1.5e6, diameter=0.126,
+        clamp_height=0.315, E=12.6e9,
         a0=-6.7e-7, a1=1.167, a2=-34.817, x_max=8.925e-3, tau=14.67e-3, b=30.0, omega_n=84.4,
         xi=0.36, rebound_angle_deg=6.0, energy_loss_pct=47.0),
 }
 
 QUANTITIES = ("u1", "V", "x0", "T0", "A_x", "M_T", "K_T", "E", "b", "omega_n", "xi",
               "energy_loss_pct")
+#: The :class:`TreeTable` field of each quantity Table 1 prints by its symbol.
+FIELDS = {"M_T": "dynamic_mass", "K_T": "equivalent_stiffness"}
 
 
 def table_model(tree: TreeTable, restitution: float) -> TwoBodyModel:
@@ -91,9 +95,10 @@ def table_model(tree: TreeTable, restitution: float) -> TwoBodyModel:
     m), eq 35) and e = ``restitution``."""
     b = -tree.a2 / tree.a1
     k = PENDULUM_MASS * GRAVITY / EQUIVALENT_LENGTH
-    return TwoBodyModel(dynamic_mass=tree.M_T,
-                        equivalent_damping=2.0 * b * (tree.M_T + PENDULUM_MASS),
-                        equivalent_stiffness=tree.K_T, impactor_mass=PENDULUM_MASS,
+    return TwoBodyModel(dynamic_mass=tree.dynamic_mass,
+                        equivalent_damping=2.0 * b * (tree.dynamic_mass + PENDULUM_MASS),
+                        equivalent_stiffness=tree.equivalent_stiffness,
+                        impactor_mass=PENDULUM_MASS,
                         impactor_stiffness=k,
                         impact_speed=tree.test.impact_speed, restitution=restitution)
 
@@ -132,7 +137,7 @@ def reproduce_tree(tree: TreeTable) -> dict:
                      T0=tree.T0, test=test, reading="paper")
     sim = model_metrics(tree, tree.default_restitution)
     mgl = PENDULUM_MASS * GRAVITY * EQUIVALENT_LENGTH
-    mu = tree.M_T * PENDULUM_MASS / (tree.M_T + PENDULUM_MASS)
+    mu = tree.dynamic_mass * PENDULUM_MASS / (tree.dynamic_mass + PENDULUM_MASS)
     loss57 = 0.5 * mu * test.impact_speed ** 2  # eq 57 with Table 1's M_T and eq 48's u_1
     drop = mgl * (math.cos(math.radians(tree.rebound_angle_deg))
                   - math.cos(math.radians(tree.release_angle_deg)))
@@ -142,8 +147,8 @@ def reproduce_tree(tree: TreeTable) -> dict:
         "x0": (sim["x0"], f"exact solver, e = {tree.default_restitution}"),
         "T0": (sim["T0"], f"exact solver, e = {tree.default_restitution}"),
         "A_x": (0.5 * tree.x0 * tree.T0, "eq 45 read as x0 T0 / 2"),
-        "M_T": (ident.M_T, "eq 44 (+ sign, omega_1 = damped omega)"),
-        "K_T": (ident.K_T, "eq 46 (omega_1 = damped omega)"),
+        "M_T": (ident.dynamic_mass, "eq 44 (+ sign, omega_1 = damped omega)"),
+        "K_T": (ident.equivalent_stiffness, "eq 46 (omega_1 = damped omega)"),
         "E": (ident.E, "eq 47 with Table 1's d, a and recomputed K_T"),
         "b": (ident.b, "eq 42"),
         "omega_n": (ident.omega_n, "eq 43"),
@@ -153,7 +158,7 @@ def reproduce_tree(tree: TreeTable) -> dict:
     out = {}
     for q in QUANTITIES:
         value, how = recomputed[q]
-        printed = getattr(tree, q)
+        printed = getattr(tree, FIELDS.get(q, q))
         out[q] = {"printed": printed, "recomputed": value, "rel_diff": _rel(printed, value),
                   "how": how}
     return out
@@ -178,8 +183,8 @@ def _ident(tree, reading):
 
 def _evidence_eq44() -> str:
     oc, cl = TABLE_1["open-center"], TABLE_1["central-leader"]
-    p = [_ident(t, "paper").M_T for t in (oc, cl)]
-    q = [_ident(t, "printed").M_T for t in (oc, cl)]
+    p = [_ident(t, "paper").dynamic_mass for t in (oc, cl)]
+    q = [_ident(t, "printed").dynamic_mass for t in (oc, cl)]
     return (f"Table 1 M_T = 87 / 110 kg. Derived sign (+) with omega_1 = damped omega gives "
             f"{p[0]:.1f} / {p[1]:.1f} kg; the printed minus sign with omega_1 = omega_n gives "
             f"{q[0]:.1f} / {q[1]:.1f} kg.")
@@ -188,8 +193,9 @@ def _evidence_eq44() -> str:
 def _evidence_eq46() -> str:
     oc, cl = TABLE_1["open-center"], TABLE_1["central-leader"]
     k = PENDULUM_MASS * GRAVITY / EQUIVALENT_LENGTH
-    with_wn = [t.omega_n ** 2 * (t.M_T + PENDULUM_MASS) - k for t in (oc, cl)]
-    with_wd = [t.omega_n ** 2 * (1 - t.xi ** 2) * (t.M_T + PENDULUM_MASS) - k for t in (oc, cl)]
+    with_wn = [t.omega_n ** 2 * (t.dynamic_mass + PENDULUM_MASS) - k for t in (oc, cl)]
+    with_wd = [t.omega_n ** 2 * (1 - t.xi ** 2) * (t.dynamic_mass + PENDULUM_MASS) - k
+               for t in (oc, cl)]
     return (f"Table 1 K_T = 1.2e6 / 1.5e6 N/m. With omega_1 = omega_n: {with_wn[0]:.3g} / "
             f"{with_wn[1]:.3g} N/m; with the damped omega_n sqrt(1 - xi^2): {with_wd[0]:.3g} / "
             f"{with_wd[1]:.3g} N/m.")
@@ -199,7 +205,7 @@ def _evidence_eq47() -> str:
     vals = []
     for t in TABLE_1.values():
         I = math.pi * t.diameter ** 4 / 64
-        vals.append(t.K_T * t.clamp_height ** 3 / (3 * I))
+        vals.append(t.equivalent_stiffness * t.clamp_height ** 3 / (3 * I))
     return (f"eq 47 with Table 1's K_T, d and a gives {vals[0]:.3g} / {vals[1]:.3g} Pa; Table 1 "
             f"prints 8.9e9 / 12.6e9 Pa, ratios {8.9e9 / vals[0]:.3f} / {12.6e9 / vals[1]:.3f}.")
 
@@ -225,7 +231,8 @@ def _evidence_ct() -> str:
 
 
 def _evidence_consistent() -> str:
-    vals = [(_ident(t, "paper").M_T, _ident(t, "consistent").M_T) for t in TABLE_1.values()]
+    vals = [(_ident(t, "paper").dynamic_mass, _ident(t, "consistent").dynamic_mass)
+            for t in TABLE_1.values()]
     return (f"Integrating eq 11 and eq 13 over the impact process gives m u1 - (M_T + m) V = "
             f"K_T A_x + C_T x0 + k A_y exactly; closing it with K_T, C_T of the moving-together "
             f"motion gives M_T = {vals[0][1]:.1f} / {vals[1][1]:.1f} kg instead of "

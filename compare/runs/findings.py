@@ -41,13 +41,13 @@ class TreePhysics:
         from treeimpact.analytic.model.reduction import crown_factor, reduce_trunk
 
         m = scenario.impactor.mass
-        m_t = reduce_trunk(scenario.trunk).dynamic_mass
+        dynamic_mass = reduce_trunk(scenario.trunk).dynamic_mass
         # the beam's effective mass at the clamp: its mesh's, whatever the pad; built at an e
         # the soft pad law takes (e = 0, valid for the Newton model, needs infinite damping)
         m_c = beam_impact_model(scenario_as_run(scenario, {"restitution": PAD_E})
                                 )[0].effective_mass
         return cls(restitution=float(scenario.contact.restitution),
-                   loss_ratio=_reduced(m, m_t) / _reduced(m, m_c),
+                   loss_ratio=_reduced(m, dynamic_mass) / _reduced(m, m_c),
                    crown_factor=float(crown_factor(scenario.trunk)))
 
 

@@ -125,7 +125,8 @@ def record_identification(result, scenario, record: dict) -> dict:
         out["fit_error"] = str(exc).splitlines()[0]
     try:
         ident, _ = identify_from_record(t, x, test, reading="paper")
-        out["paper"] = {k: float(getattr(ident, k)) / truth[k] - 1.0 for k in PARAMETERS}
+        found = ident.as_dict()  # by the symbols PARAMETERS names
+        out["paper"] = {k: float(found[k]) / truth[k] - 1.0 for k in PARAMETERS}
     except (ParameterError, ValueError, FloatingPointError) as exc:
         text = str(exc).splitlines()[0]
         out["paper_error"] = "not identifiable" if text.startswith("not identifiable") else text

@@ -51,16 +51,16 @@ def registry_range(name: str) -> tuple[float, float]:
 def _rigid_modulus(trunk) -> float:
     """E_0 = a^3 K_T / (3 I), Pa: the modulus that gives the tree's K_T with a rigid root
     (eq 8)."""
-    k_t = reduce_trunk(trunk).equivalent_stiffness
-    return trunk.clamp_height ** 3 * k_t / (3.0 * trunk.second_moment)
+    equivalent_stiffness = reduce_trunk(trunk).equivalent_stiffness
+    return trunk.clamp_height ** 3 * equivalent_stiffness / (3.0 * trunk.second_moment)
 
 
 def _share_range(trunk, low: float, high: float) -> tuple[float, float, str]:
     """Rule 1 on the root share's range [low, high]: (low, high, why clipped or '')."""
     e0 = _rigid_modulus(trunk)
     e_low, e_high = LIMITS["trunk.youngs_modulus"][:2]
-    k_t = reduce_trunk(trunk).equivalent_stiffness
-    top = min(1.0 - e0 / e_high, trunk.clamp_height ** 2 * k_t
+    equivalent_stiffness = reduce_trunk(trunk).equivalent_stiffness
+    top = min(1.0 - e0 / e_high, trunk.clamp_height ** 2 * equivalent_stiffness
               / LIMITS["trunk.base_stiffness"][0])
     bottom = max(1.0 - e0 / e_low, 0.0)
     lo, hi = max(low, bottom), min(high, top)
@@ -77,9 +77,9 @@ def _share_range(trunk, low: float, high: float) -> tuple[float, float, str]:
 def _wood_area_j(trunk, share: float) -> float:
     """A J(s), m^3: the bare trunk's mass per unit density at root share ``share``
     (eq 7's rho A J; J of the static shape with E and the root spring that keep K_T)."""
-    k_t = reduce_trunk(trunk).equivalent_stiffness
+    equivalent_stiffness = reduce_trunk(trunk).equivalent_stiffness
     e_mod = _rigid_modulus(trunk) / (1.0 - share)
-    base = trunk.clamp_height ** 2 * k_t / share if share > 0 else math.inf
+    base = trunk.clamp_height ** 2 * equivalent_stiffness / share if share > 0 else math.inf
     bare = replace(trunk, youngs_modulus=e_mod, base_stiffness=base, crown_mass=0.0,
                    clamp_mass=0.0, damping=0.0)
     return reduce_trunk(bare).dynamic_mass / trunk.density
@@ -88,13 +88,13 @@ def _wood_area_j(trunk, share: float) -> float:
 def _mass_ranges(trunk, ranges: dict, held: dict) -> dict:
     """Rule 3 on the density's and the clamp mass's ranges (``ranges``: name -> [low, high,
     why]; ``held``: the measured inputs' values): the ranges, clipped where needed."""
-    m_t = reduce_trunk(trunk).dynamic_mass
+    dynamic_mass = reduce_trunk(trunk).dynamic_mass
     s_lo, s_hi = ranges["root_share"][:2] if "root_share" in ranges else \
         (held["root_share"],) * 2
     aj = max(_wood_area_j(trunk, s) for s in np.linspace(s_lo, s_hi, J_SAMPLES))
     rho = ranges["density"][:2] if "density" in ranges else (held["density"],) * 2
     m_c = ranges["clamp_mass"][:2] if "clamp_mass" in ranges else (held["clamp_mass"],) * 2
-    budget = m_t * (1.0 - MASS_MARGIN)
+    budget = dynamic_mass * (1.0 - MASS_MARGIN)
     room = budget - rho[0] * aj - m_c[0]  # kg the box's upper ends may add
     span = (rho[1] - rho[0]) * aj + (m_c[1] - m_c[0])  # kg they add
     if span <= room:
@@ -102,14 +102,15 @@ def _mass_ranges(trunk, ranges: dict, held: dict) -> dict:
     out = dict(ranges)
     if room <= 0:  # no valid box: kept as they are, said so
         why = (f"no valid range: the lightest bare trunk rho A J + m_c = "
-               f"{rho[0] * aj + m_c[0]:.4g} kg exceeds M_T = {m_t:.4g} kg (eq 7)")
+               f"{rho[0] * aj + m_c[0]:.4g} kg exceeds M_T = {dynamic_mass:.4g} kg (eq 7)")
         for name in ("density", "clamp_mass"):
             if name in out:
                 out[name] = [*out[name][:2], why]
         return out
     f = room / span
-    why = (f"the bare trunk rho A J + m_c may not exceed M_T = {m_t:.4g} kg (eq 7, crown "
-           f"m_f >= 0; A J up to {aj:.4g} m^3): upper ends shrunk to {f:.3f} of their span")
+    why = (f"the bare trunk rho A J + m_c may not exceed M_T = {dynamic_mass:.4g} kg "
+           f"(eq 7, crown m_f >= 0; A J up to {aj:.4g} m^3): upper ends shrunk to {f:.3f} of "
+           "their span")
     for name, (lo, hi) in (("density", rho), ("clamp_mass", m_c)):
         if name in out:
             out[name] = [lo, lo + f * (hi - lo), why]

@@ -17,8 +17,9 @@ from treeimpact.compare.runs.verdicts import load_tolerances, relative_step
 TREE = "central-leader"
 
 
-def _result(dt=5.9e-6, t_c=2.95e-4, c_t=1.0e4, m_t=300.0, m=100.0, u1=2.0):
-    model = {"C_T": c_t, "M_T": m_t, "m": m, "u1": u1, "dt": dt}
+def _result(dt=5.9e-6, t_c=2.95e-4, equivalent_damping=1.0e4, dynamic_mass=300.0, m=100.0,
+            u1=2.0):
+    model = {"C_T": equivalent_damping, "M_T": dynamic_mass, "m": m, "u1": u1, "dt": dt}
     return SimpleNamespace(model=model, collision_duration=t_c)
 
 

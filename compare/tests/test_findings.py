@@ -147,10 +147,11 @@ def test_a_findings_band_is_the_trees_own_physics(name):
         assert checks[metric].verdict == "finding", (metric, checks[metric])
     assert checks["peak_force"].band == pytest.approx((1 / physics.loss_ratio - 1, 0.0))
     model = ladder["beam"].run.result.model
-    m, m_t, m_c, u, e = (model[k] for k in ("m", "M_T", "effective_mass", "u1", "restitution"))
+    m, dynamic_mass, m_c, u, e = (model[k] for k in ("m", "M_T", "effective_mass", "u1",
+                                                     "restitution"))
     d_soft = ladder.value("soft", "contact_dissipation")
     lo = (1 - e * e) * 0.5 * m * m_c / (m + m_c) * u * u / d_soft - 1
-    hi = 0.5 * m * m_t / (m + m_t) * u * u / d_soft - 1
+    hi = 0.5 * m * dynamic_mass / (m + dynamic_mass) * u * u / d_soft - 1
     assert checks["contact_dissipation"].band == pytest.approx((lo, hi))
     for metric, (low, high) in ENVELOPE.items():
         assert low - 0.05 <= checks[metric].band[0] <= high, (metric, checks[metric].band)

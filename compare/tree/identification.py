@@ -84,14 +84,15 @@ def identify_rung(result, scenario: Scenario) -> RungIdentification:
         return RungIdentification(SKIPPED, text if text.startswith("not identifiable")
                                   else f"identification failed: {text}", truth=shown)
     errors = identification_errors(ident, truth_of(scenario))
+    identified = ident.as_dict()  # by the symbols IDENT_METRICS names
     return RungIdentification(
-        OK, values={k: getattr(ident, k) for k in IDENT_METRICS},
+        OK, values={k: identified[k] for k in IDENT_METRICS},
         errors={k: errors[k] for k in IDENT_METRICS}, truth=shown,
         regression={"t_first": reg.t_first, "t_together": reg.t_together,
                     "x_together": reg.x_together, "t_origin": reg.t_origin,
                     "coefficients": list(reg.coefficients), "x_max": reg.x_max,
                     "tau": reg.tau},
-        identified=ident.as_dict())
+        identified=identified)
 
 
 def rung_identification(run, scenario: Scenario) -> RungIdentification:

@@ -325,7 +325,7 @@ def procedure_on_noisy_records() -> dict:
             keep = t >= REST - rest - 1e-12
             with np.errstate(all="ignore"):
                 ident, _ = identify_from_record(t[keep] - t[keep][0], x[keep], test)
-            errors.append(100.0 * (ident.M_T / result.model["M_T"] - 1.0))
+            errors.append(100.0 * (ident.dynamic_mass / result.model["M_T"] - 1.0))
         key = f"ident.procedure.rest{round(1e3 * rest)}ms.M_T_pct"
         out[f"{key}.median"] = rounded(float(np.median(errors)))
         put(out, f"{key}.range", rounded(span(errors)))

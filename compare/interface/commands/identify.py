@@ -87,10 +87,12 @@ def _paper(record, test, fit=None) -> dict:
         except (ParameterError, ValueError, FloatingPointError) as exc:
             out[reading] = {"error": " ".join(str(exc).split())}
             continue
-        c_t = 2.0 * ident.b * (ident.M_T + test.impactor_mass)
-        trunk = c_t / (2.0 * math.sqrt(ident.K_T * ident.M_T)) if (
-            ident.K_T > 0 and ident.M_T > 0) else math.nan
-        out[reading] = {"M_T": ident.M_T, "K_T": ident.K_T, "C_T": c_t, "E": ident.E,
+        equivalent_damping = 2.0 * ident.b * (ident.dynamic_mass + test.impactor_mass)
+        trunk = (equivalent_damping
+                 / (2.0 * math.sqrt(ident.equivalent_stiffness * ident.dynamic_mass))) if (
+            ident.equivalent_stiffness > 0 and ident.dynamic_mass > 0) else math.nan
+        out[reading] = {"M_T": ident.dynamic_mass, "K_T": ident.equivalent_stiffness,
+                        "C_T": equivalent_damping, "E": ident.E,
                         "pair_damping_ratio": ident.pair_damping_ratio,  # the paper's xi
                         "trunk_damping_ratio": trunk}
     return out
@@ -250,7 +252,8 @@ def _plot_paper(ax, axr, record, fit, reading: dict, test) -> None:
         return
     ms = 1e3
     p = np.array(fit.point, float)  # the fit's contact, e and sensor terms
-    p[Slot.LN_M_T], p[Slot.LN_K_T] = math.log(reading["M_T"]), math.log(reading["K_T"])
+    p[Slot.LN_DYNAMIC_MASS], p[Slot.LN_EQUIVALENT_STIFFNESS] = (math.log(reading["M_T"]),
+                                                               math.log(reading["K_T"]))
     p[Slot.TRUNK_DAMPING_RATIO] = reading["trunk_damping_ratio"]
     xp = model_x(p, test, record.t)
     ax.plot(record.t * ms, xp * ms, "--", color="C3", lw=1.4,

@@ -315,7 +315,7 @@ def procedure_floor(scenario, rung_result, metric: str) -> float:
                                         reading="paper")
     except (ParameterError, ValueError, FloatingPointError):  # refused: no floor to read
         return math.nan
-    return getattr(ident, metric) / truth_of(s0)[metric] - 1.0
+    return ident.as_dict()[metric] / truth_of(s0)[metric] - 1.0  # by its symbol (M_T, ...)
 
 
 @register("procedure-floor")

@@ -72,15 +72,15 @@ def clamp_to_m_t_loss(pair: Pair, finding: dict) -> FindingBand:
     mu(m, M_T) u^2 / 2 (the mass the pendulum meets grows from m_c towards M_T, never beyond);
     relative to the soft SDOF's loss on the same tree (``pair``: the beam run against the
     soft SDOF's); ``finding`` unused (the signature)."""
-    m, m_t, m_c, u, e = _masses(pair)
+    m, dynamic_mass, m_c, u, e = _masses(pair)
     ref = pair.reference_value
     one = (1 - e * e) * 0.5 * _mu(m, m_c) * u * u
-    plastic = 0.5 * _mu(m, m_t) * u * u
+    plastic = 0.5 * _mu(m, dynamic_mass) * u * u
     lo, hi = one / ref - 1, plastic / ref - 1
     return FindingBand(lo, hi, (
         f"band from one collision on the clamp's {m_c:.2f} kg, (1 - e^2) mu u^2 / 2 = "
-        f"{one:.3g} J ({lo:+.1%}), to the plastic loss on M_T = {m_t:.0f} kg, {plastic:.3g} J "
-        f"({hi:+.1%}), against the SDOF's {ref:.3g} J"))
+        f"{one:.3g} J ({lo:+.1%}), to the plastic loss on M_T = {dynamic_mass:.0f} kg, "
+        f"{plastic:.3g} J ({hi:+.1%}), against the SDOF's {ref:.3g} J"))
 
 
 @register_band("clamp_to_M_T_force")

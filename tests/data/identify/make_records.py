@@ -674,7 +674,7 @@ def accuracy_numbers(seeds: int) -> dict:
             if not pendulum:
                 try:
                     ident, _ = identify_from_record(record.t, record.x, test, reading="paper")
-                    paper.append(ident.M_T / model.dynamic_mass - 1.0)
+                    paper.append(ident.dynamic_mass / model.dynamic_mass - 1.0)
                 except (ParameterError, ValueError, FloatingPointError):
                     pass
         key = f"accuracy.{tag}"
