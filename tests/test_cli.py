@@ -228,11 +228,14 @@ def test_building_every_help_page_imports_no_scipy():
 
 def test_simulate_runs_through_the_public_api_and_its_refusal_names_the_flag(monkeypatch,
                                                                              capsys):
-    """One face (issue 51 item 3): ``treeimpact simulate`` calls treeimpact.api.simulate
-    (here a spy around it), the API whose refusals name keywords (``t_end``) for a Python
-    caller and the flags (``--t-end``) while a command runs (compare.runs.names.NAMING)."""
-    import treeimpact.api as api
+    """One face (issue 51 item 3): ``treeimpact simulate`` calls the public API's simulate
+    (treeimpact.api re-exports compare.interface.api's; here a spy around it), whose
+    refusals name keywords (``t_end``) for a Python caller and the flags (``--t-end``) while
+    a command runs (compare.runs.names.NAMING)."""
+    import treeimpact.api
+    from treeimpact.compare.interface import api
 
+    assert treeimpact.api.simulate is api.simulate
     calls = []
     real = api.simulate
 

@@ -33,7 +33,7 @@ def run(args) -> int:
     """Print the backend's modes beside the beam's for the parsed command line ``args``
     (text or ``--json``); exit code 0."""
     # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
-    from treeimpact.api import modes
+    from treeimpact.compare.interface.api import modes
 
     get_backend(args.backend)  # a one-line refusal naming --backend, before the scenario
     scenario = load_scenario(args.scenario)

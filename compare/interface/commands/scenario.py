@@ -67,7 +67,7 @@ def run(args) -> int:
     ParameterError naming the flag (exit 2); a tree whose analytic x_max lies beyond the
     clamp height is OutsideValidity (exit 4, nothing written)."""
     # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
-    from treeimpact.api import tree_scenario
+    from treeimpact.compare.interface.api import tree_scenario
 
     fields = [f.name for f in dataclasses.fields(TreeInputs) if f.name != "name"]
     scenario = tree_scenario(args.name, **{n: getattr(args, n) for n in fields})

@@ -90,7 +90,7 @@ def run(args) -> int:
     """Run the scenario on the backend of the parsed command line ``args`` and print it
     (text or ``--json``; with ``--record`` also write the record); exit code 0."""
     # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
-    from treeimpact.api import simulate
+    from treeimpact.compare.interface.api import simulate
 
     get_backend(args.backend)  # a one-line refusal naming --backend, before the scenario
     scenario = load_scenario(args.scenario)
