@@ -25,11 +25,12 @@ from pathlib import Path
 import pandas as pd
 
 #: Keys and columns that differ between two runs of the same code on the same machine:
-#: measured times, which worker or task ran a point, when it finished or was generated, the
+#: measured times (a study's mean wall time per run, the design map's CPU per cell), which
+#: worker or task ran a point, when it finished or was generated, the
 #: commit and load.
 VOLATILE = frozenset({"wall_s", "stepping_s", "swing_s", "step_us", "git_commit", "git_dirty",
                       "measured", "generated", "load_average", "worker", "task",
-                      "finished"})
+                      "finished", "mean_wall_s", "cpu_s_per_cell"})
 RENDERED = frozenset({".md", ".html"})
 MAX_LINES = 40
 

@@ -268,3 +268,14 @@ def test_the_api_s_defaults_are_the_command_line_s():
     assert sig["record_from_simulation"]["rate_hz"].default == DEFAULTS["rate"]
     assert sig["record_from_simulation"]["noise"].default == DEFAULTS["noise"]
     assert sig["record_from_simulation"]["seed"].default == DEFAULTS["seed"]
+
+
+def test_report_runs_its_studies_beside_it_as_the_command_does(tmp_path):
+    """treeimpact.report takes the command's --with-study (issue 51 item 3: the command calls
+    it): a preset refused by its keyword as typed, as the command refuses it by its flag, and
+    a Scenario object refused with it (a study's child process reads names or paths)."""
+    with pytest.raises(ti.ParameterError, match=r"^with_study 'nope': allowed default"):
+        ti.report(tmp_path, with_study=("nope",))
+    with pytest.raises(ti.ParameterError, match="by shipped name or TOML path"):
+        ti.report(tmp_path, [ti.load_scenario("open-center")], with_study=("default",))
+    assert not any(tmp_path.iterdir())  # refused before anything was written

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import re
+import sys
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
@@ -27,7 +28,7 @@ from treeimpact.analytic.threads import enter_limit, exit_limit
 
 from ..runs.backends import BACKENDS, ENGINES, get_backend
 from ..runs.cache import resolve_scenario
-from ..runs.names import NAMING, did_you_mean
+from ..runs.names import NAMING, did_you_mean, show
 from ..runs.recording import check_sampling, sample
 from ..studies.sweep.run import run_sweep
 from ..tree.ladder import build_ladder
@@ -367,8 +368,14 @@ def identify(record, test, *, clamp_height: float | None = None,
                              record)
 
 
+#: The ``treeimpact`` program as a child process runs it: a study run beside the report
+#: (``with_study``) is its ``sweep --preset`` (compare.report.validity.study_job.StudyJob).
+PROGRAM = (sys.executable, "-m", "treeimpact.compare.interface.cli")
+
+
 @_api
-def report(out=REPORT_DIR, scenarios=None, *, studies=()) -> dict:
+def report(out=REPORT_DIR, scenarios=None, *, studies=(), with_study=(),
+           progress: bool = False) -> dict:
     """The discrepancy report (report.html, report.md, report.json), as ``treeimpact report``.
 
     Args:
@@ -376,22 +383,76 @@ def report(out=REPORT_DIR, scenarios=None, *, studies=()) -> dict:
         scenarios: the scenarios (Scenario, shipped name or TOML path each; default: the
             shipped ones).
         studies: directories of finished studies (sweeps) to include.
+        with_study: study presets (``treeimpact sweep --preset``'s names: ``default``,
+            ``design``, ...) also run into ``out`` beside the report's own runs, in child
+            processes, and included (a study already there resumes); with ``scenarios``
+            (names or TOML paths only: a child process reads them), its maps are of the
+            first and its sensitivity of every one.
+        progress: draw progress bars on stderr (the command's).
 
     Returns:
         dict: kind ("html", "md", "json") -> the written file's path.
 
     Raises:
-        ParameterError: an unknown scenario, a study that is not a directory.
+        ParameterError: an unknown scenario or preset, a study that is not a directory, two
+            presets writing one folder, a Scenario object with ``with_study``.
     """
     # lazy: +120 ms at import otherwise (jinja2), which this module's other callers do not need
     from ..report import write_report
 
+    folders = _study_folders(with_study)
+    if folders and any(isinstance(s, Scenario) for s in scenarios or ()):
+        raise ParameterError(f"{show('with_study', NAMING.get())}: the scenarios by shipped "
+                             "name or TOML path (a study's child process reads them)")
+    scens = None if scenarios is None else [resolve_scenario(s) for s in scenarios]
     for study in studies:
         if not Path(study).is_dir():
             raise ParameterError(f"studies: {str(study)!r} is not a directory (a finished "
                                  "study, treeimpact sweep --out DIR)")
-    scens = None if scenarios is None else [resolve_scenario(s) for s in scenarios]
-    return write_report(out, scenarios=scens, study_dirs=tuple(studies))
+    jobs = _study_jobs(folders, out, scenarios)
+    try:
+        for job in jobs:
+            job.start()
+        return write_report(out, scenarios=scens, study_dirs=tuple(studies),
+                            progress=progress, study_jobs=jobs)
+    finally:
+        for job in jobs:
+            job.stop()
+
+
+def _study_folders(presets) -> dict:
+    """``with_study``'s presets -> their folders in the report's directory; a one-line
+    ParameterError for an unknown preset or two writing one folder."""
+    if not presets:
+        return {}
+    # lazy: +118 ms at import otherwise (jinja2, numpy),
+    # which this module's other callers do not need
+    from ..report.validity.study import PRESETS
+
+    flag, folders = show("with_study", NAMING.get()), {}
+    for preset in presets:
+        if preset not in PRESETS:
+            raise ParameterError(f"{flag} {preset!r}: allowed {', '.join(PRESETS)}")
+        folder = PRESETS[preset].folder
+        other = next((p for p, f in folders.items() if f == folder), None)
+        if other is not None:
+            raise ParameterError(f"{flag} {preset}: {other} writes OUT/{folder} too; "
+                                 "give one of them")
+        folders[preset] = folder
+    return folders
+
+
+def _study_jobs(folders: dict, out, scenarios) -> tuple:
+    """The StudyJob of each preset -> folder of ``folders``, into ``out``/folder, of the
+    ``scenarios`` as given (names or paths; None: the study's own)."""
+    if not folders:
+        return ()
+    # lazy: +73 ms at import otherwise (the study runner), which only with_study needs
+    from ..report.validity.study_job import StudyJob
+
+    given = None if scenarios is None else [str(s) for s in scenarios]
+    return tuple(StudyJob(preset, Path(out) / folder, PROGRAM, scenarios=given)
+                 for preset, folder in folders.items())
 
 
 @_api
