@@ -15,10 +15,10 @@ them to ``bullet_models/models``).
 
 from importlib import import_module
 
-from .options import OPTIONS
+from .declaration import DECLARATION
 
 #: The engine interface (treeimpact.analytic.engine.interface.Engine), loaded on first use:
-#: the options above are read without importing the engine.
+#: its declaration and options are read without importing the engine.
 _RUNNER = ("make_setup", "modes", "run", "simulate", "simulate_batch")
 #: Bullet's contact for a target law at a time step (contactStiffness/contactDamping, the
 #: largest step it holds) and the two-body collision, with the world's and the links' flags,
@@ -28,10 +28,16 @@ _CONTACT = {"bullet_contact": "_contact", "largest_time_step": "_contact",
             "per_body": "_contact", "LINK_FLAGS": "_world", "WORLD_FLAGS": "_world",
             "two_body_collision": "_world"}
 
-__all__ = ["OPTIONS", *_RUNNER, *_CONTACT]
+__all__ = ["DECLARATION", "OPTIONS", *_RUNNER, *_CONTACT]
 
 
 def __getattr__(name: str):
+    if name == "OPTIONS":
+        # lazy face: +100 ms at import otherwise (numpy, the engines' shared options): the
+        # registry reads DECLARATION alone
+        from .options import OPTIONS
+
+        return OPTIONS
     if name in _RUNNER:
         # lazy face: +326 ms at import otherwise (pybullet and the runner)
         from . import _runner

@@ -16,10 +16,10 @@ compiled model), :mod:`mujoco_models._runner` (the runs: :mod:`._rollout` steps,
 to ``mujoco_models/models``.
 """
 
-from .options import OPTIONS
+from .declaration import DECLARATION
 
 #: The engine interface (treeimpact.analytic.engine.interface.Engine), loaded on first use:
-#: the options above are read without importing the engine.
+#: its declaration and options are read without importing the engine.
 _RUNNER = ("build_model", "make_setup", "modes", "run", "simulate", "simulate_batch")
 #: MuJoCo's contact for a target law at a time step (solref/solimp, the engine law its
 #: Euler step needs) and the two-body collision that measures what a setting achieves:
@@ -28,10 +28,16 @@ _CONTACT = ("IMPEDANCE", "SOLIMP_TAIL", "effective_denominator", "engine_law",
             "solref_for_law", "time_constant_impedance", "time_constant_solref",
             "two_body_collision", "two_body_mjcf")
 
-__all__ = ["OPTIONS", *_RUNNER, *_CONTACT]
+__all__ = ["DECLARATION", "OPTIONS", *_RUNNER, *_CONTACT]
 
 
 def __getattr__(name: str):
+    if name == "OPTIONS":
+        # lazy face: +100 ms at import otherwise (numpy, the engines' shared options): the
+        # registry reads DECLARATION alone
+        from .options import OPTIONS
+
+        return OPTIONS
     if name in _RUNNER or name in _CONTACT:
         # lazy face: +478 ms at import otherwise (MuJoCo and the runner); from the first
         # use on, MuJoCo's warnings go to stderr

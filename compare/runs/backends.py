@@ -1,9 +1,12 @@
-"""The registry of simulation backends and engines: the only place that names the engines.
+"""The registry of simulation backends and engines.
 
-An engine is one folder (its package) plus one :func:`register_engine` call here (its
-:class:`Engine`: backend, label, folder, distributions, contact settings); the ladder, the
-pool, the report, ``treeimpact contact``, the provenance and the layer test read it
-(docs/engines.md, "Adding an engine"). Each backend entry maps a backend name to ``module:function`` for ``simulate(scenario, **options)``
+An engine is one folder (its package), which declares itself beside its definition (its
+``DECLARATION``: analytic.engine.declaration.EngineDeclaration: name, label, costs,
+variants, colours, distributions), and its name in :data:`ENGINE_FOLDERS`; the registry
+makes its :class:`Engine` from that declaration, and the ladder, the pool, the report,
+``treeimpact contact``, the provenance and the layer test read it (docs/engines.md,
+"Adding an engine"). Each backend entry maps a backend name to ``module:function`` for
+``simulate(scenario, **options)``
 (returning :class:`analytic.results.SimulationResult`) and, where the backend has its own
 trunk, ``modes(scenario, **options)``. Options a backend does not take are refused with a
 one-line error instead of being ignored.
@@ -309,23 +312,29 @@ def engines(*, contact: bool = False) -> tuple:
                  if not contact or e.contact is not None)
 
 
-register_engine(Engine(
-    Backend("mujoco", "treeimpact.mujoco_models:simulate", "treeimpact.mujoco_models:modes",
-            "MuJoCo (MJCF) slide-joint or hinged-segment trunk",
-            run_cost=(("sdof", 0.05), ("chain", 0.5), ("flex", 0.5)),
-            variants=("integrator", ("Euler", "implicit", "implicitfast", "RK4")),
-            shades=("#1f77b4", "#4f9fd6", "#8cc3ea", "#0b3d75")),
-    label="MuJoCo", folder="mujoco_models", package="mujoco",
-    # MuJoCo's physics comes as mujoco-core (pyproject.toml); mujoco only adds a viewer
-    distributions=("mujoco-core", "mujoco"),
-    contact="treeimpact.compare.runs.contact_engines:MUJOCO"))
-register_engine(Engine(
-    Backend("bullet", "treeimpact.bullet_models:simulate", "treeimpact.bullet_models:modes",
-            "PyBullet prismatic or hinged-link trunk",
-            run_cost=(("sdof", 0.15), ("chain", 2.5)), variants=("contact", ("soft", "newton")),
-            shades=("#d95f02", "#f28e2b", "#f7b76d")),
-    label="Bullet", folder="bullet_models", package="pybullet", distributions=("pybullet",),
-    contact="treeimpact.compare.runs.contact_engines:BULLET"))
+#: The engine packages (folders), in the order the ladder and the studies show them: each
+#: declares itself beside its definition (its ``DECLARATION``,
+#: analytic.engine.declaration), which the registry reads without importing the engine.
+ENGINE_FOLDERS = ("mujoco_models", "bullet_models")
+#: compare's check of an engine's contact settings (``treeimpact contact``), by engine:
+#: compare's own code about that engine (compare.runs.contact_engines).
+CONTACT_SIDES = {"mujoco": "treeimpact.compare.runs.contact_engines:MUJOCO",
+                 "bullet": "treeimpact.compare.runs.contact_engines:BULLET"}
+
+
+def declared_engine(folder: str) -> Engine:
+    """The :class:`Engine` the package ``treeimpact.<folder>`` declares (its DECLARATION:
+    its simulate and modes are the package's own, its options the package's OPTIONS)."""
+    d = importlib.import_module(f"treeimpact.{folder}").DECLARATION
+    package = f"treeimpact.{folder}"
+    return Engine(Backend(d.name, f"{package}:simulate", f"{package}:modes", d.description,
+                          run_cost=d.run_cost, variants=d.variants, shades=d.shades),
+                  label=d.label, folder=folder, package=d.package,
+                  distributions=d.distributions, contact=CONTACT_SIDES.get(d.name))
+
+
+for _folder in ENGINE_FOLDERS:
+    register_engine(declared_engine(_folder))
 
 #: The shipped engines, in the order the ladder and the studies show them (an engine
 #: registered later, e.g. by a test, is in :func:`engines` and :data:`ENGINE_REGISTRY`).
