@@ -103,10 +103,11 @@ def test_the_scenario_of_a_run_is_the_scenario_as_run():
 
 @pytest.mark.parametrize("backend", ["analytic", "soft", "beam", "mujoco", "bullet"])
 def test_a_physical_input_reaches_a_backend_one_way_only(monkeypatch, backend):
-    """A run option that overrides a scenario field (compare.runs.backends.SCENARIO_OPTIONS) is
+    """A run option that overrides a scenario field (analytic.model.options.OVERRIDES) is
     applied to the scenario once, at the backends' door, and the backend receives that
     scenario and its numerical options only (issue 51 item 2): here each backend's simulate
     is replaced by a spy that records what it is given."""
+    from treeimpact.analytic.model.options import OVERRIDES
     from treeimpact.compare.runs import backends as B
 
     seen = {}
@@ -123,7 +124,7 @@ def test_a_physical_input_reaches_a_backend_one_way_only(monkeypatch, backend):
     physical = {"restitution": 0.3, "t_end": 0.05}
     if pad is not None:  # the Newton model has no pad
         physical[pad] = 0.002 if pad == "contact_duration" else 3e6
-    assert set(physical) <= B.SCENARIO_OPTIONS and set(physical) <= offered
+    assert set(physical) <= set(OVERRIDES) and set(physical) <= offered
     with pytest.raises(RuntimeError, match="spy"):
         b.simulate(ti.load_scenario("open-center"), **physical, **numerical)
     assert seen["options"] == numerical  # nothing physical besides the scenario

@@ -168,7 +168,7 @@ class Backend:
         """``(scenario as run, result)`` of ``scenario`` with ``options``, each checked by
         its Option (one the backend does not take is refused). The one way a physical input
         reaches a backend: the options that override a scenario field
-        (:data:`SCENARIO_OPTIONS`) are applied to the scenario here, once
+        (analytic.model.options.OVERRIDES) are applied to the scenario here, once
         (:func:`scenario_as_run`), and the backend receives that scenario and its numerical
         options only. The result is checked before anyone reports it (a diverged run raises
         :class:`analytic.errors.SimulationDiverged`: never numbers)."""
@@ -215,15 +215,12 @@ class Backend:
                 # a scenario field's override is checked once, where it enters the
                 # scenario (scenario_as_run: the field's own range, named by its flag)
                 out[key] = table[key].check(key, value) if key in table and value is not None \
-                    and key not in SCENARIO_OPTIONS else value
+                    and key not in OVERRIDES else value
             except ParameterError as exc:
                 refused.append(str(exc))
         if refused:
             raise ParameterError("; ".join(refused))
         return out
-
-#: The run options that override a scenario field (analytic.model.options.OVERRIDES).
-SCENARIO_OPTIONS = frozenset(OVERRIDES)
 
 
 BACKENDS = {
@@ -325,8 +322,8 @@ CONTACT_SIDES = {"mujoco": "treeimpact.compare.runs.contact_engines:MUJOCO",
 def declared_engine(folder: str) -> Engine:
     """The :class:`Engine` the package ``treeimpact.<folder>`` declares (its DECLARATION:
     its simulate and modes are the package's own, its options the package's OPTIONS)."""
-    d = importlib.import_module(f"treeimpact.{folder}").DECLARATION
     package = f"treeimpact.{folder}"
+    d = importlib.import_module(package).DECLARATION
     return Engine(Backend(d.name, f"{package}:simulate", f"{package}:modes", d.description,
                           run_cost=d.run_cost, variants=d.variants, shades=d.shades),
                   label=d.label, folder=folder, package=d.package,

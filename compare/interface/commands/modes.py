@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import json_text
-from treeimpact.compare.runs.backends import BACKENDS, get_backend
+from treeimpact.compare.runs.backends import BACKENDS
 from treeimpact.compare.runs.provenance import provenance
 
 from ...runs.exits import ExitCode
@@ -35,7 +35,6 @@ def run(args) -> int:
     # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
     from treeimpact.compare.interface.api import modes
 
-    get_backend(args.backend)  # a one-line refusal naming --backend, before the scenario
     scenario = load_scenario(args.scenario)
     opts = options_of(args, MODES_OPTIONS)
     res = modes(scenario, args.backend, **opts).to_json()

@@ -9,7 +9,7 @@ from treeimpact.analytic.model.registry import units_of
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import json_text
 from treeimpact.analytic.metrics import METRIC_UNITS
-from treeimpact.compare.runs.backends import BACKENDS, get_backend
+from treeimpact.compare.runs.backends import BACKENDS
 from treeimpact.compare.runs.provenance import provenance
 from treeimpact.compare.runs.recording import DEFAULTS, REST, check_sampling, sample
 
@@ -92,7 +92,6 @@ def run(args) -> int:
     # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
     from treeimpact.compare.interface.api import simulate
 
-    get_backend(args.backend)  # a one-line refusal naming --backend, before the scenario
     scenario = load_scenario(args.scenario)
     opts = options_of(args, backend_options())
     check_record_arguments(args)
