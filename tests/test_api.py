@@ -13,7 +13,7 @@ import typing
 import pytest
 
 import treeimpact as ti
-from treeimpact.compare.interface.api import REPORT_DIR, SWEEP_BACKENDS, SWEEP_SCENARIO
+from treeimpact.compare.interface.api_studies import REPORT_DIR, SWEEP_BACKENDS, SWEEP_SCENARIO
 from treeimpact.compare.studies.sweep.run import SweepResult
 from treeimpact.compare.tree.ladder import Ladder
 

@@ -10,7 +10,7 @@ import numpy as np
 import treeimpact as ti
 from treeimpact.analytic.identify.fit_parameters import E_MAX, M_RANGE, Slot, record_parameters
 from treeimpact.analytic.identify.record_fit import at_range_end, fit_record
-from treeimpact.compare.interface.api import pendulum_test
+from treeimpact.compare.interface.api_records import pendulum_test
 
 
 def test_a_parameter_at_its_range_s_end_leaves_what_it_moves_undetermined():

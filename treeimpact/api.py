@@ -2,7 +2,8 @@
 and the module that defines it, read here. ``treeimpact`` hands these names on when first
 used (``treeimpact.simulate`` is this module's ``simulate``), so ``import treeimpact`` and
 the command line's start-up stay cheap; the implementation behind them is
-:mod:`treeimpact.compare.interface.api` (one function per job) and
+:mod:`treeimpact.compare.interface.api` (runs and trees), ``api_records`` (records and
+identification) and ``api_studies`` (sweeps, studies, the report), one function per job, and
 :mod:`treeimpact.compare.interface.api_results` (the typed, SI results).
 """
 
@@ -13,19 +14,9 @@ from treeimpact.analytic.model.calibration import MeasuredTree, calibrate_trunk
 from treeimpact.analytic.model.parameters import Billet, Contact, Pendulum, Scenario, Trunk
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 from treeimpact.analytic.model.scenario_toml import scenario_toml
-from treeimpact.compare.interface.api import (
-    backends,
-    design_map,
-    identify,
-    ladder,
-    modes,
-    read_record,
-    record_from_simulation,
-    report,
-    simulate,
-    sweep,
-    tree_scenario,
-)
+from treeimpact.compare.interface.api import backends, ladder, modes, simulate, tree_scenario
+from treeimpact.compare.interface.api_records import identify, read_record, record_from_simulation
+from treeimpact.compare.interface.api_studies import design_map, report, sweep
 from treeimpact.compare.interface.api_results import (
     Conclusion,
     Diagnosis,

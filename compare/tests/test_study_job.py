@@ -12,7 +12,7 @@ import pytest
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.interface.cli import main
-from treeimpact.compare.interface.api import PROGRAM
+from treeimpact.compare.interface.api_studies import PROGRAM
 from treeimpact.compare.report import write_report
 from treeimpact.compare.report.validity.study_job import StudyJob
 from treeimpact.compare.runs.cache import RunCache

@@ -48,7 +48,7 @@ def test_a_registered_study_runs_from_the_command_line(fake, tmp_path, capsys):
         "fake": {"tree": "central-leader"}}
     assert main(["sweep", "--preset", "nope", "--out", str(tmp_path / "n")]) == 2
     assert "fake" in capsys.readouterr().err.splitlines()[-1]  # the choices read the registry
-    from treeimpact.compare.interface.api import _study_folders
+    from treeimpact.compare.interface.api_studies import _study_folders
     from treeimpact.compare.report.validity.study_job import StudyJob
 
     assert _study_folders(["default", "fake"]) == {"default": "study", "fake": "fake"}

@@ -58,10 +58,10 @@ def add_arguments(sp: argparse.ArgumentParser) -> None:
 
 
 def _test(args):
-    """The PendulumTest of the flags (:func:`compare.interface.api.pendulum_test`, as the API's
+    """The PendulumTest of the flags (:func:`compare.interface.api_records.pendulum_test`, as the API's
     identify), each flag checked as typed first (an error names the flag)."""
     # lazy: +53 ms at import otherwise (numpy), which this module's other callers do not need
-    from treeimpact.compare.interface.api import pendulum_test
+    from treeimpact.compare.interface.api_records import pendulum_test
 
     for name in TEST_FLAGS:  # each flag as typed, before anything is built
         p = BY_NAME[name]

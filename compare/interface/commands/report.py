@@ -33,12 +33,12 @@ def add_arguments(sp) -> None:
 
 def run(args) -> int:
     """Write the report for the parsed command line ``args`` (the public API's
-    :func:`~treeimpact.compare.interface.api.report`, its studies beside it) and print the
+    :func:`~treeimpact.compare.interface.api_studies.report`, its studies beside it) and print the
     written paths; exit code 0, or NotAchieved (exit 4, after the paths) when a scenario's
     ladder gives no 1-DOF answer (its paper's-model or continuum rung failed: the pages say
     why)."""
     # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
-    from treeimpact.compare.interface.api import report
+    from treeimpact.compare.interface.api_studies import report
 
     for study in args.studies:  # checked before an hour of runs, not after
         if not Path(study).is_dir():
