@@ -6,6 +6,7 @@ import sys
 
 import pytest
 
+from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.compare.interface.cli import main
 
@@ -266,3 +267,53 @@ def test_modes_writes_the_public_apis_result(capsys, backend):
     assert got["model"]["omegas"] == list(want.model.omegas)
     assert got["beam"]["omegas"] == list(want.beam.omegas)
     assert got["model"].get("segments") == want.model.segments
+
+
+def _spied(monkeypatch, name):
+    """A spy around the API function ``name`` of compare.interface.api (the function
+    treeimpact.api re-exports): the calls it saw, (args, kwargs) each."""
+    import treeimpact.api
+    from treeimpact.compare.interface import api
+
+    assert getattr(treeimpact.api, name) is getattr(api, name)
+    calls, real = [], getattr(api, name)
+
+    def spy(*args, **kwargs):
+        calls.append((args, kwargs))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(api, name, spy)
+    return calls, real
+
+
+def test_paper_prints_the_public_apis_result(monkeypatch, capsys):
+    """One face (issue 51 item 3): ``treeimpact paper --json`` is treeimpact.paper()'s result
+    with the provenance added, the numbers parsed (not compared as text)."""
+    calls, real = _spied(monkeypatch, "paper")
+    code, out, _ = run(capsys, "paper", "--json")
+    assert code == 0 and calls == [((), {"fit_contact": False})]
+    printed = json.loads(out)
+    printed.pop("provenance")
+    assert printed == json.loads(json.dumps(real(), default=float))
+
+
+def test_contact_prints_the_public_apis_result_and_its_refusal_names_the_flag(monkeypatch,
+                                                                              capsys):
+    """``treeimpact contact --json`` is treeimpact.contact_settings()'s result for the flags
+    (its engines --engine's); a refusal names the flag while the command runs and the
+    keyword for a Python caller; an engine without contact settings is refused by name."""
+    calls, real = _spied(monkeypatch, "contact_settings")
+    argv = ["--mass", "132.4", "--other-mass", "4", "--restitution", "0.5",
+            "--touch-duration", "2e-3", "--dt", "4e-5", "--engine", "mujoco"]
+    code, out, _ = run(capsys, "contact", *argv, "--json")
+    assert code == 0 and calls[0][1]["engines"] == ("mujoco",)
+    got = real(mass=132.4, other_mass=4.0, restitution=0.5, touch_duration=2e-3, dt=4e-5,
+               engines=("mujoco",))
+    assert json.loads(out) == json.loads(json.dumps(got, default=float))
+    assert main(["contact", *argv[:4], "--restitution", "1.5", *argv[6:]]) == 2
+    assert "--restitution" in capsys.readouterr().err
+    with pytest.raises(ParameterError, match=r"^restitution"):
+        real(mass=132.4, restitution=1.5, touch_duration=2e-3, dt=4e-5)
+    with pytest.raises(ParameterError, match=r"^engines: 'analytic' gives no contact"):
+        real(mass=132.4, restitution=0.5, touch_duration=2e-3, dt=4e-5,
+             engines=("analytic",))

@@ -14,7 +14,15 @@ from treeimpact.analytic.model.calibration import MeasuredTree, calibrate_trunk
 from treeimpact.analytic.model.parameters import Billet, Contact, Pendulum, Scenario, Trunk
 from treeimpact.analytic.model.scenario import load_scenario, shipped_scenarios
 from treeimpact.analytic.model.scenario_toml import scenario_toml
-from treeimpact.compare.interface.api import backends, ladder, modes, simulate, tree_scenario
+from treeimpact.compare.interface.api import (
+    backends,
+    contact_settings,
+    ladder,
+    modes,
+    paper,
+    simulate,
+    tree_scenario,
+)
 from treeimpact.compare.interface.api_records import identify, read_record, record_from_simulation
 from treeimpact.compare.interface.api_studies import design_map, report, sweep
 from treeimpact.compare.interface.api_results import (

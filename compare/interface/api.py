@@ -21,7 +21,9 @@ from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.model.scenario import shipped_scenarios
 
 from ..runs.backends import BACKENDS, ENGINES, get_backend
+from ..runs.backends import engines as engines_of
 from ..runs.cache import resolve_scenario
+from ..runs.contact_settings import contact_settings as settings
 from ..runs.names import did_you_mean
 from ..tree.ladder import build_ladder
 from ..tree.scenario import RENAMED as TREE_RENAMED
@@ -178,4 +180,87 @@ def tree_scenario(name: str, **measured) -> Scenario:
                                                         measured.items() if v is not None}))
 
 
-__all__ = ["backends", "ladder", "modes", "simulate", "tree_scenario"]
+@api_function
+def paper(*, fit_contact: bool = False) -> dict:
+    """The paper reproduced (docs/paper-discrepancies.md), as ``treeimpact paper --json``
+    without its provenance: Table 1 recomputed beside the printed values, the restitution
+    reproducing each measured quantity, the discrepancies between the printed equations and
+    the printed numbers.
+
+    Args:
+        fit_contact: also fit each model (the paper's, the 1-DOF soft, the continuum, the
+            continuum with the clamp mass free) to every measured number of each tree (about
+            a minute; the command's ``--fit-contact``).
+
+    Returns:
+        dict: ``trees`` (tree -> quantity -> ``printed``, ``recomputed``, ``rel_diff``,
+        ``how``; SI units), ``restitution_estimates`` (tree -> the e reproducing V, x0 and
+        T0 each), ``discrepancies`` (``equation``, ``printed``, ``reproduces_table``,
+        ``evidence``) and, with ``fit_contact``, ``contact_fit`` (tree -> ``measured``,
+        ``fits`` by model, ``explained_by_none``).
+
+    Raises:
+        Nothing for its own inputs (the paper's numbers are package data).
+    """
+    # lazy: +304 ms at import otherwise (scipy, numpy),
+    # which this module's other callers do not need
+    from treeimpact.analytic.paper.reproduction import reproduce
+
+    res = reproduce()
+    if fit_contact:
+        # lazy: +425 ms at import otherwise (the engines' contact fit), which only
+        # fit_contact needs
+        from treeimpact.analytic.paper.contact_fit import fit_paper_trees
+
+        res["contact_fit"] = fit_paper_trees()
+    return res
+
+
+@api_function
+def contact_settings(*, mass: float | None = None, other_mass: float | None = None,
+                     effective_mass: float | None = None, restitution: float | None = None,
+                     touch_duration: float | None = None,
+                     contact_stiffness: float | None = None,
+                     contact_damping: float | None = None, dt: float | None = None,
+                     engines=None) -> dict:
+    """Engine contact settings for a target collision at a time step, each checked by
+    simulating the two-body collision in its engine (docs/contact-settings.md), as
+    ``treeimpact contact --json``.
+
+    Args:
+        mass: body 1's mass, kg (with ``other_mass``; or ``effective_mass`` alone).
+        other_mass: body 2's mass, kg (None: body 2 fixed).
+        effective_mass: the reduced mass m1 m2 / (m1 + m2), kg, instead of ``mass``.
+        restitution: the target e of one collision, in (0, 1), with ``touch_duration``.
+        touch_duration: the target touch duration, s (first touch to release).
+        contact_stiffness: the pad's k_c, N/m, with ``contact_damping`` (N s/m), instead of
+            ``restitution`` and ``touch_duration``.
+        contact_damping: the pad's c_c, N s/m.
+        dt: the engines' time step, s (default: MuJoCo's 0.002 where the law allows).
+        engines: the engines to give settings for (default: every registered engine that
+            gives contact settings, MuJoCo and Bullet).
+
+    Returns:
+        dict: ``inputs`` (the masses, ``dt``, the approach speed), ``target`` (the law:
+        e, touch duration, k_c, c_c, damping ratio, contact duration) and, per engine, its
+        settings and simulated collisions with ``holds_target`` (within 10 %) and, where
+        not, ``what_holds``; or ``{"error", "largest_dt"}`` when it cannot hold ``dt``.
+
+    Raises:
+        ParameterError: an input out of its range, a missing or contradictory pair, an
+            engine that gives no contact settings.
+    """
+    offered = engines_of(contact=True)
+    chosen = offered if engines is None else tuple(engines)
+    for name in chosen:
+        if name not in offered:
+            raise ParameterError(f"engines: {name!r} gives no contact settings; allowed "
+                                 f"{', '.join(offered)}")
+    return settings(mass=mass, other_mass=other_mass, effective_mass=effective_mass,
+                    restitution=restitution, touch_duration=touch_duration,
+                    contact_stiffness=contact_stiffness, contact_damping=contact_damping,
+                    dt=dt, engines=chosen)
+
+
+__all__ = ["backends", "contact_settings", "ladder", "modes", "paper", "simulate",
+           "tree_scenario"]

@@ -10,7 +10,7 @@ import math
 
 from treeimpact.analytic.errors import NotAchieved, ParameterError
 from treeimpact.analytic.results import json_text
-from treeimpact.compare.runs.contact_settings import HOLD_TOLERANCE, contact_settings
+from treeimpact.compare.runs.contact_settings import HOLD_TOLERANCE
 
 from ...runs.backends import ENGINE_REGISTRY
 from ...runs.backends import engines as registered_engines
@@ -51,10 +51,14 @@ def add_arguments(sp) -> None:
 
 def run(args) -> int:
     """Print the settings and the simulated collisions for the parsed command line ``args``
-    (text or ``--json``); exit code 0 when at least one engine holds the step and each
+    (the API's :func:`~treeimpact.compare.interface.api.contact_settings`, as text or
+    ``--json``); exit code 0 when at least one engine holds the step and each
     engine that gives settings holds the target within 10 %; NotAchieved (exit 4, after
     the output) naming what was achieved and what would hold it when one does not;
     ParameterError (exit 2) with each engine's reason when no engine holds the step."""
+    # lazy: +290 ms at import otherwise (the API's modules, numpy), which --help does not need
+    from treeimpact.compare.interface.api import contact_settings
+
     engines = ENGINE_CHOICES[args.engine]
     res = contact_settings(mass=args.mass, other_mass=args.other_mass,
                            effective_mass=args.effective_mass, restitution=args.restitution,

@@ -87,19 +87,13 @@ def _print_tables(res: dict) -> None:
 
 
 def run(args) -> int:
-    """Print the reproduction for the parsed command line ``args`` (text or ``--json``;
-    with ``--fit-contact`` the models fitted to the measurements); exit code 0."""
-    # lazy: +304 ms at import otherwise (scipy, numpy),
-    # which this module's other callers do not need
-    from treeimpact.analytic.paper.reproduction import reproduce
+    """Print the reproduction for the parsed command line ``args`` (the API's
+    :func:`~treeimpact.compare.interface.api.paper`, as text or ``--json``; with
+    ``--fit-contact`` the models fitted to the measurements); exit code 0."""
+    # lazy: +290 ms at import otherwise (the API's modules, numpy), which --help does not need
+    from treeimpact.compare.interface.api import paper
 
-    res = reproduce()
-    if getattr(args, "fit_contact", False):
-        # lazy: +425 ms at import otherwise (the engines' contact fit), which only --fit-contact
-        # needs
-        from treeimpact.analytic.paper.contact_fit import fit_paper_trees
-
-        res["contact_fit"] = fit_paper_trees()
+    res = paper(fit_contact=getattr(args, "fit_contact", False))
     if args.json:
         print(json_text(res | {"provenance": provenance()}, indent=2))
         return ExitCode.OK
