@@ -26,7 +26,8 @@ FOLDERS = {"treeimpact": "treeimpact", "analytic": "treeimpact.analytic",
            "compare": "treeimpact.compare"}
 #: analytic's floors, bottom first: a module imports only its own floor or lower ones.
 ANALYTIC_FLOORS = ("threads", "errors", "budget", "metrics", "results", "model", "records",
-                   "impact", "contact", "continuum", "identify", "engine", "paper")
+                   "impact", "contact", "continuum", "identify", "engine", "paper",
+                   "references")
 #: compare's floors, bottom first (docs/architecture.md): each a set of units (a module or
 #: a subpackage of compare); a module imports only its own floor or lower ones, and the
 #: units of one floor import each other without a circle.

@@ -5,10 +5,10 @@ An engine is one folder (its package), which declares itself beside its definiti
 variants, colours, distributions), and its name in :data:`ENGINE_FOLDERS`; the registry
 makes its :class:`Engine` from that declaration, and the ladder, the pool, the report,
 ``treeimpact contact``, the provenance and the layer test read it (docs/engines.md,
-"Adding an engine"). Each backend entry maps a backend name to ``module:function`` for
-``simulate(scenario, **options)``
-(returning :class:`analytic.results.SimulationResult`) and, where the backend has its own
-trunk, ``modes(scenario, **options)``. Options a backend does not take are refused with a
+"Adding an engine"); the analytic references are declared beside their definitions too
+(analytic.references). Each backend's ``simulate(scenario, **options)`` returns
+:class:`analytic.results.SimulationResult` and its ``modes(scenario, **options)`` the modes
+dict. Options a backend does not take are refused with a
 one-line error instead of being ignored.
 """
 
@@ -24,6 +24,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.references import REFERENCES
 from treeimpact.analytic.model.options import (
     OVERRIDES,
     as_typed,
@@ -223,19 +224,10 @@ class Backend:
         return out
 
 
-BACKENDS = {
-    "analytic": Backend("analytic", "treeimpact.analytic.impact.simulate:simulate",
-                        "treeimpact.analytic.continuum.modes:modes",
-                        "exact Newton-restitution solver of the paper (eqs 12-35)",
-                        run_cost=((None, 0.005),)),
-    "soft": Backend("soft", "treeimpact.analytic.contact.soft:simulate_soft",
-                    "treeimpact.analytic.continuum.modes:modes",
-                    "analytic SDOF with the spring-dashpot contact", run_cost=((None, 0.2),)),
-    "beam": Backend("beam", "treeimpact.analytic.continuum.beam_impact:simulate_beam",
-                    "treeimpact.analytic.continuum.beam_impact:modes",
-                    "continuum Euler-Bernoulli trunk with the same pad, exact between contact "
-                    "switches", run_cost=((None, 0.6),)),
-}
+#: The registered backends, name -> :class:`Backend`: the analytic references as analytic
+#: declares them (analytic.references.REFERENCES), then each engine registered below.
+BACKENDS = {d.name: Backend(d.name, d.simulate, d.modes, d.description, run_cost=d.run_cost)
+            for d in REFERENCES}
 
 
 @dataclass(frozen=True)
