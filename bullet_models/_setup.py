@@ -89,9 +89,10 @@ def make_setup(scenario: Scenario, *, trunk="chain", segments=None, pendulum="li
     is built where it can)."""
     check_choice("contact", contact, CONTACTS)
     damping, calibration = trunk_options(trunk, trunk_damping_model, calibration)
-    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
-                                trunk_damping_model=damping,
-                                calibration=calibration)
+    t_end = float(scenario.t_end)
+    model = engine_model(scenario, trunk=trunk, pendulum=pendulum,
+                         trunk_damping_model=damping,
+                         calibration=calibration)
     if contact == "soft" and not model.restitution < 1.0:  # before the chain is built
         raise ParameterError(
             f"contact.restitution = {model.restitution:g}: Bullet's soft "

@@ -193,9 +193,10 @@ def _make_setup(scenario, trunk, segments, pendulum, dt, damping, integrator, ca
     """:func:`make_setup` without its cache (the options in its order, positional)."""
     check_choice("integrator", integrator, INTEGRATORS)
     damping, calibration = trunk_options(trunk, damping, calibration)
-    model, t_end = engine_model(scenario, trunk=trunk, pendulum=pendulum,
-                                trunk_damping_model=damping,
-                                calibration=calibration, trunks=TRUNKS)
+    t_end = float(scenario.t_end)
+    model = engine_model(scenario, trunk=trunk, pendulum=pendulum,
+                         trunk_damping_model=damping,
+                         calibration=calibration, trunks=TRUNKS)
     if trunk == "flex":
         _flex.check_flex_options(integrator, damping)
     if not model.restitution > 0.0:

@@ -1,6 +1,7 @@
 """The treeimpact command line: JSON layout, units, and one-line errors with exit code 2."""
 
 import json
+import re
 import subprocess
 import sys
 
@@ -317,3 +318,16 @@ def test_contact_prints_the_public_apis_result_and_its_refusal_names_the_flag(mo
     with pytest.raises(ParameterError, match=r"^engines: 'analytic' gives no contact"):
         real(mass=132.4, restitution=0.5, touch_duration=2e-3, dt=4e-5,
              engines=("analytic",))
+
+
+def test_a_study_that_is_not_a_directory_is_refused_once_by_its_name(tmp_path, capsys):
+    """``--study`` is checked once, in the API's report, before any run: the command's
+    refusal names the flag (exit 2), a Python caller's the keyword ``studies``."""
+    import treeimpact as ti
+
+    missing = str(tmp_path / "no-study")
+    assert main(["report", "--out", str(tmp_path / "out"), "--study", missing]) == 2
+    assert f"--study {missing!r}: not a directory" in capsys.readouterr().err
+    with pytest.raises(ParameterError, match=rf"^studies {re.escape(repr(missing))}: not a"):
+        ti.report(tmp_path / "out", studies=(missing,))
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

@@ -24,7 +24,6 @@ from pathlib import Path
 import pytest
 
 import treeimpact as ti
-from treeimpact.compare.runs.verdicts import TOLERANCES_PATH
 from treeimpact.analytic.metrics import (
     FORCE,
     LADDER_METRICS,
@@ -34,6 +33,7 @@ from treeimpact.analytic.metrics import (
     TOGETHER,
     Metric,
 )
+from treeimpact.compare.runs.verdicts import TOLERANCES_PATH
 
 from test_glossary import _cited, glossary_problems
 from test_registry_defaults import _copy

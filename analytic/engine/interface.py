@@ -127,11 +127,11 @@ def trunk_options(trunk: str, trunk_damping_model, calibration) -> tuple[str, st
 
 
 def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping_model: str,
-                 calibration: str, trunks: tuple = TRUNKS) -> tuple[TwoBodyModel, float]:
+                 calibration: str, trunks: tuple = TRUNKS) -> TwoBodyModel:
     """The options every engine shares, checked (one-line errors), and the scenario's
-    two-body model (eqs 7-13, 48) with the end time (s) of an engine run (the scenario's
-    t_end: a run option that overrides it or e is applied to the scenario before,
-    analytic.model.options.scenario_as_run).
+    two-body model (eqs 7-13, 48). An engine run ends at the scenario's t_end (s): a run
+    option that overrides it or e is applied to the scenario before
+    (analytic.model.options.scenario_as_run).
 
     ``trunk``, ``pendulum``, ``trunk_damping_model`` and ``calibration`` are checked against
     their choices; ``pendulum = "full"`` needs a pendulum impactor; ``trunks``: the engine's
@@ -145,7 +145,7 @@ def engine_model(scenario: Scenario, *, trunk: str, pendulum: str, trunk_damping
         raise ParameterError("scenario: expected an analytic.Scenario")
     if pendulum == "full" and not isinstance(scenario.impactor, Pendulum):
         raise ParameterError("--pendulum = 'full': the scenario's impactor is a billet")
-    return two_body_model(scenario), float(scenario.t_end)
+    return two_body_model(scenario)
 
 
 def trunk_chain(scenario: Scenario, trunk: str, segments, *, engine: str = "the engine",

@@ -7,13 +7,13 @@ from functools import lru_cache, partial
 
 import numpy as np
 
+from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.analytic.model.options import RESTITUTION, T_END, Option
 from treeimpact.analytic.model.parameters import Pendulum, Scenario
 from treeimpact.analytic.model.reduction import crown_factor
 from treeimpact.analytic.model.two_body import TwoBodyModel, two_body_model
 from treeimpact.analytic.records import with_static_shape_crown
 from treeimpact.analytic.results import ImpactRecord, SimulationResult, Trajectory
-from treeimpact.analytic.metrics import METRIC_KEYS
 
 from .events import Motion
 from .solution import ImpactSolution

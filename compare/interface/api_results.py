@@ -10,11 +10,14 @@ import types
 from dataclasses import dataclass
 
 from treeimpact.analytic.identify.conclusion import Conclusion
-from treeimpact.analytic.identify.diagnosis import Diagnosis, DiagnosisKind  # noqa: F401 (public)
+from treeimpact.analytic.identify.diagnosis import (  # noqa: F401 (public)
+    Diagnosis,
+    DiagnosisKind,
+)
 from treeimpact.analytic.identify.intervals import UNITS as FIT_UNITS
+from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import Trajectory
-from treeimpact.analytic.metrics import METRIC_KEYS
 
 
 @dataclass(frozen=True)

@@ -87,10 +87,11 @@ def report(out=REPORT_DIR, scenarios=None, *, studies=(), with_study=(),
         raise ParameterError(f"{show('with_study', NAMING.get())}: the scenarios by shipped "
                              "name or TOML path (a study's child process reads them)")
     scens = None if scenarios is None else [resolve_scenario(s) for s in scenarios]
-    for study in studies:
+    for study in studies:  # checked before the runs, not after
         if not Path(study).is_dir():
-            raise ParameterError(f"studies: {str(study)!r} is not a directory (a finished "
-                                 "study, treeimpact sweep --out DIR)")
+            flag = "--study" if NAMING.get() == "flag" else "studies"
+            raise ParameterError(f"{flag} {str(study)!r}: not a directory (a finished "
+                                 "study's output directory)")
     jobs = _study_jobs(folders, out, scenarios)
     try:
         for job in jobs:

@@ -14,8 +14,8 @@ from functools import lru_cache
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
-from treeimpact.analytic.results import finite_number, to_jsonable
 from treeimpact.analytic.metrics import FORCE, PARTED, TOGETHER, metrics_needing
+from treeimpact.analytic.results import finite_number, to_jsonable
 
 from .bounds import validate_bound
 from .bounds.base import relative_step  # noqa: F401 (compare.runs.verdicts.relative_step)

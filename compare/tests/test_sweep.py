@@ -17,16 +17,20 @@ import pytest
 from treeimpact.analytic.continuum.chain import SEGMENTS
 from treeimpact.analytic.errors import ParameterError, SimulationDiverged
 from treeimpact.analytic.impact.simulate import simulate
+from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.analytic.model.options import RESTITUTION, T_END, Option
 from treeimpact.analytic.model.reduction import reduce_trunk
 from treeimpact.analytic.model.scenario import load_scenario
-from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.compare.runs.cache import INVALID
 from treeimpact.compare.studies.speed import speed_points
 from treeimpact.compare.studies.sweep.apply import apply_point
 from treeimpact.compare.studies.sweep.grid import derived_ratios, parse_axis, parse_grid
 from treeimpact.compare.studies.sweep.journal import JOURNAL, TABLE, read_table
-from treeimpact.compare.studies.sweep.maps import discrepancies, identification_maps, validity_maps
+from treeimpact.compare.studies.sweep.maps import (
+    discrepancies,
+    identification_maps,
+    validity_maps,
+)
 from treeimpact.compare.studies.sweep.run import run_sweep
 
 # --------------------------------------------------------------------------- grid specs

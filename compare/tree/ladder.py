@@ -11,10 +11,10 @@ from functools import cache, cached_property
 from types import SimpleNamespace
 
 from treeimpact.analytic.continuum.chain_impact import converged_segments
+from treeimpact.analytic.metrics import LADDER_METRICS, METRIC_UNITS
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.records import PEAK_AMBIGUITY, peak_times
 from treeimpact.analytic.results import finite_number, to_jsonable
-from treeimpact.analytic.metrics import LADDER_METRICS, METRIC_UNITS
 
 from ..runs.backends import ENGINES
 from ..runs.bounds import Pair, tree_entry

@@ -4,9 +4,8 @@ given scenarios, with finished studies and optionally a study run beside it."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
-from treeimpact.analytic.errors import NotAchieved, ParameterError
+from treeimpact.analytic.errors import NotAchieved
 
 from ...runs.exits import ExitCode
 from ._common import add_budget_flag, writable_dir
@@ -40,10 +39,6 @@ def run(args) -> int:
     # lazy: +250 ms at import otherwise (the API's modules, numpy), which --help does not need
     from treeimpact.compare.interface.api_studies import report
 
-    for study in args.studies:  # checked before an hour of runs, not after
-        if not Path(study).is_dir():
-            raise ParameterError(f"--study {study!r}: not a directory (a finished study, "
-                                 "treeimpact sweep --out DIR)")
     writable_dir("--out", args.out)
     paths = report(args.out, args.scenarios, studies=tuple(args.studies),
                    with_study=tuple(args.with_study), progress=True)

@@ -3,12 +3,11 @@ paper's model (or as JSON), optionally written as a pendulum-test record (SI uni
 
 from __future__ import annotations
 
-
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.metrics import METRIC_UNITS
 from treeimpact.analytic.model.registry import units_of
 from treeimpact.analytic.model.scenario import load_scenario
 from treeimpact.analytic.results import json_text
-from treeimpact.analytic.metrics import METRIC_UNITS
 from treeimpact.compare.runs.backends import BACKENDS
 from treeimpact.compare.runs.provenance import provenance
 from treeimpact.compare.runs.recording import DEFAULTS, REST, check_sampling, sample

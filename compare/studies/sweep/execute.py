@@ -15,8 +15,8 @@ import socket
 from dataclasses import dataclass, field
 
 from treeimpact.analytic.errors import one_line
-from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.metrics import METRIC_KEYS
+from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.compare.runs.cache import DIVERGED, FAILED, INVALID, OK, attempt, failure
 from treeimpact.compare.tree.identification import identify_rung
 

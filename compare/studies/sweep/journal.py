@@ -15,9 +15,9 @@ import math
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
+from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.analytic.model.parameters import Scenario
 from treeimpact.analytic.results import json_text
-from treeimpact.analytic.metrics import METRIC_KEYS
 from treeimpact.compare.runs.cache import OK
 
 from .execute import IDENT_KEYS, MODEL_KEYS, load_analysis
