@@ -1,6 +1,7 @@
 """The treeimpact command line: JSON layout, units, and one-line errors with exit code 2."""
 
 import json
+import math
 import re
 import subprocess
 import sys
@@ -270,12 +271,14 @@ def test_modes_writes_the_public_apis_result(capsys, backend):
     assert got["model"].get("segments") == want.model.segments
 
 
-def _spied(monkeypatch, name):
-    """A spy around the API function ``name`` of compare.interface.api (the function
+def _spied(monkeypatch, name, module="api"):
+    """A spy around the API function ``name`` of compare.interface.``module`` (the function
     treeimpact.api re-exports): the calls it saw, (args, kwargs) each."""
-    import treeimpact.api
-    from treeimpact.compare.interface import api
+    import importlib
 
+    import treeimpact.api
+
+    api = importlib.import_module(f"treeimpact.compare.interface.{module}")
     assert getattr(treeimpact.api, name) is getattr(api, name)
     calls, real = [], getattr(api, name)
 
@@ -318,6 +321,67 @@ def test_contact_prints_the_public_apis_result_and_its_refusal_names_the_flag(mo
     with pytest.raises(ParameterError, match=r"^engines: 'analytic' gives no contact"):
         real(mass=132.4, restitution=0.5, touch_duration=2e-3, dt=4e-5,
              engines=("analytic",))
+
+
+#: The pendulum test of central-leader (its scenario file) as identify's flags.
+CENTRAL_LEADER_TEST = ["--impactor-mass", "132.4", "--equivalent-length", "1.51",
+                    "--release-angle-deg", "36.39", "--clamp-height", "0.315",
+                    "--diameter", "0.126"]
+
+
+def test_identify_prints_the_public_apis_identification(monkeypatch, capsys, tmp_path):
+    """``treeimpact identify --json`` is treeimpact.identify()'s Identification: its fit's
+    quantities and the paper's procedure's readings (``procedure``) of the record it read,
+    and the figure it draws; the numbers parsed, not compared as text."""
+    import treeimpact as ti
+
+    record = tmp_path / "rec.csv"
+    assert main(["simulate", "central-leader", "--record", str(record), "--noise", "0.01"]) == 0
+    capsys.readouterr()
+    calls, real = _spied(monkeypatch, "identify", "api_records")
+    code, out, _ = run(capsys, "identify", str(record), *CENTRAL_LEADER_TEST, "--json",
+                       "--plot", str(tmp_path / "fit.png"))
+    assert code == 0 and len(calls) == 1 and calls[0][1]["plot"] == str(tmp_path / "fit.png")
+    assert (tmp_path / "fit.png").read_bytes()[:4] == b"\x89PNG"
+    printed = json.loads(out)
+    ident = real(str(record), ti.load_scenario("central-leader"))
+    assert printed["paper"] == json.loads(json.dumps(ident.procedure, default=float))
+    for name in ("M_T", "K_T", "C_T", "restitution"):
+        want = getattr(ident, name).value  # not fixed by the record: NaN, null in JSON
+        assert printed["fit"][name]["value"] == (None if math.isnan(want) else want)
+    # the paper's C_T is 2 b (M_T + m) of its b (eq 34), its trunk ratio C_T / (2 sqrt(K M))
+    paper = ident.procedure["paper"]
+    assert paper["trunk_damping_ratio"] == pytest.approx(  # rounding only: one formula each
+        paper["C_T"] / (2 * math.sqrt(paper["K_T"] * paper["M_T"])), rel=1e-12)
+
+
+@pytest.mark.parametrize("flags, typed, keyword, value", [
+    (["--restitution", "1.5"], "--restitution = 1.5", "restitution = 1.5",
+     {"restitution": 1.5}),
+    (["--clamp-height", "-0.3"], "--clamp-height = -0.3", "clamp_height = -0.3",
+     {"clamp_height": -0.3}),
+    (["--plot", "fit.txt"], "--plot 'fit.txt': allowed a file ending in", "plot 'fit.txt'",
+     {"plot": "fit.txt"})])
+def test_identifys_refusal_is_the_apis_naming_the_flag_or_the_keyword(
+        capsys, tmp_path, flags, typed, keyword, value):
+    """identify's inputs are checked once, by the API (the registry's range; the figure's
+    formats), before the record is read: one line naming the flag as typed in the command
+    (exit 2), the keyword for a Python caller."""
+    import treeimpact as ti
+
+    record = tmp_path / "missing.csv"  # never read: the check comes first
+    argv = list(CENTRAL_LEADER_TEST)
+    for flag, text in zip(flags[::2], flags[1::2]):
+        if flag in argv:
+            argv[argv.index(flag) + 1] = text
+        else:
+            argv += [flag, text]
+    assert main(["identify", str(record), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"treeimpact: error: {typed}") and err.count("\n") == 1, err
+    given = {"clamp_height": 0.315, "diameter": 0.126, **value}
+    with pytest.raises(ParameterError, match=f"^{re.escape(keyword)}"):
+        ti.identify(record, ti.load_scenario("central-leader").impactor, **given)
 
 
 def test_a_study_that_is_not_a_directory_is_refused_once_by_its_name(tmp_path, capsys):

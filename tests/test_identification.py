@@ -126,3 +126,24 @@ def test_a_record_that_breaks_the_premises_is_not_identifiable():
                           ({"equivalent_stiffness": -860.0}, "K_T = -860")):
         with pytest.raises(ParameterError, match=f"^not identifiable: .*{words}"):
             check_identifiable(dataclasses.replace(ident, **change))
+
+
+def test_a_readings_curve_is_the_fitted_model_with_that_reading_s_trunk():
+    """The figure's curve of the paper's reading (analytic.identify.fit_model.
+    model_x_of_trunk): the fit's own M_T, K_T and trunk damping ratio give the fit's own
+    model x(t); the reading's trunk (another M_T) moves it."""
+    import treeimpact as ti
+    from treeimpact.analytic.identify.fit_model import model_x_of_trunk
+    from treeimpact.compare.interface.api_records import pendulum_test
+
+    sim = ti.simulate("central-leader")
+    ident = ti.identify(ti.record_from_simulation(sim, noise=0.01), sim.scenario)
+    t, test = ident.record.t, pendulum_test(sim.scenario, None, None)
+    own = dict(dynamic_mass=ident.M_T.value, equivalent_stiffness=ident.K_T.value,
+               trunk_damping_ratio=ident.trunk_damping_ratio.value)
+    x = model_x_of_trunk(ident.fit.point, test, t, **own)
+    # log(exp(ln M_T)) rounds: a few ulps of the parameters, far below the 1e-9 of the peak
+    np.testing.assert_allclose(x, ident.fit.model_x, rtol=0, atol=1e-9 * np.abs(x).max())
+    other = model_x_of_trunk(ident.fit.point, test, t,
+                             **{**own, "dynamic_mass": 1.2 * own["dynamic_mass"]})
+    assert np.abs(other - x).max() > 0.01 * np.abs(x).max()  # a 20 % heavier trunk shows

@@ -275,6 +275,31 @@ def identify_from_record(t, x, test: PendulumTest, *, y=None, reading: str = "pa
     return ident, reg
 
 
+def procedure_readings(t, x, test: PendulumTest, *, y=None) -> dict:
+    """The whole procedure (:func:`identify_from_record`) on the record x(t) (``x``, ``y`` m
+    at the times ``t`` s) of the pendulum ``test`` in each of the :data:`READINGS`: reading
+    -> M_T (kg), K_T (N/m), C_T = 2 b (M_T + m) (N s/m, eq 34: b of the pair moving
+    together, mass M_T + m), E (Pa), ``pair_damping_ratio`` (the paper's xi = b / omega_n)
+    and ``trunk_damping_ratio`` C_T / (2 sqrt(K_T M_T)); or ``{"error": one line}`` for a
+    reading that cannot run on it (not identifiable, or its numbers fail)."""
+    out = {}
+    for reading in READINGS:
+        try:
+            with np.errstate(all="ignore"):  # a reading's numbers are checked: one line each
+                ident, _ = identify_from_record(t, x, test, y=y, reading=reading)
+        except (ParameterError, ValueError, FloatingPointError) as exc:
+            out[reading] = {"error": " ".join(str(exc).split())}
+            continue
+        M, K = ident.dynamic_mass, ident.equivalent_stiffness
+        equivalent_damping = 2.0 * ident.b * (M + test.impactor_mass)
+        trunk = (equivalent_damping / (2.0 * math.sqrt(K * M)) if K > 0 and M > 0
+                 else math.nan)
+        out[reading] = {"M_T": M, "K_T": K, "C_T": equivalent_damping, "E": ident.E,
+                        "pair_damping_ratio": ident.pair_damping_ratio,
+                        "trunk_damping_ratio": trunk}
+    return out
+
+
 def check_identifiable(ident: Identified) -> Identified:
     """``ident`` if the procedure's premises hold on the record, else a one-line
     ParameterError starting "not identifiable": the moving-together motion decays and

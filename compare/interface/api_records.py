@@ -4,15 +4,18 @@ run, the test it records, and the tree identified from it. SI units."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.analytic.identify.pendulum_record import Record
 from treeimpact.analytic.identify.pendulum_record import read_record as read
-from treeimpact.analytic.identify.procedure import PendulumTest
-from treeimpact.analytic.model.parameters import LIMITS, Pendulum, Scenario, check_range
+from treeimpact.analytic.identify.procedure import READINGS, PendulumTest, procedure_readings
+from treeimpact.analytic.model.parameters import Pendulum, Scenario, check_range
 from treeimpact.analytic.model.plausible import implausible_values, warn_implausible
+from treeimpact.analytic.model.registry import BY_NAME
 
+from ..runs.names import NAMING, show
 from ..runs.recording import check_sampling, sample
 from .api_call import api_function
 from .api_results import Identification, Simulation, identification_of
@@ -61,6 +64,15 @@ def record_from_simulation(simulation: Simulation, *, rate_hz: float = 5000.0,
     return Record(t=t, x=x, source=f"{simulation.scenario.name} ({simulation.backend})")
 
 
+def checked_input(name: str, value) -> float:
+    """``value`` of the registry's input ``name`` (analytic.model.registry) as a float, or a
+    one-line ParameterError naming it as typed (the flag while a command runs, else the
+    keyword) with its allowed range: the one check of a value entering here."""
+    p = BY_NAME[name]
+    return check_range(show(name, NAMING.get()), value, low=p.low, high=p.high,
+                       unit="" if p.unit == "1" else p.unit)
+
+
 def pendulum_test(test, clamp_height, diameter):
     """The identification's PendulumTest (analytic.identify.procedure) of ``test``: a
     Scenario (its pendulum, its trunk's clamp height and diameter), or a Pendulum with the
@@ -80,8 +92,7 @@ def pendulum_test(test, clamp_height, diameter):
     for name, value in (("clamp_height", clamp_height), ("diameter", diameter)):
         if value is None:
             raise ParameterError(f"{name}: required with a Pendulum (m)")
-        low, high, unit = LIMITS[f"trunk.{name}"]
-        check_range(name, value, low=low, high=high, unit=unit)
+        checked_input(name, value)
     if not isinstance(test, Scenario):  # a scenario warned where it was read
         warn_implausible(implausible_values({
             "impactor.mass": pend.mass, "impactor.equivalent_length": pend.equivalent_length,
@@ -94,43 +105,83 @@ def pendulum_test(test, clamp_height, diameter):
 
 @api_function
 def identify(record, test, *, clamp_height: float | None = None,
-             diameter: float | None = None, restitution: float | None = None
-             ) -> Identification:
+             diameter: float | None = None, restitution: float | None = None,
+             time_unit: str | None = None, length_unit: str | None = None,
+             plot=None) -> Identification:
     """Tree properties from a pendulum-test record: the exact 1-DOF model fitted to every
-    sample (docs/identification.md), as ``treeimpact identify``.
+    sample (docs/identification.md) beside the paper's procedure, as ``treeimpact
+    identify``.
 
     Args:
         record: a :class:`Record` (:func:`read_record`, :func:`record_from_simulation`) or
-            the path of a record file (read in s and m unless its header says otherwise).
+            the path of a record file.
         test: the test's :class:`Scenario` (its pendulum, clamp height and diameter) or its
             :class:`Pendulum`.
         clamp_height: the impact height a, m (with a Pendulum only).
         diameter: the trunk's diameter d, m (with a Pendulum only).
         restitution: the pad's e in [0, 1] if known, held fixed (default: fitted).
+        time_unit: a record file's time unit where its header names none: s (default), ms,
+            us (as :func:`read_record`).
+        length_unit: its x and y unit likewise: m (default), cm, mm, um.
+        plot: a file (.png, .pdf or .svg) to draw the record, both fits and the residuals
+            in (default: none; none drawn for a record not fitted).
 
     Returns:
         :class:`Identification`: M_T (kg), K_T (N/m), C_T (N s/m), the damping ratios, e,
-        E (Pa), each an :class:`Estimate` with its 95 % interval, and the verdict.
+        E (Pa), each an :class:`Estimate` with its 95 % interval, the verdict, and the
+        paper's procedure's readings.
 
     Raises:
         ParameterError: an unreadable record, a test that is not a pendulum's, a value out
-            of its range.
+            of its range, a plot that is not a file of those formats.
     """
     # lazy: +643 ms at import otherwise (scipy, numpy),
     # which this module's other callers do not need
     from treeimpact.analytic.identify.record_fit import fit_record
 
-
     the_test = pendulum_test(test, clamp_height, diameter)
+    if restitution is not None:
+        checked_input("restitution", restitution)
+    if plot is not None:
+        _check_plot_path(plot)
     if isinstance(record, (str, Path)):
-        record = read_record(record)
+        record = read(record, time_unit=time_unit, length_unit=length_unit)
     if not isinstance(record, Record):
         raise ParameterError(f"record: expected a Record or a path, got "
                              f"{type(record).__name__}")
-    if restitution is not None:
-        check_range("restitution", restitution, low=0.0, high=1.0)
-    return identification_of(fit_record(record, the_test, restitution=restitution),
-                             record)
+    fit = fit_record(record, the_test, restitution=restitution)
+    procedure = _procedure(record, the_test, fit)
+    if plot is not None and math.isfinite(fit.residual_rms):
+        # lazy: +400 ms at import otherwise (matplotlib), which only a plot needs
+        from ..tree.record_figure import draw_record_fit
+
+        draw_record_fit(plot, record, fit, procedure, the_test)
+    return identification_of(fit, record, procedure)
 
 
-__all__ = ["identify", "pendulum_test", "read_record", "record_from_simulation"]
+def _procedure(record, test, fit) -> dict:
+    """The paper's procedure's readings of ``record`` (analytic.identify.procedure), or for
+    a record the ``fit`` did not fit (its units, no impact: every method refuses it) each
+    reading's error saying why."""
+    if not fit.conclusion.fitted:
+        why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
+        return {reading: {"error": f"not read: {why}"} for reading in READINGS}
+    return procedure_readings(record.t, record.x, test, y=record.y)
+
+
+def _check_plot_path(path) -> None:
+    """``plot`` names a file of a format it writes, not a directory (one line naming it as
+    typed, before the fit)."""
+    # lazy: the figure's module (matplotlib on use only), which only a plot needs
+    from ..tree.record_figure import PLOT_FORMATS
+
+    p, flag = Path(path), show("plot", NAMING.get())
+    if p.is_dir():
+        raise ParameterError(f"{flag} {str(path)!r} is a directory: name a file in it, e.g. "
+                             f"{str(p / 'fit.png')!r}")
+    if p.suffix.lower() not in PLOT_FORMATS:
+        raise ParameterError(f"{flag} {str(path)!r}: allowed a file ending in "
+                             f"{', '.join(PLOT_FORMATS)}")
+
+
+__all__ = ["checked_input", "identify", "pendulum_test", "read_record", "record_from_simulation"]

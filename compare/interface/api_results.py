@@ -311,6 +311,11 @@ class Identification:
         flagged_rows: the record's rows left out as outliers (file lines).
         warnings: one line each (units, columns ignored, ...).
         fit: the fit's own result (``analytic.identify.record_fit.FitResult``).
+        procedure: the paper's procedure (eqs 39-48) on the same record in each of its
+            readings (``paper``, ``printed``, ``consistent``; docs/identification.md):
+            reading -> M_T (kg), K_T (N/m), C_T (N s/m), E (Pa), pair_damping_ratio and
+            trunk_damping_ratio (1), or ``{"error": why}`` where it cannot run.
+        record: the :class:`Record` fitted.
     """
 
     M_T: Estimate
@@ -340,10 +345,13 @@ class Identification:
     flagged_rows: tuple
     warnings: tuple
     fit: object
+    procedure: dict
+    record: object
 
 
-def identification_of(fit, record) -> Identification:
-    """The :class:`Identification` of the record fit's result on ``record``."""
+def identification_of(fit, record, procedure: dict) -> Identification:
+    """The :class:`Identification` of the record fit's result on ``record`` and the
+    paper's ``procedure`` readings on it."""
     def estimate(key):
         if key not in fit.values:
             return None
@@ -360,5 +368,5 @@ def identification_of(fit, record) -> Identification:
         residual_rms_y=fit.residual_rms_y, noise=float(fit.noise),
         noise_source=fit.noise_source, misfit_ratio=float(fit.misfit_ratio),
         flagged_rows=tuple(record.row(int(i)) for i in fit.flagged),
-        warnings=tuple(fit.warnings), fit=fit)
+        warnings=tuple(fit.warnings), fit=fit, procedure=procedure, record=record)
 
