@@ -260,6 +260,8 @@ def test_the_api_s_defaults_are_the_command_line_s():
     sig = {f.__name__: inspect.signature(f).parameters for f in FUNCTIONS}
     assert sig["sweep"]["backends"].default == SWEEP_BACKENDS
     assert sig["sweep"]["scenario"].default == SWEEP_SCENARIO
+    assert sig["study"]["scenario"].default == SWEEP_SCENARIO  # sweep --preset's tree too
+    assert sig["study"]["preset"].default == "default"
     assert sig["report"]["out"].default == REPORT_DIR
     assert sig["simulate"]["backend"].default == default["simulate"]["backend"]
     assert sig["modes"]["backend"].default == default["modes"]["backend"]

@@ -272,8 +272,9 @@ def test_modes_writes_the_public_apis_result(capsys, backend):
 
 
 def _spied(monkeypatch, name, module="api"):
-    """A spy around the API function ``name`` of compare.interface.``module`` (the function
-    treeimpact.api re-exports): the calls it saw, (args, kwargs) each."""
+    """A spy around the API function ``name`` of compare.interface.``module`` (``api``,
+    ``api_records`` or ``api_studies``: the function treeimpact.api re-exports, which the
+    command calls): the calls it saw, (args, kwargs) each."""
     import importlib
 
     import treeimpact.api
@@ -395,3 +396,90 @@ def test_a_study_that_is_not_a_directory_is_refused_once_by_its_name(tmp_path, c
     with pytest.raises(ParameterError, match=rf"^studies {re.escape(repr(missing))}: not a"):
         ti.report(tmp_path / "out", studies=(missing,))
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+#: The columns of a sweep's table that a second run of the same sweep changes too (its
+#: timings, when and by which task a row finished).
+VOLATILE = ("wall_s", "finished", "task", "worker")
+
+
+def _rows(table):
+    """A sweep's table without its volatile columns, in one row order."""
+    kept = table.drop(columns=[c for c in VOLATILE if c in table.columns])
+    return kept.sort_values(["point", "target"]).reset_index(drop=True)
+
+
+def test_sweep_calls_the_public_api_and_its_table_is_the_apis(tmp_path, monkeypatch, capsys):
+    """One face (issue 51 item 3): ``treeimpact sweep`` is treeimpact.sweep() then
+    treeimpact.sweep_pages() (a spy sees each call, with the flags as keywords), its table
+    the one a Python caller's sweep of the same grid gives, cell for cell."""
+    import pandas as pd
+
+    import treeimpact as ti
+    from treeimpact.compare.studies.sweep.journal import read_table
+
+    calls, _ = _spied(monkeypatch, "sweep", "api_studies")
+    pages, _ = _spied(monkeypatch, "sweep_pages", "api_studies")
+    grid = ["restitution=0.1:0.5:3"]
+    code, out, _ = run(capsys, "sweep", "--grid", grid[0], "--backend", "analytic",
+                       "--workers", "0", "--tolerance", "0.1", "--out", str(tmp_path / "cli"))
+    assert code == 0 and out.startswith("sweep: 3 rows (ok 3); 3 written now, 0 done before")
+    assert calls[0][0] == (grid, str(tmp_path / "cli"))
+    assert {k: calls[0][1][k] for k in ("backends", "workers", "identify", "progress")} == {
+        "backends": ["analytic"], "workers": 0, "identify": True, "progress": None}
+    assert len(pages) == 1 and pages[0][1] == {"tolerance": 0.1}
+    assert f"md: {tmp_path / 'cli' / 'study.md'}" in out.splitlines()
+    api = ti.sweep(grid, tmp_path / "api", backends=("analytic",), workers=0)
+    # the same code on the same inputs: the numbers bit for bit, not within a tolerance
+    pd.testing.assert_frame_equal(_rows(api.table), _rows(read_table(tmp_path / "cli")),
+                                  check_exact=True)
+
+
+def test_a_sweep_refusal_names_the_flag_in_the_command_and_the_keyword_in_python(tmp_path,
+                                                                                 capsys):
+    """An unknown backend is checked once, where it enters the API's sweep: the command's
+    refusal names --backend (exit 2, one line), a Python caller's the keyword backends;
+    nothing is written either way."""
+    import treeimpact as ti
+
+    out = tmp_path / "s"
+    code, _, err = run(capsys, "sweep", "--grid", "restitution=0.1", "--backend",
+                       "analytic,nosuch", "--out", str(out))
+    assert code == 2 and err.strip() == ("treeimpact: error: --backend 'nosuch': allowed "
+                                         "analytic, soft, beam, mujoco, bullet "
+                                         "(comma-separated)")
+    with pytest.raises(ParameterError, match=r"^backends 'nosuch': allowed analytic"):
+        ti.sweep(["restitution=0.1"], out, backends=("analytic", "nosuch"))
+    with pytest.raises(ParameterError, match=r"^grid 'nosuch=1': unknown name"):
+        ti.sweep(["nosuch=1"], out, backends=("analytic",))
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("flags, keyword, given", [
+    (["--tolerance", "0.1"], "tolerance", {"tolerance": 0.1}),
+    (["--backend", "analytic"], "backends", {"backends": ("analytic",)}),
+    (["--sensitivity-scenario", "open-center"], "sensitivity_scenarios",
+     {"sensitivity_scenarios": ["open-center"]}),
+])
+def test_sweep_preset_calls_the_apis_study_whose_refusal_names_flag_or_keyword(
+        tmp_path, monkeypatch, capsys, flags, keyword, given):
+    """``treeimpact sweep --preset`` is treeimpact.study() (a spy sees the call): what the
+    design study fixes is refused there, once, before anything is written, naming the flag
+    while the command runs and the keyword for a Python caller."""
+    import treeimpact as ti
+
+    calls, _ = _spied(monkeypatch, "study", "api_studies")
+    out = tmp_path / "d"
+    code, _, err = run(capsys, "sweep", "--preset", "design", *flags, "--workers", "0",
+                       "--out", str(out))
+    err = err.strip()
+    assert code == 2 and "\n" not in err
+    assert err.startswith(f"treeimpact: error: {flags[0]}: not used with --preset design")
+    assert calls[0][0] == (str(out), "design") and calls[0][1]["workers"] == 0
+    untyped = calls[0][1]["backends"] is None  # --backend not typed: the preset's own
+    assert untyped == (keyword != "backends")
+    with pytest.raises(ParameterError, match=rf"^{keyword}: not used with preset design"):
+        ti.study(out, "design", workers=0, **given)
+    with pytest.raises(ParameterError, match=r"^backends 'nosuch': allowed"):
+        ti.study(out, "default", backends=("nosuch",))
+    assert not out.exists()

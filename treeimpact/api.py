@@ -23,8 +23,11 @@ from treeimpact.compare.interface.api import (
     simulate,
     tree_scenario,
 )
-from treeimpact.compare.interface.api_records import identify, read_record, record_from_simulation
-from treeimpact.compare.interface.api_studies import design_map, report, sweep
+from treeimpact.compare.interface.api_records import (
+    identify,
+    read_record,
+    record_from_simulation,
+)
 from treeimpact.compare.interface.api_results import (
     Conclusion,
     Diagnosis,
@@ -36,6 +39,13 @@ from treeimpact.compare.interface.api_results import (
     Modes,
     Simulation,
     TrunkModes,
+)
+from treeimpact.compare.interface.api_studies import (
+    design_map,
+    report,
+    study,
+    sweep,
+    sweep_pages,
 )
 
 __all__ = sorted(name for name in dir() if not name.startswith("_"))

@@ -598,13 +598,13 @@ def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, capsys, argv, words):
 
 def test_interrupted_sweep_command_says_how_to_resume_and_exits_130(tmp_path, capsys,
                                                                      monkeypatch):
+    from treeimpact.compare.interface import api_studies
     from treeimpact.compare.interface.cli import main
-    from treeimpact.compare.interface.commands import sweep
 
     def interrupted(*args, **kw):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(sweep, "run_sweep", interrupted)  # the name the command calls
+    monkeypatch.setattr(api_studies, "sweep", interrupted)  # the API function the command calls
     rc = main(["sweep", "--grid", "restitution=0.1", "--backend", "analytic", "--out",
                str(tmp_path)])
     err = capsys.readouterr().err.strip()

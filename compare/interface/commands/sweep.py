@@ -10,7 +10,9 @@ and page: :mod:`treeimpact.compare.report.validity`).
 Writes the sweep table (results.csv, results.parquet), the validity and identification maps
 and study.md / study.html into DIR. Rerunning with the same DIR resumes; Ctrl-C keeps every
 finished row and exits 130 with one line. Bad input: one line naming the flag and the
-allowed form or range (exit 2).
+allowed form or range (exit 2). The command parses its flags, calls the public API
+(:mod:`treeimpact.compare.interface.api_studies`: ``sweep`` then ``sweep_pages``, or
+``study`` with ``--preset``) and prints what it returns.
 """
 
 from __future__ import annotations
@@ -27,12 +29,14 @@ from treeimpact.compare.runs.backends import BACKENDS, ENGINES, get_backend
 from treeimpact.compare.runs.pool import STOP
 
 from ...runs.exits import ExitCode
-from ...studies.sweep.grid import GRID_FORM, parse_grid
-from ...studies.sweep.plan import check_backends
-from ...studies.sweep.run import run_sweep
+from ...studies.sweep.grid import GRID_FORM
+from .. import api_studies  # the public API the command calls (sweep, sweep_pages, study)
 from ._common import add_budget_flag
 
 NAME = "sweep"
+
+#: ``--backend``'s default: every backend (a plain sweep's; a preset's own when not typed).
+BACKEND_DEFAULT = ",".join(BACKENDS)
 
 OPTION_FORM = "[BACKEND.]NAME=VALUE, e.g. trunk=sdof or mujoco.integrator=RK4"
 
@@ -69,7 +73,7 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--scenario", default="central-leader",
                         help="shipped scenario name or TOML path (default: central-leader)")
 
-    parser.add_argument("--backend", default=",".join(BACKENDS),
+    parser.add_argument("--backend", default=BACKEND_DEFAULT,
                         help="comma-separated backends (analytic is always run as the "
                              f"reference; default: all, {','.join(BACKENDS)})")
     parser.add_argument("--ladder", action="store_true",
@@ -176,12 +180,7 @@ def _refuse_fixed_by_preset(args) -> None:
 
 def _run(args) -> int:
     t_start = time.perf_counter()
-    # lazy: +112 ms at import otherwise (jinja2, numpy),
-    # which this module's other callers do not need
-    from ...report.validity.study import run_study, write_study
-
-    backends = check_backends(args.backend)
-    grid = parse_grid(args.grid) if args.grid else None
+    backends = _backend_names(args.backend)  # checked where they enter: by the API
     options = parse_options(args.option, backends)
     if args.sensitivity_scenarios and not args.preset:
         raise ParameterError("--sensitivity-scenario: used with --preset (a study's "
@@ -191,28 +190,47 @@ def _run(args) -> int:
             raise ParameterError("--option: not used with --preset (the preset fixes the "
                                  "engines' options); run a plain sweep instead")
         _refuse_fixed_by_preset(args)
-        typed = args.backend != ",".join(BACKENDS)  # the default: the preset's own
-        own_run = PRESETS[args.preset].run is not None  # a study of another kind
-        paths = run_study(args.out, args.preset, scenario=args.scenario,
-                          backends=backends if typed or not own_run else None,
-                          workers=args.workers, scheduler=args.scheduler,
-                          tolerance=args.tolerance, grid=args.grid or None,
-                          retry_failed=args.retry_failed,
-                          sensitivity_scenarios=args.sensitivity_scenarios)
+        typed = args.backend != BACKEND_DEFAULT  # not typed: the preset's own
+        paths = api_studies.study(args.out, args.preset, scenario=args.scenario,
+                                  backends=backends if typed else None, workers=args.workers,
+                                  scheduler=args.scheduler, tolerance=args.tolerance,
+                                  grid=args.grid or None, retry_failed=args.retry_failed,
+                                  sensitivity_scenarios=args.sensitivity_scenarios,
+                                  progress=None)
     else:
-        if grid is None:
+        if not args.grid:
             raise ParameterError(f"--grid: give at least one ({GRID_FORM}) or --preset")
-        res = run_sweep(args.scenario, grid, args.out, backends=backends, ladder=args.ladder,
-                        options=options, workers=args.workers, scheduler=args.scheduler,
-                        identify=args.identify, retry_failed=args.retry_failed)
-        status = res.table["status"].value_counts().to_dict()
-        print(f"sweep: {len(res.table)} rows ("
-              + ", ".join(f"{k} {v}" for k, v in sorted(status.items()))
-              + f"); {res.rows_written} written now, {res.rows_done_before} done before; "
-              f"runs {res.wall_s:.1f} s")
-        paths = write_study(args.out, {"sweep": res.out}, tolerance=args.tolerance,
-                            title=f"Sweep of {res.table['scenario'].iloc[0] if len(res.table) else args.scenario}",
-                            meta={"wall_s": res.wall_s})
+        res = api_studies.sweep(args.grid, args.out, scenario=args.scenario,
+                                backends=backends, ladder=args.ladder, options=options,
+                                workers=args.workers, scheduler=args.scheduler,
+                                identify=args.identify, retry_failed=args.retry_failed,
+                                progress=None)
+        _print_sweep(res)
+        paths = api_studies.sweep_pages(res, tolerance=args.tolerance)
+    _print_paths(paths)
+    print(f"wall time: {time.perf_counter() - t_start:.1f} s (the whole command: its runs and "
+          "sweeps, then its maps and pages)")
+    return ExitCode.OK
+
+
+def _backend_names(text: str) -> list[str]:
+    """The names ``--backend`` lists (comma-separated), each once, in order (the API checks
+    them)."""
+    return list(dict.fromkeys(b.strip() for b in text.split(",") if b.strip()))
+
+
+def _print_sweep(res) -> None:
+    """The sweep's line: its rows by status, what this run wrote, its wall time."""
+    status = res.table["status"].value_counts().to_dict()
+    print(f"sweep: {len(res.table)} rows ("
+          + ", ".join(f"{k} {v}" for k, v in sorted(status.items()))
+          + f"); {res.rows_written} written now, {res.rows_done_before} done before; "
+          f"runs {res.wall_s:.1f} s")
+
+
+def _print_paths(paths: dict) -> None:
+    """What the study or the sweep's pages wrote (its ``paths``), and its warnings on
+    stderr."""
     for kind in ("table", "md", "html", "json"):  # what the study wrote, of these
         if kind in paths:
             print(f"{kind}: {paths[kind]}")
@@ -220,6 +238,3 @@ def _run(args) -> int:
         print(f"figures: {len(paths['figures'])} in {Path(paths['figures'][0]).parent}")
     for line in paths.get("warnings", []):  # the study ran, some of its points did not
         print(f"treeimpact: warning: {line}", file=sys.stderr)
-    print(f"wall time: {time.perf_counter() - t_start:.1f} s (the whole command: its runs and "
-          "sweeps, then its maps and pages)")
-    return ExitCode.OK

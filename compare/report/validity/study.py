@@ -9,7 +9,7 @@ import json
 import time
 from pathlib import Path
 
-from treeimpact.analytic.errors import NotAchieved, ParameterError
+from treeimpact.analytic.errors import NotAchieved
 from treeimpact.analytic.results import json_text
 from treeimpact.compare.report.base import environment
 from treeimpact.compare.runs.backends import ENGINES
@@ -28,9 +28,18 @@ from treeimpact.compare.studies.ident_study import (
 
 from ...studies.speed import speed_curves, speed_sweep
 from ...studies.sweep.journal import JOURNAL, TABLE, make_out, read_file, read_table
-from ...studies.sweep.maps import DEFAULT_TOLERANCE, identification_maps, point_text, validity_maps
+from ...studies.sweep.maps import (
+    DEFAULT_TOLERANCE,
+    identification_maps,
+    point_text,
+    validity_maps,
+)
 from ...studies.sweep.run import SweepSpec, run_sweep, run_sweeps
-from .presets import PRESETS, Preset, get_preset  # noqa: F401 - the study's presets, re-exported
+from .presets import (  # noqa: F401 - the study's presets, re-exported
+    PRESETS,
+    Preset,
+    get_preset,
+)
 from .sensitivity_study import sensitivity_result, sensitivity_specs
 
 
@@ -42,15 +51,12 @@ def run_study(out, preset: str = "default", *, scenario=None, backends=None, wor
     ``tolerance``: the maps' criterion (None: the default); ``workers``, ``scheduler``,
     ``progress`` and ``retry_failed`` as :func:`compare.studies.sweep.run.run_sweeps`.
     ``sensitivity_scenarios``: the trees of its sensitivity study (shipped names, TOML paths
-    or Scenarios; default: every shipped tree)."""
+    or Scenarios; default: every shipped tree). What its caller gives is checked where it
+    enters, by the public API's study (compare.interface.api_studies): the backends' names,
+    the grid, what a study of another kind fixes (its backends, tolerance and sensitivity
+    trees, ignored here)."""
     p = get_preset(preset)
     if p.run is not None:  # a study of another kind: its module runs it
-        for flag, given in (("--backend", backends), ("--tolerance", tolerance),
-                            ("--sensitivity-scenario", sensitivity_scenarios)):
-            if given is not None:
-                raise ParameterError(f"{flag}: not used with --preset {p.name} (its study "
-                                     "fixes what it runs and judges)")
-
         return p.run(out, scenario or p.scenario, workers=workers, scheduler=scheduler,
                      progress=progress, grid=grid, retry_failed=retry_failed)
     return _validity_study(out, p, scenario=scenario, backends=backends, workers=workers,

@@ -45,10 +45,10 @@ class Target:
         return self.backend in REFERENCE_BACKENDS
 
 
-def check_backends(backends) -> list[str]:
+def check_backends(backends, flag: str = "--backend") -> list[str]:
     """The backend names of ``--backend``, ``backends`` (a list or a comma-separated
-    string), each once, in order; a one-line ParameterError naming the allowed ones for an
-    unknown name."""
+    string), each once, in order; a one-line ParameterError naming ``flag`` (the public
+    API's: ``backends`` in Python) and the allowed ones for an unknown name."""
     if isinstance(backends, str):
         backends = [b.strip() for b in backends.split(",") if b.strip()]
     out = []
@@ -56,7 +56,7 @@ def check_backends(backends) -> list[str]:
         try:
             get_backend(b)
         except ParameterError:
-            raise ParameterError(f"--backend {b!r}: allowed {', '.join(BACKENDS)} "
+            raise ParameterError(f"{flag} {b!r}: allowed {', '.join(BACKENDS)} "
                                  f"(comma-separated)") from None
         if b not in out:
             out.append(b)
