@@ -48,10 +48,11 @@ def model_x(p, test: PendulumTest, t: np.ndarray) -> np.ndarray:
 
 def model_x_of_trunk(p, test: PendulumTest, t: np.ndarray, *, dynamic_mass: float,
                      equivalent_stiffness: float, trunk_damping_ratio: float) -> np.ndarray:
-    """x(t) (m) of the exact model at parameters ``p`` (:class:`fit_parameters.Slot`
-    order: the contact, e and sensor terms) with its trunk replaced by another's: M_T
-    ``dynamic_mass`` (kg), K_T ``equivalent_stiffness`` (N/m) and the trunk's damping
-    ratio C_T / (2 sqrt(K_T M_T)) (1), e.g. the paper's procedure's reading of a record."""
+    """x(t) (m) at the times ``t`` (s) of the exact model at parameters ``p``
+    (:class:`fit_parameters.Slot` order: the contact, e and sensor terms) with the pendulum
+    of ``test`` and its trunk replaced by another's: M_T ``dynamic_mass`` (kg), K_T
+    ``equivalent_stiffness`` (N/m) and ``trunk_damping_ratio`` C_T / (2 sqrt(K_T M_T)) (1),
+    e.g. the paper's procedure's reading of a record."""
     q = np.array(p, float)
     q[Slot.LN_DYNAMIC_MASS] = math.log(dynamic_mass)
     q[Slot.LN_EQUIVALENT_STIFFNESS] = math.log(equivalent_stiffness)
