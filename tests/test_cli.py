@@ -455,6 +455,28 @@ def test_a_sweep_refusal_names_the_flag_in_the_command_and_the_keyword_in_python
     assert not out.exists()
 
 
+@pytest.mark.parametrize("spec, given, why", [
+    ("soft.foo=1", {"soft": {"foo": 1}}, "backend 'soft' has no option 'foo'; allowed: "),
+    ("mujoco.dt=-1", {"mujoco": {"dt": -1}}, "dt = -1"),
+    ("nosuch.dt=1", {"nosuch": {"dt": 1}}, "backend 'nosuch': allowed analytic"),
+])
+def test_a_sweeps_fixed_option_is_checked_once_by_the_api(tmp_path, capsys, spec, given, why):
+    """A fixed option is checked once, where it enters the API's sweep, whether the
+    command's --option spec or a Python caller's {backend: {name: value}}: refused before
+    any run (not a sweep of skipped rows), naming --option in the command and options in
+    Python with the entry as a spec; nothing is written."""
+    import treeimpact as ti
+
+    out = tmp_path / "s"
+    code, _, err = run(capsys, "sweep", "--grid", "restitution=0.1", "--backend",
+                       "analytic,soft", "--option", spec, "--out", str(out))
+    assert code == 2 and err.startswith(f"treeimpact: error: --option {spec!r}: {why}"), err
+    with pytest.raises(ParameterError, match=rf"^options {re.escape(repr(spec))}: "
+                                             rf"{re.escape(why)}"):
+        ti.sweep(["restitution=0.1"], out, backends=("analytic", "soft"), options=given)
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("flags, keyword, given", [
     (["--tolerance", "0.1"], "tolerance", {"tolerance": 0.1}),
     (["--backend", "analytic"], "backends", {"backends": ("analytic",)}),

@@ -18,7 +18,7 @@ from ..runs.cache import resolve_scenario
 from ..runs.names import NAMING, show
 from ..studies.sweep.grid import Grid, parse_grid
 from ..studies.sweep.journal import SPEC
-from ..studies.sweep.plan import check_backends
+from ..studies.sweep.plan import check_backends, check_options
 from ..studies.sweep.run import SweepResult, run_sweep
 from .api_call import api_function
 
@@ -71,8 +71,10 @@ def sweep(grid, out, *, scenario=SWEEP_SCENARIO, backends=SWEEP_BACKENDS,
         backends: the backends run at each point, names or one comma-separated string
             (default all five, as the command's; analytic always runs as the reference).
         ladder: run each engine as the ladder's rungs.
-        options: backend options held fixed, ``{backend: {name: value}}`` (values in SI
-            units: ``dt`` in s).
+        options: backend options held fixed, ``{backend: {name: value}}`` or the
+            command's ``--option`` specs ``[BACKEND.]NAME=VALUE`` (no BACKEND: every engine
+            swept), each checked against its backend's options (values in SI units: ``dt``
+            in s).
         workers: local worker processes (default one per CPU; 0 runs here).
         scheduler: a Dask scheduler address (``tcp://host:8786``) or Client to run on
             instead of local workers.
@@ -88,13 +90,16 @@ def sweep(grid, out, *, scenario=SWEEP_SCENARIO, backends=SWEEP_BACKENDS,
         writes its pages there).
 
     Raises:
-        ParameterError: a malformed grid spec, an unknown backend, scenario or scheduler, a
-            workers count out of range, an output directory that cannot be created.
+        ParameterError: a malformed grid spec, an unknown backend, scenario or scheduler,
+            an option a backend does not have or a value out of its range, a workers count
+            out of range, an output directory that cannot be created.
     """
     names = _backends(backends)
     parsed = grid if isinstance(grid, Grid) else parse_grid(grid)  # the one check
+    fixed = check_options(options, names, label=_named("options", "--option"),
+                          backends_label=_named("backends", "--backend"))
     return run_sweep(scenario, parsed, out, backends=tuple(names), ladder=ladder,
-                     options=options, workers=workers, scheduler=scheduler,
+                     options=fixed, workers=workers, scheduler=scheduler,
                      identify=identify, retry_failed=retry_failed, progress=progress)
 
 

@@ -25,11 +25,12 @@ from pathlib import Path
 
 from treeimpact.analytic.errors import ParameterError
 from treeimpact.compare.report.validity.presets import PRESETS
-from treeimpact.compare.runs.backends import BACKENDS, ENGINES, get_backend
+from treeimpact.compare.runs.backends import BACKENDS
 from treeimpact.compare.runs.pool import STOP
 
 from ...runs.exits import ExitCode
 from ...studies.sweep.grid import GRID_FORM
+from ...studies.sweep.plan import OPTION_FORM
 from .. import api_studies  # the public API the command calls (sweep, sweep_pages, study)
 from ._common import add_budget_flag
 
@@ -38,7 +39,6 @@ NAME = "sweep"
 #: ``--backend``'s default: every backend (a plain sweep's; a preset's own when not typed).
 BACKEND_DEFAULT = ",".join(BACKENDS)
 
-OPTION_FORM = "[BACKEND.]NAME=VALUE, e.g. trunk=sdof or mujoco.integrator=RK4"
 
 
 def _workers(text: str) -> int:
@@ -105,46 +105,6 @@ def add_sweep_arguments(parser) -> None:
     parser.add_argument("--out", required=True, help="output directory (resumable)")
 
 
-def parse_options(specs, backends) -> dict:
-    """{backend: {name: value}} from ``--option`` specs (no BACKEND: every engine among
-    ``backends``, the sweep's), each name and value checked against the backend's OPTIONS
-    (one line naming the spec)."""
-    out: dict = {}
-    for spec in specs or []:
-        if spec.count("=") != 1 or not spec.split("=")[0].strip() or not spec.split("=")[1]:
-            raise ParameterError(f"--option {spec!r}: expected {OPTION_FORM}")
-        name, text = (s.strip() for s in spec.split("="))
-        if "." in name:
-            backend, name = name.split(".", 1)
-            if not name:
-                raise ParameterError(f"--option {spec!r}: expected {OPTION_FORM}")
-            targets = [backend]
-        else:
-            targets = [b for b in backends if b in ENGINES]
-            if not targets:
-                raise ParameterError(f"--option {spec!r}: no engine among --backend "
-                                     f"{','.join(backends)}; write BACKEND.NAME=VALUE")
-        for b in targets:
-            table = get_backend(b).options()
-            option = table.get(name)
-            if option is None:
-                raise ParameterError(
-                    f"--option {spec!r}: backend {b!r} has no option {name!r}; allowed: "
-                    f"{', '.join(sorted(k for k, o in table.items() if o.cli))}")
-            value = text if option.choices else _option_number(text)
-            out.setdefault(b, {})[name] = option.check(name, value,
-                                                       label=f"--option {spec!r}: {name}")
-    return out
-
-
-def _option_number(text: str):
-    """The number an --option value spells, or the text (the option's check names it)."""
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
 def add_arguments(sp) -> None:
     """The sweep's flags (:func:`add_sweep_arguments`) and the run budget, added to its
     subparser ``sp``."""
@@ -181,12 +141,11 @@ def _refuse_fixed_by_preset(args) -> None:
 def _run(args) -> int:
     t_start = time.perf_counter()
     backends = _backend_names(args.backend)  # checked where they enter: by the API
-    options = parse_options(args.option, backends)
     if args.sensitivity_scenarios and not args.preset:
         raise ParameterError("--sensitivity-scenario: used with --preset (a study's "
                              "sensitivity part)")
     if args.preset:
-        if options:
+        if args.option:
             raise ParameterError("--option: not used with --preset (the preset fixes the "
                                  "engines' options); run a plain sweep instead")
         _refuse_fixed_by_preset(args)
@@ -201,7 +160,7 @@ def _run(args) -> int:
         if not args.grid:
             raise ParameterError(f"--grid: give at least one ({GRID_FORM}) or --preset")
         res = api_studies.sweep(args.grid, args.out, scenario=args.scenario,
-                                backends=backends, ladder=args.ladder, options=options,
+                                backends=backends, ladder=args.ladder, options=args.option,
                                 workers=args.workers, scheduler=args.scheduler,
                                 identify=args.identify, retry_failed=args.retry_failed,
                                 progress=None)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from treeimpact.analytic.errors import ParameterError, one_line
 from treeimpact.analytic.model.parameters import Scenario
-from treeimpact.compare.runs.backends import BACKENDS, get_backend
+from treeimpact.compare.runs.backends import BACKENDS, ENGINES, get_backend
 from treeimpact.compare.runs.cache import INVALID, options_key, scenario_key
 from treeimpact.compare.runs.rungs import RungKind, analytic_samples, rung_table
 
@@ -61,6 +61,65 @@ def check_backends(backends, flag: str = "--backend") -> list[str]:
         if b not in out:
             out.append(b)
     return out
+
+
+#: The form of one fixed option: ``--option``'s, and the API's ``options`` given as specs.
+OPTION_FORM = "[BACKEND.]NAME=VALUE, e.g. trunk=sdof or mujoco.integrator=RK4"
+
+
+def check_options(options, backends, *, label: str = "--option",
+                  backends_label: str = "--backend") -> dict:
+    """``{backend: {name: value}}`` of the fixed ``options``: that dict, or specs
+    :data:`OPTION_FORM` (``--option``'s; no BACKEND: every engine among ``backends``, the
+    sweep's), each name and value checked against its backend's OPTIONS. A one-line
+    ParameterError names ``label`` (the API's ``options`` in Python) and the entry as a
+    spec, ``backends_label`` where the spec names no engine of the sweep."""
+    if isinstance(options, dict):
+        specs = [(f"{b}.{name}={value}", b, name, value)
+                 for b, table in options.items() for name, value in table.items()]
+    else:
+        specs = [_split_spec(spec, label) for spec in options or ()]
+    out: dict = {}
+    for spec, backend, name, value in specs:
+        targets = [backend] if backend else [b for b in backends if b in ENGINES]
+        if not targets:
+            raise ParameterError(f"{label} {spec!r}: no engine among {backends_label} "
+                                 f"{','.join(backends)}; write BACKEND.NAME=VALUE")
+        for b in targets:
+            check_backends([b], flag=f"{label} {spec!r}: backend")
+            table = get_backend(b).options()
+            option = table.get(name)
+            if option is None:
+                raise ParameterError(
+                    f"{label} {spec!r}: backend {b!r} has no option {name!r}; allowed: "
+                    f"{', '.join(sorted(k for k, o in table.items() if o.cli))}")
+            if isinstance(value, str) and not option.choices:
+                value = _number(value)
+            out.setdefault(b, {})[name] = option.check(name, value,
+                                                       label=f"{label} {spec!r}: {name}")
+    return out
+
+
+def _split_spec(spec, label: str) -> tuple:
+    """(spec, backend or None, name, value text) of one :data:`OPTION_FORM` spec."""
+    if not isinstance(spec, str) or spec.count("=") != 1 or not spec.split("=")[0].strip() \
+            or not spec.split("=")[1]:
+        raise ParameterError(f"{label} {spec!r}: expected {OPTION_FORM}")
+    name, text = (s.strip() for s in spec.split("="))
+    backend = None
+    if "." in name:
+        backend, name = name.split(".", 1)
+        if not name:
+            raise ParameterError(f"{label} {spec!r}: expected {OPTION_FORM}")
+    return spec, backend, name, text
+
+
+def _number(text: str):
+    """The number an option's value spells, or the text (the option's check names it)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 def make_targets(backends=("analytic",), *, ladder: bool = False,
