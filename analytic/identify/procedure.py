@@ -290,10 +290,9 @@ def procedure_readings(t, x, test: PendulumTest, *, y=None) -> dict:
         except (ParameterError, ValueError, FloatingPointError) as exc:
             out[reading] = {"error": " ".join(str(exc).split())}
             continue
-        M, K = ident.dynamic_mass, ident.equivalent_stiffness
+        M, K = ident.dynamic_mass, ident.equivalent_stiffness  # > 0: check_identifiable
         equivalent_damping = 2.0 * ident.b * (M + test.impactor_mass)
-        trunk = (equivalent_damping / (2.0 * math.sqrt(K * M)) if K > 0 and M > 0
-                 else math.nan)
+        trunk = equivalent_damping / (2.0 * math.sqrt(K * M))
         out[reading] = {"M_T": M, "K_T": K, "C_T": equivalent_damping, "E": ident.E,
                         "pair_damping_ratio": ident.pair_damping_ratio,
                         "trunk_damping_ratio": trunk}

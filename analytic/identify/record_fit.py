@@ -110,6 +110,11 @@ class FitResult:
         """The kinds of the fit's diagnoses, in order."""
         return [d.kind for d in self.diagnoses]
 
+    def findings(self) -> str:
+        """What the fit found, one line: its diagnoses' messages joined, or its conclusion
+        (for a record not fitted: why, e.g. the unit flags to pass)."""
+        return "; ".join(d.message for d in self.diagnoses) or str(self.conclusion)
+
 
 @dataclass(frozen=True)
 class _Fixed:

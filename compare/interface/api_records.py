@@ -164,8 +164,7 @@ def _procedure(record, test, fit) -> dict:
     a record the ``fit`` did not fit (its units, no impact: every method refuses it) each
     reading's error saying why."""
     if not fit.conclusion.fitted:
-        why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
-        return {reading: {"error": f"not read: {why}"} for reading in READINGS}
+        return {reading: {"error": f"not read: {fit.findings()}"} for reading in READINGS}
     return procedure_readings(record.t, record.x, test, y=record.y)
 
 

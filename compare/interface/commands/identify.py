@@ -117,8 +117,7 @@ def _not_fitted(fit):
     the tree's free vibration), or None for a fitted one."""
     if fit.conclusion.fitted:
         return None
-    why = "; ".join(d.message for d in fit.diagnoses) or str(fit.conclusion)
-    return NotAchieved(f"the record was not fitted: {why}")
+    return NotAchieved(f"the record was not fitted: {fit.findings()}")
 
 
 def _json(args, ident) -> dict:

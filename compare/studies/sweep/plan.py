@@ -85,8 +85,9 @@ def check_options(options, backends, *, label: str = "--option",
         if not targets:
             raise ParameterError(f"{label} {spec!r}: no engine among {backends_label} "
                                  f"{','.join(backends)}; write BACKEND.NAME=VALUE")
+        if backend:  # the sweep's own backends are checked already
+            check_backends([backend], flag=f"{label} {spec!r}: backend")
         for b in targets:
-            check_backends([b], flag=f"{label} {spec!r}: backend")
             table = get_backend(b).options()
             option = table.get(name)
             if option is None:
